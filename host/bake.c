@@ -1,0 +1,255 @@
+/*
+ * The bake driver. See bake.h.
+ */
+#include "bake.h"
+
+#include "preview.h"
+#include "progress.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char *fb_backend_name(fb_backend b)
+{
+    return b == FB_BACKEND_VULKAN ? "vulkan" : b == FB_BACKEND_NATIVE ? "native" : "auto";
+}
+
+fb_result fb_engine_open(const fb_engine_desc *d, fb_engine *e)
+{
+    memset(e, 0, sizeof *e);
+    e->threads = d->threads > 0 ? d->threads : fb_cpu_count();
+    if (d->backend != FB_BACKEND_NATIVE) {
+        vkc_desc vd = {.device = d->device, .validation = d->validation};
+        fb_result rc = vkc_create(&vd, &e->vk);
+        if (rc == FB_OK) {
+            e->kind = FB_BACKEND_VULKAN;
+            snprintf(e->device, sizeof e->device, "%s", vkc_info(e->vk)->name);
+            return FB_OK;
+        }
+        /* Only a missing loader or device falls back, and only when vulkan was not asked for. */
+        if (d->backend == FB_BACKEND_VULKAN || rc != FB_ERR_NODEVICE) return rc;
+        fb_log(FB_LOG_WARN, "no Vulkan device available: using the native backend (%d threads)", e->threads);
+    }
+    e->kind = FB_BACKEND_NATIVE;
+    snprintf(e->device, sizeof e->device, "native C (%d threads)", e->threads);
+    return fb_pool_create(e->threads, &e->pool);
+}
+
+void fb_engine_close(fb_engine *e)
+{
+    if (!e) return;
+    fb_pool_destroy(&e->pool);
+    vkc_destroy(&e->vk);
+    memset(e, 0, sizeof *e);
+}
+
+/* ---- one layer's strip producer ------------------------------------------------------------- */
+
+#define SLOTS 2 /* strips in flight per layer on the GPU: one computing while one is consumed */
+
+typedef struct layer_run {
+    fb_gen gen;
+    /* vulkan */
+    vkc_pipeline *pipe;
+    vkc_job *job[SLOTS];
+    vkc_buffer *buf[SLOTS][FB_GEN_MAX_CHANNELS];
+    /* native */
+    void *planes[FB_GEN_MAX_CHANNELS];
+} layer_run;
+
+typedef struct native_task {
+    const fb_gen *gen;
+    int y0, n, rows_per_task;
+    void *const *planes;
+} native_task;
+
+static void native_task_fn(void *ctx, int t)
+{
+    const native_task *nt = ctx;
+    int r0 = t * nt->rows_per_task;
+    int r1 = r0 + nt->rows_per_task < nt->n ? r0 + nt->rows_per_task : nt->n;
+    size_t row_bytes = (size_t)nt->gen->scene->width * 4;
+    void *planes[FB_GEN_MAX_CHANNELS];
+    for (int c = 0; c < nt->gen->nchannels; c++) planes[c] = (uint8_t *)nt->planes[c] + (size_t)r0 * row_bytes;
+    nt->gen->native_rows(nt->gen, nt->y0 + r0, r1 - r0, planes);
+}
+
+static fb_result run_init(fb_engine *e, layer_run *lr, int strip_rows)
+{
+    const fb_scene *s = lr->gen.scene;
+    size_t bytes = (size_t)s->width * (size_t)strip_rows * 4;
+    fb_result rc = FB_OK;
+    if (e->kind == FB_BACKEND_VULKAN) {
+        rc = vkc_pipeline_create(e->vk,
+                                 &(vkc_pipeline_desc){.spv = lr->gen.spv,
+                                                      .spv_size = lr->gen.spv_size,
+                                                      .push_size = lr->gen.push_size,
+                                                      .buffers = (uint32_t)lr->gen.nchannels,
+                                                      .name = lr->gen.layer->name},
+                                 &lr->pipe);
+        for (int k = 0; k < SLOTS && !rc; k++) {
+            rc = vkc_job_create(e->vk, lr->pipe, &lr->job[k]);
+            for (int c = 0; c < lr->gen.nchannels && !rc; c++) rc = vkc_buffer_create(e->vk, bytes, &lr->buf[k][c]);
+        }
+        return rc;
+    }
+    for (int c = 0; c < lr->gen.nchannels; c++)
+        if (!(lr->planes[c] = malloc(bytes))) return fb_fail(FB_ERR_NOMEM, "out of memory for a strip of rows");
+    return FB_OK;
+}
+
+static void run_fini(fb_engine *e, layer_run *lr)
+{
+    for (int k = 0; k < SLOTS; k++) {
+        if (e->vk) vkc_job_destroy(e->vk, &lr->job[k]);
+        for (int c = 0; c < FB_GEN_MAX_CHANNELS; c++) {
+            if (e->vk) vkc_buffer_destroy(e->vk, &lr->buf[k][c]);
+        }
+    }
+    if (e->vk) vkc_pipeline_destroy(e->vk, &lr->pipe);
+    for (int c = 0; c < FB_GEN_MAX_CHANNELS; c++) free(lr->planes[c]);
+    memset(lr->planes, 0, sizeof lr->planes);
+}
+
+static fb_result run_submit(fb_engine *e, layer_run *lr, int slot, int y0, int n)
+{
+    uint8_t push[FB_GEN_MAX_PUSH];
+    uint32_t groups[3];
+    lr->gen.push(&lr->gen, y0, n, push);
+    lr->gen.groups(&lr->gen, n, groups);
+    return vkc_job_submit(e->vk, lr->job[slot], lr->buf[slot], (uint32_t)lr->gen.nchannels, push, groups);
+}
+
+/* Makes the strip [y0, y0+n) available in planes[]: waits for the GPU job, or computes it natively. */
+static fb_result run_collect(fb_engine *e, layer_run *lr, int slot, int y0, int n, const void **planes,
+                             double *gpu_seconds)
+{
+    if (e->kind == FB_BACKEND_VULKAN) {
+        double t = -1;
+        fb_result rc = vkc_job_wait(e->vk, lr->job[slot], &t);
+        if (rc) return rc;
+        if (t > 0) *gpu_seconds += t;
+        for (int c = 0; c < lr->gen.nchannels; c++) planes[c] = vkc_buffer_data(lr->buf[slot][c]);
+        return FB_OK;
+    }
+    int threads = fb_pool_threads(e->pool);
+    int per = (n + 4 * threads - 1) / (4 * threads);
+    if (per < 1) per = 1;
+    native_task nt = {.gen = &lr->gen, .y0 = y0, .n = n, .rows_per_task = per, .planes = lr->planes};
+    fb_pool_run(e->pool, (n + per - 1) / per, native_task_fn, &nt);
+    for (int c = 0; c < lr->gen.nchannels; c++) planes[c] = lr->planes[c];
+    return FB_OK;
+}
+
+/* ---- the bake ------------------------------------------------------------------------------- */
+
+static int auto_strip_rows(const fb_scene *s, int nchannels)
+{
+    /* About 4 MiB per channel buffer: well inside lavapipe's 128 MiB maxStorageBufferRange and small
+     * enough that the writer's queue keeps memory bounded at any image size. */
+    long rows = (1L << 20) / s->width;
+    (void)nchannels;
+    if (rows >= 64) rows -= rows % 64;
+    if (rows < 1) rows = 1;
+    if (rows > s->height) rows = s->height;
+    return (int)rows;
+}
+
+fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
+{
+    const fb_scene *s = d->scene;
+    fb_result rc = FB_OK;
+    layer_run *runs = calloc((size_t)s->nlayers, sizeof *runs);
+    exrio_channel channels[FB_MAX_LAYERS * FB_GEN_MAX_CHANNELS];
+    int nch = 0;
+    exrio_writer *w = NULL;
+    fb_preview *preview = NULL;
+    double t0 = fb_now(), gpu = 0;
+    if (!runs) return fb_fail(FB_ERR_NOMEM, "out of memory");
+
+    int strip = d->strip_rows > 0 ? d->strip_rows : auto_strip_rows(s, 1);
+    if (strip > s->height) strip = s->height;
+    if (e->kind == FB_BACKEND_VULKAN && (uint64_t)strip * s->width * 4 > vkc_info(e->vk)->max_storage_buffer_range) {
+        strip = (int)(vkc_info(e->vk)->max_storage_buffer_range / ((uint64_t)s->width * 4));
+        if (strip < 1) {
+            rc =
+                fb_fail(FB_ERR_INPUT, "image width %d is too wide for one storage buffer row on this device", s->width);
+            goto out;
+        }
+    }
+
+    for (int i = 0; i < s->nlayers && !rc; i++) {
+        rc = fb_gen_init(&runs[i].gen, s, &s->layers[i]);
+        for (int c = 0; c < runs[i].gen.nchannels && !rc; c++)
+            channels[nch++] = (exrio_channel){runs[i].gen.channel_names[c], runs[i].gen.channel_types[c]};
+        if (!rc) rc = run_init(e, &runs[i], strip);
+    }
+    if (rc) goto out;
+
+    if (d->out) {
+        char seed[16];
+        snprintf(seed, sizeof seed, "%u", s->seed);
+        exrio_attr attrs[] = {
+            {"fractalbake/scene", s->json},
+            {"fractalbake/seed", seed},
+            {"fractalbake/backend", fb_backend_name(e->kind)},
+            {"fractalbake/device", e->device},
+            {"fractalbake/version", FB_VERSION},
+        };
+        rc = exrio_writer_create(&(exrio_writer_desc){.path = d->out,
+                                                      .width = s->width,
+                                                      .height = s->height,
+                                                      .compression = s->compression,
+                                                      .channels = channels,
+                                                      .nchannels = nch,
+                                                      .attrs = attrs,
+                                                      .nattrs = (int)(sizeof attrs / sizeof attrs[0]),
+                                                      .threads = e->threads},
+                                 &w);
+        if (rc) goto out;
+    }
+    if (d->preview && (rc = fb_preview_create(s->width, s->height, 2048, &preview))) goto out;
+
+    fb_progress prog;
+    fb_progress_init(&prog, d->progress, "bake", "pix");
+    int nstrips = (s->height + strip - 1) / strip;
+    bool gpu_path = e->kind == FB_BACKEND_VULKAN;
+    for (int i = 0; i < s->nlayers && gpu_path && !rc; i++) rc = run_submit(e, &runs[i], 0, 0, strip);
+    for (int k = 0; k < nstrips && !rc; k++) {
+        int y0 = k * strip, n = y0 + strip <= s->height ? strip : s->height - y0;
+        /* Queue the next strip before consuming this one, so the device works while we write. */
+        if (gpu_path && k + 1 < nstrips) {
+            int y1 = y0 + strip, n1 = y1 + strip <= s->height ? strip : s->height - y1;
+            for (int i = 0; i < s->nlayers && !rc; i++) rc = run_submit(e, &runs[i], (k + 1) % SLOTS, y1, n1);
+        }
+        const void *planes[FB_MAX_LAYERS * FB_GEN_MAX_CHANNELS];
+        int at = 0;
+        for (int i = 0; i < s->nlayers && !rc; i++) {
+            rc = run_collect(e, &runs[i], k % SLOTS, y0, n, planes + at, &gpu);
+            at += runs[i].gen.nchannels;
+        }
+        if (rc) break;
+        if (preview && channels[0].type != EXRIO_UINT) fb_preview_add_rows(preview, y0, n, planes[0]);
+        if (w) rc = exrio_writer_rows(w, y0, n, planes);
+        fb_progress_update(&prog, (uint64_t)(y0 + n) * s->width, (uint64_t)s->height * s->width);
+    }
+    fb_progress_finish(&prog);
+    /* Checked before the file is renamed into place: a validated run that broke a rule is a failure. */
+    if (!rc && e->vk && vkc_validation_messages(e->vk))
+        rc = fb_fail(FB_ERR_VULKAN, "vulkan validation reported %u message(s) (see above)",
+                     vkc_validation_messages(e->vk));
+    if (!rc && w) rc = exrio_writer_finish(&w);
+    if (!rc && preview) rc = fb_preview_write_png(preview, d->preview);
+out:
+    exrio_writer_abort(&w);
+    fb_preview_destroy(&preview);
+    for (int i = 0; i < s->nlayers; i++) run_fini(e, &runs[i]);
+    free(runs);
+    if (stats) {
+        stats->seconds = fb_now() - t0;
+        stats->gpu_seconds = e->kind == FB_BACKEND_VULKAN ? gpu : -1;
+        stats->pixels = (uint64_t)s->width * s->height;
+    }
+    return rc;
+}

@@ -1,0 +1,54 @@
+/*
+ * The bake driver: scene -> generators -> strips -> EXR writer (and PNG preview).
+ *
+ * Every generator computes strips of rows keyed by absolute pixel coordinates, so the result does
+ * not depend on the strip height, the thread count or the order in which strips complete.
+ */
+#ifndef FB_BAKE_H
+#define FB_BAKE_H
+
+#include "gen.h"
+#include "pool.h"
+#include "scene.h"
+#include "vkc.h"
+
+typedef enum fb_backend { FB_BACKEND_AUTO = 0, FB_BACKEND_VULKAN, FB_BACKEND_NATIVE } fb_backend;
+
+/* The compute backend in use: a Vulkan context, or a thread pool for the native kernels. */
+typedef struct fb_engine {
+    fb_backend kind;
+    vkc_context *vk;
+    fb_pool *pool;
+    int threads;
+    char device[256];
+} fb_engine;
+
+typedef struct fb_engine_desc {
+    fb_backend backend; /* AUTO: vulkan if a device exists, else native with a warning */
+    const char *device;
+    int threads; /* native workers and EXR compression threads; 0: one per core */
+    bool validation;
+} fb_engine_desc;
+
+fb_result fb_engine_open(const fb_engine_desc *desc, fb_engine *out);
+void fb_engine_close(fb_engine *e);
+const char *fb_backend_name(fb_backend b);
+
+typedef struct fb_bake_desc {
+    const fb_scene *scene;
+    const char *out;     /* EXR path; NULL computes without writing (benchmarks) */
+    const char *preview; /* PNG path or NULL */
+    int strip_rows;      /* 0: automatic */
+    bool progress;       /* draw a progress bar on stderr */
+} fb_bake_desc;
+
+typedef struct fb_bake_stats {
+    double seconds;     /* wall time of the whole bake */
+    double gpu_seconds; /* sum of dispatch timestamps (vulkan), else -1 */
+    uint64_t pixels;
+} fb_bake_stats;
+
+/* Bakes every layer of the scene with engine `e`. On failure no output file exists. */
+fb_result fb_bake(fb_engine *e, const fb_bake_desc *desc, fb_bake_stats *stats);
+
+#endif

@@ -1,0 +1,9 @@
+/* `fractalbake bench`: throughput of every generator on each backend, measured in one run. */
+#ifndef FB_BENCH_H
+#define FB_BENCH_H
+
+#include "fb.h"
+
+fb_result fb_bench_main(int argc, char **argv);
+
+#endif

@@ -1,0 +1,615 @@
+/*
+ * OpenEXR writing and reading through OpenEXRCore. See exrio.h.
+ */
+#include "exrio.h"
+
+#include <openexr.h>
+
+#include <errno.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* OpenEXRCore reports details through a callback; keep the last message of this thread so that
+ * the error line we log can carry it. The library itself never prints. */
+static _Thread_local char t_exr_msg[512];
+
+static void exr_error_cb(exr_const_context_t ctxt, exr_result_t code, const char *msg)
+{
+    (void)ctxt;
+    snprintf(t_exr_msg, sizeof t_exr_msg, "%s (%s)", msg ? msg : "", exr_get_default_error_message(code));
+}
+
+static exr_context_initializer_t initializer(void)
+{
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = exr_error_cb;
+    return init;
+}
+
+int exrio_compression_parse(const char *s)
+{
+    if (!strcmp(s, "none")) return EXRIO_NONE;
+    if (!strcmp(s, "zip")) return EXRIO_ZIP;
+    if (!strcmp(s, "piz")) return EXRIO_PIZ;
+    return -1;
+}
+
+const char *exrio_compression_name(exrio_compression c)
+{
+    return c == EXRIO_ZIP ? "zip" : c == EXRIO_PIZ ? "piz" : "none";
+}
+
+const char *exrio_type_name(exrio_type t)
+{
+    return t == EXRIO_UINT ? "uint" : t == EXRIO_HALF ? "half" : "float";
+}
+
+static exr_pixel_type_t pixel_type(exrio_type t)
+{
+    return t == EXRIO_UINT ? EXR_PIXEL_UINT : t == EXRIO_HALF ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
+}
+
+/* ---- writer --------------------------------------------------------------------------------- */
+
+/* One batch of whole chunks: the rows as given (4 bytes a value), then the compressed chunks. */
+typedef struct batch {
+    int y0, nrows;
+    uint8_t *rows; /* nchannels planes of nrows * width values */
+    int nchunks;
+    void **chunk_data; /* compressed bytes of each chunk, written in order */
+    uint64_t *chunk_size;
+    bool done;
+    struct batch *next; /* queue link */
+} batch;
+
+struct exrio_writer {
+    exr_context_t ctx;
+    char path[4096], tmp[4200];
+    int width, height, nchannels;
+    exrio_type *types;
+    int *file_order; /* file_order[i]: index into the caller's channel list of the file's i-th channel */
+    int chunk_rows, batch_rows;
+    size_t plane_bytes_per_row;
+
+    batch *filling; /* the batch receiving rows */
+    int next_row;
+
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+    batch *queue_head, *queue_tail; /* not yet taken by a worker */
+    batch **order;                  /* every submitted batch by sequence, for in-order commit */
+    int submitted, committed, in_flight, max_in_flight;
+    bool stopping;
+    fb_result error;
+    char error_msg[600];
+    pthread_t *threads;
+    int nthreads;
+};
+
+static void batch_free(batch *b)
+{
+    if (!b) return;
+    for (int i = 0; i < b->nchunks && b->chunk_data; i++) free(b->chunk_data[i]);
+    free(b->chunk_data);
+    free(b->chunk_size);
+    free(b->rows);
+    free(b);
+}
+
+static void set_error(exrio_writer *w, fb_result rc, const char *msg)
+{
+    if (w->error) return;
+    w->error = rc;
+    snprintf(w->error_msg, sizeof w->error_msg, "%s", msg);
+}
+
+/* Packs and compresses every chunk of a batch (no lock held: OpenEXRCore allows concurrent encoding
+ * of different chunks; we clear yield/write so that nothing is written from here). */
+static fb_result encode_batch(exrio_writer *w, batch *b, char *msg, size_t msgsz)
+{
+    exr_encode_pipeline_t enc = {0};
+    bool init = false;
+    fb_result rc = FB_OK;
+    for (int k = 0; k < b->nchunks; k++) {
+        int y = b->y0 + k * w->chunk_rows;
+        exr_chunk_info_t cinfo;
+        exr_result_t er = exr_write_scanline_chunk_info(w->ctx, 0, y, &cinfo);
+        if (er == EXR_ERR_SUCCESS)
+            er = init ? exr_encoding_update(w->ctx, 0, &cinfo, &enc) : exr_encoding_initialize(w->ctx, 0, &cinfo, &enc);
+        if (er != EXR_ERR_SUCCESS) goto exr_fail;
+        init = true;
+        int rows_here = cinfo.height;
+        for (int c = 0; c < enc.channel_count; c++) {
+            int src = w->file_order[c];
+            size_t row_bytes = (size_t)w->width * 4;
+            enc.channels[c].encode_from_ptr =
+                b->rows + (size_t)src * b->nrows * row_bytes + (size_t)(y - b->y0) * row_bytes;
+            enc.channels[c].user_pixel_stride = 4;
+            enc.channels[c].user_line_stride = (int32_t)row_bytes;
+            enc.channels[c].user_bytes_per_element = 4;
+            enc.channels[c].user_data_type = w->types[src] == EXRIO_UINT ? EXR_PIXEL_UINT : EXR_PIXEL_FLOAT;
+        }
+        (void)rows_here;
+        er = exr_encoding_choose_default_routines(w->ctx, 0, &enc);
+        if (er != EXR_ERR_SUCCESS) goto exr_fail;
+        enc.yield_until_ready_fn = NULL;
+        enc.write_fn = NULL;
+        er = exr_encoding_run(w->ctx, 0, &enc);
+        if (er != EXR_ERR_SUCCESS) goto exr_fail;
+        b->chunk_size[k] = enc.compressed_bytes;
+        b->chunk_data[k] = malloc(enc.compressed_bytes ? enc.compressed_bytes : 1);
+        if (!b->chunk_data[k]) {
+            snprintf(msg, msgsz, "out of memory compressing rows %d..%d", y, y + cinfo.height - 1);
+            rc = FB_ERR_NOMEM;
+            goto out;
+        }
+        memcpy(b->chunk_data[k], enc.compressed_buffer, enc.compressed_bytes);
+        continue;
+    exr_fail:
+        snprintf(msg, msgsz, "%s: encoding rows from %d failed: %s", w->path, y, t_exr_msg);
+        rc = FB_ERR_EXR;
+        goto out;
+    }
+out:
+    if (init) exr_encoding_destroy(w->ctx, &enc);
+    free(b->rows); /* the raw rows are no longer needed: keep only compressed data in memory */
+    b->rows = NULL;
+    return rc;
+}
+
+/* Writes, in order, every finished batch at the head of the sequence. Called with w->mu held;
+ * only one thread commits at a time because the lock is held throughout. */
+static void commit_ready(exrio_writer *w)
+{
+    while (w->committed < w->submitted && w->order[w->committed] && w->order[w->committed]->done) {
+        batch *b = w->order[w->committed];
+        for (int k = 0; k < b->nchunks && !w->error; k++) {
+            int y = b->y0 + k * w->chunk_rows;
+            exr_result_t er = exr_write_scanline_chunk(w->ctx, 0, y, b->chunk_data[k], b->chunk_size[k]);
+            if (er != EXR_ERR_SUCCESS) {
+                char m[600];
+                snprintf(m, sizeof m, "%s: writing rows from %d failed: %s", w->path, y, t_exr_msg);
+                set_error(w, er == EXR_ERR_WRITE_IO ? FB_ERR_IO : FB_ERR_EXR, m);
+            }
+        }
+        w->order[w->committed] = NULL;
+        batch_free(b);
+        w->committed++;
+        w->in_flight--;
+        pthread_cond_broadcast(&w->cv);
+    }
+}
+
+static void *worker_main(void *arg)
+{
+    exrio_writer *w = arg;
+    pthread_mutex_lock(&w->mu);
+    for (;;) {
+        while (!w->queue_head && !w->stopping) pthread_cond_wait(&w->cv, &w->mu);
+        if (!w->queue_head) break;
+        batch *b = w->queue_head;
+        w->queue_head = b->next;
+        if (!w->queue_head) w->queue_tail = NULL;
+        bool skip = w->error != FB_OK;
+        pthread_mutex_unlock(&w->mu);
+        char msg[600] = "";
+        fb_result rc = skip ? FB_OK : encode_batch(w, b, msg, sizeof msg);
+        pthread_mutex_lock(&w->mu);
+        if (rc) set_error(w, rc, msg);
+        b->done = true;
+        commit_ready(w);
+    }
+    pthread_mutex_unlock(&w->mu);
+    return NULL;
+}
+
+static batch *batch_new(exrio_writer *w, int y0)
+{
+    batch *b = calloc(1, sizeof *b);
+    if (!b) return NULL;
+    b->y0 = y0;
+    b->nrows = w->batch_rows;
+    if (y0 + b->nrows > w->height) b->nrows = w->height - y0;
+    b->nchunks = (b->nrows + w->chunk_rows - 1) / w->chunk_rows;
+    b->rows = malloc(w->plane_bytes_per_row * (size_t)w->nchannels * (size_t)b->nrows);
+    b->chunk_data = calloc((size_t)b->nchunks, sizeof *b->chunk_data);
+    b->chunk_size = calloc((size_t)b->nchunks, sizeof *b->chunk_size);
+    if (!b->rows || !b->chunk_data || !b->chunk_size) {
+        batch_free(b);
+        return NULL;
+    }
+    return b;
+}
+
+fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
+{
+    fb_result rc = FB_OK;
+    exrio_writer *w = calloc(1, sizeof *w);
+    if (!w) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    pthread_mutex_init(&w->mu, NULL);
+    pthread_cond_init(&w->cv, NULL);
+    snprintf(w->path, sizeof w->path, "%s", d->path);
+    w->width = d->width;
+    w->height = d->height;
+    w->nchannels = d->nchannels;
+    w->plane_bytes_per_row = (size_t)d->width * 4;
+
+    /* The temporary file lives beside the target so that rename() is atomic (same file system). */
+    const char *slash = strrchr(d->path, '/');
+    int dirlen = slash ? (int)(slash - d->path + 1) : 0;
+    snprintf(w->tmp, sizeof w->tmp, "%.*s.%s.%ld.tmp", dirlen, d->path, d->path + dirlen, (long)getpid());
+
+    exr_context_initializer_t init = initializer();
+    exr_result_t er = exr_start_write(&w->ctx, w->tmp, EXR_WRITE_FILE_DIRECTLY, &init);
+    if (er != EXR_ERR_SUCCESS) {
+        int e = errno;
+        w->ctx = NULL;
+        rc = fb_fail(FB_ERR_IO, "%s: cannot create output file: %s", d->path, e ? strerror(e) : t_exr_msg);
+        goto fail;
+    }
+    int part = 0;
+    exr_compression_t ct = d->compression == EXRIO_ZIP   ? EXR_COMPRESSION_ZIP
+                           : d->compression == EXRIO_PIZ ? EXR_COMPRESSION_PIZ
+                                                         : EXR_COMPRESSION_NONE;
+    er = exr_add_part(w->ctx, "fractalbake", EXR_STORAGE_SCANLINE, &part);
+    if (er == EXR_ERR_SUCCESS) er = exr_initialize_required_attr_simple(w->ctx, part, d->width, d->height, ct);
+    for (int c = 0; c < d->nchannels && er == EXR_ERR_SUCCESS; c++)
+        er = exr_add_channel(w->ctx, part, d->channels[c].name, pixel_type(d->channels[c].type),
+                             d->channels[c].type == EXRIO_UINT ? EXR_PERCEPTUALLY_LINEAR : EXR_PERCEPTUALLY_LOGARITHMIC,
+                             1, 1);
+    for (int a = 0; a < d->nattrs && er == EXR_ERR_SUCCESS; a++)
+        er = exr_attr_set_string(w->ctx, part, d->attrs[a].name, d->attrs[a].value);
+    if (er == EXR_ERR_SUCCESS) er = exr_write_header(w->ctx);
+    if (er != EXR_ERR_SUCCESS) {
+        rc = fb_fail(FB_ERR_EXR, "%s: cannot write the EXR header: %s", d->path, t_exr_msg);
+        goto fail;
+    }
+    int32_t spc = 1;
+    exr_get_scanlines_per_chunk(w->ctx, part, &spc);
+    w->chunk_rows = spc > 0 ? spc : 1;
+    w->batch_rows = w->chunk_rows * (64 / w->chunk_rows > 0 ? 64 / w->chunk_rows : 1);
+
+    /* The file stores channels sorted by name; map each back to the caller's plane index. */
+    const exr_attr_chlist_t *cl = NULL;
+    exr_get_channels(w->ctx, part, &cl);
+    w->types = calloc((size_t)d->nchannels, sizeof *w->types);
+    w->file_order = calloc((size_t)d->nchannels, sizeof *w->file_order);
+    if (!w->types || !w->file_order || !cl || cl->num_channels != d->nchannels) {
+        rc = fb_fail(FB_ERR_INTERNAL, "%s: channel list mismatch (duplicate channel names?)", d->path);
+        goto fail;
+    }
+    for (int c = 0; c < d->nchannels; c++) w->types[c] = d->channels[c].type;
+    for (int i = 0; i < cl->num_channels; i++) {
+        w->file_order[i] = -1;
+        for (int c = 0; c < d->nchannels; c++)
+            if (!strcmp(cl->entries[i].name.str, d->channels[c].name)) w->file_order[i] = c;
+        if (w->file_order[i] < 0) {
+            rc = fb_fail(FB_ERR_INTERNAL, "%s: channel %s lost", d->path, cl->entries[i].name.str);
+            goto fail;
+        }
+    }
+
+    int nbatches = (d->height + w->batch_rows - 1) / w->batch_rows;
+    w->order = calloc((size_t)nbatches + 1, sizeof *w->order);
+    w->nthreads = d->threads > 0 ? d->threads : fb_cpu_count();
+    w->max_in_flight = 2 * w->nthreads + 2;
+    w->threads = calloc((size_t)w->nthreads, sizeof *w->threads);
+    if (!w->order || !w->threads) {
+        rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        goto fail;
+    }
+    for (int t = 0; t < w->nthreads; t++) {
+        if (pthread_create(&w->threads[t], NULL, worker_main, w) != 0) {
+            w->nthreads = t;
+            rc = fb_fail(FB_ERR_INTERNAL, "cannot start EXR compression threads");
+            goto fail;
+        }
+    }
+    *out = w;
+    return FB_OK;
+fail:
+    exrio_writer_abort(&w);
+    return rc;
+}
+
+/* Hands the filled batch to the workers, waiting while too many are in flight. */
+static fb_result submit_filling(exrio_writer *w)
+{
+    batch *b = w->filling;
+    w->filling = NULL;
+    pthread_mutex_lock(&w->mu);
+    while (w->in_flight >= w->max_in_flight && !w->error) pthread_cond_wait(&w->cv, &w->mu);
+    w->order[w->submitted++] = b;
+    w->in_flight++;
+    if (w->queue_tail)
+        w->queue_tail->next = b;
+    else
+        w->queue_head = b;
+    w->queue_tail = b;
+    pthread_cond_broadcast(&w->cv);
+    fb_result rc = w->error;
+    pthread_mutex_unlock(&w->mu);
+    return rc;
+}
+
+fb_result exrio_writer_rows(exrio_writer *w, int y0, int nrows, const void *const *planes)
+{
+    if (y0 != w->next_row || nrows < 0 || y0 + nrows > w->height)
+        return fb_fail(FB_ERR_INTERNAL, "%s: rows %d..%d given out of order (next is %d)", w->path, y0, y0 + nrows - 1,
+                       w->next_row);
+    size_t rb = w->plane_bytes_per_row;
+    int done = 0;
+    while (done < nrows) {
+        if (!w->filling && !(w->filling = batch_new(w, w->next_row)))
+            return fb_fail(FB_ERR_NOMEM, "out of memory buffering rows for %s", w->path);
+        batch *b = w->filling;
+        int at = w->next_row - b->y0;
+        int n = b->nrows - at;
+        if (n > nrows - done) n = nrows - done;
+        for (int c = 0; c < w->nchannels; c++)
+            memcpy(b->rows + ((size_t)c * b->nrows + at) * rb, (const uint8_t *)planes[c] + (size_t)done * rb,
+                   (size_t)n * rb);
+        done += n;
+        w->next_row += n;
+        if (at + n == b->nrows) {
+            fb_result rc = submit_filling(w);
+            if (rc) {
+                pthread_mutex_lock(&w->mu);
+                fb_fail(rc, "%s", w->error_msg);
+                pthread_mutex_unlock(&w->mu);
+                return rc;
+            }
+        }
+    }
+    return FB_OK;
+}
+
+/* Stops the workers after the queue drains. */
+static void stop_workers(exrio_writer *w)
+{
+    pthread_mutex_lock(&w->mu);
+    w->stopping = true;
+    pthread_cond_broadcast(&w->cv);
+    pthread_mutex_unlock(&w->mu);
+    for (int t = 0; t < w->nthreads; t++) pthread_join(w->threads[t], NULL);
+    w->nthreads = 0;
+}
+
+static void writer_free(exrio_writer *w)
+{
+    for (int i = w->committed; i < w->submitted; i++) batch_free(w->order[i]);
+    batch_free(w->filling);
+    free(w->order);
+    free(w->threads);
+    free(w->types);
+    free(w->file_order);
+    pthread_mutex_destroy(&w->mu);
+    pthread_cond_destroy(&w->cv);
+    memset(w, 0, sizeof *w);
+    free(w);
+}
+
+fb_result exrio_writer_finish(exrio_writer **pw)
+{
+    exrio_writer *w = *pw;
+    *pw = NULL;
+    fb_result rc = FB_OK;
+    if (w->next_row != w->height) {
+        rc = fb_fail(FB_ERR_INTERNAL, "%s: finished after %d of %d rows", w->path, w->next_row, w->height);
+    } else if (w->filling) {
+        rc = submit_filling(w);
+        if (rc) fb_fail(rc, "%s", w->error_msg);
+    }
+    stop_workers(w);
+    if (!rc && w->error) rc = fb_fail(w->error, "%s", w->error_msg);
+    exr_result_t er = exr_finish(&w->ctx);
+    if (!rc && er != EXR_ERR_SUCCESS)
+        rc = fb_fail(er == EXR_ERR_WRITE_IO ? FB_ERR_IO : FB_ERR_EXR, "%s: cannot complete the file: %s", w->path,
+                     t_exr_msg);
+    if (!rc && rename(w->tmp, w->path) != 0)
+        rc = fb_fail(FB_ERR_IO, "%s: cannot move the finished file into place: %s", w->path, strerror(errno));
+    if (rc) unlink(w->tmp);
+    writer_free(w);
+    return rc;
+}
+
+void exrio_writer_abort(exrio_writer **pw)
+{
+    if (!pw || !*pw) return;
+    exrio_writer *w = *pw;
+    *pw = NULL;
+    pthread_mutex_lock(&w->mu);
+    w->error = w->error ? w->error : FB_ERR_INTERNAL; /* workers skip what is left */
+    pthread_mutex_unlock(&w->mu);
+    stop_workers(w);
+    if (w->ctx) exr_finish(&w->ctx);
+    unlink(w->tmp);
+    writer_free(w);
+}
+
+/* ---- reader --------------------------------------------------------------------------------- */
+
+struct exrio_reader {
+    exr_context_t ctx;
+    char path[4096];
+    int width, height, x0, y0;
+    int nchannels;
+    const exr_attr_chlist_t *chlist;
+    int chunk_rows;
+    uint8_t *chunk_buf; /* one decoded chunk, all channels */
+};
+
+fb_result exrio_open(const char *path, exrio_reader **out)
+{
+    fb_result rc = FB_OK;
+    FILE *probe = fopen(path, "rb");
+    if (!probe) return fb_fail(FB_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    fclose(probe);
+    exrio_reader *r = calloc(1, sizeof *r);
+    if (!r) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    snprintf(r->path, sizeof r->path, "%s", path);
+    exr_context_initializer_t init = initializer();
+    exr_result_t er = exr_start_read(&r->ctx, path, &init);
+    if (er != EXR_ERR_SUCCESS) {
+        r->ctx = NULL;
+        rc = fb_fail(FB_ERR_INPUT, "%s: not a readable OpenEXR file: %s", path, t_exr_msg);
+        goto fail;
+    }
+    exr_storage_t st;
+    exr_attr_box2i_t dw;
+    if (exr_get_storage(r->ctx, 0, &st) != EXR_ERR_SUCCESS || st != EXR_STORAGE_SCANLINE) {
+        rc = fb_fail(FB_ERR_INPUT, "%s: only scanline (not tiled or deep) EXR files are supported", path);
+        goto fail;
+    }
+    if (exr_get_data_window(r->ctx, 0, &dw) != EXR_ERR_SUCCESS || exr_get_channels(r->ctx, 0, &r->chlist) ||
+        !r->chlist) {
+        rc = fb_fail(FB_ERR_INPUT, "%s: missing data window or channel list", path);
+        goto fail;
+    }
+    r->x0 = dw.min.x;
+    r->y0 = dw.min.y;
+    r->width = dw.max.x - dw.min.x + 1;
+    r->height = dw.max.y - dw.min.y + 1;
+    r->nchannels = r->chlist->num_channels;
+    for (int c = 0; c < r->nchannels; c++)
+        if (r->chlist->entries[c].x_sampling != 1 || r->chlist->entries[c].y_sampling != 1) {
+            rc = fb_fail(FB_ERR_INPUT, "%s: channel %s is subsampled, which is not supported", path,
+                         r->chlist->entries[c].name.str);
+            goto fail;
+        }
+    int32_t spc = 1;
+    exr_get_scanlines_per_chunk(r->ctx, 0, &spc);
+    r->chunk_rows = spc > 0 ? spc : 1;
+    r->chunk_buf = malloc((size_t)r->width * 4 * (size_t)r->chunk_rows * (size_t)(r->nchannels ? r->nchannels : 1));
+    if (!r->chunk_buf) {
+        rc = fb_fail(FB_ERR_NOMEM, "%s: out of memory", path);
+        goto fail;
+    }
+    *out = r;
+    return FB_OK;
+fail:
+    exrio_close(&r);
+    return rc;
+}
+
+void exrio_close(exrio_reader **pr)
+{
+    if (!pr || !*pr) return;
+    exrio_reader *r = *pr;
+    if (r->ctx) exr_finish(&r->ctx);
+    free(r->chunk_buf);
+    memset(r, 0, sizeof *r);
+    free(r);
+    *pr = NULL;
+}
+
+int exrio_width(const exrio_reader *r)
+{
+    return r->width;
+}
+int exrio_height(const exrio_reader *r)
+{
+    return r->height;
+}
+int exrio_nchannels(const exrio_reader *r)
+{
+    return r->nchannels;
+}
+const char *exrio_channel_name(const exrio_reader *r, int c)
+{
+    return r->chlist->entries[c].name.str;
+}
+exrio_type exrio_channel_type(const exrio_reader *r, int c)
+{
+    exr_pixel_type_t t = r->chlist->entries[c].pixel_type;
+    return t == EXR_PIXEL_UINT ? EXRIO_UINT : t == EXR_PIXEL_HALF ? EXRIO_HALF : EXRIO_FLOAT;
+}
+int exrio_find_channel(const exrio_reader *r, const char *name)
+{
+    for (int c = 0; c < r->nchannels; c++)
+        if (!strcmp(exrio_channel_name(r, c), name)) return c;
+    return -1;
+}
+
+const char *exrio_compression_of(const exrio_reader *r)
+{
+    exr_compression_t c = EXR_COMPRESSION_NONE;
+    exr_get_compression(r->ctx, 0, &c);
+    static const char *names[] = {"none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa", "dwab"};
+    return (unsigned)c < sizeof names / sizeof names[0] ? names[c] : "unknown";
+}
+
+const char *exrio_attr_string(const exrio_reader *r, const char *name)
+{
+    const char *s = NULL;
+    int32_t len = 0;
+    if (exr_attr_get_string(r->ctx, 0, name, &len, &s) != EXR_ERR_SUCCESS) return NULL;
+    return s;
+}
+
+int exrio_attr_count(const exrio_reader *r)
+{
+    int32_t n = 0;
+    exr_get_attribute_count(r->ctx, 0, &n);
+    return n;
+}
+
+void exrio_attr_at(const exrio_reader *r, int i, const char **name, const char **type)
+{
+    const exr_attribute_t *a = NULL;
+    *name = "?";
+    *type = "?";
+    if (exr_get_attribute_by_index(r->ctx, 0, EXR_ATTR_LIST_FILE_ORDER, i, &a) == EXR_ERR_SUCCESS && a) {
+        *name = a->name;
+        *type = a->type_name;
+    }
+}
+
+fb_result exrio_read_rows(exrio_reader *r, int y0, int nrows, void *const *planes)
+{
+    if (y0 < 0 || nrows < 0 || y0 + nrows > r->height)
+        return fb_fail(FB_ERR_INTERNAL, "%s: rows %d..%d out of range", r->path, y0, y0 + nrows - 1);
+    fb_result rc = FB_OK;
+    exr_decode_pipeline_t dec = {0};
+    bool init = false;
+    size_t rb = (size_t)r->width * 4;
+    int y = y0;
+    while (y < y0 + nrows) {
+        exr_chunk_info_t cinfo;
+        exr_result_t er = exr_read_scanline_chunk_info(r->ctx, 0, y + r->y0, &cinfo);
+        if (er == EXR_ERR_SUCCESS)
+            er = init ? exr_decoding_update(r->ctx, 0, &cinfo, &dec) : exr_decoding_initialize(r->ctx, 0, &cinfo, &dec);
+        if (er != EXR_ERR_SUCCESS) goto exr_fail;
+        init = true;
+        int cy0 = cinfo.start_y - r->y0, ch = cinfo.height;
+        for (int c = 0; c < dec.channel_count; c++) {
+            int idx = exrio_find_channel(r, dec.channels[c].channel_name);
+            dec.channels[c].decode_to_ptr = r->chunk_buf + (size_t)idx * rb * (size_t)r->chunk_rows;
+            dec.channels[c].user_pixel_stride = 4;
+            dec.channels[c].user_line_stride = (int32_t)rb;
+            dec.channels[c].user_bytes_per_element = 4;
+            dec.channels[c].user_data_type =
+                dec.channels[c].data_type == EXR_PIXEL_UINT ? EXR_PIXEL_UINT : EXR_PIXEL_FLOAT;
+        }
+        er = exr_decoding_choose_default_routines(r->ctx, 0, &dec);
+        if (er == EXR_ERR_SUCCESS) er = exr_decoding_run(r->ctx, 0, &dec);
+        if (er != EXR_ERR_SUCCESS) goto exr_fail;
+        int from = y > cy0 ? y : cy0;
+        int to = (y0 + nrows < cy0 + ch) ? y0 + nrows : cy0 + ch;
+        for (int c = 0; c < r->nchannels; c++) {
+            if (!planes[c]) continue;
+            const uint8_t *src = r->chunk_buf + (size_t)c * rb * (size_t)r->chunk_rows + (size_t)(from - cy0) * rb;
+            memcpy((uint8_t *)planes[c] + (size_t)(from - y0) * rb, src, (size_t)(to - from) * rb);
+        }
+        y = to;
+        continue;
+    exr_fail:
+        rc = fb_fail(FB_ERR_INPUT, "%s: cannot decode rows from %d: %s", r->path, y, t_exr_msg);
+        break;
+    }
+    if (init) exr_decoding_destroy(r->ctx, &dec);
+    return rc;
+}

@@ -1,0 +1,90 @@
+/*
+ * exrio: OpenEXR files through OpenEXRCore (the C library).
+ *
+ * The writer takes rows in order, as a generator produces them, and never holds the image:
+ * rows are gathered into batches of whole chunks, each batch is packed and compressed by one of
+ * `threads` workers, and the compressed chunks are written in order by whichever worker finishes
+ * the batch that is next. The file is written under a temporary name in the target folder and
+ * renamed into place by exrio_writer_finish, so a failed or interrupted bake leaves no partial file.
+ */
+#ifndef FB_EXRIO_H
+#define FB_EXRIO_H
+
+#include "fb.h"
+
+#include <stdbool.h>
+
+typedef enum exrio_type { EXRIO_UINT = 0, EXRIO_HALF = 1, EXRIO_FLOAT = 2 } exrio_type;
+typedef enum exrio_compression { EXRIO_NONE = 0, EXRIO_ZIP = 1, EXRIO_PIZ = 2 } exrio_compression;
+
+/* "none", "zip", "piz" -> enum; -1 when unknown. */
+int exrio_compression_parse(const char *s);
+const char *exrio_compression_name(exrio_compression c);
+const char *exrio_type_name(exrio_type t);
+
+typedef struct exrio_channel {
+    const char *name; /* "layer.channel" */
+    exrio_type type;  /* stored type; rows are given as float for HALF/FLOAT, uint32 for UINT */
+} exrio_channel;
+
+typedef struct exrio_attr {
+    const char *name;
+    const char *value; /* stored as an EXR string attribute */
+} exrio_attr;
+
+typedef struct exrio_writer_desc {
+    const char *path;
+    int width, height;
+    exrio_compression compression;
+    const exrio_channel *channels;
+    int nchannels;
+    const exrio_attr *attrs;
+    int nattrs;
+    int threads; /* compression workers; 0: one per core */
+} exrio_writer_desc;
+
+typedef struct exrio_writer exrio_writer;
+
+/* Opens the temporary file and writes the header. */
+fb_result exrio_writer_create(const exrio_writer_desc *desc, exrio_writer **out);
+
+/* Appends rows [y0, y0 + nrows) (y0 must be the next row not yet written). planes[c] points to
+ * nrows * width values of channel c, 4 bytes each. The data is copied; the call may wait while
+ * the compression queue is full. */
+fb_result exrio_writer_rows(exrio_writer *w, int y0, int nrows, const void *const *planes);
+
+/* Waits for the last chunks, completes the file and renames it into place. Frees the writer,
+ * whatever the result; on failure the temporary file is removed. */
+fb_result exrio_writer_finish(exrio_writer **w);
+
+/* Abandons the file: the temporary file is removed, nothing is renamed. Null-safe. */
+void exrio_writer_abort(exrio_writer **w);
+
+/* ---- reading -------------------------------------------------------------------------------- */
+
+typedef struct exrio_reader exrio_reader;
+
+fb_result exrio_open(const char *path, exrio_reader **out);
+void exrio_close(exrio_reader **r);
+
+int exrio_width(const exrio_reader *r);
+int exrio_height(const exrio_reader *r);
+int exrio_nchannels(const exrio_reader *r);
+const char *exrio_channel_name(const exrio_reader *r, int c);
+exrio_type exrio_channel_type(const exrio_reader *r, int c);
+/* Index of the channel named `name`, or -1. */
+int exrio_find_channel(const exrio_reader *r, const char *name);
+const char *exrio_compression_of(const exrio_reader *r);
+
+/* The value of a string attribute, or NULL. Valid until exrio_close. */
+const char *exrio_attr_string(const exrio_reader *r, const char *name);
+
+/* Attribute i of exrio_attr_count: its name and type name. */
+int exrio_attr_count(const exrio_reader *r);
+void exrio_attr_at(const exrio_reader *r, int i, const char **name, const char **type);
+
+/* Reads rows [y0, y0 + nrows) of the channels whose planes[c] is not NULL; UINT channels as
+ * uint32, the others as float. */
+fb_result exrio_read_rows(exrio_reader *r, int y0, int nrows, void *const *planes);
+
+#endif

@@ -1,0 +1,65 @@
+/*
+ * fractalbake: the types every host module shares: the result code, the logger, small helpers.
+ *
+ * Library code (everything but main.c) never prints and never exits: it returns an fb_result and
+ * hands text to the logger, whose sink main() chooses.
+ */
+#ifndef FB_H
+#define FB_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#define FB_VERSION "0.1.0"
+
+typedef int32_t fb_result;
+
+enum {
+    FB_OK = 0,
+    FB_ERR_USAGE = 1,    /* bad flag or argument (exit 2) */
+    FB_ERR_INPUT = 2,    /* bad input data: scene, file contents, values (exit 2) */
+    FB_ERR_IO = 3,       /* file system: cannot open, write, rename (exit 3) */
+    FB_ERR_NOMEM = 4,    /* allocation failed (exit 3) */
+    FB_ERR_VULKAN = 5,   /* a Vulkan call failed (exit 3) */
+    FB_ERR_NODEVICE = 6, /* no Vulkan loader or no device (exit 3 when vulkan was asked for) */
+    FB_ERR_EXR = 7,      /* OpenEXRCore reported an error (exit 3) */
+    FB_ERR_INTERNAL = 8, /* an impossible state was reached (exit 3) */
+};
+
+/* A short name for a result code ("bad input", "vulkan error", ...). */
+const char *fb_result_string(fb_result r);
+
+/* The process exit code DESIGN.md assigns to a result: 0, 2 (usage, input) or 3 (runtime). */
+int fb_result_exit_code(fb_result r);
+
+/* Log levels. Errors are the one line a user sees when a command fails. */
+enum { FB_LOG_ERROR = 0, FB_LOG_WARN = 1, FB_LOG_INFO = 2, FB_LOG_DEBUG = 3 };
+
+typedef void (*fb_log_fn)(int level, const char *msg, void *user);
+
+/* Routes log text to fn (NULL restores the default: nothing). */
+void fb_log_set_sink(fb_log_fn fn, void *user);
+
+/* Formats a message and hands it to the sink. Returns `r` so that callers can write
+ * `return fb_fail(FB_ERR_INPUT, "size: expected ...")`. */
+fb_result fb_fail(fb_result r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+void fb_log(int level, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/* SQLite's defensive-check idiom: conditions that must never happen. In debug builds they abort;
+ * in release builds they still evaluate and let the caller take the error path. */
+#ifdef NDEBUG
+#define ALWAYS(x) (x)
+#define NEVER(x)  (x)
+#else
+#include <assert.h>
+#define ALWAYS(x) ((x) ? 1 : (assert(0), 0))
+#define NEVER(x)  ((x) ? (assert(0), 1) : 0)
+#endif
+
+/* Seconds on a monotonic clock. */
+double fb_now(void);
+
+/* Number of online CPU cores (at least 1). */
+int fb_cpu_count(void);
+
+#endif

@@ -1,0 +1,44 @@
+/*
+ * Generators: what the bake driver needs to know about each layer kind. A generator fills the
+ * rows [y0, y0 + n) of its layer's channels, either in C (native backend; must be a pure function
+ * of the pixel so that any split over threads gives the same bits) or by a compute shader over the
+ * same kernel (vulkan backend), one storage buffer per channel.
+ */
+#ifndef FB_GEN_H
+#define FB_GEN_H
+
+#include "exrio.h"
+#include "scene.h"
+
+#define FB_GEN_MAX_CHANNELS 8
+#define FB_GEN_MAX_PUSH     128
+
+typedef struct fb_gen fb_gen;
+
+struct fb_gen {
+    const fb_scene *scene;
+    const fb_layer *layer;
+    int nchannels;
+    char channel_names[FB_GEN_MAX_CHANNELS][80];
+    exrio_type channel_types[FB_GEN_MAX_CHANNELS];
+
+    /* native: fill rows [y0, y0 + n); planes[c] holds n * width values (4 bytes each) */
+    void (*native_rows)(const fb_gen *g, int y0, int n, void *const *planes);
+
+    /* vulkan: the shader, its push constants for a strip, and its workgroup counts */
+    const uint32_t *spv;
+    size_t spv_size;
+    uint32_t push_size;
+    void (*push)(const fb_gen *g, int y0, int n, void *out);
+    void (*groups)(const fb_gen *g, int n, uint32_t out[3]);
+
+    unsigned char params[256]; /* generator-private, e.g. K_FbmParams */
+};
+
+/* Sets up the generator of `layer`. */
+fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer);
+
+/* Per kind. */
+fb_result fb_gen_fbm_init(fb_gen *g);
+
+#endif

@@ -1,0 +1,103 @@
+/*
+ * The fBm generator: kernels/fbm.h, driven natively or by shaders/fbm.comp.
+ */
+#include "../gen.h"
+
+#include "../../kernels/fbm.h"
+#include "fbm_comp.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <string.h>
+
+/* The push-constant block of shaders/fbm.comp. std430 with scalars only: offsets are the C ones. */
+typedef struct fbm_push {
+    K_FbmParams p;
+    uint32_t y0;
+    uint32_t rows;
+} fbm_push;
+
+_Static_assert(offsetof(K_FbmParams, seed) == 0, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, noise) == 4, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, octaves) == 8, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, flags) == 12, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, gain) == 16, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, lacunarity) == 20, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, rot_c) == 24, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, rot_s) == 28, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, freq_x) == 32, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, freq_y) == 36, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, offset_x) == 40, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, offset_y) == 44, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, warp) == 48, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, width) == 52, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, height) == 56, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, pad0) == 60, "std430 offset");
+_Static_assert(offsetof(fbm_push, y0) == 64 && offsetof(fbm_push, rows) == 68, "std430 offset");
+_Static_assert(sizeof(fbm_push) == 72 && sizeof(fbm_push) <= FB_GEN_MAX_PUSH, "push constants");
+_Static_assert(sizeof(K_FbmParams) <= sizeof(((fb_gen *)0)->params), "params fit");
+
+static const K_FbmParams *params(const fb_gen *g)
+{
+    return (const K_FbmParams *)(const void *)g->params;
+}
+
+static void fbm_rows(const fb_gen *g, int y0, int n, void *const *planes)
+{
+    const K_FbmParams *p = params(g);
+    float *out = planes[0];
+    for (int r = 0; r < n; r++)
+        for (uint32_t x = 0; x < p->width; x++) out[(size_t)r * p->width + x] = k_fbm_pixel(*p, x, (uint32_t)(y0 + r));
+}
+
+static void fbm_push_fn(const fb_gen *g, int y0, int n, void *out)
+{
+    fbm_push push = {.p = *params(g), .y0 = (uint32_t)y0, .rows = (uint32_t)n};
+    memcpy(out, &push, sizeof push);
+}
+
+static void fbm_groups(const fb_gen *g, int n, uint32_t out[3])
+{
+    out[0] = (params(g)->width + 63) / 64;
+    out[1] = (uint32_t)n;
+    out[2] = 1;
+}
+
+/* Fills K_FbmParams from a validated layer. */
+static void fb_fbm_params_fill(const fb_scene *s, const fb_layer *L, K_FbmParams *p)
+{
+    const fb_fbm_params *f = &L->fbm;
+    memset(p, 0, sizeof *p);
+    p->seed = s->seed;
+    p->noise = f->noise;
+    p->octaves = (uint32_t)f->octaves;
+    p->flags = (f->ridged ? K_FBM_RIDGED : 0u) | (f->billow ? K_FBM_BILLOW : 0u) | (f->tileable ? K_FBM_TILEABLE : 0u);
+    p->gain = (float)f->gain;
+    p->lacunarity = (float)f->lacunarity;
+    double a = f->rotation * 3.14159265358979323846 / 180.0;
+    p->rot_c = (float)cos(a);
+    p->rot_s = (float)sin(a);
+    p->freq_x = (float)f->frequency;
+    p->freq_y = (float)(f->frequency * s->height / s->width); /* square cells */
+    p->offset_x = (float)f->offset[0];
+    p->offset_y = (float)f->offset[1];
+    p->warp = (float)f->warp;
+    p->width = (uint32_t)s->width;
+    p->height = (uint32_t)s->height;
+}
+
+fb_result fb_gen_fbm_init(fb_gen *g)
+{
+    fb_fbm_params_fill(g->scene, g->layer, (K_FbmParams *)(void *)g->params);
+    g->nchannels = 1;
+    snprintf(g->channel_names[0], sizeof g->channel_names[0], "%s.Y", g->layer->name);
+    g->channel_types[0] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
+    g->native_rows = fbm_rows;
+    g->spv = fbm_comp;
+    g->spv_size = sizeof fbm_comp;
+    g->push_size = sizeof(fbm_push);
+    g->push = fbm_push_fn;
+    g->groups = fbm_groups;
+    return FB_OK;
+}

@@ -1,0 +1,15 @@
+#include "../gen.h"
+
+#include <string.h>
+
+fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer)
+{
+    memset(g, 0, sizeof *g);
+    g->scene = scene;
+    g->layer = layer;
+    switch (layer->kind) {
+    case FB_LAYER_FBM:
+        return fb_gen_fbm_init(g);
+    }
+    return fb_fail(FB_ERR_INTERNAL, "layer %s: no generator", layer->name);
+}

@@ -1,0 +1,359 @@
+/*
+ * fractalbake: the command line. The only place that decides what the user sees and how the
+ * process exits (0 ok, 1 comparison beyond threshold, 2 bad usage or input, 3 runtime failure).
+ */
+#include "bake.h"
+#include "bench.h"
+#include "compare.h"
+#include "scene.h"
+#include "vkc.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The first error is the one line the user sees; warnings are shown as they come. */
+static char g_first_error[2048];
+static bool g_quiet_warnings;
+
+static void sink(int level, const char *msg, void *user)
+{
+    (void)user;
+    if (level == FB_LOG_ERROR) {
+        if (!g_first_error[0]) snprintf(g_first_error, sizeof g_first_error, "%s", msg);
+    } else if (level == FB_LOG_WARN && !g_quiet_warnings) {
+        fprintf(stderr, "fractalbake: warning: %s\n", msg);
+    }
+}
+
+static int finish(fb_result rc)
+{
+    if (rc) fprintf(stderr, "fractalbake: %s\n", g_first_error[0] ? g_first_error : fb_result_string(rc));
+    return fb_result_exit_code(rc);
+}
+
+static int usage_error(const char *fmt, const char *arg)
+{
+    fprintf(stderr, "fractalbake: ");
+    fprintf(stderr, fmt, arg);
+    fprintf(stderr, "\n");
+    return 2;
+}
+
+static void print_line(const char *line, void *user)
+{
+    fprintf(user ? (FILE *)user : stdout, "%s\n", line);
+}
+
+static const char *const k_usage =
+    "usage: fractalbake COMMAND [options]\n"
+    "\n"
+    "commands:\n"
+    "  render [SCENE.json] [-o OUT.exr]   bake every layer of a scene (no scene: the embedded default)\n"
+    "  fbm [options] -o OUT.exr           fBm noise, one layer (fractalbake fbm --help lists the options)\n"
+    "  compare A.exr B.exr [thresholds]   exit 0 within thresholds, 1 beyond, 2 on error\n"
+    "  info FILE.exr                      layers, channels, types, attributes and the stored scene\n"
+    "  devices                            the Vulkan devices found, and which one is chosen\n"
+    "  bench [--json] [--size WxH]        throughput of every generator on each backend\n"
+    "\n"
+    "common options:\n"
+    "  -o, --output FILE     output EXR (written to a temporary file, renamed when complete)\n"
+    "  --preview FILE.png    also write a PNG preview of the first layer\n"
+    "  --backend B           vulkan | native (default: vulkan if a device exists, else native)\n"
+    "  --device D            Vulkan device index or name substring (see `fractalbake devices`)\n"
+    "  --threads N           native threads and EXR compression threads (default: all cores)\n"
+    "  --strip-rows N        rows computed per strip (the result does not depend on it)\n"
+    "  --validation          enable VK_LAYER_KHRONOS_validation (also FB_VK_VALIDATION=1)\n"
+    "  --quiet               no progress bar, no warnings\n"
+    "  --help, --version\n"
+    "\n"
+    "exit codes: 0 success, 1 comparison beyond threshold, 2 bad usage or input, 3 runtime failure\n";
+
+/* Options every baking command shares. */
+typedef struct common_opts {
+    const char *out, *preview, *device;
+    fb_backend backend;
+    int threads, strip_rows;
+    bool quiet, validation, help;
+} common_opts;
+
+static bool parse_int_arg(const char *s, long lo, long hi, int *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (!*s || *end || errno || v < lo || v > hi) return false;
+    *out = (int)v;
+    return true;
+}
+
+/* Consumes a common option at argv[*i]; returns 1 if consumed, 0 if not common, -1 on error (logged). */
+static int common_option(int argc, char **argv, int *i, common_opts *o)
+{
+    const char *a = argv[*i];
+    const char *val = *i + 1 < argc ? argv[*i + 1] : NULL;
+#define NEED_VALUE()                                                                                                   \
+    do {                                                                                                               \
+        if (!val) {                                                                                                    \
+            fb_fail(FB_ERR_USAGE, "%s: missing value", a);                                                             \
+            return -1;                                                                                                 \
+        }                                                                                                              \
+        (*i)++;                                                                                                        \
+    } while (0)
+    if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
+        NEED_VALUE();
+        o->out = val;
+    } else if (!strcmp(a, "--preview")) {
+        NEED_VALUE();
+        o->preview = val;
+    } else if (!strcmp(a, "--device")) {
+        NEED_VALUE();
+        o->device = val;
+    } else if (!strcmp(a, "--backend")) {
+        NEED_VALUE();
+        if (!strcmp(val, "vulkan"))
+            o->backend = FB_BACKEND_VULKAN;
+        else if (!strcmp(val, "native"))
+            o->backend = FB_BACKEND_NATIVE;
+        else {
+            fb_fail(FB_ERR_USAGE, "--backend: expected vulkan or native, found \"%s\"", val);
+            return -1;
+        }
+    } else if (!strcmp(a, "--threads")) {
+        NEED_VALUE();
+        if (!parse_int_arg(val, 1, 1024, &o->threads)) {
+            fb_fail(FB_ERR_USAGE, "--threads: expected an integer in 1..1024, found \"%s\"", val);
+            return -1;
+        }
+    } else if (!strcmp(a, "--strip-rows")) {
+        NEED_VALUE();
+        if (!parse_int_arg(val, 1, FB_MAX_DIM, &o->strip_rows)) {
+            fb_fail(FB_ERR_USAGE, "--strip-rows: expected an integer in 1..%d, found \"%s\"", FB_MAX_DIM, val);
+            return -1;
+        }
+    } else if (!strcmp(a, "--quiet")) {
+        o->quiet = true;
+    } else if (!strcmp(a, "--validation")) {
+        o->validation = true;
+    } else if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+        o->help = true;
+    } else {
+        return 0;
+    }
+    return 1;
+#undef NEED_VALUE
+}
+
+static fb_result bake_scene(const fb_scene *scene, const common_opts *o)
+{
+    fb_engine e;
+    fb_result rc = fb_engine_open(
+        &(fb_engine_desc){
+            .backend = o->backend, .device = o->device, .threads = o->threads, .validation = o->validation},
+        &e);
+    if (rc) return rc;
+    fb_bake_stats st;
+    rc = fb_bake(
+        &e,
+        &(fb_bake_desc){
+            .scene = scene, .out = o->out, .preview = o->preview, .strip_rows = o->strip_rows, .progress = !o->quiet},
+        &st);
+    if (!rc && !o->quiet)
+        fprintf(stderr, "fractalbake: wrote %s (%d x %d, %d layer%s) in %.2f s on %s\n", o->out, scene->width,
+                scene->height, scene->nlayers, scene->nlayers == 1 ? "" : "s", st.seconds, e.device);
+    fb_engine_close(&e);
+    return rc;
+}
+
+static int cmd_generator(const char *kind, int argc, char **argv)
+{
+    common_opts o = {0};
+    char **gen_args = calloc((size_t)argc + 1, sizeof *gen_args);
+    int ngen = 0;
+    fb_result rc = FB_OK;
+    if (!gen_args) return finish(fb_fail(FB_ERR_NOMEM, "out of memory"));
+    for (int i = 0; i < argc; i++) {
+        int c = common_option(argc, argv, &i, &o);
+        if (c < 0) {
+            free(gen_args);
+            return finish(FB_ERR_USAGE);
+        }
+        if (c > 0) continue;
+        gen_args[ngen++] = argv[i];
+        if (strncmp(argv[i], "--", 2) == 0 && fb_scene_flag_arity(kind, argv[i] + 2) == 1 && i + 1 < argc)
+            gen_args[ngen++] = argv[++i];
+    }
+    if (o.help) {
+        printf("usage: fractalbake %s [options] -o OUT.exr [--preview OUT.png]\n\noptions (each is also a scene key of "
+               "the same name):\n",
+               kind);
+        fb_scene_print_keys(kind, print_line, stdout);
+        printf("\nand the common options of `fractalbake --help`.\n");
+        free(gen_args);
+        return 0;
+    }
+    g_quiet_warnings = o.quiet;
+    char *json = NULL;
+    fb_scene scene = {0};
+    rc = fb_scene_from_flags(kind, ngen, gen_args, &json);
+    if (!rc) rc = fb_scene_parse(json, NULL, &scene);
+    if (!rc && !o.out) rc = fb_fail(FB_ERR_USAGE, "-o: missing output file (fractalbake %s ... -o OUT.exr)", kind);
+    if (!rc) rc = bake_scene(&scene, &o);
+    fb_scene_fini(&scene);
+    free(json);
+    free(gen_args);
+    return finish(rc);
+}
+
+static int cmd_render(int argc, char **argv)
+{
+    common_opts o = {0};
+    const char *scene_path = NULL;
+    for (int i = 0; i < argc; i++) {
+        int c = common_option(argc, argv, &i, &o);
+        if (c < 0) return finish(FB_ERR_USAGE);
+        if (c > 0) continue;
+        if (argv[i][0] == '-') return usage_error("%s: unknown flag for `fractalbake render`", argv[i]);
+        if (scene_path) return usage_error("%s: only one scene file may be given", argv[i]);
+        scene_path = argv[i];
+    }
+    if (o.help) {
+        printf("usage: fractalbake render [SCENE.json] [-o OUT.exr] [--preview OUT.png]\n"
+               "Bakes every layer of the scene into one EXR. Without SCENE.json, bakes the embedded default scene.\n"
+               "Default output: fractalbake.exr in the current folder.\n");
+        return 0;
+    }
+    g_quiet_warnings = o.quiet;
+    if (!o.out) o.out = "fractalbake.exr";
+    fb_scene scene;
+    fb_result rc = scene_path ? fb_scene_load(scene_path, &scene)
+                              : fb_scene_parse(fb_scene_default_json(), "(default scene)", &scene);
+    if (!rc) rc = bake_scene(&scene, &o);
+    fb_scene_fini(&scene);
+    return finish(rc);
+}
+
+static bool parse_double_arg(const char *s, double *out)
+{
+    char *end;
+    errno = 0;
+    *out = strtod(s, &end);
+    return *s && !*end && errno == 0 && *out == *out && *out > -1e300 && *out < 1e300;
+}
+
+static int cmd_compare(int argc, char **argv)
+{
+    fb_compare_desc d = {.print = print_line};
+    const char *files[2];
+    int nfiles = 0;
+    for (int i = 0; i < argc; i++) {
+        const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
+        double *dst = NULL;
+        bool *has = NULL;
+        if (!strcmp(a, "--max-abs")) dst = &d.max_abs, has = &d.has_max_abs;
+        if (!strcmp(a, "--rmse")) dst = &d.rmse, has = &d.has_rmse;
+        if (!strcmp(a, "--psnr")) dst = &d.psnr, has = &d.has_psnr;
+        if (!strcmp(a, "--fail-percent")) dst = &d.fail_percent, has = &d.has_fail_percent;
+        if (dst) {
+            if (!val) return usage_error("%s: missing value", a);
+            if (!parse_double_arg(val, dst) || *dst < 0) return usage_error("%s: expected a finite number >= 0", a);
+            *has = true;
+            i++;
+        } else if (!strcmp(a, "--layer") || !strcmp(a, "--diff")) {
+            if (!val) return usage_error("%s: missing value", a);
+            *(!strcmp(a, "--layer") ? &d.layer : &d.diff) = val;
+            i++;
+        } else if (!strcmp(a, "--ignore-missing")) {
+            d.ignore_missing = true;
+        } else if (!strcmp(a, "--help")) {
+            printf("usage: fractalbake compare A.exr B.exr [--layer L] [--max-abs E] [--rmse E] [--psnr DB]\n"
+                   "                          [--fail-percent P] [--ignore-missing] [--diff OUT.exr]\n"
+                   "Per channel: max abs error and where, RMSE, PSNR, percent of pixels beyond --max-abs.\n"
+                   "With no threshold every pixel must be equal. --fail-percent P fails only when more than P%%\n"
+                   "of the pixels exceed --max-abs. Exit 0 within thresholds, 1 beyond, 2 on error.\n");
+            return 0;
+        } else if (a[0] == '-' && a[1]) {
+            return usage_error("%s: unknown flag for `fractalbake compare`", a);
+        } else if (nfiles < 2) {
+            files[nfiles++] = a;
+        } else {
+            return usage_error("%s: compare takes exactly two files", a);
+        }
+    }
+    if (nfiles != 2) return usage_error("%s", "compare: expected two EXR files: fractalbake compare A.exr B.exr");
+    d.a = files[0];
+    d.b = files[1];
+    bool pass = false;
+    fb_result rc = fb_compare(&d, &pass);
+    if (rc) {
+        finish(rc);
+        return 2; /* compare: any error is exit 2, distinct from "beyond threshold" */
+    }
+    printf("%s\n", pass ? "result: within thresholds" : "result: BEYOND thresholds");
+    return pass ? 0 : 1;
+}
+
+static int cmd_info(int argc, char **argv)
+{
+    if (argc != 1 || argv[0][0] == '-') {
+        if (argc == 1 && !strcmp(argv[0], "--help")) {
+            printf("usage: fractalbake info FILE.exr\n");
+            return 0;
+        }
+        return usage_error("%s", "info: expected one EXR file: fractalbake info FILE.exr");
+    }
+    return finish(fb_info(argv[0], print_line, stdout));
+}
+
+static int cmd_devices(int argc, char **argv)
+{
+    const char *sel = NULL;
+    for (int i = 0; i < argc; i++) {
+        if (!strcmp(argv[i], "--device") && i + 1 < argc)
+            sel = argv[++i];
+        else
+            return usage_error("%s: unknown argument for `fractalbake devices` (only --device D)", argv[i]);
+    }
+    vkc_device_info *infos = NULL;
+    int n = 0;
+    fb_result rc = vkc_enumerate(sel, &infos, &n);
+    if (rc == FB_ERR_NODEVICE) {
+        printf("no Vulkan device: %s\nfractalbake will use the native backend (%d threads).\n", g_first_error,
+               fb_cpu_count());
+        return 0;
+    }
+    if (rc) return finish(rc);
+    printf("%-3s %-3s %-34s %-10s %-10s %-8s %s\n", "#", "use", "name", "type", "memory", "subgroup", "driver");
+    for (int i = 0; i < n; i++)
+        printf("%-3d %-3s %-34s %-10s %-10.0f %-8u %s\n", i, infos[i].chosen ? "*" : "", infos[i].name, infos[i].type,
+               (double)infos[i].memory / (1024.0 * 1024.0), infos[i].subgroup_size, infos[i].driver);
+    printf("(memory in MiB; * marks the device fractalbake chooses%s)\n", sel ? " for --device" : "");
+    free(infos);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    fb_log_set_sink(sink, NULL);
+    if (argc < 2) {
+        fputs(k_usage, stderr);
+        return 2;
+    }
+    const char *cmd = argv[1];
+    if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {
+        fputs(k_usage, stdout);
+        return 0;
+    }
+    if (!strcmp(cmd, "--version")) {
+        printf("fractalbake %s\n", FB_VERSION);
+        return 0;
+    }
+    if (!strcmp(cmd, "render")) return cmd_render(argc - 2, argv + 2);
+    if (!strcmp(cmd, "fbm")) return cmd_generator("fbm", argc - 2, argv + 2);
+    if (!strcmp(cmd, "compare")) return cmd_compare(argc - 2, argv + 2);
+    if (!strcmp(cmd, "info")) return cmd_info(argc - 2, argv + 2);
+    if (!strcmp(cmd, "devices")) return cmd_devices(argc - 2, argv + 2);
+    if (!strcmp(cmd, "bench")) return finish(fb_bench_main(argc - 2, argv + 2));
+    return usage_error("%s: unknown command (see fractalbake --help)", cmd);
+}

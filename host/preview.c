@@ -1,0 +1,109 @@
+#include "preview.h"
+
+#include <png.h>
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+struct fb_preview {
+    int width, height; /* source */
+    int scale;         /* source pixels per preview pixel, per axis */
+    int pw, ph;
+    double *sum;
+    uint32_t *count;
+};
+
+fb_result fb_preview_create(int width, int height, int max_side, fb_preview **out)
+{
+    fb_preview *p = calloc(1, sizeof *p);
+    if (!p) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    int longest = width > height ? width : height;
+    p->width = width;
+    p->height = height;
+    p->scale = (longest + max_side - 1) / max_side;
+    if (p->scale < 1) p->scale = 1;
+    p->pw = (width + p->scale - 1) / p->scale;
+    p->ph = (height + p->scale - 1) / p->scale;
+    p->sum = calloc((size_t)p->pw * p->ph, sizeof *p->sum);
+    p->count = calloc((size_t)p->pw * p->ph, sizeof *p->count);
+    if (!p->sum || !p->count) {
+        fb_preview_destroy(&p);
+        return fb_fail(FB_ERR_NOMEM, "out of memory for the preview");
+    }
+    *out = p;
+    return FB_OK;
+}
+
+void fb_preview_destroy(fb_preview **pp)
+{
+    if (!pp || !*pp) return;
+    free((*pp)->sum);
+    free((*pp)->count);
+    free(*pp);
+    *pp = NULL;
+}
+
+void fb_preview_add_rows(fb_preview *p, int y0, int n, const float *rows)
+{
+    for (int r = 0; r < n; r++) {
+        size_t base = (size_t)((y0 + r) / p->scale) * p->pw;
+        const float *row = rows + (size_t)r * p->width;
+        for (int x = 0; x < p->width; x++) {
+            if (!isfinite(row[x])) continue;
+            p->sum[base + x / p->scale] += row[x];
+            p->count[base + x / p->scale]++;
+        }
+    }
+}
+
+fb_result fb_preview_write_png(const fb_preview *p, const char *path)
+{
+    size_t n = (size_t)p->pw * p->ph;
+    double lo = INFINITY, hi = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        if (!p->count[i]) continue;
+        double v = p->sum[i] / p->count[i];
+        lo = v < lo ? v : lo;
+        hi = v > hi ? v : hi;
+    }
+    double range = hi > lo ? hi - lo : 1.0;
+    uint8_t *volatile img = malloc(n); /* volatile: survives libpng's longjmp */
+    if (!img) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    for (size_t i = 0; i < n; i++)
+        img[i] = p->count[i] ? (uint8_t)lrint(255.0 * (p->sum[i] / p->count[i] - lo) / range) : 0;
+
+    char tmp[4200];
+    const char *slash = strrchr(path, '/');
+    int dirlen = slash ? (int)(slash - path + 1) : 0;
+    snprintf(tmp, sizeof tmp, "%.*s.%s.%ld.tmp", dirlen, path, path + dirlen, (long)getpid());
+    FILE *f = fopen(tmp, "wb");
+    if (!f) {
+        free((void *)img);
+        return fb_fail(FB_ERR_IO, "%s: cannot create preview: %s", path, strerror(errno));
+    }
+    fb_result rc = FB_OK;
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+    png_infop info = png ? png_create_info_struct(png) : NULL;
+    if (!png || !info) {
+        rc = fb_fail(FB_ERR_NOMEM, "out of memory writing %s", path);
+    } else if (setjmp(png_jmpbuf(png))) {
+        rc = fb_fail(FB_ERR_IO, "%s: cannot write preview", path);
+    } else {
+        png_init_io(png, f);
+        png_set_IHDR(png, info, (png_uint_32)p->pw, (png_uint_32)p->ph, 8, PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE,
+                     PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+        png_write_info(png, info);
+        for (int y = 0; y < p->ph; y++) png_write_row(png, (uint8_t *)img + (size_t)y * p->pw);
+        png_write_end(png, NULL);
+    }
+    png_destroy_write_struct(png ? &png : NULL, info ? &info : NULL);
+    if (fclose(f) != 0 && !rc) rc = fb_fail(FB_ERR_IO, "%s: cannot write preview: %s", path, strerror(errno));
+    if (!rc && rename(tmp, path) != 0) rc = fb_fail(FB_ERR_IO, "%s: cannot move preview into place", path);
+    if (rc) unlink(tmp);
+    free((void *)img);
+    return rc;
+}

@@ -1,0 +1,677 @@
+/*
+ * Scene parsing and validation (jansson), driven by one schema table per generator.
+ */
+#include "scene.h"
+
+#include "../kernels/noise.h"
+
+#include <jansson.h>
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef enum ktype { T_INT, T_NUM, T_BOOL, T_ENUM, T_NAME, T_VEC2, T_SIZE, T_LAYERS, T_TYPE } ktype;
+
+typedef struct keyspec {
+    const char *key;
+    ktype type;
+    double lo, hi;
+    bool lo_open;      /* lo < x rather than lo <= x */
+    const char *enums; /* "a|b|c" for T_ENUM */
+    const char *def;   /* the default as JSON text; NULL: none (optional key, or required) */
+    const char *help;
+} keyspec;
+
+static const keyspec scene_keys[] = {
+    {"size", T_SIZE, 1, FB_MAX_DIM, false, NULL, "[1024, 1024]", "image size in pixels (flag: --size WxH)"},
+    {"seed", T_INT, 0, 4294967295.0, false, NULL, "1", "random seed"},
+    {"compression", T_ENUM, 0, 0, false, "zip|piz|none", "\"zip\"", "EXR compression"},
+    {"layers", T_LAYERS, 1, FB_MAX_LAYERS, false, NULL, NULL, "the layers, each a generator"},
+};
+
+static const char *const noise_names = "gradient|value|simplex|cellular|cellular-f2|sine";
+
+static const keyspec fbm_keys[] = {
+    {"type", T_TYPE, 0, 0, false, NULL, NULL, "generator: \"fbm\""},
+    {"name", T_NAME, 0, 0, false, NULL, "\"fbm\"", "layer name; the channel is NAME.Y (flag: --layer)"},
+    {"noise", T_ENUM, 0, 0, false, "gradient|value|simplex|cellular|cellular-f2|sine", "\"gradient\"", "base noise"},
+    {"hurst", T_NUM, 0, 1, false, NULL, "1.0", "Hurst exponent H; gain G = 2^-H"},
+    {"gain", T_NUM, 0, 2, true, NULL, NULL, "octave gain G, instead of hurst"},
+    {"octaves", T_INT, 1, 32, false, NULL, "8", "number of octaves"},
+    {"lacunarity", T_NUM, 1.01, 8, false, NULL, "2.0", "frequency ratio between octaves"},
+    {"rotation", T_NUM, -180, 180, false, NULL, "36.87", "rotation between octaves, degrees"},
+    {"frequency", T_NUM, 0, 1e6, true, NULL, "4.0", "cycles of the first octave across the image width"},
+    {"offset", T_VEC2, -1e6, 1e6, false, NULL, "[0.0, 0.0]", "domain offset, in first-octave cells (X,Y)"},
+    {"ridged", T_BOOL, 0, 0, false, NULL, "false", "ridged octaves (1 - |n|)^2"},
+    {"billow", T_BOOL, 0, 0, false, NULL, "false", "billow octaves 2|n| - 1"},
+    {"warp", T_NUM, 0, 100, false, NULL, "0.0", "domain-warp strength, in first-octave cells"},
+    {"tileable", T_BOOL, 0, 0, false, NULL, "false", "periodic in x and y: the image wraps without a seam"},
+    {"half", T_BOOL, 0, 0, false, NULL, "false", "store as half instead of float (flags: --half, --float)"},
+};
+
+#define NKEYS(a) ((int)(sizeof(a) / sizeof((a)[0])))
+
+static const keyspec *find_key(const keyspec *keys, int n, const char *key)
+{
+    for (int i = 0; i < n; i++)
+        if (!strcmp(keys[i].key, key)) return &keys[i];
+    return NULL;
+}
+
+static bool kind_keys(const char *kind, const keyspec **keys, int *n)
+{
+    if (!strcmp(kind, "fbm")) {
+        *keys = fbm_keys;
+        *n = NKEYS(fbm_keys);
+        return true;
+    }
+    return false;
+}
+
+/* ---- locating a key path in the source text ------------------------------------------------- */
+
+typedef struct cursor {
+    const char *p;
+    int line;
+} cursor;
+
+static void skip_ws(cursor *c)
+{
+    while (*c->p == ' ' || *c->p == '\t' || *c->p == '\r' || *c->p == '\n') {
+        if (*c->p == '\n') c->line++;
+        c->p++;
+    }
+}
+
+static bool skip_string(cursor *c)
+{
+    if (*c->p != '"') return false;
+    for (c->p++; *c->p && *c->p != '"'; c->p++)
+        if (*c->p == '\\' && c->p[1]) c->p++;
+    if (*c->p != '"') return false;
+    c->p++;
+    return true;
+}
+
+static bool skip_value(cursor *c)
+{
+    skip_ws(c);
+    char open = *c->p;
+    if (open == '"') return skip_string(c);
+    if (open == '{' || open == '[') {
+        char close = open == '{' ? '}' : ']';
+        c->p++;
+        skip_ws(c);
+        if (*c->p == close) {
+            c->p++;
+            return true;
+        }
+        for (;;) {
+            if (open == '{') {
+                skip_ws(c);
+                if (!skip_string(c)) return false;
+                skip_ws(c);
+                if (*c->p++ != ':') return false;
+            }
+            if (!skip_value(c)) return false;
+            skip_ws(c);
+            if (*c->p == ',') {
+                c->p++;
+                continue;
+            }
+            if (*c->p == close) {
+                c->p++;
+                return true;
+            }
+            return false;
+        }
+    }
+    while (*c->p && !strchr(",]} \t\r\n", *c->p)) c->p++;
+    return true;
+}
+
+/* The line of the element at `path` ("layers[0].octaves") in JSON text, or of the deepest enclosing
+ * element that exists. The text has already been parsed successfully by jansson. */
+static int locate(cursor *c, const char *path)
+{
+    skip_ws(c);
+    if (*path == '.') path++;
+    if (!*path) return c->line;
+    int here = c->line;
+    if (*path == '[') {
+        long idx = strtol(path + 1, NULL, 10);
+        const char *rest = strchr(path, ']');
+        if (!rest || *c->p != '[') return here;
+        c->p++;
+        for (long i = 0; i < idx; i++) {
+            if (!skip_value(c)) return here;
+            skip_ws(c);
+            if (*c->p++ != ',') return here;
+        }
+        return locate(c, rest + 1);
+    }
+    size_t klen = strcspn(path, ".[");
+    if (*c->p != '{') return here;
+    c->p++;
+    for (;;) {
+        skip_ws(c);
+        if (*c->p != '"') return here;
+        int key_line = c->line;
+        const char *k = c->p + 1;
+        if (!skip_string(c)) return here;
+        bool match = (size_t)(c->p - 1 - k) == klen && !strncmp(k, path, klen);
+        skip_ws(c);
+        if (*c->p++ != ':') return here;
+        if (match) return path[klen] ? locate(c, path + klen) : key_line;
+        if (!skip_value(c)) return here;
+        skip_ws(c);
+        if (*c->p++ != ',') return here;
+    }
+}
+
+/* ---- validation ----------------------------------------------------------------------------- */
+
+typedef struct vctx {
+    const char *origin; /* file name, or NULL for the command line */
+    const char *text;
+} vctx;
+
+/* Logs "FILE:LINE: PATH: message" (file) or "--KEY: message" (command line) and returns FB_ERR_INPUT. */
+static fb_result verr(const vctx *v, const char *path, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static fb_result verr(const vctx *v, const char *path, const char *fmt, ...)
+{
+    char msg[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    if (v->origin) {
+        cursor c = {v->text, 1};
+        int line = locate(&c, path);
+        return fb_fail(FB_ERR_INPUT, "%s:%d: %s: %s", v->origin, line, path[0] ? path : "(top level)", msg);
+    }
+    const char *leaf = strrchr(path, '.');
+    leaf = leaf ? leaf + 1 : path;
+    if (!strcmp(leaf, "name")) leaf = "layer";
+    return fb_fail(FB_ERR_USAGE, "--%s: %s", leaf, msg);
+}
+
+/* A short rendering of a JSON value for messages. */
+static void show(const json_t *j, char *buf, size_t n)
+{
+    char *s = json_dumps(j, JSON_ENCODE_ANY | JSON_COMPACT);
+    snprintf(buf, n, "%s", s ? s : "?");
+    if (strlen(buf) > 40) strcpy(buf + 37, "...");
+    free(s);
+}
+
+static bool enum_index(const char *enums, const char *s, int *idx)
+{
+    size_t n = strlen(s);
+    int i = 0;
+    for (const char *p = enums; *p; i++) {
+        size_t len = strcspn(p, "|");
+        if (len == n && !strncmp(p, s, n)) {
+            *idx = i;
+            return true;
+        }
+        p += len + (p[len] == '|');
+    }
+    return false;
+}
+
+static fb_result check_number(const vctx *v, const char *path, const keyspec *k, const json_t *j, bool integer)
+{
+    char shown[64];
+    show(j, shown, sizeof shown);
+    if (integer ? !json_is_integer(j) : !json_is_number(j))
+        return verr(v, path, "expected %s, found %s", integer ? "an integer" : "a number", shown);
+    double x = json_number_value(j);
+    if (!isfinite(x)) return verr(v, path, "expected a finite number, found %s", shown);
+    bool in_range = (k->lo_open ? x > k->lo : x >= k->lo) && x <= k->hi;
+    if (!in_range) {
+        if (integer) return verr(v, path, "expected an integer in %.0f..%.0f, found %s", k->lo, k->hi, shown);
+        return verr(v, path, "expected a number in %s%g, %g], found %s", k->lo_open ? "(" : "[", k->lo, k->hi, shown);
+    }
+    return FB_OK;
+}
+
+static fb_result check_value(const vctx *v, const char *path, const keyspec *k, json_t *j)
+{
+    char shown[64];
+    show(j, shown, sizeof shown);
+    int idx;
+    switch (k->type) {
+    case T_INT:
+        return check_number(v, path, k, j, true);
+    case T_NUM:
+        return check_number(v, path, k, j, false);
+    case T_BOOL:
+        if (!json_is_boolean(j)) return verr(v, path, "expected true or false, found %s", shown);
+        return FB_OK;
+    case T_ENUM:
+        if (!json_is_string(j) || !enum_index(k->enums, json_string_value(j), &idx))
+            return verr(v, path, "expected one of %s, found %s", k->enums, shown);
+        return FB_OK;
+    case T_TYPE:
+        if (!json_is_string(j)) return verr(v, path, "expected a generator name such as \"fbm\", found %s", shown);
+        return FB_OK;
+    case T_NAME: {
+        const char *s = json_is_string(j) ? json_string_value(j) : NULL;
+        bool ok = s && *s && strlen(s) < 64;
+        for (const char *p = s; ok && *p; p++)
+            ok = (*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') || (*p >= '0' && *p <= '9') || *p == '_' ||
+                 *p == '-';
+        if (!ok) return verr(v, path, "expected a name of 1 to 63 letters, digits, '_' or '-', found %s", shown);
+        return FB_OK;
+    }
+    case T_VEC2:
+    case T_SIZE: {
+        bool isz = k->type == T_SIZE;
+        if (!json_is_array(j) || json_array_size(j) != 2)
+            return verr(v, path, "expected %s, found %s", isz ? "[width, height]" : "[x, y]", shown);
+        for (size_t i = 0; i < 2; i++) {
+            const json_t *e = json_array_get(j, i);
+            bool good = isz ? json_is_integer(e) : json_is_number(e);
+            double x = good ? json_number_value(e) : 0;
+            if (!good || !isfinite(x) || x < k->lo || x > k->hi)
+                return verr(v, path, "expected %s with each %s in %g..%g, found %s", isz ? "[width, height]" : "[x, y]",
+                            isz ? "side an integer" : "component", k->lo, k->hi, shown);
+        }
+        if (isz) {
+            unsigned long long px =
+                (unsigned long long)json_integer_value(json_array_get(j, 0)) * json_integer_value(json_array_get(j, 1));
+            if (px > FB_MAX_PIXELS)
+                return verr(v, path, "%s is %llu pixels; at most %llu are supported", shown, px, FB_MAX_PIXELS);
+        }
+        return FB_OK;
+    }
+    case T_LAYERS:
+        if (!json_is_array(j) || json_array_size(j) < 1 || json_array_size(j) > FB_MAX_LAYERS)
+            return verr(v, path, "expected an array of 1 to %d layers, found %s", FB_MAX_LAYERS, shown);
+        return FB_OK;
+    }
+    return FB_OK;
+}
+
+/* Checks every key of `obj` against `keys` and fills in the defaults. */
+static fb_result check_object(const vctx *v, const char *path, json_t *obj, const keyspec *keys, int n,
+                              const char *what)
+{
+    const char *key;
+    json_t *val;
+    char sub[256];
+    json_object_foreach(obj, key, val)
+    {
+        snprintf(sub, sizeof sub, "%s%s%s", path, path[0] ? "." : "", key);
+        const keyspec *k = find_key(keys, n, key);
+        if (!k) {
+            char known[512] = "";
+            for (int i = 0; i < n; i++)
+                snprintf(known + strlen(known), sizeof known - strlen(known), "%s%s", i ? ", " : "", keys[i].key);
+            if (!v->origin) return fb_fail(FB_ERR_USAGE, "--%s: unknown flag for %s", key, what);
+            return verr(v, sub, "unknown key for %s (known keys: %s)", what, known);
+        }
+        fb_result rc = check_value(v, sub, k, val);
+        if (rc) return rc;
+    }
+    for (int i = 0; i < n; i++) {
+        if (!keys[i].def || json_object_get(obj, keys[i].key)) continue;
+        if (!strcmp(keys[i].key, "hurst") && json_object_get(obj, "gain")) continue;
+        json_t *d = json_loads(keys[i].def, JSON_DECODE_ANY, NULL);
+        if (!d || json_object_set_new(obj, keys[i].key, d) != 0) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    }
+    return FB_OK;
+}
+
+static double num(const json_t *obj, const char *key)
+{
+    return json_number_value(json_object_get(obj, key));
+}
+
+static bool boolean(const json_t *obj, const char *key)
+{
+    return json_is_true(json_object_get(obj, key));
+}
+
+static fb_result parse_fbm(const vctx *v, const char *path, json_t *obj, fb_layer *L)
+{
+    char sub[256];
+    fb_result rc = check_object(v, path, obj, fbm_keys, NKEYS(fbm_keys), "an fbm layer");
+    if (rc) return rc;
+    fb_fbm_params *f = &L->fbm;
+    if (json_object_get(obj, "hurst") && json_object_get(obj, "gain")) {
+        snprintf(sub, sizeof sub, "%s.gain", path);
+        return verr(v, sub, "give hurst or gain, not both");
+    }
+    int idx = 0;
+    enum_index(noise_names, json_string_value(json_object_get(obj, "noise")), &idx);
+    static const unsigned kinds[] = {K_NOISE_GRADIENT, K_NOISE_VALUE,       K_NOISE_SIMPLEX,
+                                     K_NOISE_CELLULAR, K_NOISE_CELLULAR_F2, K_NOISE_SINE};
+    f->noise = kinds[idx];
+    f->gain_given = json_object_get(obj, "gain") != NULL;
+    f->hurst = f->gain_given ? -log2(num(obj, "gain")) : num(obj, "hurst");
+    f->gain = f->gain_given ? num(obj, "gain") : exp2(-f->hurst);
+    f->octaves = (int)json_integer_value(json_object_get(obj, "octaves"));
+    f->lacunarity = num(obj, "lacunarity");
+    f->rotation = num(obj, "rotation");
+    f->frequency = num(obj, "frequency");
+    json_t *off = json_object_get(obj, "offset");
+    f->offset[0] = json_number_value(json_array_get(off, 0));
+    f->offset[1] = json_number_value(json_array_get(off, 1));
+    f->ridged = boolean(obj, "ridged");
+    f->billow = boolean(obj, "billow");
+    f->tileable = boolean(obj, "tileable");
+    f->warp = num(obj, "warp");
+    L->half = boolean(obj, "half");
+    if (f->ridged && f->billow) {
+        snprintf(sub, sizeof sub, "%s.billow", path);
+        return verr(v, sub, "ridged and billow cannot both be set");
+    }
+    if (f->tileable && f->noise == K_NOISE_SIMPLEX) {
+        snprintf(sub, sizeof sub, "%s.tileable", path);
+        return verr(v, sub,
+                    "simplex noise lives on a skewed lattice that does not tile a rectangle; use gradient, "
+                    "value, cellular, cellular-f2 or sine noise for tileable fBm");
+    }
+    return FB_OK;
+}
+
+static fb_result parse_root(const vctx *v, json_t *root, fb_scene *s)
+{
+    char path[64];
+    if (!json_is_object(root)) return verr(v, "", "expected a JSON object with \"size\", \"seed\" and \"layers\"");
+    if (!json_object_get(root, "layers")) return verr(v, "", "missing key \"layers\" (an array of layers)");
+    fb_result rc = check_object(v, "", root, scene_keys, NKEYS(scene_keys), "a scene");
+    if (rc) return rc;
+    json_t *size = json_object_get(root, "size");
+    s->width = (int)json_integer_value(json_array_get(size, 0));
+    s->height = (int)json_integer_value(json_array_get(size, 1));
+    s->seed = (uint32_t)json_integer_value(json_object_get(root, "seed"));
+    s->compression =
+        (exrio_compression)exrio_compression_parse(json_string_value(json_object_get(root, "compression")));
+    json_t *layers = json_object_get(root, "layers");
+    s->nlayers = (int)json_array_size(layers);
+    for (int i = 0; i < s->nlayers; i++) {
+        json_t *lj = json_array_get(layers, (size_t)i);
+        snprintf(path, sizeof path, "layers[%d]", i);
+        if (!json_is_object(lj)) return verr(v, path, "expected a layer object with a \"type\"");
+        json_t *type = json_object_get(lj, "type");
+        if (!type) return verr(v, path, "missing key \"type\" (the generator, e.g. \"fbm\")");
+        const char *t = json_is_string(type) ? json_string_value(type) : "";
+        fb_layer *L = &s->layers[i];
+        memset(L, 0, sizeof *L);
+        if (!strcmp(t, "fbm")) {
+            L->kind = FB_LAYER_FBM;
+            rc = parse_fbm(v, path, lj, L);
+        } else {
+            char sub[80], shown[64];
+            snprintf(sub, sizeof sub, "%s.type", path);
+            show(type, shown, sizeof shown);
+            rc = verr(v, sub, "unknown generator %s (available: \"fbm\")", shown);
+        }
+        if (rc) return rc;
+        snprintf(L->name, sizeof L->name, "%s", json_string_value(json_object_get(lj, "name")));
+        for (int k = 0; k < i; k++)
+            if (!strcmp(s->layers[k].name, L->name)) {
+                char sub[80];
+                snprintf(sub, sizeof sub, "%s.name", path);
+                return verr(v, sub, "layer name \"%s\" is already used by layers[%d]", L->name, k);
+            }
+    }
+    return FB_OK;
+}
+
+fb_result fb_scene_parse(const char *text, const char *origin, fb_scene *out)
+{
+    memset(out, 0, sizeof *out);
+    json_error_t err;
+    json_t *root = json_loads(text, JSON_REJECT_DUPLICATES, &err);
+    if (!root) {
+        if (origin)
+            return fb_fail(FB_ERR_INPUT, "%s:%d:%d: malformed JSON: %s", origin, err.line, err.column, err.text);
+        return fb_fail(FB_ERR_INPUT, "scene: malformed JSON: %s", err.text);
+    }
+    vctx v = {origin, text};
+    fb_result rc = parse_root(&v, root, out);
+    if (!rc) {
+        out->json = json_dumps(root, JSON_SORT_KEYS | JSON_INDENT(2) | JSON_REAL_PRECISION(17));
+        if (!out->json) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    }
+    json_decref(root);
+    return rc;
+}
+
+fb_result fb_scene_load(const char *path, fb_scene *out)
+{
+    memset(out, 0, sizeof *out);
+    FILE *f = fopen(path, "rb");
+    if (!f) return fb_fail(FB_ERR_IO, "%s: cannot open scene: %s", path, strerror(errno));
+    char *text = NULL;
+    size_t len = 0, cap = 0;
+    for (;;) {
+        if (len + 4096 + 1 > cap) {
+            cap = cap ? 2 * cap : 8192;
+            if (cap > (16u << 20)) {
+                free(text);
+                fclose(f);
+                return fb_fail(FB_ERR_INPUT, "%s: scene file larger than 16 MiB", path);
+            }
+            char *t = realloc(text, cap);
+            if (!t) {
+                free(text);
+                fclose(f);
+                return fb_fail(FB_ERR_NOMEM, "out of memory");
+            }
+            text = t;
+        }
+        size_t n = fread(text + len, 1, 4096, f);
+        len += n;
+        if (n < 4096) break;
+    }
+    bool bad = ferror(f);
+    fclose(f);
+    if (bad) {
+        free(text);
+        return fb_fail(FB_ERR_IO, "%s: cannot read scene: %s", path, strerror(errno));
+    }
+    text[len] = 0;
+    if (strlen(text) != len) {
+        free(text);
+        return fb_fail(FB_ERR_INPUT, "%s: scene contains a NUL byte (not a JSON text file)", path);
+    }
+    fb_result rc = fb_scene_parse(text, path, out);
+    free(text);
+    return rc;
+}
+
+void fb_scene_fini(fb_scene *s)
+{
+    if (!s) return;
+    free(s->json);
+    memset(s, 0, sizeof *s);
+}
+
+const char *fb_scene_default_json(void)
+{
+    return "{\n"
+           "  \"size\": [1024, 512],\n"
+           "  \"seed\": 7,\n"
+           "  \"layers\": [\n"
+           "    {\"type\": \"fbm\", \"name\": \"fbm\", \"hurst\": 0.85, \"octaves\": 10, \"frequency\": 3.0,\n"
+           "     \"warp\": 0.6}\n"
+           "  ]\n"
+           "}\n";
+}
+
+/* ---- command-line flags --------------------------------------------------------------------- */
+
+static const keyspec *flag_spec(const char *kind, const char *flag, bool *scene_level)
+{
+    const keyspec *keys;
+    int n;
+    *scene_level = false;
+    if (!strcmp(flag, "layer")) flag = "name";
+    if (!strcmp(flag, "type") || !strcmp(flag, "layers")) return NULL;
+    if (kind_keys(kind, &keys, &n)) {
+        const keyspec *k = find_key(keys, n, flag);
+        if (k) return k;
+    }
+    *scene_level = true;
+    return find_key(scene_keys, NKEYS(scene_keys), flag);
+}
+
+int fb_scene_flag_arity(const char *kind, const char *flag)
+{
+    bool scene_level;
+    if (!strcmp(flag, "float")) return 0;
+    const keyspec *k = flag_spec(kind, flag, &scene_level);
+    if (!k) return -1;
+    return k->type == T_BOOL ? 0 : 1;
+}
+
+static bool parse_double(const char *s, double *out)
+{
+    char *end;
+    errno = 0;
+    *out = strtod(s, &end);
+    return *s && !*end && errno == 0;
+}
+
+/* Converts one flag's text to the JSON value its key takes; logs and returns NULL on failure. */
+static json_t *flag_value(const keyspec *k, const char *flag, const char *s)
+{
+    double a, b;
+    char *end;
+    switch (k->type) {
+    case T_INT: {
+        errno = 0;
+        long long x = strtoll(s, &end, 10);
+        if (!*s || *end || errno) {
+            fb_fail(FB_ERR_USAGE, "--%s: expected an integer, found \"%s\"", flag, s);
+            return NULL;
+        }
+        return json_integer(x);
+    }
+    case T_NUM:
+        if (!parse_double(s, &a) || !isfinite(a)) {
+            fb_fail(FB_ERR_USAGE, "--%s: expected a finite number, found \"%s\"", flag, s);
+            return NULL;
+        }
+        return json_real(a);
+    case T_VEC2: {
+        const char *comma = strchr(s, ',');
+        char first[64];
+        if (!comma || comma - s >= 63) goto bad_vec;
+        snprintf(first, sizeof first, "%.*s", (int)(comma - s), s);
+        if (!parse_double(first, &a) || !parse_double(comma + 1, &b) || !isfinite(a) || !isfinite(b)) goto bad_vec;
+        return json_pack("[ff]", a, b);
+    bad_vec:
+        fb_fail(FB_ERR_USAGE, "--%s: expected two finite numbers X,Y, found \"%s\"", flag, s);
+        return NULL;
+    }
+    case T_SIZE: {
+        errno = 0;
+        long long w = strtoll(s, &end, 10);
+        if (end == s || (*end != 'x' && *end != 'X') || errno) goto bad_size;
+        const char *hs = end + 1;
+        long long h = strtoll(hs, &end, 10);
+        if (end == hs || *end || errno) goto bad_size;
+        if (w < 1 || h < 1 || w > FB_MAX_DIM || h > FB_MAX_DIM) {
+            fb_fail(FB_ERR_USAGE, "--%s: each side must be in 1..%d, found \"%s\"", flag, FB_MAX_DIM, s);
+            return NULL;
+        }
+        return json_pack("[II]", (json_int_t)w, (json_int_t)h);
+    bad_size:
+        fb_fail(FB_ERR_USAGE, "--%s: expected WIDTHxHEIGHT such as 1024x512, found \"%s\"", flag, s);
+        return NULL;
+    }
+    default:
+        return json_string(s);
+    }
+}
+
+fb_result fb_scene_from_flags(const char *kind, int argc, char **argv, char **json)
+{
+    fb_result rc = FB_OK;
+    json_t *root = json_object(), *layer = json_object(), *layers = json_array();
+    if (!root || !layer || !layers) {
+        rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        goto out;
+    }
+    json_object_set_new(layer, "type", json_string(kind));
+    for (int i = 0; i < argc; i++) {
+        const char *a = argv[i];
+        if (strncmp(a, "--", 2) != 0) {
+            rc = fb_fail(FB_ERR_USAGE, "%s: unexpected argument (flags start with --)", a);
+            goto out;
+        }
+        const char *flag = a + 2;
+        if (!strcmp(flag, "float") || !strcmp(flag, "half")) {
+            json_object_set_new(layer, "half", json_boolean(!strcmp(flag, "half")));
+            continue;
+        }
+        bool scene_level;
+        const keyspec *k = flag_spec(kind, flag, &scene_level);
+        if (!k) {
+            rc = fb_fail(FB_ERR_USAGE, "--%s: unknown flag for `fractalbake %s` (see fractalbake %s --help)", flag,
+                         kind, kind);
+            goto out;
+        }
+        json_t *target = scene_level ? root : layer;
+        json_t *val;
+        if (k->type == T_BOOL) {
+            val = json_true();
+        } else {
+            if (i + 1 >= argc) {
+                rc = fb_fail(FB_ERR_USAGE, "--%s: missing value", flag);
+                goto out;
+            }
+            val = flag_value(k, flag, argv[++i]);
+            if (!val) {
+                rc = FB_ERR_USAGE;
+                goto out;
+            }
+        }
+        json_object_set_new(target, k->key, val);
+    }
+    json_array_append_new(layers, layer);
+    layer = NULL;
+    json_object_set_new(root, "layers", layers);
+    layers = NULL;
+    *json = json_dumps(root, JSON_SORT_KEYS | JSON_REAL_PRECISION(17));
+    if (!*json) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+out:
+    json_decref(layer);
+    json_decref(layers);
+    json_decref(root);
+    return rc;
+}
+
+void fb_scene_print_keys(const char *kind, void (*print)(const char *line, void *user), void *user)
+{
+    const keyspec *keys;
+    int n;
+    char line[512];
+    if (!kind_keys(kind, &keys, &n)) return;
+    for (int pass = 0; pass < 2; pass++) {
+        const keyspec *ks = pass ? scene_keys : keys;
+        int nk = pass ? NKEYS(scene_keys) : n;
+        for (int i = 0; i < nk; i++) {
+            const keyspec *k = &ks[i];
+            if (k->type == T_TYPE || k->type == T_LAYERS) continue;
+            char range[96] = "";
+            if (k->type == T_INT || k->type == T_NUM)
+                snprintf(range, sizeof range, " %s%g..%g%s", k->lo_open ? "(" : "[", k->lo, k->hi, "]");
+            else if (k->type == T_ENUM)
+                snprintf(range, sizeof range, " %s", k->enums);
+            snprintf(line, sizeof line, "  --%-12s %s%s%s%s", !strcmp(k->key, "name") ? "layer" : k->key, k->help,
+                     range, k->def ? "; default " : "", k->def ? k->def : "");
+            print(line, user);
+        }
+    }
+}

@@ -1,0 +1,76 @@
+/*
+ * Scenes: the validated description of a bake. A scene comes from a JSON file, from the embedded
+ * default, or from a single-generator command line (which builds the same JSON: every flag is the
+ * scene key of the same name). Every key is checked against a schema; errors name the key path,
+ * and for files the line.
+ */
+#ifndef FB_SCENE_H
+#define FB_SCENE_H
+
+#include "exrio.h"
+#include "fb.h"
+
+#include <stdbool.h>
+
+#define FB_MAX_LAYERS 16
+#define FB_MAX_DIM    65536
+#define FB_MAX_PIXELS (1ull << 31)
+
+typedef enum fb_layer_kind { FB_LAYER_FBM = 0 } fb_layer_kind;
+
+typedef struct fb_fbm_params {
+    unsigned noise; /* K_NOISE_* */
+    double hurst;   /* used when !gain_given */
+    double gain;    /* G = 2^-H */
+    bool gain_given;
+    int octaves;
+    double lacunarity;
+    double rotation; /* degrees per octave */
+    double frequency;
+    double offset[2];
+    bool ridged, billow, tileable;
+    double warp;
+} fb_fbm_params;
+
+typedef struct fb_layer {
+    fb_layer_kind kind;
+    char name[64];
+    bool half; /* store colour/height as half instead of float */
+    fb_fbm_params fbm;
+} fb_layer;
+
+typedef struct fb_scene {
+    int width, height;
+    uint32_t seed;
+    exrio_compression compression;
+    int nlayers;
+    fb_layer layers[FB_MAX_LAYERS];
+    char *json; /* the scene with every default filled in, canonical (sorted keys); owned */
+} fb_scene;
+
+/* Parses and validates JSON text. `origin` names the file for messages (NULL: the command line,
+ * where a key is reported as its flag, --key). */
+fb_result fb_scene_parse(const char *text, const char *origin, fb_scene *out);
+
+/* Reads a scene file and parses it. */
+fb_result fb_scene_load(const char *path, fb_scene *out);
+
+/* The embedded default scene. */
+const char *fb_scene_default_json(void);
+
+void fb_scene_fini(fb_scene *s);
+
+/* For the command line: converts `--flag value` of a single-generator command into the JSON scene
+ * it stands for. `kind` is the generator ("fbm"). argv holds only the generator's flags. Returns
+ * malloc'd JSON text in *json. Global flags (--size, --seed, --compression) become scene keys. */
+fb_result fb_scene_from_flags(const char *kind, int argc, char **argv, char **json);
+
+/* For the command line: how many values flag `flag` (without the dashes) of generator `kind` takes:
+ * 0 for a switch (--tileable), 1 for a valued flag (--octaves 8), -1 when it is not a flag of
+ * `kind` or of the scene. */
+int fb_scene_flag_arity(const char *kind, const char *flag);
+
+/* Prints the keys of a generator with their types, ranges and defaults (for --help). */
+void fb_scene_print_keys(const char *kind, void (*print)(const char *line, void *user), void *user);
+
+#endif

@@ -1,0 +1,92 @@
+/*
+ * vkc: the Vulkan compute context. The only module that talks to Vulkan.
+ *
+ * The loader (libvulkan.so.1) is opened at run time, so that fractalbake runs its native backend
+ * on a machine with no Vulkan at all. One instance, one device, one compute queue. Buffers are
+ * storage buffers the host can read after a job: device memory mapped directly where the device
+ * says it is host-visible and it is a CPU or integrated device (lavapipe), otherwise device-local
+ * memory copied to a host-cached staging buffer inside the same submission.
+ */
+#ifndef FB_VKC_H
+#define FB_VKC_H
+
+#include "fb.h"
+
+#include <stdbool.h>
+
+typedef struct vkc_context vkc_context;
+typedef struct vkc_pipeline vkc_pipeline;
+typedef struct vkc_buffer vkc_buffer;
+typedef struct vkc_job vkc_job;
+
+typedef struct vkc_device_info {
+    char name[256];
+    const char *type; /* "discrete", "integrated", "virtual", "cpu", "other" */
+    char driver[256];
+    uint64_t memory; /* bytes of device-local heaps */
+    uint32_t subgroup_size;
+    uint32_t api_version;
+    uint64_t max_storage_buffer_range;
+    bool chosen;
+} vkc_device_info;
+
+typedef struct vkc_desc {
+    const char *device; /* NULL: best by type; all digits: an index; else a name substring */
+    bool validation;    /* enable VK_LAYER_KHRONOS_validation (also: FB_VK_VALIDATION=1) */
+    bool no_pipeline_cache;
+} vkc_desc;
+
+/* Lists the Vulkan devices and marks the one `device_sel` (as in vkc_desc.device) would choose.
+ * *out is malloc'd; the caller frees it. FB_ERR_NODEVICE when there is no loader or no device. */
+fb_result vkc_enumerate(const char *device_sel, vkc_device_info **out, int *count);
+
+/* Creates the context. On failure *out is untouched and the logger has one line. */
+fb_result vkc_create(const vkc_desc *desc, vkc_context **out);
+
+/* Destroys the context (saving the pipeline cache). Null-safe; sets *ctx to NULL. */
+void vkc_destroy(vkc_context **ctx);
+
+const vkc_device_info *vkc_info(const vkc_context *ctx);
+
+/* Number of messages VK_LAYER_KHRONOS_validation has sent so far (0 when it is off). */
+uint32_t vkc_validation_messages(const vkc_context *ctx);
+
+/* True when the validation layer was requested and is active. */
+bool vkc_validation_enabled(const vkc_context *ctx);
+
+typedef struct vkc_pipeline_desc {
+    const uint32_t *spv; /* SPIR-V words, embedded at build time */
+    size_t spv_size;     /* bytes */
+    uint32_t push_size;  /* bytes of push constants (<= 128) */
+    uint32_t buffers;    /* storage buffers at set 0, bindings 0..buffers-1 */
+    const char *name;    /* for messages */
+} vkc_pipeline_desc;
+
+#define FB_SPV(arr) .spv = (arr), .spv_size = sizeof(arr)
+
+fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, vkc_pipeline **out);
+void vkc_pipeline_destroy(vkc_context *ctx, vkc_pipeline **p);
+
+/* A storage buffer of `size` bytes whose contents the host reads after a job completes, and may
+ * write before a job is submitted (vkc_buffer_upload). */
+fb_result vkc_buffer_create(vkc_context *ctx, uint64_t size, vkc_buffer **out);
+void vkc_buffer_destroy(vkc_context *ctx, vkc_buffer **b);
+
+/* Host pointer to the buffer's contents, valid after vkc_job_wait of a job that wrote it. */
+const void *vkc_buffer_data(const vkc_buffer *b);
+uint64_t vkc_buffer_size(const vkc_buffer *b);
+
+/* A reusable submission: one command buffer, fence, descriptor set and pair of timestamps. */
+fb_result vkc_job_create(vkc_context *ctx, vkc_pipeline *pipe, vkc_job **out);
+void vkc_job_destroy(vkc_context *ctx, vkc_job **job);
+
+/* Records and submits one dispatch of `groups` workgroups with `push` constants, writing `bufs`.
+ * The job must not be in flight. */
+fb_result vkc_job_submit(vkc_context *ctx, vkc_job *job, vkc_buffer *const *bufs, uint32_t nbufs, const void *push,
+                         const uint32_t groups[3]);
+
+/* Waits for the job; afterwards its buffers' data is visible to the host. *gpu_seconds (optional)
+ * is the time between the dispatch's timestamps, or -1 where the queue has no timestamps. */
+fb_result vkc_job_wait(vkc_context *ctx, vkc_job *job, double *gpu_seconds);
+
+#endif

@@ -1,0 +1,106 @@
+/*
+ * Fractional Brownian motion (SPEC.md section 1, seed 002):
+ *
+ *     fbm(x) = sum_{i=0}^{n-1} G^i * noise(R^i (L^i x) + o_i),   G = 2^-H
+ *
+ * The parameter block is shared with the shader's push constants (std430: scalars only, so the C
+ * and GLSL offsets agree; host/gen/fbm.c asserts every offset).
+ */
+#ifndef FB_KERNELS_FBM_H
+#define FB_KERNELS_FBM_H
+
+#include "noise.h"
+
+#define K_FBM_RIDGED   1u
+#define K_FBM_BILLOW   2u
+#define K_FBM_TILEABLE 4u
+
+K_STRUCT(K_FbmParams)
+{
+    uint seed;
+    uint noise;   /* K_NOISE_* */
+    uint octaves; /* 1..32 */
+    uint flags;   /* K_FBM_* */
+    float gain;   /* G = 2^-H */
+    float lacunarity;
+    float rot_c; /* per-octave rotation R, as cos and sin (computed once on the host) */
+    float rot_s;
+    float freq_x; /* octave-0 cells across the image width / height */
+    float freq_y;
+    float offset_x; /* domain offset, in octave-0 cells */
+    float offset_y;
+    float warp; /* domain-warp strength, in octave-0 cells; 0 disables */
+    uint width;
+    uint height;
+    uint pad0;
+}
+K_END(K_FbmParams)
+
+/* Shapes one octave's noise value: ridged (1 - |n|)^2 in [0, 1], billow 2|n| - 1 in [-1, 1]. */
+K_FN float k_fbm_shape(float n, uint flags)
+{
+    if ((flags & K_FBM_RIDGED) != 0u) {
+        float r = 1.0f - k_abs(n);
+        return r * r;
+    }
+    if ((flags & K_FBM_BILLOW) != 0u) return 2.0f * k_abs(n) - 1.0f;
+    return n;
+}
+
+/*
+ * The fBm sum at texture coordinates (u, v) for one random stream (0: the field itself, 1 and 2:
+ * the two domain-warp displacement fields). Ordinary fBm iterates x_{i+1} = L R x_i + o_{i+1} from
+ * x_0 = (u fx, v fy) + offset. Tileable fBm instead uses an integral number of cells per octave,
+ * P_i = round(fx L^i), with the lattice period set to P_i, and no rotation (a rotated square
+ * lattice is not periodic on the image rectangle): every octave, and so the sum, wraps exactly.
+ */
+K_FN float k_fbm_uv(K_FbmParams p, uint stream, float u, float v)
+{
+    uint seed = k_hash3(p.seed, stream, 0x0fb0u);
+    bool tileable = (p.flags & K_FBM_TILEABLE) != 0u;
+    float x = u * p.freq_x + p.offset_x;
+    float y = v * p.freq_y + p.offset_y;
+    float cells_x = p.freq_x, cells_y = p.freq_y;
+    float amp = 1.0f, sum = 0.0f;
+    for (uint i = 0u; i < p.octaves; i++) {
+        uint h = k_hash3(seed, 1u, i);
+        uint per_x = K_NOISE_PERIOD, per_y = K_NOISE_PERIOD;
+        float qx = x, qy = y;
+        if (tileable) {
+            float rx = k_max(k_floor(cells_x + 0.5f), 1.0f);
+            float ry = k_max(k_floor(cells_y + 0.5f), 1.0f);
+            per_x = K_U(K_I(k_min(rx, 16777216.0f)));
+            per_y = K_U(K_I(k_min(ry, 16777216.0f)));
+            /* integral offsets keep every octave periodic */
+            qx = u * rx + K_F(h & 255u) + p.offset_x;
+            qy = v * ry + K_F((h >> 8) & 255u) + p.offset_y;
+        }
+        sum += amp * k_fbm_shape(k_noise(p.noise, k_hash(h), qx, qy, per_x, per_y), p.flags);
+        amp *= p.gain;
+        cells_x *= p.lacunarity;
+        cells_y *= p.lacunarity;
+        /* next octave's domain: scale, rotate, offset by a fraction of a cell */
+        float nx = p.lacunarity * (p.rot_c * x - p.rot_s * y);
+        float ny = p.lacunarity * (p.rot_s * x + p.rot_c * y);
+        x = nx + 64.0f * k_u01(k_hash(h ^ 0x5bd1e995u));
+        y = ny + 64.0f * k_u01(k_hash(h ^ 0x1b873593u));
+    }
+    return sum;
+}
+
+/* The fBm value of pixel (px, py): texture coordinates u = (x + 0.5)/W, v = 1 - (y + 0.5)/H, then
+ * an optional domain warp u' = u + w fbm_1(u, v) / fx, v' = v + w fbm_2(u, v) / fy. */
+K_FN float k_fbm_pixel(K_FbmParams p, uint px, uint py)
+{
+    float u = (K_F(px) + 0.5f) / K_F(p.width);
+    float v = 1.0f - (K_F(py) + 0.5f) / K_F(p.height);
+    if (p.warp != 0.0f) {
+        float du = k_fbm_uv(p, 1u, u, v);
+        float dv = k_fbm_uv(p, 2u, u, v);
+        u = u + p.warp * du / p.freq_x;
+        v = v + p.warp * dv / p.freq_y;
+    }
+    return k_fbm_uv(p, 0u, u, v);
+}
+
+#endif
