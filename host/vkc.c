@@ -486,7 +486,7 @@ static void cache_path(vkc_context *ctx, const VkPhysicalDeviceProperties *props
     }
     if (mkdir(dir, 0755) != 0 && errno != EEXIST) return;
     char uuid[2 * VK_UUID_SIZE + 1];
-    for (int i = 0; i < VK_UUID_SIZE; i++) snprintf(uuid + 2 * i, 3, "%02x", props->pipelineCacheUUID[i]);
+    for (unsigned i = 0; i < VK_UUID_SIZE; i++) snprintf(uuid + 2 * i, 3, "%02x", props->pipelineCacheUUID[i]);
     snprintf(ctx->cache_path, sizeof ctx->cache_path, "%s/pipelines-%08x-%s.bin", dir, props->deviceID, uuid);
 }
 

@@ -32,7 +32,12 @@ K_STRUCT(K_FbmParams)
     float warp; /* domain-warp strength, in octave-0 cells; 0 disables */
     uint width;
     uint height;
+    float inv_width;  /* 1/W, 1/H, 1/fx, 1/fy: computed once on the host, because a shader division */
+    float inv_height; /* may differ from C's by 2.5 ULP while a multiplication rounds the same */
+    float inv_freq_x;
+    float inv_freq_y;
     uint pad0;
+    uint pad1;
 }
 K_END(K_FbmParams)
 
@@ -92,13 +97,13 @@ K_FN float k_fbm_uv(K_FbmParams p, uint stream, float u, float v)
  * an optional domain warp u' = u + w fbm_1(u, v) / fx, v' = v + w fbm_2(u, v) / fy. */
 K_FN float k_fbm_pixel(K_FbmParams p, uint px, uint py)
 {
-    float u = (K_F(px) + 0.5f) / K_F(p.width);
-    float v = 1.0f - (K_F(py) + 0.5f) / K_F(p.height);
+    float u = (K_F(px) + 0.5f) * p.inv_width;
+    float v = 1.0f - (K_F(py) + 0.5f) * p.inv_height;
     if (p.warp != 0.0f) {
         float du = k_fbm_uv(p, 1u, u, v);
         float dv = k_fbm_uv(p, 2u, u, v);
-        u = u + p.warp * du / p.freq_x;
-        v = v + p.warp * dv / p.freq_y;
+        u = u + p.warp * du * p.inv_freq_x;
+        v = v + p.warp * dv * p.inv_freq_y;
     }
     return k_fbm_uv(p, 0u, u, v);
 }

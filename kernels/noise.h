@@ -24,13 +24,22 @@
 #define K_NOISE_SINE        5u
 #define K_NOISE_COUNT       6u
 
-/* Wraps an integral lattice index i (a float, possibly huge) into [0, p). */
+/* Wraps an integral lattice index i (a float, possibly huge) into [0, p). Integer arithmetic while
+ * i is exact in binary32 (|i| < 2^24), so that C and GLSL agree bit for bit: Vulkan lets a float
+ * division be off by 2.5 ULP, so no kernel divides. Beyond 2^24 cells (octaves finer than any
+ * pixel) the float path only has to stay in range. GLSL leaves % of negative operands undefined,
+ * hence the shift to a non-negative value first. */
 K_FN uint k_wrap_cell(float i, uint p)
 {
+    if (k_abs(i) < 16777216.0f) {
+        int ii = K_I(i);
+        int ip = K_I(p);
+        if (ii < 0) ii += ((-ii) / ip + 1) * ip;
+        return K_U(ii) % p;
+    }
     float fp = K_F(p);
-    float r = i - fp * k_floor(i / fp);
-    r = k_clamp(r, 0.0f, fp - 1.0f);
-    return K_U(K_I(r));
+    float r = k_clamp(i - fp * k_floor(i * (1.0f / fp)), 0.0f, fp - 1.0f);
+    return K_U(K_I(r)) % p;
 }
 
 /* (c + d) mod p for a cell c in [0, p) and a small offset d >= -2p. */
@@ -141,12 +150,12 @@ K_FN k_vec2 k_cellular(uint seed, float x, float y, uint px, uint py)
 
 /* Sine noise in [-1, 1]: sin(2 pi x) sin(2 pi y), period 1 cell. Fastest and periodic; fBm's
  * per-octave offsets and rotations break its regularity. The coordinate is first reduced modulo
- * the period so that sin() sees a small argument. */
+ * the period (without dividing) so that sin() sees a small argument. */
 K_FN float k_sine_noise(float x, float y, uint px, uint py)
 {
-    float fpx = K_F(px), fpy = K_F(py);
-    float xr = x - fpx * k_floor(x / fpx);
-    float yr = y - fpy * k_floor(y / fpy);
+    float fx = k_floor(x), fy = k_floor(y);
+    float xr = K_F(k_wrap_cell(fx, px)) + (x - fx);
+    float yr = K_F(k_wrap_cell(fy, py)) + (y - fy);
     return k_sin(K_TAU * xr) * k_sin(K_TAU * yr);
 }
 

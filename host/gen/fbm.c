@@ -33,9 +33,13 @@ _Static_assert(offsetof(K_FbmParams, offset_y) == 44, "std430 offset");
 _Static_assert(offsetof(K_FbmParams, warp) == 48, "std430 offset");
 _Static_assert(offsetof(K_FbmParams, width) == 52, "std430 offset");
 _Static_assert(offsetof(K_FbmParams, height) == 56, "std430 offset");
-_Static_assert(offsetof(K_FbmParams, pad0) == 60, "std430 offset");
-_Static_assert(offsetof(fbm_push, y0) == 64 && offsetof(fbm_push, rows) == 68, "std430 offset");
-_Static_assert(sizeof(fbm_push) == 72 && sizeof(fbm_push) <= FB_GEN_MAX_PUSH, "push constants");
+_Static_assert(offsetof(K_FbmParams, inv_width) == 60, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, inv_height) == 64, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, inv_freq_x) == 68, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, inv_freq_y) == 72, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, pad0) == 76 && offsetof(K_FbmParams, pad1) == 80, "std430 offset");
+_Static_assert(offsetof(fbm_push, y0) == 84 && offsetof(fbm_push, rows) == 88, "std430 offset");
+_Static_assert(sizeof(fbm_push) == 92 && sizeof(fbm_push) <= FB_GEN_MAX_PUSH, "push constants");
 _Static_assert(sizeof(K_FbmParams) <= sizeof(((fb_gen *)0)->params), "params fit");
 
 static const K_FbmParams *params(const fb_gen *g)
@@ -85,6 +89,10 @@ static void fb_fbm_params_fill(const fb_scene *s, const fb_layer *L, K_FbmParams
     p->warp = (float)f->warp;
     p->width = (uint32_t)s->width;
     p->height = (uint32_t)s->height;
+    p->inv_width = 1.0f / (float)s->width;
+    p->inv_height = 1.0f / (float)s->height;
+    p->inv_freq_x = 1.0f / p->freq_x;
+    p->inv_freq_y = 1.0f / p->freq_y;
 }
 
 fb_result fb_gen_fbm_init(fb_gen *g)

@@ -1,0 +1,166 @@
+/*
+ * exrio: write float, half and uint channels in uneven strips with each compression, read back
+ * exactly; attributes survive; a failed or aborted write leaves no file and keeps an old one.
+ */
+#include "exrio.h"
+
+#include "testhelp.h"
+
+#include <stdint.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static char g_dir[] = "/tmp/fb-test-exr-XXXXXX";
+
+static bool exists(const char *p)
+{
+    struct stat st;
+    return stat(p, &st) == 0;
+}
+
+/* Values exactly representable in half: multiples of 1/8 below 256. */
+static float val(int c, int x, int y)
+{
+    return (float)((x * 7 + y * 13 + c * 5) % 2048) / 8.0f - 128.0f;
+}
+
+static void roundtrip(exrio_compression comp)
+{
+    enum { W = 67, H = 101 }; /* 101 rows: not a multiple of 16 or 32 chunk rows */
+    char path[128];
+    snprintf(path, sizeof path, "%s/rt-%s.exr", g_dir, exrio_compression_name(comp));
+    exrio_channel ch[3] = {{"a.Y", EXRIO_FLOAT}, {"b.R", EXRIO_HALF}, {"a.count", EXRIO_UINT}};
+    exrio_attr attrs[2] = {{"fractalbake/scene", "{\"x\": 1}"}, {"fractalbake/seed", "42"}};
+    exrio_writer *w = NULL;
+    fb_result rc = exrio_writer_create(&(exrio_writer_desc){.path = path,
+                                                            .width = W,
+                                                            .height = H,
+                                                            .compression = comp,
+                                                            .channels = ch,
+                                                            .nchannels = 3,
+                                                            .attrs = attrs,
+                                                            .nattrs = 2,
+                                                            .threads = 3},
+                                       &w);
+    CHECK(rc == FB_OK);
+    if (rc) return;
+    static float f0[W * H], f1[W * H];
+    static uint32_t u2[W * H];
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            f0[y * W + x] = val(0, x, y);
+            f1[y * W + x] = val(1, x, y);
+            u2[y * W + x] = 0xfffffff0u + (uint32_t)(x + y); /* beyond float's exact integers */
+        }
+    CHECK(!exists(path)); /* nothing at the final name until finished */
+    int y = 0, step = 1;
+    while (y < H && !rc) {
+        int n = y + step <= H ? step : H - y;
+        const void *planes[3] = {f0 + y * W, f1 + y * W, u2 + y * W};
+        rc = exrio_writer_rows(w, y, n, planes);
+        y += n;
+        step = step * 3 % 17 + 1; /* uneven strips */
+    }
+    CHECK(rc == FB_OK);
+    CHECK(exrio_writer_finish(&w) == FB_OK);
+    CHECK(w == NULL);
+    CHECK(exists(path));
+
+    exrio_reader *r = NULL;
+    CHECK(exrio_open(path, &r) == FB_OK);
+    if (!r) return;
+    CHECK(exrio_width(r) == W && exrio_height(r) == H && exrio_nchannels(r) == 3);
+    CHECK(!strcmp(exrio_compression_of(r), exrio_compression_name(comp)));
+    int ia = exrio_find_channel(r, "a.Y"), ib = exrio_find_channel(r, "b.R"), ic = exrio_find_channel(r, "a.count");
+    CHECK(ia >= 0 && ib >= 0 && ic >= 0);
+    CHECK(exrio_channel_type(r, ia) == EXRIO_FLOAT && exrio_channel_type(r, ib) == EXRIO_HALF &&
+          exrio_channel_type(r, ic) == EXRIO_UINT);
+    const char *scene = exrio_attr_string(r, "fractalbake/scene");
+    CHECK(scene && !strcmp(scene, "{\"x\": 1}"));
+    CHECK(exrio_attr_string(r, "nonexistent") == NULL);
+    static float g0[W * H], g1[W * H];
+    static uint32_t v2[W * H];
+    void *planes[3] = {0};
+    planes[ia] = g0;
+    planes[ib] = g1;
+    planes[ic] = v2;
+    /* read in two uneven pieces to exercise chunk straddling */
+    CHECK(exrio_read_rows(r, 0, 45, planes) == FB_OK);
+    void *planes2[3] = {0};
+    planes2[ia] = g0 + 45 * W;
+    planes2[ib] = g1 + 45 * W;
+    planes2[ic] = v2 + 45 * W;
+    CHECK(exrio_read_rows(r, 45, H - 45, planes2) == FB_OK);
+    CHECK(memcmp(f0, g0, sizeof f0) == 0);
+    CHECK(memcmp(f1, g1, sizeof f1) == 0);
+    CHECK(memcmp(u2, v2, sizeof u2) == 0);
+    exrio_close(&r);
+    CHECK(r == NULL);
+}
+
+static void failures(void)
+{
+    exrio_channel ch[1] = {{"a.Y", EXRIO_FLOAT}};
+    char path[128];
+    /* an output folder that does not exist: an I/O error naming the path */
+    snprintf(path, sizeof path, "%s/missing/dir/x.exr", g_dir);
+    exrio_writer *w = NULL;
+    CHECK(
+        exrio_writer_create(&(exrio_writer_desc){.path = path, .width = 4, .height = 4, .channels = ch, .nchannels = 1},
+                            &w) == FB_ERR_IO);
+    CHECK(w == NULL);
+
+    /* an aborted write keeps the old file and leaves no temporary */
+    snprintf(path, sizeof path, "%s/keep.exr", g_dir);
+    FILE *f = fopen(path, "wb");
+    fputs("old", f);
+    fclose(f);
+    CHECK(exrio_writer_create(
+              &(exrio_writer_desc){.path = path, .width = 4, .height = 40, .channels = ch, .nchannels = 1}, &w) ==
+          FB_OK);
+    float rows[4 * 20] = {0};
+    const void *planes[1] = {rows};
+    CHECK(exrio_writer_rows(w, 0, 20, planes) == FB_OK);
+    exrio_writer_abort(&w);
+    CHECK(w == NULL);
+    f = fopen(path, "rb");
+    char buf[8] = {0};
+    CHECK(f && fread(buf, 1, 7, f) == 3 && !strcmp(buf, "old"));
+    if (f) fclose(f);
+    int files = 0;
+    char cmd[256];
+    snprintf(cmd, sizeof cmd, "ls -A %s | grep -c tmp", g_dir);
+    FILE *p = popen(cmd, "r");
+    if (p && fscanf(p, "%d", &files) == 1) CHECK(files == 0);
+    if (p) pclose(p);
+
+    /* rows out of order are refused */
+    CHECK(exrio_writer_create(
+              &(exrio_writer_desc){.path = path, .width = 4, .height = 40, .channels = ch, .nchannels = 1}, &w) ==
+          FB_OK);
+    CHECK(exrio_writer_rows(w, 5, 1, planes) != FB_OK);
+    CHECK(exrio_writer_finish(&w) != FB_OK); /* incomplete: not renamed */
+    f = fopen(path, "rb");
+    CHECK(f && fread(buf, 1, 7, f) == 3);
+    if (f) fclose(f);
+
+    /* not an EXR file */
+    exrio_reader *r = NULL;
+    CHECK(exrio_open(path, &r) == FB_ERR_INPUT && r == NULL);
+    snprintf(path, sizeof path, "%s/none.exr", g_dir);
+    CHECK(exrio_open(path, &r) == FB_ERR_IO && r == NULL);
+}
+
+int main(void)
+{
+    if (!mkdtemp(g_dir)) TEST_SKIP("no temporary folder");
+    roundtrip(EXRIO_NONE);
+    roundtrip(EXRIO_ZIP);
+    roundtrip(EXRIO_PIZ);
+    failures();
+    char cmd[128];
+    snprintf(cmd, sizeof cmd, "rm -rf %s", g_dir);
+    if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", g_dir);
+    TEST_REPORT();
+}
