@@ -32,7 +32,8 @@ fb_result fb_engine_open(const fb_engine_desc *d, fb_engine *e)
         fb_log(FB_LOG_WARN, "no Vulkan device available: using the native backend (%d threads)", e->threads);
     }
     e->kind = FB_BACKEND_NATIVE;
-    snprintf(e->device, sizeof e->device, "native C (%d threads)", e->threads);
+    /* No thread count here: it is stored in the file, which must not depend on it. */
+    snprintf(e->device, sizeof e->device, "native C");
     return fb_pool_create(e->threads, &e->pool);
 }
 
