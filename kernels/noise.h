@@ -33,6 +33,10 @@ K_FN uint k_wrap_cell(float i, uint p)
 {
     if (k_abs(i) < 16777216.0f) {
         int ii = K_I(i);
+        /* A power-of-two period (every non-tileable lattice) is a mask, also for negative ii in two's
+         * complement. Integer division has no SIMD instruction: on lavapipe, where one invocation is
+         * one AVX2 lane, a % per lattice lookup made fBm 20 times slower. */
+        if ((p & (p - 1u)) == 0u) return K_U(ii) & (p - 1u);
         int ip = K_I(p);
         if (ii < 0) ii += ((-ii) / ip + 1) * ip;
         return K_U(ii) % p;
@@ -45,6 +49,7 @@ K_FN uint k_wrap_cell(float i, uint p)
 /* (c + d) mod p for a cell c in [0, p) and a small offset d >= -2p. */
 K_FN uint k_cell_add(uint c, int d, uint p)
 {
+    if ((p & (p - 1u)) == 0u) return K_U(K_I(c) + d) & (p - 1u);
     return K_U(K_I(c) + d + 2 * K_I(p)) % p;
 }
 
