@@ -87,6 +87,8 @@ static fb_result run_init(fb_engine *e, layer_run *lr, int strip_rows)
                                                       .spv_size = lr->gen.spv_size,
                                                       .push_size = lr->gen.push_size,
                                                       .buffers = (uint32_t)lr->gen.nchannels,
+                                                      .spec = lr->gen.spec,
+                                                      .nspec = lr->gen.nspec,
                                                       .name = lr->gen.layer->name},
                                  &lr->pipe);
         for (int k = 0; k < SLOTS && !rc; k++) {

@@ -31,6 +31,8 @@ struct fb_gen {
     uint32_t push_size;
     void (*push)(const fb_gen *g, int y0, int n, void *out);
     void (*groups)(const fb_gen *g, int n, uint32_t out[3]);
+    uint32_t spec[4]; /* specialization constants 0..nspec-1 */
+    uint32_t nspec;
 
     unsigned char params[256]; /* generator-private, e.g. K_FbmParams */
 };

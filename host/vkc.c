@@ -718,6 +718,18 @@ fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, v
         .pCode = desc->spv,
     };
     VKC_CHECK(g_vk.vkCreateShaderModule(ctx->device, &smci, NULL, &module), fail);
+    /* Specialization lets the device compiler fold uniform choices (noise kind, style flags) away:
+     * on lavapipe every branch it cannot prove uniform costs both sides. */
+    VkSpecializationMapEntry entries[8];
+    uint32_t nspec = desc->nspec < 8 ? desc->nspec : 8;
+    for (uint32_t i = 0; i < nspec; i++)
+        entries[i] = (VkSpecializationMapEntry){.constantID = i, .offset = 4 * i, .size = 4};
+    VkSpecializationInfo spec = {
+        .mapEntryCount = nspec,
+        .pMapEntries = entries,
+        .dataSize = 4 * nspec,
+        .pData = desc->spec,
+    };
     VkComputePipelineCreateInfo cpci = {
         .sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO,
         .stage =
@@ -726,6 +738,7 @@ fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, v
                 .stage = VK_SHADER_STAGE_COMPUTE_BIT,
                 .module = module,
                 .pName = "main",
+                .pSpecializationInfo = nspec ? &spec : NULL,
             },
         .layout = p->layout,
     };

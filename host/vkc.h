@@ -55,11 +55,13 @@ uint32_t vkc_validation_messages(const vkc_context *ctx);
 bool vkc_validation_enabled(const vkc_context *ctx);
 
 typedef struct vkc_pipeline_desc {
-    const uint32_t *spv; /* SPIR-V words, embedded at build time */
-    size_t spv_size;     /* bytes */
-    uint32_t push_size;  /* bytes of push constants (<= 128) */
-    uint32_t buffers;    /* storage buffers at set 0, bindings 0..buffers-1 */
-    const char *name;    /* for messages */
+    const uint32_t *spv;  /* SPIR-V words, embedded at build time */
+    size_t spv_size;      /* bytes */
+    uint32_t push_size;   /* bytes of push constants (<= 128) */
+    uint32_t buffers;     /* storage buffers at set 0, bindings 0..buffers-1 */
+    const uint32_t *spec; /* specialization constants: constant_id i takes spec[i] (32-bit each) */
+    uint32_t nspec;
+    const char *name; /* for messages */
 } vkc_pipeline_desc;
 
 #define FB_SPV(arr) .spv = (arr), .spv_size = sizeof(arr)

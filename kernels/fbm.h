@@ -61,6 +61,7 @@ K_FN float k_fbm_shape(float n, uint flags)
  */
 K_FN float k_fbm_uv(K_FbmParams p, uint stream, float u, float v)
 {
+    /* One hash per pixel for the stream, one per octave for its noise seed and offsets. */
     uint seed = k_hash3(p.seed, stream, 0x0fb0u);
     bool tileable = (p.flags & K_FBM_TILEABLE) != 0u;
     float x = u * p.freq_x + p.offset_x;
@@ -68,7 +69,7 @@ K_FN float k_fbm_uv(K_FbmParams p, uint stream, float u, float v)
     float cells_x = p.freq_x, cells_y = p.freq_y;
     float amp = 1.0f, sum = 0.0f;
     for (uint i = 0u; i < p.octaves; i++) {
-        uint h = k_hash3(seed, 1u, i);
+        uint h = k_hash(seed + i * 0x9e3779b9u);
         uint per_x = K_NOISE_PERIOD, per_y = K_NOISE_PERIOD;
         float qx = x, qy = y;
         if (tileable) {
@@ -80,15 +81,16 @@ K_FN float k_fbm_uv(K_FbmParams p, uint stream, float u, float v)
             qx = u * rx + K_F(h & 255u) + p.offset_x;
             qy = v * ry + K_F((h >> 8) & 255u) + p.offset_y;
         }
-        sum += amp * k_fbm_shape(k_noise(p.noise, k_hash(h), qx, qy, per_x, per_y), p.flags);
+        sum += amp * k_fbm_shape(k_noise(p.noise, h, qx, qy, per_x, per_y), p.flags);
         amp *= p.gain;
         cells_x *= p.lacunarity;
         cells_y *= p.lacunarity;
         /* next octave's domain: scale, rotate, offset by a fraction of a cell */
         float nx = p.lacunarity * (p.rot_c * x - p.rot_s * y);
         float ny = p.lacunarity * (p.rot_s * x + p.rot_c * y);
-        x = nx + 64.0f * k_u01(k_hash(h ^ 0x5bd1e995u));
-        y = ny + 64.0f * k_u01(k_hash(h ^ 0x1b873593u));
+        uint ho = k_hash(h ^ 0x5bd1e995u);
+        x = nx + K_F(ho & 0xffffu) * (64.0f / 65536.0f);
+        y = ny + K_F(ho >> 16) * (64.0f / 65536.0f);
     }
     return sum;
 }

@@ -6,6 +6,10 @@
 
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 
+// The noise kind and style flags, fixed per pipeline so that the compiler folds the dispatch.
+layout(constant_id = 0) const uint NOISE = 0u;
+layout(constant_id = 1) const uint FLAGS = 0u;
+
 layout(push_constant) uniform Push
 {
     K_FbmParams p;
@@ -25,5 +29,8 @@ void main()
     uint x = gl_GlobalInvocationID.x;
     uint r = gl_GlobalInvocationID.y;
     if (x >= pc.p.width || r >= pc.rows) return;
-    dst.v[r * pc.p.width + x] = k_fbm_pixel(pc.p, x, pc.y0 + r);
+    K_FbmParams p = pc.p;
+    p.noise = NOISE;
+    p.flags = FLAGS;
+    dst.v[r * p.width + x] = k_fbm_pixel(p, x, pc.y0 + r);
 }

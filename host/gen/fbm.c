@@ -47,12 +47,47 @@ static const K_FbmParams *params(const fb_gen *g)
     return (const K_FbmParams *)(const void *)g->params;
 }
 
+/* The native loop, cloned per noise kind with the kind a compile-time constant (the C counterpart of
+ * the shader's specialization constant), so that the dispatch in k_noise folds away. */
+#define FBM_ROWS(KIND)                                                                                                 \
+    static void fbm_rows_##KIND(K_FbmParams p, int y0, int n, float *out)                                              \
+    {                                                                                                                  \
+        p.noise = KIND;                                                                                                \
+        for (int r = 0; r < n; r++)                                                                                    \
+            for (uint32_t x = 0; x < p.width; x++)                                                                     \
+                out[(size_t)r * p.width + x] = k_fbm_pixel(p, x, (uint32_t)(y0 + r));                                  \
+    }
+FBM_ROWS(K_NOISE_GRADIENT)
+FBM_ROWS(K_NOISE_VALUE)
+FBM_ROWS(K_NOISE_SIMPLEX)
+FBM_ROWS(K_NOISE_CELLULAR)
+FBM_ROWS(K_NOISE_CELLULAR_F2)
+FBM_ROWS(K_NOISE_SINE)
+
 static void fbm_rows(const fb_gen *g, int y0, int n, void *const *planes)
 {
     const K_FbmParams *p = params(g);
     float *out = planes[0];
-    for (int r = 0; r < n; r++)
-        for (uint32_t x = 0; x < p->width; x++) out[(size_t)r * p->width + x] = k_fbm_pixel(*p, x, (uint32_t)(y0 + r));
+    switch (p->noise) {
+    case K_NOISE_VALUE:
+        fbm_rows_K_NOISE_VALUE(*p, y0, n, out);
+        break;
+    case K_NOISE_SIMPLEX:
+        fbm_rows_K_NOISE_SIMPLEX(*p, y0, n, out);
+        break;
+    case K_NOISE_CELLULAR:
+        fbm_rows_K_NOISE_CELLULAR(*p, y0, n, out);
+        break;
+    case K_NOISE_CELLULAR_F2:
+        fbm_rows_K_NOISE_CELLULAR_F2(*p, y0, n, out);
+        break;
+    case K_NOISE_SINE:
+        fbm_rows_K_NOISE_SINE(*p, y0, n, out);
+        break;
+    default:
+        fbm_rows_K_NOISE_GRADIENT(*p, y0, n, out);
+        break;
+    }
 }
 
 static void fbm_push_fn(const fb_gen *g, int y0, int n, void *out)
@@ -107,5 +142,8 @@ fb_result fb_gen_fbm_init(fb_gen *g)
     g->push_size = sizeof(fbm_push);
     g->push = fbm_push_fn;
     g->groups = fbm_groups;
+    g->spec[0] = params(g)->noise;
+    g->spec[1] = params(g)->flags;
+    g->nspec = 2;
     return FB_OK;
 }
