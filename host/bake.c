@@ -32,6 +32,7 @@ fb_result fb_engine_open(const fb_engine_desc *d, fb_engine *e)
         fb_log(FB_LOG_WARN, "no Vulkan device available: using the native backend (%d threads)", e->threads);
     }
     e->kind = FB_BACKEND_NATIVE;
+    e->scalar = d->scalar;
     /* No thread count here: it is stored in the file, which must not depend on it. */
     snprintf(e->device, sizeof e->device, "native C");
     return fb_pool_create(e->threads, &e->pool);
@@ -184,6 +185,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
 
     for (int i = 0; i < s->nlayers && !rc; i++) {
         rc = fb_gen_init(&runs[i].gen, s, &s->layers[i]);
+        runs[i].gen.scalar = e->scalar;
         for (int c = 0; c < runs[i].gen.nchannels && !rc; c++)
             channels[nch++] = (exrio_channel){runs[i].gen.channel_names[c], runs[i].gen.channel_types[c]};
         if (!rc) rc = run_init(e, &runs[i], strip);

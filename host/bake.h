@@ -20,6 +20,7 @@ typedef struct fb_engine {
     vkc_context *vk;
     fb_pool *pool;
     int threads;
+    bool scalar; /* native: portable kernels only (the benchmark's scalar reference) */
     char device[256];
 } fb_engine;
 
@@ -28,6 +29,7 @@ typedef struct fb_engine_desc {
     const char *device;
     int threads; /* native workers and EXR compression threads; 0: one per core */
     bool validation;
+    bool scalar; /* native: no hand-vectorised paths */
 } fb_engine_desc;
 
 fb_result fb_engine_open(const fb_engine_desc *desc, fb_engine *out);

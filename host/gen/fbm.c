@@ -1,6 +1,7 @@
 /*
  * The fBm generator: kernels/fbm.h, driven natively or by shaders/fbm.comp.
  */
+#include "../fbm_avx2.h"
 #include "../gen.h"
 
 #include "../../kernels/fbm.h"
@@ -68,6 +69,11 @@ static void fbm_rows(const fb_gen *g, int y0, int n, void *const *planes)
 {
     const K_FbmParams *p = params(g);
     float *out = planes[0];
+    /* Bit-exact with the kernel (tests/test_avx2.c), so using it changes no result. */
+    if (!g->scalar && fb_fbm_avx2_supported(p)) {
+        fb_fbm_avx2_rows(p, y0, n, out);
+        return;
+    }
     switch (p->noise) {
     case K_NOISE_VALUE:
         fbm_rows_K_NOISE_VALUE(*p, y0, n, out);

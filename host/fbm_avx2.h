@@ -1,0 +1,14 @@
+/* The AVX2 reference loop for the fBm benchmark (see fbm_avx2.c). `params` is a K_FbmParams. */
+#ifndef FB_FBM_AVX2_H
+#define FB_FBM_AVX2_H
+
+#include <stdbool.h>
+
+/* True when this CPU has AVX2 and the parameters are the case the loop implements (gradient
+ * noise, standard shape, no warp, not tileable). */
+bool fb_fbm_avx2_supported(const void *params);
+
+/* Fills rows [y0, y0 + n) of the image (n * width floats), bit-exact with k_fbm_pixel. */
+void fb_fbm_avx2_rows(const void *params, int y0, int n, float *out);
+
+#endif
