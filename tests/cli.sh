@@ -158,6 +158,22 @@ grep -q "at pixel (39, 29)" cmp.txt && ok || bad "the perturbed pixel is not nam
 # all-zero images: ridged fBm with gain... instead use two identical files and a zero diff file
 "$FB" compare d.exr d.exr > /dev/null 2>&1; [ $? -eq 0 ] || [ $? -eq 1 ] && ok || bad "compare crashed on a diff image"
 
+# ---- no Vulkan device: fall back with one line, unless vulkan was asked for ----
+VK_ICD_FILENAMES=/nonexistent.json "$FB" fbm --size 32x32 -o nv.exr 2> nv.txt && [ -s nv.exr ] && ok || bad "no fallback to native"
+[ "$(grep -c 'no Vulkan device available: using the native backend' nv.txt)" -eq 1 ] && ok || bad "fallback not announced: $(cat nv.txt)"
+FB_VK_VALIDATION=0 VK_ICD_FILENAMES=/nonexistent.json expect_fail 3 "vulkan" nv2.exr -- fbm --size 32x32 --backend vulkan -o nv2.exr
+"$FB" compare nv.exr nv.exr > /dev/null && ok || bad "fallback file unreadable"
+
+# ---- bounded memory: resident size does not grow with the image (streamed in strips) ----
+rss() { /usr/bin/time -f %M "$FB" fbm --size "$1" --compression none --quiet -o m.exr 2>&1 >/dev/null | tail -1; }
+if [ -x /usr/bin/time ]; then
+  small=$(rss 4096x256)
+  large=$(rss 4096x8192) # 32 times the pixels (128 MiB of floats)
+  # kilobytes; allow 64 MiB of growth for driver caches and the writer's queue, far below 128 MiB
+  [ "$large" -lt $((small + 65536)) ] && ok || bad "resident memory grows with the image: $small KiB -> $large KiB"
+  rm -f m.exr
+fi
+
 # ---- the other commands ----
 "$FB" devices > dev.txt && ok || bad "devices failed"
 grep -q -E "\*|no Vulkan device" dev.txt && ok || bad "devices marks no chosen device"
