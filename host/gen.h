@@ -35,7 +35,7 @@ struct fb_gen {
     uint32_t nspec;
 
     bool scalar;               /* native: the portable kernel only, no hand-vectorised path (benchmark reference) */
-    unsigned char params[256]; /* generator-private, e.g. K_FbmParams */
+    _Alignas(16) unsigned char params[256]; /* generator-private, e.g. K_FbmParams */
 };
 
 /* Sets up the generator of `layer`. */

@@ -165,7 +165,8 @@ FB_VK_VALIDATION=0 VK_ICD_FILENAMES=/nonexistent.json expect_fail 3 "vulkan" nv2
 "$FB" compare nv.exr nv.exr > /dev/null && ok || bad "fallback file unreadable"
 
 # ---- bounded memory: resident size does not grow with the image (streamed in strips) ----
-rss() { /usr/bin/time -f %M "$FB" fbm --size "$1" --compression none --quiet -o m.exr 2>&1 >/dev/null | tail -1; }
+# (under AddressSanitizer its quarantine keeps freed buffers resident; measure without it)
+rss() { ASAN_OPTIONS="${ASAN_OPTIONS:-}:quarantine_size_mb=0" /usr/bin/time -f %M "$FB" fbm --size "$1" --compression none --quiet -o m.exr 2>&1 >/dev/null | tail -1; }
 if [ -x /usr/bin/time ]; then
   small=$(rss 4096x256)
   large=$(rss 4096x8192) # 32 times the pixels (128 MiB of floats)
