@@ -34,7 +34,7 @@ struct fb_gen {
     uint32_t spec[4]; /* specialization constants 0..nspec-1 */
     uint32_t nspec;
 
-    bool scalar;               /* native: the portable kernel only, no hand-vectorised path (benchmark reference) */
+    bool scalar; /* native: the portable kernel only, no hand-vectorised path (benchmark reference) */
     _Alignas(16) unsigned char params[256]; /* generator-private, e.g. K_FbmParams */
 };
 

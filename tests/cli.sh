@@ -175,6 +175,15 @@ if [ -x /usr/bin/time ]; then
   rm -f m.exr
 fi
 
+# ---- device selection (where a Vulkan device exists) ----
+if "$FB" devices | grep -q '^0 '; then
+  "$FB" fbm $S --backend vulkan --device 0 -o d0.exr && ok || bad "--device 0 failed"
+  first=$("$FB" devices | awk 'NR == 2 {print $3}')
+  "$FB" fbm $S --backend vulkan --device "$first" -o d1.exr && ok || bad "--device $first (a name) failed"
+  "$FB" info d1.exr | grep -q "fractalbake/device .*$first" && ok || bad "device not stored in the file"
+  expect_fail 2 "out of range" d2.exr -- fbm $S --backend vulkan --device 99 -o d2.exr
+fi
+
 # ---- the other commands ----
 "$FB" devices > dev.txt && ok || bad "devices failed"
 grep -q -E "\*|no Vulkan device" dev.txt && ok || bad "devices marks no chosen device"
