@@ -579,8 +579,11 @@ fb_result vkc_create(const vkc_desc *desc, vkc_context **out)
     ctx->queue_family = (uint32_t)family;
     ctx->timestamps = qf[family].timestampValidBits > 0 && props.limits.timestampPeriod > 0.0f;
     ctx->timestamp_period = props.limits.timestampPeriod;
-    ctx->direct_map =
-        props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU || props.deviceType == VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU;
+    /* FB_VK_STAGING=1 forces the discrete-GPU path (device-local + staging copy) on any device, so
+     * that lavapipe in CI exercises it under the validation layer. */
+    ctx->direct_map = (props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ||
+                       props.deviceType == VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU) &&
+                      !env_true("FB_VK_STAGING");
 
     float prio = 1.0f;
     VkDeviceQueueCreateInfo qci = {
