@@ -148,12 +148,11 @@ static fb_result run_collect(fb_engine *e, layer_run *lr, int slot, int y0, int 
 
 /* ---- the bake ------------------------------------------------------------------------------- */
 
-static int auto_strip_rows(const fb_scene *s, int nchannels)
+static int auto_strip_rows(const fb_scene *s)
 {
     /* About 4 MiB per channel buffer: well inside lavapipe's 128 MiB maxStorageBufferRange and small
      * enough that the writer's queue keeps memory bounded at any image size. */
     long rows = (1L << 20) / s->width;
-    (void)nchannels;
     if (rows >= 64) rows -= rows % 64;
     if (rows < 1) rows = 1;
     if (rows > s->height) rows = s->height;
@@ -172,7 +171,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     double t0 = fb_now(), gpu = 0;
     if (!runs) return fb_fail(FB_ERR_NOMEM, "out of memory");
 
-    int strip = d->strip_rows > 0 ? d->strip_rows : auto_strip_rows(s, 1);
+    int strip = d->strip_rows > 0 ? d->strip_rows : auto_strip_rows(s);
     if (strip > s->height) strip = s->height;
     if (e->kind == FB_BACKEND_VULKAN && (uint64_t)strip * s->width * 4 > vkc_info(e->vk)->max_storage_buffer_range) {
         strip = (int)(vkc_info(e->vk)->max_storage_buffer_range / ((uint64_t)s->width * 4));

@@ -121,7 +121,6 @@ static fb_result encode_batch(exrio_writer *w, batch *b, char *msg, size_t msgsz
             er = init ? exr_encoding_update(w->ctx, 0, &cinfo, &enc) : exr_encoding_initialize(w->ctx, 0, &cinfo, &enc);
         if (er != EXR_ERR_SUCCESS) goto exr_fail;
         init = true;
-        int rows_here = cinfo.height;
         for (int c = 0; c < enc.channel_count; c++) {
             int src = w->file_order[c];
             size_t row_bytes = (size_t)w->width * 4;
@@ -132,7 +131,6 @@ static fb_result encode_batch(exrio_writer *w, batch *b, char *msg, size_t msgsz
             enc.channels[c].user_bytes_per_element = 4;
             enc.channels[c].user_data_type = w->types[src] == EXRIO_UINT ? EXR_PIXEL_UINT : EXR_PIXEL_FLOAT;
         }
-        (void)rows_here;
         er = exr_encoding_choose_default_routines(w->ctx, 0, &enc);
         if (er != EXR_ERR_SUCCESS) goto exr_fail;
         enc.yield_until_ready_fn = NULL;
