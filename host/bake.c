@@ -234,7 +234,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
             at += runs[i].gen.nchannels;
         }
         if (rc) break;
-        if (preview && channels[0].type != EXRIO_UINT) fb_preview_add_rows(preview, y0, n, planes[0]);
+        if (preview) fb_preview_add_rows(preview, y0, n, planes[runs[0].gen.preview_channel]);
         if (w) rc = exrio_writer_rows(w, y0, n, planes);
         fb_progress_update(&prog, (uint64_t)(y0 + n) * s->width, (uint64_t)s->height * s->width);
     }

@@ -19,6 +19,7 @@ struct fb_gen {
     const fb_scene *scene;
     const fb_layer *layer;
     int nchannels;
+    int preview_channel; /* the float channel a grey preview shows */
     char channel_names[FB_GEN_MAX_CHANNELS][80];
     exrio_type channel_types[FB_GEN_MAX_CHANNELS];
 
@@ -43,5 +44,6 @@ fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer);
 
 /* Per kind. */
 fb_result fb_gen_fbm_init(fb_gen *g);
+fb_result fb_gen_julia_init(fb_gen *g);
 
 #endif

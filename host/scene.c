@@ -53,6 +53,21 @@ static const keyspec fbm_keys[] = {
     {"half", T_BOOL, 0, 0, false, NULL, "false", "store as half instead of float (flags: --half, --float)"},
 };
 
+static const keyspec julia_keys[] = {
+    {"type", T_TYPE, 0, 0, false, NULL, NULL, "generator: \"julia\""},
+    {"name", T_NAME, 0, 0, false, NULL, "\"sky\"", "layer name; channels NAME.iter, .n, .inside, .de (flag: --layer)"},
+    {"mapping", T_ENUM, 0, 0, false, "rect|polar", "\"rect\"",
+     "starting grid: rect (eq. 7) or polar (eq. 8, seamless left/right)"},
+    {"scale", T_VEC2, 0, 1e6, false, NULL, NULL, "rect: width and height of the grid (default 3 wide, square pixels)"},
+    {"radius", T_NUM, 0, 1e6, true, NULL, "1.5", "polar: radius r of p = r v exp(i 2 pi u)"},
+    {"center", T_VEC2, -1e6, 1e6, false, NULL, "[0.0, 0.0]", "centre of the starting grid (RE,IM)"},
+    {"rotation", T_NUM, -360, 360, false, NULL, "0.0", "rotation of the starting grid, degrees"},
+    {"alpha", T_VEC2, -1e6, 1e6, false, NULL, "[0.0, 0.0]", "allpass warp coefficient a (RE,IM); 0: plain Julia set"},
+    {"c", T_VEC2, -1e6, 1e6, false, NULL, "[-0.8, 0.156]", "Julia constant c (RE,IM)"},
+    {"max-iter", T_INT, 1, 1000000, false, NULL, "256", "iteration limit"},
+    {"bailout", T_NUM, 2, 1e6, false, NULL, "2.0", "escape radius R (iter counts steps until |z| >= R)"},
+};
+
 #define NKEYS(a) ((int)(sizeof(a) / sizeof((a)[0])))
 
 static const keyspec *find_key(const keyspec *keys, int n, const char *key)
@@ -67,6 +82,11 @@ static bool kind_keys(const char *kind, const keyspec **keys, int *n)
     if (!strcmp(kind, "fbm")) {
         *keys = fbm_keys;
         *n = NKEYS(fbm_keys);
+        return true;
+    }
+    if (!strcmp(kind, "julia")) {
+        *keys = julia_keys;
+        *n = NKEYS(julia_keys);
         return true;
     }
     return false;
@@ -381,6 +401,38 @@ static fb_result parse_fbm(const vctx *v, const char *path, json_t *obj, fb_laye
     return FB_OK;
 }
 
+static void vec2_of(const json_t *obj, const char *key, double out[2])
+{
+    json_t *a = json_object_get(obj, key);
+    out[0] = json_number_value(json_array_get(a, 0));
+    out[1] = json_number_value(json_array_get(a, 1));
+}
+
+static fb_result parse_julia(const vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
+{
+    /* The default grid is 3 units wide with square pixels, so it depends on the image size. */
+    if (!json_object_get(obj, "scale") && s->width > 0)
+        json_object_set_new(obj, "scale", json_pack("[ff]", 3.0, 3.0 * s->height / s->width));
+    fb_result rc = check_object(v, path, obj, julia_keys, NKEYS(julia_keys), "a julia layer");
+    if (rc) return rc;
+    fb_julia_params *j = &L->julia;
+    j->polar = !strcmp(json_string_value(json_object_get(obj, "mapping")), "polar");
+    vec2_of(obj, "scale", j->scale);
+    vec2_of(obj, "center", j->center);
+    vec2_of(obj, "alpha", j->alpha);
+    vec2_of(obj, "c", j->c);
+    j->radius = num(obj, "radius");
+    j->rotation = num(obj, "rotation");
+    j->max_iter = (int)json_integer_value(json_object_get(obj, "max-iter"));
+    j->bailout = num(obj, "bailout");
+    if (!(j->scale[0] > 0 && j->scale[1] > 0)) {
+        char sub[256];
+        snprintf(sub, sizeof sub, "%s.scale", path);
+        return verr(v, sub, "both sides of the grid must be positive");
+    }
+    return FB_OK;
+}
+
 static fb_result parse_root(const vctx *v, json_t *root, fb_scene *s)
 {
     char path[64];
@@ -408,11 +460,14 @@ static fb_result parse_root(const vctx *v, json_t *root, fb_scene *s)
         if (!strcmp(t, "fbm")) {
             L->kind = FB_LAYER_FBM;
             rc = parse_fbm(v, path, lj, L);
+        } else if (!strcmp(t, "julia")) {
+            L->kind = FB_LAYER_JULIA;
+            rc = parse_julia(v, path, lj, s, L);
         } else {
             char sub[80], shown[64];
             snprintf(sub, sizeof sub, "%s.type", path);
             show(type, shown, sizeof shown);
-            rc = verr(v, sub, "unknown generator %s (available: \"fbm\")", shown);
+            rc = verr(v, sub, "unknown generator %s (available: \"fbm\", \"julia\")", shown);
         }
         if (rc) return rc;
         snprintf(L->name, sizeof L->name, "%s", json_string_value(json_object_get(lj, "name")));

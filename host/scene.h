@@ -16,7 +16,7 @@
 #define FB_MAX_DIM    65536
 #define FB_MAX_PIXELS (1ull << 31)
 
-typedef enum fb_layer_kind { FB_LAYER_FBM = 0 } fb_layer_kind;
+typedef enum fb_layer_kind { FB_LAYER_FBM = 0, FB_LAYER_JULIA = 1 } fb_layer_kind;
 
 typedef struct fb_fbm_params {
     unsigned noise; /* K_NOISE_* */
@@ -32,11 +32,24 @@ typedef struct fb_fbm_params {
     double warp;
 } fb_fbm_params;
 
+typedef struct fb_julia_params {
+    bool polar; /* mapping: rect (eq. 7) or polar (eq. 8) */
+    double scale[2];
+    double radius;
+    double center[2];
+    double rotation; /* degrees */
+    double alpha[2];
+    double c[2];
+    int max_iter;
+    double bailout;
+} fb_julia_params;
+
 typedef struct fb_layer {
     fb_layer_kind kind;
     char name[64];
     bool half; /* store colour/height as half instead of float */
     fb_fbm_params fbm;
+    fb_julia_params julia;
 } fb_layer;
 
 typedef struct fb_scene {

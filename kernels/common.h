@@ -32,6 +32,9 @@
 #define K_STRUCT(n) struct n
 #define K_END(n)    ;
 #define K_MAKE(n)   n
+/* No fused multiply-add in computations that produce this variable (SPIR-V NoContraction), so
+ * that the device rounds every operation as C built with -ffp-contract=off does. */
+#define K_PRECISE precise
 
 #else /* C11 */
 
@@ -59,6 +62,7 @@ typedef uint32_t uint;
 #define K_STRUCT(n) typedef struct n
 #define K_END(n)    n;
 #define K_MAKE(n)   (n)
+#define K_PRECISE
 
 #endif
 

@@ -63,6 +63,20 @@ expect_fail 2 "unknown command" "" -- frobnicate
 expect_fail 3 "cannot create" "$T/nodir/o.exr" -- fbm $S -o "$T/nodir/o.exr"
 expect_fail 2 "device" o.exr -- fbm $S --backend vulkan --device no-such-gpu -o o.exr
 
+# ---- bad input: julia ----
+expect_fail 2 "\-\-c: expected two finite numbers" o.exr -- julia $S --c 1 -o o.exr
+expect_fail 2 "\-\-c: expected two finite numbers" o.exr -- julia $S --c nan,0 -o o.exr
+expect_fail 2 "alpha: expected two finite numbers" o.exr -- julia $S --alpha 0,inf -o o.exr
+expect_fail 2 "max-iter" o.exr -- julia $S --max-iter 0 -o o.exr
+expect_fail 2 "bailout" o.exr -- julia $S --bailout 1.5 -o o.exr
+expect_fail 2 "radius" o.exr -- julia $S --mapping polar --radius 0 -o o.exr
+expect_fail 2 "radius" o.exr -- julia $S --radius -1 -o o.exr
+expect_fail 2 "mapping" o.exr -- julia $S --mapping sphere -o o.exr
+expect_fail 2 "scale" o.exr -- julia $S --scale 0,1 -o o.exr
+if "$FB" julia $S --alpha 0.5,0.25 -o j.exr --preview j.png 2> err.txt; then ok; else bad "julia bake failed: $(cat err.txt)"; fi
+valid_exr j.exr
+"$FB" info j.exr | grep -q "layer sky .*iter (uint)" && ok || bad "julia layer lacks sky.iter as uint"
+
 # ---- bad input: scene files ----
 printf '{"size": [64, 32],\n "layers": [\n  {"type": "fbm", "octaves": 3,\n   "octavez": 2}\n ]\n}\n' > unknown.json
 expect_fail 2 "unknown.json:4: layers\[0\].octavez: unknown key" o.exr -- render unknown.json -o o.exr --quiet

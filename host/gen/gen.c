@@ -10,6 +10,8 @@ fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer)
     switch (layer->kind) {
     case FB_LAYER_FBM:
         return fb_gen_fbm_init(g);
+    case FB_LAYER_JULIA:
+        return fb_gen_julia_init(g);
     }
     return fb_fail(FB_ERR_INTERNAL, "layer %s: no generator", layer->name);
 }

@@ -1,0 +1,113 @@
+/*
+ * The Julia sky generator: kernels/julia.h, driven natively or by shaders/julia.comp.
+ * Channels: NAME.iter (uint), NAME.n (smooth count), NAME.inside (0/1), NAME.de (pixels).
+ */
+#include "../gen.h"
+
+#include "../../kernels/julia.h"
+#include "julia_comp.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <string.h>
+
+typedef struct julia_push {
+    K_JuliaParams p;
+    uint32_t y0;
+    uint32_t rows;
+} julia_push;
+
+_Static_assert(offsetof(K_JuliaParams, width) == 0 && offsetof(K_JuliaParams, height) == 4, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, mapping) == 8 && offsetof(K_JuliaParams, max_iter) == 12, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, c_re) == 16 && offsetof(K_JuliaParams, c_im) == 20, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, a_re) == 24 && offsetof(K_JuliaParams, a_im) == 28, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, scale_u) == 32 && offsetof(K_JuliaParams, scale_v) == 36, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, radius) == 40, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, center_re) == 44 && offsetof(K_JuliaParams, center_im) == 48, "std430");
+_Static_assert(offsetof(K_JuliaParams, rot_c) == 52 && offsetof(K_JuliaParams, rot_s) == 56, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, bailout2) == 60, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, inv_width) == 64 && offsetof(K_JuliaParams, inv_height) == 68, "std430");
+_Static_assert(offsetof(K_JuliaParams, pad0) == 72 && offsetof(K_JuliaParams, pad1) == 76, "std430 offset");
+_Static_assert(offsetof(julia_push, y0) == 80 && offsetof(julia_push, rows) == 84, "std430 offset");
+_Static_assert(sizeof(julia_push) <= FB_GEN_MAX_PUSH, "push constants");
+_Static_assert(sizeof(K_JuliaParams) <= sizeof(((fb_gen *)0)->params), "params fit");
+
+static const K_JuliaParams *params(const fb_gen *g)
+{
+    return (const K_JuliaParams *)(const void *)g->params;
+}
+
+static void julia_rows(const fb_gen *g, int y0, int n, void *const *planes)
+{
+    const K_JuliaParams *p = params(g);
+    uint32_t *iter = planes[0];
+    float *sm = planes[1], *inside = planes[2], *de = planes[3];
+    for (int r = 0; r < n; r++)
+        for (uint32_t x = 0; x < p->width; x++) {
+            K_JuliaResult res = k_julia_pixel(*p, x, (uint32_t)(y0 + r));
+            size_t i = (size_t)r * p->width + x;
+            iter[i] = res.iter;
+            sm[i] = res.nsmooth;
+            inside[i] = (float)res.inside;
+            de[i] = res.de;
+        }
+}
+
+static void julia_push_fn(const fb_gen *g, int y0, int n, void *out)
+{
+    julia_push push = {.p = *params(g), .y0 = (uint32_t)y0, .rows = (uint32_t)n};
+    memcpy(out, &push, sizeof push);
+}
+
+static void julia_groups(const fb_gen *g, int n, uint32_t out[3])
+{
+    out[0] = (params(g)->width + 63) / 64;
+    out[1] = (uint32_t)n;
+    out[2] = 1;
+}
+
+fb_result fb_gen_julia_init(fb_gen *g)
+{
+    const fb_scene *s = g->scene;
+    const fb_julia_params *j = &g->layer->julia;
+    K_JuliaParams *p = (K_JuliaParams *)(void *)g->params;
+    memset(p, 0, sizeof *p);
+    p->width = (uint32_t)s->width;
+    p->height = (uint32_t)s->height;
+    p->mapping = j->polar ? K_JULIA_POLAR : K_JULIA_RECT;
+    p->max_iter = (uint32_t)j->max_iter;
+    p->c_re = (float)j->c[0];
+    p->c_im = (float)j->c[1];
+    p->a_re = (float)j->alpha[0];
+    p->a_im = (float)j->alpha[1];
+    p->scale_u = (float)j->scale[0];
+    p->scale_v = (float)j->scale[1];
+    p->radius = (float)j->radius;
+    p->center_re = (float)j->center[0];
+    p->center_im = (float)j->center[1];
+    double a = j->rotation * 3.14159265358979323846 / 180.0;
+    p->rot_c = (float)cos(a);
+    p->rot_s = (float)sin(a);
+    p->bailout2 = (float)(j->bailout * j->bailout);
+    p->inv_width = 1.0f / (float)s->width;
+    p->inv_height = 1.0f / (float)s->height;
+
+    static const char *const suffix[4] = {"iter", "n", "inside", "de"};
+    static const exrio_type types[4] = {EXRIO_UINT, EXRIO_FLOAT, EXRIO_HALF, EXRIO_FLOAT};
+    g->nchannels = 4;
+    for (int c = 0; c < 4; c++) {
+        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        g->channel_types[c] = types[c];
+    }
+    g->preview_channel = 1; /* the smooth count */
+    g->native_rows = julia_rows;
+    g->spv = julia_comp;
+    g->spv_size = sizeof julia_comp;
+    g->push_size = sizeof(julia_push);
+    g->push = julia_push_fn;
+    g->groups = julia_groups;
+    g->spec[0] = p->mapping;
+    g->nspec = 1;
+    return FB_OK;
+}

@@ -1,0 +1,229 @@
+/*
+ * The Julia kernel against closed forms and an independent double-precision reference written
+ * here (not the shared kernel): known points, the allpass warp's unit-circle property (eq. 10),
+ * the pole, the bailout-independent smooth count, the distance estimate, the polar seam.
+ */
+#include "../kernels/julia.h"
+
+#include "testhelp.h"
+
+#include <complex.h>
+#include <math.h>
+#include <string.h>
+
+static K_JuliaParams base(double cre, double cim, double are, double aim, int max_iter)
+{
+    K_JuliaParams p;
+    memset(&p, 0, sizeof p);
+    p.width = p.height = 200;
+    p.max_iter = (uint)max_iter;
+    p.c_re = (float)cre, p.c_im = (float)cim;
+    p.a_re = (float)are, p.a_im = (float)aim;
+    p.scale_u = p.scale_v = 3.0f;
+    p.radius = 1.5f;
+    p.rot_c = 1.0f;
+    p.bailout2 = 4.0f;
+    p.inv_width = p.inv_height = 1.0f / 200.0f;
+    return p;
+}
+
+static void test_known_points(void)
+{
+    /* c = -1: the origin's orbit 0, -1, 0, -1, ... stays bounded */
+    K_JuliaResult r = k_julia_orbit(base(-1, 0, 0, 0, 1000), 0, 0, 1e-3f, 0);
+    CHECK(r.inside == 1 && r.iter == 1000 && r.nsmooth == 1000.0f && r.de == 0.0f);
+    /* c = 0, a = 0: z_n = p^(2^n); inside for |p| < 1, else the first n with |p|^(2^n) >= 2 */
+    int bad = 0;
+    for (int i = 0; i < 400; i++) {
+        double m = 0.3 + 0.004 * i, ang = 0.7 * i;
+        if (fabs(m - 1) < 0.01) continue;
+        double n_exact = log2(log(2.0) / log(m));
+        if (m > 1 && fabs(n_exact - round(n_exact)) < 0.01) continue; /* a rounding tie: skip */
+        K_JuliaResult q = k_julia_orbit(base(0, 0, 0, 0, 100), (float)(m * cos(ang)), (float)(m * sin(ang)), 1e-3f, 0);
+        if (m < 1)
+            bad += !(q.inside == 1 && q.iter == 100);
+        else
+            bad += !(q.inside == 0 && (double)q.iter == (m >= 2 ? 0 : ceil(n_exact)));
+    }
+    CHECKF(bad == 0, "%d points disagree with the closed form", bad);
+}
+
+/* Eq. 10: the warp keeps the unit circle (|z0| = 1) and, for |a| < 1, maps |p| < 1 inside and |p| > 1
+ * outside. Observed through the escape test at step 0 with R^2 = 1 -/+ 1e-4. */
+static void test_warp_circle(void)
+{
+    int bad = 0;
+    for (int i = 0; i < 500; i++) {
+        double ang = 0.0137 * i * 97, am = 0.1 + 0.0017 * i, aa = 0.3 * i;
+        K_JuliaParams p = base(0.3, 0.1, am * cos(aa), am * sin(aa), 1);
+        float x = (float)cos(ang), y = (float)sin(ang);
+        p.bailout2 = 1.0f - 1e-4f;
+        bad += k_julia_orbit(p, x, y, 1e-3f, 0).iter != 0; /* |z0| >= R: escapes at step 0 */
+        p.bailout2 = 1.0f + 1e-4f;
+        bad += k_julia_orbit(p, x, y, 1e-3f, 0).iter != 1;
+        p.bailout2 = 1.0f;
+        bad += k_julia_orbit(p, 0.9f * x, 0.9f * y, 1e-3f, 0).iter != 1; /* inside stays inside */
+        bad += k_julia_orbit(p, 1.1f * x, 1.1f * y, 1e-3f, 0).iter != 0; /* outside stays outside */
+    }
+    CHECKF(bad == 0, "%d violations of |A| = 1 on the circle", bad);
+}
+
+/* The pole p = 1/a: no NaN or Inf, the pixel escapes at once. */
+static void test_pole(void)
+{
+    K_JuliaParams p = base(-0.8, 0.156, 0.5, 0, 256);
+    K_JuliaResult r = k_julia_orbit(p, 2.0f, 0.0f, 1e-3f, 0);
+    CHECK(r.iter == 0 && r.inside == 0 && r.nsmooth == 0.0f && r.de == 0.0f);
+    for (int i = -50; i <= 50; i++) {
+        K_JuliaResult q = k_julia_orbit(p, 2.0f + 1e-7f * (float)i, 1e-7f * (float)(i % 7), 1e-3f, 0);
+        CHECK(isfinite(q.nsmooth) && isfinite(q.de));
+    }
+}
+
+/* Independent reference: the whole pipeline in double, written from the paper's equations. */
+static int reference_iter(double complex pt, double complex a, double complex c, int max_iter, double R)
+{
+    double complex z = (pt - conj(a)) / (1.0 - a * pt);
+    for (int n = 0; n < max_iter; n++) {
+        if (cabs(z) >= R) return n;
+        z = z * z + c;
+    }
+    return cabs(z) >= R ? max_iter : max_iter;
+}
+
+static double lcg_noise(uint32_t *s)
+{
+    *s = *s * 1664525u + 1013904223u;
+    return ((double)(*s >> 8) / 16777216.0 - 0.5) * 2.0 * 0x1p-23;
+}
+
+/* The reference with a float-sized rounding (2^-23 relative, a fixed pseudo-random sequence per
+ * `seed`) applied to the start point and after every step: what float arithmetic may do. */
+static int noisy_iter(double complex pt, double complex a, double complex c, int max_iter, uint32_t seed)
+{
+    uint32_t s = seed * 2654435761u + 1u;
+#define NOISE() lcg_noise(&s)
+    pt *= 1.0 + NOISE() + I * NOISE();
+    double complex z = (pt - conj(a)) / (1.0 - a * pt);
+    for (int n = 0; n < max_iter; n++) {
+        if (cabs(z) >= 2.0) return n;
+        z = (z * z + c) * (1.0 + NOISE() + I * NOISE());
+    }
+#undef NOISE
+    return max_iter;
+}
+
+/* Numerically unstable: float-sized rounding can change the reference's count. */
+static bool unstable(double complex pt, double complex a, double complex c, int max_iter, int ref)
+{
+    for (uint32_t k = 1; k <= 16; k++)
+        if (noisy_iter(pt, a, c, max_iter, k) != ref) return true;
+    return false;
+}
+
+static void test_against_reference(void)
+{
+    const double cs[4][2] = {{-0.8, 0.156}, {-0.4, 0.6}, {0.285, 0.01}, {-1.0, 0.0}};
+    const double as[3][2] = {{0, 0}, {0.5, 0.25}, {-0.3, 0}};
+    for (int mapping = 0; mapping < 2; mapping++)
+        for (int ci = 0; ci < 4; ci++)
+            for (int ai = 0; ai < 3; ai++) {
+                K_JuliaParams p = base(cs[ci][0], cs[ci][1], as[ai][0], as[ai][1], 256);
+                p.mapping = (uint)mapping;
+                p.width = 160, p.height = 120;
+                p.inv_width = 1.0f / 160, p.inv_height = 1.0f / 120;
+                double complex a = as[ai][0] + I * as[ai][1], c = cs[ci][0] + I * cs[ci][1];
+                int agree = 0, total = 0, stable = 0, stable_agree = 0;
+                for (uint y = 0; y < p.height; y++)
+                    for (uint x = 0; x < p.width; x++) {
+                        double u = (x + 0.5) / p.width, v = 1.0 - (y + 0.5) / p.height;
+                        double complex pt =
+                            mapping ? 1.5 * v * cexp(I * 2 * M_PI * u) : 3.0 * (u - 0.5) + I * 3.0 * (v - 0.5);
+                        int ref = reference_iter(pt, a, c, 256, 2.0);
+                        bool same = (int)k_julia_pixel(p, x, y).iter == ref;
+                        agree += same;
+                        total++;
+                        if (same || !unstable(pt, a, c, 256, ref)) {
+                            stable++;
+                            stable_agree += same;
+                        }
+                    }
+                /* Disagreements must be on unstable pixels. The classification is a sample of 16
+                 * rounding sequences, so it misses some unstable pixels: allow 0.1% of the image. */
+                CHECKF(stable - stable_agree <= total / 1000,
+                       "mapping %d c %g%+gi alpha %g%+gi: %d stable pixels disagree", mapping, cs[ci][0], cs[ci][1],
+                       as[ai][0], as[ai][1], stable - stable_agree);
+                CHECKF(agree >= 0.96 * total, "mapping %d c %g%+gi alpha %g%+gi: %d of %d agree", mapping, cs[ci][0],
+                       cs[ci][1], as[ai][0], as[ai][1], agree, total);
+            }
+}
+
+/* The smooth count does not depend on the bailout (exactly: the orbit continues to a fixed big
+ * radius), and it is continuous: for c = 0, a = 0 it is 1 - log2(ln |p|) in closed form, with no
+ * step where the integer count steps (no banding). */
+static void test_smooth(void)
+{
+    K_JuliaParams p2 = base(-0.8, 0.156, 0.5, 0.25, 256), p9 = p2;
+    p9.bailout2 = 81.0f;
+    int bad = 0;
+    for (uint x = 0; x < 200; x++)
+        for (uint y = 90; y < 110; y++) {
+            K_JuliaResult a = k_julia_pixel(p2, x, y), b = k_julia_pixel(p9, x, y);
+            bad += !a.inside && !b.inside && a.nsmooth != b.nsmooth; /* R = 9 may need more iterations */
+        }
+    CHECKF(bad == 0, "%d smooth counts depend on the bailout", bad);
+    K_JuliaParams p0 = base(0, 0, 0, 0, 100);
+    double worst = 0;
+    for (int i = 0; i < 1000; i++) {
+        double m = 1.02 + 0.0015 * i, ang = 0.37 * i;
+        K_JuliaResult r = k_julia_orbit(p0, (float)(m * cos(ang)), (float)(m * sin(ang)), 1e-3f, 0);
+        double want = 1.0 - log2(log(m));
+        worst = fmax(worst, fabs(r.nsmooth - want));
+    }
+    /* float rounding of |p| (1e-7) moves log2(ln |p|) by 1e-7 / (|p| ln|p| ln 2) < 1e-4 here */
+    CHECKF(worst < 1e-3, "smooth count off its closed form by %g", worst);
+}
+
+/* Distance estimate for c = 0, a = 0: exactly |p| ln|p| / (pixel size) for points outside. */
+static void test_distance_estimate(void)
+{
+    K_JuliaParams p = base(0, 0, 0, 0, 100);
+    float pix = p.scale_u * p.inv_width;
+    int bad = 0;
+    for (int i = 0; i < 200; i++) {
+        double m = 1.01 + 0.005 * i, ang = 0.3 * i;
+        K_JuliaResult r = k_julia_orbit(p, (float)(m * cos(ang)), (float)(m * sin(ang)), pix, 0);
+        double want = m * log(m) / pix;
+        bad += fabs(r.de - want) > 1e-3 * want;
+    }
+    CHECKF(bad == 0, "%d distance estimates off by more than 0.1%%", bad);
+}
+
+/* Polar mapping is exactly periodic in u: t(0, v) = t(1, v) bit for bit, and t(u, v) = t(u + 1, v)
+ * to the rounding of u + 1. */
+static void test_polar_seam(void)
+{
+    K_JuliaParams p = base(-0.8, 0.156, -0.3, 0, 256);
+    p.mapping = K_JULIA_POLAR;
+    int bad = 0;
+    for (int i = 0; i < 200; i++) {
+        float v = (i + 0.5f) / 200.0f, u = 0.25f / 200.0f;
+        k_vec2 a = k_julia_start(p, u, v), b = k_julia_start(p, u + 1.0f, v);
+        k_vec2 c = k_julia_start(p, 0.0f, v), d = k_julia_start(p, 1.0f, v);
+        bad += c.x != d.x || c.y != d.y;                             /* exactly periodic */
+        bad += fabsf(a.x - b.x) > 1e-6f || fabsf(a.y - b.y) > 1e-6f; /* u + 1 rounds in float */
+    }
+    CHECKF(bad == 0, "%d rows differ across the seam", bad);
+}
+
+int main(void)
+{
+    test_known_points();
+    test_warp_circle();
+    test_pole();
+    test_against_reference();
+    test_smooth();
+    test_distance_estimate();
+    test_polar_seam();
+    TEST_REPORT();
+}
