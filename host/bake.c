@@ -55,7 +55,7 @@ typedef struct layer_run {
     /* vulkan */
     vkc_pipeline *pipe;
     vkc_job *job[SLOTS];
-    vkc_buffer *buf[SLOTS][FB_GEN_MAX_CHANNELS];
+    vkc_buffer *buf[SLOTS][FB_GEN_MAX_CHANNELS + 1]; /* the outputs, then the input (shared) */
     /* native */
     void *planes[FB_GEN_MAX_CHANNELS];
 } layer_run;
@@ -83,18 +83,25 @@ static fb_result run_init(fb_engine *e, layer_run *lr, int strip_rows)
     size_t bytes = (size_t)s->width * (size_t)strip_rows * 4;
     fb_result rc = FB_OK;
     if (e->kind == FB_BACKEND_VULKAN) {
-        rc = vkc_pipeline_create(e->vk,
-                                 &(vkc_pipeline_desc){.spv = lr->gen.spv,
-                                                      .spv_size = lr->gen.spv_size,
-                                                      .push_size = lr->gen.push_size,
-                                                      .buffers = (uint32_t)lr->gen.nchannels,
-                                                      .spec = lr->gen.spec,
-                                                      .nspec = lr->gen.nspec,
-                                                      .name = lr->gen.layer->name},
-                                 &lr->pipe);
+        rc =
+            vkc_pipeline_create(e->vk,
+                                &(vkc_pipeline_desc){.spv = lr->gen.spv,
+                                                     .spv_size = lr->gen.spv_size,
+                                                     .push_size = lr->gen.push_size,
+                                                     .buffers = (uint32_t)lr->gen.nchannels + (lr->gen.input ? 1u : 0u),
+                                                     .spec = lr->gen.spec,
+                                                     .nspec = lr->gen.nspec,
+                                                     .name = lr->gen.layer->name},
+                                &lr->pipe);
         for (int k = 0; k < SLOTS && !rc; k++) {
             rc = vkc_job_create(e->vk, lr->pipe, &lr->job[k]);
             for (int c = 0; c < lr->gen.nchannels && !rc; c++) rc = vkc_buffer_create(e->vk, bytes, &lr->buf[k][c]);
+        }
+        if (!rc && lr->gen.input) {
+            int at = lr->gen.nchannels;
+            rc = vkc_buffer_create(e->vk, lr->gen.input_size, &lr->buf[0][at]);
+            if (!rc) rc = vkc_buffer_upload(e->vk, lr->buf[0][at], lr->gen.input, lr->gen.input_size);
+            for (int k = 1; k < SLOTS; k++) lr->buf[k][at] = lr->buf[0][at]; /* one input, both slots */
         }
         return rc;
     }
@@ -105,12 +112,14 @@ static fb_result run_init(fb_engine *e, layer_run *lr, int strip_rows)
 
 static void run_fini(fb_engine *e, layer_run *lr)
 {
+    for (int k = 1; k < SLOTS; k++) lr->buf[k][lr->gen.nchannels] = NULL; /* the shared input: freed once */
     for (int k = 0; k < SLOTS; k++) {
         if (e->vk) vkc_job_destroy(e->vk, &lr->job[k]);
-        for (int c = 0; c < FB_GEN_MAX_CHANNELS; c++) {
+        for (int c = 0; c <= FB_GEN_MAX_CHANNELS; c++) {
             if (e->vk) vkc_buffer_destroy(e->vk, &lr->buf[k][c]);
         }
     }
+    fb_gen_fini(&lr->gen);
     if (e->vk) vkc_pipeline_destroy(e->vk, &lr->pipe);
     for (int c = 0; c < FB_GEN_MAX_CHANNELS; c++) free(lr->planes[c]);
     memset(lr->planes, 0, sizeof lr->planes);
@@ -122,7 +131,8 @@ static fb_result run_submit(fb_engine *e, layer_run *lr, int slot, int y0, int n
     uint32_t groups[3];
     lr->gen.push(&lr->gen, y0, n, push);
     lr->gen.groups(&lr->gen, n, groups);
-    return vkc_job_submit(e->vk, lr->job[slot], lr->buf[slot], (uint32_t)lr->gen.nchannels, push, groups);
+    return vkc_job_submit(e->vk, lr->job[slot], lr->buf[slot], (uint32_t)lr->gen.nchannels + (lr->gen.input ? 1u : 0u),
+                          push, groups);
 }
 
 /* Makes the strip [y0, y0+n) available in planes[]: waits for the GPU job, or computes it natively. */
@@ -213,7 +223,8 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
                                  &w);
         if (rc) goto out;
     }
-    if (d->preview && (rc = fb_preview_create(s->width, s->height, 2048, &preview))) goto out;
+    int prgb = runs[0].gen.preview_rgb;
+    if (d->preview && (rc = fb_preview_create(s->width, s->height, 2048, prgb > 0 ? 3 : 1, &preview))) goto out;
 
     fb_progress prog;
     fb_progress_init(&prog, d->progress, "bake", "pix");
@@ -234,7 +245,12 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
             at += runs[i].gen.nchannels;
         }
         if (rc) break;
-        if (preview) fb_preview_add_rows(preview, y0, n, planes[runs[0].gen.preview_channel]);
+        if (preview) {
+            int first = prgb > 0 ? prgb : runs[0].gen.preview_channel;
+            const float *pv[3] = {planes[first], planes[prgb > 0 ? first + 1 : first],
+                                  planes[prgb > 0 ? first + 2 : first]};
+            fb_preview_add_rows(preview, y0, n, pv);
+        }
         if (w) rc = exrio_writer_rows(w, y0, n, planes);
         fb_progress_update(&prog, (uint64_t)(y0 + n) * s->width, (uint64_t)s->height * s->width);
     }

@@ -20,6 +20,7 @@ struct fb_gen {
     const fb_layer *layer;
     int nchannels;
     int preview_channel; /* the float channel a grey preview shows */
+    int preview_rgb;     /* if > 0: the first of three float channels R, G, B shown in colour instead */
     char channel_names[FB_GEN_MAX_CHANNELS][80];
     exrio_type channel_types[FB_GEN_MAX_CHANNELS];
 
@@ -32,15 +33,21 @@ struct fb_gen {
     uint32_t push_size;
     void (*push)(const fb_gen *g, int y0, int n, void *out);
     void (*groups)(const fb_gen *g, int n, uint32_t out[3]);
+    const void *input; /* read-only data for the kernel (binding nchannels), or NULL */
+    uint32_t input_size;
     uint32_t spec[4]; /* specialization constants 0..nspec-1 */
     uint32_t nspec;
 
     bool scalar; /* native: the portable kernel only, no hand-vectorised path (benchmark reference) */
     _Alignas(16) unsigned char params[256]; /* generator-private, e.g. K_FbmParams */
+    void *owned;                            /* generator-owned memory (freed by fb_gen_fini) */
 };
 
 /* Sets up the generator of `layer`. */
 fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer);
+
+/* Frees what the generator owns. Null-safe, idempotent. */
+void fb_gen_fini(fb_gen *g);
 
 /* Per kind. */
 fb_result fb_gen_fbm_init(fb_gen *g);

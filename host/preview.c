@@ -4,6 +4,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,11 +14,12 @@ struct fb_preview {
     int width, height; /* source */
     int scale;         /* source pixels per preview pixel, per axis */
     int pw, ph;
-    double *sum;
+    int channels;
+    double *sum; /* channels values per preview pixel */
     uint32_t *count;
 };
 
-fb_result fb_preview_create(int width, int height, int max_side, fb_preview **out)
+fb_result fb_preview_create(int width, int height, int max_side, int channels, fb_preview **out)
 {
     fb_preview *p = calloc(1, sizeof *p);
     if (!p) return fb_fail(FB_ERR_NOMEM, "out of memory");
@@ -28,7 +30,8 @@ fb_result fb_preview_create(int width, int height, int max_side, fb_preview **ou
     if (p->scale < 1) p->scale = 1;
     p->pw = (width + p->scale - 1) / p->scale;
     p->ph = (height + p->scale - 1) / p->scale;
-    p->sum = calloc((size_t)p->pw * p->ph, sizeof *p->sum);
+    p->channels = channels == 3 ? 3 : 1;
+    p->sum = calloc((size_t)p->pw * p->ph * p->channels, sizeof *p->sum);
     p->count = calloc((size_t)p->pw * p->ph, sizeof *p->count);
     if (!p->sum || !p->count) {
         fb_preview_destroy(&p);
@@ -47,34 +50,49 @@ void fb_preview_destroy(fb_preview **pp)
     *pp = NULL;
 }
 
-void fb_preview_add_rows(fb_preview *p, int y0, int n, const float *rows)
+void fb_preview_add_rows(fb_preview *p, int y0, int n, const float *const *rows)
 {
     for (int r = 0; r < n; r++) {
         size_t base = (size_t)((y0 + r) / p->scale) * p->pw;
-        const float *row = rows + (size_t)r * p->width;
         for (int x = 0; x < p->width; x++) {
-            if (!isfinite(row[x])) continue;
-            p->sum[base + x / p->scale] += row[x];
-            p->count[base + x / p->scale]++;
+            size_t at = base + x / p->scale, src = (size_t)r * p->width + x;
+            bool finite = true;
+            for (int c = 0; c < p->channels; c++) finite = finite && isfinite(rows[c][src]);
+            if (!finite) continue;
+            for (int c = 0; c < p->channels; c++) p->sum[at * p->channels + c] += rows[c][src];
+            p->count[at]++;
         }
     }
+}
+
+static uint8_t srgb8(double v)
+{
+    v = v < 0 ? 0 : v > 1 ? 1 : v;
+    v = v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1 / 2.4) - 0.055;
+    return (uint8_t)lrint(255.0 * v);
 }
 
 fb_result fb_preview_write_png(const fb_preview *p, const char *path)
 {
     size_t n = (size_t)p->pw * p->ph;
-    double lo = INFINITY, hi = -INFINITY;
-    for (size_t i = 0; i < n; i++) {
-        if (!p->count[i]) continue;
-        double v = p->sum[i] / p->count[i];
-        lo = v < lo ? v : lo;
-        hi = v > hi ? v : hi;
-    }
-    double range = hi > lo ? hi - lo : 1.0;
-    uint8_t *volatile img = malloc(n); /* volatile: survives libpng's longjmp */
+    int nc = p->channels;
+    uint8_t *volatile img = malloc(n * nc); /* volatile: survives libpng's longjmp */
     if (!img) return fb_fail(FB_ERR_NOMEM, "out of memory");
-    for (size_t i = 0; i < n; i++)
-        img[i] = p->count[i] ? (uint8_t)lrint(255.0 * (p->sum[i] / p->count[i] - lo) / range) : 0;
+    if (nc == 3) {
+        for (size_t i = 0; i < n; i++)
+            for (int c = 0; c < 3; c++) img[i * 3 + c] = p->count[i] ? srgb8(p->sum[i * 3 + c] / p->count[i]) : 0;
+    } else {
+        double lo = INFINITY, hi = -INFINITY;
+        for (size_t i = 0; i < n; i++) {
+            if (!p->count[i]) continue;
+            double v = p->sum[i] / p->count[i];
+            lo = v < lo ? v : lo;
+            hi = v > hi ? v : hi;
+        }
+        double range = hi > lo ? hi - lo : 1.0;
+        for (size_t i = 0; i < n; i++)
+            img[i] = p->count[i] ? (uint8_t)lrint(255.0 * (p->sum[i] / p->count[i] - lo) / range) : 0;
+    }
 
     char tmp[4200];
     const char *slash = strrchr(path, '/');
@@ -94,10 +112,11 @@ fb_result fb_preview_write_png(const fb_preview *p, const char *path)
         rc = fb_fail(FB_ERR_IO, "%s: cannot write preview", path);
     } else {
         png_init_io(png, f);
-        png_set_IHDR(png, info, (png_uint_32)p->pw, (png_uint_32)p->ph, 8, PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE,
+        png_set_IHDR(png, info, (png_uint_32)p->pw, (png_uint_32)p->ph, 8,
+                     nc == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE,
                      PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
         png_write_info(png, info);
-        for (int y = 0; y < p->ph; y++) png_write_row(png, (uint8_t *)img + (size_t)y * p->pw);
+        for (int y = 0; y < p->ph; y++) png_write_row(png, (uint8_t *)img + (size_t)y * p->pw * nc);
         png_write_end(png, NULL);
     }
     png_destroy_write_struct(png ? &png : NULL, info ? &info : NULL);

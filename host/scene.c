@@ -3,6 +3,8 @@
  */
 #include "scene.h"
 
+#include "palette.h"
+
 #include "../kernels/noise.h"
 
 #include <jansson.h>
@@ -14,7 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-typedef enum ktype { T_INT, T_NUM, T_BOOL, T_ENUM, T_NAME, T_VEC2, T_SIZE, T_LAYERS, T_TYPE } ktype;
+typedef enum ktype { T_INT, T_NUM, T_BOOL, T_ENUM, T_NAME, T_VEC2, T_SIZE, T_LAYERS, T_TYPE, T_NUMLIST, T_STOPS } ktype;
 
 typedef struct keyspec {
     const char *key;
@@ -24,6 +26,7 @@ typedef struct keyspec {
     const char *enums; /* "a|b|c" for T_ENUM */
     const char *def;   /* the default as JSON text; NULL: none (optional key, or required) */
     const char *help;
+    int count; /* T_NUMLIST: how many numbers */
 } keyspec;
 
 static const keyspec scene_keys[] = {
@@ -66,6 +69,19 @@ static const keyspec julia_keys[] = {
     {"c", T_VEC2, -1e6, 1e6, false, NULL, "[-0.8, 0.156]", "Julia constant c (RE,IM)"},
     {"max-iter", T_INT, 1, 1000000, false, NULL, "256", "iteration limit"},
     {"bailout", T_NUM, 2, 1e6, false, NULL, "2.0", "escape radius R (iter counts steps until |z| >= R)"},
+    {"palette", T_ENUM, 0, 0, false, FB_PALETTE_NAMES, "\"night\"", "named colour map"},
+    {"cosine", T_NUMLIST, -10, 10, false, NULL, NULL,
+     "cosine palette a + b cos(2 pi (c t + d)): 12 numbers aR,aG,aB,bR,bG,bB,cR,cG,cB,dR,dG,dB", 12},
+    {"stops", T_STOPS, 0, 1e3, false, NULL, NULL,
+     "gradient: [[t, r, g, b], ...], t rising from 0 to 1 (flag: \"t,r,g,b;t,r,g,b\")"},
+    {"period", T_NUM, 0, 1e6, true, NULL, "24.0", "smooth-count units per palette sweep"},
+    {"palette-offset", T_NUM, -1e6, 1e6, false, NULL, "0.0", "palette position at count 0, in sweeps"},
+    {"brightness", T_NUM, 0, 1e3, false, NULL, "1.0", "linear colour scale"},
+    {"gamma", T_NUM, 0, 10, true, NULL, "1.0", "exponent on the colour"},
+    {"density", T_NUM, 0, 16, false, NULL, "1.5", "contrast: larger keeps only pixels near the set bright"},
+    {"density-count", T_NUM, 1, 1e6, false, NULL, "48.0", "smooth count at which brightness is full"},
+    {"inside-color", T_NUMLIST, 0, 1e3, false, NULL, "[0.0, 0.0, 0.0]", "colour of points inside the set (R,G,B)", 3},
+    {"half", T_BOOL, 0, 0, false, NULL, "true", "store R, G, B as half (flags: --half, --float)"},
 };
 
 #define NKEYS(a) ((int)(sizeof(a) / sizeof((a)[0])))
@@ -310,6 +326,41 @@ static fb_result check_value(const vctx *v, const char *path, const keyspec *k, 
         }
         return FB_OK;
     }
+    case T_NUMLIST: {
+        bool good = json_is_array(j) && (int)json_array_size(j) == k->count;
+        for (size_t i = 0; good && i < json_array_size(j); i++) {
+            const json_t *e = json_array_get(j, i);
+            double x = json_is_number(e) ? json_number_value(e) : NAN;
+            good = isfinite(x) && x >= k->lo && x <= k->hi;
+        }
+        if (!good) return verr(v, path, "expected %d numbers in %g..%g, found %s", k->count, k->lo, k->hi, shown);
+        return FB_OK;
+    }
+    case T_STOPS: {
+        size_t n = json_is_array(j) ? json_array_size(j) : 0;
+        bool good = n >= 2 && n <= FB_PALETTE_MAX_STOPS;
+        double prev = -1;
+        for (size_t i = 0; good && i < n; i++) {
+            const json_t *e = json_array_get(j, i);
+            good = json_is_array(e) && json_array_size(e) == 4;
+            for (size_t c = 0; good && c < 4; c++) {
+                const json_t *x = json_array_get(e, c);
+                double d = json_is_number(x) ? json_number_value(x) : NAN;
+                good = isfinite(d) && d >= 0 && (c > 0 ? d <= k->hi : d <= 1.0);
+            }
+            if (good) {
+                double t = json_number_value(json_array_get(e, 0));
+                good = t > prev && (i > 0 || t == 0.0) && (i + 1 < n || t == 1.0);
+                prev = t;
+            }
+        }
+        if (!good)
+            return verr(v, path,
+                        "expected 2 to %d stops [t, r, g, b] with t rising from 0 to exactly 1 and colours >= 0, "
+                        "found %s",
+                        FB_PALETTE_MAX_STOPS, shown);
+        return FB_OK;
+    }
     case T_LAYERS:
         if (!json_is_array(j) || json_array_size(j) < 1 || json_array_size(j) > FB_MAX_LAYERS)
             return verr(v, path, "expected an array of 1 to %d layers, found %s", FB_MAX_LAYERS, shown);
@@ -425,6 +476,28 @@ static fb_result parse_julia(const vctx *v, const char *path, json_t *obj, const
     j->rotation = num(obj, "rotation");
     j->max_iter = (int)json_integer_value(json_object_get(obj, "max-iter"));
     j->bailout = num(obj, "bailout");
+    enum_index(FB_PALETTE_NAMES, json_string_value(json_object_get(obj, "palette")), &j->palette.named);
+    json_t *cos_j = json_object_get(obj, "cosine"), *stops_j = json_object_get(obj, "stops");
+    if (cos_j && stops_j) {
+        char sub[256];
+        snprintf(sub, sizeof sub, "%s.stops", path);
+        return verr(v, sub, "give cosine or stops, not both");
+    }
+    j->palette.has_cosine = cos_j != NULL;
+    for (size_t i = 0; cos_j && i < 12; i++) j->palette.cosine[i] = json_number_value(json_array_get(cos_j, i));
+    j->palette.nstops = stops_j ? (int)json_array_size(stops_j) : 0;
+    for (int i = 0; i < j->palette.nstops; i++)
+        for (int c = 0; c < 4; c++)
+            j->palette.stops[i][c] = json_number_value(json_array_get(json_array_get(stops_j, (size_t)i), (size_t)c));
+    j->period = num(obj, "period");
+    j->palette_offset = num(obj, "palette-offset");
+    j->brightness = num(obj, "brightness");
+    j->gamma = num(obj, "gamma");
+    j->density = num(obj, "density");
+    j->density_count = num(obj, "density-count");
+    json_t *ic = json_object_get(obj, "inside-color");
+    for (size_t i = 0; i < 3; i++) j->inside_color[i] = json_number_value(json_array_get(ic, i));
+    L->half = boolean(obj, "half");
     if (!(j->scale[0] > 0 && j->scale[1] > 0)) {
         char sub[256];
         snprintf(sub, sizeof sub, "%s.scale", path);
@@ -644,6 +717,43 @@ static json_t *flag_value(const keyspec *k, const char *flag, const char *s)
     bad_size:
         fb_fail(FB_ERR_USAGE, "--%s: expected WIDTHxHEIGHT such as 1024x512, found \"%s\"", flag, s);
         return NULL;
+    }
+    case T_NUMLIST: {
+        json_t *arr = json_array();
+        const char *q = s;
+        for (int i = 0; i < k->count; i++) {
+            char *e;
+            double x = strtod(q, &e);
+            if (e == q || !isfinite(x) || (i + 1 < k->count ? *e != ',' : *e != 0)) {
+                json_decref(arr);
+                fb_fail(FB_ERR_USAGE, "--%s: expected %d comma-separated finite numbers, found \"%s\"", flag, k->count,
+                        s);
+                return NULL;
+            }
+            json_array_append_new(arr, json_real(x));
+            q = e + 1;
+        }
+        return arr;
+    }
+    case T_STOPS: {
+        /* "t,r,g,b;t,r,g,b;...": the scene's [[t, r, g, b], ...] on one line */
+        json_t *arr = json_array();
+        const char *q = s;
+        while (*q) {
+            double t[4];
+            for (int c = 0; c < 4; c++) {
+                char *e;
+                t[c] = strtod(q, &e);
+                if (e == q || !isfinite(t[c]) || (c < 3 && *e != ',') || (c == 3 && *e != ';' && *e != 0)) {
+                    json_decref(arr);
+                    fb_fail(FB_ERR_USAGE, "--%s: expected stops t,r,g,b;t,r,g,b;..., found \"%s\"", flag, s);
+                    return NULL;
+                }
+                q = *e ? e + 1 : e;
+            }
+            json_array_append_new(arr, json_pack("[ffff]", t[0], t[1], t[2], t[3]));
+        }
+        return arr;
     }
     default:
         return json_string(s);

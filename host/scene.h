@@ -9,6 +9,7 @@
 
 #include "exrio.h"
 #include "fb.h"
+#include "palette.h"
 
 #include <stdbool.h>
 
@@ -42,6 +43,9 @@ typedef struct fb_julia_params {
     double c[2];
     int max_iter;
     double bailout;
+    fb_palette_spec palette;
+    double period, palette_offset, brightness, gamma, density, density_count;
+    double inside_color[3];
 } fb_julia_params;
 
 typedef struct fb_layer {

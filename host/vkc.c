@@ -777,6 +777,7 @@ struct vkc_buffer {
     VkDeviceMemory staging_mem;
     void *map;
     bool coherent;
+    bool upload_pending; /* staging holds host data to copy into `buf` before the next dispatch */
 };
 
 /* The first memory type allowed by `bits` that has all of `want`. */
@@ -831,7 +832,8 @@ fb_result vkc_buffer_create(vkc_context *ctx, uint64_t size, vkc_buffer **out)
     if (!b) return fb_fail(FB_ERR_NOMEM, "out of memory");
     b->size = size;
     VkMemoryPropertyFlags got = 0;
-    const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
+    const VkBufferUsageFlags storage =
+        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
     if (ctx->direct_map) {
         const VkMemoryPropertyFlags prefs[] = {
             VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT | VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT |
@@ -874,6 +876,24 @@ void vkc_buffer_destroy(vkc_context *ctx, vkc_buffer **pb)
     memset(b, 0, sizeof *b);
     free(b);
     *pb = NULL;
+}
+
+fb_result vkc_buffer_upload(vkc_context *ctx, vkc_buffer *b, const void *data, uint64_t size)
+{
+    fb_result rc = FB_OK;
+    if (NEVER(size > b->size)) return fb_fail(FB_ERR_INTERNAL, "vulkan: upload larger than its buffer");
+    memcpy(b->map, data, size);
+    if (!b->coherent) {
+        VkMappedMemoryRange r = {
+            .sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE,
+            .memory = b->staging ? b->staging_mem : b->mem,
+            .size = VK_WHOLE_SIZE,
+        };
+        VKC_CHECK(g_vk.vkFlushMappedMemoryRanges(ctx->device, 1, &r), out);
+    }
+    b->upload_pending = b->staging != VK_NULL_HANDLE;
+out:
+    return rc;
 }
 
 const void *vkc_buffer_data(const vkc_buffer *b)
@@ -996,6 +1016,24 @@ fb_result vkc_job_submit(vkc_context *ctx, vkc_job *job, vkc_buffer *const *bufs
     if (job->queries) {
         g_vk.vkCmdResetQueryPool(job->cmd, job->queries, 0, 2);
         g_vk.vkCmdWriteTimestamp(job->cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, job->queries, 0);
+    }
+    /* Host data for staged input buffers goes to the device buffer first. */
+    bool uploads = false;
+    for (uint32_t i = 0; i < nbufs; i++) {
+        if (!bufs[i]->upload_pending) continue;
+        VkBufferCopy region = {.size = bufs[i]->size};
+        g_vk.vkCmdCopyBuffer(job->cmd, bufs[i]->staging, bufs[i]->buf, 1, &region);
+        bufs[i]->upload_pending = false;
+        uploads = true;
+    }
+    if (uploads) {
+        VkMemoryBarrier ub = {
+            .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER,
+            .srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT,
+            .dstAccessMask = VK_ACCESS_SHADER_READ_BIT,
+        };
+        g_vk.vkCmdPipelineBarrier(job->cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1,
+                                  &ub, 0, NULL, 0, NULL);
     }
     g_vk.vkCmdBindPipeline(job->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
     if (nbufs)

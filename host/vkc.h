@@ -74,6 +74,10 @@ void vkc_pipeline_destroy(vkc_context *ctx, vkc_pipeline **p);
 fb_result vkc_buffer_create(vkc_context *ctx, uint64_t size, vkc_buffer **out);
 void vkc_buffer_destroy(vkc_context *ctx, vkc_buffer **b);
 
+/* Writes `size` bytes of input for the shader: directly where the buffer is host-visible, else into
+ * its staging buffer, copied to the device buffer at the start of the next submitted job. */
+fb_result vkc_buffer_upload(vkc_context *ctx, vkc_buffer *b, const void *data, uint64_t size);
+
 /* Host pointer to the buffer's contents, valid after vkc_job_wait of a job that wrote it. */
 const void *vkc_buffer_data(const vkc_buffer *b);
 uint64_t vkc_buffer_size(const vkc_buffer *b);

@@ -1,5 +1,6 @@
 #include "../gen.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer)
@@ -14,4 +15,12 @@ fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer)
         return fb_gen_julia_init(g);
     }
     return fb_fail(FB_ERR_INTERNAL, "layer %s: no generator", layer->name);
+}
+
+void fb_gen_fini(fb_gen *g)
+{
+    if (!g) return;
+    free(g->owned);
+    g->owned = NULL;
+    g->input = NULL;
 }

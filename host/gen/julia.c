@@ -5,11 +5,14 @@
 #include "../gen.h"
 
 #include "../../kernels/julia.h"
+#include "../../kernels/palette.h"
+#include "../palette.h"
 #include "julia_comp.h"
 
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 typedef struct julia_push {
@@ -33,6 +36,14 @@ _Static_assert(offsetof(julia_push, y0) == 80 && offsetof(julia_push, rows) == 8
 _Static_assert(sizeof(julia_push) <= FB_GEN_MAX_PUSH, "push constants");
 _Static_assert(sizeof(K_JuliaParams) <= sizeof(((fb_gen *)0)->params), "params fit");
 
+/* The read-only buffer of shaders/julia.comp: colour parameters, then the palette table. */
+typedef struct julia_palette {
+    K_SkyColour colour;
+    float entries[K_PALETTE_SIZE][4];
+} julia_palette;
+_Static_assert(sizeof(K_SkyColour) == 48 && offsetof(julia_palette, entries) == 48, "std430: vec4 array at 48");
+_Static_assert(FB_PALETTE_ENTRIES == K_PALETTE_SIZE, "palette size");
+
 static const K_JuliaParams *params(const fb_gen *g)
 {
     return (const K_JuliaParams *)(const void *)g->params;
@@ -41,8 +52,10 @@ static const K_JuliaParams *params(const fb_gen *g)
 static void julia_rows(const fb_gen *g, int y0, int n, void *const *planes)
 {
     const K_JuliaParams *p = params(g);
+    const julia_palette *pal = g->input;
+    const K_SkyColour c = pal->colour;
     uint32_t *iter = planes[0];
-    float *sm = planes[1], *inside = planes[2], *de = planes[3];
+    float *sm = planes[1], *inside = planes[2], *de = planes[3], *R = planes[4], *G = planes[5], *B = planes[6];
     for (int r = 0; r < n; r++)
         for (uint32_t x = 0; x < p->width; x++) {
             K_JuliaResult res = k_julia_pixel(*p, x, (uint32_t)(y0 + r));
@@ -51,6 +64,17 @@ static void julia_rows(const fb_gen *g, int y0, int n, void *const *planes)
             sm[i] = res.nsmooth;
             inside[i] = (float)res.inside;
             de[i] = res.de;
+            if (res.inside) {
+                R[i] = c.inside_r, G[i] = c.inside_g, B[i] = c.inside_b;
+                continue;
+            }
+            /* the same table lookup as shaders/julia.comp */
+            float pos = k_palette_pos(c, res.nsmooth);
+            uint32_t i0 = (uint32_t)pos, i1 = i0 + 1 < K_PALETTE_SIZE ? i0 + 1 : i0;
+            float f = pos - (float)i0, w = k_sky_weight(c, res.nsmooth);
+            R[i] = k_sky_channel(c, k_mix(pal->entries[i0][0], pal->entries[i1][0], f), w);
+            G[i] = k_sky_channel(c, k_mix(pal->entries[i0][1], pal->entries[i1][1], f), w);
+            B[i] = k_sky_channel(c, k_mix(pal->entries[i0][2], pal->entries[i1][2], f), w);
         }
 }
 
@@ -93,14 +117,34 @@ fb_result fb_gen_julia_init(fb_gen *g)
     p->inv_width = 1.0f / (float)s->width;
     p->inv_height = 1.0f / (float)s->height;
 
-    static const char *const suffix[4] = {"iter", "n", "inside", "de"};
-    static const exrio_type types[4] = {EXRIO_UINT, EXRIO_FLOAT, EXRIO_HALF, EXRIO_FLOAT};
-    g->nchannels = 4;
-    for (int c = 0; c < 4; c++) {
+    julia_palette *pal = calloc(1, sizeof *pal);
+    if (!pal) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    pal->colour = (K_SkyColour){
+        .inv_period = (float)(1.0 / j->period),
+        .offset = (float)j->palette_offset,
+        .brightness = (float)j->brightness,
+        .gamma = (float)j->gamma,
+        .density = (float)j->density,
+        .inv_n_ref = (float)(1.0 / j->density_count),
+        .inside_r = (float)j->inside_color[0],
+        .inside_g = (float)j->inside_color[1],
+        .inside_b = (float)j->inside_color[2],
+    };
+    fb_palette_build(&j->palette, pal->entries);
+    g->owned = pal;
+    g->input = pal;
+    g->input_size = sizeof *pal;
+
+    static const char *const suffix[7] = {"iter", "n", "inside", "de", "R", "G", "B"};
+    exrio_type colour = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
+    const exrio_type types[7] = {EXRIO_UINT, EXRIO_FLOAT, EXRIO_HALF, EXRIO_FLOAT, colour, colour, colour};
+    g->nchannels = 7;
+    for (int c = 0; c < 7; c++) {
         snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
         g->channel_types[c] = types[c];
     }
     g->preview_channel = 1; /* the smooth count */
+    g->preview_rgb = 4;     /* R, G, B */
     g->native_rows = julia_rows;
     g->spv = julia_comp;
     g->spv_size = sizeof julia_comp;

@@ -1,0 +1,72 @@
+#include "palette.h"
+
+#include <math.h>
+#include <string.h>
+
+typedef struct named_palette {
+    bool cosine;
+    double v[12]; /* cosine coefficients */
+    int nstops;
+    double stops[6][4];
+} named_palette;
+
+/* In FB_PALETTE_NAMES order. Gradients for the deep-sky looks, cosines for nebular colour cycles. */
+static const named_palette k_named[] = {
+    /* night: black sky, deep blue, pale blue, white stars */
+    {false,
+     {0},
+     5,
+     {{0, 0.0, 0.0, 0.02},
+      {0.35, 0.04, 0.07, 0.30},
+      {0.7, 0.40, 0.52, 0.95},
+      {0.9, 0.88, 0.9, 1.0},
+      {1, 1.0, 0.97, 0.88}}},
+    /* nebula: magenta, teal and gold cycling */
+    {true, {0.5, 0.4, 0.55, 0.5, 0.4, 0.45, 1.0, 1.0, 1.0, 0.80, 0.90, 0.30}, 0, {{0}}},
+    /* aurora: greens and violets */
+    {true, {0.3, 0.5, 0.45, 0.3, 0.45, 0.4, 1.0, 1.0, 1.0, 0.55, 0.3, 0.65}, 0, {{0}}},
+    /* ice */
+    {false, {0}, 3, {{0, 0.0, 0.02, 0.05}, {0.5, 0.2, 0.6, 0.8}, {1, 0.9, 1.0, 1.0}}},
+    /* ember */
+    {false, {0}, 4, {{0, 0.02, 0.0, 0.0}, {0.4, 0.5, 0.1, 0.02}, {0.75, 1.0, 0.55, 0.1}, {1, 1.0, 0.95, 0.7}}},
+    /* grey */
+    {false, {0}, 2, {{0, 0, 0, 0}, {1, 1, 1, 1}}},
+};
+
+static void cosine_at(const double *v, double t, float out[4])
+{
+    for (int ch = 0; ch < 3; ch++) {
+        double x = v[ch] + v[3 + ch] * cos(2 * M_PI * (v[6 + ch] * t + v[9 + ch]));
+        out[ch] = (float)(x > 0 ? x : 0); /* linear colour is never negative */
+    }
+    out[3] = 0;
+}
+
+static void stops_at(int n, const double (*s)[4], double t, float out[4])
+{
+    int k = 0;
+    while (k + 1 < n && s[k + 1][0] < t) k++;
+    if (k + 1 >= n || t <= s[0][0]) {
+        const double *e = t <= s[0][0] ? s[0] : s[n - 1];
+        for (int ch = 0; ch < 3; ch++) out[ch] = (float)e[1 + ch];
+    } else {
+        double f = (t - s[k][0]) / (s[k + 1][0] - s[k][0]);
+        for (int ch = 0; ch < 3; ch++) out[ch] = (float)(s[k][1 + ch] + (s[k + 1][1 + ch] - s[k][1 + ch]) * f);
+    }
+    out[3] = 0;
+}
+
+void fb_palette_build(const fb_palette_spec *spec, float table[FB_PALETTE_ENTRIES][4])
+{
+    for (int i = 0; i < FB_PALETTE_ENTRIES; i++) {
+        double t = (double)i / (FB_PALETTE_ENTRIES - 1);
+        if (spec->has_cosine)
+            cosine_at(spec->cosine, t, table[i]);
+        else if (spec->nstops >= 2)
+            stops_at(spec->nstops, (const double(*)[4])spec->stops, t, table[i]);
+        else if (k_named[spec->named].cosine)
+            cosine_at(k_named[spec->named].v, t, table[i]);
+        else
+            stops_at(k_named[spec->named].nstops, k_named[spec->named].stops, t, table[i]);
+    }
+}
