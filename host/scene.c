@@ -69,6 +69,10 @@ static const keyspec julia_keys[] = {
     {"c", T_VEC2, -1e6, 1e6, false, NULL, "[-0.8, 0.156]", "Julia constant c (RE,IM)"},
     {"max-iter", T_INT, 1, 1000000, false, NULL, "256", "iteration limit"},
     {"bailout", T_NUM, 2, 1e6, false, NULL, "2.0", "escape radius R (iter counts steps until |z| >= R)"},
+    {"turbulence", T_NUM, 0, 10, false, NULL, "0.0", "lambda of eq. 13: z0 = A(1/p) + lambda W(p), W fBm in [0, 1]"},
+    {"turbulence-hurst", T_NUM, 0, 1, false, NULL, "0.8", "Hurst exponent of W"},
+    {"turbulence-octaves", T_INT, 1, 32, false, NULL, "6", "octaves of W"},
+    {"turbulence-frequency", T_NUM, 0, 1e4, true, NULL, "4.0", "cycles of W's first octave across the image"},
     {"palette", T_ENUM, 0, 0, false, FB_PALETTE_NAMES, "\"night\"", "named colour map"},
     {"cosine", T_NUMLIST, -10, 10, false, NULL, NULL,
      "cosine palette a + b cos(2 pi (c t + d)): 12 numbers aR,aG,aB,bR,bG,bB,cR,cG,cB,dR,dG,dB", 12},
@@ -489,6 +493,10 @@ static fb_result parse_julia(const vctx *v, const char *path, json_t *obj, const
     for (int i = 0; i < j->palette.nstops; i++)
         for (int c = 0; c < 4; c++)
             j->palette.stops[i][c] = json_number_value(json_array_get(json_array_get(stops_j, (size_t)i), (size_t)c));
+    j->turbulence = num(obj, "turbulence");
+    j->turb_hurst = num(obj, "turbulence-hurst");
+    j->turb_octaves = (int)json_integer_value(json_object_get(obj, "turbulence-octaves"));
+    j->turb_frequency = num(obj, "turbulence-frequency");
     j->period = num(obj, "period");
     j->palette_offset = num(obj, "palette-offset");
     j->brightness = num(obj, "brightness");

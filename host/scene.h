@@ -46,6 +46,8 @@ typedef struct fb_julia_params {
     fb_palette_spec palette;
     double period, palette_offset, brightness, gamma, density, density_count;
     double inside_color[3];
+    double turbulence, turb_hurst, turb_frequency;
+    int turb_octaves;
 } fb_julia_params;
 
 typedef struct fb_layer {

@@ -11,7 +11,7 @@
 #ifndef FB_KERNELS_JULIA_H
 #define FB_KERNELS_JULIA_H
 
-#include "common.h"
+#include "fbm.h"
 
 #define K_JULIA_RECT  0u
 #define K_JULIA_POLAR 1u
@@ -35,7 +35,8 @@ K_STRUCT(K_JuliaParams)
     float rot_c, rot_s; /* rotation of the starting grid (host-computed cos, sin) */
     float bailout2;     /* R^2, R >= 2 */
     float inv_width, inv_height;
-    float pad0, pad1;
+    float lambda;    /* turbulence strength (eq. 13); 0 disables */
+    float turb_norm; /* 1 / sum of the turbulence octaves' gains: maps fBm to [-1, 1] */
 }
 K_END(K_JuliaParams)
 
@@ -83,7 +84,8 @@ K_FN k_vec2 k_julia_dstart(K_JuliaParams p, float u, float v)
     return k_vec2(p.rot_c * dx - p.rot_s * dy, p.rot_s * dx + p.rot_c * dy);
 }
 
-K_FN K_JuliaResult k_julia_orbit(K_JuliaParams p, float px, float py, float dpx, float dpy)
+/* (tw_re, tw_im): the turbulence term lambda W(p) added to z0 (eq. 13); 0 for none. */
+K_FN K_JuliaResult k_julia_orbit(K_JuliaParams p, float px, float py, float dpx, float dpy, float tw_re, float tw_im)
 {
     K_JuliaResult res;
     res.iter = 0u;
@@ -102,8 +104,8 @@ K_FN K_JuliaResult k_julia_orbit(K_JuliaParams p, float px, float py, float dpx,
     float inv = 1.0f / den;
     /* precise: an orbit is chaotic, so one fused rounding would change the escape count of
      * boundary pixels between a device and C. */
-    K_PRECISE float zr = (nr * dr + ni * di) * inv;
-    K_PRECISE float zi = (ni * dr - nr * di) * inv;
+    K_PRECISE float zr = (nr * dr + ni * di) * inv + tw_re;
+    K_PRECISE float zi = (ni * dr - nr * di) * inv + tw_im;
     float k = 1.0f - (p.a_re * p.a_re + p.a_im * p.a_im);
     float sr = (dr * dr - di * di) * inv * inv, si = -2.0f * dr * di * inv * inv; /* 1 / (1 - a p)^2 */
     float wr = k * sr, wi = k * si;
@@ -157,14 +159,25 @@ K_FN K_JuliaResult k_julia_orbit(K_JuliaParams p, float px, float py, float dpx,
     return res;
 }
 
+/* W(p) in [0, 1]^2 scaled by lambda: two decorrelated streams of the shared fBm over (u, v); the
+ * host makes it tileable for polar grids, so that the sky still wraps (t(0, v) = t(1, v)). */
+K_FN k_vec2 k_julia_turbulence(K_JuliaParams p, K_FbmParams t, float u, float v)
+{
+    if (p.lambda == 0.0f) return k_vec2(0.0f, 0.0f);
+    float wr = k_clamp(0.5f + 0.5f * p.turb_norm * k_fbm_uv(t, 1u, u, v), 0.0f, 1.0f);
+    float wi = k_clamp(0.5f + 0.5f * p.turb_norm * k_fbm_uv(t, 2u, u, v), 0.0f, 1.0f);
+    return k_vec2(p.lambda * wr, p.lambda * wi);
+}
+
 /* Pixel (x, y) at its centre: u = (x + 0.5)/W, v = 1 - (y + 0.5)/H. */
-K_FN K_JuliaResult k_julia_pixel(K_JuliaParams p, uint x, uint y)
+K_FN K_JuliaResult k_julia_pixel(K_JuliaParams p, K_FbmParams turb, uint x, uint y)
 {
     K_PRECISE float u = (K_F(x) + 0.5f) * p.inv_width;
     K_PRECISE float v = 1.0f - (K_F(y) + 0.5f) * p.inv_height;
     k_vec2 s = k_julia_start(p, u, v);
     k_vec2 d = k_julia_dstart(p, u, v);
-    return k_julia_orbit(p, s.x, s.y, d.x, d.y);
+    k_vec2 w = k_julia_turbulence(p, turb, u, v);
+    return k_julia_orbit(p, s.x, s.y, d.x, d.y, w.x, w.y);
 }
 
 #endif

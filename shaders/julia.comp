@@ -28,6 +28,8 @@ layout(std430, set = 0, binding = 6) writeonly buffer Blue { float v[]; } o_b;
 layout(std430, set = 0, binding = 7) readonly buffer Palette
 {
     K_SkyColour colour;
+    K_FbmParams turb;
+    float pad0, pad1, pad2;
     vec4 entries[K_PALETTE_SIZE];
 }
 pal;
@@ -39,7 +41,7 @@ void main()
     if (x >= pc.p.width || r >= pc.rows) return;
     K_JuliaParams p = pc.p;
     p.mapping = MAPPING;
-    K_JuliaResult res = k_julia_pixel(p, x, pc.y0 + r);
+    K_JuliaResult res = k_julia_pixel(p, pal.turb, x, pc.y0 + r);
     uint i = r * p.width + x;
     o_iter.v[i] = res.iter;
     o_n.v[i] = res.nsmooth;

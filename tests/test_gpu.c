@@ -52,8 +52,9 @@ static float *bake_read(fb_engine *e, const char *json, int strip, const char *n
  * log2 and sqrt (3 ULP): 1e-4 absolute and relative respectively cover them where counts agree. */
 static void test_julia(fb_engine *gpu, fb_engine *cpu)
 {
-    static const char *variants[] = {"", ", \"alpha\": [0.5, 0.25]", ", \"mapping\": \"polar\", \"alpha\": [-0.3, 0]"};
-    for (int k = 0; k < 3; k++) {
+    static const char *variants[] = {"", ", \"alpha\": [0.5, 0.25]", ", \"mapping\": \"polar\", \"alpha\": [-0.3, 0]",
+                                     ", \"mapping\": \"polar\", \"alpha\": [-0.3, 0], \"turbulence\": 0.2"};
+    for (int k = 0; k < 4; k++) {
         char json[512];
         snprintf(json, sizeof json, "{\"size\": [181, 97], \"layers\": [{\"type\": \"julia\", \"max-iter\": 300%s}]}",
                  variants[k]);

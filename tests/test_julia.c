@@ -11,6 +11,8 @@
 #include <math.h>
 #include <string.h>
 
+static K_FbmParams g_turb; /* unused while lambda = 0 */
+
 static K_JuliaParams base(double cre, double cim, double are, double aim, int max_iter)
 {
     K_JuliaParams p;
@@ -30,7 +32,7 @@ static K_JuliaParams base(double cre, double cim, double are, double aim, int ma
 static void test_known_points(void)
 {
     /* c = -1: the origin's orbit 0, -1, 0, -1, ... stays bounded */
-    K_JuliaResult r = k_julia_orbit(base(-1, 0, 0, 0, 1000), 0, 0, 1e-3f, 0);
+    K_JuliaResult r = k_julia_orbit(base(-1, 0, 0, 0, 1000), 0, 0, 1e-3f, 0, 0, 0);
     CHECK(r.inside == 1 && r.iter == 1000 && r.nsmooth == 1000.0f && r.de == 0.0f);
     /* c = 0, a = 0: z_n = p^(2^n); inside for |p| < 1, else the first n with |p|^(2^n) >= 2 */
     int bad = 0;
@@ -39,7 +41,8 @@ static void test_known_points(void)
         if (fabs(m - 1) < 0.01) continue;
         double n_exact = log2(log(2.0) / log(m));
         if (m > 1 && fabs(n_exact - round(n_exact)) < 0.01) continue; /* a rounding tie: skip */
-        K_JuliaResult q = k_julia_orbit(base(0, 0, 0, 0, 100), (float)(m * cos(ang)), (float)(m * sin(ang)), 1e-3f, 0);
+        K_JuliaResult q =
+            k_julia_orbit(base(0, 0, 0, 0, 100), (float)(m * cos(ang)), (float)(m * sin(ang)), 1e-3f, 0, 0, 0);
         if (m < 1)
             bad += !(q.inside == 1 && q.iter == 100);
         else
@@ -58,12 +61,12 @@ static void test_warp_circle(void)
         K_JuliaParams p = base(0.3, 0.1, am * cos(aa), am * sin(aa), 1);
         float x = (float)cos(ang), y = (float)sin(ang);
         p.bailout2 = 1.0f - 1e-4f;
-        bad += k_julia_orbit(p, x, y, 1e-3f, 0).iter != 0; /* |z0| >= R: escapes at step 0 */
+        bad += k_julia_orbit(p, x, y, 1e-3f, 0, 0, 0).iter != 0; /* |z0| >= R: escapes at step 0 */
         p.bailout2 = 1.0f + 1e-4f;
-        bad += k_julia_orbit(p, x, y, 1e-3f, 0).iter != 1;
+        bad += k_julia_orbit(p, x, y, 1e-3f, 0, 0, 0).iter != 1;
         p.bailout2 = 1.0f;
-        bad += k_julia_orbit(p, 0.9f * x, 0.9f * y, 1e-3f, 0).iter != 1; /* inside stays inside */
-        bad += k_julia_orbit(p, 1.1f * x, 1.1f * y, 1e-3f, 0).iter != 0; /* outside stays outside */
+        bad += k_julia_orbit(p, 0.9f * x, 0.9f * y, 1e-3f, 0, 0, 0).iter != 1; /* inside stays inside */
+        bad += k_julia_orbit(p, 1.1f * x, 1.1f * y, 1e-3f, 0, 0, 0).iter != 0; /* outside stays outside */
     }
     CHECKF(bad == 0, "%d violations of |A| = 1 on the circle", bad);
 }
@@ -72,10 +75,10 @@ static void test_warp_circle(void)
 static void test_pole(void)
 {
     K_JuliaParams p = base(-0.8, 0.156, 0.5, 0, 256);
-    K_JuliaResult r = k_julia_orbit(p, 2.0f, 0.0f, 1e-3f, 0);
+    K_JuliaResult r = k_julia_orbit(p, 2.0f, 0.0f, 1e-3f, 0, 0, 0);
     CHECK(r.iter == 0 && r.inside == 0 && r.nsmooth == 0.0f && r.de == 0.0f);
     for (int i = -50; i <= 50; i++) {
-        K_JuliaResult q = k_julia_orbit(p, 2.0f + 1e-7f * (float)i, 1e-7f * (float)(i % 7), 1e-3f, 0);
+        K_JuliaResult q = k_julia_orbit(p, 2.0f + 1e-7f * (float)i, 1e-7f * (float)(i % 7), 1e-3f, 0, 0, 0);
         CHECK(isfinite(q.nsmooth) && isfinite(q.de));
     }
 }
@@ -140,7 +143,7 @@ static void test_against_reference(void)
                         double complex pt =
                             mapping ? 1.5 * v * cexp(I * 2 * M_PI * u) : 3.0 * (u - 0.5) + I * 3.0 * (v - 0.5);
                         int ref = reference_iter(pt, a, c, 256, 2.0);
-                        bool same = (int)k_julia_pixel(p, x, y).iter == ref;
+                        bool same = (int)k_julia_pixel(p, g_turb, x, y).iter == ref;
                         agree += same;
                         total++;
                         if (same || !unstable(pt, a, c, 256, ref)) {
@@ -168,7 +171,7 @@ static void test_smooth(void)
     int bad = 0;
     for (uint x = 0; x < 200; x++)
         for (uint y = 90; y < 110; y++) {
-            K_JuliaResult a = k_julia_pixel(p2, x, y), b = k_julia_pixel(p9, x, y);
+            K_JuliaResult a = k_julia_pixel(p2, g_turb, x, y), b = k_julia_pixel(p9, g_turb, x, y);
             bad += !a.inside && !b.inside && a.nsmooth != b.nsmooth; /* R = 9 may need more iterations */
         }
     CHECKF(bad == 0, "%d smooth counts depend on the bailout", bad);
@@ -176,7 +179,7 @@ static void test_smooth(void)
     double worst = 0;
     for (int i = 0; i < 1000; i++) {
         double m = 1.02 + 0.0015 * i, ang = 0.37 * i;
-        K_JuliaResult r = k_julia_orbit(p0, (float)(m * cos(ang)), (float)(m * sin(ang)), 1e-3f, 0);
+        K_JuliaResult r = k_julia_orbit(p0, (float)(m * cos(ang)), (float)(m * sin(ang)), 1e-3f, 0, 0, 0);
         double want = 1.0 - log2(log(m));
         worst = fmax(worst, fabs(r.nsmooth - want));
     }
@@ -192,7 +195,7 @@ static void test_distance_estimate(void)
     int bad = 0;
     for (int i = 0; i < 200; i++) {
         double m = 1.01 + 0.005 * i, ang = 0.3 * i;
-        K_JuliaResult r = k_julia_orbit(p, (float)(m * cos(ang)), (float)(m * sin(ang)), pix, 0);
+        K_JuliaResult r = k_julia_orbit(p, (float)(m * cos(ang)), (float)(m * sin(ang)), pix, 0, 0, 0);
         double want = m * log(m) / pix;
         bad += fabs(r.de - want) > 1e-3 * want;
     }
@@ -216,8 +219,44 @@ static void test_polar_seam(void)
     CHECKF(bad == 0, "%d rows differ across the seam", bad);
 }
 
+/* Turbulence (eq. 13): lambda W with W in [0, 1]^2; tileable W keeps the polar sky's seam exact. */
+static void test_turbulence(void)
+{
+    K_JuliaParams p = base(-0.8, 0.156, -0.3, 0, 256);
+    p.mapping = K_JULIA_POLAR;
+    p.lambda = 0.2f;
+    K_FbmParams t;
+    memset(&t, 0, sizeof t);
+    t.seed = 5, t.octaves = 6, t.gain = 0.57f, t.lacunarity = 2.0f, t.rot_c = 0.8f, t.rot_s = 0.6f;
+    t.flags = K_FBM_TILEABLE, t.freq_x = t.freq_y = 4.0f, t.width = t.height = 200;
+    t.inv_width = t.inv_height = 1.0f / 200, t.inv_freq_x = t.inv_freq_y = 0.25f;
+    double gsum = 0, g = 1;
+    for (int i = 0; i < 6; i++, g *= 0.57) gsum += g;
+    p.turb_norm = (float)(1 / gsum);
+    int bad = 0, varied = 0;
+    k_vec2 first = k_julia_turbulence(p, t, 0.1f, 0.5f);
+    for (int i = 0; i < 400; i++) {
+        float u = (i % 20) / 20.0f, v = (i / 20 + 0.5f) / 20.0f;
+        k_vec2 w = k_julia_turbulence(p, t, u, v), w1 = k_julia_turbulence(p, t, u + 1.0f, v);
+        bad += !(w.x >= 0 && w.x <= 0.2f && w.y >= 0 && w.y <= 0.2f);
+        k_vec2 a = k_julia_turbulence(p, t, 0.0f, v), b = k_julia_turbulence(p, t, 1.0f, v);
+        bad += a.x != b.x || a.y != b.y; /* t(0, v) = t(1, v) exactly */
+        bad += fabsf(w.x - w1.x) > 2e-3f * 0.2f || fabsf(w.y - w1.y) > 2e-3f * 0.2f;
+        varied += fabsf(w.x - first.x) > 0.01f;
+    }
+    CHECKF(bad == 0, "%d turbulence samples out of [0, lambda] or not periodic", bad);
+    CHECKF(varied > 200, "turbulence barely varies (%d of 400 samples)", varied);
+    /* lambda = 0 is exactly the unperturbed set */
+    K_JuliaParams q = p;
+    q.lambda = 0.0f;
+    int diff = 0;
+    for (uint x = 0; x < 200; x += 3) diff += k_julia_pixel(q, t, x, 77).iter != k_julia_pixel(q, g_turb, x, 77).iter;
+    CHECK(diff == 0);
+}
+
 int main(void)
 {
+    test_turbulence();
     test_known_points();
     test_warp_circle();
     test_pole();

@@ -31,7 +31,7 @@ _Static_assert(offsetof(K_JuliaParams, center_re) == 44 && offsetof(K_JuliaParam
 _Static_assert(offsetof(K_JuliaParams, rot_c) == 52 && offsetof(K_JuliaParams, rot_s) == 56, "std430 offset");
 _Static_assert(offsetof(K_JuliaParams, bailout2) == 60, "std430 offset");
 _Static_assert(offsetof(K_JuliaParams, inv_width) == 64 && offsetof(K_JuliaParams, inv_height) == 68, "std430");
-_Static_assert(offsetof(K_JuliaParams, pad0) == 72 && offsetof(K_JuliaParams, pad1) == 76, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, lambda) == 72 && offsetof(K_JuliaParams, turb_norm) == 76, "std430 offset");
 _Static_assert(offsetof(julia_push, y0) == 80 && offsetof(julia_push, rows) == 84, "std430 offset");
 _Static_assert(sizeof(julia_push) <= FB_GEN_MAX_PUSH, "push constants");
 _Static_assert(sizeof(K_JuliaParams) <= sizeof(((fb_gen *)0)->params), "params fit");
@@ -39,9 +39,12 @@ _Static_assert(sizeof(K_JuliaParams) <= sizeof(((fb_gen *)0)->params), "params f
 /* The read-only buffer of shaders/julia.comp: colour parameters, then the palette table. */
 typedef struct julia_palette {
     K_SkyColour colour;
+    K_FbmParams turb;
+    float pad[3];
     float entries[K_PALETTE_SIZE][4];
 } julia_palette;
-_Static_assert(sizeof(K_SkyColour) == 48 && offsetof(julia_palette, entries) == 48, "std430: vec4 array at 48");
+_Static_assert(sizeof(K_SkyColour) == 48 && offsetof(julia_palette, turb) == 48, "std430 offset");
+_Static_assert(sizeof(K_FbmParams) == 84 && offsetof(julia_palette, entries) == 144, "std430: vec4 array at 144");
 _Static_assert(FB_PALETTE_ENTRIES == K_PALETTE_SIZE, "palette size");
 
 static const K_JuliaParams *params(const fb_gen *g)
@@ -58,7 +61,7 @@ static void julia_rows(const fb_gen *g, int y0, int n, void *const *planes)
     float *sm = planes[1], *inside = planes[2], *de = planes[3], *R = planes[4], *G = planes[5], *B = planes[6];
     for (int r = 0; r < n; r++)
         for (uint32_t x = 0; x < p->width; x++) {
-            K_JuliaResult res = k_julia_pixel(*p, x, (uint32_t)(y0 + r));
+            K_JuliaResult res = k_julia_pixel(*p, pal->turb, x, (uint32_t)(y0 + r));
             size_t i = (size_t)r * p->width + x;
             iter[i] = res.iter;
             sm[i] = res.nsmooth;
@@ -131,6 +134,28 @@ fb_result fb_gen_julia_init(fb_gen *g)
         .inside_b = (float)j->inside_color[2],
     };
     fb_palette_build(&j->palette, pal->entries);
+    /* Turbulence W: fBm over (u, v) with the layer's own parameters; tileable for polar grids. */
+    K_FbmParams *t = &pal->turb;
+    t->seed = s->seed;
+    t->noise = K_NOISE_GRADIENT;
+    t->octaves = (uint32_t)j->turb_octaves;
+    t->gain = (float)exp2(-j->turb_hurst);
+    t->lacunarity = 2.0f;
+    t->rot_c = 0.8f; /* the paper's rotation (0.8, 0.6) between octaves */
+    t->rot_s = 0.6f;
+    t->flags = j->polar ? K_FBM_TILEABLE : 0u;
+    t->freq_x = (float)j->turb_frequency;
+    t->freq_y = (float)(j->polar ? j->turb_frequency : j->turb_frequency * s->height / s->width);
+    t->width = (uint32_t)s->width;
+    t->height = (uint32_t)s->height;
+    t->inv_width = 1.0f / (float)s->width;
+    t->inv_height = 1.0f / (float)s->height;
+    t->inv_freq_x = 1.0f / t->freq_x;
+    t->inv_freq_y = 1.0f / t->freq_y;
+    double gsum = 0, amp = 1;
+    for (int i = 0; i < j->turb_octaves; i++, amp *= t->gain) gsum += amp;
+    p->lambda = (float)j->turbulence;
+    p->turb_norm = (float)(1.0 / gsum);
     g->owned = pal;
     g->input = pal;
     g->input_size = sizeof *pal;
