@@ -73,6 +73,7 @@ static const keyspec julia_keys[] = {
     {"turbulence-hurst", T_NUM, 0, 1, false, NULL, "0.8", "Hurst exponent of W"},
     {"turbulence-octaves", T_INT, 1, 32, false, NULL, "6", "octaves of W"},
     {"turbulence-frequency", T_NUM, 0, 1e4, true, NULL, "4.0", "cycles of W's first octave across the image"},
+    {"samples", T_INT, 1, 1024, false, NULL, "1", "jittered colour samples per pixel (iter, n, inside, de: centre)"},
     {"palette", T_ENUM, 0, 0, false, FB_PALETTE_NAMES, "\"night\"", "named colour map"},
     {"cosine", T_NUMLIST, -10, 10, false, NULL, NULL,
      "cosine palette a + b cos(2 pi (c t + d)): 12 numbers aR,aG,aB,bR,bG,bB,cR,cG,cB,dR,dG,dB", 12},
@@ -497,6 +498,7 @@ static fb_result parse_julia(const vctx *v, const char *path, json_t *obj, const
     j->turb_hurst = num(obj, "turbulence-hurst");
     j->turb_octaves = (int)json_integer_value(json_object_get(obj, "turbulence-octaves"));
     j->turb_frequency = num(obj, "turbulence-frequency");
+    j->samples = (int)json_integer_value(json_object_get(obj, "samples"));
     j->period = num(obj, "period");
     j->palette_offset = num(obj, "palette-offset");
     j->brightness = num(obj, "brightness");

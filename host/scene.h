@@ -48,6 +48,7 @@ typedef struct fb_julia_params {
     double inside_color[3];
     double turbulence, turb_hurst, turb_frequency;
     int turb_octaves;
+    int samples;
 } fb_julia_params;
 
 typedef struct fb_layer {

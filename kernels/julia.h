@@ -12,6 +12,7 @@
 #define FB_KERNELS_JULIA_H
 
 #include "fbm.h"
+#include "hash.h"
 
 #define K_JULIA_RECT  0u
 #define K_JULIA_POLAR 1u
@@ -169,15 +170,32 @@ K_FN k_vec2 k_julia_turbulence(K_JuliaParams p, K_FbmParams t, float u, float v)
     return k_vec2(p.lambda * wr, p.lambda * wi);
 }
 
-/* Pixel (x, y) at its centre: u = (x + 0.5)/W, v = 1 - (y + 0.5)/H. */
-K_FN K_JuliaResult k_julia_pixel(K_JuliaParams p, K_FbmParams turb, uint x, uint y)
+/* The orbit of the point at continuous pixel coordinates (fx, fy) (pixel centres at +0.5). */
+K_FN K_JuliaResult k_julia_at(K_JuliaParams p, K_FbmParams turb, float fx, float fy)
 {
-    K_PRECISE float u = (K_F(x) + 0.5f) * p.inv_width;
-    K_PRECISE float v = 1.0f - (K_F(y) + 0.5f) * p.inv_height;
+    K_PRECISE float u = fx * p.inv_width;
+    K_PRECISE float v = 1.0f - fy * p.inv_height;
     k_vec2 s = k_julia_start(p, u, v);
     k_vec2 d = k_julia_dstart(p, u, v);
     k_vec2 w = k_julia_turbulence(p, turb, u, v);
     return k_julia_orbit(p, s.x, s.y, d.x, d.y, w.x, w.y);
+}
+
+/* Pixel (x, y) at its centre: u = (x + 0.5)/W, v = 1 - (y + 0.5)/H. */
+K_FN K_JuliaResult k_julia_pixel(K_JuliaParams p, K_FbmParams turb, uint x, uint y)
+{
+    return k_julia_at(p, turb, K_F(x) + 0.5f, K_F(y) + 0.5f);
+}
+
+/* Sample k of pixel (x, y) for anti-aliasing: sample 0 is the centre, the others jittered uniformly
+ * over the pixel by the counter-based hash of (seed, sample, absolute pixel index), so a sample is
+ * the same whatever strip, thread or device computes it. */
+K_FN K_JuliaResult k_julia_sample(K_JuliaParams p, K_FbmParams turb, uint seed, uint x, uint y, uint k)
+{
+    if (k == 0u) return k_julia_pixel(p, turb, x, y);
+    uint idx = y * p.width + x;
+    float jx = k_rand01(seed, 0x5a00u + 2u * k, idx), jy = k_rand01(seed, 0x5a01u + 2u * k, idx);
+    return k_julia_at(p, turb, K_F(x) + jx, K_F(y) + jy);
 }
 
 #endif

@@ -20,7 +20,9 @@ K_STRUCT(K_SkyColour)
     float density;    /* contrast exponent: weight = clamp(n / n_ref, 0, 1)^density */
     float inv_n_ref;  /* 1 / the count at which the weight reaches 1 */
     float inside_r, inside_g, inside_b;
-    float pad0, pad1, pad2;
+    uint samples; /* colour samples per pixel (1: the centre only) */
+    uint seed;    /* jitter seed */
+    float inv_samples;
 }
 K_END(K_SkyColour)
 

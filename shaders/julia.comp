@@ -34,6 +34,19 @@ layout(std430, set = 0, binding = 7) readonly buffer Palette
 }
 pal;
 
+// The same table lookup as host/gen/julia.c.
+vec3 sky_colour(K_JuliaResult res)
+{
+    K_SkyColour c = pal.colour;
+    if (res.inside != 0u) return vec3(c.inside_r, c.inside_g, c.inside_b);
+    float pos = k_palette_pos(c, res.nsmooth);
+    uint i0 = uint(pos), i1 = min(i0 + 1u, K_PALETTE_SIZE - 1u);
+    float f = pos - float(i0), w = k_sky_weight(c, res.nsmooth);
+    vec4 e0 = pal.entries[i0], e1 = pal.entries[i1];
+    return vec3(k_sky_channel(c, k_mix(e0.r, e1.r, f), w), k_sky_channel(c, k_mix(e0.g, e1.g, f), w),
+                k_sky_channel(c, k_mix(e0.b, e1.b, f), w));
+}
+
 void main()
 {
     uint x = gl_GlobalInvocationID.x;
@@ -47,19 +60,12 @@ void main()
     o_n.v[i] = res.nsmooth;
     o_inside.v[i] = float(res.inside);
     o_de.v[i] = res.de;
-    K_SkyColour c = pal.colour;
-    if (res.inside != 0u) {
-        o_r.v[i] = c.inside_r;
-        o_g.v[i] = c.inside_g;
-        o_b.v[i] = c.inside_b;
-        return;
-    }
-    // the same table lookup as host/gen/julia.c
-    float pos = k_palette_pos(c, res.nsmooth);
-    uint i0 = uint(pos), i1 = min(i0 + 1u, K_PALETTE_SIZE - 1u);
-    float f = pos - float(i0), w = k_sky_weight(c, res.nsmooth);
-    vec4 e0 = pal.entries[i0], e1 = pal.entries[i1];
-    o_r.v[i] = k_sky_channel(c, k_mix(e0.r, e1.r, f), w);
-    o_g.v[i] = k_sky_channel(c, k_mix(e0.g, e1.g, f), w);
-    o_b.v[i] = k_sky_channel(c, k_mix(e0.b, e1.b, f), w);
+    // Colour: the average of `samples` jittered samples in linear colour (sample 0 is the centre).
+    vec3 sum = sky_colour(res);
+    for (uint k = 1u; k < pal.colour.samples; k++)
+        sum += sky_colour(k_julia_sample(p, pal.turb, pal.colour.seed, x, pc.y0 + r, k));
+    float s = pal.colour.inv_samples;
+    o_r.v[i] = pal.colour.samples == 1u ? sum.r : sum.r * s;
+    o_g.v[i] = pal.colour.samples == 1u ? sum.g : sum.g * s;
+    o_b.v[i] = pal.colour.samples == 1u ? sum.b : sum.b * s;
 }

@@ -80,6 +80,8 @@ expect_fail 2 "not both" o.exr -- julia $S --stops "0,0,0,0;1,1,1,1" --cosine 0,
 expect_fail 2 "palette" o.exr -- julia $S --palette sunset -o o.exr
 expect_fail 2 "gamma" o.exr -- julia $S --gamma 0 -o o.exr
 expect_fail 2 "turbulence" o.exr -- julia $S --turbulence -0.1 -o o.exr
+expect_fail 2 "samples" o.exr -- julia $S --samples 0 -o o.exr
+expect_fail 2 "samples" o.exr -- julia $S --samples 100000 -o o.exr
 expect_fail 2 "turbulence-octaves" o.exr -- julia $S --turbulence 0.2 --turbulence-octaves 0 -o o.exr
 "$FB" julia $S --stops "0,0,0,0;0.5,1,0,0;1,1,1,1" --density 0 --brightness 2 -o js.exr && ok || bad "julia with stops failed"
 if "$FB" julia $S --alpha 0.5,0.25 -o j.exr --preview j.png 2> err.txt; then ok; else bad "julia bake failed: $(cat err.txt)"; fi

@@ -52,32 +52,46 @@ static const K_JuliaParams *params(const fb_gen *g)
     return (const K_JuliaParams *)(const void *)g->params;
 }
 
+/* The same table lookup as shaders/julia.comp. */
+static void sky_colour(const julia_palette *pal, K_JuliaResult res, float rgb[3])
+{
+    const K_SkyColour c = pal->colour;
+    if (res.inside) {
+        rgb[0] = c.inside_r, rgb[1] = c.inside_g, rgb[2] = c.inside_b;
+        return;
+    }
+    float pos = k_palette_pos(c, res.nsmooth);
+    uint32_t i0 = (uint32_t)pos, i1 = i0 + 1 < K_PALETTE_SIZE ? i0 + 1 : i0;
+    float f = pos - (float)i0, w = k_sky_weight(c, res.nsmooth);
+    for (int ch = 0; ch < 3; ch++) rgb[ch] = k_sky_channel(c, k_mix(pal->entries[i0][ch], pal->entries[i1][ch], f), w);
+}
+
 static void julia_rows(const fb_gen *g, int y0, int n, void *const *planes)
 {
     const K_JuliaParams *p = params(g);
     const julia_palette *pal = g->input;
-    const K_SkyColour c = pal->colour;
     uint32_t *iter = planes[0];
     float *sm = planes[1], *inside = planes[2], *de = planes[3], *R = planes[4], *G = planes[5], *B = planes[6];
     for (int r = 0; r < n; r++)
         for (uint32_t x = 0; x < p->width; x++) {
-            K_JuliaResult res = k_julia_pixel(*p, pal->turb, x, (uint32_t)(y0 + r));
+            uint32_t y = (uint32_t)(y0 + r);
+            K_JuliaResult res = k_julia_pixel(*p, pal->turb, x, y);
             size_t i = (size_t)r * p->width + x;
             iter[i] = res.iter;
             sm[i] = res.nsmooth;
             inside[i] = (float)res.inside;
             de[i] = res.de;
-            if (res.inside) {
-                R[i] = c.inside_r, G[i] = c.inside_g, B[i] = c.inside_b;
-                continue;
+            /* the average of `samples` jittered samples in linear colour (sample 0 is the centre) */
+            float sum[3], c[3];
+            sky_colour(pal, res, sum);
+            for (uint32_t k = 1; k < pal->colour.samples; k++) {
+                sky_colour(pal, k_julia_sample(*p, pal->turb, pal->colour.seed, x, y, k), c);
+                for (int ch = 0; ch < 3; ch++) sum[ch] += c[ch];
             }
-            /* the same table lookup as shaders/julia.comp */
-            float pos = k_palette_pos(c, res.nsmooth);
-            uint32_t i0 = (uint32_t)pos, i1 = i0 + 1 < K_PALETTE_SIZE ? i0 + 1 : i0;
-            float f = pos - (float)i0, w = k_sky_weight(c, res.nsmooth);
-            R[i] = k_sky_channel(c, k_mix(pal->entries[i0][0], pal->entries[i1][0], f), w);
-            G[i] = k_sky_channel(c, k_mix(pal->entries[i0][1], pal->entries[i1][1], f), w);
-            B[i] = k_sky_channel(c, k_mix(pal->entries[i0][2], pal->entries[i1][2], f), w);
+            float s = pal->colour.samples == 1 ? 1.0f : pal->colour.inv_samples;
+            R[i] = pal->colour.samples == 1 ? sum[0] : sum[0] * s;
+            G[i] = pal->colour.samples == 1 ? sum[1] : sum[1] * s;
+            B[i] = pal->colour.samples == 1 ? sum[2] : sum[2] * s;
         }
 }
 
@@ -132,6 +146,9 @@ fb_result fb_gen_julia_init(fb_gen *g)
         .inside_r = (float)j->inside_color[0],
         .inside_g = (float)j->inside_color[1],
         .inside_b = (float)j->inside_color[2],
+        .samples = (uint32_t)j->samples,
+        .seed = s->seed,
+        .inv_samples = (float)(1.0 / j->samples),
     };
     fb_palette_build(&j->palette, pal->entries);
     /* Turbulence W: fBm over (u, v) with the layer's own parameters; tileable for polar grids. */
