@@ -1,12 +1,15 @@
 /*
  * Benchmarks. Each measurement is a warm-up run (shader compilation, page faults) followed by
  * three timed runs, of which the median is reported. Generation-only runs compute every strip
- * and discard it; end-to-end runs write the EXR file as a user's bake would.
+ * and discard it; end-to-end runs write the EXR file as a user's bake would. Every figure of one
+ * generator comes from the same run, so that ratios between backends are meaningful on a noisy
+ * machine.
  */
 #include "bench.h"
 
 #include "bake.h"
 #include "fbm_avx2.h"
+#include "julia_avx2.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,7 +22,18 @@ typedef struct bench_opts {
     const char *device;
     int threads;
     bool vulkan, native;
+    bool fbm, julia;
 } bench_opts;
+
+/* One benchmark: a one-layer scene, its work unit, and the work one image represents. */
+typedef struct bench_case {
+    const char *generator; /* "fbm", "julia" */
+    const char *unit;      /* "Mpix/s", "Giter/s" */
+    double work;           /* units of work in one image (pixels, iterations) */
+    double unit_scale;     /* work per unit: 1e6 for Mpix, 1e9 for Giter */
+    const char *extra;     /* a second figure's JSON name, or NULL */
+    double extra_per_work; /* its work per unit of `work`, in millions */
+} bench_case;
 
 static int cmp_double(const void *a, const void *b)
 {
@@ -46,28 +60,27 @@ static fb_result timed(fb_engine *e, const fb_scene *s, const char *out, double 
     return FB_OK;
 }
 
-static void report(const bench_opts *o, const fb_engine *e, const char *backend, const char *mode, int octaves,
+static void report(const bench_opts *o, const bench_case *bc, const char *device, const char *backend, const char *mode,
                    int threads, double seconds, double gpu_seconds)
 {
-    double px = (double)o->width * o->height;
-    double rate = px / seconds * 1e-6;
+    double rate = bc->work / seconds / bc->unit_scale;
     if (o->json) {
-        printf(
-            "{\"generator\": \"fbm\", \"backend\": \"%s\", \"device\": \"%s\", \"mode\": \"%s\", \"unit\": \"Mpix/s\", "
-            "\"rate\": %.2f, \"moctaves_per_s\": %.1f, \"size\": [%d, %d], \"octaves\": %d, \"threads\": %d",
-            backend, e->device, mode, rate, rate * octaves, o->width, o->height, octaves, threads);
-        if (gpu_seconds > 0) printf(", \"gpu_rate\": %.2f", px / gpu_seconds * 1e-6);
+        printf("{\"generator\": \"%s\", \"backend\": \"%s\", \"device\": \"%s\", \"mode\": \"%s\", \"unit\": \"%s\", "
+               "\"rate\": %.3f, \"size\": [%d, %d], \"threads\": %d",
+               bc->generator, backend, device, mode, bc->unit, rate, o->width, o->height, threads);
+        if (bc->extra) printf(", \"%s\": %.1f", bc->extra, rate * bc->extra_per_work);
+        if (gpu_seconds > 0) printf(", \"gpu_rate\": %.3f", bc->work / gpu_seconds / bc->unit_scale);
         printf("}\n");
     } else {
-        printf("fbm  %-7s %-18s %8.1f Mpix/s %9.1f Moctave/s", backend, mode, rate, rate * octaves);
-        if (gpu_seconds > 0) printf("  (timestamps: %.1f Mpix/s)", px / gpu_seconds * 1e-6);
-        printf("  [%s]\n", e->device);
+        printf("%-6s %-7s %-18s %8.2f %s", bc->generator, backend, mode, rate, bc->unit);
+        if (gpu_seconds > 0) printf("  (timestamps: %.2f %s)", bc->work / gpu_seconds / bc->unit_scale, bc->unit);
+        printf("  [%s]\n", device);
     }
     fflush(stdout);
 }
 
 /* Whole bakes with the EXR written, for each compression: what a user's bake costs. */
-static fb_result end_to_end(const bench_opts *o, fb_engine *e, fb_scene *s, const char *out, int octaves)
+static fb_result end_to_end(const bench_opts *o, const bench_case *bc, fb_engine *e, fb_scene *s, const char *out)
 {
     static const exrio_compression comps[] = {EXRIO_NONE, EXRIO_ZIP, EXRIO_PIZ};
     static const char *names[] = {"end-to-end-none", "end-to-end-zip", "end-to-end-piz"};
@@ -77,53 +90,129 @@ static fb_result end_to_end(const bench_opts *o, fb_engine *e, fb_scene *s, cons
         double wall, gpu;
         s->compression = comps[c];
         rc = timed(e, s, out, &wall, &gpu);
-        if (!rc) report(o, e, fb_backend_name(e->kind), names[c], octaves, e->threads, wall, gpu);
+        if (!rc) report(o, bc, e->device, fb_backend_name(e->kind), names[c], e->threads, wall, gpu);
     }
     s->compression = keep;
     return rc;
 }
 
-/* The AVX2 reference loop on every thread of the pool, strip by strip like the native backend. */
-typedef struct avx2_job {
-    const fb_gen *g;
-    float *out;
-    int rows_per_task, height;
-} avx2_job;
+/* ---- the hand-vectorised references, on every thread of a pool --------------------------------- */
 
-static void avx2_task(void *ctx, int t)
+typedef struct ref_job {
+    const fb_gen *g;
+    void *out;
+    int rows_per_task, height;
+    bool julia;
+    uint64_t totals[4096];
+} ref_job;
+
+static void ref_task(void *ctx, int t)
 {
-    const avx2_job *j = ctx;
+    ref_job *j = ctx;
     int y0 = t * j->rows_per_task, n = y0 + j->rows_per_task <= j->height ? j->rows_per_task : j->height - y0;
-    fb_fbm_avx2_rows(j->g->params, y0, n, j->out + (size_t)y0 * j->g->scene->width);
+    size_t at = (size_t)y0 * j->g->scene->width;
+    if (j->julia)
+        fb_julia_avx2_rows(j->g->params, y0, n, (uint32_t *)j->out + at, &j->totals[t]);
+    else
+        fb_fbm_avx2_rows(j->g->params, y0, n, (float *)j->out + at);
 }
 
-/* Median seconds of three full-image runs after a warm-up; -1 when AVX2 or memory is missing. */
-static double time_avx2(const fb_scene *s, int threads)
+/* Median seconds of three full-image runs after a warm-up; -1 when AVX2 or memory is missing.
+ * *total (optional) receives the Julia iterations executed in one image. */
+static double time_reference(const fb_scene *s, int threads, uint64_t *total)
 {
     fb_gen g;
     fb_pool *pool = NULL;
-    if (fb_gen_init(&g, s, &s->layers[0]) || !fb_fbm_avx2_supported(g.params)) return -1;
-    float *out = malloc((size_t)s->width * s->height * 4);
-    if (!out || fb_pool_create(threads, &pool)) {
-        free(out);
+    ref_job *j = calloc(1, sizeof *j);
+    double result = -1;
+    if (!j || fb_gen_init(&g, s, &s->layers[0])) {
+        free(j);
         return -1;
     }
-    avx2_job j = {.g = &g, .out = out, .rows_per_task = 16, .height = s->height};
-    double t[4];
-    for (int k = 0; k < 4; k++) {
-        double t0 = fb_now();
-        fb_pool_run(pool, (s->height + 15) / 16, avx2_task, &j);
-        t[k] = fb_now() - t0;
+    j->julia = s->layers[0].kind == FB_LAYER_JULIA;
+    bool ok = j->julia ? fb_julia_avx2_supported(g.params) : fb_fbm_avx2_supported(g.params);
+    j->out = ok ? malloc((size_t)s->width * s->height * 4) : NULL;
+    if (j->out && !fb_pool_create(threads, &pool)) {
+        j->g = &g;
+        j->rows_per_task = (s->height + 4095) / 4096 > 16 ? (s->height + 4095) / 4096 : 16;
+        j->height = s->height;
+        int tasks = (s->height + j->rows_per_task - 1) / j->rows_per_task;
+        double t[4];
+        for (int k = 0; k < 4; k++) {
+            memset(j->totals, 0, sizeof j->totals);
+            double t0 = fb_now();
+            fb_pool_run(pool, tasks, ref_task, j);
+            t[k] = fb_now() - t0;
+        }
+        if (total) {
+            *total = 0;
+            for (int k = 0; k < tasks; k++) *total += j->totals[k];
+        }
+        qsort(t + 1, 3, sizeof t[0], cmp_double);
+        result = t[2];
     }
     fb_pool_destroy(&pool);
-    free(out);
-    qsort(t + 1, 3, sizeof t[0], cmp_double);
-    return t[2];
+    free(j->out);
+    free(j);
+    fb_gen_fini(&g);
+    return result;
+}
+
+/* ---- one generator on every backend ----------------------------------------------------------- */
+
+static fb_result run_case(const bench_opts *o, bench_case *bc, fb_scene *s, const char *out)
+{
+    fb_result rc = FB_OK;
+    double wall, gpu;
+    int threads = o->threads > 0 ? o->threads : fb_cpu_count();
+    /* The reference runs first: for Julia it also counts the iterations one image executes. */
+    uint64_t iters = 0;
+    double tref = time_reference(s, threads, bc->work == 0 ? &iters : NULL);
+    if (bc->work == 0) {
+        if (tref < 0) return fb_fail(FB_ERR_INTERNAL, "bench: the %s benchmark needs AVX2", bc->generator);
+        bc->work = (double)iters;
+        bc->extra_per_work = 1e3 * (double)o->width * o->height / (double)iters; /* Giter/s -> Mpix/s */
+    }
+    fb_engine e;
+    bool have_vulkan = false;
+    if (o->vulkan) {
+        rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .device = o->device, .threads = o->threads},
+                            &e);
+        if (rc == FB_ERR_NODEVICE && o->native) {
+            fb_log(FB_LOG_WARN, "no Vulkan device: benchmarking the native backend only");
+            rc = FB_OK;
+        } else if (!rc) {
+            have_vulkan = true;
+            rc = timed(&e, s, NULL, &wall, &gpu);
+            if (!rc) report(o, bc, e.device, "vulkan", "generate", 0, wall, gpu);
+            if (!rc) rc = end_to_end(o, bc, &e, s, out);
+            fb_engine_close(&e);
+        }
+    }
+    if (!rc && o->native) {
+        rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = o->threads}, &e);
+        if (!rc) {
+            rc = timed(&e, s, NULL, &wall, &gpu);
+            if (!rc) report(o, bc, e.device, "native", "generate", e.threads, wall, -1);
+            if (!have_vulkan && !rc) rc = end_to_end(o, bc, &e, s, out);
+            fb_engine_close(&e);
+        }
+        /* The references: the same algorithm hand-vectorised with AVX2 (bit-exact with the kernel,
+         * tests/test_avx2.c) on every core, and the kernel in a plain scalar loop on one core. */
+        if (!rc && tref > 0) report(o, bc, "hand-vectorised AVX2 C", "native", "avx2-reference", threads, tref, -1);
+        if (!rc) rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = 1, .scalar = true}, &e);
+        if (!rc) {
+            rc = timed(&e, s, NULL, &wall, &gpu);
+            if (!rc) report(o, bc, e.device, "native", "scalar-1-thread", 1, wall, -1);
+            fb_engine_close(&e);
+        }
+    }
+    return rc;
 }
 
 fb_result fb_bench_main(int argc, char **argv)
 {
-    bench_opts o = {.width = 4096, .height = 4096, .vulkan = true, .native = true};
+    bench_opts o = {.width = 4096, .height = 4096, .vulkan = true, .native = true, .fbm = true, .julia = true};
     for (int i = 0; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--json")) {
@@ -139,6 +228,11 @@ fb_result fb_bench_main(int argc, char **argv)
             if (!o.vulkan && !o.native)
                 return fb_fail(FB_ERR_USAGE, "--backend: expected vulkan or native, found \"%s\"", v);
             i++;
+        } else if (!strcmp(a, "--generator") && v) {
+            o.fbm = !strcmp(v, "fbm");
+            o.julia = !strcmp(v, "julia");
+            if (!o.fbm && !o.julia) return fb_fail(FB_ERR_USAGE, "--generator: expected fbm or julia, found \"%s\"", v);
+            i++;
         } else if (!strcmp(a, "--device") && v) {
             o.device = v;
             i++;
@@ -147,78 +241,50 @@ fb_result fb_bench_main(int argc, char **argv)
             if (o.threads < 1) return fb_fail(FB_ERR_USAGE, "--threads: expected a positive integer, found \"%s\"", v);
             i++;
         } else if (!strcmp(a, "--help")) {
-            printf("usage: fractalbake bench [--json] [--size WxH] [--backend vulkan|native] [--device D] "
-                   "[--threads N]\n");
+            printf("usage: fractalbake bench [--json] [--size WxH] [--generator fbm|julia] [--backend vulkan|native] "
+                   "[--device D] [--threads N]\n");
             return FB_OK;
         } else {
             return fb_fail(FB_ERR_USAGE, "%s: unknown or incomplete flag for `fractalbake bench`", a);
         }
     }
-    const int octaves = 8;
-    char json[512];
-    snprintf(json, sizeof json,
-             "{\"size\": [%d, %d], \"seed\": 1, \"compression\": \"zip\", \"layers\": [{\"type\": \"fbm\", "
-             "\"noise\": \"gradient\", \"octaves\": %d}]}",
-             o.width, o.height, octaves);
-    fb_scene s;
-    fb_result rc = fb_scene_parse(json, NULL, &s);
-    if (rc) return rc;
     char dir[] = "/tmp/fractalbake-bench-XXXXXX";
-    if (!mkdtemp(dir)) {
-        fb_scene_fini(&s);
-        return fb_fail(FB_ERR_IO, "cannot create a temporary folder for the benchmark");
-    }
+    if (!mkdtemp(dir)) return fb_fail(FB_ERR_IO, "cannot create a temporary folder for the benchmark");
     char out[64];
     snprintf(out, sizeof out, "%s/bench.exr", dir);
-    if (!o.json)
-        printf("fBm %d x %d, %d octaves of gradient noise; median of 3 runs after a warm-up\n", o.width, o.height,
-               octaves);
-
-    double wall, gpu;
-    fb_engine e;
-    bool have_vulkan = false;
-    if (o.vulkan) {
-        rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .device = o.device, .threads = o.threads},
-                            &e);
-        if (rc == FB_ERR_NODEVICE && o.native) {
-            fb_log(FB_LOG_WARN, "no Vulkan device: benchmarking the native backend only");
-            rc = FB_OK;
-        } else if (!rc) {
-            have_vulkan = true;
-            rc = timed(&e, &s, NULL, &wall, &gpu);
-            if (!rc) report(&o, &e, "vulkan", "generate", octaves, 0, wall, gpu);
-            if (!rc) rc = end_to_end(&o, &e, &s, out, octaves);
-            fb_engine_close(&e);
-        }
+    fb_result rc = FB_OK;
+    char json[512];
+    fb_scene s;
+    if (o.fbm) {
+        const int octaves = 8;
+        snprintf(json, sizeof json,
+                 "{\"size\": [%d, %d], \"seed\": 1, \"layers\": [{\"type\": \"fbm\", \"noise\": \"gradient\", "
+                 "\"octaves\": %d}]}",
+                 o.width, o.height, octaves);
+        if (!o.json)
+            printf("fBm %d x %d, %d octaves of gradient noise; median of 3 runs after a warm-up\n", o.width, o.height,
+                   octaves);
+        bench_case bc = {"fbm", "Mpix/s", (double)o.width * o.height, 1e6, "moctaves_per_s", octaves};
+        rc = fb_scene_parse(json, NULL, &s);
+        if (!rc) rc = run_case(&o, &bc, &s, out);
+        fb_scene_fini(&s);
     }
-    if (!rc && o.native) {
-        rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = o.threads}, &e);
+    if (!rc && o.julia) {
+        snprintf(json, sizeof json,
+                 "{\"size\": [%d, %d], \"seed\": 1, \"layers\": [{\"type\": \"julia\", \"c\": [-0.8, 0.156], "
+                 "\"max-iter\": 256}]}",
+                 o.width, o.height);
+        bench_case bc = {"julia", "Giter/s", 0, 1e9, "mpix_per_s", 0};
+        rc = fb_scene_parse(json, NULL, &s);
         if (!rc) {
-            rc = timed(&e, &s, NULL, &wall, &gpu);
-            if (!rc) report(&o, &e, "native", "generate", octaves, e.threads, wall, -1);
-            if (!have_vulkan && !rc) rc = end_to_end(&o, &e, &s, out, octaves);
-            fb_engine_close(&e);
+            if (!o.json)
+                printf("Julia %d x %d, c = -0.8+0.156i, max-iter 256 (rate: iterations executed); median of 3\n",
+                       o.width, o.height);
+            rc = run_case(&o, &bc, &s, out);
         }
-        /* The references: the same algorithm hand-vectorised with AVX2 (bit-exact with the kernel,
-         * tests/test_avx2.c) on every core, and the kernel in a plain scalar loop on one core. */
-        if (!rc) {
-            int threads = o.threads > 0 ? o.threads : fb_cpu_count();
-            double t = time_avx2(&s, threads);
-            if (t > 0) {
-                fb_engine ref = {.kind = FB_BACKEND_NATIVE, .threads = threads};
-                snprintf(ref.device, sizeof ref.device, "hand-vectorised AVX2 C");
-                report(&o, &ref, "native", "avx2-reference", octaves, threads, t, -1);
-            }
-        }
-        if (!rc) rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = 1, .scalar = true}, &e);
-        if (!rc) {
-            rc = timed(&e, &s, NULL, &wall, &gpu);
-            if (!rc) report(&o, &e, "native", "scalar-1-thread", octaves, 1, wall, -1);
-            fb_engine_close(&e);
-        }
+        fb_scene_fini(&s);
     }
     unlink(out);
     rmdir(dir);
-    fb_scene_fini(&s);
     return rc;
 }

@@ -2,6 +2,7 @@
  * of several fBm images is bit-identical, so comparing their speeds compares like with like. */
 #include "../kernels/fbm.h"
 #include "fbm_avx2.h"
+#include "julia_avx2.h"
 #include "gen.h"
 
 #include "testhelp.h"
@@ -33,6 +34,36 @@ int main(void)
         CHECKF(diff == 0, "scene %d: %d of %zu pixels differ", k, diff, n);
         free(a);
         free(b);
+        fb_scene_fini(&s);
+    }
+    /* Julia: the escape counts of the AVX2 loop are the kernel's, pole and warp included. */
+    const char *julias[] = {
+        "{\"size\": [203, 61], \"layers\": [{\"type\": \"julia\"}]}",
+        "{\"size\": [160, 120], \"layers\": [{\"type\": \"julia\", \"alpha\": [0.5, 0.25], \"c\": [-0.4, 0.6], "
+        "\"rotation\": 30, \"center\": [0.2, -0.1], \"max-iter\": 500, \"bailout\": 3}]}",
+        "{\"size\": [64, 64], \"layers\": [{\"type\": \"julia\", \"alpha\": [0.5, 0], \"scale\": [6, 6]}]}",
+    };
+    for (int k = 0; k < 3; k++) {
+        fb_scene s;
+        CHECK(fb_scene_parse(julias[k], NULL, &s) == FB_OK);
+        fb_gen g;
+        CHECK(fb_gen_init(&g, &s, &s.layers[0]) == FB_OK);
+        if (!fb_julia_avx2_supported(g.params)) TEST_SKIP("this CPU has no AVX2");
+        size_t n = (size_t)s.width * s.height;
+        uint32_t *a = malloc(n * 4), *b = malloc(n * 4);
+        float *rest[6];
+        for (int c = 0; c < 6; c++) rest[c] = malloc(n * 4);
+        void *planes[7] = {a, rest[0], rest[1], rest[2], rest[3], rest[4], rest[5]};
+        g.native_rows(&g, 0, s.height, planes);
+        uint64_t total = 0, want = 0;
+        fb_julia_avx2_rows(g.params, 0, s.height, b, &total);
+        int diff = 0;
+        for (size_t i = 0; i < n; i++) diff += a[i] != b[i], want += a[i];
+        CHECKF(diff == 0, "julia %d: %d of %zu escape counts differ", k, diff, n);
+        CHECK(total == want);
+        free(a), free(b);
+        for (int c = 0; c < 6; c++) free(rest[c]);
+        fb_gen_fini(&g);
         fb_scene_fini(&s);
     }
     TEST_REPORT();

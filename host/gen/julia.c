@@ -194,6 +194,8 @@ fb_result fb_gen_julia_init(fb_gen *g)
     g->push = julia_push_fn;
     g->groups = julia_groups;
     g->spec[0] = p->mapping;
-    g->nspec = 1;
+    g->spec[1] = p->lambda != 0.0f;
+    g->spec[2] = (uint32_t)j->samples;
+    g->nspec = 3;
     return FB_OK;
 }
