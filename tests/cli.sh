@@ -141,6 +141,14 @@ cmp -s n1.exr n2.exr && cmp -s n1.exr n3.exr && ok || bad "native result depends
 "$FB" fbm $S --seed 9 --warp 1 --strip-rows 3 -o v2.exr
 cmp -s v1.exr v2.exr && ok || bad "the same command twice (other strip rows) gave different bytes"
 
+J="julia --size 96x64 --quiet --mapping polar --alpha -0.3,0 --turbulence 0.2 --samples 3"
+"$FB" $J --backend native --threads 1 --strip-rows 64 -o jn1.exr
+"$FB" $J --backend native --threads 3 --strip-rows 7 -o jn2.exr
+cmp -s jn1.exr jn2.exr && ok || bad "julia (native) depends on threads or strip rows"
+"$FB" $J --strip-rows 5 -o jv1.exr
+"$FB" $J --strip-rows 64 -o jv2.exr
+cmp -s jv1.exr jv2.exr && ok || bad "julia (vulkan) depends on strip rows"
+
 # ---- atomic replacement ----
 cp a.exr keep.exr
 before=$(md5sum < keep.exr)
