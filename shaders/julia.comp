@@ -13,6 +13,9 @@ layout(constant_id = 0) const uint MAPPING = 0u;
 // folded away (on lavapipe the unused turbulence fBm alone cost 4x).
 layout(constant_id = 1) const uint TURBULENCE = 0u;
 layout(constant_id = 2) const uint SAMPLES = 1u;
+// bit 0: gamma != 1, bit 1: density > 0. A ternary on a buffer value compiles to a select that
+// evaluates pow() whatever the value; known constants fold it away.
+layout(constant_id = 3) const uint COLOUR_FLAGS = 3u;
 
 layout(push_constant) uniform Push
 {
@@ -42,6 +45,8 @@ pal;
 vec3 sky_colour(K_JuliaResult res)
 {
     K_SkyColour c = pal.colour;
+    if ((COLOUR_FLAGS & 1u) == 0u) c.gamma = 1.0f;
+    if ((COLOUR_FLAGS & 2u) == 0u) c.density = 0.0f;
     if (res.inside != 0u) return vec3(c.inside_r, c.inside_g, c.inside_b);
     float pos = k_palette_pos(c, res.nsmooth);
     uint i0 = uint(pos), i1 = min(i0 + 1u, K_PALETTE_SIZE - 1u);

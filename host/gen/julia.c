@@ -196,6 +196,7 @@ fb_result fb_gen_julia_init(fb_gen *g)
     g->spec[0] = p->mapping;
     g->spec[1] = p->lambda != 0.0f;
     g->spec[2] = (uint32_t)j->samples;
-    g->nspec = 3;
+    g->spec[3] = (pal->colour.gamma != 1.0f ? 1u : 0u) | (pal->colour.density > 0.0f ? 2u : 0u);
+    g->nspec = 4;
     return FB_OK;
 }
