@@ -129,8 +129,8 @@ static fb_result run_submit(fb_engine *e, layer_run *lr, int slot, int y0, int n
 {
     uint8_t push[FB_GEN_MAX_PUSH];
     uint32_t groups[3];
-    lr->gen.push(&lr->gen, y0, n, push);
-    lr->gen.groups(&lr->gen, n, groups);
+    fb_gen_push(&lr->gen, y0, n, push);
+    fb_gen_groups(&lr->gen, n, groups);
     return vkc_job_submit(e->vk, lr->job[slot], lr->buf[slot], (uint32_t)lr->gen.nchannels + (lr->gen.input ? 1u : 0u),
                           push, groups);
 }

@@ -30,9 +30,8 @@ struct fb_gen {
     /* vulkan: the shader, its push constants for a strip, and its workgroup counts */
     const uint32_t *spv;
     size_t spv_size;
-    uint32_t push_size;
-    void (*push)(const fb_gen *g, int y0, int n, void *out);
-    void (*groups)(const fb_gen *g, int n, uint32_t out[3]);
+    uint32_t push_size; /* params_size + 8: the shader's push block is {params; uint y0; uint rows;} */
+    uint32_t params_size;
     const void *input; /* read-only data for the kernel (binding nchannels), or NULL */
     uint32_t input_size;
     uint32_t spec[4]; /* specialization constants 0..nspec-1 */
@@ -45,6 +44,12 @@ struct fb_gen {
 
 /* Sets up the generator of `layer`. */
 fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer);
+
+/* The push constants of a strip: the generator's parameter block, then y0 and the row count. */
+void fb_gen_push(const fb_gen *g, int y0, int n, void *out);
+
+/* Workgroups for a strip of n rows: 64 invocations wide, one per pixel, one row of groups per row. */
+void fb_gen_groups(const fb_gen *g, int n, uint32_t out[3]);
 
 /* Frees what the generator owns. Null-safe, idempotent. */
 void fb_gen_fini(fb_gen *g);

@@ -50,6 +50,25 @@ K_STRUCT(K_JuliaResult)
 }
 K_END(K_JuliaResult)
 
+/* An orbit's state: z and its derivative z' with respect to the pixel coordinate. */
+K_STRUCT(K_JuliaZ)
+{
+    float zr, zi, dzr, dzi;
+}
+K_END(K_JuliaZ)
+
+/* One step: z' <- 2 z z', z <- z^2 + c. precise: an orbit is chaotic, so one fused rounding would
+ * change the escape count of boundary pixels between a device and C. */
+K_FN K_JuliaZ k_julia_step(K_JuliaZ o, float c_re, float c_im)
+{
+    K_PRECISE K_JuliaZ r;
+    r.dzr = 2.0f * (o.zr * o.dzr - o.zi * o.dzi);
+    r.dzi = 2.0f * (o.zr * o.dzi + o.zi * o.dzr);
+    r.zr = o.zr * o.zr - o.zi * o.zi + c_re;
+    r.zi = 2.0f * o.zr * o.zi + c_im;
+    return r;
+}
+
 /* The starting point p for texture coordinates (u, v), and dp/dx (per pixel) as a complex number. */
 K_FN k_vec2 k_julia_start(K_JuliaParams p, float u, float v)
 {
@@ -110,27 +129,24 @@ K_FN K_JuliaResult k_julia_orbit(K_JuliaParams p, float px, float py, float dpx,
     float k = 1.0f - (p.a_re * p.a_re + p.a_im * p.a_im);
     float sr = (dr * dr - di * di) * inv * inv, si = -2.0f * dr * di * inv * inv; /* 1 / (1 - a p)^2 */
     float wr = k * sr, wi = k * si;
-    K_PRECISE float dzr = wr * dpx - wi * dpy;
-    K_PRECISE float dzi = wr * dpy + wi * dpx;
+    K_PRECISE K_JuliaZ o;
+    o.zr = zr;
+    o.zi = zi;
+    o.dzr = wr * dpx - wi * dpy;
+    o.dzi = wr * dpy + wi * dpx;
     if (!(zr * zr + zi * zi < 1.0e30f)) return res;
 
     uint n = 0u;
     bool escaped = false;
     for (uint i = 0u; i < p.max_iter; i++) {
-        if (zr * zr + zi * zi >= p.bailout2) {
+        if (o.zr * o.zr + o.zi * o.zi >= p.bailout2) {
             escaped = true;
             break;
         }
-        K_PRECISE float tr = 2.0f * (zr * dzr - zi * dzi);
-        K_PRECISE float ti = 2.0f * (zr * dzi + zi * dzr);
-        dzr = tr;
-        dzi = ti;
-        K_PRECISE float xr = zr * zr - zi * zi + p.c_re;
-        zi = 2.0f * zr * zi + p.c_im;
-        zr = xr;
+        o = k_julia_step(o, p.c_re, p.c_im);
         n++;
     }
-    if (!escaped && zr * zr + zi * zi >= p.bailout2) escaped = true;
+    if (!escaped && o.zr * o.zr + o.zi * o.zi >= p.bailout2) escaped = true;
     res.iter = n;
     if (!escaped) {
         res.inside = 1u;
@@ -141,20 +157,14 @@ K_FN K_JuliaResult k_julia_orbit(K_JuliaParams p, float px, float py, float dpx,
      * doubly exponentially, so a handful suffice). */
     uint m = n;
     for (uint j = 0u; j < K_JULIA_EXTRA_ITER; j++) {
-        if (zr * zr + zi * zi > K_JULIA_BIG_RADIUS2) break;
-        K_PRECISE float tr = 2.0f * (zr * dzr - zi * dzi);
-        K_PRECISE float ti = 2.0f * (zr * dzi + zi * dzr);
-        dzr = tr;
-        dzi = ti;
-        K_PRECISE float xr = zr * zr - zi * zi + p.c_re;
-        zi = 2.0f * zr * zi + p.c_im;
-        zr = xr;
+        if (o.zr * o.zr + o.zi * o.zi > K_JULIA_BIG_RADIUS2) break;
+        o = k_julia_step(o, p.c_re, p.c_im);
         m++;
     }
-    float r2 = zr * zr + zi * zi;
+    float r2 = o.zr * o.zr + o.zi * o.zi;
     float lnr = 0.5f * k_log2(r2) * 0.69314718f; /* ln |z| */
     res.nsmooth = K_F(m) + 1.0f - k_log2(lnr);
-    float dz = k_sqrt(dzr * dzr + dzi * dzi);
+    float dz = k_sqrt(o.dzr * o.dzr + o.dzi * o.dzi);
     /* an overflowed derivative (inf or NaN) gives 0, never a non-finite value */
     res.de = (dz > 0.0f && dz < 3.0e38f) ? k_sqrt(r2) * lnr / dz : 0.0f;
     return res;

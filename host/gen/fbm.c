@@ -96,19 +96,6 @@ static void fbm_rows(const fb_gen *g, int y0, int n, void *const *planes)
     }
 }
 
-static void fbm_push_fn(const fb_gen *g, int y0, int n, void *out)
-{
-    fbm_push push = {.p = *params(g), .y0 = (uint32_t)y0, .rows = (uint32_t)n};
-    memcpy(out, &push, sizeof push);
-}
-
-static void fbm_groups(const fb_gen *g, int n, uint32_t out[3])
-{
-    out[0] = (params(g)->width + 63) / 64;
-    out[1] = (uint32_t)n;
-    out[2] = 1;
-}
-
 /* Fills K_FbmParams from a validated layer. */
 static void fb_fbm_params_fill(const fb_scene *s, const fb_layer *L, K_FbmParams *p)
 {
@@ -145,9 +132,8 @@ fb_result fb_gen_fbm_init(fb_gen *g)
     g->native_rows = fbm_rows;
     g->spv = fbm_comp;
     g->spv_size = sizeof fbm_comp;
+    g->params_size = sizeof(K_FbmParams);
     g->push_size = sizeof(fbm_push);
-    g->push = fbm_push_fn;
-    g->groups = fbm_groups;
     g->spec[0] = params(g)->noise;
     g->spec[1] = params(g)->flags;
     g->nspec = 2;

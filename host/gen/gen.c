@@ -24,3 +24,17 @@ void fb_gen_fini(fb_gen *g)
     g->owned = NULL;
     g->input = NULL;
 }
+
+void fb_gen_push(const fb_gen *g, int y0, int n, void *out)
+{
+    uint32_t strip[2] = {(uint32_t)y0, (uint32_t)n};
+    memcpy(out, g->params, g->params_size);
+    memcpy((uint8_t *)out + g->params_size, strip, sizeof strip);
+}
+
+void fb_gen_groups(const fb_gen *g, int n, uint32_t out[3])
+{
+    out[0] = ((uint32_t)g->scene->width + 63) / 64;
+    out[1] = (uint32_t)n;
+    out[2] = 1;
+}

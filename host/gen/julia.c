@@ -95,19 +95,6 @@ static void julia_rows(const fb_gen *g, int y0, int n, void *const *planes)
         }
 }
 
-static void julia_push_fn(const fb_gen *g, int y0, int n, void *out)
-{
-    julia_push push = {.p = *params(g), .y0 = (uint32_t)y0, .rows = (uint32_t)n};
-    memcpy(out, &push, sizeof push);
-}
-
-static void julia_groups(const fb_gen *g, int n, uint32_t out[3])
-{
-    out[0] = (params(g)->width + 63) / 64;
-    out[1] = (uint32_t)n;
-    out[2] = 1;
-}
-
 fb_result fb_gen_julia_init(fb_gen *g)
 {
     const fb_scene *s = g->scene;
@@ -190,9 +177,8 @@ fb_result fb_gen_julia_init(fb_gen *g)
     g->native_rows = julia_rows;
     g->spv = julia_comp;
     g->spv_size = sizeof julia_comp;
+    g->params_size = sizeof(K_JuliaParams);
     g->push_size = sizeof(julia_push);
-    g->push = julia_push_fn;
-    g->groups = julia_groups;
     g->spec[0] = p->mapping;
     g->spec[1] = p->lambda != 0.0f;
     g->spec[2] = (uint32_t)j->samples;
