@@ -132,6 +132,16 @@ done
 "$FB" compare s_zip.exr s_piz.exr > /dev/null && ok || bad "zip and piz files differ"
 "$FB" compare s_zip.exr s_none.exr > /dev/null && ok || bad "zip and none files differ"
 
+# a scene with both generators: one file, every layer's channels, each with its own type
+printf '{"size": [120, 60], "seed": 4, "layers": [{"type": "julia", "name": "sky", "mapping": "polar", "alpha": [-0.3, 0]}, {"type": "fbm", "name": "height", "octaves": 5}]}' > mixed.json
+if "$FB" render mixed.json -o mixed.exr --preview mixed.png --quiet; then ok; else bad "mixed scene failed"; fi
+valid_exr mixed.exr
+"$FB" info mixed.exr > info2.txt
+grep -q "layer height .*Y (float)" info2.txt && grep -q "layer sky .*iter (uint)" info2.txt && grep -q "R (half)" info2.txt && ok || bad "mixed scene lacks a layer: $(cat info2.txt)"
+"$FB" render mixed.json -o mixed_n.exr --backend native --quiet
+"$FB" compare mixed.exr mixed_n.exr --layer height --max-abs 1e-5 > /dev/null && ok || bad "mixed scene: fbm layer differs between backends"
+"$FB" compare mixed.exr mixed_n.exr --layer sky --max-abs 0.5 --fail-percent 1 > /dev/null && ok || bad "mixed scene: sky layer differs between backends beyond 1% of pixels"
+
 # ---- determinism ----
 "$FB" fbm $S --seed 9 --warp 1 --backend native --threads 1 --strip-rows 64 -o n1.exr
 "$FB" fbm $S --seed 9 --warp 1 --backend native --threads 2 --strip-rows 5 -o n2.exr
