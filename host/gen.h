@@ -54,6 +54,11 @@ void fb_gen_groups(const fb_gen *g, int n, uint32_t out[3]);
 /* Frees what the generator owns. Null-safe, idempotent. */
 void fb_gen_fini(fb_gen *g);
 
+/* Completes an fBm parameter block whose frequencies are set: the image size and the reciprocals the
+ * kernel multiplies by (kernels never divide). Shared by the fBm layer and Julia's turbulence. */
+struct K_FbmParams;
+void fb_fbm_params_frame(struct K_FbmParams *p, int width, int height);
+
 /* Per kind. */
 fb_result fb_gen_fbm_init(fb_gen *g);
 fb_result fb_gen_julia_init(fb_gen *g);

@@ -97,6 +97,16 @@ static void fbm_rows(const fb_gen *g, int y0, int n, void *const *planes)
 }
 
 /* Fills K_FbmParams from a validated layer. */
+void fb_fbm_params_frame(K_FbmParams *p, int width, int height)
+{
+    p->width = (uint32_t)width;
+    p->height = (uint32_t)height;
+    p->inv_width = 1.0f / (float)width;
+    p->inv_height = 1.0f / (float)height;
+    p->inv_freq_x = 1.0f / p->freq_x;
+    p->inv_freq_y = 1.0f / p->freq_y;
+}
+
 static void fb_fbm_params_fill(const fb_scene *s, const fb_layer *L, K_FbmParams *p)
 {
     const fb_fbm_params *f = &L->fbm;
@@ -115,12 +125,7 @@ static void fb_fbm_params_fill(const fb_scene *s, const fb_layer *L, K_FbmParams
     p->offset_x = (float)f->offset[0];
     p->offset_y = (float)f->offset[1];
     p->warp = (float)f->warp;
-    p->width = (uint32_t)s->width;
-    p->height = (uint32_t)s->height;
-    p->inv_width = 1.0f / (float)s->width;
-    p->inv_height = 1.0f / (float)s->height;
-    p->inv_freq_x = 1.0f / p->freq_x;
-    p->inv_freq_y = 1.0f / p->freq_y;
+    fb_fbm_params_frame(p, s->width, s->height);
 }
 
 fb_result fb_gen_fbm_init(fb_gen *g)

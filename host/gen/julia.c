@@ -150,12 +150,7 @@ fb_result fb_gen_julia_init(fb_gen *g)
     t->flags = j->polar ? K_FBM_TILEABLE : 0u;
     t->freq_x = (float)j->turb_frequency;
     t->freq_y = (float)(j->polar ? j->turb_frequency : j->turb_frequency * s->height / s->width);
-    t->width = (uint32_t)s->width;
-    t->height = (uint32_t)s->height;
-    t->inv_width = 1.0f / (float)s->width;
-    t->inv_height = 1.0f / (float)s->height;
-    t->inv_freq_x = 1.0f / t->freq_x;
-    t->inv_freq_y = 1.0f / t->freq_y;
+    fb_fbm_params_frame(t, s->width, s->height);
     double gsum = 0, amp = 1;
     for (int i = 0; i < j->turb_octaves; i++, amp *= t->gain) gsum += amp;
     p->lambda = (float)j->turbulence;
