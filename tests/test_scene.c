@@ -4,6 +4,8 @@
  * canonical.
  */
 #include "../kernels/fbm.h"
+#include "../kernels/julia.h"
+#include "../kernels/palette.h"
 #include "gen.h"
 #include "scene.h"
 
@@ -105,8 +107,62 @@ static void test_canonical(void)
     free(json);
 }
 
+/* Every julia key reaches what it names: the kernel block, the colour and turbulence parameters at
+ * the head of the input buffer (K_SkyColour at 0, K_FbmParams at 48: asserted in gen/julia.c), the
+ * palette table, the specialization constants and the channel types. */
+static void test_julia_keys(void)
+{
+    const char *json =
+        "{\"size\": [300, 100], \"seed\": 8, \"layers\": [{\"type\": \"julia\", \"name\": \"night\", \"mapping\": "
+        "\"polar\", \"scale\": [2, 1], \"radius\": 1.25, \"center\": [0.5, -0.25], \"rotation\": 90, \"alpha\": "
+        "[-0.3, 0.1], \"c\": [-0.4, 0.6], \"max-iter\": 777, \"bailout\": 4, \"turbulence\": 0.2, "
+        "\"turbulence-hurst\": "
+        "0.5, \"turbulence-octaves\": 3, \"turbulence-frequency\": 5, \"samples\": 6, \"stops\": [[0, 0, 0, 0], [1, 1, "
+        "0.5, 0.25]], \"period\": 8, \"palette-offset\": 0.5, \"brightness\": 2, \"gamma\": 2.2, \"density\": 3, "
+        "\"density-count\": 16, \"inside-color\": [0.1, 0.2, 0.3], \"half\": false}]}";
+    fb_scene s;
+    CHECK(fb_scene_parse(json, NULL, &s) == FB_OK);
+    fb_gen g;
+    CHECK(fb_gen_init(&g, &s, &s.layers[0]) == FB_OK);
+    K_JuliaParams p;
+    memcpy(&p, g.params, sizeof p);
+    CHECK(p.mapping == K_JULIA_POLAR && p.max_iter == 777 && p.bailout2 == 16.0f);
+    CHECK(p.scale_u == 2.0f && p.scale_v == 1.0f && p.radius == 1.25f);
+    CHECK(p.center_re == 0.5f && p.center_im == -0.25f);
+    CHECK(fabsf(p.rot_c) < 1e-7f && fabsf(p.rot_s - 1.0f) < 1e-7f);
+    CHECK(p.a_re == -0.3f && p.a_im == 0.1f && p.c_re == -0.4f && p.c_im == 0.6f);
+    CHECK(p.lambda == 0.2f && fabsf(p.turb_norm - 1.0f / (1.0f + 0.70710678f + 0.5f)) < 1e-6f);
+    const K_SkyColour *c = g.input;
+    K_FbmParams t;
+    memcpy(&t, (const char *)g.input + 48, sizeof t);
+    CHECK(c->inv_period == 0.125f && c->offset == 0.5f && c->brightness == 2.0f && c->gamma == 2.2f);
+    CHECK(c->density == 3.0f && c->inv_n_ref == 1.0f / 16.0f && c->samples == 6 && c->seed == 8);
+    CHECK(c->inside_r == 0.1f && c->inside_g == 0.2f && c->inside_b == 0.3f);
+    CHECK(t.octaves == 3 && fabsf(t.gain - 0.70710678f) < 1e-7f && t.freq_x == 5.0f && t.flags == K_FBM_TILEABLE);
+    CHECK(t.seed == 8 && t.width == 300 && t.inv_freq_x == 0.2f);
+    /* the gradient's last stop is the table's last entry */
+    const float *last = (const float *)((const char *)g.input + 144) + 4 * (K_PALETTE_SIZE - 1);
+    CHECK(last[0] == 1.0f && last[1] == 0.5f && last[2] == 0.25f);
+    CHECK(g.nspec == 4 && g.spec[0] == K_JULIA_POLAR && g.spec[1] == 1 && g.spec[2] == 6 && g.spec[3] == 3);
+    CHECK(g.nchannels == 7 && !strcmp(g.channel_names[0], "night.iter") && g.channel_types[0] == EXRIO_UINT);
+    CHECK(!strcmp(g.channel_names[4], "night.R") && g.channel_types[4] == EXRIO_FLOAT); /* half: false */
+    fb_gen_fini(&g);
+    fb_scene_fini(&s);
+
+    /* defaults: square-pixel scale from the size, night palette, half colour, no turbulence */
+    CHECK(fb_scene_parse("{\"size\": [300, 100], \"layers\": [{\"type\": \"julia\"}]}", NULL, &s) == FB_OK);
+    CHECK(fb_gen_init(&g, &s, &s.layers[0]) == FB_OK);
+    memcpy(&p, g.params, sizeof p);
+    CHECK(p.scale_u == 3.0f && p.scale_v == 1.0f && p.mapping == K_JULIA_RECT && p.max_iter == 256);
+    CHECK(p.c_re == -0.8f && p.c_im == 0.156f && p.lambda == 0.0f && g.spec[1] == 0 && g.spec[2] == 1);
+    CHECK(g.channel_types[4] == EXRIO_HALF && !strcmp(g.channel_names[0], "sky.iter"));
+    fb_gen_fini(&g);
+    fb_scene_fini(&s);
+}
+
 int main(void)
 {
+    test_julia_keys();
     test_keys();
     test_flags();
     test_canonical();
