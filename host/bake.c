@@ -82,7 +82,7 @@ static fb_result run_init(fb_engine *e, layer_run *lr, int strip_rows)
     const fb_scene *s = lr->gen.scene;
     size_t bytes = (size_t)s->width * (size_t)strip_rows * 4;
     fb_result rc = FB_OK;
-    if (e->kind == FB_BACKEND_VULKAN) {
+    if (e->kind == FB_BACKEND_VULKAN && !lr->gen.prepare) {
         rc =
             vkc_pipeline_create(e->vk,
                                 &(vkc_pipeline_desc){.spv = lr->gen.spv,
@@ -127,6 +127,7 @@ static void run_fini(fb_engine *e, layer_run *lr)
 
 static fb_result run_submit(fb_engine *e, layer_run *lr, int slot, int y0, int n)
 {
+    if (lr->gen.prepare) return FB_OK; /* computed in prepare; its strips come from the host */
     uint8_t push[FB_GEN_MAX_PUSH];
     uint32_t groups[3];
     fb_gen_push(&lr->gen, y0, n, push);
@@ -139,7 +140,7 @@ static fb_result run_submit(fb_engine *e, layer_run *lr, int slot, int y0, int n
 static fb_result run_collect(fb_engine *e, layer_run *lr, int slot, int y0, int n, const void **planes,
                              double *gpu_seconds)
 {
-    if (e->kind == FB_BACKEND_VULKAN) {
+    if (e->kind == FB_BACKEND_VULKAN && !lr->gen.prepare) {
         double t = -1;
         fb_result rc = vkc_job_wait(e->vk, lr->job[slot], &t);
         if (rc) return rc;
@@ -147,11 +148,14 @@ static fb_result run_collect(fb_engine *e, layer_run *lr, int slot, int y0, int 
         for (int c = 0; c < lr->gen.nchannels; c++) planes[c] = vkc_buffer_data(lr->buf[slot][c]);
         return FB_OK;
     }
-    int threads = fb_pool_threads(e->pool);
+    int threads = e->pool ? fb_pool_threads(e->pool) : 1;
     int per = (n + 4 * threads - 1) / (4 * threads);
     if (per < 1) per = 1;
     native_task nt = {.gen = &lr->gen, .y0 = y0, .n = n, .rows_per_task = per, .planes = lr->planes};
-    fb_pool_run(e->pool, (n + per - 1) / per, native_task_fn, &nt);
+    if (e->pool)
+        fb_pool_run(e->pool, (n + per - 1) / per, native_task_fn, &nt);
+    else /* a host-side layer (tone mapping) on the vulkan backend */
+        for (int t = 0; t < (n + per - 1) / per; t++) native_task_fn(&nt, t);
     for (int c = 0; c < lr->gen.nchannels; c++) planes[c] = lr->planes[c];
     return FB_OK;
 }
@@ -198,6 +202,12 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         for (int c = 0; c < runs[i].gen.nchannels && !rc; c++)
             channels[nch++] = (exrio_channel){runs[i].gen.channel_names[c], runs[i].gen.channel_types[c]};
         if (!rc) rc = run_init(e, &runs[i], strip);
+    }
+    /* Layers computed as a whole (the chaos game) run before the first strip. */
+    for (int i = 0; i < s->nlayers && !rc; i++) {
+        if (!runs[i].gen.prepare) continue;
+        rc = runs[i].gen.prepare(&runs[i].gen, e, d->progress);
+        if (runs[i].gen.prepare_gpu_seconds > 0) gpu += runs[i].gen.prepare_gpu_seconds;
     }
     if (rc) goto out;
 

@@ -14,6 +14,7 @@
 #define FB_GEN_MAX_PUSH     128
 
 typedef struct fb_gen fb_gen;
+struct fb_engine;
 
 struct fb_gen {
     const fb_scene *scene;
@@ -37,9 +38,16 @@ struct fb_gen {
     uint32_t spec[4]; /* specialization constants 0..nspec-1 */
     uint32_t nspec;
 
+    /* Layers that are not a function of the pixel (the chaos game) compute everything here, once, on
+     * the engine's backend before the first strip; their strips then come from native_rows on the
+     * host whatever the backend. NULL for per-pixel generators. */
+    fb_result (*prepare)(fb_gen *g, struct fb_engine *e, bool progress);
+    double prepare_gpu_seconds; /* set by prepare: dispatch time on the GPU, else -1 */
+
     bool scalar; /* native: the portable kernel only, no hand-vectorised path (benchmark reference) */
     _Alignas(16) unsigned char params[256]; /* generator-private, e.g. K_FbmParams */
     void *owned;                            /* generator-owned memory (freed by fb_gen_fini) */
+    void (*fini)(fb_gen *g);                /* frees what `owned` points to, before owned itself */
 };
 
 /* Sets up the generator of `layer`. */
@@ -62,5 +70,10 @@ void fb_fbm_params_frame(struct K_FbmParams *p, int width, int height);
 /* Per kind. */
 fb_result fb_gen_fbm_init(fb_gen *g);
 fb_result fb_gen_julia_init(fb_gen *g);
+fb_result fb_gen_ifs_init(fb_gen *g);
+
+/* The chaos-game statistics of an ifs layer after prepare (NULL for other layers). */
+struct fb_ifs_stats;
+const struct fb_ifs_stats *fb_gen_ifs_stats(const fb_gen *g);
 
 #endif

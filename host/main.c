@@ -53,6 +53,7 @@ static const char *const k_usage =
     "  render [SCENE.json] [-o OUT.exr]   bake every layer of a scene (no scene: the embedded default)\n"
     "  fbm [options] -o OUT.exr           fBm noise, one layer (fractalbake fbm --help lists the options)\n"
     "  julia [options] -o OUT.exr         a warped Julia set (night skies), one layer\n"
+    "  ifs [options] -o OUT.exr           an IFS chaos game (plants: fern, tree, population...), one layer\n"
     "  compare A.exr B.exr [thresholds]   exit 0 within thresholds, 1 beyond, 2 on error\n"
     "  info FILE.exr                      layers, channels, types, attributes and the stored scene\n"
     "  devices                            the Vulkan devices found, and which one is chosen\n"
@@ -353,6 +354,7 @@ int main(int argc, char **argv)
     if (!strcmp(cmd, "render")) return cmd_render(argc - 2, argv + 2);
     if (!strcmp(cmd, "fbm")) return cmd_generator("fbm", argc - 2, argv + 2);
     if (!strcmp(cmd, "julia")) return cmd_generator("julia", argc - 2, argv + 2);
+    if (!strcmp(cmd, "ifs")) return cmd_generator("ifs", argc - 2, argv + 2);
     if (!strcmp(cmd, "compare")) return cmd_compare(argc - 2, argv + 2);
     if (!strcmp(cmd, "info")) return cmd_info(argc - 2, argv + 2);
     if (!strcmp(cmd, "devices")) return cmd_devices(argc - 2, argv + 2);

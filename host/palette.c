@@ -31,6 +31,10 @@ static const named_palette k_named[] = {
     {false, {0}, 4, {{0, 0.02, 0.0, 0.0}, {0.4, 0.5, 0.1, 0.02}, {0.75, 1.0, 0.55, 0.1}, {1, 1.0, 0.95, 0.7}}},
     /* grey */
     {false, {0}, 2, {{0, 0, 0, 0}, {1, 1, 1, 1}}},
+    /* foliage: bark brown through olive to leaf green and a light new-growth green */
+    {false, {0}, 4, {{0, 0.16, 0.07, 0.02}, {0.35, 0.22, 0.25, 0.04}, {0.7, 0.06, 0.40, 0.05}, {1, 0.45, 0.85, 0.20}}},
+    /* blossom: dark stems, green leaves, pink and white flowers */
+    {false, {0}, 4, {{0, 0.10, 0.06, 0.03}, {0.4, 0.08, 0.35, 0.06}, {0.75, 0.95, 0.35, 0.55}, {1, 1.0, 0.92, 0.95}}},
 };
 
 static void cosine_at(const double *v, double t, float out[4])

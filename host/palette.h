@@ -9,7 +9,7 @@
 
 #define FB_PALETTE_ENTRIES   256
 #define FB_PALETTE_MAX_STOPS 16
-#define FB_PALETTE_NAMES     "night|nebula|aurora|ice|ember|grey"
+#define FB_PALETTE_NAMES     "night|nebula|aurora|ice|ember|grey|foliage|blossom"
 
 typedef struct fb_palette_spec {
     int named;       /* index into FB_PALETTE_NAMES, used when neither below is given */

@@ -12,11 +12,29 @@
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
+#include <ctype.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-typedef enum ktype { T_INT, T_NUM, T_BOOL, T_ENUM, T_NAME, T_VEC2, T_SIZE, T_LAYERS, T_TYPE, T_NUMLIST, T_STOPS } ktype;
+typedef enum ktype {
+    T_INT,
+    T_NUM,
+    T_BOOL,
+    T_ENUM,
+    T_NAME,
+    T_VEC2,
+    T_SIZE,
+    T_LAYERS,
+    T_TYPE,
+    T_NUMLIST,
+    T_STOPS,
+    T_STRING, /* any non-empty string (a file path, an entry name) */
+    T_MAPS,   /* IFS maps: [[a, b, c, d, e, f(, p)], ...] */
+    T_BOUNDS, /* "auto" or [xmin, xmax, ymin, ymax] */
+    T_FRACS,  /* 1..64 numbers in [lo, hi] */
+    T_IFSREF, /* a preset name or a map list */
+} ktype;
 
 typedef struct keyspec {
     const char *key;
@@ -89,6 +107,40 @@ static const keyspec julia_keys[] = {
     {"half", T_BOOL, 0, 0, false, NULL, "true", "store R, G, B as half (flags: --half, --float)"},
 };
 
+static const keyspec ifs_keys[] = {
+    {"type", T_TYPE, 0, 0, false, NULL, NULL, "generator: \"ifs\""},
+    {"name", T_NAME, 0, 0, false, NULL, "\"plants\"",
+     "layer name; channels NAME.count, .density, .colour, .R, .G, .B, .A (flag: --layer)"},
+    {"preset", T_ENUM, 0, 0, false, FB_IFS_PRESETS, NULL, "built-in IFS (default fern when no maps or file)"},
+    {"maps", T_MAPS, -1e6, 1e6, false, NULL, NULL,
+     "affine maps [[a, b, c, d, e, f, p], ...]: x' = a x + b y + e, y' = c x + d y + f (flag: \"a,b,c,d,e,f,p;...\")"},
+    {"file", T_STRING, 0, 0, false, NULL, NULL, "a Fractint .ifs file (its maps are stored in the scene)"},
+    {"entry", T_STRING, 0, 0, false, NULL, NULL, "the entry of the .ifs file (flag: --name; default the first)"},
+    {"colors", T_FRACS, 0, 1, false, NULL, NULL, "colour coordinate of each map, in [0, 1] (default spread evenly)"},
+    {"condensation", T_IFSREF, -1e6, 1e6, false, NULL, NULL,
+     "condensation set C: a preset name or a map list; w0 sends any point onto C"},
+    {"condensation-probability", T_NUM, 0, 1, true, NULL, "0.5", "probability of the condensation map w0"},
+    {"points", T_INT, 0, 1e14, false, NULL, "0", "chaos-game steps in all (0: 64 per histogram cell)"},
+    {"skip", T_INT, 0, 1000000, false, NULL, "0",
+     "transient steps discarded after each (re)start (0: from the maps' mean contraction)"},
+    {"chains", T_INT, 0, 1048576, false, NULL, "0", "independent chains (0: from points and skip, at most 65536)"},
+    {"bounds", T_BOUNDS, -1e9, 1e9, false, NULL, "\"auto\"",
+     "frame XMIN,XMAX,YMIN,YMAX, or auto (from a short pre-run, square units)"},
+    {"oversample", T_INT, 1, 4, false, NULL, "1", "histogram at K x K the resolution, box-filtered down"},
+    {"palette", T_ENUM, 0, 0, false, FB_PALETTE_NAMES, "\"foliage\"", "named colour map"},
+    {"cosine", T_NUMLIST, -10, 10, false, NULL, NULL,
+     "cosine palette a + b cos(2 pi (c t + d)): 12 numbers aR,aG,aB,bR,bG,bB,cR,cG,cB,dR,dG,dB", 12},
+    {"stops", T_STOPS, 0, 1e3, false, NULL, NULL,
+     "gradient: [[t, r, g, b], ...], t rising from 0 to 1 (flag: \"t,r,g,b;t,r,g,b\")"},
+    {"brightness", T_NUM, 0, 1e3, false, NULL, "1.0", "scale of the log density (1: the 99.5th percentile is full)"},
+    {"gamma", T_NUM, 0, 10, true, NULL, "2.2", "density gamma"},
+    {"gamma-threshold", T_NUM, 0, 1, false, NULL, "0.01", "below this alpha the gamma curve is linear"},
+    {"vibrancy", T_NUM, 0, 1, false, NULL, "1.0", "1: gamma on alpha (saturated); 0: gamma per channel"},
+    {"highlight-power", T_NUM, -1, 100, false, NULL, "1.0",
+     "over-bright pixels: < 0 clip per channel, 0 keep hue, larger fade to white"},
+    {"half", T_BOOL, 0, 0, false, NULL, "true", "store R, G, B, A as half (flags: --half, --float)"},
+};
+
 #define NKEYS(a) ((int)(sizeof(a) / sizeof((a)[0])))
 
 static const keyspec *find_key(const keyspec *keys, int n, const char *key)
@@ -108,6 +160,11 @@ static bool kind_keys(const char *kind, const keyspec **keys, int *n)
     if (!strcmp(kind, "julia")) {
         *keys = julia_keys;
         *n = NKEYS(julia_keys);
+        return true;
+    }
+    if (!strcmp(kind, "ifs")) {
+        *keys = ifs_keys;
+        *n = NKEYS(ifs_keys);
         return true;
     }
     return false;
@@ -238,6 +295,7 @@ static fb_result verr(const vctx *v, const char *path, const char *fmt, ...)
     const char *leaf = strrchr(path, '.');
     leaf = leaf ? leaf + 1 : path;
     if (!strcmp(leaf, "name")) leaf = "layer";
+    if (!strcmp(leaf, "entry")) leaf = "name";
     return fb_fail(FB_ERR_USAGE, "--%s: %s", leaf, msg);
 }
 
@@ -277,6 +335,33 @@ static fb_result check_number(const vctx *v, const char *path, const keyspec *k,
     if (!in_range) {
         if (integer) return verr(v, path, "expected an integer in %.0f..%.0f, found %s", k->lo, k->hi, shown);
         return verr(v, path, "expected a number in %s%g, %g], found %s", k->lo_open ? "(" : "[", k->lo, k->hi, shown);
+    }
+    return FB_OK;
+}
+
+/* [[a, b, c, d, e, f(, p)], ...]: 1..64 maps of 6 or 7 finite numbers, p >= 0. */
+static fb_result check_maps(const vctx *v, const char *path, const keyspec *k, const json_t *j)
+{
+    char shown[64], sub[256];
+    show(j, shown, sizeof shown);
+    size_t n = json_is_array(j) ? json_array_size(j) : 0;
+    if (n < 1 || n > FB_IFS_MAX_MAPS)
+        return verr(v, path, "expected a list of 1 to %d maps [a, b, c, d, e, f, p], found %s", FB_IFS_MAX_MAPS, shown);
+    for (size_t i = 0; i < n; i++) {
+        const json_t *m = json_array_get(j, i);
+        size_t len = json_is_array(m) ? json_array_size(m) : 0;
+        snprintf(sub, sizeof sub, "%s[%zu]", path, i);
+        show(m, shown, sizeof shown);
+        if (len != 6 && len != 7)
+            return verr(v, sub, "expected a map [a, b, c, d, e, f] or [a, b, c, d, e, f, p], found %s", shown);
+        for (size_t c = 0; c < len; c++) {
+            const json_t *e = json_array_get(m, c);
+            double x = json_is_number(e) ? json_number_value(e) : NAN;
+            if (!isfinite(x) || x < k->lo || x > k->hi)
+                return verr(v, sub, "coefficient %c is not a finite number in %g..%g (found %s)", "abcdefp"[c], k -> lo,
+                            k -> hi, shown);
+            if (c == 6 && x < 0) return verr(v, sub, "probability %g is negative", x);
+        }
     }
     return FB_OK;
 }
@@ -364,6 +449,50 @@ static fb_result check_value(const vctx *v, const char *path, const keyspec *k, 
                         "expected 2 to %d stops [t, r, g, b] with t rising from 0 to exactly 1 and colours >= 0, "
                         "found %s",
                         FB_PALETTE_MAX_STOPS, shown);
+        return FB_OK;
+    }
+    case T_STRING:
+        if (!json_is_string(j) || !*json_string_value(j) || strlen(json_string_value(j)) >= 4096)
+            return verr(v, path, "expected a non-empty string, found %s", shown);
+        return FB_OK;
+    case T_IFSREF:
+        if (json_is_string(j)) {
+            if (!enum_index(FB_IFS_PRESETS, json_string_value(j), &idx) || !strcmp(json_string_value(j), "population"))
+                return verr(v, path,
+                            "expected a preset name (fern|sierpinski|maple|tree|spiral) or a map list, "
+                            "found %s",
+                            shown);
+            return FB_OK;
+        }
+        return check_maps(v, path, k, j);
+    case T_MAPS:
+        return check_maps(v, path, k, j);
+    case T_BOUNDS: {
+        if (json_is_string(j) && !strcmp(json_string_value(j), "auto")) return FB_OK;
+        bool good = json_is_array(j) && json_array_size(j) == 4;
+        double b[4] = {0};
+        for (size_t i = 0; good && i < 4; i++) {
+            const json_t *e = json_array_get(j, i);
+            b[i] = json_is_number(e) ? json_number_value(e) : NAN;
+            good = isfinite(b[i]) && b[i] >= k->lo && b[i] <= k->hi;
+        }
+        if (!good || !(b[1] > b[0] && b[3] > b[2]))
+            return verr(v, path,
+                        "expected \"auto\" or [xmin, xmax, ymin, ymax] with xmin < xmax and ymin < ymax, "
+                        "found %s",
+                        shown);
+        return FB_OK;
+    }
+    case T_FRACS: {
+        size_t n = json_is_array(j) ? json_array_size(j) : 0;
+        bool good = n >= 1 && n <= FB_IFS_MAX_MAPS;
+        for (size_t i = 0; good && i < n; i++) {
+            const json_t *e = json_array_get(j, i);
+            double x = json_is_number(e) ? json_number_value(e) : NAN;
+            good = isfinite(x) && x >= k->lo && x <= k->hi;
+        }
+        if (!good)
+            return verr(v, path, "expected 1 to %d numbers in %g..%g, found %s", FB_IFS_MAX_MAPS, k->lo, k->hi, shown);
         return FB_OK;
     }
     case T_LAYERS:
@@ -464,6 +593,25 @@ static void vec2_of(const json_t *obj, const char *key, double out[2])
     out[1] = json_number_value(json_array_get(a, 1));
 }
 
+/* The colour map keys shared by julia and ifs layers: palette, cosine, stops. */
+static fb_result parse_palette(const vctx *v, const char *path, const json_t *obj, fb_palette_spec *pal)
+{
+    enum_index(FB_PALETTE_NAMES, json_string_value(json_object_get(obj, "palette")), &pal->named);
+    json_t *cos_j = json_object_get(obj, "cosine"), *stops_j = json_object_get(obj, "stops");
+    if (cos_j && stops_j) {
+        char sub[256];
+        snprintf(sub, sizeof sub, "%s.stops", path);
+        return verr(v, sub, "give cosine or stops, not both");
+    }
+    pal->has_cosine = cos_j != NULL;
+    for (size_t i = 0; cos_j && i < 12; i++) pal->cosine[i] = json_number_value(json_array_get(cos_j, i));
+    pal->nstops = stops_j ? (int)json_array_size(stops_j) : 0;
+    for (int i = 0; i < pal->nstops; i++)
+        for (int c = 0; c < 4; c++)
+            pal->stops[i][c] = json_number_value(json_array_get(json_array_get(stops_j, (size_t)i), (size_t)c));
+    return FB_OK;
+}
+
 static fb_result parse_julia(const vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
 {
     /* The default grid is 3 units wide with square pixels, so it depends on the image size. */
@@ -481,19 +629,8 @@ static fb_result parse_julia(const vctx *v, const char *path, json_t *obj, const
     j->rotation = num(obj, "rotation");
     j->max_iter = (int)json_integer_value(json_object_get(obj, "max-iter"));
     j->bailout = num(obj, "bailout");
-    enum_index(FB_PALETTE_NAMES, json_string_value(json_object_get(obj, "palette")), &j->palette.named);
-    json_t *cos_j = json_object_get(obj, "cosine"), *stops_j = json_object_get(obj, "stops");
-    if (cos_j && stops_j) {
-        char sub[256];
-        snprintf(sub, sizeof sub, "%s.stops", path);
-        return verr(v, sub, "give cosine or stops, not both");
-    }
-    j->palette.has_cosine = cos_j != NULL;
-    for (size_t i = 0; cos_j && i < 12; i++) j->palette.cosine[i] = json_number_value(json_array_get(cos_j, i));
-    j->palette.nstops = stops_j ? (int)json_array_size(stops_j) : 0;
-    for (int i = 0; i < j->palette.nstops; i++)
-        for (int c = 0; c < 4; c++)
-            j->palette.stops[i][c] = json_number_value(json_array_get(json_array_get(stops_j, (size_t)i), (size_t)c));
+    rc = parse_palette(v, path, obj, &j->palette);
+    if (rc) return rc;
     j->turbulence = num(obj, "turbulence");
     j->turb_hurst = num(obj, "turbulence-hurst");
     j->turb_octaves = (int)json_integer_value(json_object_get(obj, "turbulence-octaves"));
@@ -512,6 +649,128 @@ static fb_result parse_julia(const vctx *v, const char *path, json_t *obj, const
         char sub[256];
         snprintf(sub, sizeof sub, "%s.scale", path);
         return verr(v, sub, "both sides of the grid must be positive");
+    }
+    return FB_OK;
+}
+
+/* A validated map list (T_MAPS) into an fb_ifs; a missing probability is -1. */
+static void maps_of(const json_t *j, fb_ifs *out)
+{
+    memset(out, 0, sizeof *out);
+    out->n = (int)json_array_size(j);
+    for (int k = 0; k < out->n; k++) {
+        const json_t *m = json_array_get(j, (size_t)k);
+        double c[7] = {0, 0, 0, 0, 0, 0, -1};
+        for (size_t i = 0; i < json_array_size(m); i++) c[i] = json_number_value(json_array_get(m, i));
+        out->m[k] = (fb_ifs_map){c[0], c[1], c[2], c[3], c[4], c[5], c[6]};
+    }
+}
+
+static json_t *maps_json(const fb_ifs *ifs)
+{
+    json_t *arr = json_array();
+    for (int k = 0; arr && k < ifs->n; k++) {
+        const fb_ifs_map *m = &ifs->m[k];
+        json_t *e = json_pack("[ffffff]", m->a, m->b, m->c, m->d, m->e, m->f);
+        if (e && m->p != -1) json_array_append_new(e, json_real(m->p));
+        json_array_append_new(arr, e);
+    }
+    return arr;
+}
+
+static fb_result check_ifs(const vctx *v, const char *path, const fb_ifs *ifs)
+{
+    int bad;
+    char msg[256], sub[256];
+    if (fb_ifs_valid(ifs, &bad, msg, sizeof msg)) return FB_OK;
+    if (bad >= 0)
+        snprintf(sub, sizeof sub, "%s[%d]", path, bad);
+    else
+        snprintf(sub, sizeof sub, "%s", path);
+    return verr(v, sub, "%s", msg);
+}
+
+static void spread_colors(const json_t *given, int n, double *out)
+{
+    for (int k = 0; k < n; k++)
+        out[k] = given ? json_number_value(json_array_get(given, (size_t)k)) : n > 1 ? (double)k / (n - 1) : 0.5;
+}
+
+static fb_result parse_ifs(const vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
+{
+    char sub[256];
+    fb_ifs_params *f = &L->ifs;
+    json_t *file = json_object_get(obj, "file"), *entry = json_object_get(obj, "entry");
+    int sources = (json_object_get(obj, "preset") != NULL) + (json_object_get(obj, "maps") != NULL) + (file != NULL);
+    if (sources > 1) {
+        snprintf(sub, sizeof sub, "%s.%s", path, file ? "file" : "maps");
+        return verr(v, sub, "give one of preset, maps or file");
+    }
+    if (entry && !file) {
+        snprintf(sub, sizeof sub, "%s.entry", path);
+        return verr(v, sub, "an entry name needs a file");
+    }
+    if (!sources) json_object_set_new(obj, "preset", json_string("fern"));
+    fb_result rc = check_object(v, path, obj, ifs_keys, NKEYS(ifs_keys), "an ifs layer");
+    if (rc) return rc;
+    snprintf(sub, sizeof sub, "%s.maps", path);
+    const char *preset = json_string_value(json_object_get(obj, "preset"));
+    if (file) {
+        /* The file's maps go into the stored scene, so that the bake can be reproduced without it. */
+        rc = fb_ifs_read_file(json_string_value(file), entry ? json_string_value(entry) : NULL, &f->maps);
+        if (rc) return rc;
+        json_t *mj = maps_json(&f->maps);
+        if (!mj) return fb_fail(FB_ERR_NOMEM, "out of memory");
+        json_object_set_new(obj, "maps", mj);
+        json_object_del(obj, "file");
+        json_object_del(obj, "entry");
+        snprintf(sub, sizeof sub, "%s.file", path);
+    } else if (preset) {
+        rc = fb_ifs_preset(preset, &f->maps, &f->cond, &f->has_cond);
+        if (rc) return rc;
+    } else {
+        maps_of(json_object_get(obj, "maps"), &f->maps);
+    }
+    if ((rc = check_ifs(v, sub, &f->maps))) return rc;
+
+    json_t *cond = json_object_get(obj, "condensation");
+    snprintf(sub, sizeof sub, "%s.condensation", path);
+    if (cond && f->has_cond) return verr(v, sub, "the population preset has its own condensation set");
+    if (cond) {
+        f->has_cond = true;
+        if (json_is_string(cond))
+            rc = fb_ifs_preset(json_string_value(cond), &f->cond, NULL, NULL);
+        else
+            maps_of(cond, &f->cond);
+        if (rc || (rc = check_ifs(v, sub, &f->cond))) return rc;
+    }
+    f->cond_p = num(obj, "condensation-probability");
+    json_t *colors = json_object_get(obj, "colors");
+    if (colors && (int)json_array_size(colors) != f->maps.n) {
+        snprintf(sub, sizeof sub, "%s.colors", path);
+        return verr(v, sub, "%zu colour coordinates for %d maps", json_array_size(colors), f->maps.n);
+    }
+    spread_colors(colors, f->maps.n, f->colors);
+    spread_colors(NULL, f->cond.n, f->cond_colors);
+    f->points = (double)json_integer_value(json_object_get(obj, "points"));
+    f->skip = (int)json_integer_value(json_object_get(obj, "skip"));
+    f->chains = (int)json_integer_value(json_object_get(obj, "chains"));
+    f->oversample = (int)json_integer_value(json_object_get(obj, "oversample"));
+    json_t *b = json_object_get(obj, "bounds");
+    f->auto_bounds = json_is_string(b);
+    for (size_t i = 0; !f->auto_bounds && i < 4; i++) f->bounds[i] = json_number_value(json_array_get(b, i));
+    if ((rc = parse_palette(v, path, obj, &f->palette))) return rc;
+    f->brightness = num(obj, "brightness");
+    f->gamma = num(obj, "gamma");
+    f->gamma_threshold = num(obj, "gamma-threshold");
+    f->vibrancy = num(obj, "vibrancy");
+    f->highlight_power = num(obj, "highlight-power");
+    L->half = boolean(obj, "half");
+    uint64_t cells = (uint64_t)s->width * s->height * (uint64_t)(f->oversample * f->oversample);
+    if (cells > (1ull << 28)) {
+        snprintf(sub, sizeof sub, "%s.oversample", path);
+        return verr(v, sub, "the histogram would have %llu cells (size x oversample^2); at most 2^28 are supported",
+                    (unsigned long long)cells);
     }
     return FB_OK;
 }
@@ -546,11 +805,14 @@ static fb_result parse_root(const vctx *v, json_t *root, fb_scene *s)
         } else if (!strcmp(t, "julia")) {
             L->kind = FB_LAYER_JULIA;
             rc = parse_julia(v, path, lj, s, L);
+        } else if (!strcmp(t, "ifs")) {
+            L->kind = FB_LAYER_IFS;
+            rc = parse_ifs(v, path, lj, s, L);
         } else {
             char sub[80], shown[64];
             snprintf(sub, sizeof sub, "%s.type", path);
             show(type, shown, sizeof shown);
-            rc = verr(v, sub, "unknown generator %s (available: \"fbm\", \"julia\")", shown);
+            rc = verr(v, sub, "unknown generator %s (available: \"fbm\", \"julia\", \"ifs\")", shown);
         }
         if (rc) return rc;
         snprintf(L->name, sizeof L->name, "%s", json_string_value(json_object_get(lj, "name")));
@@ -653,7 +915,10 @@ static const keyspec *flag_spec(const char *kind, const char *flag, bool *scene_
     const keyspec *keys;
     int n;
     *scene_level = false;
-    if (!strcmp(flag, "layer")) flag = "name";
+    if (!strcmp(flag, "name") && !strcmp(kind, "ifs"))
+        flag = "entry"; /* --file X.ifs --name ENTRY */
+    else if (!strcmp(flag, "layer"))
+        flag = "name";
     if (!strcmp(flag, "type") || !strcmp(flag, "layers")) return NULL;
     if (kind_keys(kind, &keys, &n)) {
         const keyspec *k = find_key(keys, n, flag);
@@ -762,6 +1027,51 @@ static json_t *flag_value(const keyspec *k, const char *flag, const char *s)
                 q = *e ? e + 1 : e;
             }
             json_array_append_new(arr, json_pack("[ffff]", t[0], t[1], t[2], t[3]));
+        }
+        return arr;
+    }
+    case T_MAPS:
+    case T_IFSREF: {
+        /* "a,b,c,d,e,f[,p];..." or, for a condensation set, a preset name */
+        if (k->type == T_IFSREF && (isalpha((unsigned char)*s))) return json_string(s);
+        json_t *arr = json_array();
+        const char *q = s;
+        while (*q) {
+            json_t *m = json_array();
+            for (int c = 0; c < 7; c++) {
+                char *e;
+                double x = strtod(q, &e);
+                if (e == q || !isfinite(x) || (*e != ',' && *e != ';' && *e != 0) || (c == 6 && *e == ',')) {
+                    json_decref(m);
+                    json_decref(arr);
+                    fb_fail(FB_ERR_USAGE, "--%s: expected maps a,b,c,d,e,f[,p];..., found \"%s\"", flag, s);
+                    return NULL;
+                }
+                json_array_append_new(m, json_real(x));
+                q = *e == ',' ? e + 1 : e;
+                if (*e != ',') break;
+            }
+            json_array_append_new(arr, m);
+            if (*q == ';') q++;
+        }
+        return arr;
+    }
+    case T_BOUNDS:
+    case T_FRACS: {
+        if (k->type == T_BOUNDS && !strcmp(s, "auto")) return json_string(s);
+        json_t *arr = json_array();
+        const char *q = s;
+        while (*q) {
+            char *e;
+            double x = strtod(q, &e);
+            if (e == q || !isfinite(x) || (*e != ',' && *e != 0)) {
+                json_decref(arr);
+                fb_fail(FB_ERR_USAGE, "--%s: expected comma-separated finite numbers%s, found \"%s\"", flag,
+                        k->type == T_BOUNDS ? " XMIN,XMAX,YMIN,YMAX or auto" : "", s);
+                return NULL;
+            }
+            json_array_append_new(arr, json_real(x));
+            q = *e ? e + 1 : e;
         }
         return arr;
     }

@@ -9,6 +9,7 @@
 
 #include "exrio.h"
 #include "fb.h"
+#include "ifs.h"
 #include "palette.h"
 
 #include <stdbool.h>
@@ -17,7 +18,7 @@
 #define FB_MAX_DIM    65536
 #define FB_MAX_PIXELS (1ull << 31)
 
-typedef enum fb_layer_kind { FB_LAYER_FBM = 0, FB_LAYER_JULIA = 1 } fb_layer_kind;
+typedef enum fb_layer_kind { FB_LAYER_FBM = 0, FB_LAYER_JULIA = 1, FB_LAYER_IFS = 2 } fb_layer_kind;
 
 typedef struct fb_fbm_params {
     unsigned noise; /* K_NOISE_* */
@@ -51,12 +52,30 @@ typedef struct fb_julia_params {
     int samples;
 } fb_julia_params;
 
+typedef struct fb_ifs_params {
+    fb_ifs maps; /* w1..wN (probabilities as given, or -1) */
+    fb_ifs cond; /* the condensation set's IFS when has_cond */
+    bool has_cond;
+    double cond_p;                  /* probability of the condensation map w0 */
+    double colors[FB_IFS_MAX_MAPS]; /* colour coordinate of each map of `maps` */
+    double cond_colors[FB_IFS_MAX_MAPS];
+    double points; /* total chaos-game steps (an integer up to 1e14) */
+    int skip;      /* transient steps after each (re)start */
+    int chains;
+    bool auto_bounds;
+    double bounds[4]; /* xmin, xmax, ymin, ymax */
+    int oversample;
+    fb_palette_spec palette;
+    double brightness, gamma, gamma_threshold, vibrancy, highlight_power;
+} fb_ifs_params;
+
 typedef struct fb_layer {
     fb_layer_kind kind;
     char name[64];
     bool half; /* store colour/height as half instead of float */
     fb_fbm_params fbm;
     fb_julia_params julia;
+    fb_ifs_params ifs;
 } fb_layer;
 
 typedef struct fb_scene {

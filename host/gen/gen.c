@@ -13,6 +13,8 @@ fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer)
         return fb_gen_fbm_init(g);
     case FB_LAYER_JULIA:
         return fb_gen_julia_init(g);
+    case FB_LAYER_IFS:
+        return fb_gen_ifs_init(g);
     }
     return fb_fail(FB_ERR_INTERNAL, "layer %s: no generator", layer->name);
 }
@@ -20,6 +22,8 @@ fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer)
 void fb_gen_fini(fb_gen *g)
 {
     if (!g) return;
+    if (g->fini) g->fini(g);
+    g->fini = NULL;
     free(g->owned);
     g->owned = NULL;
     g->input = NULL;

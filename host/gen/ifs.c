@@ -1,0 +1,504 @@
+/*
+ * The IFS plant generator: the chaos game of kernels/ifs.h on the GPU (shaders/ifs.comp) or on
+ * the native thread pool, into integer histograms of hits and quantised colour, then box-filtered
+ * to the image and tone-mapped on the host (docs/plants.md).
+ *
+ * Channels: NAME.count (uint hits), NAME.density (hits / plotted points per pixel), NAME.colour
+ * (mean colour coordinate), NAME.R, .G, .B (premultiplied) and .A.
+ */
+#include "../bake.h"
+#include "../gen.h"
+#include "../ifs.h"
+#include "../palette.h"
+#include "../progress.h"
+
+#include "../../kernels/ifs.h"
+#include "ifs_comp.h"
+
+#include <math.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+_Static_assert(sizeof(K_IfsMap) == 32, "std430 struct of 8 words");
+_Static_assert(sizeof(K_IfsChain) == 32, "std430 struct of 8 words");
+_Static_assert(sizeof(K_IfsParams) == 72 && sizeof(K_IfsParams) <= FB_GEN_MAX_PUSH, "push constants");
+
+/* Points per dispatch (all chains together): a few hundred ms on lavapipe, so that the progress bar
+ * moves and no single submission runs for long. */
+#define POINTS_PER_DISPATCH (1u << 25)
+
+typedef struct ifs_state {
+    K_IfsParams p;
+    K_IfsMap table[2 * K_IFS_MAX_MAPS];
+    uint32_t ntable;
+    uint32_t k; /* oversampling */
+    uint64_t points;
+    fb_ifs_stats stats;
+    /* the image-resolution results (prepare) */
+    uint32_t *count;
+    float *density, *colour;
+    fb_ifs_tone tone;
+} ifs_state;
+
+static ifs_state *state(const fb_gen *g)
+{
+    return g->owned;
+}
+
+/* ---- setup ---------------------------------------------------------------------------------- */
+
+/* Thresholds of one map list in [lo, 2^32): map k is picked when thr_k <= r < thr_k+1. */
+static void fill_table(const fb_ifs *ifs, const double *colors, uint64_t lo, K_IfsMap *out)
+{
+    double p[FB_IFS_MAX_MAPS], cum = 0;
+    fb_ifs_probabilities(ifs, p);
+    for (int k = 0; k < ifs->n; k++) {
+        const fb_ifs_map *m = &ifs->m[k];
+        double t = (double)lo + ((double)(1ull << 32) - (double)lo) * cum;
+        uint64_t thr = t >= 4294967295.0 ? 0xffffffffu : (uint64_t)llround(t);
+        out[k] = (K_IfsMap){(float)m->a, (float)m->b, (float)m->c,      (float)m->d,
+                            (float)m->e, (float)m->f, (float)colors[k], (uint32_t)thr};
+        cum += p[k];
+    }
+}
+
+/* A bound on the attractor's distance from the origin (and of a start in [-1, 1]^2). */
+static double attractor_radius(const fb_ifs *ifs)
+{
+    double r = 1.5;
+    for (int k = 0; k < ifs->n; k++) {
+        const fb_ifs_map *m = &ifs->m[k];
+        double s = fb_ifs_contraction(m), t = hypot(m->e, m->f);
+        double rk = t / (1 - s);
+        if (rk > r) r = rk;
+    }
+    return r;
+}
+
+/* The frame of `auto` bounds: a short deterministic pre-run on the host (the same kernel), its
+ * points' extent padded by 3% and widened to the image's aspect ratio (square units). */
+static void auto_bounds(const ifs_state *st, int width, int height, double b[4])
+{
+    K_IfsParams p = st->p;
+    const uint32_t chains = 256, steps = 2048;
+    p.skip = p.skip > 200 ? p.skip : 200;
+    double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+    for (uint32_t i = 0; i < chains; i++) {
+        K_IfsChain s = k_ifs_init(p, 0x80000000u + i);
+        for (uint32_t t = 0; t < p.skip + steps; t++) {
+            s = k_ifs_step(p, s, 0x80000000u + i, t, st->table);
+            if (s.status != K_IFS_PLOT) continue;
+            x0 = fmin(x0, s.x), x1 = fmax(x1, s.x), y0 = fmin(y0, s.y), y1 = fmax(y1, s.y);
+        }
+    }
+    if (!(x1 >= x0)) x0 = -1, x1 = 1, y0 = -1, y1 = 1; /* every chain restarted: cannot happen for valid maps */
+    double w = x1 - x0, h = y1 - y0, cx = (x0 + x1) / 2, cy = (y0 + y1) / 2;
+    double span = fmax(w, h) * 1e-3 + 1e-9; /* a point set or a line still gets a frame */
+    w = fmax(w, span) * 1.06;
+    h = fmax(h, span) * 1.06;
+    double aspect = (double)width / height;
+    if (w / h < aspect)
+        w = h * aspect;
+    else
+        h = w / aspect;
+    b[0] = cx - w / 2, b[1] = cx + w / 2, b[2] = cy - h / 2, b[3] = cy + h / 2;
+}
+
+/* ---- the chaos game, natively --------------------------------------------------------------- */
+
+typedef struct native_hist {
+    uint32_t *hits; /* cells */
+    uint64_t *sum;  /* colour sums */
+} native_hist;
+
+typedef struct native_run {
+    const ifs_state *st;
+    K_IfsParams p;
+    K_IfsChain *chains;
+    uint32_t (*counts)[4];
+    native_hist *hist; /* one per task when `private`, else one shared (atomic adds) */
+    bool private_hist;
+    int ntasks;
+} native_run;
+
+static void native_task(void *ctx, int task)
+{
+    native_run *r = ctx;
+    const K_IfsParams p = r->p;
+    uint32_t c0 = (uint32_t)((uint64_t)p.chains * (uint64_t)task / (uint64_t)r->ntasks);
+    uint32_t c1 = (uint32_t)((uint64_t)p.chains * (uint64_t)(task + 1) / (uint64_t)r->ntasks);
+    native_hist *h = r->private_hist ? &r->hist[task] : &r->hist[0];
+    for (uint32_t i = c0; i < c1; i++) {
+        uint32_t total = k_ifs_total(p, i), end = total < p.step0 + p.nsteps ? total : p.step0 + p.nsteps;
+        uint32_t n[4] = {0, 0, 0, 0};
+        if (p.step0 < end) {
+            K_IfsChain s = p.step0 == 0 ? k_ifs_init(p, i) : r->chains[i];
+            for (uint32_t t = p.step0; t < end; t++) {
+                s = k_ifs_step(p, s, i, t, r->st->table);
+                if (s.status == K_IFS_PLOT) {
+                    uint32_t cell = k_ifs_cell(p, s.x, s.y);
+                    if (cell == K_IFS_NONE) {
+                        n[0]++;
+                    } else if (r->private_hist) {
+                        h->hits[cell]++;
+                        h->sum[cell] += k_ifs_quant(s.c);
+                    } else {
+                        atomic_fetch_add_explicit((_Atomic uint32_t *)&h->hits[cell], 1u, memory_order_relaxed);
+                        atomic_fetch_add_explicit((_Atomic uint64_t *)&h->sum[cell], k_ifs_quant(s.c),
+                                                  memory_order_relaxed);
+                    }
+                } else {
+                    n[1]++;
+                    n[2] += s.status == K_IFS_RESTART;
+                }
+            }
+            r->chains[i] = s;
+        }
+        memcpy(r->counts[i], n, sizeof n);
+    }
+}
+
+typedef struct merge_ctx {
+    native_hist *hist;
+    int nhist;
+    size_t cells;
+    int ntasks;
+} merge_ctx;
+
+static void merge_task(void *ctx, int task)
+{
+    merge_ctx *m = ctx;
+    size_t c0 = m->cells * (size_t)task / (size_t)m->ntasks, c1 = m->cells * (size_t)(task + 1) / (size_t)m->ntasks;
+    for (int h = 1; h < m->nhist; h++)
+        for (size_t c = c0; c < c1; c++) {
+            m->hist[0].hits[c] += m->hist[h].hits[c];
+            m->hist[0].sum[c] += m->hist[h].sum[c];
+        }
+}
+
+/* ---- from histogram cells to image pixels ----------------------------------------------------- */
+
+/* Sums the K x K cells of each pixel; hits[] and the colour sum accessor come from either backend. */
+typedef uint64_t (*sum_at_fn)(const void *ctx, size_t cell);
+
+static fb_result reduce(ifs_state *st, int width, int height, const uint32_t *hits, sum_at_fn sum_at,
+                        const void *sum_ctx)
+{
+    size_t n = (size_t)width * height;
+    uint32_t k = st->k, hw = st->p.hist_w;
+    st->count = malloc(n * sizeof *st->count);
+    st->density = malloc(n * sizeof *st->density);
+    st->colour = malloc(n * sizeof *st->colour);
+    if (!st->count || !st->density || !st->colour) return fb_fail(FB_ERR_NOMEM, "out of memory for the plant layer");
+    uint64_t total = 0;
+    for (int y = 0; y < height; y++)
+        for (int x = 0; x < width; x++) {
+            uint64_t c = 0, s = 0;
+            for (uint32_t j = 0; j < k; j++)
+                for (uint32_t i = 0; i < k; i++) {
+                    size_t cell = ((size_t)y * k + j) * hw + (size_t)x * k + i;
+                    c += hits[cell];
+                    s += sum_at(sum_ctx, cell);
+                }
+            size_t at = (size_t)y * width + x;
+            total += c;
+            if (c > 0xffffffffu) {
+                st->stats.saturated++;
+                c = 0xffffffffu;
+            }
+            st->count[at] = (uint32_t)c;
+            st->colour[at] = c ? (float)((double)s / (255.0 * (double)c)) : 0.0f;
+        }
+    st->stats.hits = total;
+    /* density: hits per pixel relative to the plotted points spread evenly over the frame */
+    uint64_t plotted = st->stats.hits + st->stats.outside;
+    double inv_mean = plotted ? (double)n / (double)plotted : 0;
+    for (size_t i = 0; i < n; i++) st->density[i] = (float)(st->count[i] * inv_mean);
+    st->tone.dref = fb_ifs_density_ref(st->density, n);
+    return FB_OK;
+}
+
+static uint64_t sum_native(const void *ctx, size_t cell)
+{
+    return ((const uint64_t *)ctx)[cell];
+}
+
+typedef struct gpu_sums {
+    const uint32_t *lo, *hi;
+} gpu_sums;
+
+static uint64_t sum_gpu(const void *ctx, size_t cell)
+{
+    const gpu_sums *g = ctx;
+    return (uint64_t)g->hi[cell] << 32 | g->lo[cell];
+}
+
+/* ---- prepare: the whole chaos game ------------------------------------------------------------ */
+
+static uint32_t max_total(const K_IfsParams *p)
+{
+    return p->base + (p->extra ? 1u : 0u);
+}
+
+static void add_counts(ifs_state *st, const uint32_t (*counts)[4], uint32_t chains)
+{
+    for (uint32_t i = 0; i < chains; i++) {
+        st->stats.outside += counts[i][0];
+        st->stats.discarded += counts[i][1];
+        st->stats.restarts += counts[i][2];
+    }
+}
+
+static fb_result prepare_native(fb_gen *g, fb_engine *e, fb_progress *prog)
+{
+    ifs_state *st = state(g);
+    const fb_scene *s = g->scene;
+    size_t cells = (size_t)st->p.hist_w * st->p.hist_h;
+    int threads = e->pool ? fb_pool_threads(e->pool) : 1;
+    /* Private histograms per task (plain adds) when they fit in 1 GiB, else one with atomic adds:
+     * the sums, and so the result, are the same either way. */
+    bool priv = threads > 1 && (uint64_t)threads * cells * 12 <= (1ull << 30);
+    int nhist = priv ? threads : 1;
+    native_hist *hist = calloc((size_t)nhist, sizeof *hist);
+    K_IfsChain *chains = malloc(st->p.chains * sizeof *chains);
+    uint32_t(*counts)[4] = malloc(st->p.chains * sizeof *counts);
+    fb_result rc = FB_OK;
+    if (!hist || !chains || !counts) rc = fb_fail(FB_ERR_NOMEM, "out of memory for the chaos game");
+    for (int h = 0; h < nhist && !rc; h++) {
+        hist[h].hits = calloc(cells, sizeof *hist[h].hits);
+        hist[h].sum = calloc(cells, sizeof *hist[h].sum);
+        if (!hist[h].hits || !hist[h].sum) rc = fb_fail(FB_ERR_NOMEM, "out of memory for the histogram");
+    }
+    native_run run = {.st = st,
+                      .p = st->p,
+                      .chains = chains,
+                      .counts = counts,
+                      .hist = hist,
+                      .private_hist = priv,
+                      .ntasks = priv ? threads : threads * 8};
+    uint32_t last = max_total(&st->p);
+    for (uint32_t step0 = 0; step0 < last && !rc; step0 += st->p.nsteps) {
+        run.p.step0 = step0;
+        if (e->pool)
+            fb_pool_run(e->pool, run.ntasks, native_task, &run);
+        else
+            for (int t = 0; t < run.ntasks; t++) native_task(&run, t);
+        add_counts(st, (const uint32_t(*)[4])counts, st->p.chains);
+        uint64_t done = (uint64_t)(step0 + st->p.nsteps < last ? step0 + st->p.nsteps : last) * st->p.chains;
+        fb_progress_update(prog, done < st->points ? done : st->points, st->points);
+    }
+    if (!rc && nhist > 1) {
+        merge_ctx m = {hist, nhist, cells, threads * 4};
+        fb_pool_run(e->pool, m.ntasks, merge_task, &m);
+    }
+    if (!rc) rc = reduce(st, s->width, s->height, hist[0].hits, sum_native, hist[0].sum);
+    for (int h = 0; hist && h < nhist; h++) {
+        free(hist[h].hits);
+        free(hist[h].sum);
+    }
+    free(hist);
+    free(chains);
+    free(counts);
+    return rc;
+}
+
+enum { B_MAPS, B_CHAINS, B_COUNTS, B_HITS, B_LO, B_HI, NBUF };
+
+static fb_result prepare_vulkan(fb_gen *g, fb_engine *e, fb_progress *prog, double *gpu_seconds)
+{
+    ifs_state *st = state(g);
+    vkc_context *vk = e->vk;
+    size_t cells = (size_t)st->p.hist_w * st->p.hist_h;
+    uint64_t range = vkc_info(vk)->max_storage_buffer_range;
+    if ((uint64_t)cells * 4 > range)
+        return fb_fail(FB_ERR_INPUT,
+                       "layer %s: a histogram of %zu cells needs %zu MiB per buffer; this device allows %llu MiB "
+                       "(lower --oversample or the size, or use --backend native)",
+                       g->layer->name, cells, cells * 4 >> 20, (unsigned long long)(range >> 20));
+    vkc_pipeline *pipe = NULL;
+    vkc_job *job = NULL;
+    vkc_buffer *buf[NBUF] = {0};
+    uint32_t spec[1] = {st->p.cmaps > 0};
+    fb_result rc =
+        vkc_pipeline_create(vk,
+                            &(vkc_pipeline_desc){FB_SPV(ifs_comp), .push_size = sizeof(K_IfsParams), .buffers = NBUF,
+                                                 .spec = spec, .nspec = 1, .name = g->layer->name},
+                            &pipe);
+    const uint64_t sizes[NBUF] = {sizeof(K_IfsMap) * st->ntable,
+                                  sizeof(K_IfsChain) * (uint64_t)st->p.chains,
+                                  16ull * st->p.chains,
+                                  4ull * cells,
+                                  4ull * cells,
+                                  4ull * cells};
+    for (int b = 0; b < NBUF && !rc; b++) rc = vkc_buffer_create(vk, sizes[b], &buf[b]);
+    if (!rc) rc = vkc_buffer_upload(vk, buf[B_MAPS], st->table, sizes[B_MAPS]);
+    void *zero = rc ? NULL : calloc(cells, 4);
+    if (!rc && !zero) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    for (int b = B_HITS; b <= B_HI && !rc; b++) rc = vkc_buffer_upload(vk, buf[b], zero, sizes[b]);
+    free(zero);
+    if (!rc) rc = vkc_job_create(vk, pipe, &job);
+    uint32_t last = max_total(&st->p);
+    for (uint32_t step0 = 0; step0 < last && !rc; step0 += st->p.nsteps) {
+        K_IfsParams p = st->p;
+        p.step0 = step0;
+        uint32_t groups[3] = {(p.chains + 63) / 64, 1, 1};
+        double t = -1;
+        rc = vkc_job_submit(vk, job, buf, NBUF, &p, groups);
+        if (!rc) rc = vkc_job_wait(vk, job, &t);
+        if (t > 0) *gpu_seconds += t;
+        if (!rc) add_counts(st, vkc_buffer_data(buf[B_COUNTS]), p.chains);
+        uint64_t done = (uint64_t)(step0 + p.nsteps < last ? step0 + p.nsteps : last) * p.chains;
+        fb_progress_update(prog, done < st->points ? done : st->points, st->points);
+    }
+    if (!rc) {
+        gpu_sums sums = {vkc_buffer_data(buf[B_LO]), vkc_buffer_data(buf[B_HI])};
+        rc = reduce(st, g->scene->width, g->scene->height, vkc_buffer_data(buf[B_HITS]), sum_gpu, &sums);
+    }
+    vkc_job_destroy(vk, &job);
+    for (int b = 0; b < NBUF; b++) vkc_buffer_destroy(vk, &buf[b]);
+    vkc_pipeline_destroy(vk, &pipe);
+    return rc;
+}
+
+static fb_result ifs_prepare(fb_gen *g, fb_engine *e, bool progress)
+{
+    ifs_state *st = state(g);
+    fb_progress prog;
+    char label[96];
+    snprintf(label, sizeof label, "%s: chaos game", g->layer->name);
+    fb_progress_init(&prog, progress, label, "pts");
+    double t0 = fb_now(), gpu = -1;
+    memset(&st->stats, 0, sizeof st->stats);
+    st->stats.points = st->points;
+    fb_result rc =
+        e->kind == FB_BACKEND_VULKAN ? (gpu = 0, prepare_vulkan(g, e, &prog, &gpu)) : prepare_native(g, e, &prog);
+    fb_progress_finish(&prog);
+    st->stats.seconds = fb_now() - t0;
+    st->stats.gpu_seconds = gpu;
+    g->prepare_gpu_seconds = gpu;
+    if (rc) return rc;
+    const fb_ifs_stats *x = &st->stats;
+    fb_log(FB_LOG_INFO,
+           "%s: %llu points: %llu hits, %llu outside the frame, %llu discarded (transient), %llu restarts, %.3g "
+           "Mpts/s",
+           g->layer->name, (unsigned long long)x->points, (unsigned long long)x->hits, (unsigned long long)x->outside,
+           (unsigned long long)x->discarded, (unsigned long long)x->restarts, (double)x->points / x->seconds * 1e-6);
+    if (x->restarts)
+        fb_log(FB_LOG_WARN, "%s: %llu chains left the finite range and were restarted", g->layer->name,
+               (unsigned long long)x->restarts);
+    if (x->saturated)
+        fb_log(FB_LOG_WARN, "%s: %llu pixels had more than 2^32 hits; their count is saturated", g->layer->name,
+               (unsigned long long)x->saturated);
+    return FB_OK;
+}
+
+/* ---- rows ------------------------------------------------------------------------------------- */
+
+static void ifs_rows(const fb_gen *g, int y0, int n, void *const *planes)
+{
+    const ifs_state *st = state(g);
+    size_t w = (size_t)g->scene->width, at = (size_t)y0 * w, len = (size_t)n * w;
+    memcpy(planes[0], st->count + at, len * 4);
+    memcpy(planes[1], st->density + at, len * 4);
+    memcpy(planes[2], st->colour + at, len * 4);
+    fb_ifs_tonemap_row(&st->tone, st->density + at, st->colour + at, len, planes[3], planes[4], planes[5], planes[6]);
+}
+
+static void ifs_fini(fb_gen *g)
+{
+    ifs_state *st = state(g);
+    if (!st) return;
+    free(st->count);
+    free(st->density);
+    free(st->colour);
+}
+
+const fb_ifs_stats *fb_gen_ifs_stats(const fb_gen *g)
+{
+    return g->layer->kind == FB_LAYER_IFS && g->owned ? &state(g)->stats : NULL;
+}
+
+fb_result fb_gen_ifs_init(fb_gen *g)
+{
+    const fb_scene *s = g->scene;
+    const fb_ifs_params *f = &g->layer->ifs;
+    ifs_state *st = calloc(1, sizeof *st);
+    if (!st) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    g->owned = st;
+    g->fini = ifs_fini;
+    K_IfsParams *p = &st->p;
+    st->k = (uint32_t)f->oversample;
+    p->seed = s->seed;
+    p->nmaps = (uint32_t)f->maps.n;
+    p->cmaps = f->has_cond ? (uint32_t)f->cond.n : 0u;
+    uint64_t lo = f->has_cond ? (uint64_t)llround(f->cond_p * 4294967296.0) : 0;
+    if (lo > 0xffffffffu) lo = 0xffffffffu;
+    fill_table(&f->maps, f->colors, lo, st->table);
+    if (f->has_cond) fill_table(&f->cond, f->cond_colors, 0, st->table + p->nmaps);
+    st->table[0].thr = (uint32_t)lo; /* below it: the condensation map w0 */
+    st->ntable = p->nmaps + p->cmaps;
+    p->skip = (uint32_t)(f->skip ? f->skip : fb_ifs_auto_skip(&f->maps));
+    if (f->has_cond && !f->skip) {
+        uint32_t cs = (uint32_t)fb_ifs_auto_skip(&f->cond);
+        if (cs > p->skip) p->skip = cs;
+    }
+    double radius = attractor_radius(&f->maps);
+    if (f->has_cond) radius += attractor_radius(&f->cond);
+    p->limit = (float)(radius * 1e3);
+    p->hist_w = (uint32_t)s->width * st->k;
+    p->hist_h = (uint32_t)s->height * st->k;
+
+    uint64_t cells = (uint64_t)p->hist_w * p->hist_h;
+    st->points = f->points > 0 ? (uint64_t)f->points : 64 * cells;
+    uint64_t chains = (uint64_t)f->chains;
+    if (!chains) {
+        chains = st->points / (32ull * (p->skip ? p->skip : 1));
+        chains = chains > 65536 ? 65536 : chains >= 64 ? chains - chains % 64 : chains ? chains : 1;
+    }
+    if (st->points / chains >= (1ull << 31))
+        return fb_fail(FB_ERR_INPUT,
+                       "layer %s: %llu points over %llu chains is more than 2^31 steps per chain; use "
+                       "more chains",
+                       g->layer->name, (unsigned long long)st->points, (unsigned long long)chains);
+    p->chains = (uint32_t)chains;
+    p->base = (uint32_t)(st->points / chains);
+    p->extra = (uint32_t)(st->points % chains);
+    p->nsteps = POINTS_PER_DISPATCH / p->chains ? POINTS_PER_DISPATCH / p->chains : 1;
+
+    double b[4];
+    if (f->auto_bounds)
+        auto_bounds(st, s->width, s->height, b);
+    else
+        memcpy(b, f->bounds, sizeof b);
+    st->stats.bounds[0] = b[0], st->stats.bounds[1] = b[1], st->stats.bounds[2] = b[2], st->stats.bounds[3] = b[3];
+    p->x0 = (float)b[0];
+    p->y0 = (float)b[3];
+    p->sx = (float)(p->hist_w / (b[1] - b[0]));
+    p->sy = (float)(p->hist_h / (b[3] - b[2]));
+    st->stats.chains = p->chains;
+    st->stats.skip = p->skip;
+
+    fb_ifs_tone *t = &st->tone;
+    t->brightness = f->brightness;
+    t->gamma = f->gamma;
+    t->threshold = f->gamma_threshold;
+    t->vibrancy = f->vibrancy;
+    t->highlight = f->highlight_power;
+    fb_palette_build(&f->palette, t->palette);
+
+    static const char *const suffix[7] = {"count", "density", "colour", "R", "G", "B", "A"};
+    exrio_type colour = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
+    const exrio_type types[7] = {EXRIO_UINT, EXRIO_FLOAT, EXRIO_FLOAT, colour, colour, colour, colour};
+    g->nchannels = 7;
+    for (int c = 0; c < 7; c++) {
+        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        g->channel_types[c] = types[c];
+    }
+    g->preview_channel = 1;
+    g->preview_rgb = 3;
+    g->native_rows = ifs_rows;
+    g->prepare = ifs_prepare;
+    return FB_OK;
+}

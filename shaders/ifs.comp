@@ -1,0 +1,58 @@
+#version 450
+// The chaos game: one invocation per chain, `nsteps` steps per dispatch, every plotted point
+// splatted into integer histograms with atomics (order-independent sums). The math is
+// kernels/ifs.h; host/gen/ifs.c runs the same loop natively.
+#extension GL_GOOGLE_include_directive : require
+#define K_GLSL 1
+#include "../kernels/common.h"
+
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
+
+// Condensation on or off, fixed per pipeline: without it the second chain is folded away.
+layout(constant_id = 0) const uint CONDENSATION = 0u;
+
+#define K_IFS_MAPS_BUFFER layout(std430, set = 0, binding = 0) readonly buffer Maps { K_IfsMap m[]; } maps;
+#define k_ifs_maps maps.m
+#include "../kernels/ifs.h"
+
+layout(push_constant) uniform Push { K_IfsParams p; } pc;
+
+layout(std430, set = 0, binding = 1) buffer Chains { K_IfsChain s[]; } chains;
+// per chain, this dispatch: points outside the frame, points discarded, restarts, (unused)
+layout(std430, set = 0, binding = 2) writeonly buffer Counts { uvec4 v[]; } counts;
+layout(std430, set = 0, binding = 3) buffer Hits { uint v[]; } hits;
+layout(std430, set = 0, binding = 4) buffer SumLo { uint v[]; } sum_lo;
+layout(std430, set = 0, binding = 5) buffer SumHi { uint v[]; } sum_hi;
+
+void main()
+{
+    uint i = gl_GlobalInvocationID.x;
+    K_IfsParams p = pc.p;
+    if (i >= p.chains) return;
+    if (CONDENSATION == 0u) p.cmaps = 0u;
+    uint total = k_ifs_total(p, i);
+    uint end = min(total, p.step0 + p.nsteps);
+    uvec4 n = uvec4(0u);
+    if (p.step0 < end) {
+        K_IfsChain s = p.step0 == 0u ? k_ifs_init(p, i) : chains.s[i];
+        for (uint t = p.step0; t < end; t++) {
+            s = k_ifs_step(p, s, i, t);
+            if (s.status == K_IFS_PLOT) {
+                uint cell = k_ifs_cell(p, s.x, s.y);
+                if (cell == K_IFS_NONE) {
+                    n.x++;
+                } else {
+                    atomicAdd(hits.v[cell], 1u);
+                    uint q = k_ifs_quant(s.c);
+                    uint old = atomicAdd(sum_lo.v[cell], q);
+                    if (old + q < old) atomicAdd(sum_hi.v[cell], 1u); // the carry out of the low word
+                }
+            } else {
+                n.y++;
+                if (s.status == K_IFS_RESTART) n.z++;
+            }
+        }
+        chains.s[i] = s;
+    }
+    counts.v[i] = n;
+}
