@@ -156,10 +156,12 @@ fb_result fb_ifs_parse_text(const char *text, const char *origin, const char *en
             snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", names[0] ? ", " : "", name);
         double v[FB_IFS_MAX_MAPS * 7];
         int count = 0;
+        lexer close;
         for (;;) {
             lex_skip(&L);
             if (!*L.p) return lex_error(&L, "entry %s is not closed with '}'", name);
             if (*L.p == '}') {
+                close = L;
                 lex_advance(&L);
                 break;
             }
@@ -191,7 +193,7 @@ fb_result fb_ifs_parse_text(const char *text, const char *origin, const char *en
         if (!three_d && count % 7 != 0) {
             char what[160];
             snprintf(what, sizeof what, "entry %s has %d numbers; a 2D IFS has 7 per map (a b c d e f p)", name, count);
-            return lex_error(&L, "%s", what);
+            return lex_error(&close, "%s", what);
         }
         if (want && !three_d) {
             out->n = count / 7;

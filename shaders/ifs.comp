@@ -11,18 +11,47 @@ layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 // Condensation on or off, fixed per pipeline: without it the second chain is folded away.
 layout(constant_id = 0) const uint CONDENSATION = 0u;
 
-#define K_IFS_MAPS_BUFFER layout(std430, set = 0, binding = 0) readonly buffer Maps { K_IfsMap m[]; } maps;
+#define K_IFS_MAPS_BUFFER                                                                                              \
+    layout(std430, set = 0, binding = 0) readonly buffer Maps                                                          \
+    {                                                                                                                  \
+        K_IfsMap m[];                                                                                                  \
+    }                                                                                                                  \
+    maps;
 #define k_ifs_maps maps.m
 #include "../kernels/ifs.h"
 
-layout(push_constant) uniform Push { K_IfsParams p; } pc;
+layout(push_constant) uniform Push
+{
+    K_IfsParams p;
+}
+pc;
 
-layout(std430, set = 0, binding = 1) buffer Chains { K_IfsChain s[]; } chains;
+layout(std430, set = 0, binding = 1) buffer Chains
+{
+    K_IfsChain s[];
+}
+chains;
 // per chain, this dispatch: points outside the frame, points discarded, restarts, (unused)
-layout(std430, set = 0, binding = 2) writeonly buffer Counts { uvec4 v[]; } counts;
-layout(std430, set = 0, binding = 3) buffer Hits { uint v[]; } hits;
-layout(std430, set = 0, binding = 4) buffer SumLo { uint v[]; } sum_lo;
-layout(std430, set = 0, binding = 5) buffer SumHi { uint v[]; } sum_hi;
+layout(std430, set = 0, binding = 2) writeonly buffer Counts
+{
+    uvec4 v[];
+}
+counts;
+layout(std430, set = 0, binding = 3) buffer Hits
+{
+    uint v[];
+}
+hits;
+layout(std430, set = 0, binding = 4) buffer SumLo
+{
+    uint v[];
+}
+sum_lo;
+layout(std430, set = 0, binding = 5) buffer SumHi
+{
+    uint v[];
+}
+sum_hi;
 
 void main()
 {
@@ -34,7 +63,12 @@ void main()
     uint end = min(total, p.step0 + p.nsteps);
     uvec4 n = uvec4(0u);
     if (p.step0 < end) {
-        K_IfsChain s = p.step0 == 0u ? k_ifs_init(p, i) : chains.s[i];
+        // (not a ?: between a local and a buffer struct: glslang stores the wrong type for that)
+        K_IfsChain s;
+        if (p.step0 == 0u)
+            s = k_ifs_init(p, i);
+        else
+            s = chains.s[i];
         for (uint t = p.step0; t < end; t++) {
             s = k_ifs_step(p, s, i, t);
             if (s.status == K_IFS_PLOT) {

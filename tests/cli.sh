@@ -91,6 +91,49 @@ if "$FB" julia $S --alpha 0.5,0.25 -o j.exr --preview j.png 2> err.txt; then ok;
 valid_exr j.exr
 "$FB" info j.exr | grep -q "layer sky .*iter (uint)" && ok || bad "julia layer lacks sky.iter as uint"
 
+# ---- bad input: ifs ----
+I="ifs --size 96x64 --quiet --points 200000"
+expect_fail 2 "maps\[1\]: probability -0.5 is negative" o.exr -- $I --maps "0.5,0,0,0.5,0,0,0.5;0.5,0,0,0.5,1,0,-0.5" -o o.exr
+expect_fail 2 "probabilities sum to 0" o.exr -- $I --maps "0.5,0,0,0.5,0,0,0;0.5,0,0,0.5,1,0,0" -o o.exr
+expect_fail 2 "maps\[0\]: the map is not contractive" o.exr -- $I --maps "1.2,0,0,0.5,0,0;0.5,0,0,0.5,1,0" -o o.exr
+expect_fail 2 "expected maps" o.exr -- $I --maps "0.5,0,x" -o o.exr
+expect_fail 2 "every map or for none" o.exr -- $I --maps "0.5,0,0,0.5,0,0,0.5;0.5,0,0,0.5,1,0" -o o.exr
+printf '{"size": [64, 32], "layers": [{"type": "ifs",\n "maps": []}]}' > empty.json
+expect_fail 2 "empty.json:2: layers\[0\].maps: expected a list of 1 to 64 maps" o.exr -- render empty.json -o o.exr --quiet
+printf '{"size": [64, 32], "layers": [{"type": "ifs", "maps": [[0.5, 0, 0, 0.5, 0, 0],\n [0.5, 0, 0, 0.5, 1, NaN]]}]}' > nanmap.json
+expect_fail 2 "nanmap.json:2:.*malformed JSON" o.exr -- render nanmap.json -o o.exr --quiet
+expect_fail 2 "one of preset, maps or file" o.exr -- $I --preset fern --maps "0.5,0,0,0.5,0,0" -o o.exr
+expect_fail 2 "preset" o.exr -- $I --preset oak -o o.exr
+expect_fail 2 "bounds" o.exr -- $I --bounds 1,0,0,1 -o o.exr
+expect_fail 2 "bounds" o.exr -- $I --bounds 0,1,0 -o o.exr
+expect_fail 2 "oversample" o.exr -- $I --oversample 0 -o o.exr
+expect_fail 2 "points" o.exr -- $I --points -5 -o o.exr
+expect_fail 2 "points" o.exr -- $I --points 1e20 -o o.exr
+expect_fail 2 "colour coordinates for 4 maps" o.exr -- $I --colors 0,1 -o o.exr
+expect_fail 2 "own condensation set" o.exr -- $I --preset population --condensation tree -o o.exr
+expect_fail 2 "nofile.ifs: cannot open" o.exr -- $I --file nofile.ifs -o o.exr
+printf 'leaf {\n  .5 0 0 .5 0 0 .5\n  .5 0 0 .5 1 0 zz\n}\n' > broken.ifs
+expect_fail 2 "broken.ifs:3:17: expected a number, found \"zz\"" o.exr -- $I --file broken.ifs -o o.exr
+printf 'halves { .5 0 0 .5 0 0 .5 .5 0 0 .5 1 0 .5 }\nthirds {\n .33 0 0 .33 0 0 .3 .33 0 0 .33 .66 0 .3 .33 0 0 .33 .33 .5 .4\n}\n' > two.ifs
+expect_fail 2 "no 2D entry named \"quarters\" (entries: halves, thirds)" o.exr -- $I --file two.ifs --name quarters -o o.exr
+if "$FB" $I --file two.ifs --name thirds -o t.exr 2> err.txt; then ok; else bad "ifs from a file failed: $(cat err.txt)"; fi
+"$FB" info t.exr | grep -q '0.66' && ok || bad "the file's maps are not stored in the scene"
+"$FB" info t.exr | grep -q '"file"' && bad "the stored scene still names the file" || ok
+"$FB" $I --maps ".33,0,0,.33,0,0,.3;.33,0,0,.33,.66,0,.3;.33,0,0,.33,.33,.5,.4" -o t2.exr --quiet
+"$FB" compare t.exr t2.exr > /dev/null && ok || bad "the same maps from a file and from --maps differ"
+if "$FB" ifs --size 96x64 --points 300000 --preset population -o pop.exr --preview pop.png --quiet 2> err.txt; then ok; else bad "population failed: $(cat err.txt)"; fi
+[ -s err.txt ] && bad "a clean ifs bake wrote to stderr: $(cat err.txt)" || ok
+valid_exr pop.exr
+"$FB" info pop.exr > info3.txt
+grep -q "layer plants .*count (uint)" info3.txt && grep -q "A (half)" info3.txt && grep -q "density (float)" info3.txt && ok || bad "ifs layer channels: $(cat info3.txt)"
+[ "$(od -An -tu1 -j25 -N1 pop.png | tr -d ' ')" = "2" ] && ok || bad "the ifs preview is not an RGB PNG"
+# the same bits on every thread count, strip height and backend
+"$FB" $I --preset maple --oversample 2 --backend native --threads 1 --strip-rows 7 -o in1.exr
+"$FB" $I --preset maple --oversample 2 --backend native --threads 3 --strip-rows 64 -o in2.exr
+"$FB" $I --preset maple --oversample 2 -o iv1.exr
+cmp -s in1.exr in2.exr && ok || bad "ifs (native) depends on threads or strip rows"
+"$FB" compare in1.exr iv1.exr --max-abs 0 > /dev/null && ok || bad "ifs differs between lavapipe and native"
+
 # ---- bad input: scene files ----
 printf '{"size": [64, 32],\n "layers": [\n  {"type": "fbm", "octaves": 3,\n   "octavez": 2}\n ]\n}\n' > unknown.json
 expect_fail 2 "unknown.json:4: layers\[0\].octavez: unknown key" o.exr -- render unknown.json -o o.exr --quiet
