@@ -9,6 +9,8 @@
 
 #include "bake.h"
 #include "fbm_avx2.h"
+#include "ifs.h"
+#include "ifs_avx2.h"
 #include "julia_avx2.h"
 
 #include <stdio.h>
@@ -22,7 +24,8 @@ typedef struct bench_opts {
     const char *device;
     int threads;
     bool vulkan, native;
-    bool fbm, julia;
+    bool fbm, julia, ifs;
+    double points; /* ifs: chaos-game steps per run */
 } bench_opts;
 
 /* One benchmark: a one-layer scene, its work unit, and the work one image represents. */
@@ -158,6 +161,111 @@ static double time_reference(const fb_scene *s, int threads, uint64_t *total)
     return result;
 }
 
+/* ---- the chaos game -------------------------------------------------------------------------- */
+
+static void report_rate(const bench_opts *o, const char *backend, const char *mode, const char *device, int threads,
+                        double mpts, double gpu_mpts)
+{
+    if (o->json) {
+        printf("{\"generator\": \"ifs\", \"backend\": \"%s\", \"device\": \"%s\", \"mode\": \"%s\", \"unit\": "
+               "\"Mpts/s\", \"rate\": %.3f, \"size\": [%d, %d], \"points\": %.0f, \"threads\": %d",
+               backend, device, mode, mpts, o->width, o->height, o->points, threads);
+        if (gpu_mpts > 0) printf(", \"gpu_rate\": %.3f", gpu_mpts);
+        printf("}\n");
+    } else {
+        printf("%-6s %-7s %-18s %8.1f Mpts/s", "ifs", backend, mode, mpts);
+        if (gpu_mpts > 0) printf("  (timestamps: %.1f Mpts/s)", gpu_mpts);
+        printf("  [%s]\n", device);
+    }
+    fflush(stdout);
+}
+
+/* Median chaos-game seconds of three prepares after a warm-up (the game alone: no reduction to
+ * pixels, no tone mapping, no file). */
+static fb_result time_game(fb_engine *e, const fb_scene *s, double *sec, double *gpu)
+{
+    double w[3], g[3];
+    fb_result rc = FB_OK;
+    for (int i = -1; i < 3 && !rc; i++) {
+        fb_gen gen;
+        rc = fb_gen_init(&gen, s, &s->layers[0]);
+        if (!rc) rc = gen.prepare(&gen, e, false);
+        if (!rc && i >= 0) {
+            const fb_ifs_stats *st = fb_gen_ifs_stats(&gen);
+            w[i] = st->game_seconds;
+            g[i] = st->gpu_seconds;
+        }
+        fb_gen_fini(&gen);
+    }
+    if (rc) return rc;
+    qsort(w, 3, sizeof w[0], cmp_double);
+    qsort(g, 3, sizeof g[0], cmp_double);
+    *sec = w[1];
+    *gpu = g[1];
+    return FB_OK;
+}
+
+static fb_result run_ifs(const bench_opts *o, const fb_scene *s, const char *out)
+{
+    int threads = o->threads > 0 ? o->threads : fb_cpu_count();
+    double pts = o->points, sec, gpu;
+    fb_engine e;
+    fb_result rc = FB_OK;
+    if (o->vulkan) {
+        rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .device = o->device, .threads = o->threads},
+                            &e);
+        if (rc == FB_ERR_NODEVICE && o->native) {
+            fb_log(FB_LOG_WARN, "no Vulkan device: benchmarking the native backend only");
+            rc = FB_OK;
+        } else if (!rc) {
+            rc = time_game(&e, s, &sec, &gpu);
+            if (!rc) report_rate(o, "vulkan", "chaos-game", e.device, 0, pts / sec * 1e-6, gpu > 0 ? pts / gpu * 1e-6 : 0);
+            double wall;
+            if (!rc) rc = timed(&e, s, out, &wall, &gpu);
+            if (!rc) report_rate(o, "vulkan", "end-to-end-zip", e.device, 0, pts / wall * 1e-6, 0);
+            fb_engine_close(&e);
+        }
+    }
+    if (!rc && o->native) {
+        rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = o->threads}, &e);
+        if (!rc) {
+            rc = time_game(&e, s, &sec, &gpu);
+            if (!rc) report_rate(o, "native", "chaos-game", e.device, e.threads, pts / sec * 1e-6, 0);
+            fb_engine_close(&e);
+        }
+        /* the references: hand-vectorised AVX2 on every core, and the textbook loop on one */
+        fb_gen g;
+        if (!rc) rc = fb_gen_init(&g, s, &s->layers[0]);
+        if (rc) return rc;
+        size_t cells = (size_t)s->width * s->height;
+        uint32_t *hits = malloc(cells * 4);
+        uint64_t *sum = malloc(cells * 8);
+        if (!hits || !sum) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        if (!rc && fb_ifs_avx2_supported(g.params)) {
+            double t[4];
+            for (int k = 0; k < 4 && !rc; k++) {
+                double t0 = fb_now();
+                rc = fb_ifs_avx2_game(g.params, g.input, threads, hits, sum);
+                t[k] = fb_now() - t0;
+            }
+            qsort(t + 1, 3, sizeof t[0], cmp_double);
+            if (!rc) report_rate(o, "native", "avx2-reference", "hand-vectorised AVX2 C", threads, pts / t[2] * 1e-6, 0);
+        }
+        if (!rc) {
+            uint64_t n = (uint64_t)(pts / 8);
+            memset(hits, 0, cells * 4);
+            memset(sum, 0, cells * 8);
+            double t0 = fb_now();
+            fb_ifs_scalar_game(g.params, g.input, n, hits, sum);
+            report_rate(o, "native", "scalar-1-thread", "textbook C loop", 1, (double)n / (fb_now() - t0) * 1e-6, 0);
+        }
+        free(hits);
+        free(sum);
+        fb_gen_fini(&g);
+    }
+    return rc;
+}
+
 /* ---- one generator on every backend ----------------------------------------------------------- */
 
 static fb_result run_case(const bench_opts *o, bench_case *bc, fb_scene *s, const char *out)
@@ -212,7 +320,14 @@ static fb_result run_case(const bench_opts *o, bench_case *bc, fb_scene *s, cons
 
 fb_result fb_bench_main(int argc, char **argv)
 {
-    bench_opts o = {.width = 4096, .height = 4096, .vulkan = true, .native = true, .fbm = true, .julia = true};
+    bench_opts o = {.width = 4096,
+                    .height = 4096,
+                    .vulkan = true,
+                    .native = true,
+                    .fbm = true,
+                    .julia = true,
+                    .ifs = true,
+                    .points = 268435456};
     for (int i = 0; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--json")) {
@@ -231,7 +346,16 @@ fb_result fb_bench_main(int argc, char **argv)
         } else if (!strcmp(a, "--generator") && v) {
             o.fbm = !strcmp(v, "fbm");
             o.julia = !strcmp(v, "julia");
-            if (!o.fbm && !o.julia) return fb_fail(FB_ERR_USAGE, "--generator: expected fbm or julia, found \"%s\"", v);
+            o.ifs = !strcmp(v, "ifs");
+            if (!o.fbm && !o.julia && !o.ifs)
+                return fb_fail(FB_ERR_USAGE, "--generator: expected fbm, julia or ifs, found \"%s\"", v);
+            i++;
+        } else if (!strcmp(a, "--points") && v) {
+            char *end;
+            o.points = strtod(v, &end);
+            if (*end || !(o.points >= 1e6 && o.points <= 1e12))
+                return fb_fail(FB_ERR_USAGE, "--points: expected a number in 1e6..1e12, found \"%s\"", v);
+            o.points = (double)(uint64_t)o.points;
             i++;
         } else if (!strcmp(a, "--device") && v) {
             o.device = v;
@@ -241,7 +365,7 @@ fb_result fb_bench_main(int argc, char **argv)
             if (o.threads < 1) return fb_fail(FB_ERR_USAGE, "--threads: expected a positive integer, found \"%s\"", v);
             i++;
         } else if (!strcmp(a, "--help")) {
-            printf("usage: fractalbake bench [--json] [--size WxH] [--generator fbm|julia] [--backend vulkan|native] "
+            printf("usage: fractalbake bench [--json] [--size WxH] [--generator fbm|julia|ifs] [--points N] [--backend vulkan|native] "
                    "[--device D] [--threads N]\n");
             return FB_OK;
         } else {
@@ -281,6 +405,20 @@ fb_result fb_bench_main(int argc, char **argv)
                 printf("Julia %d x %d, c = -0.8+0.156i, max-iter 256 (rate: iterations executed); median of 3\n",
                        o.width, o.height);
             rc = run_case(&o, &bc, &s, out);
+        }
+        fb_scene_fini(&s);
+    }
+    if (!rc && o.ifs) {
+        snprintf(json, sizeof json,
+                 "{\"size\": [%d, %d], \"seed\": 1, \"layers\": [{\"type\": \"ifs\", \"preset\": \"fern\", "
+                 "\"points\": %.0f}]}",
+                 o.width, o.height, o.points);
+        rc = fb_scene_parse(json, NULL, &s);
+        if (!rc) {
+            if (!o.json)
+                printf("IFS chaos game: Barnsley's fern, %d x %d, %.0f points (rate: points per second); median of 3\n",
+                       o.width, o.height, o.points);
+            rc = run_ifs(&o, &s, out);
         }
         fb_scene_fini(&s);
     }

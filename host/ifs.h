@@ -55,7 +55,9 @@ typedef struct fb_ifs_stats {
     uint64_t points, hits, outside, discarded, restarts, saturated;
     uint32_t chains, skip;
     double bounds[4]; /* the frame used: xmin, xmax, ymin, ymax */
-    double seconds, gpu_seconds;
+    double seconds;      /* the whole prepare: chaos game, reduction to pixels, tone reference */
+    double game_seconds; /* the chaos game alone (dispatches, or native tasks) */
+    double gpu_seconds;  /* dispatch timestamps (vulkan), else -1 */
 } fb_ifs_stats;
 
 /* Tone mapping (after flam3): alpha from the log density, a gamma curve with a linear part below

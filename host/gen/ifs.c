@@ -13,6 +13,7 @@
 #include "../progress.h"
 
 #include "../../kernels/ifs.h"
+#include "ifs64_comp.h"
 #include "ifs_comp.h"
 
 #include <math.h>
@@ -180,11 +181,28 @@ static void merge_task(void *ctx, int task)
 
 /* ---- from histogram cells to image pixels ----------------------------------------------------- */
 
-/* Sums the K x K cells of each pixel; hits[] and the colour sum accessor come from either backend. */
-typedef uint64_t (*sum_at_fn)(const void *ctx, size_t cell);
+/* A histogram in whichever layout a backend left it: the hits and the colour sum of a cell. */
+typedef struct cells_view {
+    const uint32_t *hits;  /* 32-bit layouts */
+    const uint64_t *sum;   /* native: the colour sums */
+    const uint32_t *lo, *hi; /* vulkan, 32-bit atomics: colour sum words */
+    const uint64_t *packed;  /* vulkan, 64-bit atomics: hits | colour (mod 2^32) << 32 */
+    const uint32_t *carry;   /* ... and the carries out of the colour word */
+} cells_view;
 
-static fb_result reduce(ifs_state *st, int width, int height, const uint32_t *hits, sum_at_fn sum_at,
-                        const void *sum_ctx)
+static inline void cell_at(const cells_view *v, size_t cell, uint64_t *hits, uint64_t *sum)
+{
+    if (v->packed) {
+        *hits = (uint32_t)v->packed[cell];
+        *sum = (uint64_t)v->carry[cell] << 32 | (v->packed[cell] >> 32);
+    } else {
+        *hits = v->hits[cell];
+        *sum = v->sum ? v->sum[cell] : (uint64_t)v->hi[cell] << 32 | v->lo[cell];
+    }
+}
+
+/* Sums the K x K cells of each pixel. */
+static fb_result reduce(ifs_state *st, int width, int height, const cells_view *view)
 {
     size_t n = (size_t)width * height;
     uint32_t k = st->k, hw = st->p.hist_w;
@@ -199,8 +217,10 @@ static fb_result reduce(ifs_state *st, int width, int height, const uint32_t *hi
             for (uint32_t j = 0; j < k; j++)
                 for (uint32_t i = 0; i < k; i++) {
                     size_t cell = ((size_t)y * k + j) * hw + (size_t)x * k + i;
-                    c += hits[cell];
-                    s += sum_at(sum_ctx, cell);
+                    uint64_t hc, sc;
+                    cell_at(view, cell, &hc, &sc);
+                    c += hc;
+                    s += sc;
                 }
             size_t at = (size_t)y * width + x;
             total += c;
@@ -218,21 +238,6 @@ static fb_result reduce(ifs_state *st, int width, int height, const uint32_t *hi
     for (size_t i = 0; i < n; i++) st->density[i] = (float)(st->count[i] * inv_mean);
     st->tone.dref = fb_ifs_density_ref(st->density, n);
     return FB_OK;
-}
-
-static uint64_t sum_native(const void *ctx, size_t cell)
-{
-    return ((const uint64_t *)ctx)[cell];
-}
-
-typedef struct gpu_sums {
-    const uint32_t *lo, *hi;
-} gpu_sums;
-
-static uint64_t sum_gpu(const void *ctx, size_t cell)
-{
-    const gpu_sums *g = ctx;
-    return (uint64_t)g->hi[cell] << 32 | g->lo[cell];
 }
 
 /* ---- prepare: the whole chaos game ------------------------------------------------------------ */
@@ -279,6 +284,7 @@ static fb_result prepare_native(fb_gen *g, fb_engine *e, fb_progress *prog)
                       .private_hist = priv,
                       .ntasks = priv ? threads : threads * 8};
     uint32_t last = max_total(&st->p);
+    double t0 = fb_now();
     for (uint32_t step0 = 0; step0 < last && !rc; step0 += st->p.nsteps) {
         run.p.step0 = step0;
         if (e->pool)
@@ -293,7 +299,8 @@ static fb_result prepare_native(fb_gen *g, fb_engine *e, fb_progress *prog)
         merge_ctx m = {hist, nhist, cells, threads * 4};
         fb_pool_run(e->pool, m.ntasks, merge_task, &m);
     }
-    if (!rc) rc = reduce(st, s->width, s->height, hist[0].hits, sum_native, hist[0].sum);
+    st->stats.game_seconds = fb_now() - t0;
+    if (!rc) rc = reduce(st, s->width, s->height, &(cells_view){.hits = hist[0].hits, .sum = hist[0].sum});
     for (int h = 0; hist && h < nhist; h++) {
         free(hist[h].hits);
         free(hist[h].sum);
@@ -312,6 +319,9 @@ static fb_result prepare_vulkan(fb_gen *g, fb_engine *e, fb_progress *prog, doub
     vkc_context *vk = e->vk;
     size_t cells = (size_t)st->p.hist_w * st->p.hist_h;
     uint64_t range = vkc_info(vk)->max_storage_buffer_range;
+    /* One 64-bit atomic per point where the device has them and the packed histogram fits one
+     * buffer; else two 32-bit ones. The sums, and so the result, are the same. */
+    bool wide = vkc_info(vk)->int64_atomics && (uint64_t)cells * 8 <= range;
     if ((uint64_t)cells * 4 > range)
         return fb_fail(FB_ERR_INPUT,
                        "layer %s: a histogram of %zu cells needs %zu MiB per buffer; this device allows %llu MiB "
@@ -323,23 +333,26 @@ static fb_result prepare_vulkan(fb_gen *g, fb_engine *e, fb_progress *prog, doub
     uint32_t spec[1] = {st->p.cmaps > 0};
     fb_result rc =
         vkc_pipeline_create(vk,
-                            &(vkc_pipeline_desc){FB_SPV(ifs_comp), .push_size = sizeof(K_IfsParams), .buffers = NBUF,
+                            &(vkc_pipeline_desc){.spv = wide ? ifs64_comp : ifs_comp,
+                                                 .spv_size = wide ? sizeof ifs64_comp : sizeof ifs_comp,
+                                                 .push_size = sizeof(K_IfsParams), .buffers = NBUF,
                                                  .spec = spec, .nspec = 1, .name = g->layer->name},
                             &pipe);
     const uint64_t sizes[NBUF] = {sizeof(K_IfsMap) * st->ntable,
                                   sizeof(K_IfsChain) * (uint64_t)st->p.chains,
                                   16ull * st->p.chains,
+                                  (wide ? 8ull : 4ull) * cells,
                                   4ull * cells,
-                                  4ull * cells,
-                                  4ull * cells};
+                                  wide ? 16ull : 4ull * cells};
     for (int b = 0; b < NBUF && !rc; b++) rc = vkc_buffer_create(vk, sizes[b], &buf[b]);
     if (!rc) rc = vkc_buffer_upload(vk, buf[B_MAPS], st->table, sizes[B_MAPS]);
-    void *zero = rc ? NULL : calloc(cells, 4);
+    void *zero = rc ? NULL : calloc(cells, wide ? 8 : 4);
     if (!rc && !zero) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     for (int b = B_HITS; b <= B_HI && !rc; b++) rc = vkc_buffer_upload(vk, buf[b], zero, sizes[b]);
     free(zero);
     if (!rc) rc = vkc_job_create(vk, pipe, &job);
     uint32_t last = max_total(&st->p);
+    double t0 = fb_now();
     for (uint32_t step0 = 0; step0 < last && !rc; step0 += st->p.nsteps) {
         K_IfsParams p = st->p;
         p.step0 = step0;
@@ -352,9 +365,16 @@ static fb_result prepare_vulkan(fb_gen *g, fb_engine *e, fb_progress *prog, doub
         uint64_t done = (uint64_t)(step0 + p.nsteps < last ? step0 + p.nsteps : last) * p.chains;
         fb_progress_update(prog, done < st->points ? done : st->points, st->points);
     }
+    st->stats.game_seconds = fb_now() - t0;
     if (!rc) {
-        gpu_sums sums = {vkc_buffer_data(buf[B_LO]), vkc_buffer_data(buf[B_HI])};
-        rc = reduce(st, g->scene->width, g->scene->height, vkc_buffer_data(buf[B_HITS]), sum_gpu, &sums);
+        cells_view v = {.hits = vkc_buffer_data(buf[B_HITS]),
+                        .lo = vkc_buffer_data(buf[B_LO]),
+                        .hi = vkc_buffer_data(buf[B_HI])};
+        if (wide) {
+            v = (cells_view){.packed = vkc_buffer_data(buf[B_HITS]), .carry = vkc_buffer_data(buf[B_LO])};
+            if (*(const uint32_t *)vkc_buffer_data(buf[B_HI])) st->stats.saturated++;
+        }
+        rc = reduce(st, g->scene->width, g->scene->height, &v);
     }
     vkc_job_destroy(vk, &job);
     for (int b = 0; b < NBUF; b++) vkc_buffer_destroy(vk, &buf[b]);
@@ -479,6 +499,12 @@ fb_result fb_gen_ifs_init(fb_gen *g)
     p->sy = (float)(p->hist_h / (b[3] - b[2]));
     st->stats.chains = p->chains;
     st->stats.skip = p->skip;
+
+    /* for the benchmark's references: the kernel parameters and the map table */
+    _Static_assert(sizeof(K_IfsParams) <= sizeof(g->params), "params fit");
+    memcpy(g->params, p, sizeof *p);
+    g->input = st->table;
+    g->input_size = (uint32_t)(st->ntable * sizeof(K_IfsMap));
 
     fb_ifs_tone *t = &st->tone;
     t->brightness = f->brightness;

@@ -1,0 +1,23 @@
+/* The chaos-game benchmark's references (see ifs_avx2.c). `params` is a K_IfsParams, `maps` its
+ * K_IfsMap table. */
+#ifndef FB_IFS_AVX2_H
+#define FB_IFS_AVX2_H
+
+#include "fb.h"
+
+#include <stdbool.h>
+#include <stdint.h>
+
+/* True when this CPU has AVX2 and the run is one the loop implements (at most 8 maps, no
+ * condensation). */
+bool fb_ifs_avx2_supported(const void *params);
+
+/* The whole run of `params` (every chain, every step) on `threads` threads into hits[] and colour
+ * sums sum[] (hist_w * hist_h cells each, overwritten): the same sums as the kernel. */
+fb_result fb_ifs_avx2_game(const void *params, const void *maps, int threads, uint32_t *hits, uint64_t *sum);
+
+/* The textbook chaos game on one core: one chain of `points` steps, xorshift32, the first `skip`
+ * points discarded. Adds to hits[] and sum[]; returns the points plotted inside the frame. */
+uint64_t fb_ifs_scalar_game(const void *params, const void *maps, uint64_t points, uint32_t *hits, uint64_t *sum);
+
+#endif
