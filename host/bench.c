@@ -219,7 +219,8 @@ static fb_result run_ifs(const bench_opts *o, const fb_scene *s, const char *out
             rc = FB_OK;
         } else if (!rc) {
             rc = time_game(&e, s, &sec, &gpu);
-            if (!rc) report_rate(o, "vulkan", "chaos-game", e.device, 0, pts / sec * 1e-6, gpu > 0 ? pts / gpu * 1e-6 : 0);
+            if (!rc)
+                report_rate(o, "vulkan", "chaos-game", e.device, 0, pts / sec * 1e-6, gpu > 0 ? pts / gpu * 1e-6 : 0);
             double wall;
             if (!rc) rc = timed(&e, s, out, &wall, &gpu);
             if (!rc) report_rate(o, "vulkan", "end-to-end-zip", e.device, 0, pts / wall * 1e-6, 0);
@@ -249,7 +250,8 @@ static fb_result run_ifs(const bench_opts *o, const fb_scene *s, const char *out
                 t[k] = fb_now() - t0;
             }
             qsort(t + 1, 3, sizeof t[0], cmp_double);
-            if (!rc) report_rate(o, "native", "avx2-reference", "hand-vectorised AVX2 C", threads, pts / t[2] * 1e-6, 0);
+            if (!rc)
+                report_rate(o, "native", "avx2-reference", "hand-vectorised AVX2 C", threads, pts / t[2] * 1e-6, 0);
         }
         if (!rc) {
             uint64_t n = (uint64_t)(pts / 8);
@@ -365,7 +367,8 @@ fb_result fb_bench_main(int argc, char **argv)
             if (o.threads < 1) return fb_fail(FB_ERR_USAGE, "--threads: expected a positive integer, found \"%s\"", v);
             i++;
         } else if (!strcmp(a, "--help")) {
-            printf("usage: fractalbake bench [--json] [--size WxH] [--generator fbm|julia|ifs] [--points N] [--backend vulkan|native] "
+            printf("usage: fractalbake bench [--json] [--size WxH] [--generator fbm|julia|ifs] [--points N] [--backend "
+                   "vulkan|native] "
                    "[--device D] [--threads N]\n");
             return FB_OK;
         } else {

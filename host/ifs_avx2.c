@@ -47,8 +47,10 @@ typedef struct avx2_job {
 
 #define G 2 /* vectors of 8 chains in flight */
 
-/* Chains [c0, c1) (a multiple of 8 chains per group, the rest scalar) into histogram h. */
-AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t c0, uint32_t c1, avx2_hist *h)
+/* Chains [c0, c1) (groups of 8 * G chains vectorised, the rest scalar) into histogram h; adds the
+ * points outside the frame, discarded and restarted to n[0..2]. */
+AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t c0, uint32_t c1, avx2_hist *h,
+                           uint64_t n[3])
 {
     float coef[7][8] = {{0}};
     int thr[8];
@@ -124,22 +126,25 @@ AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t 
                 left[g] = _mm256_add_epi32(left[g], _mm256_andnot_si256(plot, _mm256_set1_epi32(-1)));
                 __m256 px = _mm256_mul_ps(_mm256_sub_ps(x[g], x0), sx);
                 __m256 py = _mm256_mul_ps(_mm256_sub_ps(y0, y[g]), sy);
-                __m256 in = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(px, zero, _CMP_GE_OQ),
-                                                        _mm256_cmp_ps(py, zero, _CMP_GE_OQ)),
-                                          _mm256_and_ps(_mm256_cmp_ps(px, hw, _CMP_LT_OQ),
-                                                        _mm256_cmp_ps(py, hh, _CMP_LT_OQ)));
-                int m = _mm256_movemask_ps(_mm256_and_ps(in, _mm256_castsi256_ps(plot)));
-                if (t >= p->base) { /* the last step belongs only to chains below `extra` */
+                __m256 in = _mm256_and_ps(
+                    _mm256_and_ps(_mm256_cmp_ps(px, zero, _CMP_GE_OQ), _mm256_cmp_ps(py, zero, _CMP_GE_OQ)),
+                    _mm256_and_ps(_mm256_cmp_ps(px, hw, _CMP_LT_OQ), _mm256_cmp_ps(py, hh, _CMP_LT_OQ)));
+                int active = 0xff;
+                if (t >= p->base) /* the last step belongs only to chains below `extra` */
                     for (int l = 0; l < 8; l++)
-                        if (c + 8 * (uint32_t)g + (uint32_t)l >= p->extra) m &= ~(1 << l);
-                }
-                __m256i cell = _mm256_add_epi32(
-                    _mm256_mullo_epi32(_mm256_cvttps_epi32(py), _mm256_set1_epi32((int)p->hist_w)),
-                    _mm256_cvttps_epi32(px));
-                __m256 qf = _mm256_add_ps(_mm256_mul_ps(_mm256_min_ps(_mm256_max_ps(col[g], zero),
-                                                                      _mm256_set1_ps(1.0f)),
-                                                        _mm256_set1_ps(255.0f)),
-                                          half);
+                        if (c + 8 * (uint32_t)g + (uint32_t)l >= p->extra) active &= ~(1 << l);
+                int pm = _mm256_movemask_ps(_mm256_castsi256_ps(plot)) & active;
+                int m = _mm256_movemask_ps(in) & pm;
+                n[0] += (uint64_t)__builtin_popcount((unsigned)(pm & ~m));
+                n[1] += (uint64_t)__builtin_popcount((unsigned)(active & ~pm));
+                n[2] += (uint64_t)__builtin_popcount((unsigned)(_mm256_movemask_ps(bad) & active));
+                __m256i cell =
+                    _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(py), _mm256_set1_epi32((int)p->hist_w)),
+                                     _mm256_cvttps_epi32(px));
+                __m256 qf =
+                    _mm256_add_ps(_mm256_mul_ps(_mm256_min_ps(_mm256_max_ps(col[g], zero), _mm256_set1_ps(1.0f)),
+                                                _mm256_set1_ps(255.0f)),
+                                  half);
                 __m256i q = _mm256_cvttps_epi32(qf);
                 uint32_t cs[8], qs[8];
                 _mm256_storeu_si256((__m256i *)cs, cell);
@@ -159,8 +164,13 @@ AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t 
         uint32_t total = k_ifs_total(*p, c);
         for (uint32_t t = 0; t < total; t++) {
             s = k_ifs_step(*p, s, c, t, maps);
+            n[1] += s.status != K_IFS_PLOT;
+            n[2] += s.status == K_IFS_RESTART;
             uint32_t cell = s.status == K_IFS_PLOT ? k_ifs_cell(*p, s.x, s.y) : K_IFS_NONE;
-            if (cell == K_IFS_NONE) continue;
+            if (cell == K_IFS_NONE) {
+                n[0] += s.status == K_IFS_PLOT;
+                continue;
+            }
             h->hits[cell]++;
             h->sum[cell] += k_ifs_quant(s.c);
         }
@@ -172,7 +182,8 @@ static void avx2_task(void *ctx, int task)
     avx2_job *j = ctx;
     uint32_t n = j->p->chains, per = (n / (uint32_t)j->ntasks + 15) / 16 * 16;
     uint32_t c0 = per * (uint32_t)task, c1 = c0 + per < n ? c0 + per : n;
-    if (c0 < n) game_avx2(j->p, j->maps, c0, c1, &j->hist[task]);
+    uint64_t counts[3] = {0, 0, 0};
+    if (c0 < n) game_avx2(j->p, j->maps, c0, c1, &j->hist[task], counts);
 }
 
 static void merge_task(void *ctx, int task)
@@ -184,6 +195,13 @@ static void merge_task(void *ctx, int task)
             j->hist[0].hits[c] += j->hist[h].hits[c];
             j->hist[0].sum[c] += j->hist[h].sum[c];
         }
+}
+
+void fb_ifs_avx2_chains(const void *params, const void *maps, uint32_t c0, uint32_t c1, uint32_t *hits, uint64_t *sum,
+                        uint64_t counts[3])
+{
+    avx2_hist h = {hits, sum};
+    game_avx2(params, maps, c0, c1, &h, counts);
 }
 
 bool fb_ifs_avx2_supported(const void *params)
@@ -226,6 +244,12 @@ bool fb_ifs_avx2_supported(const void *params)
 {
     (void)params;
     return false;
+}
+
+void fb_ifs_avx2_chains(const void *params, const void *maps, uint32_t c0, uint32_t c1, uint32_t *hits, uint64_t *sum,
+                        uint64_t counts[3])
+{
+    (void)params, (void)maps, (void)c0, (void)c1, (void)hits, (void)sum, (void)counts;
 }
 
 fb_result fb_ifs_avx2_game(const void *params, const void *maps, int threads, uint32_t *hits, uint64_t *sum)

@@ -16,6 +16,11 @@ bool fb_ifs_avx2_supported(const void *params);
  * sums sum[] (hist_w * hist_h cells each, overwritten): the same sums as the kernel. */
 fb_result fb_ifs_avx2_game(const void *params, const void *maps, int threads, uint32_t *hits, uint64_t *sum);
 
+/* Chains [c0, c1) of `params`, every step, added to hits[] and sum[]; adds the points outside the
+ * frame, discarded and restarted to counts[0..2]. Needs fb_ifs_avx2_supported. */
+void fb_ifs_avx2_chains(const void *params, const void *maps, uint32_t c0, uint32_t c1, uint32_t *hits, uint64_t *sum,
+                        uint64_t counts[3]);
+
 /* The textbook chaos game on one core: one chain of `points` steps, xorshift32, the first `skip`
  * points discarded. Adds to hits[] and sum[]; returns the points plotted inside the frame. */
 uint64_t fb_ifs_scalar_game(const void *params, const void *maps, uint64_t points, uint32_t *hits, uint64_t *sum);

@@ -610,8 +610,8 @@ fb_result vkc_create(const vkc_desc *desc, vkc_context **out)
         free(ep);
     }
     if (has_ext) g_vk.vkGetPhysicalDeviceFeatures2(ctx->phys, &f2);
-    ctx->info.int64_atomics = has_ext && f2.features.shaderInt64 && a64.shaderBufferInt64Atomics &&
-                              !env_true("FB_VK_NO_INT64");
+    ctx->info.int64_atomics =
+        has_ext && f2.features.shaderInt64 && a64.shaderBufferInt64Atomics && !env_true("FB_VK_NO_INT64");
     VkPhysicalDeviceShaderAtomicInt64Features a64_on = {
         .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_INT64_FEATURES, .shaderBufferInt64Atomics = VK_TRUE};
     VkPhysicalDeviceFeatures on = {.shaderInt64 = VK_TRUE};

@@ -1,8 +1,12 @@
 /* The benchmark's AVX2 reference loop computes exactly what the shared kernel computes: every pixel
  * of several fBm images is bit-identical, so comparing their speeds compares like with like. */
 #include "../kernels/fbm.h"
+#include "../kernels/ifs.h"
 #include "fbm_avx2.h"
+#include "ifs_avx2.h"
 #include "julia_avx2.h"
+#include "bake.h"
+#include "ifs.h"
 #include "gen.h"
 
 #include "testhelp.h"
@@ -63,6 +67,61 @@ int main(void)
         CHECK(total == want);
         free(a), free(b);
         for (int c = 0; c < 6; c++) free(rest[c]);
+        fb_gen_fini(&g);
+        fb_scene_fini(&s);
+    }
+    /* IFS: the AVX2 chaos game's histogram and counters are the portable kernel's (scalar engine),
+     * with a chain count that leaves a scalar tail and points that leave an uneven last step. */
+    const char *ifss[] = {
+        "{\"size\": [200, 120], \"seed\": 3, \"layers\": [{\"type\": \"ifs\", \"points\": 2000003, \"chains\": 1000, "
+        "\"bounds\": [-2, 2, 1, 9]}]}",
+        "{\"size\": [90, 90], \"seed\": 8, \"layers\": [{\"type\": \"ifs\", \"preset\": \"spiral\", \"oversample\": 2, "
+        "\"points\": 1000000}]}",
+    };
+    for (int k = 0; k < 2; k++) {
+        fb_scene s;
+        CHECK(fb_scene_parse(ifss[k], NULL, &s) == FB_OK);
+        fb_gen g;
+        CHECK(fb_gen_init(&g, &s, &s.layers[0]) == FB_OK);
+        if (!fb_ifs_avx2_supported(g.params)) TEST_SKIP("this CPU has no AVX2");
+        fb_engine e;
+        CHECK(fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = 1, .scalar = true}, &e) ==
+              FB_OK);
+        g.scalar = true;
+        CHECK(g.prepare(&g, &e, false) == FB_OK);
+        const fb_ifs_stats *st = fb_gen_ifs_stats(&g);
+        const K_IfsParams *p = (const K_IfsParams *)(const void *)g.params;
+        size_t cells = (size_t)p->hist_w * p->hist_h, n = (size_t)s.width * s.height;
+        uint32_t *hits = calloc(cells, 4), *count = malloc(n * 4);
+        uint64_t *sum = calloc(cells, 8), counts[3] = {0, 0, 0};
+        fb_ifs_avx2_chains(g.params, g.input, 0, p->chains, hits, sum, counts);
+        float *rest[6];
+        for (int c = 0; c < 6; c++) rest[c] = malloc(n * 4);
+        void *planes[7] = {count, rest[0], rest[1], rest[2], rest[3], rest[4], rest[5]};
+        g.native_rows(&g, 0, s.height, planes);
+        int diff = 0;
+        uint32_t K = p->hist_w / (uint32_t)s.width;
+        for (int y = 0; y < s.height; y++)
+            for (int x = 0; x < s.width; x++) {
+                uint64_t c = 0, sm = 0;
+                for (uint32_t j = 0; j < K; j++)
+                    for (uint32_t i = 0; i < K; i++) {
+                        size_t cell = ((size_t)y * K + j) * p->hist_w + (size_t)x * K + i;
+                        c += hits[cell], sm += sum[cell];
+                    }
+                size_t at = (size_t)y * s.width + x;
+                float colour = c ? (float)((double)sm / (255.0 * (double)c)) : 0.0f;
+                diff += count[at] != c || memcmp(&rest[1][at], &colour, 4) != 0;
+            }
+        CHECKF(diff == 0, "ifs %d: %d of %zu pixels differ", k, diff, n);
+        CHECKF(counts[0] == st->outside && counts[1] == st->discarded && counts[2] == st->restarts,
+               "ifs %d: counters %llu %llu %llu vs %llu %llu %llu", k, (unsigned long long)counts[0],
+               (unsigned long long)counts[1], (unsigned long long)counts[2], (unsigned long long)st->outside,
+               (unsigned long long)st->discarded, (unsigned long long)st->restarts);
+        CHECK(st->outside > 0 || k == 1);
+        free(hits), free(sum), free(count);
+        for (int c = 0; c < 6; c++) free(rest[c]);
+        fb_engine_close(&e);
         fb_gen_fini(&g);
         fb_scene_fini(&s);
     }

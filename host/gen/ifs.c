@@ -9,6 +9,7 @@
 #include "../bake.h"
 #include "../gen.h"
 #include "../ifs.h"
+#include "../ifs_avx2.h"
 #include "../palette.h"
 #include "../progress.h"
 
@@ -183,8 +184,8 @@ static void merge_task(void *ctx, int task)
 
 /* A histogram in whichever layout a backend left it: the hits and the colour sum of a cell. */
 typedef struct cells_view {
-    const uint32_t *hits;  /* 32-bit layouts */
-    const uint64_t *sum;   /* native: the colour sums */
+    const uint32_t *hits;    /* 32-bit layouts */
+    const uint64_t *sum;     /* native: the colour sums */
     const uint32_t *lo, *hi; /* vulkan, 32-bit atomics: colour sum words */
     const uint64_t *packed;  /* vulkan, 64-bit atomics: hits | colour (mod 2^32) << 32 */
     const uint32_t *carry;   /* ... and the carries out of the colour word */
@@ -256,12 +257,30 @@ static void add_counts(ifs_state *st, const uint32_t (*counts)[4], uint32_t chai
     }
 }
 
+typedef struct avx2_round {
+    const ifs_state *st;
+    native_hist *hist;
+    uint32_t c0, block;
+    uint64_t counts[64][3];
+} avx2_round;
+
+static void avx2_task(void *ctx, int task)
+{
+    avx2_round *r = ctx;
+    uint64_t c0 = (uint64_t)r->c0 + (uint64_t)r->block * (uint64_t)task, c1 = c0 + r->block;
+    if (c1 > r->st->p.chains) c1 = r->st->p.chains;
+    if (c0 < c1)
+        fb_ifs_avx2_chains(&r->st->p, r->st->table, (uint32_t)c0, (uint32_t)c1, r->hist[task].hits, r->hist[task].sum,
+                           r->counts[task]);
+}
+
 static fb_result prepare_native(fb_gen *g, fb_engine *e, fb_progress *prog)
 {
     ifs_state *st = state(g);
     const fb_scene *s = g->scene;
     size_t cells = (size_t)st->p.hist_w * st->p.hist_h;
     int threads = e->pool ? fb_pool_threads(e->pool) : 1;
+    if (threads > 64) threads = 64;
     /* Private histograms per task (plain adds) when they fit in 1 GiB, else one with atomic adds:
      * the sums, and so the result, are the same either way. */
     bool priv = threads > 1 && (uint64_t)threads * cells * 12 <= (1ull << 30);
@@ -285,7 +304,26 @@ static fb_result prepare_native(fb_gen *g, fb_engine *e, fb_progress *prog)
                       .ntasks = priv ? threads : threads * 8};
     uint32_t last = max_total(&st->p);
     double t0 = fb_now();
-    for (uint32_t step0 = 0; step0 < last && !rc; step0 += st->p.nsteps) {
+    /* The hand-vectorised loop (bit-exact with the kernel, tests/test_avx2.c) where it applies:
+     * whole chains per task, in rounds of one task per histogram so that the bar moves. */
+    bool avx2 = !rc && !g->scalar && (priv || threads == 1) && fb_ifs_avx2_supported(&st->p);
+    const uint32_t block = 512; /* chains per task */
+    for (uint32_t c0 = 0; avx2 && c0 < st->p.chains; c0 += block * (uint32_t)threads) {
+        avx2_round r = {st, hist, c0, block, {{0}}};
+        if (e->pool)
+            fb_pool_run(e->pool, threads, avx2_task, &r);
+        else
+            avx2_task(&r, 0);
+        for (int t = 0; t < threads; t++) {
+            st->stats.outside += r.counts[t][0];
+            st->stats.discarded += r.counts[t][1];
+            st->stats.restarts += r.counts[t][2];
+        }
+        uint64_t c1 = (uint64_t)c0 + (uint64_t)block * (uint64_t)threads;
+        uint64_t done = st->points * (c1 < st->p.chains ? c1 : st->p.chains) / st->p.chains;
+        fb_progress_update(prog, done, st->points);
+    }
+    for (uint32_t step0 = 0; !avx2 && step0 < last && !rc; step0 += st->p.nsteps) {
         run.p.step0 = step0;
         if (e->pool)
             fb_pool_run(e->pool, run.ntasks, native_task, &run);
@@ -331,13 +369,15 @@ static fb_result prepare_vulkan(fb_gen *g, fb_engine *e, fb_progress *prog, doub
     vkc_job *job = NULL;
     vkc_buffer *buf[NBUF] = {0};
     uint32_t spec[1] = {st->p.cmaps > 0};
-    fb_result rc =
-        vkc_pipeline_create(vk,
-                            &(vkc_pipeline_desc){.spv = wide ? ifs64_comp : ifs_comp,
-                                                 .spv_size = wide ? sizeof ifs64_comp : sizeof ifs_comp,
-                                                 .push_size = sizeof(K_IfsParams), .buffers = NBUF,
-                                                 .spec = spec, .nspec = 1, .name = g->layer->name},
-                            &pipe);
+    fb_result rc = vkc_pipeline_create(vk,
+                                       &(vkc_pipeline_desc){.spv = wide ? ifs64_comp : ifs_comp,
+                                                            .spv_size = wide ? sizeof ifs64_comp : sizeof ifs_comp,
+                                                            .push_size = sizeof(K_IfsParams),
+                                                            .buffers = NBUF,
+                                                            .spec = spec,
+                                                            .nspec = 1,
+                                                            .name = g->layer->name},
+                                       &pipe);
     const uint64_t sizes[NBUF] = {sizeof(K_IfsMap) * st->ntable,
                                   sizeof(K_IfsChain) * (uint64_t)st->p.chains,
                                   16ull * st->p.chains,
@@ -367,9 +407,8 @@ static fb_result prepare_vulkan(fb_gen *g, fb_engine *e, fb_progress *prog, doub
     }
     st->stats.game_seconds = fb_now() - t0;
     if (!rc) {
-        cells_view v = {.hits = vkc_buffer_data(buf[B_HITS]),
-                        .lo = vkc_buffer_data(buf[B_LO]),
-                        .hi = vkc_buffer_data(buf[B_HI])};
+        cells_view v = {
+            .hits = vkc_buffer_data(buf[B_HITS]), .lo = vkc_buffer_data(buf[B_LO]), .hi = vkc_buffer_data(buf[B_HI])};
         if (wide) {
             v = (cells_view){.packed = vkc_buffer_data(buf[B_HITS]), .carry = vkc_buffer_data(buf[B_LO])};
             if (*(const uint32_t *)vkc_buffer_data(buf[B_HI])) st->stats.saturated++;
