@@ -133,6 +133,20 @@ grep -q "layer plants .*count (uint)" info3.txt && grep -q "A (half)" info3.txt 
 "$FB" $I --preset maple --oversample 2 -o iv1.exr
 cmp -s in1.exr in2.exr && ok || bad "ifs (native) depends on threads or strip rows"
 "$FB" compare in1.exr iv1.exr --max-abs 0 > /dev/null && ok || bad "ifs differs between lavapipe and native"
+# tone mapping re-run from the stored channels: the same parameters give the same bytes, new ones
+# the same pixels as a bake made with them
+"$FB" $I -o tm1.exr
+"$FB" tonemap tm1.exr -o tm1b.exr --quiet && cmp -s tm1.exr tm1b.exr && ok || bad "tonemap with unchanged parameters changed the file"
+"$FB" $I --brightness 2.5 --gamma 3 --vibrancy 0.5 --highlight-power -1 --palette blossom -o tm2.exr
+"$FB" tonemap tm1.exr -o tm2b.exr --brightness 2.5 --gamma 3 --vibrancy 0.5 --highlight-power -1 --palette blossom
+"$FB" compare tm2.exr tm2b.exr --max-abs 0 > /dev/null && ok || bad "tonemap differs from a bake with the same tone parameters"
+"$FB" info tm2b.exr | grep -q '"brightness": 2.5' && ok || bad "tonemap did not store the new parameters"
+"$FB" compare tm1.exr tm2b.exr --layer plants > /dev/null; [ $? -eq 1 ] && ok || bad "new tone parameters changed nothing"
+expect_fail 2 "not a tone-mapping flag" x.exr -- tonemap tm1.exr -o x.exr --points 5
+expect_fail 2 "brightness" x.exr -- tonemap tm1.exr -o x.exr --brightness -1
+"$FB" fbm $S -o f0.exr
+expect_fail 2 "no ifs layer" x.exr -- tonemap f0.exr -o x.exr
+expect_fail 3 "nofile.exr: cannot open" x.exr -- tonemap nofile.exr -o x.exr
 
 # ---- bad input: scene files ----
 printf '{"size": [64, 32],\n "layers": [\n  {"type": "fbm", "octaves": 3,\n   "octavez": 2}\n ]\n}\n' > unknown.json
