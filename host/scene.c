@@ -954,6 +954,8 @@ static json_t *flag_value(const keyspec *k, const char *flag, const char *s)
     case T_INT: {
         errno = 0;
         long long x = strtoll(s, &end, 10);
+        if (*s && *end && !errno && parse_double(s, &a) && a == floor(a) && fabs(a) <= 9007199254740992.0)
+            return json_integer((json_int_t)a); /* 1e9: an integer written in exponent form */
         if (!*s || *end || errno) {
             fb_fail(FB_ERR_USAGE, "--%s: expected an integer, found \"%s\"", flag, s);
             return NULL;

@@ -109,6 +109,8 @@ expect_fail 2 "bounds" o.exr -- $I --bounds 0,1,0 -o o.exr
 expect_fail 2 "oversample" o.exr -- $I --oversample 0 -o o.exr
 expect_fail 2 "points" o.exr -- $I --points -5 -o o.exr
 expect_fail 2 "points" o.exr -- $I --points 1e20 -o o.exr
+expect_fail 2 "points: expected an integer" o.exr -- $I --points 2.5 -o o.exr
+"$FB" ifs --size 64x48 --quiet --points 1e5 -o e5.exr && "$FB" info e5.exr | grep -q '"points": 100000' && ok || bad "--points 1e5 is not the integer 100000"
 expect_fail 2 "colour coordinates for 4 maps" o.exr -- $I --colors 0,1 -o o.exr
 expect_fail 2 "own condensation set" o.exr -- $I --preset population --condensation tree -o o.exr
 expect_fail 2 "nofile.ifs: cannot open" o.exr -- $I --file nofile.ifs -o o.exr
