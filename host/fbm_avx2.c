@@ -11,19 +11,7 @@
 #include <stdbool.h>
 
 #if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
-
-#define AVX2 __attribute__((target("avx2")))
-
-AVX2 static inline __m256i hash8(__m256i x)
-{
-    x = _mm256_xor_si256(x, _mm256_srli_epi32(x, 16));
-    x = _mm256_mullo_epi32(x, _mm256_set1_epi32(0x7feb352d));
-    x = _mm256_xor_si256(x, _mm256_srli_epi32(x, 15));
-    x = _mm256_mullo_epi32(x, _mm256_set1_epi32((int)0x846ca68bu));
-    x = _mm256_xor_si256(x, _mm256_srli_epi32(x, 16));
-    return x;
-}
+#include "avx2_hash.h"
 
 /* k_wrap_cell(i, 4096) for 8 lanes: integer path below 2^24, the float path above, blended. */
 AVX2 static inline __m256i wrap8(__m256 i)

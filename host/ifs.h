@@ -54,7 +54,7 @@ int fb_ifs_auto_skip(const fb_ifs *ifs);
 typedef struct fb_ifs_stats {
     uint64_t points, hits, outside, discarded, restarts, saturated;
     uint32_t chains, skip;
-    double bounds[4]; /* the frame used: xmin, xmax, ymin, ymax */
+    double bounds[4];    /* the frame used: xmin, xmax, ymin, ymax */
     double seconds;      /* the whole prepare: chaos game, reduction to pixels, tone reference */
     double game_seconds; /* the chaos game alone (dispatches, or native tasks) */
     double gpu_seconds;  /* dispatch timestamps (vulkan), else -1 */

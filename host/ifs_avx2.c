@@ -18,19 +18,7 @@
 #include <string.h>
 
 #if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
-
-#define AVX2 __attribute__((target("avx2")))
-
-AVX2 static inline __m256i hash8(__m256i x)
-{
-    x = _mm256_xor_si256(x, _mm256_srli_epi32(x, 16));
-    x = _mm256_mullo_epi32(x, _mm256_set1_epi32(0x7feb352d));
-    x = _mm256_xor_si256(x, _mm256_srli_epi32(x, 15));
-    x = _mm256_mullo_epi32(x, _mm256_set1_epi32((int)0x846ca68bu));
-    x = _mm256_xor_si256(x, _mm256_srli_epi32(x, 16));
-    return x;
-}
+#include "avx2_hash.h"
 
 typedef struct avx2_hist {
     uint32_t *hits;
@@ -68,7 +56,6 @@ AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t 
                  sy = _mm256_set1_ps(p->sy), zero = _mm256_setzero_ps(), half = _mm256_set1_ps(0.5f);
     const __m256 hw = _mm256_set1_ps((float)p->hist_w), hh = _mm256_set1_ps((float)p->hist_h);
     const __m256 lim = _mm256_set1_ps(p->limit), absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
-    const __m256i seedh = _mm256_set1_epi32((int)k_hash(p->seed ^ 0x9e3779b9u));
     uint32_t c = c0;
     for (; c + 8 * G <= c1; c += 8 * G) {
         __m256 x[G], y[G], col[G];
@@ -89,7 +76,6 @@ AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t 
             left[g] = _mm256_loadu_si256((const __m256i *)ls);
             chainh[g] = _mm256_loadu_si256((const __m256i *)hs);
         }
-        (void)seedh;
         for (uint32_t t = 0; t < total; t++) {
             for (int g = 0; g < G; g++) {
                 /* r = k_hash3(seed, chain, t) = hash(t ^ hash(chain ^ hash(seed ^ k))) */
