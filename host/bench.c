@@ -161,6 +161,20 @@ static double time_reference(const fb_scene *s, int threads, uint64_t *total)
     return result;
 }
 
+/* Opens the Vulkan engine; *have is false (and the result FB_OK) when there is no device and the
+ * native backend is benchmarked anyway. */
+static fb_result open_vulkan(const bench_opts *o, fb_engine *e, bool *have)
+{
+    fb_result rc =
+        fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .device = o->device, .threads = o->threads}, e);
+    *have = rc == FB_OK;
+    if (rc == FB_ERR_NODEVICE && o->native) {
+        fb_log(FB_LOG_WARN, "no Vulkan device: benchmarking the native backend only");
+        rc = FB_OK;
+    }
+    return rc;
+}
+
 /* ---- the chaos game -------------------------------------------------------------------------- */
 
 static void report_rate(const bench_opts *o, const char *backend, const char *mode, const char *device, int threads,
@@ -211,21 +225,14 @@ static fb_result run_ifs(const bench_opts *o, const fb_scene *s, const char *out
     double pts = o->points, sec, gpu;
     fb_engine e;
     fb_result rc = FB_OK;
-    if (o->vulkan) {
-        rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .device = o->device, .threads = o->threads},
-                            &e);
-        if (rc == FB_ERR_NODEVICE && o->native) {
-            fb_log(FB_LOG_WARN, "no Vulkan device: benchmarking the native backend only");
-            rc = FB_OK;
-        } else if (!rc) {
-            rc = time_game(&e, s, &sec, &gpu);
-            if (!rc)
-                report_rate(o, "vulkan", "chaos-game", e.device, 0, pts / sec * 1e-6, gpu > 0 ? pts / gpu * 1e-6 : 0);
-            double wall;
-            if (!rc) rc = timed(&e, s, out, &wall, &gpu);
-            if (!rc) report_rate(o, "vulkan", "end-to-end-zip", e.device, 0, pts / wall * 1e-6, 0);
-            fb_engine_close(&e);
-        }
+    bool have_vulkan = false;
+    if (o->vulkan && !(rc = open_vulkan(o, &e, &have_vulkan)) && have_vulkan) {
+        rc = time_game(&e, s, &sec, &gpu);
+        if (!rc) report_rate(o, "vulkan", "chaos-game", e.device, 0, pts / sec * 1e-6, gpu > 0 ? pts / gpu * 1e-6 : 0);
+        double wall;
+        if (!rc) rc = timed(&e, s, out, &wall, &gpu);
+        if (!rc) report_rate(o, "vulkan", "end-to-end-zip", e.device, 0, pts / wall * 1e-6, 0);
+        fb_engine_close(&e);
     }
     if (!rc && o->native) {
         rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = o->threads}, &e);
@@ -285,19 +292,11 @@ static fb_result run_case(const bench_opts *o, bench_case *bc, fb_scene *s, cons
     }
     fb_engine e;
     bool have_vulkan = false;
-    if (o->vulkan) {
-        rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .device = o->device, .threads = o->threads},
-                            &e);
-        if (rc == FB_ERR_NODEVICE && o->native) {
-            fb_log(FB_LOG_WARN, "no Vulkan device: benchmarking the native backend only");
-            rc = FB_OK;
-        } else if (!rc) {
-            have_vulkan = true;
-            rc = timed(&e, s, NULL, &wall, &gpu);
-            if (!rc) report(o, bc, e.device, "vulkan", "generate", 0, wall, gpu);
-            if (!rc) rc = end_to_end(o, bc, &e, s, out);
-            fb_engine_close(&e);
-        }
+    if (o->vulkan && !(rc = open_vulkan(o, &e, &have_vulkan)) && have_vulkan) {
+        rc = timed(&e, s, NULL, &wall, &gpu);
+        if (!rc) report(o, bc, e.device, "vulkan", "generate", 0, wall, gpu);
+        if (!rc) rc = end_to_end(o, bc, &e, s, out);
+        fb_engine_close(&e);
     }
     if (!rc && o->native) {
         rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = o->threads}, &e);

@@ -108,6 +108,25 @@ K_FN bool k_ifs_escaped(K_IfsParams p, float x, float y)
     return k_isnan(x) || k_isnan(y) || k_abs(x) > p.limit || k_abs(y) > p.limit;
 }
 
+K_STRUCT(K_IfsPoint)
+{
+    float x, y, c;
+}
+K_END(K_IfsPoint)
+
+/* Map m applied to a point, and its colour coordinate moved halfway toward the map's. */
+K_FN K_IfsPoint k_ifs_apply(K_IfsMap m, float x, float y, float c)
+{
+    K_IfsPoint q;
+    K_PRECISE float nx = m.a * x + m.b * y + m.e;
+    K_PRECISE float ny = m.c * x + m.d * y + m.f;
+    K_PRECISE float nc = (c + m.colour) * 0.5f;
+    q.x = nx;
+    q.y = ny;
+    q.c = nc;
+    return q;
+}
+
 /* One step of chain `chain` at its step index t. With condensation (cmaps > 0) the chain also
  * walks C's IFS, and the condensation map w0 (picked when r < the first map's threshold) sends
  * the point to the chain's current point of C. */
@@ -116,28 +135,23 @@ K_FN K_IfsChain k_ifs_step(K_IfsParams p, K_IfsChain s, uint chain, uint t K_IFS
     uint r = k_hash3(p.seed, chain, t);
     bool escaped = false;
     if (p.cmaps > 0u) {
-        K_IfsMap m = k_ifs_maps[k_ifs_pick(k_hash(r ^ 0x5bd1e995u), p.nmaps, p.cmaps K_IFS_MAPS)];
-        K_PRECISE float nx = m.a * s.cx + m.b * s.cy + m.e;
-        K_PRECISE float ny = m.c * s.cx + m.d * s.cy + m.f;
-        K_PRECISE float nc = (s.cc + m.colour) * 0.5f;
-        s.cx = nx;
-        s.cy = ny;
-        s.cc = nc;
-        escaped = k_ifs_escaped(p, nx, ny);
+        K_IfsPoint q =
+            k_ifs_apply(k_ifs_maps[k_ifs_pick(k_hash(r ^ 0x5bd1e995u), p.nmaps, p.cmaps K_IFS_MAPS)], s.cx, s.cy, s.cc);
+        s.cx = q.x;
+        s.cy = q.y;
+        s.cc = q.c;
+        escaped = k_ifs_escaped(p, q.x, q.y);
     }
     if (r < k_ifs_maps[0].thr) { /* w0: onto the condensation set */
         s.x = s.cx;
         s.y = s.cy;
         s.c = s.cc;
     } else {
-        K_IfsMap m = k_ifs_maps[k_ifs_pick(r, 0u, p.nmaps K_IFS_MAPS)];
-        K_PRECISE float nx = m.a * s.x + m.b * s.y + m.e;
-        K_PRECISE float ny = m.c * s.x + m.d * s.y + m.f;
-        K_PRECISE float nc = (s.c + m.colour) * 0.5f;
-        s.x = nx;
-        s.y = ny;
-        s.c = nc;
-        escaped = escaped || k_ifs_escaped(p, nx, ny);
+        K_IfsPoint q = k_ifs_apply(k_ifs_maps[k_ifs_pick(r, 0u, p.nmaps K_IFS_MAPS)], s.x, s.y, s.c);
+        s.x = q.x;
+        s.y = q.y;
+        s.c = q.c;
+        escaped = escaped || k_ifs_escaped(p, q.x, q.y);
     }
     if (escaped) {
         s = k_ifs_restart(p, s, chain, t);

@@ -429,8 +429,10 @@ static fb_result ifs_prepare(fb_gen *g, fb_engine *e, bool progress)
     snprintf(label, sizeof label, "%s: chaos game", g->layer->name);
     fb_progress_init(&prog, progress, label, "pts");
     double t0 = fb_now(), gpu = -1;
-    memset(&st->stats, 0, sizeof st->stats);
-    st->stats.points = st->points;
+    /* the run's counters start at zero; the frame, chains and skip chosen at init stay */
+    fb_ifs_stats *x0 = &st->stats;
+    x0->hits = x0->outside = x0->discarded = x0->restarts = x0->saturated = 0;
+    x0->points = st->points;
     fb_result rc =
         e->kind == FB_BACKEND_VULKAN ? (gpu = 0, prepare_vulkan(g, e, &prog, &gpu)) : prepare_native(g, e, &prog);
     fb_progress_finish(&prog);
