@@ -244,6 +244,65 @@ static void test_condensation_row(fb_engine *e)
     run_free(&r);
 }
 
+/* `colors`: all maps at 0 or all at 1 pin every hit pixel's colour there (the start colour 0.5 has
+ * halved away by the end of the transient); `condensation` as a map list equals the preset that uses
+ * the same set; `condensation-probability` is the share of points on C itself (the first tree). */
+static void test_keys(fb_engine *e)
+{
+    for (int v = 0; v <= 1; v++) {
+        char json[256];
+        snprintf(json, sizeof json,
+                 "{\"size\": [96, 96], \"layers\": [{\"type\": \"ifs\", \"points\": 300000, \"colors\": [%d, %d, %d, "
+                 "%d]}]}",
+                 v, v, v, v);
+        run_out r;
+        CHECKF(run_scene(e, json, &r) == FB_OK, "%s", g_last_error);
+        int bad = 0, hit = 0;
+        for (int i = 0; i < 96 * 96; i++)
+            if (r.count[i]) hit++, bad += r.colour[i] != (float)v;
+        CHECKF(hit > 500 && bad == 0, "colors all %d: %d of %d hit pixels have another colour", v, bad, hit);
+        run_free(&r);
+    }
+    fb_ifs tree;
+    fb_ifs_preset("tree", &tree, NULL, NULL);
+    char maps[512] = "";
+    for (int k = 0; k < tree.n; k++)
+        snprintf(maps + strlen(maps), sizeof maps - strlen(maps), "%s[%.17g, %.17g, %.17g, %.17g, %.17g, %.17g, %.17g]",
+                 k ? ", " : "", tree.m[k].a, tree.m[k].b, tree.m[k].c, tree.m[k].d, tree.m[k].e * 0.25,
+                 tree.m[k].f * 0.25, tree.m[k].p);
+    char a[1024], b[256];
+    snprintf(a, sizeof a,
+             "{\"size\": [160, 60], \"seed\": 2, \"layers\": [{\"type\": \"ifs\", \"points\": 500000, \"maps\": "
+             "[[0.75, 0, 0, 0.75, 0.25, 0]], \"condensation\": [%s]}]}",
+             maps);
+    snprintf(b, sizeof b,
+             "{\"size\": [160, 60], \"seed\": 2, \"layers\": [{\"type\": \"ifs\", \"points\": 500000, \"preset\": "
+             "\"population\"}]}");
+    run_out ra, rb;
+    CHECKF(run_scene(e, a, &ra) == FB_OK && run_scene(e, b, &rb) == FB_OK, "%s", g_last_error);
+    CHECK(same_run(&ra, &rb));
+    run_free(&ra), run_free(&rb);
+    const double p0[2] = {0.2, 0.6};
+    for (int k = 0; k < 2; k++) {
+        snprintf(a, sizeof a,
+                 "{\"size\": [1300, 100], \"layers\": [{\"type\": \"ifs\", \"preset\": \"population\", \"points\": "
+                 "2000000, \"condensation-probability\": %g, \"bounds\": [-0.2, 1.1, -0.02, 0.3]}]}",
+                 p0[k]);
+        run_out r;
+        CHECKF(run_scene(e, a, &r) == FB_OK, "%s", g_last_error);
+        uint64_t first = 0, all = 0; /* the first tree: x < 0.14, i.e. columns < 340 */
+        for (int y = 0; y < r.height; y++)
+            for (int x = 0; x < r.width; x++) {
+                all += r.count[y * r.width + x];
+                if (x < 340) first += r.count[y * r.width + x];
+            }
+        double share = (double)first / (double)all;
+        CHECKF(fabs(share - p0[k]) < 0.01, "condensation-probability %g: %.4f of the hits on the first tree", p0[k],
+               share);
+        run_free(&r);
+    }
+}
+
 /* ---- kernel details ------------------------------------------------------------------------- */
 
 static void test_restart(void)
@@ -373,6 +432,15 @@ static void test_tone(void)
     float a5 = (float)sqrt(log1p(5.0) / log1p(50.0));
     CHECK(fabsf(A[2] - a5) < 1e-6f && fabsf(G[2] - a5) < 1e-6f);
     CHECK(A[3] == 1.0f && R[3] <= 1.0f && B[3] <= 1.0f); /* over-bright: highlight handling keeps <= 1 */
+    /* vibrancy 0: the gamma per channel, on a grey palette */
+    for (int i = 0; i < 256; i++) t.palette[i][0] = t.palette[i][1] = t.palette[i][2] = 0.5f;
+    t.vibrancy = 0;
+    fb_ifs_tonemap_row(&t, dens, col, 4, R, G, B, A);
+    float g5 = (float)sqrt(0.5 * log1p(5.0) / log1p(50.0));
+    CHECK(fabsf(R[2] - g5) < 1e-6f && fabsf(A[2] - a5) < 1e-6f);
+    t.vibrancy = 1;
+    fb_ifs_tonemap_row(&t, dens, col, 4, R, G, B, A);
+    CHECK(fabsf(R[2] - 0.5f * a5) < 1e-6f);
     /* the linear part below the threshold meets the curve there */
     t.dref = exp(1.0) - 1; /* alin = log1p(d) */
     float tiny[1] = {(float)expm1(0.01)}, tiny2[1] = {(float)expm1(0.005)}, c1[1] = {0.5f}, r1, g1, b1, a1, a2;
@@ -414,6 +482,7 @@ int main(void)
     if (have_gpu) test_accounting(&engines[n - 1]);
     test_determinism(engines, n);
     test_condensation_row(&engines[0]);
+    test_keys(&engines[0]);
     if (have_gpu) CHECKF(vkc_validation_messages(engines[n - 1].vk) == 0, "validation layer messages");
     for (int i = 0; i < n; i++) fb_engine_close(&engines[i]);
     TEST_REPORT();
