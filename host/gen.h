@@ -71,6 +71,7 @@ void fb_fbm_params_frame(struct K_FbmParams *p, int width, int height);
 fb_result fb_gen_fbm_init(fb_gen *g);
 fb_result fb_gen_julia_init(fb_gen *g);
 fb_result fb_gen_ifs_init(fb_gen *g);
+fb_result fb_gen_lsystem_init(fb_gen *g);
 
 /* The chaos-game statistics of an ifs layer after prepare (NULL for other layers). */
 struct fb_ifs_stats;

@@ -55,6 +55,7 @@ static const char *const k_usage =
     "  fbm [options] -o OUT.exr           fBm noise, one layer (fractalbake fbm --help lists the options)\n"
     "  julia [options] -o OUT.exr         a warped Julia set (night skies), one layer\n"
     "  ifs [options] -o OUT.exr           an IFS chaos game (plants: fern, tree, population...), one layer\n"
+    "  lsystem [options] -o OUT.exr       an L-system plant (bush, tree, ... or --axiom/--rule), one layer\n"
     "  tonemap IN.exr -o OUT.exr [tone]   re-run an ifs layer's tone mapping (no new chaos game)\n"
     "  compare A.exr B.exr [thresholds]   exit 0 within thresholds, 1 beyond, 2 on error\n"
     "  info FILE.exr                      layers, channels, types, attributes and the stored scene\n"
@@ -357,6 +358,7 @@ int main(int argc, char **argv)
     if (!strcmp(cmd, "fbm")) return cmd_generator("fbm", argc - 2, argv + 2);
     if (!strcmp(cmd, "julia")) return cmd_generator("julia", argc - 2, argv + 2);
     if (!strcmp(cmd, "ifs")) return cmd_generator("ifs", argc - 2, argv + 2);
+    if (!strcmp(cmd, "lsystem")) return cmd_generator("lsystem", argc - 2, argv + 2);
     if (!strcmp(cmd, "tonemap")) {
         bool quiet = false;
         fb_result rc = fb_tonemap_main(argc - 2, argv + 2, &quiet);

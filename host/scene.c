@@ -34,6 +34,7 @@ typedef enum ktype {
     T_BOUNDS, /* "auto" or [xmin, xmax, ymin, ymax] */
     T_FRACS,  /* 1..64 numbers in [lo, hi] */
     T_IFSREF, /* a preset name or a map list */
+    T_RULES,  /* L-system productions: ["X=successor", "X(p)=successor", ...] (flag: --rule, repeatable) */
 } ktype;
 
 typedef struct keyspec {
@@ -141,6 +142,33 @@ static const keyspec ifs_keys[] = {
     {"half", T_BOOL, 0, 0, false, NULL, "true", "store R, G, B, A as half (flags: --half, --float)"},
 };
 
+static const keyspec lsystem_keys[] = {
+    {"type", T_TYPE, 0, 0, false, NULL, NULL, "generator: \"lsystem\""},
+    {"name", T_NAME, 0, 0, false, NULL, "\"plants\"",
+     "layer name; channels NAME.A (coverage), .R, .G, .B (flag: --layer)"},
+    {"preset", T_ENUM, 0, 0, false, FB_LSYS_PRESETS, NULL,
+     "built-in L-system (default bush when no axiom); axiom, rules, iterations and angle override it"},
+    {"axiom", T_STRING, 0, 0, false, NULL, NULL, "the starting string"},
+    {"rules", T_RULES, 0, FB_LSYS_MAX_RULES, false, NULL, NULL,
+     "productions \"X=successor\" or stochastic \"X(0.3)=successor\" (flag: --rule, repeatable)"},
+    {"iterations", T_INT, 0, 64, false, NULL, NULL, "parallel rewriting steps"},
+    {"angle", T_NUM, -360, 360, false, NULL, NULL, "degrees turned by + and -"},
+    {"heading", T_NUM, -360, 360, false, NULL, "90.0", "initial heading, degrees counter-clockwise from +x (90: up)"},
+    {"step", T_NUM, 0, 1e6, true, NULL, "1.0", "length of F and f, turtle units"},
+    {"width", T_NUM, 0, 100, false, NULL, "0.6", "branch width at the base (bracket depth 0), in steps"},
+    {"taper", T_NUM, 0, 1, true, NULL, "0.65", "width factor per bracket depth"},
+    {"max-symbols", T_INT, 1, 2147483648.0, false, NULL, "268435456",
+     "longest string allowed while rewriting (a longer one stops with an error)"},
+    {"bounds", T_BOUNDS, -1e9, 1e9, false, NULL, "\"auto\"",
+     "frame XMIN,XMAX,YMIN,YMAX in turtle units, or auto (the drawing, padded 4%, square units)"},
+    {"palette", T_ENUM, 0, 0, false, FB_PALETTE_NAMES, "\"foliage\"", "named colour map, by bracket depth"},
+    {"cosine", T_NUMLIST, -10, 10, false, NULL, NULL,
+     "cosine palette a + b cos(2 pi (c t + d)): 12 numbers aR,aG,aB,bR,bG,bB,cR,cG,cB,dR,dG,dB", 12},
+    {"stops", T_STOPS, 0, 1e3, false, NULL, NULL,
+     "gradient: [[t, r, g, b], ...], t rising from 0 to 1 (flag: \"t,r,g,b;t,r,g,b\")"},
+    {"half", T_BOOL, 0, 0, false, NULL, "true", "store A, R, G, B as half (flags: --half, --float)"},
+};
+
 #define NKEYS(a) ((int)(sizeof(a) / sizeof((a)[0])))
 
 static const keyspec *find_key(const keyspec *keys, int n, const char *key)
@@ -165,6 +193,11 @@ static bool kind_keys(const char *kind, const keyspec **keys, int *n)
     if (!strcmp(kind, "ifs")) {
         *keys = ifs_keys;
         *n = NKEYS(ifs_keys);
+        return true;
+    }
+    if (!strcmp(kind, "lsystem")) {
+        *keys = lsystem_keys;
+        *n = NKEYS(lsystem_keys);
         return true;
     }
     return false;
@@ -296,6 +329,7 @@ static fb_result verr(const vctx *v, const char *path, const char *fmt, ...)
     leaf = leaf ? leaf + 1 : path;
     if (!strcmp(leaf, "name")) leaf = "layer";
     if (!strcmp(leaf, "entry")) leaf = "name";
+    if (!strncmp(leaf, "rules", 5)) leaf = "rule";
     return fb_fail(FB_ERR_USAGE, "--%s: %s", leaf, msg);
 }
 
@@ -493,6 +527,24 @@ static fb_result check_value(const vctx *v, const char *path, const keyspec *k, 
         }
         if (!good)
             return verr(v, path, "expected 1 to %d numbers in %g..%g, found %s", FB_IFS_MAX_MAPS, k->lo, k->hi, shown);
+        return FB_OK;
+    }
+    case T_RULES: {
+        size_t n = json_is_array(j) ? json_array_size(j) : 0;
+        if (!json_is_array(j) || n > FB_LSYS_MAX_RULES)
+            return verr(v, path, "expected a list of at most %d rules \"X=successor\", found %s", FB_LSYS_MAX_RULES,
+                        shown);
+        for (size_t i = 0; i < n; i++) {
+            const json_t *e = json_array_get(j, i);
+            char sub[256], msg[256];
+            fb_lsys_rule rule;
+            snprintf(sub, sizeof sub, "%s[%zu]", path, i);
+            if (!json_is_string(e)) {
+                show(e, shown, sizeof shown);
+                return verr(v, sub, "expected a rule \"X=successor\", found %s", shown);
+            }
+            if (!fb_lsys_parse_rule(json_string_value(e), &rule, msg, sizeof msg)) return verr(v, sub, "%s", msg);
+        }
         return FB_OK;
     }
     case T_LAYERS:
@@ -775,6 +827,82 @@ static fb_result parse_ifs(const vctx *v, const char *path, json_t *obj, const f
     return FB_OK;
 }
 
+static fb_result parse_lsystem(const vctx *v, const char *path, json_t *obj, fb_layer *L)
+{
+    char sub[256], msg[256];
+    fb_lsystem_params *f = &L->lsystem;
+    json_t *preset = json_object_get(obj, "preset");
+    if (!preset && !json_object_get(obj, "axiom")) {
+        if (json_object_get(obj, "rules")) {
+            snprintf(sub, sizeof sub, "%s.rules", path);
+            return verr(v, sub, "rules need an axiom (or a preset)");
+        }
+        json_object_set_new(obj, "preset", json_string("bush"));
+        preset = json_object_get(obj, "preset");
+    }
+    /* A preset fills in what the layer does not give; the stored scene then spells it out. */
+    if (preset) {
+        fb_lsys ps;
+        int idx;
+        if (json_is_string(preset) && enum_index(FB_LSYS_PRESETS, json_string_value(preset), &idx) &&
+            !fb_lsys_preset(json_string_value(preset), &ps)) {
+            json_t *rules = json_array();
+            for (int k = 0; k < ps.nrules; k++) {
+                char text[FB_LSYS_MAX_SUCC + 64];
+                if (ps.rules[k].p >= 0)
+                    snprintf(text, sizeof text, "%c(%g)=%s", ps.rules[k].pred, ps.rules[k].p, ps.rules[k].succ);
+                else
+                    snprintf(text, sizeof text, "%c=%s", ps.rules[k].pred, ps.rules[k].succ);
+                json_array_append_new(rules, json_string(text));
+            }
+            if (!json_object_get(obj, "axiom")) json_object_set_new(obj, "axiom", json_string(ps.axiom));
+            if (!json_object_get(obj, "rules"))
+                json_object_set_new(obj, "rules", rules);
+            else
+                json_decref(rules);
+            if (!json_object_get(obj, "iterations"))
+                json_object_set_new(obj, "iterations", json_integer(ps.iterations));
+            if (!json_object_get(obj, "angle")) json_object_set_new(obj, "angle", json_real(ps.angle));
+        }
+    }
+    if (!json_object_get(obj, "rules")) json_object_set_new(obj, "rules", json_array());
+    if (!json_object_get(obj, "iterations")) json_object_set_new(obj, "iterations", json_integer(1));
+    if (!json_object_get(obj, "angle")) json_object_set_new(obj, "angle", json_real(25.0));
+    fb_result rc = check_object(v, path, obj, lsystem_keys, NKEYS(lsystem_keys), "an lsystem layer");
+    if (rc) return rc;
+    fb_lsys *ls = &f->sys;
+    memset(ls, 0, sizeof *ls);
+    const char *axiom = json_string_value(json_object_get(obj, "axiom"));
+    snprintf(sub, sizeof sub, "%s.axiom", path);
+    if (strlen(axiom) > FB_LSYS_MAX_SUCC) return verr(v, sub, "longer than %d symbols", FB_LSYS_MAX_SUCC);
+    snprintf(ls->axiom, sizeof ls->axiom, "%s", axiom);
+    json_t *rules = json_object_get(obj, "rules");
+    ls->nrules = (int)json_array_size(rules);
+    for (int k = 0; k < ls->nrules; k++)
+        fb_lsys_parse_rule(json_string_value(json_array_get(rules, (size_t)k)), &ls->rules[k], msg, sizeof msg);
+    ls->iterations = (int)json_integer_value(json_object_get(obj, "iterations"));
+    ls->angle = num(obj, "angle");
+    int bad;
+    if (!fb_lsys_valid(ls, &bad, msg, sizeof msg)) {
+        if (bad >= 0)
+            snprintf(sub, sizeof sub, "%s.rules[%d]", path, bad);
+        else
+            snprintf(sub, sizeof sub, "%s.axiom", path);
+        return verr(v, sub, "%s", msg);
+    }
+    f->heading = num(obj, "heading");
+    f->step = num(obj, "step");
+    f->width = num(obj, "width");
+    f->taper = num(obj, "taper");
+    f->max_symbols = (uint64_t)json_integer_value(json_object_get(obj, "max-symbols"));
+    json_t *b = json_object_get(obj, "bounds");
+    f->auto_bounds = json_is_string(b);
+    for (size_t i = 0; !f->auto_bounds && i < 4; i++) f->bounds[i] = json_number_value(json_array_get(b, i));
+    if ((rc = parse_palette(v, path, obj, &f->palette))) return rc;
+    L->half = boolean(obj, "half");
+    return FB_OK;
+}
+
 static fb_result parse_root(const vctx *v, json_t *root, fb_scene *s)
 {
     char path[64];
@@ -808,11 +936,14 @@ static fb_result parse_root(const vctx *v, json_t *root, fb_scene *s)
         } else if (!strcmp(t, "ifs")) {
             L->kind = FB_LAYER_IFS;
             rc = parse_ifs(v, path, lj, s, L);
+        } else if (!strcmp(t, "lsystem")) {
+            L->kind = FB_LAYER_LSYSTEM;
+            rc = parse_lsystem(v, path, lj, L);
         } else {
             char sub[80], shown[64];
             snprintf(sub, sizeof sub, "%s.type", path);
             show(type, shown, sizeof shown);
-            rc = verr(v, sub, "unknown generator %s (available: \"fbm\", \"julia\", \"ifs\")", shown);
+            rc = verr(v, sub, "unknown generator %s (available: \"fbm\", \"julia\", \"ifs\", \"lsystem\")", shown);
         }
         if (rc) return rc;
         snprintf(L->name, sizeof L->name, "%s", json_string_value(json_object_get(lj, "name")));
@@ -919,6 +1050,8 @@ static const keyspec *flag_spec(const char *kind, const char *flag, bool *scene_
         flag = "entry"; /* --file X.ifs --name ENTRY */
     else if (!strcmp(flag, "layer"))
         flag = "name";
+    else if (!strcmp(flag, "rule") && !strcmp(kind, "lsystem"))
+        flag = "rules"; /* --rule X=... (repeatable) */
     if (!strcmp(flag, "type") || !strcmp(flag, "layers")) return NULL;
     if (kind_keys(kind, &keys, &n)) {
         const keyspec *k = find_key(keys, n, flag);
@@ -1111,6 +1244,16 @@ fb_result fb_scene_from_flags(const char *kind, int argc, char **argv, char **js
         }
         json_t *target = scene_level ? root : layer;
         json_t *val;
+        if (k->type == T_RULES) { /* repeatable: each --rule adds one production */
+            if (i + 1 >= argc) {
+                rc = fb_fail(FB_ERR_USAGE, "--%s: missing value", flag);
+                goto out;
+            }
+            json_t *list = json_object_get(layer, k->key);
+            if (!list) json_object_set_new(layer, k->key, list = json_array());
+            json_array_append_new(list, json_string(argv[++i]));
+            continue;
+        }
         if (k->type == T_BOOL) {
             val = json_true();
         } else {
@@ -1156,8 +1299,9 @@ void fb_scene_print_keys(const char *kind, void (*print)(const char *line, void 
                 snprintf(range, sizeof range, " %s%g..%g%s", k->lo_open ? "(" : "[", k->lo, k->hi, "]");
             else if (k->type == T_ENUM)
                 snprintf(range, sizeof range, " %s", k->enums);
-            snprintf(line, sizeof line, "  --%-12s %s%s%s%s", !strcmp(k->key, "name") ? "layer" : k->key, k->help,
-                     range, k->def ? "; default " : "", k->def ? k->def : "");
+            const char *flag = !strcmp(k->key, "name") ? "layer" : k->type == T_RULES ? "rule" : k->key;
+            snprintf(line, sizeof line, "  --%-12s %s%s%s%s", flag, k->help, range, k->def ? "; default " : "",
+                     k->def ? k->def : "");
             print(line, user);
         }
     }

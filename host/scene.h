@@ -10,6 +10,7 @@
 #include "exrio.h"
 #include "fb.h"
 #include "ifs.h"
+#include "lsys.h"
 #include "palette.h"
 
 #include <stdbool.h>
@@ -18,7 +19,12 @@
 #define FB_MAX_DIM    65536
 #define FB_MAX_PIXELS (1ull << 31)
 
-typedef enum fb_layer_kind { FB_LAYER_FBM = 0, FB_LAYER_JULIA = 1, FB_LAYER_IFS = 2 } fb_layer_kind;
+typedef enum fb_layer_kind {
+    FB_LAYER_FBM = 0,
+    FB_LAYER_JULIA = 1,
+    FB_LAYER_IFS = 2,
+    FB_LAYER_LSYSTEM = 3
+} fb_layer_kind;
 
 typedef struct fb_fbm_params {
     unsigned noise; /* K_NOISE_* */
@@ -69,6 +75,18 @@ typedef struct fb_ifs_params {
     double brightness, gamma, gamma_threshold, vibrancy, highlight_power;
 } fb_ifs_params;
 
+typedef struct fb_lsystem_params {
+    fb_lsys sys;    /* axiom, rules, iterations, angle */
+    double heading; /* degrees; 90: up */
+    double step;    /* segment length, turtle units */
+    double width;   /* branch width at depth 0, in steps */
+    double taper;   /* width factor per bracket depth */
+    uint64_t max_symbols;
+    bool auto_bounds;
+    double bounds[4];
+    fb_palette_spec palette; /* colour by depth: 0 at the trunk, 1 at the deepest branches */
+} fb_lsystem_params;
+
 typedef struct fb_layer {
     fb_layer_kind kind;
     char name[64];
@@ -76,6 +94,7 @@ typedef struct fb_layer {
     fb_fbm_params fbm;
     fb_julia_params julia;
     fb_ifs_params ifs;
+    fb_lsystem_params lsystem;
 } fb_layer;
 
 typedef struct fb_scene {

@@ -150,6 +150,52 @@ expect_fail 2 "brightness" x.exr -- tonemap tm1.exr -o x.exr --brightness -1
 expect_fail 2 "no ifs layer" x.exr -- tonemap f0.exr -o x.exr
 expect_fail 3 "nofile.exr: cannot open" x.exr -- tonemap nofile.exr -o x.exr
 
+# ---- lsystem ----
+L="lsystem --size 96x64 --quiet"
+expect_fail 2 "\-\-axiom: the axiom has unbalanced brackets: ']' at symbol 2" o.exr -- $L --axiom 'F]' -o o.exr
+expect_fail 2 "\-\-rule: the rule for F has unbalanced brackets: 1 '\[' never closed" o.exr -- $L --axiom F --rule 'F=F[+F' -o o.exr
+expect_fail 2 "max-symbols (268435456) at iteration 29 of 40" o.exr -- $L --axiom F --rule 'F=FF' --iterations 40 -o o.exr
+expect_fail 2 "max-symbols (100) at iteration 3 of 5" o.exr -- $L --preset bush --max-symbols 100 -o o.exr
+expect_fail 2 "rules need an axiom" o.exr -- $L --rule 'F=FF' -o o.exr
+expect_fail 2 "probabilities of the rules for F sum to 0.9" o.exr -- $L --axiom F --rule 'F(0.5)=F+F' --rule 'F(0.4)=F-F' -o o.exr
+expect_fail 2 "give every one a probability" o.exr -- $L --axiom F --rule 'F(0.5)=F+F' --rule 'F=F-F' -o o.exr
+expect_fail 2 "expected a rule X=successor" o.exr -- $L --axiom F --rule '=F' -o o.exr
+expect_fail 2 "brackets cannot be rewritten" o.exr -- $L --axiom F --rule '[=F' -o o.exr
+expect_fail 2 "\-\-preset: expected one of bush" o.exr -- $L --preset oak -o o.exr
+expect_fail 2 "iterations" o.exr -- $L --iterations 65 -o o.exr
+expect_fail 2 "taper" o.exr -- $L --taper 0 -o o.exr
+expect_fail 2 "width.*finite" o.exr -- $L --width nan -o o.exr
+expect_fail 2 "\-\-rule: missing value" o.exr -- $L --axiom F -o o.exr --rule
+expect_fail 2 "segments (F symbols) are more than" o.exr -- $L --axiom F --rule 'F=FF' --iterations 22 -o o.exr
+printf '{"size": [64, 32], "layers": [{"type": "lsystem", "axiom": "F",\n "rules": ["F=F[+F]", 3]}]}' > lrule.json
+expect_fail 2 "lrule.json:2: layers\[0\].rules\[1\]: expected a rule" o.exr -- render lrule.json -o o.exr --quiet
+if "$FB" lsystem --size 96x64 --preset tree -o lt.exr --preview lt.png 2> err.txt; then ok; else bad "lsystem failed: $(cat err.txt)"; fi
+grep -q "wrote lt.exr" err.txt && ok || bad "lsystem: no summary line"
+valid_exr lt.exr
+"$FB" info lt.exr > info4.txt
+grep -q "layer plants .*A (half)" info4.txt && grep -q "R (half)" info4.txt && ok || bad "lsystem layer channels: $(cat info4.txt)"
+grep -q '"X=X\[-FFF\]F\[+FFF\]FX"' info4.txt && ok || bad "the preset's rules are not spelled out in the stored scene"
+[ "$(od -An -tu1 -j25 -N1 lt.png | tr -d ' ')" = "2" ] && ok || bad "the lsystem preview is not an RGB PNG"
+# the preset equals its rules given by hand (repeatable --rule)
+"$FB" $L --axiom Y --rule 'Y=YFX[+Y][-Y]' --rule 'X=X[-FFF]F[+FFF]FX' --iterations 6 --angle 25.7 -o lh.exr
+"$FB" $L --preset tree -o lp.exr
+"$FB" compare lh.exr lp.exr > /dev/null && ok || bad "--rule (repeated) differs from the tree preset"
+# flags change the picture: width, taper, angle, iterations, heading, palette, seed (stochastic)
+for f in "--width 2" "--taper 0.3" "--angle 30" "--iterations 5" "--heading 60" "--palette blossom"; do
+  "$FB" $L --preset tree $f -o lf.exr
+  "$FB" compare lp.exr lf.exr > /dev/null; [ $? -eq 1 ] && ok || bad "lsystem $f changed nothing"
+done
+"$FB" $L --preset stochastic --seed 1 -o ls1.exr
+"$FB" $L --preset stochastic --seed 2 -o ls2.exr
+"$FB" compare ls1.exr ls2.exr > /dev/null; [ $? -eq 1 ] && ok || bad "the stochastic preset ignores the seed"
+# the same bits on every thread count, strip height and backend
+"$FB" $L --preset stochastic --float --backend native --threads 1 --strip-rows 5 -o ln1.exr
+"$FB" $L --preset stochastic --float --backend native --threads 3 --strip-rows 64 -o ln2.exr
+"$FB" $L --preset stochastic --float -o lv1.exr
+cmp -s ln1.exr ln2.exr && ok || bad "lsystem (native) depends on threads or strip rows"
+"$FB" compare ln1.exr lv1.exr --max-abs 0 > /dev/null && ok || bad "lsystem differs between lavapipe and native"
+"$FB" lsystem --help | grep -q -- "--rule " && ok || bad "lsystem --help lists no --rule"
+
 # ---- bad input: scene files ----
 printf '{"size": [64, 32],\n "layers": [\n  {"type": "fbm", "octaves": 3,\n   "octavez": 2}\n ]\n}\n' > unknown.json
 expect_fail 2 "unknown.json:4: layers\[0\].octavez: unknown key" o.exr -- render unknown.json -o o.exr --quiet

@@ -9,6 +9,7 @@
 #include "../host/ifs.h"
 #include "../kernels/ifs.h"
 
+#include "testengines.h"
 #include "testhelp.h"
 
 #include <math.h>
@@ -458,19 +459,8 @@ int main(void)
     test_tone();
 
     fb_engine engines[4];
-    int n = 0;
-    const int threads[3] = {2, 1, 3};
-    for (int i = 0; i < 3; i++)
-        if (fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = threads[i]}, &engines[n]) ==
-            FB_OK)
-            n++;
-    CHECK(n == 3);
-    bool have_gpu =
-        fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .validation = true}, &engines[n]) == FB_OK;
-    if (have_gpu)
-        n++;
-    else
-        printf("no Vulkan device: the lavapipe comparisons are not run\n");
+    bool have_gpu;
+    int n = th_open_engines(engines, &have_gpu);
 
     const double fern_b[4] = {-2.75, 2.75, -0.25, 10.25}, tri_b[4] = {-0.05, 1.05, -0.05, 0.9};
     for (int i = 0; i < n; i += (have_gpu ? 3 : 4)) {
