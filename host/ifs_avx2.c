@@ -194,7 +194,7 @@ bool fb_ifs_avx2_supported(const void *params)
 {
     const K_IfsParams *p = params;
     __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") && p->nmaps <= 8 && p->cmaps == 0;
+    return __builtin_cpu_supports("avx2") && p->nmaps <= 8 && p->cmaps == 0 && p->csegs == 0;
 }
 
 fb_result fb_ifs_avx2_game(const void *params, const void *maps, int threads, uint32_t *hits, uint64_t *sum)

@@ -11,8 +11,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define FB_LSYS_MAX_RULES 64
-#define FB_LSYS_MAX_SUCC  4096 /* symbols in one successor */
+#define FB_LSYS_MAX_RULES 32
+#define FB_LSYS_MAX_SUCC  1000 /* symbols in one successor or the axiom */
 #define FB_LSYS_PRESETS   "bush|tree|sticks|weed|stochastic"
 
 /* One production pred -> succ, chosen with probability p among the productions of pred (p < 0: not

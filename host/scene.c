@@ -119,7 +119,8 @@ static const keyspec ifs_keys[] = {
     {"entry", T_STRING, 0, 0, false, NULL, NULL, "the entry of the .ifs file (flag: --name; default the first)"},
     {"colors", T_FRACS, 0, 1, false, NULL, NULL, "colour coordinate of each map, in [0, 1] (default spread evenly)"},
     {"condensation", T_IFSREF, -1e6, 1e6, false, NULL, NULL,
-     "condensation set C: a preset name or a map list; w0 sends any point onto C"},
+     "condensation set C: an IFS preset name or map list, or an L-system {\"preset\": \"tree\", ...} (flag: "
+     "lsystem:tree); w0 sends any point onto C"},
     {"condensation-probability", T_NUM, 0, 1, true, NULL, "0.5", "probability of the condensation map w0"},
     {"points", T_INT, 0, 1e14, false, NULL, "0", "chaos-game steps in all (0: 64 per histogram cell)"},
     {"skip", T_INT, 0, 1000000, false, NULL, "0",
@@ -167,6 +168,18 @@ static const keyspec lsystem_keys[] = {
     {"stops", T_STOPS, 0, 1e3, false, NULL, NULL,
      "gradient: [[t, r, g, b], ...], t rising from 0 to 1 (flag: \"t,r,g,b;t,r,g,b\")"},
     {"half", T_BOOL, 0, 0, false, NULL, "true", "store A, R, G, B as half (flags: --half, --float)"},
+};
+
+/* The keys of an L-system condensation set of an ifs layer ("condensation": {"preset": "tree"}). */
+static const keyspec cond_lsystem_keys[] = {
+    {"preset", T_ENUM, 0, 0, false, FB_LSYS_PRESETS, NULL, "built-in L-system"},
+    {"axiom", T_STRING, 0, 0, false, NULL, NULL, "the starting string"},
+    {"rules", T_RULES, 0, FB_LSYS_MAX_RULES, false, NULL, NULL, "productions \"X=successor\""},
+    {"iterations", T_INT, 0, 64, false, NULL, NULL, "parallel rewriting steps"},
+    {"angle", T_NUM, -360, 360, false, NULL, NULL, "degrees turned by + and -"},
+    {"heading", T_NUM, -360, 360, false, NULL, "90.0", "initial heading, degrees (90: up)"},
+    {"height", T_NUM, 0, 1e6, true, NULL, "0.25",
+     "the drawing's largest extent in the IFS's units, base at the origin"},
 };
 
 #define NKEYS(a) ((int)(sizeof(a) / sizeof((a)[0])))
@@ -325,6 +338,9 @@ static fb_result verr(const vctx *v, const char *path, const char *fmt, ...)
         int line = locate(&c, path);
         return fb_fail(FB_ERR_INPUT, "%s:%d: %s: %s", v->origin, line, path[0] ? path : "(top level)", msg);
     }
+    const char *inner = strstr(path, ".condensation.");
+    if (inner) /* a key of an L-system condensation set given as one --condensation JSON value */
+        return fb_fail(FB_ERR_USAGE, "--condensation: %s: %s", inner + strlen(".condensation."), msg);
     const char *leaf = strrchr(path, '.');
     leaf = leaf ? leaf + 1 : path;
     if (!strcmp(leaf, "name")) leaf = "layer";
@@ -490,11 +506,12 @@ static fb_result check_value(const vctx *v, const char *path, const keyspec *k, 
             return verr(v, path, "expected a non-empty string, found %s", shown);
         return FB_OK;
     case T_IFSREF:
+        if (json_is_object(j)) return FB_OK; /* an L-system: checked by parse_ifs */
         if (json_is_string(j)) {
             if (!enum_index(FB_IFS_PRESETS, json_string_value(j), &idx) || !strcmp(json_string_value(j), "population"))
                 return verr(v, path,
-                            "expected a preset name (fern|sierpinski|maple|tree|spiral) or a map list, "
-                            "found %s",
+                            "expected an IFS preset name (fern|sierpinski|maple|tree|spiral), a map list or an "
+                            "L-system {\"preset\": ...}, found %s",
                             shown);
             return FB_OK;
         }
@@ -570,7 +587,8 @@ static fb_result check_object(const vctx *v, const char *path, json_t *obj, cons
             char known[512] = "";
             for (int i = 0; i < n; i++)
                 snprintf(known + strlen(known), sizeof known - strlen(known), "%s%s", i ? ", " : "", keys[i].key);
-            if (!v->origin) return fb_fail(FB_ERR_USAGE, "--%s: unknown flag for %s", key, what);
+            if (!v->origin && !strstr(sub, ".condensation."))
+                return fb_fail(FB_ERR_USAGE, "--%s: unknown flag for %s", key, what);
             return verr(v, sub, "unknown key for %s (known keys: %s)", what, known);
         }
         fb_result rc = check_value(v, sub, k, val);
@@ -748,6 +766,9 @@ static void spread_colors(const json_t *given, int n, double *out)
         out[k] = given ? json_number_value(json_array_get(given, (size_t)k)) : n > 1 ? (double)k / (n - 1) : 0.5;
 }
 
+static fb_result parse_lsys_def(const vctx *v, const char *path, json_t *obj, const keyspec *keys, int nkeys,
+                                const char *what, fb_lsys *ls);
+
 static fb_result parse_ifs(const vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
 {
     char sub[256];
@@ -788,7 +809,14 @@ static fb_result parse_ifs(const vctx *v, const char *path, json_t *obj, const f
     json_t *cond = json_object_get(obj, "condensation");
     snprintf(sub, sizeof sub, "%s.condensation", path);
     if (cond && f->has_cond) return verr(v, sub, "the population preset has its own condensation set");
-    if (cond) {
+    if (cond && json_is_object(cond)) {
+        f->has_cond = f->cond_lsys = true;
+        rc = parse_lsys_def(v, sub, cond, cond_lsystem_keys, NKEYS(cond_lsystem_keys), "an L-system condensation set",
+                            &f->cond_sys);
+        if (rc) return rc;
+        f->cond_heading = num(cond, "heading");
+        f->cond_height = num(cond, "height");
+    } else if (cond) {
         f->has_cond = true;
         if (json_is_string(cond))
             rc = fb_ifs_preset(json_string_value(cond), &f->cond, NULL, NULL);
@@ -827,10 +855,12 @@ static fb_result parse_ifs(const vctx *v, const char *path, json_t *obj, const f
     return FB_OK;
 }
 
-static fb_result parse_lsystem(const vctx *v, const char *path, json_t *obj, fb_layer *L)
+/* The L-system of `obj` (a layer, or an ifs layer's condensation set): a preset fills in what the
+ * object does not give, and the stored scene then spells it out; keys checked against `keys`. */
+static fb_result parse_lsys_def(const vctx *v, const char *path, json_t *obj, const keyspec *keys, int nkeys,
+                                const char *what, fb_lsys *ls)
 {
     char sub[256], msg[256];
-    fb_lsystem_params *f = &L->lsystem;
     json_t *preset = json_object_get(obj, "preset");
     if (!preset && !json_object_get(obj, "axiom")) {
         if (json_object_get(obj, "rules")) {
@@ -840,7 +870,6 @@ static fb_result parse_lsystem(const vctx *v, const char *path, json_t *obj, fb_
         json_object_set_new(obj, "preset", json_string("bush"));
         preset = json_object_get(obj, "preset");
     }
-    /* A preset fills in what the layer does not give; the stored scene then spells it out. */
     if (preset) {
         fb_lsys ps;
         int idx;
@@ -868,9 +897,8 @@ static fb_result parse_lsystem(const vctx *v, const char *path, json_t *obj, fb_
     if (!json_object_get(obj, "rules")) json_object_set_new(obj, "rules", json_array());
     if (!json_object_get(obj, "iterations")) json_object_set_new(obj, "iterations", json_integer(1));
     if (!json_object_get(obj, "angle")) json_object_set_new(obj, "angle", json_real(25.0));
-    fb_result rc = check_object(v, path, obj, lsystem_keys, NKEYS(lsystem_keys), "an lsystem layer");
+    fb_result rc = check_object(v, path, obj, keys, nkeys, what);
     if (rc) return rc;
-    fb_lsys *ls = &f->sys;
     memset(ls, 0, sizeof *ls);
     const char *axiom = json_string_value(json_object_get(obj, "axiom"));
     snprintf(sub, sizeof sub, "%s.axiom", path);
@@ -890,6 +918,14 @@ static fb_result parse_lsystem(const vctx *v, const char *path, json_t *obj, fb_
             snprintf(sub, sizeof sub, "%s.axiom", path);
         return verr(v, sub, "%s", msg);
     }
+    return FB_OK;
+}
+
+static fb_result parse_lsystem(const vctx *v, const char *path, json_t *obj, fb_layer *L)
+{
+    fb_lsystem_params *f = &L->lsystem;
+    fb_result rc = parse_lsys_def(v, path, obj, lsystem_keys, NKEYS(lsystem_keys), "an lsystem layer", &f->sys);
+    if (rc) return rc;
     f->heading = num(obj, "heading");
     f->step = num(obj, "step");
     f->width = num(obj, "width");
@@ -1168,6 +1204,14 @@ static json_t *flag_value(const keyspec *k, const char *flag, const char *s)
     case T_MAPS:
     case T_IFSREF: {
         /* "a,b,c,d,e,f[,p];..." or, for a condensation set, a preset name */
+        if (k->type == T_IFSREF && !strncmp(s, "lsystem:", 8)) return json_pack("{ss}", "preset", s + 8);
+        if (k->type == T_IFSREF && *s == '{') {
+            json_t *obj = json_loads(s, JSON_REJECT_DUPLICATES, NULL);
+            if (json_is_object(obj)) return obj;
+            json_decref(obj);
+            fb_fail(FB_ERR_USAGE, "--%s: expected a JSON object such as {\"preset\": \"tree\"}, found \"%s\"", flag, s);
+            return NULL;
+        }
         if (k->type == T_IFSREF && (isalpha((unsigned char)*s))) return json_string(s);
         json_t *arr = json_array();
         const char *q = s;

@@ -62,6 +62,10 @@ typedef struct fb_ifs_params {
     fb_ifs maps; /* w1..wN (probabilities as given, or -1) */
     fb_ifs cond; /* the condensation set's IFS when has_cond */
     bool has_cond;
+    bool cond_lsys;                 /* the condensation set is an L-system drawing instead of cond */
+    fb_lsys cond_sys;               /* ... derived with the scene's seed, drawn by the turtle */
+    double cond_heading;            /* its initial heading, degrees */
+    double cond_height;             /* its largest extent, in the IFS's units (base at the origin) */
     double cond_p;                  /* probability of the condensation map w0 */
     double colors[FB_IFS_MAX_MAPS]; /* colour coordinate of each map of `maps` */
     double cond_colors[FB_IFS_MAX_MAPS];

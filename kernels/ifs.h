@@ -45,8 +45,9 @@ K_STRUCT(K_IfsParams)
     uint base;   /* total steps of chain i: base + (i < extra ? 1 : 0) */
     uint extra;
     uint hist_w, hist_h; /* histogram size (image size times the oversampling factor) */
-    uint pad0;
-    float x0, y0; /* frame: column (x - x0) sx, row (y0 - y) sy (y up in the plane, down in the image) */
+    uint csegs;          /* condensation onto an L-system drawing: its segments follow at nmaps..nmaps+csegs-1
+                            (0: none), segment k as the map of (u, 0) to its point at parameter u */
+    float x0, y0;        /* frame: column (x - x0) sx, row (y0 - y) sy (y up in the plane, down in the image) */
     float sx, sy;
     float limit; /* a chain whose |x| or |y| exceeds this restarts */
     float pad1;
@@ -143,9 +144,19 @@ K_FN K_IfsChain k_ifs_step(K_IfsParams p, K_IfsChain s, uint chain, uint t K_IFS
         escaped = k_ifs_escaped(p, q.x, q.y);
     }
     if (r < k_ifs_maps[0].thr) { /* w0: onto the condensation set */
-        s.x = s.cx;
-        s.y = s.cy;
-        s.c = s.cc;
+        if (p.csegs > 0u) {
+            /* a point uniform on the drawing: its segments are equally long (one turtle step) */
+            uint h = k_hash(r ^ 0x5bd1e995u);
+            K_IfsMap m = k_ifs_maps[p.nmaps + h % p.csegs];
+            K_IfsPoint q = k_ifs_apply(m, k_u01(k_hash(h ^ 0x27d4eb2du)), 0.0f, m.colour);
+            s.x = q.x;
+            s.y = q.y;
+            s.c = q.c;
+        } else {
+            s.x = s.cx;
+            s.y = s.cy;
+            s.c = s.cc;
+        }
     } else {
         K_IfsPoint q = k_ifs_apply(k_ifs_maps[k_ifs_pick(r, 0u, p.nmaps K_IFS_MAPS)], s.x, s.y, s.c);
         s.x = q.x;

@@ -195,6 +195,15 @@ done
 cmp -s ln1.exr ln2.exr && ok || bad "lsystem (native) depends on threads or strip rows"
 "$FB" compare ln1.exr lv1.exr --max-abs 0 > /dev/null && ok || bad "lsystem differs between lavapipe and native"
 "$FB" lsystem --help | grep -q -- "--rule " && ok || bad "lsystem --help lists no --rule"
+# an L-system as the condensation set of an IFS
+if "$FB" ifs --size 96x48 --quiet --points 300000 --maps "0.75,0,0,0.75,0.25,0" --condensation lsystem:tree -o lc.exr 2> err.txt; then ok; else bad "ifs with an L-system condensation set failed: $(cat err.txt)"; fi
+"$FB" info lc.exr | grep -q '"Y=YFX\[+Y\]\[-Y\]"' && ok || bad "the condensation L-system is not spelled out in the stored scene"
+"$FB" ifs --size 96x48 --quiet --points 300000 --maps "0.75,0,0,0.75,0.25,0" --condensation '{"preset": "tree", "height": 0.1}' -o lc2.exr
+"$FB" compare lc.exr lc2.exr > /dev/null; [ $? -eq 1 ] && ok || bad "the condensation height changed nothing"
+expect_fail 2 "\-\-condensation: width: unknown key for an L-system condensation set" o.exr -- $I --maps "0.75,0,0,0.75,0.25,0" --condensation '{"preset": "tree", "width": 2}' -o o.exr
+expect_fail 2 "condensation: expected a JSON object" o.exr -- $I --maps "0.75,0,0,0.75,0.25,0" --condensation '{"preset": ' -o o.exr
+expect_fail 2 "condensation: the L-system draws 0 segments" o.exr -- $I --maps "0.75,0,0,0.75,0.25,0" --condensation '{"axiom": "X"}' -o o.exr
+expect_fail 2 "\-\-condensation: rules\[0\]: the rule for F has unbalanced brackets" o.exr -- $I --maps "0.75,0,0,0.75,0.25,0" --condensation '{"axiom": "F", "rules": ["F=F["]}' -o o.exr
 
 # ---- bad input: scene files ----
 printf '{"size": [64, 32],\n "layers": [\n  {"type": "fbm", "octaves": 3,\n   "octavez": 2}\n ]\n}\n' > unknown.json

@@ -191,13 +191,15 @@ static bool same_run(const run_out *a, const run_out *b)
 /* The same histogram on 1, 2 and 3 threads, on lavapipe, and with condensation. */
 static void test_determinism(fb_engine *engines, int nengines)
 {
-    const char *scenes[2] = {
+    const char *scenes[3] = {
         "{\"size\": [300, 200], \"seed\": 11, \"layers\": [{\"type\": \"ifs\", \"preset\": \"maple\", "
         "\"points\": 3000000, \"oversample\": 2}]}",
         "{\"size\": [300, 200], \"seed\": 12, \"layers\": [{\"type\": \"ifs\", \"preset\": \"population\", "
         "\"points\": 3000000}]}",
+        "{\"size\": [300, 200], \"seed\": 13, \"layers\": [{\"type\": \"ifs\", \"maps\": [[0.6, 0, 0, 0.6, 0.4, 0]], "
+        "\"condensation\": {\"preset\": \"stochastic\", \"iterations\": 4}, \"points\": 3000000}]}",
     };
-    for (int sc = 0; sc < 2; sc++) {
+    for (int sc = 0; sc < 3; sc++) {
         run_out first;
         fb_result rc = run_scene(&engines[0], scenes[sc], &first);
         CHECKF(rc == FB_OK, "%s", g_last_error);
@@ -212,15 +214,16 @@ static void test_determinism(fb_engine *engines, int nengines)
     }
 }
 
-/* The population: trees at x_k = 1 - 0.75^k whose tops are at 0.75^k times the first one's. */
-static void test_condensation_row(fb_engine *e)
+/* The population: trees at x_k = 1 - 0.75^k whose tops are at 0.75^k times the first one's; C the
+ * tree IFS (the preset) or an L-system tree 0.25 high. */
+static void test_condensation_row(fb_engine *e, const char *set)
 {
     const double b[4] = {-0.2, 1.1, -0.02, 0.3};
     char json[512];
     snprintf(json, sizeof json,
-             "{\"size\": [2048, 504], \"seed\": 4, \"layers\": [{\"type\": \"ifs\", \"preset\": \"population\", "
+             "{\"size\": [2048, 504], \"seed\": 4, \"layers\": [{\"type\": \"ifs\", %s, "
              "\"points\": 40000000, \"bounds\": [%g, %g, %g, %g]}]}",
-             b[0], b[1], b[2], b[3]);
+             set, b[0], b[1], b[2], b[3]);
     run_out r;
     fb_result rc = run_scene(e, json, &r);
     CHECKF(rc == FB_OK, "%s", g_last_error);
@@ -240,8 +243,46 @@ static void test_condensation_row(fb_engine *e)
         top[k] = b[3] - (row + 0.5) / r.height * (b[3] - b[2]); /* the tree stands on y = 0 */
     }
     for (int k = 0; k + 1 < 5; k++)
-        CHECKF(fabs(top[k + 1] / top[k] - 0.75) < 0.025, "tree %d to %d: height ratio %.4f (tops %.4f, %.4f)", k, k + 1,
-               top[k + 1] / top[k], top[k], top[k + 1]);
+        CHECKF(fabs(top[k + 1] / top[k] - 0.75) < 0.025, "%s: tree %d to %d: height ratio %.4f (tops %.4f, %.4f)", set,
+               k, k + 1, top[k + 1] / top[k], top[k], top[k + 1]);
+    run_free(&r);
+}
+
+static double seg_dist(double px, double py, double ax, double ay, double bx, double by)
+{
+    double dx = bx - ax, dy = by - ay, t = ((px - ax) * dx + (py - ay) * dy) / (dx * dx + dy * dy);
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    return hypot(px - ax - t * dx, py - ay - t * dy);
+}
+
+/* An L-system condensation set with w0 taken at every step: every plotted point lies on the drawing
+ * (the turtle's segments, base at the origin, scaled to `height`), so every hit cell's centre is
+ * within half a cell diagonal of a segment; and the drawing is covered end to end. */
+static void test_condensation_lsystem(fb_engine *e)
+{
+    const char *json = "{\"size\": [200, 200], \"seed\": 3, \"layers\": [{\"type\": \"ifs\", \"maps\": [[0.5, 0, 0, "
+                       "0.5, 0, 0]], \"condensation\": {\"axiom\": \"F[+F]F[-F]F\", \"angle\": 30, \"height\": 1.5}, "
+                       "\"condensation-probability\": 1, \"points\": 400000, \"bounds\": [-1, 1, -0.25, 1.75]}]}";
+    run_out r;
+    CHECKF(run_scene(e, json, &r) == FB_OK, "%s", g_last_error);
+    if (!r.count) return;
+    /* the drawing by hand: a stem of three steps with a branch at 30 degrees either side after the first */
+    const double c30 = cos(M_PI / 6), s30 = sin(M_PI / 6), k = 1.5 / 3.0; /* extent 3 steps -> 1.5 */
+    const double seg[5][4] = {{0, 0, 0, 1}, {0, 1, -s30, 1 + c30}, {0, 1, 0, 2}, {0, 2, s30, 2 + c30}, {0, 2, 0, 3}};
+    int far = 0, hit = 0;
+    double top = 0;
+    for (int y = 0; y < 200; y++)
+        for (int x = 0; x < 200; x++) {
+            if (!r.count[y * 200 + x]) continue;
+            hit++;
+            double px = -1 + (x + 0.5) * 0.01, py = 1.75 - (y + 0.5) * 0.01, d = 1e9;
+            for (int i = 0; i < 5; i++)
+                d = fmin(d, seg_dist(px, py, seg[i][0] * k, seg[i][1] * k, seg[i][2] * k, seg[i][3] * k));
+            far += d > 0.01 * M_SQRT1_2 + 1e-6;
+            top = fmax(top, py);
+        }
+    CHECKF(far == 0 && hit > 240, "%d of %d hit cells off the drawing", far, hit);
+    CHECKF(fabs(top - 1.5) < 0.011, "the drawing's top at %g, expected 1.5", top);
     run_free(&r);
 }
 
@@ -471,7 +512,10 @@ int main(void)
     test_accounting(&engines[0]);
     if (have_gpu) test_accounting(&engines[n - 1]);
     test_determinism(engines, n);
-    test_condensation_row(&engines[0]);
+    test_condensation_row(&engines[0], "\"preset\": \"population\"");
+    test_condensation_row(&engines[0],
+                          "\"maps\": [[0.75, 0, 0, 0.75, 0.25, 0]], \"condensation\": {\"preset\": \"tree\"}");
+    test_condensation_lsystem(&engines[0]);
     test_keys(&engines[0]);
     if (have_gpu) CHECKF(vkc_validation_messages(engines[n - 1].vk) == 0, "validation layer messages");
     for (int i = 0; i < n; i++) fb_engine_close(&engines[i]);

@@ -106,12 +106,12 @@ static void test_explosion(void)
     free(s);
 }
 
-/* Stochastic productions: each of 4096 A's decides once per iteration for 64 iterations (262144
+/* Stochastic productions: each of 1000 A's decides once per iteration for 64 iterations (64000
  * draws); the count of each successor is binomial, and must be within 5 standard deviations. */
 static void test_stochastic(void)
 {
     fb_lsys ls = {.nrules = 3, .iterations = 64};
-    memset(ls.axiom, 'A', 4096);
+    memset(ls.axiom, 'A', 1000);
     char msg[256];
     CHECK(fb_lsys_parse_rule("A(0.2)=AB", &ls.rules[0], msg, sizeof msg));
     CHECK(fb_lsys_parse_rule("A(0.3)=AC", &ls.rules[1], msg, sizeof msg));
@@ -120,8 +120,8 @@ static void test_stochastic(void)
     CHECK(fb_lsys_valid(&ls, &bad, msg, sizeof msg));
     size_t n;
     char *s = derive(&ls, 7, &n);
-    const double N = 4096.0 * 64, p[3] = {0.2, 0.3, 0.5};
-    CHECK(n == 4096 * 65);
+    const double N = 1000.0 * 64, p[3] = {0.2, 0.3, 0.5};
+    CHECK(n == 1000 * 65);
     for (int k = 0; k < 3 && s; k++) {
         double got = (double)count_char(s, "BCD"[k]), sd = sqrt(N * p[k] * (1 - p[k]));
         CHECKF(fabs(got - N * p[k]) < 5 * sd, "%c: %g, expected %g +- %g", "BCD"[k], got, N * p[k], 5 * sd);

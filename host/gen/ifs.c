@@ -10,6 +10,7 @@
 #include "../gen.h"
 #include "../ifs.h"
 #include "../ifs_avx2.h"
+#include "../lsys.h"
 #include "../palette.h"
 #include "../progress.h"
 
@@ -33,7 +34,7 @@ _Static_assert(sizeof(K_IfsParams) == 72 && sizeof(K_IfsParams) <= FB_GEN_MAX_PU
 
 typedef struct ifs_state {
     K_IfsParams p;
-    K_IfsMap table[2 * K_IFS_MAX_MAPS];
+    K_IfsMap *table; /* w1..wN, then C's maps or its segments */
     uint32_t ntable;
     uint32_t k; /* oversampling */
     uint64_t points;
@@ -106,6 +107,59 @@ static void auto_bounds(const ifs_state *st, int width, int height, double b[4])
     else
         h = w / aspect;
     b[0] = cx - w / 2, b[1] = cx + w / 2, b[2] = cy - h / 2, b[3] = cy + h / 2;
+}
+
+/* An L-system condensation set: the turtle's drawing with its start at the origin, scaled so that
+ * its largest extent is cond_height, each segment as the map (u, 0) -> its point at parameter u,
+ * coloured by bracket depth (0 at the base, 1 at the deepest branches). */
+#define MAX_COND_SEGMENTS (1u << 20)
+
+static fb_result lsystem_condensation(const fb_gen *g, K_IfsMap **out, uint32_t *n)
+{
+    const fb_ifs_params *f = &g->layer->ifs;
+    char who[96], *str = NULL;
+    size_t len = 0, nsegs = 0;
+    fb_lsys_seg *segs = NULL;
+    int depth = 0;
+    snprintf(who, sizeof who, "layer %s: condensation", g->layer->name);
+    fb_result rc = fb_lsys_derive(&f->cond_sys, g->scene->seed, 1u << 28, who, &str, &len);
+    if (rc) return rc;
+    size_t nf = 0;
+    for (size_t i = 0; i < len; i++) nf += str[i] == 'F';
+    if (nf == 0 || nf > MAX_COND_SEGMENTS) {
+        free(str);
+        return fb_fail(FB_ERR_INPUT, "%s: the L-system draws %zu segments; a condensation set needs 1 to %u", who, nf,
+                       MAX_COND_SEGMENTS);
+    }
+    rc = fb_lsys_turtle(str, len, f->cond_sys.angle, f->cond_heading, 1.0, who, &segs, &nsegs, &depth);
+    free(str);
+    if (rc) return rc;
+    double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+    for (size_t i = 0; i < nsegs; i++) {
+        x0 = fmin(x0, fmin(segs[i].x0, segs[i].x1)), x1 = fmax(x1, fmax(segs[i].x0, segs[i].x1));
+        y0 = fmin(y0, fmin(segs[i].y0, segs[i].y1)), y1 = fmax(y1, fmax(segs[i].y0, segs[i].y1));
+    }
+    double k = f->cond_height / fmax(x1 - x0, y1 - y0);
+    K_IfsMap *m = malloc(nsegs * sizeof *m);
+    if (!m) {
+        free(segs);
+        return fb_fail(FB_ERR_NOMEM, "out of memory");
+    }
+    for (size_t i = 0; i < nsegs; i++) {
+        const fb_lsys_seg *q = &segs[i];
+        m[i] = (K_IfsMap){(float)((q->x1 - q->x0) * k),
+                          0.0f,
+                          (float)((q->y1 - q->y0) * k),
+                          0.0f,
+                          (float)(q->x0 * k),
+                          (float)(q->y0 * k),
+                          (float)(depth ? (double)q->depth / depth : 0.0),
+                          0u};
+    }
+    free(segs);
+    *out = m;
+    *n = (uint32_t)nsegs;
+    return FB_OK;
 }
 
 /* ---- the chaos game, natively --------------------------------------------------------------- */
@@ -474,6 +528,7 @@ static void ifs_fini(fb_gen *g)
     free(st->count);
     free(st->density);
     free(st->colour);
+    free(st->table);
 }
 
 const fb_ifs_stats *fb_gen_ifs_stats(const fb_gen *g)
@@ -493,20 +548,34 @@ fb_result fb_gen_ifs_init(fb_gen *g)
     st->k = (uint32_t)f->oversample;
     p->seed = s->seed;
     p->nmaps = (uint32_t)f->maps.n;
-    p->cmaps = f->has_cond ? (uint32_t)f->cond.n : 0u;
+    bool cond_ifs = f->has_cond && !f->cond_lsys;
+    p->cmaps = cond_ifs ? (uint32_t)f->cond.n : 0u;
+    K_IfsMap *segs = NULL;
+    if (f->cond_lsys) {
+        fb_result rc = lsystem_condensation(g, &segs, &p->csegs);
+        if (rc) return rc;
+    }
     uint64_t lo = f->has_cond ? (uint64_t)llround(f->cond_p * 4294967296.0) : 0;
     if (lo > 0xffffffffu) lo = 0xffffffffu;
+    st->ntable = p->nmaps + p->cmaps + p->csegs;
+    st->table = calloc(st->ntable, sizeof *st->table);
+    if (!st->table) {
+        free(segs);
+        return fb_fail(FB_ERR_NOMEM, "out of memory");
+    }
     fill_table(&f->maps, f->colors, lo, st->table);
-    if (f->has_cond) fill_table(&f->cond, f->cond_colors, 0, st->table + p->nmaps);
+    if (cond_ifs) fill_table(&f->cond, f->cond_colors, 0, st->table + p->nmaps);
+    if (p->csegs) memcpy(st->table + p->nmaps, segs, p->csegs * sizeof *segs);
+    free(segs);
     st->table[0].thr = (uint32_t)lo; /* below it: the condensation map w0 */
-    st->ntable = p->nmaps + p->cmaps;
     p->skip = (uint32_t)(f->skip ? f->skip : fb_ifs_auto_skip(&f->maps));
-    if (f->has_cond && !f->skip) {
+    if (cond_ifs && !f->skip) {
         uint32_t cs = (uint32_t)fb_ifs_auto_skip(&f->cond);
         if (cs > p->skip) p->skip = cs;
     }
     double radius = attractor_radius(&f->maps);
-    if (f->has_cond) radius += attractor_radius(&f->cond);
+    if (cond_ifs) radius += attractor_radius(&f->cond);
+    if (f->cond_lsys) radius += f->cond_height * 1.5;
     p->limit = (float)(radius * 1e3);
     p->hist_w = (uint32_t)s->width * st->k;
     p->hist_h = (uint32_t)s->height * st->k;
