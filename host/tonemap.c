@@ -41,12 +41,13 @@ static fb_result apply_flags(json_t *lj, int argc, char **argv)
     json_object_foreach(given, key, val)
     {
         if (!strcmp(key, "type")) continue;
-        if (!tone_key(key)) {
+        if (!tone_key(key)) { /* the message first: `key` belongs to root */
+            rc = fb_fail(FB_ERR_USAGE,
+                         "--%s: not a tone-mapping flag (tonemap takes --brightness, --gamma, --gamma-threshold, "
+                         "--vibrancy, --highlight-power, --palette, --cosine, --stops)",
+                         key);
             json_decref(root);
-            return fb_fail(FB_ERR_USAGE,
-                           "--%s: not a tone-mapping flag (tonemap takes --brightness, --gamma, --gamma-threshold, "
-                           "--vibrancy, --highlight-power, --palette, --cosine, --stops)",
-                           key);
+            return rc;
         }
         if (!strcmp(key, "palette") || !strcmp(key, "cosine") || !strcmp(key, "stops")) {
             json_object_del(lj, "cosine");
