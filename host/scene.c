@@ -180,6 +180,7 @@ static const keyspec cond_lsystem_keys[] = {
     {"heading", T_NUM, -360, 360, false, NULL, "90.0", "initial heading, degrees (90: up)"},
     {"height", T_NUM, 0, 1e6, true, NULL, "0.25",
      "the drawing's largest extent in the IFS's units, base at the origin"},
+    {"max-symbols", T_INT, 1, 2147483648.0, false, NULL, "268435456", "longest string allowed while rewriting"},
 };
 
 #define NKEYS(a) ((int)(sizeof(a) / sizeof((a)[0])))
@@ -816,6 +817,7 @@ static fb_result parse_ifs(const vctx *v, const char *path, json_t *obj, const f
         if (rc) return rc;
         f->cond_heading = num(cond, "heading");
         f->cond_height = num(cond, "height");
+        f->cond_max_symbols = (uint64_t)json_integer_value(json_object_get(cond, "max-symbols"));
     } else if (cond) {
         f->has_cond = true;
         if (json_is_string(cond))

@@ -66,6 +66,7 @@ typedef struct fb_ifs_params {
     fb_lsys cond_sys;               /* ... derived with the scene's seed, drawn by the turtle */
     double cond_heading;            /* its initial heading, degrees */
     double cond_height;             /* its largest extent, in the IFS's units (base at the origin) */
+    uint64_t cond_max_symbols;      /* its rewriting bound */
     double cond_p;                  /* probability of the condensation map w0 */
     double colors[FB_IFS_MAX_MAPS]; /* colour coordinate of each map of `maps` */
     double cond_colors[FB_IFS_MAX_MAPS];

@@ -202,6 +202,7 @@ if "$FB" ifs --size 96x48 --quiet --points 300000 --maps "0.75,0,0,0.75,0.25,0" 
 "$FB" compare lc.exr lc2.exr > /dev/null; [ $? -eq 1 ] && ok || bad "the condensation height changed nothing"
 "$FB" ifs --size 96x48 --quiet --points 300000 --maps "0.75,0,0,0.75,0.25,0" --condensation '{"preset": "tree", "heading": 80}' -o lc3.exr
 "$FB" compare lc.exr lc3.exr > /dev/null; [ $? -eq 1 ] && ok || bad "the condensation heading changed nothing"
+expect_fail 2 "condensation: the string would exceed max-symbols (50) at iteration 2 of 6" o.exr -- $I --maps "0.75,0,0,0.75,0.25,0" --condensation '{"preset": "tree", "max-symbols": 50}' -o o.exr
 expect_fail 2 "\-\-condensation: width: unknown key for an L-system condensation set" o.exr -- $I --maps "0.75,0,0,0.75,0.25,0" --condensation '{"preset": "tree", "width": 2}' -o o.exr
 expect_fail 2 "condensation: expected a JSON object" o.exr -- $I --maps "0.75,0,0,0.75,0.25,0" --condensation '{"preset": ' -o o.exr
 expect_fail 2 "condensation: the L-system draws 0 segments" o.exr -- $I --maps "0.75,0,0,0.75,0.25,0" --condensation '{"axiom": "X"}' -o o.exr
