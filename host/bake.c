@@ -235,6 +235,8 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     }
     int prgb = runs[0].gen.preview_rgb;
     if (d->preview && (rc = fb_preview_create(s->width, s->height, 2048, prgb > 0 ? 3 : 1, &preview))) goto out;
+    if (preview && prgb <= 0 && runs[0].gen.preview_shade[0] > 0)
+        fb_preview_set_hillshade(preview, runs[0].gen.preview_shade[0], runs[0].gen.preview_shade[1]);
 
     fb_progress prog;
     fb_progress_init(&prog, d->progress, "bake", "pix");
@@ -271,6 +273,11 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
                      vkc_validation_messages(e->vk));
     if (!rc && w) rc = exrio_writer_finish(&w);
     if (!rc && preview) rc = fb_preview_write_png(preview, d->preview);
+    for (int i = 0; i < s->nlayers && !rc; i++)
+        if (runs[i].gen.finish) rc = runs[i].gen.finish(&runs[i].gen);
+    for (int i = 0; i < s->nlayers && !rc && d->report; i++)
+        if (runs[i].gen.summary[0])
+            d->report(runs[i].gen.layer->name, runs[i].gen.summary, runs[i].gen.summary_json, d->user);
 out:
     exrio_writer_abort(&w);
     fb_preview_destroy(&preview);

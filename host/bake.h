@@ -42,6 +42,10 @@ typedef struct fb_bake_desc {
     const char *preview; /* PNG path or NULL */
     int strip_rows;      /* 0: automatic */
     bool progress;       /* draw a progress bar on stderr */
+    /* Called after a successful bake for each layer that reports on its computation (terrain):
+     * a human line and a JSON object. NULL: no reports. */
+    void (*report)(const char *layer, const char *summary, const char *json, void *user);
+    void *user;
 } fb_bake_desc;
 
 typedef struct fb_bake_stats {

@@ -44,6 +44,14 @@ struct fb_gen {
     fb_result (*prepare)(fb_gen *g, struct fb_engine *e, bool progress);
     double prepare_gpu_seconds; /* set by prepare: dispatch time on the GPU, else -1 */
 
+    /* Side outputs (a mesh file) are written to temporary files by prepare and moved into place by
+     * finish, called only after the EXR is complete, so that a failed bake leaves no output. */
+    fb_result (*finish)(fb_gen *g);
+    double preview_shade[2]; /* > 0: the preview shows preview_channel as a hillshade (world units per
+                                pixel in x and y) */
+    char summary[512];       /* set by prepare: one human line about the layer's computation, or "" */
+    char summary_json[1024]; /* the same as a JSON object, or "" */
+
     bool scalar; /* native: the portable kernel only, no hand-vectorised path (benchmark reference) */
     _Alignas(16) unsigned char params[256]; /* generator-private, e.g. K_FbmParams */
     void *owned;                            /* generator-owned memory (freed by fb_gen_fini) */
@@ -72,6 +80,7 @@ fb_result fb_gen_fbm_init(fb_gen *g);
 fb_result fb_gen_julia_init(fb_gen *g);
 fb_result fb_gen_ifs_init(fb_gen *g);
 fb_result fb_gen_lsystem_init(fb_gen *g);
+fb_result fb_gen_terrain_init(fb_gen *g);
 
 /* The chaos-game statistics of an ifs layer after prepare (NULL for other layers). */
 struct fb_ifs_stats;

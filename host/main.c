@@ -56,6 +56,7 @@ static const char *const k_usage =
     "  julia [options] -o OUT.exr         a warped Julia set (night skies), one layer\n"
     "  ifs [options] -o OUT.exr           an IFS chaos game (plants: fern, tree, population...), one layer\n"
     "  lsystem [options] -o OUT.exr       an L-system plant (bush, tree, ... or --axiom/--rule), one layer\n"
+    "  terrain --points F.xyz -o OUT.exr  survey points refined by Delaunay midpoint displacement, one layer\n"
     "  tonemap IN.exr -o OUT.exr [tone]   re-run an ifs layer's tone mapping (no new chaos game)\n"
     "  compare A.exr B.exr [thresholds]   exit 0 within thresholds, 1 beyond, 2 on error\n"
     "  info FILE.exr                      layers, channels, types, attributes and the stored scene\n"
@@ -70,7 +71,8 @@ static const char *const k_usage =
     "  --threads N           native threads and EXR compression threads (default: all cores)\n"
     "  --strip-rows N        rows computed per strip (the result does not depend on it)\n"
     "  --validation          enable VK_LAYER_KHRONOS_validation (also FB_VK_VALIDATION=1)\n"
-    "  --quiet               no progress bar, no warnings\n"
+    "  --quiet               no progress bar, no warnings, no summaries\n"
+    "  --json                layer summaries (terrain: points, time per stage) as JSON lines on stdout\n"
     "  --help, --version\n"
     "\n"
     "exit codes: 0 success, 1 comparison beyond threshold, 2 bad usage or input, 3 runtime failure\n";
@@ -80,7 +82,7 @@ typedef struct common_opts {
     const char *out, *preview, *device;
     fb_backend backend;
     int threads, strip_rows;
-    bool quiet, validation, help;
+    bool quiet, validation, help, json;
 } common_opts;
 
 static bool parse_int_arg(const char *s, long lo, long hi, int *out)
@@ -139,6 +141,8 @@ static int common_option(int argc, char **argv, int *i, common_opts *o)
         }
     } else if (!strcmp(a, "--quiet")) {
         o->quiet = true;
+    } else if (!strcmp(a, "--json")) {
+        o->json = true;
     } else if (!strcmp(a, "--validation")) {
         o->validation = true;
     } else if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
@@ -150,6 +154,16 @@ static int common_option(int argc, char **argv, int *i, common_opts *o)
 #undef NEED_VALUE
 }
 
+static void report(const char *layer, const char *summary, const char *json, void *user)
+{
+    const common_opts *o = user;
+    (void)layer;
+    if (o->json)
+        printf("%s\n", json);
+    else if (!o->quiet)
+        fprintf(stderr, "fractalbake: %s\n", summary);
+}
+
 static fb_result bake_scene(const fb_scene *scene, const common_opts *o)
 {
     fb_engine e;
@@ -159,11 +173,15 @@ static fb_result bake_scene(const fb_scene *scene, const common_opts *o)
         &e);
     if (rc) return rc;
     fb_bake_stats st;
-    rc = fb_bake(
-        &e,
-        &(fb_bake_desc){
-            .scene = scene, .out = o->out, .preview = o->preview, .strip_rows = o->strip_rows, .progress = !o->quiet},
-        &st);
+    rc = fb_bake(&e,
+                 &(fb_bake_desc){.scene = scene,
+                                 .out = o->out,
+                                 .preview = o->preview,
+                                 .strip_rows = o->strip_rows,
+                                 .progress = !o->quiet,
+                                 .report = report,
+                                 .user = (void *)o},
+                 &st);
     if (!rc && !o->quiet)
         fprintf(stderr, "fractalbake: wrote %s (%d x %d, %d layer%s) in %.2f s on %s\n", o->out, scene->width,
                 scene->height, scene->nlayers, scene->nlayers == 1 ? "" : "s", st.seconds, e.device);
@@ -359,6 +377,7 @@ int main(int argc, char **argv)
     if (!strcmp(cmd, "julia")) return cmd_generator("julia", argc - 2, argv + 2);
     if (!strcmp(cmd, "ifs")) return cmd_generator("ifs", argc - 2, argv + 2);
     if (!strcmp(cmd, "lsystem")) return cmd_generator("lsystem", argc - 2, argv + 2);
+    if (!strcmp(cmd, "terrain")) return cmd_generator("terrain", argc - 2, argv + 2);
     if (!strcmp(cmd, "tonemap")) {
         bool quiet = false;
         fb_result rc = fb_tonemap_main(argc - 2, argv + 2, &quiet);

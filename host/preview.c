@@ -17,7 +17,39 @@ struct fb_preview {
     int channels;
     double *sum; /* channels values per preview pixel */
     uint32_t *count;
+    double shade_dx, shade_dy; /* > 0: one channel drawn as a hillshade; world units per source pixel */
 };
+
+void fb_preview_set_hillshade(fb_preview *p, double dx, double dy)
+{
+    p->shade_dx = dx;
+    p->shade_dy = dy;
+}
+
+/* The value at preview pixel (x, y) clamped to the image, or the nearest covered one in the row. */
+static double at_clamped(const fb_preview *p, int x, int y)
+{
+    x = x < 0 ? 0 : x >= p->pw ? p->pw - 1 : x;
+    y = y < 0 ? 0 : y >= p->ph ? p->ph - 1 : y;
+    size_t i = (size_t)y * p->pw + x;
+    return p->count[i] ? p->sum[i] / p->count[i] : NAN;
+}
+
+/* Lambertian shading under a light from the north-west, 45 degrees up (the cartographers'
+ * convention), from central differences on the preview grid. */
+static uint8_t hillshade(const fb_preview *p, int x, int y)
+{
+    double c = at_clamped(p, x, y);
+    if (!isfinite(c)) return 0;
+    double l = at_clamped(p, x - 1, y), r = at_clamped(p, x + 1, y);
+    double u = at_clamped(p, x, y - 1), d = at_clamped(p, x, y + 1);
+    l = isfinite(l) ? l : c, r = isfinite(r) ? r : c, u = isfinite(u) ? u : c, d = isfinite(d) ? d : c;
+    double gx = (r - l) / (2 * p->shade_dx * p->scale), gy = (u - d) / (2 * p->shade_dy * p->scale); /* y up */
+    double nx = -gx, ny = -gy, nz = 1, len = sqrt(nx * nx + ny * ny + nz * nz);
+    const double lx = -0.5, ly = 0.5, lz = 0.70710678118654752; /* unit: from the north-west, 45 deg */
+    double v = (nx * lx + ny * ly + nz * lz) / len;
+    return (uint8_t)lrint(255.0 * (v < 0 ? 0 : v));
+}
 
 fb_result fb_preview_create(int width, int height, int max_side, int channels, fb_preview **out)
 {
@@ -81,6 +113,9 @@ fb_result fb_preview_write_png(const fb_preview *p, const char *path)
     if (nc == 3) {
         for (size_t i = 0; i < n; i++)
             for (int c = 0; c < 3; c++) img[i * 3 + c] = p->count[i] ? srgb8(p->sum[i * 3 + c] / p->count[i]) : 0;
+    } else if (p->shade_dx > 0) {
+        for (int y = 0; y < p->ph; y++)
+            for (int x = 0; x < p->pw; x++) img[(size_t)y * p->pw + x] = hillshade(p, x, y);
     } else {
         double lo = INFINITY, hi = -INFINITY;
         for (size_t i = 0; i < n; i++) {

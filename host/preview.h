@@ -12,6 +12,9 @@ typedef struct fb_preview fb_preview;
 
 fb_result fb_preview_create(int width, int height, int max_side, int channels, fb_preview **out);
 void fb_preview_destroy(fb_preview **p);
+/* One channel drawn as a hillshade instead of grey levels: the channel is a height in the units of
+ * the plane, dx and dy world units per source pixel (x right, y up). */
+void fb_preview_set_hillshade(fb_preview *p, double dx, double dy);
 /* Adds rows [y0, y0 + n) of the preview's 1 or 3 float channels (n * width values each). */
 void fb_preview_add_rows(fb_preview *p, int y0, int n, const float *const *rows);
 fb_result fb_preview_write_png(const fb_preview *p, const char *path);

@@ -16,6 +16,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 typedef enum ktype {
     T_INT,
@@ -34,6 +35,7 @@ typedef enum ktype {
     T_BOUNDS, /* "auto" or [xmin, xmax, ymin, ymax] */
     T_FRACS,  /* 1..64 numbers in [lo, hi] */
     T_IFSREF, /* a preset name or a map list */
+    T_POINTS, /* a file path, or an inline list [[x, y, z], ...] */
     T_RULES,  /* L-system productions: ["X=successor", "X(p)=successor", ...] (flag: --rule, repeatable) */
 } ktype;
 
@@ -170,6 +172,29 @@ static const keyspec lsystem_keys[] = {
     {"half", T_BOOL, 0, 0, false, NULL, "true", "store A, R, G, B as half (flags: --half, --float)"},
 };
 
+static const keyspec terrain_keys[] = {
+    {"type", T_TYPE, 0, 0, false, NULL, NULL, "generator: \"terrain\""},
+    {"name", T_NAME, 0, 0, false, NULL, "\"terrain\"", "layer name; channels NAME.Y (height) and NAME.A (in the hull)"},
+    {"points", T_POINTS, -1e15, 1e15, false, NULL, NULL,
+     "survey points: an XYZ / CSV file (x y z per line) or a list [[x, y, z], ...]"},
+    {"from-heightfield", T_STRING, 0, 0, false, NULL, NULL, "instead of points: IN.exr[:layer.channel] sampled"},
+    {"sample", T_INT, 1, 65536, false, NULL, NULL, "with from-heightfield: every N-th pixel (default 16)"},
+    {"insert", T_INT, 0, 1e8, false, NULL, "40000", "points inserted by random midpoint displacement"},
+    {"hurst", T_NUM, 0, 1, true, NULL, "0.85", "Hurst exponent H in (0, 1); D = 3 - H"},
+    {"dimension", T_NUM, 2, 3, true, NULL, NULL, "fractal dimension D in (2, 3), instead of hurst"},
+    {"sigma", T_NUM, 0, 1e15, false, NULL, NULL,
+     "standard deviation of height increments at unit distance (default: estimated from the points)"},
+    {"order", T_ENUM, 0, 0, false, "random|sweep", "\"random\"",
+     "insertion triangles: random (by area) or an ordered sweep"},
+    {"variance", T_ENUM, 0, 0, false, "stage|local", "\"stage\"",
+     "var(z_abc - z_*): over the mesh per doubling (stage) or the triangle's neighbourhood (local)"},
+    {"centers", T_STRING, 0, 0, false, NULL, NULL, "CSV of centres x,y,D,sigma: regions of their own D and sigma"},
+    {"bounds", T_BOUNDS, -1e15, 1e15, false, NULL, "\"auto\"",
+     "area rasterised: \"auto\" (the points' bounding box) or [xmin, xmax, ymin, ymax]"},
+    {"mesh", T_STRING, 0, 0, false, NULL, NULL, "also write the refined mesh: OUT.ply (binary) or OUT.obj"},
+    {"half", T_BOOL, 0, 0, false, NULL, "false", "store Y as half (flags: --half, --float)"},
+};
+
 /* The keys of an L-system condensation set of an ifs layer ("condensation": {"preset": "tree"}). */
 static const keyspec cond_lsystem_keys[] = {
     {"preset", T_ENUM, 0, 0, false, FB_LSYS_PRESETS, NULL, "built-in L-system"},
@@ -212,6 +237,11 @@ static bool kind_keys(const char *kind, const keyspec **keys, int *n)
     if (!strcmp(kind, "lsystem")) {
         *keys = lsystem_keys;
         *n = NKEYS(lsystem_keys);
+        return true;
+    }
+    if (!strcmp(kind, "terrain")) {
+        *keys = terrain_keys;
+        *n = NKEYS(terrain_keys);
         return true;
     }
     return false;
@@ -519,6 +549,27 @@ static fb_result check_value(const vctx *v, const char *path, const keyspec *k, 
         return check_maps(v, path, k, j);
     case T_MAPS:
         return check_maps(v, path, k, j);
+    case T_POINTS: {
+        if (json_is_string(j) && *json_string_value(j) && strlen(json_string_value(j)) < 1024) return FB_OK;
+        size_t n = json_is_array(j) ? json_array_size(j) : 0;
+        if (!n) return verr(v, path, "expected a file name or a list of points [[x, y, z], ...], found %s", shown);
+        for (size_t i = 0; i < n; i++) {
+            const json_t *pt = json_array_get(j, i);
+            bool good = json_is_array(pt) && json_array_size(pt) == 3;
+            for (size_t c = 0; good && c < 3; c++) {
+                const json_t *e = json_array_get(pt, c);
+                double x = json_is_number(e) ? json_number_value(e) : NAN;
+                good = isfinite(x) && x >= k->lo && x <= k->hi;
+            }
+            if (!good) {
+                char sub[256];
+                snprintf(sub, sizeof sub, "%s[%zu]", path, i);
+                show(pt, shown, sizeof shown);
+                return verr(v, sub, "expected a point [x, y, z] of finite numbers, found %s", shown);
+            }
+        }
+        return FB_OK;
+    }
     case T_BOUNDS: {
         if (json_is_string(j) && !strcmp(json_string_value(j), "auto")) return FB_OK;
         bool good = json_is_array(j) && json_array_size(j) == 4;
@@ -597,7 +648,8 @@ static fb_result check_object(const vctx *v, const char *path, json_t *obj, cons
     }
     for (int i = 0; i < n; i++) {
         if (!keys[i].def || json_object_get(obj, keys[i].key)) continue;
-        if (!strcmp(keys[i].key, "hurst") && json_object_get(obj, "gain")) continue;
+        if (!strcmp(keys[i].key, "hurst") && (json_object_get(obj, "gain") || json_object_get(obj, "dimension")))
+            continue;
         json_t *d = json_loads(keys[i].def, JSON_DECODE_ANY, NULL);
         if (!d || json_object_set_new(obj, keys[i].key, d) != 0) return fb_fail(FB_ERR_NOMEM, "out of memory");
     }
@@ -941,6 +993,76 @@ static fb_result parse_lsystem(const vctx *v, const char *path, json_t *obj, fb_
     return FB_OK;
 }
 
+static void string_to(const json_t *obj, const char *key, char *out, size_t size)
+{
+    const json_t *j = json_object_get(obj, key);
+    snprintf(out, size, "%s", json_is_string(j) ? json_string_value(j) : "");
+}
+
+static fb_result parse_terrain(const vctx *v, const char *path, json_t *obj, fb_layer *L)
+{
+    char sub[256];
+    bool h_given = json_object_get(obj, "hurst") != NULL, d_given = json_object_get(obj, "dimension") != NULL;
+    fb_result rc = check_object(v, path, obj, terrain_keys, NKEYS(terrain_keys), "a terrain layer");
+    if (rc) return rc;
+    fb_terrain_layer_params *t = &L->terrain;
+    json_t *pts = json_object_get(obj, "points");
+    bool hf = json_object_get(obj, "from-heightfield") != NULL;
+    if (!pts == !hf) {
+        snprintf(sub, sizeof sub, "%s.points", path);
+        return verr(v, sub, "give the survey points (points) or a height field to sample (from-heightfield)%s",
+                    pts ? ", not both" : "");
+    }
+    if (json_object_get(obj, "sample") && !hf) {
+        snprintf(sub, sizeof sub, "%s.sample", path);
+        return verr(v, sub, "sample is the step of from-heightfield, which is not given");
+    }
+    if (h_given && d_given) {
+        snprintf(sub, sizeof sub, "%s.dimension", path);
+        return verr(v, sub, "give hurst or dimension, not both");
+    }
+    if (json_object_get(obj, "centers") && (h_given || d_given)) {
+        snprintf(sub, sizeof sub, "%s.%s", path, h_given ? "hurst" : "dimension");
+        return verr(v, sub, "the centres file gives each region its own D; drop %s", h_given ? "hurst" : "dimension");
+    }
+    t->points_inline = json_is_array(pts);
+    string_to(obj, "points", t->points, sizeof t->points);
+    string_to(obj, "from-heightfield", t->heightfield, sizeof t->heightfield);
+    t->sample = json_object_get(obj, "sample") ? (int)json_integer_value(json_object_get(obj, "sample")) : 16;
+    t->insert = (uint64_t)json_integer_value(json_object_get(obj, "insert"));
+    t->hurst = d_given ? 3 - num(obj, "dimension") : num(obj, "hurst");
+    if (!(t->hurst > 0 && t->hurst < 1)) {
+        snprintf(sub, sizeof sub, "%s.%s", path, d_given ? "dimension" : "hurst");
+        return verr(v, sub, "%s must lie strictly inside %s", d_given ? "D" : "H", d_given ? "(2, 3)" : "(0, 1)");
+    }
+    t->sigma = json_object_get(obj, "sigma") ? num(obj, "sigma") : -1;
+    t->sweep = !strcmp(json_string_value(json_object_get(obj, "order")), "sweep");
+    t->local_variance = !strcmp(json_string_value(json_object_get(obj, "variance")), "local");
+    string_to(obj, "centers", t->centers, sizeof t->centers);
+    string_to(obj, "mesh", t->mesh, sizeof t->mesh);
+    json_t *b = json_object_get(obj, "bounds");
+    t->auto_bounds = json_is_string(b);
+    for (size_t i = 0; !t->auto_bounds && i < 4; i++) t->bounds[i] = json_number_value(json_array_get(b, i));
+    L->half = boolean(obj, "half");
+    const char *too_long = strlen(t->heightfield) >= sizeof t->heightfield - 1              ? "from-heightfield"
+                           : strlen(t->centers) >= sizeof t->centers - 1                    ? "centers"
+                           : strlen(t->mesh) >= sizeof t->mesh - 1                          ? "mesh"
+                           : !t->points_inline && strlen(t->points) >= sizeof t->points - 1 ? "points"
+                                                                                            : NULL;
+    if (too_long) {
+        snprintf(sub, sizeof sub, "%s.%s", path, too_long);
+        return verr(v, sub, "file name longer than %zu characters", sizeof t->mesh - 2);
+    }
+    if (t->mesh[0]) {
+        const char *dot = strrchr(t->mesh, '.');
+        if (!dot || (strcasecmp(dot, ".ply") && strcasecmp(dot, ".obj"))) {
+            snprintf(sub, sizeof sub, "%s.mesh", path);
+            return verr(v, sub, "\"%s\": the mesh format comes from the extension, .ply or .obj", t->mesh);
+        }
+    }
+    return FB_OK;
+}
+
 static fb_result parse_root(const vctx *v, json_t *root, fb_scene *s)
 {
     char path[64];
@@ -977,11 +1099,15 @@ static fb_result parse_root(const vctx *v, json_t *root, fb_scene *s)
         } else if (!strcmp(t, "lsystem")) {
             L->kind = FB_LAYER_LSYSTEM;
             rc = parse_lsystem(v, path, lj, L);
+        } else if (!strcmp(t, "terrain")) {
+            L->kind = FB_LAYER_TERRAIN;
+            rc = parse_terrain(v, path, lj, L);
         } else {
             char sub[80], shown[64];
             snprintf(sub, sizeof sub, "%s.type", path);
             show(type, shown, sizeof shown);
-            rc = verr(v, sub, "unknown generator %s (available: \"fbm\", \"julia\", \"ifs\", \"lsystem\")", shown);
+            rc = verr(v, sub, "unknown generator %s (available: \"fbm\", \"julia\", \"ifs\", \"lsystem\", \"terrain\")",
+                      shown);
         }
         if (rc) return rc;
         snprintf(L->name, sizeof L->name, "%s", json_string_value(json_object_get(lj, "name")));

@@ -23,7 +23,8 @@ typedef enum fb_layer_kind {
     FB_LAYER_FBM = 0,
     FB_LAYER_JULIA = 1,
     FB_LAYER_IFS = 2,
-    FB_LAYER_LSYSTEM = 3
+    FB_LAYER_LSYSTEM = 3,
+    FB_LAYER_TERRAIN = 4
 } fb_layer_kind;
 
 typedef struct fb_fbm_params {
@@ -92,6 +93,21 @@ typedef struct fb_lsystem_params {
     fb_palette_spec palette; /* colour by depth: 0 at the trunk, 1 at the deepest branches */
 } fb_lsystem_params;
 
+typedef struct fb_terrain_layer_params {
+    bool points_inline;         /* the points are the layer's "points" array in the scene JSON */
+    char points[1024];          /* else an XYZ / CSV file, or "" */
+    char heightfield[1024];     /* else a height-field EXR[:layer.channel] */
+    int sample;                 /* its sampling step, pixels */
+    uint64_t insert;            /* points to insert */
+    double hurst;               /* H (from hurst or 3 - dimension) */
+    double sigma;               /* < 0: estimated from the data */
+    bool sweep, local_variance; /* --order sweep, --variance local */
+    char centers[1024];         /* CSV of centres, or "" */
+    bool auto_bounds;
+    double bounds[4];
+    char mesh[1024]; /* .ply or .obj, or "" */
+} fb_terrain_layer_params;
+
 typedef struct fb_layer {
     fb_layer_kind kind;
     char name[64];
@@ -100,6 +116,7 @@ typedef struct fb_layer {
     fb_julia_params julia;
     fb_ifs_params ifs;
     fb_lsystem_params lsystem;
+    fb_terrain_layer_params terrain;
 } fb_layer;
 
 typedef struct fb_scene {

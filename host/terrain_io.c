@@ -1,0 +1,303 @@
+/*
+ * Terrain input and output (see terrain_io.h).
+ */
+#include "terrain_io.h"
+
+#include "exrio.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+/* Splits a line into at most `max` fields separated by commas and/or blanks; a comma between two
+ * commas gives an empty field. Returns the field count (max + 1 when there are more). */
+static int fields(char *line, char **f, int max)
+{
+    int n = 0;
+    char *p = line;
+    while (*p == ' ' || *p == '\t') p++;
+    if (!*p) return 0;
+    for (;;) {
+        if (n == max) return max + 1;
+        f[n++] = p;
+        while (*p && *p != ',' && *p != ' ' && *p != '\t') p++;
+        char *end = p;
+        while (*p == ' ' || *p == '\t') p++;
+        bool comma = *p == ',';
+        if (comma) p++;
+        *end = 0;
+        while (*p == ' ' || *p == '\t') p++;
+        if (!*p) {
+            if (comma) {
+                if (n == max) return max + 1;
+                f[n++] = p; /* a trailing empty field */
+            }
+            return n;
+        }
+    }
+}
+
+static bool number(const char *s, double *out)
+{
+    if (!*s) return false;
+    char *end;
+    errno = 0;
+    *out = strtod(s, &end);
+    return !*end && errno != ERANGE;
+}
+
+/* Reads the next content line (comments and line ends stripped); false at the end. */
+static bool next_line(FILE *f, char **buf, size_t *cap, int *lineno)
+{
+    for (;;) {
+        ssize_t len = getline(buf, cap, f);
+        if (len < 0) return false;
+        (*lineno)++;
+        char *s = *buf;
+        s[strcspn(s, "#\r\n")] = 0;
+        for (char *p = s; *p; p++)
+            if (*p != ' ' && *p != '\t') return true;
+    }
+}
+
+fb_result fb_terrain_read_points(const char *path, double **xyz, size_t *n)
+{
+    *xyz = NULL;
+    *n = 0;
+    FILE *f = fopen(path, "r");
+    if (!f) return fb_fail(FB_ERR_IO, "%s: cannot open points: %s", path, strerror(errno));
+    char *line = NULL, *fld[4];
+    size_t cap = 0, count = 0, alloc = 0;
+    double *p = NULL;
+    int lineno = 0;
+    bool any = false;
+    fb_result rc = FB_OK;
+    while (next_line(f, &line, &cap, &lineno)) {
+        int nf = fields(line, fld, 3);
+        double v[3];
+        bool ok = nf == 3 && number(fld[0], &v[0]) && number(fld[1], &v[1]) && number(fld[2], &v[2]);
+        if (!ok && !any && nf == 3 && !number(fld[0], &v[0])) { /* a header line */
+            any = true;
+            continue;
+        }
+        any = true;
+        if (!ok) {
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: expected three numbers x y z (or x,y,z)", path, lineno);
+            break;
+        }
+        if (!isfinite(v[0]) || !isfinite(v[1]) || !isfinite(v[2])) {
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: coordinate is not a finite number", path, lineno);
+            break;
+        }
+        if (count == FB_TERRAIN_MAX_POINTS) {
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: more than %llu points", path, lineno, FB_TERRAIN_MAX_POINTS);
+            break;
+        }
+        if (count == alloc) {
+            alloc = alloc ? 2 * alloc : 1024;
+            double *q = realloc(p, alloc * 3 * sizeof *q);
+            if (!q) {
+                rc = fb_fail(FB_ERR_NOMEM, "%s: out of memory for %zu points", path, count);
+                break;
+            }
+            p = q;
+        }
+        memcpy(p + 3 * count++, v, sizeof v);
+    }
+    if (!rc && ferror(f)) rc = fb_fail(FB_ERR_IO, "%s: cannot read points: %s", path, strerror(errno));
+    if (!rc && !count) rc = fb_fail(FB_ERR_INPUT, "%s: no points (expected lines of x y z)", path);
+    free(line);
+    fclose(f);
+    if (rc) {
+        free(p);
+        return rc;
+    }
+    *xyz = p;
+    *n = count;
+    return FB_OK;
+}
+
+fb_result fb_terrain_read_heightfield(const char *spec, int step, double **xyz, size_t *n)
+{
+    *xyz = NULL;
+    *n = 0;
+    char path[4096];
+    snprintf(path, sizeof path, "%s", spec);
+    /* IN.exr:layer.channel: the first colon right after ".exr" */
+    char *chan = NULL;
+    for (char *colon = strchr(path, ':'); colon; colon = strchr(colon + 1, ':'))
+        if (colon - path >= 4 && !strncasecmp(colon - 4, ".exr", 4)) {
+            *colon = 0, chan = colon + 1;
+            break;
+        }
+    exrio_reader *r = NULL;
+    fb_result rc = exrio_open(path, &r);
+    if (rc) return rc;
+    int c = -1, nc = exrio_nchannels(r);
+    if (chan) {
+        c = exrio_find_channel(r, chan);
+        if (c < 0) rc = fb_fail(FB_ERR_INPUT, "%s: no channel %s", path, chan);
+    } else if (nc == 1) {
+        c = 0;
+    } else {
+        for (int k = 0; k < nc; k++) {
+            const char *nm = exrio_channel_name(r, k);
+            size_t l = strlen(nm);
+            if (!strcmp(nm, "Y") || (l > 2 && !strcmp(nm + l - 2, ".Y"))) {
+                if (c >= 0) {
+                    c = -2;
+                    break;
+                }
+                c = k;
+            }
+        }
+        if (c < 0) rc = fb_fail(FB_ERR_INPUT, "%s: %d channels; name one as %s:layer.channel", path, nc, path);
+    }
+    if (!rc && exrio_channel_type(r, c) == EXRIO_UINT)
+        rc = fb_fail(FB_ERR_INPUT, "%s: channel %s holds integers, not heights", path, exrio_channel_name(r, c));
+    int W = exrio_width(r), H = exrio_height(r);
+    size_t nx = (size_t)(W - 1) / step + 1 + ((W - 1) % step != 0);
+    size_t ny = (size_t)(H - 1) / step + 1 + ((H - 1) % step != 0);
+    double *p = NULL;
+    float *row = NULL;
+    void *planes[64] = {0};
+    if (!rc && nc > 64) rc = fb_fail(FB_ERR_INPUT, "%s: more than 64 channels", path);
+    if (!rc && (!(p = malloc(nx * ny * 3 * sizeof *p)) || !(row = malloc((size_t)W * sizeof *row))))
+        rc = fb_fail(FB_ERR_NOMEM, "%s: out of memory", path);
+    size_t count = 0;
+    for (size_t j = 0; j < ny && !rc; j++) {
+        int y = j + 1 == ny ? H - 1 : (int)(j * (size_t)step);
+        planes[c] = row;
+        rc = exrio_read_rows(r, y, 1, planes);
+        for (size_t i = 0; i < nx && !rc; i++) {
+            int x = i + 1 == nx ? W - 1 : (int)(i * (size_t)step);
+            if (!isfinite(row[x])) {
+                rc = fb_fail(FB_ERR_INPUT, "%s: pixel (%d, %d) of %s is not a finite number", path, x, y,
+                             exrio_channel_name(r, c));
+                break;
+            }
+            p[3 * count] = x, p[3 * count + 1] = H - 1 - y, p[3 * count + 2] = row[x];
+            count++;
+        }
+    }
+    free(row);
+    exrio_close(&r);
+    if (rc) {
+        free(p);
+        return rc;
+    }
+    *xyz = p;
+    *n = count;
+    return FB_OK;
+}
+
+fb_result fb_terrain_read_centers(const char *path, fb_terrain_center **out, int *n)
+{
+    *out = NULL;
+    *n = 0;
+    FILE *f = fopen(path, "r");
+    if (!f) return fb_fail(FB_ERR_IO, "%s: cannot open centres: %s", path, strerror(errno));
+    fb_terrain_center *c = calloc(FB_TERRAIN_MAX_CENTERS, sizeof *c);
+    char *line = NULL, *fld[5];
+    size_t cap = 0;
+    int lineno = 0, count = 0;
+    bool any = false;
+    fb_result rc = c ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory");
+    while (!rc && next_line(f, &line, &cap, &lineno)) {
+        int nf = fields(line, fld, 4);
+        double v[4] = {0, 0, 0, -1};
+        bool ok = (nf == 3 || nf == 4) && number(fld[0], &v[0]) && number(fld[1], &v[1]) && number(fld[2], &v[2]) &&
+                  (nf == 3 || !*fld[3] || number(fld[3], &v[3]));
+        if (!ok && !any && nf >= 3 && !number(fld[0], &v[0])) {
+            any = true;
+            continue;
+        }
+        any = true;
+        if (!ok)
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: expected x,y,D or x,y,D,sigma", path, lineno);
+        else if (!isfinite(v[0]) || !isfinite(v[1]) || !isfinite(v[3]))
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: not a finite number", path, lineno);
+        else if (!(v[2] > 2 && v[2] < 3))
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: fractal dimension D = %g is outside (2, 3)", path, lineno, v[2]);
+        else if (nf == 4 && *fld[3] && !(v[3] >= 0))
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: sigma %g is negative", path, lineno, v[3]);
+        else if (count == FB_TERRAIN_MAX_CENTERS)
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: more than %d centres", path, lineno, FB_TERRAIN_MAX_CENTERS);
+        else
+            c[count++] = (fb_terrain_center){v[0], v[1], 3 - v[2], v[3]};
+    }
+    if (!rc && !count) rc = fb_fail(FB_ERR_INPUT, "%s: no centres (expected lines of x,y,D,sigma)", path);
+    free(line);
+    fclose(f);
+    if (rc) {
+        free(c);
+        return rc;
+    }
+    *out = c;
+    *n = count;
+    return FB_OK;
+}
+
+bool fb_terrain_mesh_format_ok(const char *path)
+{
+    const char *dot = strrchr(path, '.');
+    return dot && (!strcasecmp(dot, ".ply") || !strcasecmp(dot, ".obj"));
+}
+
+static void put_u32(unsigned char *b, uint32_t v)
+{
+    for (int i = 0; i < 4; i++) b[i] = (unsigned char)(v >> (8 * i));
+}
+
+fb_result fb_terrain_write_mesh(const fb_terrain *t, const char *path, const char *shown)
+{
+    const fb_dt *d = &t->dt;
+    const char *dot = strrchr(shown, '.');
+    bool ply = dot && !strcasecmp(dot, ".ply");
+    FILE *f = fopen(path, "wb");
+    if (!f) return fb_fail(FB_ERR_IO, "%s: cannot write the mesh: %s", shown, strerror(errno));
+    if (ply) {
+        fprintf(f,
+                "ply\nformat binary_little_endian 1.0\ncomment fractalbake terrain\nelement vertex %u\n"
+                "property double x\nproperty double y\nproperty double z\nelement face %u\n"
+                "property list uchar int vertex_indices\nend_header\n",
+                d->nv, d->nfinite);
+        for (uint32_t v = 0; v < d->nv; v++) {
+            double xyz[3] = {d->xy[2 * (size_t)v], d->xy[2 * (size_t)v + 1], t->z[v]};
+            unsigned char b[24];
+            for (int k = 0; k < 3; k++) {
+                uint64_t u;
+                memcpy(&u, &xyz[k], 8);
+                put_u32(b + 8 * k, (uint32_t)u);
+                put_u32(b + 8 * k + 4, (uint32_t)(u >> 32));
+            }
+            fwrite(b, 1, 24, f);
+        }
+        for (uint32_t tr = 0; tr < d->nt; tr++) {
+            if (!fb_dt_is_live(d, tr) || fb_dt_is_ghost(d, tr)) continue;
+            unsigned char b[13];
+            b[0] = 3;
+            for (int k = 0; k < 3; k++) put_u32(b + 1 + 4 * k, d->tv[3 * (size_t)tr + k]);
+            fwrite(b, 1, 13, f);
+        }
+    } else {
+        fprintf(f, "# fractalbake terrain: %u vertices, %u triangles\n", d->nv, d->nfinite);
+        for (uint32_t v = 0; v < d->nv; v++)
+            fprintf(f, "v %.17g %.17g %.17g\n", d->xy[2 * (size_t)v], d->xy[2 * (size_t)v + 1], t->z[v]);
+        for (uint32_t tr = 0; tr < d->nt; tr++) {
+            if (!fb_dt_is_live(d, tr) || fb_dt_is_ghost(d, tr)) continue;
+            const uint32_t *v = d->tv + 3 * (size_t)tr;
+            fprintf(f, "f %u %u %u\n", v[0] + 1, v[1] + 1, v[2] + 1);
+        }
+    }
+    bool bad = ferror(f) != 0;
+    if (fclose(f) != 0) bad = true;
+    if (bad) {
+        remove(path);
+        return fb_fail(FB_ERR_IO, "%s: cannot write the mesh: %s", shown, strerror(errno));
+    }
+    return FB_OK;
+}
