@@ -69,11 +69,6 @@ static bool reserve_triangles(fb_dt *d, size_t need)
 
 static uint32_t new_triangle(fb_dt *d)
 {
-    if (d->free_head != DT_NONE) {
-        uint32_t t = d->free_head;
-        d->free_head = d->tn[3 * (size_t)t];
-        return t;
-    }
     return d->nt++;
 }
 
@@ -150,7 +145,7 @@ static bool conflict(const fb_dt *d, uint32_t t, const double *p)
 
 uint32_t fb_dt_locate(fb_dt *d, const double *p, uint32_t t)
 {
-    if (t == DT_NONE || t >= d->nt || !fb_dt_is_live(d, t)) t = d->last;
+    if (t >= d->nt) t = d->last; /* DT_NONE included */
     int k = inf_index(d->tv + 3 * (size_t)t);
     if (k >= 0) t = d->tn[3 * (size_t)t + k];
     uint32_t prev = DT_NONE;
@@ -220,7 +215,8 @@ static uint32_t insert_at(fb_dt *d, const double *p, uint32_t t0)
             }
         }
     }
-    /* nb new triangles replace ncav old ones (nb = ncav + 2). */
+    /* nb new triangles replace ncav old ones: the cavity is a disc whose boundary has nb edges
+     * and no inner vertex, so nb = ncav + 2 and no slot is ever freed. */
     if (!reserve_triangles(d, (size_t)d->nt + nb)) return DT_NONE;
     tm = tmark(d);
     for (size_t i = 0; i < ncav; i++) {
@@ -246,12 +242,6 @@ static uint32_t insert_at(fb_dt *d, const double *p, uint32_t t0)
             d->nghost++;
         else
             d->nfinite++;
-    }
-    for (size_t j = nb; j < ncav; j++) { /* cannot happen for a disk cavity; kept for safety */
-        uint32_t t = d->cavity[j];
-        d->tv[3 * (size_t)t] = DT_DEAD;
-        d->tn[3 * (size_t)t] = d->free_head;
-        d->free_head = t;
     }
     for (size_t j = 0; j < nb; j++) {
         uint32_t *b = d->bnd + 3 * j, t = b[2];
@@ -395,7 +385,6 @@ static void make_first_triangle(fb_dt *d, uint32_t a, uint32_t b, uint32_t c)
 fb_result fb_dt_build(fb_dt *d, const double *xy, size_t n, uint32_t *perm_out, const char *who)
 {
     memset(d, 0, sizeof *d);
-    d->free_head = DT_NONE;
     if (n > (size_t)UINT32_MAX / 4) return fb_fail(FB_ERR_INPUT, "%s: %zu points are too many", who, n);
     uint32_t *order = n ? brio_order(xy, n) : NULL;
     if (n && !order) return fb_fail(FB_ERR_NOMEM, "%s: out of memory sorting %zu points", who, n);
@@ -454,7 +443,6 @@ uint64_t fb_dt_check(const fb_dt *d, fb_dt_check_report *rep)
 {
     fb_dt_check_report r = {0};
     for (uint32_t t = 0; t < d->nt; t++) {
-        if (!fb_dt_is_live(d, t)) continue;
         const uint32_t *v = d->tv + 3 * (size_t)t;
         bool ghost = fb_dt_is_ghost(d, t);
         if (ghost)
@@ -464,7 +452,7 @@ uint64_t fb_dt_check(const fb_dt *d, fb_dt_check_report *rep)
         for (int i = 0; i < 3; i++) {
             uint32_t n = d->tn[3 * (size_t)t + i];
             uint32_t a = v[(i + 1) % 3], b = v[(i + 2) % 3];
-            int k = n < d->nt && fb_dt_is_live(d, n) ? find_back(d, n, t) : -1;
+            int k = n < d->nt ? find_back(d, n, t) : -1;
             const uint32_t *w = k >= 0 ? d->tv + 3 * (size_t)n : NULL;
             /* the neighbour must hold the edge reversed: (b, a) after its vertex k */
             if (k < 0 || w[(k + 1) % 3] != b || w[(k + 2) % 3] != a) {
@@ -482,7 +470,7 @@ uint64_t fb_dt_check(const fb_dt *d, fb_dt_check_report *rep)
             /* the next hull edge (b, c) is the ghost across the edge (b, inf) */
             int ia = v[0] == a ? 0 : v[1] == a ? 1 : 2;
             uint32_t g = d->tn[3 * (size_t)t + ia];
-            if (g < d->nt && fb_dt_is_live(d, g) && fb_dt_is_ghost(d, g)) {
+            if (g < d->nt && fb_dt_is_ghost(d, g)) {
                 ghost_edge(d, g, &b2, &c);
                 if (b2 != b)
                     r.adjacency++;
@@ -496,7 +484,7 @@ uint64_t fb_dt_check(const fb_dt *d, fb_dt_check_report *rep)
     for (uint32_t v = 0; v < d->nv; v++) {
         uint32_t t = d->vt[v];
         const uint32_t *w = d->tv + 3 * (size_t)t;
-        if (t >= d->nt || !fb_dt_is_live(d, t) || (w[0] != v && w[1] != v && w[2] != v)) r.adjacency++;
+        if (t >= d->nt || (w[0] != v && w[1] != v && w[2] != v)) r.adjacency++;
     }
     if (r.triangles != d->nfinite || r.hull != d->nghost) r.adjacency++;
     if (rep) *rep = r;

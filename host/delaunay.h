@@ -22,8 +22,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define DT_INF  UINT32_MAX       /* the infinite vertex */
-#define DT_DEAD (UINT32_MAX - 1) /* tv[3t] of a free triangle slot */
+#define DT_INF  UINT32_MAX /* the infinite vertex */
 #define DT_NONE UINT32_MAX
 
 typedef struct fb_dt {
@@ -33,12 +32,11 @@ typedef struct fb_dt {
     uint32_t *vt; /* a triangle incident to each vertex */
     uint32_t *tv; /* 3 vertices per triangle slot (counter-clockwise) */
     uint32_t *tn; /* 3 neighbours per triangle slot: tn[3t+i] is across the edge opposite tv[3t+i] */
-    uint32_t nt;  /* triangle slots in use or free */
+    uint32_t nt;  /* triangle slots in use (a cavity's slots are reused; none is ever freed) */
     uint32_t capt;
-    uint32_t free_head; /* free slot list through tn[3t] */
-    uint32_t nfinite;   /* live finite triangles */
-    uint32_t nghost;    /* live ghost triangles (= hull edges) */
-    uint32_t last;      /* a live triangle: the walk's default start */
+    uint32_t nfinite; /* live finite triangles */
+    uint32_t nghost;  /* live ghost triangles (= hull edges) */
+    uint32_t last;    /* a live triangle: the walk's default start */
     /* scratch for insertions */
     uint32_t *stack, *cavity, *bnd; /* bnd: 3 per boundary edge (u, w, outer triangle) */
     size_t cap_scratch;
@@ -53,10 +51,6 @@ static inline int fb_dt_is_ghost(const fb_dt *d, uint32_t t)
 {
     const uint32_t *v = d->tv + 3 * (size_t)t;
     return v[0] == DT_INF || v[1] == DT_INF || v[2] == DT_INF;
-}
-static inline int fb_dt_is_live(const fb_dt *d, uint32_t t)
-{
-    return d->tv[3 * (size_t)t] != DT_DEAD;
 }
 
 /* Builds the triangulation of n points (xy[2i], xy[2i+1]), all finite. Vertex i of the result is

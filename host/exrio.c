@@ -235,10 +235,7 @@ fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
     w->nchannels = d->nchannels;
     w->plane_bytes_per_row = (size_t)d->width * 4;
 
-    /* The temporary file lives beside the target so that rename() is atomic (same file system). */
-    const char *slash = strrchr(d->path, '/');
-    int dirlen = slash ? (int)(slash - d->path + 1) : 0;
-    snprintf(w->tmp, sizeof w->tmp, "%.*s.%s.%ld.tmp", dirlen, d->path, d->path + dirlen, (long)getpid());
+    fb_temp_path(d->path, w->tmp, sizeof w->tmp);
 
     exr_context_initializer_t init = initializer();
     exr_result_t er = exr_start_write(&w->ctx, w->tmp, EXR_WRITE_FILE_DIRECTLY, &init);

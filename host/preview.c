@@ -26,7 +26,7 @@ void fb_preview_set_hillshade(fb_preview *p, double dx, double dy)
     p->shade_dy = dy;
 }
 
-/* The value at preview pixel (x, y) clamped to the image, or the nearest covered one in the row. */
+/* The mean at preview pixel (x, y), the coordinates clamped to the image; NaN where nothing landed. */
 static double at_clamped(const fb_preview *p, int x, int y)
 {
     x = x < 0 ? 0 : x >= p->pw ? p->pw - 1 : x;
@@ -130,9 +130,7 @@ fb_result fb_preview_write_png(const fb_preview *p, const char *path)
     }
 
     char tmp[4200];
-    const char *slash = strrchr(path, '/');
-    int dirlen = slash ? (int)(slash - path + 1) : 0;
-    snprintf(tmp, sizeof tmp, "%.*s.%s.%ld.tmp", dirlen, path, path + dirlen, (long)getpid());
+    fb_temp_path(path, tmp, sizeof tmp);
     FILE *f = fopen(tmp, "wb");
     if (!f) {
         free((void *)img);

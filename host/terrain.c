@@ -80,7 +80,7 @@ double fb_terrain_sigma2_estimate(const fb_terrain *t, double hurst)
     double sum = 0;
     uint64_t n = 0;
     for (uint32_t tr = 0; tr < d->nt; tr++) {
-        if (!fb_dt_is_live(d, tr) || fb_dt_is_ghost(d, tr)) continue;
+        if (fb_dt_is_ghost(d, tr)) continue;
         const uint32_t *v = d->tv + 3 * (size_t)tr;
         for (int i = 0; i < 3; i++) {
             uint32_t a = v[(i + 1) % 3], b = v[(i + 2) % 3], nb = d->tn[3 * (size_t)tr + i];
@@ -126,7 +126,7 @@ static double stage_variance(const fb_terrain *t)
     double sum = 0;
     uint64_t m = 0;
     for (uint32_t tr = 0; tr < d->nt; tr++) {
-        if (!fb_dt_is_live(d, tr) || fb_dt_is_ghost(d, tr)) continue;
+        if (fb_dt_is_ghost(d, tr)) continue;
         sum += diff_variance(t, &tr, 1) * 3;
         m += 3;
     }
@@ -251,7 +251,7 @@ fb_result fb_terrain_refine(fb_terrain *t, const fb_terrain_opts *o, const char 
         if (o->sweep) {
             for (;; cursor++) {
                 tr = (uint32_t)(cursor % d->nt);
-                if (fb_dt_is_live(d, tr) && !fb_dt_is_ghost(d, tr)) break;
+                if (!fb_dt_is_ghost(d, tr)) break;
             }
             cursor++;
         } else {

@@ -66,8 +66,8 @@ double fb_terrain_sigma2_estimate(const fb_terrain *t, double hurst);
 /* Inserts opts->insert points. */
 fb_result fb_terrain_refine(fb_terrain *t, const fb_terrain_opts *o, const char *who, fb_terrain_stats *st);
 
-/* The z values of vertex v's triangle neighbours etc. are in t->z; a standard normal draw of the
- * counter-based RNG (Box-Muller over two 32-bit hashes), exposed for tests. */
+/* The standard normal draw number `index` of the counter-based RNG (Box-Muller over two 32-bit
+ * hashes): the displacement of the index-th inserted point. Exposed for tests. */
 double fb_terrain_gauss(uint32_t seed, uint64_t index);
 
 void fb_terrain_free(fb_terrain *t);

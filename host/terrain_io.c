@@ -277,7 +277,7 @@ fb_result fb_terrain_write_mesh(const fb_terrain *t, const char *path, const cha
             fwrite(b, 1, 24, f);
         }
         for (uint32_t tr = 0; tr < d->nt; tr++) {
-            if (!fb_dt_is_live(d, tr) || fb_dt_is_ghost(d, tr)) continue;
+            if (fb_dt_is_ghost(d, tr)) continue;
             unsigned char b[13];
             b[0] = 3;
             for (int k = 0; k < 3; k++) put_u32(b + 1 + 4 * k, d->tv[3 * (size_t)tr + k]);
@@ -288,7 +288,7 @@ fb_result fb_terrain_write_mesh(const fb_terrain *t, const char *path, const cha
         for (uint32_t v = 0; v < d->nv; v++)
             fprintf(f, "v %.17g %.17g %.17g\n", d->xy[2 * (size_t)v], d->xy[2 * (size_t)v + 1], t->z[v]);
         for (uint32_t tr = 0; tr < d->nt; tr++) {
-            if (!fb_dt_is_live(d, tr) || fb_dt_is_ghost(d, tr)) continue;
+            if (fb_dt_is_ghost(d, tr)) continue;
             const uint32_t *v = d->tv + 3 * (size_t)tr;
             fprintf(f, "f %u %u %u\n", v[0] + 1, v[1] + 1, v[2] + 1);
         }

@@ -388,6 +388,11 @@ cmp -s tn1.exr tn2.exr && ok || bad "terrain depends on threads or strip rows"
 "$FB" compare tn1.exr tv1.exr --max-abs 0 > /dev/null && ok || bad "terrain differs between backends"
 "$FB" $Tr --points pts.csv --insert 5000 --seed 2 -o ts2.exr
 "$FB" compare tn1.exr ts2.exr > /dev/null; [ $? -eq 1 ] && ok || bad "terrain ignores the seed"
+# every refinement flag changes the terrain
+for f in "--order sweep" "--variance local" "--hurst 0.5" "--dimension 2.5" "--sigma 3" "--insert 4000" "--bounds 10,90,10,90"; do
+  "$FB" $Tr --points pts.csv --insert 5000 $f -o tf.exr
+  "$FB" compare tn1.exr tf.exr > /dev/null; [ $? -eq 1 ] && ok || bad "terrain $f changed nothing"
+done
 # a height field sampled back: the refined terrain of a sampled fbm
 "$FB" fbm --size 65x65 --quiet --float -o hf.exr
 if "$FB" $Tr --from-heightfield hf.exr --sample 8 --insert 2000 --sigma 0.01 --mesh hf.obj -o th.exr; then ok; else bad "from-heightfield failed"; fi

@@ -143,7 +143,7 @@ static void test_global_empty_circle(void)
     CHECK(fb_dt_build(&d, xy, n, NULL, "small") == FB_OK);
     uint64_t inside = 0, tris = 0;
     for (uint32_t t = 0; t < d.nt; t++) {
-        if (!fb_dt_is_live(&d, t) || fb_dt_is_ghost(&d, t)) continue;
+        if (fb_dt_is_ghost(&d, t)) continue;
         tris++;
         const uint32_t *v = d.tv + 3 * (size_t)t;
         for (uint32_t k = 0; k < d.nv; k++)
@@ -182,7 +182,7 @@ static void test_qhull(void)
     CHECK(fb_dt_build(&d, xy, n, perm, "qhull") == FB_OK);
     uint32_t *ours = malloc(3 * (size_t)d.nfinite * sizeof *ours), no = 0;
     for (uint32_t t = 0; t < d.nt; t++) {
-        if (!fb_dt_is_live(&d, t) || fb_dt_is_ghost(&d, t)) continue;
+        if (fb_dt_is_ghost(&d, t)) continue;
         for (int k = 0; k < 3; k++) ours[3 * no + k] = perm[d.tv[3 * (size_t)t + k]];
         sort3(ours + 3 * no++);
     }

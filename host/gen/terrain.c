@@ -121,7 +121,7 @@ static fb_result bin_triangles(fb_gen *g)
     uint64_t total = 0;
     for (int pass = 0; pass < 2; pass++) {
         for (uint32_t t = 0; t < d->nt; t++) {
-            if (!fb_dt_is_live(d, t) || fb_dt_is_ghost(d, t)) continue;
+            if (fb_dt_is_ghost(d, t)) continue;
             const uint32_t *v = d->tv + 3 * (size_t)t;
             double lo = INFINITY, hi = -INFINITY;
             for (int c = 0; c < 3; c++) {
@@ -157,13 +157,9 @@ static fb_result bin_triangles(fb_gen *g)
 
 /* ---- prepare: triangulate, refine, bin, write the mesh ------------------------------------------- */
 
-typedef struct progress_ctx {
-    fb_progress bar;
-} progress_ctx;
-
 static void on_progress(void *user, uint64_t done, uint64_t total)
 {
-    fb_progress_update(&((progress_ctx *)user)->bar, done, total);
+    fb_progress_update(user, done, total);
 }
 
 static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
@@ -186,8 +182,8 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
                            "sigma",
                            g->layer->name);
     }
-    progress_ctx pc;
-    fb_progress_init(&pc.bar, progress, "refine", "pts");
+    fb_progress bar;
+    fb_progress_init(&bar, progress, "refine", "pts");
     fb_terrain_opts o = {
         .insert = P->insert,
         .hurst = P->hurst,
@@ -198,10 +194,10 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
         .centers = s->centers,
         .ncenters = s->ncenters,
         .progress = on_progress,
-        .user = &pc,
+        .user = &bar,
     };
     rc = fb_terrain_refine(&s->t, &o, who, &s->st);
-    fb_progress_finish(&pc.bar);
+    fb_progress_finish(&bar);
     if (rc) return rc;
 
     double zmin = INFINITY;
@@ -218,9 +214,7 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     double t0 = fb_now();
     if ((rc = bin_triangles(g))) return rc;
     if (P->mesh[0]) {
-        const char *slash = strrchr(P->mesh, '/');
-        int dirlen = slash ? (int)(slash - P->mesh + 1) : 0;
-        snprintf(s->mesh_tmp, sizeof s->mesh_tmp, "%.*s.%s.%ld.tmp", dirlen, P->mesh, P->mesh + dirlen, (long)getpid());
+        fb_temp_path(P->mesh, s->mesh_tmp, sizeof s->mesh_tmp);
         s->mesh_pending = true;
         if ((rc = fb_terrain_write_mesh(&s->t, s->mesh_tmp, P->mesh))) {
             s->mesh_pending = false;
