@@ -160,6 +160,83 @@ static fb_result run_collect(fb_engine *e, layer_run *lr, int slot, int y0, int 
     return FB_OK;
 }
 
+/* ---- the PNG preview ------------------------------------------------------------------------ */
+
+/* One layer's preview: its colour (3 channels from `first`) or scalar channel, and its coverage. */
+typedef struct previews {
+    int n;     /* 1: one layer shown alone; more: the over composite of every layer */
+    bool over; /* composite (also with a single layer, when asked for by name "over") */
+    fb_preview *p[FB_MAX_LAYERS];
+    int layer[FB_MAX_LAYERS], first[FB_MAX_LAYERS], alpha[FB_MAX_LAYERS]; /* channel indices; alpha -1: none */
+    int offset[FB_MAX_LAYERS]; /* the layer's first plane among all planes of a strip */
+} previews;
+
+static int alpha_channel(const fb_gen *g)
+{
+    for (int c = 0; c < g->nchannels; c++) {
+        size_t len = strlen(g->channel_names[c]);
+        if (len >= 2 && !strcmp(g->channel_names[c] + len - 2, ".A")) return c;
+    }
+    return -1;
+}
+
+static fb_result previews_create(const fb_scene *s, const layer_run *runs, const char *which, const int region[4],
+                                 previews *pv)
+{
+    int only = 0;
+    pv->over = which ? !strcmp(which, "over") : s->nlayers > 1;
+    if (which && !pv->over) {
+        only = -1;
+        for (int i = 0; i < s->nlayers; i++)
+            if (!strcmp(s->layers[i].name, which)) only = i;
+        if (only < 0) {
+            char names[FB_MAX_LAYERS * 66] = "";
+            for (int i = 0; i < s->nlayers; i++)
+                snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", i ? ", " : "", s->layers[i].name);
+            return fb_fail(FB_ERR_USAGE, "--preview-layer: no layer named \"%s\" (layers: %s; or \"over\")", which,
+                           names);
+        }
+    }
+    int at = 0;
+    for (int i = 0; i < s->nlayers; i++) {
+        const fb_gen *g = &runs[i].gen;
+        if (pv->over || i == only) {
+            int k = pv->n++;
+            pv->layer[k] = i;
+            pv->offset[k] = at;
+            pv->first[k] = g->preview_rgb > 0 ? g->preview_rgb : g->preview_channel;
+            pv->alpha[k] = pv->over ? alpha_channel(g) : -1;
+            fb_result rc = fb_preview_create_alpha(region[2], region[3], 2048, g->preview_rgb > 0 ? 3 : 1,
+                                                   pv->alpha[k] >= 0, &pv->p[k]);
+            if (rc) return rc;
+            fb_preview_set_row_stride(pv->p[k], s->width);
+            if (g->preview_rgb <= 0 && g->preview_shade[0] > 0)
+                fb_preview_set_hillshade(pv->p[k], g->preview_shade[0], g->preview_shade[1]);
+        }
+        at += g->nchannels;
+    }
+    return FB_OK;
+}
+
+/* planes: the region's first column of each strip row, rows the image width apart; y0 in the region */
+static void previews_add(previews *pv, const layer_run *runs, int y0, int n, const void *const *planes)
+{
+    for (int k = 0; k < pv->n; k++) {
+        const fb_gen *g = &runs[pv->layer[k]].gen;
+        const void *const *lp = planes + pv->offset[k];
+        int f = pv->first[k], three = g->preview_rgb > 0;
+        const float *rows[4] = {lp[f], lp[three ? f + 1 : f], lp[three ? f + 2 : f], NULL};
+        if (pv->alpha[k] >= 0) rows[three ? 3 : 1] = lp[pv->alpha[k]];
+        fb_preview_add_rows(pv->p[k], y0, n, rows);
+    }
+}
+
+static fb_result previews_write(const previews *pv, const char *path)
+{
+    if (pv->over) return fb_preview_write_over((const fb_preview *const *)pv->p, pv->n, path);
+    return fb_preview_write_png(pv->p[0], path);
+}
+
 /* ---- the bake ------------------------------------------------------------------------------- */
 
 static int auto_strip_rows(const fb_scene *s)
@@ -181,12 +258,22 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     exrio_channel channels[FB_MAX_LAYERS * FB_GEN_MAX_CHANNELS];
     int nch = 0;
     exrio_writer *w = NULL;
-    fb_preview *preview = NULL;
+    previews pv = {0};
     double t0 = fb_now(), gpu = 0;
     if (!runs) return fb_fail(FB_ERR_NOMEM, "out of memory");
 
+    int rx = 0, ry = 0, rw = s->width, rh = s->height;
+    if (d->region[2] > 0) {
+        rx = d->region[0], ry = d->region[1], rw = d->region[2], rh = d->region[3];
+        if (rx < 0 || ry < 0 || rh <= 0 || (long)rx + rw > s->width || (long)ry + rh > s->height) {
+            rc = fb_fail(FB_ERR_USAGE, "--region %d,%d,%d,%d: not inside the %d x %d image", rx, ry, rw, rh, s->width,
+                         s->height);
+            goto out;
+        }
+    }
+    int region[4] = {rx, ry, rw, rh};
     int strip = d->strip_rows > 0 ? d->strip_rows : auto_strip_rows(s);
-    if (strip > s->height) strip = s->height;
+    if (strip > rh) strip = rh;
     if (e->kind == FB_BACKEND_VULKAN && (uint64_t)strip * s->width * 4 > vkc_info(e->vk)->max_storage_buffer_range) {
         strip = (int)(vkc_info(e->vk)->max_storage_buffer_range / ((uint64_t)s->width * 4));
         if (strip < 1) {
@@ -212,42 +299,48 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     if (rc) goto out;
 
     if (d->out) {
-        char seed[16];
+        char seed[16], reg[64];
         snprintf(seed, sizeof seed, "%u", s->seed);
+        snprintf(reg, sizeof reg, "%d,%d,%d,%d", rx, ry, rw, rh);
         exrio_attr attrs[] = {
             {"fractalbake/scene", s->json},
             {"fractalbake/seed", seed},
             {"fractalbake/backend", fb_backend_name(e->kind)},
             {"fractalbake/device", e->device},
             {"fractalbake/version", FB_VERSION},
+            {"fractalbake/region", reg}, /* last: left out of whole-image files */
         };
+        bool partial = d->region[2] > 0;
         rc = exrio_writer_create(&(exrio_writer_desc){.path = d->out,
-                                                      .width = s->width,
-                                                      .height = s->height,
+                                                      .width = rw,
+                                                      .height = rh,
+                                                      .x0 = rx,
+                                                      .y0 = ry,
+                                                      .full_width = partial ? s->width : 0,
+                                                      .full_height = partial ? s->height : 0,
+                                                      .row_stride = s->width,
                                                       .compression = s->compression,
                                                       .channels = channels,
                                                       .nchannels = nch,
                                                       .attrs = attrs,
-                                                      .nattrs = (int)(sizeof attrs / sizeof attrs[0]),
+                                                      .nattrs = (int)(sizeof attrs / sizeof attrs[0]) - !partial,
                                                       .threads = e->threads},
                                  &w);
         if (rc) goto out;
     }
-    int prgb = runs[0].gen.preview_rgb;
-    if (d->preview && (rc = fb_preview_create(s->width, s->height, 2048, prgb > 0 ? 3 : 1, &preview))) goto out;
-    if (preview && prgb <= 0 && runs[0].gen.preview_shade[0] > 0)
-        fb_preview_set_hillshade(preview, runs[0].gen.preview_shade[0], runs[0].gen.preview_shade[1]);
+    if (d->preview && (rc = previews_create(s, runs, d->preview_layer, region, &pv))) goto out;
 
     fb_progress prog;
     fb_progress_init(&prog, d->progress, "bake", "pix");
-    int nstrips = (s->height + strip - 1) / strip;
+    int nstrips = (rh + strip - 1) / strip;
     bool gpu_path = e->kind == FB_BACKEND_VULKAN;
-    for (int i = 0; i < s->nlayers && gpu_path && !rc; i++) rc = run_submit(e, &runs[i], 0, 0, strip);
+    for (int i = 0; i < s->nlayers && gpu_path && !rc; i++)
+        rc = run_submit(e, &runs[i], 0, ry, strip < rh ? strip : rh);
     for (int k = 0; k < nstrips && !rc; k++) {
-        int y0 = k * strip, n = y0 + strip <= s->height ? strip : s->height - y0;
+        int y0 = ry + k * strip, n = y0 + strip <= ry + rh ? strip : ry + rh - y0;
         /* Queue the next strip before consuming this one, so the device works while we write. */
         if (gpu_path && k + 1 < nstrips) {
-            int y1 = y0 + strip, n1 = y1 + strip <= s->height ? strip : s->height - y1;
+            int y1 = y0 + strip, n1 = y1 + strip <= ry + rh ? strip : ry + rh - y1;
             for (int i = 0; i < s->nlayers && !rc; i++) rc = run_submit(e, &runs[i], (k + 1) % SLOTS, y1, n1);
         }
         const void *planes[FB_MAX_LAYERS * FB_GEN_MAX_CHANNELS];
@@ -257,14 +350,10 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
             at += runs[i].gen.nchannels;
         }
         if (rc) break;
-        if (preview) {
-            int first = prgb > 0 ? prgb : runs[0].gen.preview_channel;
-            const float *pv[3] = {planes[first], planes[prgb > 0 ? first + 1 : first],
-                                  planes[prgb > 0 ? first + 2 : first]};
-            fb_preview_add_rows(preview, y0, n, pv);
-        }
-        if (w) rc = exrio_writer_rows(w, y0, n, planes);
-        fb_progress_update(&prog, (uint64_t)(y0 + n) * s->width, (uint64_t)s->height * s->width);
+        for (int c = 0; c < at; c++) planes[c] = (const uint8_t *)planes[c] + (size_t)rx * 4; /* the region's columns */
+        if (d->preview) previews_add(&pv, runs, y0 - ry, n, planes);
+        if (w) rc = exrio_writer_rows(w, y0 - ry, n, planes);
+        fb_progress_update(&prog, (uint64_t)(y0 - ry + n) * rw, (uint64_t)rh * rw);
     }
     fb_progress_finish(&prog);
     /* Checked before the file is renamed into place: a validated run that broke a rule is a failure. */
@@ -272,7 +361,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         rc = fb_fail(FB_ERR_VULKAN, "vulkan validation reported %u message(s) (see above)",
                      vkc_validation_messages(e->vk));
     if (!rc && w) rc = exrio_writer_finish(&w);
-    if (!rc && preview) rc = fb_preview_write_png(preview, d->preview);
+    if (!rc && d->preview) rc = previews_write(&pv, d->preview);
     for (int i = 0; i < s->nlayers && !rc; i++)
         if (runs[i].gen.finish) rc = runs[i].gen.finish(&runs[i].gen);
     for (int i = 0; i < s->nlayers && !rc && d->report; i++)
@@ -280,13 +369,13 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
             d->report(runs[i].gen.layer->name, runs[i].gen.summary, runs[i].gen.summary_json, d->user);
 out:
     exrio_writer_abort(&w);
-    fb_preview_destroy(&preview);
+    for (int k = 0; k < pv.n; k++) fb_preview_destroy(&pv.p[k]);
     for (int i = 0; i < s->nlayers; i++) run_fini(e, &runs[i]);
     free(runs);
     if (stats) {
         stats->seconds = fb_now() - t0;
         stats->gpu_seconds = e->kind == FB_BACKEND_VULKAN ? gpu : -1;
-        stats->pixels = (uint64_t)s->width * s->height;
+        stats->pixels = d->region[2] > 0 ? (uint64_t)d->region[2] * d->region[3] : (uint64_t)s->width * s->height;
     }
     return rc;
 }

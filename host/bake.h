@@ -40,8 +40,14 @@ typedef struct fb_bake_desc {
     const fb_scene *scene;
     const char *out;     /* EXR path; NULL computes without writing (benchmarks) */
     const char *preview; /* PNG path or NULL */
-    int strip_rows;      /* 0: automatic */
-    bool progress;       /* draw a progress bar on stderr */
+    /* What the preview shows: a layer's name, or "over" (every layer composited back to front by its
+     * coverage channel A). NULL: the only layer, or "over" when there are several. */
+    const char *preview_layer;
+    int strip_rows; /* 0: automatic */
+    /* Only the pixels [x, x + w) x [y, y + h) of the image, as in the full bake, into a file whose
+     * data window is that region (fractalbake merge joins such files). w == 0: the whole image. */
+    int region[4];
+    bool progress; /* draw a progress bar on stderr */
     /* Called after a successful bake for each layer that reports on its computation (terrain):
      * a human line and a JSON object. NULL: no reports. */
     void (*report)(const char *layer, const char *summary, const char *json, void *user);

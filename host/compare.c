@@ -67,6 +67,15 @@ fb_result fb_compare(const fb_compare_desc *d, bool *pass)
         *pass = false;
         goto out;
     }
+    int wa[4], wb[4];
+    exrio_window(a, &wa[0], &wa[1], &wa[2], &wa[3]);
+    exrio_window(b, &wb[0], &wb[1], &wb[2], &wb[3]);
+    if (memcmp(wa, wb, sizeof wa)) {
+        say(d, "region differs: %s holds %d,%d,%d,%d of %d x %d, %s holds %d,%d,%d,%d of %d x %d", d->a, wa[0], wa[1],
+            W, H, wa[2], wa[3], d->b, wb[0], wb[1], W, H, wb[2], wb[3]);
+        *pass = false;
+        goto out;
+    }
     int na = exrio_nchannels(a), nb = exrio_nchannels(b);
     st = calloc((size_t)na + 1, sizeof *st);
     pa = calloc((size_t)na + 1, sizeof *pa);
@@ -233,7 +242,13 @@ fb_result fb_info(const char *path, void (*print)(const char *line, void *user),
         print(line, user);                                                                                             \
     } while (0)
     P("file:        %s", path);
-    P("size:        %d x %d", exrio_width(r), exrio_height(r));
+    int win[4];
+    exrio_window(r, &win[0], &win[1], &win[2], &win[3]);
+    if (win[0] || win[1] || win[2] != exrio_width(r) || win[3] != exrio_height(r))
+        P("size:        %d x %d: the region %d,%d,%d,%d of a %d x %d image", exrio_width(r), exrio_height(r), win[0],
+          win[1], exrio_width(r), exrio_height(r), win[2], win[3]);
+    else
+        P("size:        %d x %d", exrio_width(r), exrio_height(r));
     P("compression: %s", exrio_compression_of(r));
     P("channels:    %d", exrio_nchannels(r));
     /* Group channels by layer (the text before the last dot). */

@@ -69,6 +69,7 @@ struct exrio_writer {
     exr_context_t ctx;
     char path[4096], tmp[4200];
     int width, height, nchannels;
+    int x0, y0, row_stride;
     exrio_type *types;
     int *file_order; /* file_order[i]: index into the caller's channel list of the file's i-th channel */
     int chunk_rows, batch_rows;
@@ -116,7 +117,7 @@ static fb_result encode_batch(exrio_writer *w, batch *b, char *msg, size_t msgsz
     for (int k = 0; k < b->nchunks; k++) {
         int y = b->y0 + k * w->chunk_rows;
         exr_chunk_info_t cinfo;
-        exr_result_t er = exr_write_scanline_chunk_info(w->ctx, 0, y, &cinfo);
+        exr_result_t er = exr_write_scanline_chunk_info(w->ctx, 0, y + w->y0, &cinfo);
         if (er == EXR_ERR_SUCCESS)
             er = init ? exr_encoding_update(w->ctx, 0, &cinfo, &enc) : exr_encoding_initialize(w->ctx, 0, &cinfo, &enc);
         if (er != EXR_ERR_SUCCESS) goto exr_fail;
@@ -166,7 +167,7 @@ static void commit_ready(exrio_writer *w)
         batch *b = w->order[w->committed];
         for (int k = 0; k < b->nchunks && !w->error; k++) {
             int y = b->y0 + k * w->chunk_rows;
-            exr_result_t er = exr_write_scanline_chunk(w->ctx, 0, y, b->chunk_data[k], b->chunk_size[k]);
+            exr_result_t er = exr_write_scanline_chunk(w->ctx, 0, y + w->y0, b->chunk_data[k], b->chunk_size[k]);
             if (er != EXR_ERR_SUCCESS) {
                 char m[600];
                 snprintf(m, sizeof m, "%s: writing rows from %d failed: %s", w->path, y, t_exr_msg);
@@ -234,6 +235,9 @@ fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
     w->height = d->height;
     w->nchannels = d->nchannels;
     w->plane_bytes_per_row = (size_t)d->width * 4;
+    w->x0 = d->x0;
+    w->y0 = d->y0;
+    w->row_stride = d->row_stride > 0 ? d->row_stride : d->width;
 
     fb_temp_path(d->path, w->tmp, sizeof w->tmp);
 
@@ -251,6 +255,13 @@ fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
                                                          : EXR_COMPRESSION_NONE;
     er = exr_add_part(w->ctx, "fractalbake", EXR_STORAGE_SCANLINE, &part);
     if (er == EXR_ERR_SUCCESS) er = exr_initialize_required_attr_simple(w->ctx, part, d->width, d->height, ct);
+    if (er == EXR_ERR_SUCCESS && d->full_width > 0) {
+        exr_attr_box2i_t dw, disp;
+        dw.min.x = d->x0, dw.min.y = d->y0, dw.max.x = d->x0 + d->width - 1, dw.max.y = d->y0 + d->height - 1;
+        disp.min.x = 0, disp.min.y = 0, disp.max.x = d->full_width - 1, disp.max.y = d->full_height - 1;
+        er = exr_set_display_window(w->ctx, part, &disp);
+        if (er == EXR_ERR_SUCCESS) er = exr_set_data_window(w->ctx, part, &dw);
+    }
     for (int c = 0; c < d->nchannels && er == EXR_ERR_SUCCESS; c++)
         er = exr_add_channel(w->ctx, part, d->channels[c].name, pixel_type(d->channels[c].type),
                              d->channels[c].type == EXRIO_UINT ? EXR_PERCEPTUALLY_LINEAR : EXR_PERCEPTUALLY_LOGARITHMIC,
@@ -344,9 +355,15 @@ fb_result exrio_writer_rows(exrio_writer *w, int y0, int nrows, const void *cons
         int at = w->next_row - b->y0;
         int n = b->nrows - at;
         if (n > nrows - done) n = nrows - done;
-        for (int c = 0; c < w->nchannels; c++)
-            memcpy(b->rows + ((size_t)c * b->nrows + at) * rb, (const uint8_t *)planes[c] + (size_t)done * rb,
-                   (size_t)n * rb);
+        size_t stride = (size_t)w->row_stride * 4;
+        for (int c = 0; c < w->nchannels; c++) {
+            const uint8_t *src = (const uint8_t *)planes[c] + (size_t)done * stride;
+            if (stride == rb)
+                memcpy(b->rows + ((size_t)c * b->nrows + at) * rb, src, (size_t)n * rb);
+            else
+                for (int r = 0; r < n; r++)
+                    memcpy(b->rows + ((size_t)c * b->nrows + at + r) * rb, src + (size_t)r * stride, rb);
+        }
         done += n;
         w->next_row += n;
         if (at + n == b->nrows) {
@@ -430,7 +447,8 @@ void exrio_writer_abort(exrio_writer **pw)
 struct exrio_reader {
     exr_context_t ctx;
     char path[4096];
-    int width, height, x0, y0;
+    int width, height, x0, y0, full_width, full_height;
+    int dw_y; /* the data window's first row in file coordinates */
     int nchannels;
     const exr_attr_chlist_t *chlist;
     int chunk_rows;
@@ -464,8 +482,13 @@ fb_result exrio_open(const char *path, exrio_reader **out)
         rc = fb_fail(FB_ERR_INPUT, "%s: missing data window or channel list", path);
         goto fail;
     }
-    r->x0 = dw.min.x;
-    r->y0 = dw.min.y;
+    exr_attr_box2i_t disp;
+    if (exr_get_display_window(r->ctx, 0, &disp) != EXR_ERR_SUCCESS) disp = dw;
+    r->full_width = disp.max.x - disp.min.x + 1;
+    r->full_height = disp.max.y - disp.min.y + 1;
+    r->x0 = dw.min.x - disp.min.x;
+    r->y0 = dw.min.y - disp.min.y;
+    r->dw_y = dw.min.y;
     r->width = dw.max.x - dw.min.x + 1;
     r->height = dw.max.y - dw.min.y + 1;
     r->nchannels = r->chlist->num_channels;
@@ -508,6 +531,13 @@ int exrio_width(const exrio_reader *r)
 int exrio_height(const exrio_reader *r)
 {
     return r->height;
+}
+void exrio_window(const exrio_reader *r, int *x0, int *y0, int *full_width, int *full_height)
+{
+    *x0 = r->x0;
+    *y0 = r->y0;
+    *full_width = r->full_width;
+    *full_height = r->full_height;
 }
 int exrio_nchannels(const exrio_reader *r)
 {
@@ -574,12 +604,12 @@ fb_result exrio_read_rows(exrio_reader *r, int y0, int nrows, void *const *plane
     int y = y0;
     while (y < y0 + nrows) {
         exr_chunk_info_t cinfo;
-        exr_result_t er = exr_read_scanline_chunk_info(r->ctx, 0, y + r->y0, &cinfo);
+        exr_result_t er = exr_read_scanline_chunk_info(r->ctx, 0, y + r->dw_y, &cinfo);
         if (er == EXR_ERR_SUCCESS)
             er = init ? exr_decoding_update(r->ctx, 0, &cinfo, &dec) : exr_decoding_initialize(r->ctx, 0, &cinfo, &dec);
         if (er != EXR_ERR_SUCCESS) goto exr_fail;
         init = true;
-        int cy0 = cinfo.start_y - r->y0, ch = cinfo.height;
+        int cy0 = cinfo.start_y - r->dw_y, ch = cinfo.height;
         for (int c = 0; c < dec.channel_count; c++) {
             int idx = exrio_find_channel(r, dec.channels[c].channel_name);
             dec.channels[c].decode_to_ptr = r->chunk_buf + (size_t)idx * rb * (size_t)r->chunk_rows;

@@ -34,7 +34,11 @@ typedef struct exrio_attr {
 
 typedef struct exrio_writer_desc {
     const char *path;
-    int width, height;
+    int width, height; /* the data window's size */
+    /* A region file: the data window starts at (x0, y0) of a display window of full_width x
+     * full_height (0: the data window is the whole image). */
+    int x0, y0, full_width, full_height;
+    int row_stride; /* values per row in the planes given to exrio_writer_rows (0: width) */
     exrio_compression compression;
     const exrio_channel *channels;
     int nchannels;
@@ -48,8 +52,9 @@ typedef struct exrio_writer exrio_writer;
 /* Opens the temporary file and writes the header. */
 fb_result exrio_writer_create(const exrio_writer_desc *desc, exrio_writer **out);
 
-/* Appends rows [y0, y0 + nrows) (y0 must be the next row not yet written). planes[c] points to
- * nrows * width values of channel c, 4 bytes each. The data is copied; the call may wait while
+/* Appends rows [y0, y0 + nrows) of the data window (y0 counts from its top and must be the next row
+ * not yet written). planes[c] points to nrows rows of channel c, row_stride values apart, of which
+ * the first width are taken, 4 bytes each. The data is copied; the call may wait while
  * the compression queue is full. */
 fb_result exrio_writer_rows(exrio_writer *w, int y0, int nrows, const void *const *planes);
 
@@ -67,8 +72,10 @@ typedef struct exrio_reader exrio_reader;
 fb_result exrio_open(const char *path, exrio_reader **out);
 void exrio_close(exrio_reader **r);
 
+/* The data window's size and origin, and the display window's size (its origin must be 0, 0). */
 int exrio_width(const exrio_reader *r);
 int exrio_height(const exrio_reader *r);
+void exrio_window(const exrio_reader *r, int *x0, int *y0, int *full_width, int *full_height);
 int exrio_nchannels(const exrio_reader *r);
 const char *exrio_channel_name(const exrio_reader *r, int c);
 exrio_type exrio_channel_type(const exrio_reader *r, int c);

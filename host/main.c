@@ -6,6 +6,8 @@
 #include "bench.h"
 #include "tonemap.h"
 #include "compare.h"
+#include "exrio.h"
+#include "merge.h"
 #include "scene.h"
 #include "vkc.h"
 
@@ -51,7 +53,8 @@ static const char *const k_usage =
     "usage: fractalbake COMMAND [options]\n"
     "\n"
     "commands:\n"
-    "  render [SCENE.json] [-o OUT.exr]   bake every layer of a scene (no scene: the embedded default)\n"
+    "  render [SCENE.json] [-o OUT.exr]   bake every layer of a scene (no scene: the embedded default);\n"
+    "         [--from OLD.exr] [--set K=V]  or the scene stored in a file; override keys\n"
     "  fbm [options] -o OUT.exr           fBm noise, one layer (fractalbake fbm --help lists the options)\n"
     "  julia [options] -o OUT.exr         a warped Julia set (night skies), one layer\n"
     "  ifs [options] -o OUT.exr           an IFS chaos game (plants: fern, tree, population...), one layer\n"
@@ -59,17 +62,22 @@ static const char *const k_usage =
     "  terrain --points F.xyz -o OUT.exr  survey points refined by Delaunay midpoint displacement, one layer\n"
     "  tonemap IN.exr -o OUT.exr [tone]   re-run an ifs layer's tone mapping (no new chaos game)\n"
     "  compare A.exr B.exr [thresholds]   exit 0 within thresholds, 1 beyond, 2 on error\n"
+    "  merge PARTS... -o OUT.exr          join region files (render --region X,Y,W,H) into the whole image\n"
     "  info FILE.exr                      layers, channels, types, attributes and the stored scene\n"
     "  devices                            the Vulkan devices found, and which one is chosen\n"
     "  bench [--json] [--size WxH]        throughput of every generator on each backend\n"
     "\n"
     "common options:\n"
     "  -o, --output FILE     output EXR (written to a temporary file, renamed when complete)\n"
-    "  --preview FILE.png    also write a grey PNG preview of the first layer\n"
+    "  --preview FILE.png    also write a PNG preview (grey, colour or hillshade, as the layer suits)\n"
+    "  --preview-layer L     the layer it shows, or `over`: every layer composited back to front by\n"
+    "                        its coverage A (the default for scenes of several layers)\n"
     "  --backend B           vulkan | native (default: vulkan if a device exists, else native)\n"
     "  --device D            Vulkan device index or name substring (see `fractalbake devices`)\n"
     "  --threads N           native threads and EXR compression threads (default: all cores)\n"
     "  --strip-rows N        rows computed per strip (the result does not depend on it)\n"
+    "  --region X,Y,W,H      bake only these pixels (the same as in the full bake) into a region file;\n"
+    "                        `fractalbake merge` joins region files into the whole image\n"
     "  --validation          enable VK_LAYER_KHRONOS_validation (also FB_VK_VALIDATION=1)\n"
     "  --quiet               no progress bar, no warnings, no summaries\n"
     "  --json                layer summaries (terrain: points, time per stage) as JSON lines on stdout\n"
@@ -79,9 +87,10 @@ static const char *const k_usage =
 
 /* Options every baking command shares. */
 typedef struct common_opts {
-    const char *out, *preview, *device;
+    const char *out, *preview, *preview_layer, *device;
     fb_backend backend;
     int threads, strip_rows;
+    int region[4]; /* x, y, w, h; w == 0: none */
     bool quiet, validation, help, json;
 } common_opts;
 
@@ -92,6 +101,17 @@ static bool parse_int_arg(const char *s, long lo, long hi, int *out)
     long v = strtol(s, &end, 10);
     if (!*s || *end || errno || v < lo || v > hi) return false;
     *out = (int)v;
+    return true;
+}
+
+static bool parse_region(const char *s, int r[4])
+{
+    long v[4];
+    int used = 0;
+    if (sscanf(s, "%ld,%ld,%ld,%ld%n", &v[0], &v[1], &v[2], &v[3], &used) != 4 || s[used]) return false;
+    for (int i = 0; i < 4; i++)
+        if (v[i] < (i < 2 ? 0 : 1) || v[i] > FB_MAX_DIM) return false;
+    for (int i = 0; i < 4; i++) r[i] = (int)v[i];
     return true;
 }
 
@@ -114,6 +134,9 @@ static int common_option(int argc, char **argv, int *i, common_opts *o)
     } else if (!strcmp(a, "--preview")) {
         NEED_VALUE();
         o->preview = val;
+    } else if (!strcmp(a, "--preview-layer")) {
+        NEED_VALUE();
+        o->preview_layer = val;
     } else if (!strcmp(a, "--device")) {
         NEED_VALUE();
         o->device = val;
@@ -137,6 +160,12 @@ static int common_option(int argc, char **argv, int *i, common_opts *o)
         NEED_VALUE();
         if (!parse_int_arg(val, 1, FB_MAX_DIM, &o->strip_rows)) {
             fb_fail(FB_ERR_USAGE, "--strip-rows: expected an integer in 1..%d, found \"%s\"", FB_MAX_DIM, val);
+            return -1;
+        }
+    } else if (!strcmp(a, "--region")) {
+        NEED_VALUE();
+        if (!parse_region(val, o->region)) {
+            fb_fail(FB_ERR_USAGE, "--region: expected X,Y,W,H (integers, W and H >= 1), found \"%s\"", val);
             return -1;
         }
     } else if (!strcmp(a, "--quiet")) {
@@ -177,14 +206,17 @@ static fb_result bake_scene(const fb_scene *scene, const common_opts *o)
                  &(fb_bake_desc){.scene = scene,
                                  .out = o->out,
                                  .preview = o->preview,
+                                 .preview_layer = o->preview_layer,
                                  .strip_rows = o->strip_rows,
+                                 .region = {o->region[0], o->region[1], o->region[2], o->region[3]},
                                  .progress = !o->quiet,
                                  .report = report,
                                  .user = (void *)o},
                  &st);
     if (!rc && !o->quiet)
-        fprintf(stderr, "fractalbake: wrote %s (%d x %d, %d layer%s) in %.2f s on %s\n", o->out, scene->width,
-                scene->height, scene->nlayers, scene->nlayers == 1 ? "" : "s", st.seconds, e.device);
+        fprintf(stderr, "fractalbake: wrote %s (%d x %d%s, %d layer%s) in %.2f s on %s\n", o->out,
+                o->region[2] ? o->region[2] : scene->width, o->region[2] ? o->region[3] : scene->height,
+                o->region[2] ? " region" : "", scene->nlayers, scene->nlayers == 1 ? "" : "s", st.seconds, e.device);
     fb_engine_close(&e);
     return rc;
 }
@@ -229,31 +261,106 @@ static int cmd_generator(const char *kind, int argc, char **argv)
     return finish(rc);
 }
 
+/* The scene stored in a file baked by fractalbake, and the backend that baked it. */
+static fb_result stored_scene(const char *path, char **json, fb_backend *backend, int region[4])
+{
+    exrio_reader *r = NULL;
+    fb_result rc = exrio_open(path, &r);
+    if (rc) return rc;
+    const char *text = exrio_attr_string(r, "fractalbake/scene");
+    const char *be = exrio_attr_string(r, "fractalbake/backend");
+    const char *reg = exrio_attr_string(r, "fractalbake/region");
+    if (reg && !parse_region(reg, region))
+        rc = fb_fail(FB_ERR_INPUT, "%s: malformed attribute fractalbake/region \"%s\"", path, reg);
+    if (rc)
+        ;
+    else if (!text)
+        rc = fb_fail(FB_ERR_INPUT, "%s: no stored scene (attribute fractalbake/scene): not baked by fractalbake", path);
+    else if (!(*json = strdup(text)))
+        rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    *backend = be && !strcmp(be, "native")   ? FB_BACKEND_NATIVE
+               : be && !strcmp(be, "vulkan") ? FB_BACKEND_VULKAN
+                                             : FB_BACKEND_AUTO;
+    exrio_close(&r);
+    return rc;
+}
+
 static int cmd_render(int argc, char **argv)
 {
     common_opts o = {0};
-    const char *scene_path = NULL;
+    const char *scene_path = NULL, *from = NULL;
+    const char **sets = calloc((size_t)argc + 1, sizeof *sets);
+    int nsets = 0;
+    if (!sets) return finish(fb_fail(FB_ERR_NOMEM, "out of memory"));
     for (int i = 0; i < argc; i++) {
         int c = common_option(argc, argv, &i, &o);
-        if (c < 0) return finish(FB_ERR_USAGE);
+        const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
+        int bad = 0;
+        if (c < 0) {
+            free(sets);
+            return finish(FB_ERR_USAGE);
+        }
         if (c > 0) continue;
-        if (argv[i][0] == '-') return usage_error("%s: unknown flag for `fractalbake render`", argv[i]);
-        if (scene_path) return usage_error("%s: only one scene file may be given", argv[i]);
-        scene_path = argv[i];
+        if (!strcmp(a, "--set") || !strcmp(a, "--from")) {
+            if (!val) {
+                free(sets);
+                return usage_error("%s: missing value", a);
+            }
+            if (!strcmp(a, "--set"))
+                sets[nsets++] = val;
+            else if (from)
+                bad = usage_error("%s: only one --from may be given", a);
+            else
+                from = val;
+            i++;
+        } else if (a[0] == '-') {
+            bad = usage_error("%s: unknown flag for `fractalbake render`", a);
+        } else if (scene_path) {
+            bad = usage_error("%s: only one scene file may be given", a);
+        } else {
+            scene_path = a;
+        }
+        if (bad) {
+            free(sets);
+            return bad;
+        }
     }
     if (o.help) {
-        printf("usage: fractalbake render [SCENE.json] [-o OUT.exr] [--preview OUT.png]\n"
-               "Bakes every layer of the scene into one EXR. Without SCENE.json, bakes the embedded default scene.\n"
+        printf("usage: fractalbake render [SCENE.json | --from OLD.exr] [--set KEY.PATH=VALUE ...] [-o OUT.exr]\n"
+               "                          [--preview OUT.png [--preview-layer NAME|over]]\n"
+               "Bakes every layer of the scene into one EXR. Without SCENE.json, bakes the embedded default scene\n"
+               "(a night sky, a refined terrain and a plant population). --from bakes the scene stored in a file\n"
+               "fractalbake wrote, on the backend that wrote it unless --backend is given: the same pixels.\n"
+               "--set overrides one key before validation: size=2048x1024, seed=9, layers.sky.c=-0.8,0.156,\n"
+               "layers.1.insert=5000 (a list element by index or by layer name; lists comma-separated).\n"
                "Default output: fractalbake.exr in the current folder.\n");
+        free(sets);
         return 0;
     }
     g_quiet_warnings = o.quiet;
     if (!o.out) o.out = "fractalbake.exr";
-    fb_scene scene;
-    fb_result rc = scene_path ? fb_scene_load(scene_path, &scene)
-                              : fb_scene_parse(fb_scene_default_json(), "(default scene)", &scene);
+    fb_scene scene = {0};
+    fb_result rc = FB_OK;
+    if (from && scene_path) {
+        rc = fb_fail(FB_ERR_USAGE, "--from %s: give either a scene file or --from, not both", from);
+    } else if (from) {
+        char *json = NULL, origin[1100];
+        fb_backend stored = FB_BACKEND_AUTO;
+        int region[4] = {0};
+        rc = stored_scene(from, &json, &stored, region);
+        if (!rc && o.region[2] == 0) memcpy(o.region, region, sizeof region);
+        snprintf(origin, sizeof origin, "%s (stored scene)", from);
+        if (!rc) rc = fb_scene_parse_sets(json, origin, sets, nsets, &scene);
+        if (o.backend == FB_BACKEND_AUTO) o.backend = stored;
+        free(json);
+    } else if (scene_path) {
+        rc = fb_scene_load_sets(scene_path, sets, nsets, &scene);
+    } else {
+        rc = fb_scene_parse_sets(fb_scene_default_json(), "(default scene)", sets, nsets, &scene);
+    }
     if (!rc) rc = bake_scene(&scene, &o);
     fb_scene_fini(&scene);
+    free(sets);
     return finish(rc);
 }
 
@@ -315,6 +422,51 @@ static int cmd_compare(int argc, char **argv)
     }
     printf("%s\n", pass ? "result: within thresholds" : "result: BEYOND thresholds");
     return pass ? 0 : 1;
+}
+
+static int cmd_merge(int argc, char **argv)
+{
+    const char *out = NULL;
+    const char **parts = calloc((size_t)argc + 1, sizeof *parts);
+    int n = 0, threads = 0, bad = 0;
+    bool quiet = false;
+    if (!parts) return finish(fb_fail(FB_ERR_NOMEM, "out of memory"));
+    for (int i = 0; i < argc && !bad; i++) {
+        const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--threads")) {
+            if (!val)
+                bad = usage_error("%s: missing value", a);
+            else if (a[1] == 'o' || a[2] == 'o')
+                out = val;
+            else if (!parse_int_arg(val, 1, 1024, &threads))
+                bad = usage_error("--threads: expected an integer in 1..1024, found \"%s\"", val);
+            i++;
+        } else if (!strcmp(a, "--quiet")) {
+            quiet = true;
+        } else if (!strcmp(a, "--help")) {
+            printf("usage: fractalbake merge PART.exr... -o OUT.exr [--threads N] [--quiet]\n"
+                   "Joins the region files of `fractalbake render --region X,Y,W,H` into the whole image. The parts\n"
+                   "must be regions of one bake (same size, channels and scene) that cover it with no overlap.\n");
+            free(parts);
+            return 0;
+        } else if (a[0] == '-' && a[1]) {
+            bad = usage_error("%s: unknown flag for `fractalbake merge`", a);
+        } else {
+            parts[n++] = a;
+        }
+    }
+    if (!bad && !out) bad = usage_error("%s", "merge: -o OUT.exr is required (fractalbake merge PARTS... -o OUT.exr)");
+    if (!bad && n == 0) bad = usage_error("%s", "merge: no region files given (fractalbake merge PARTS... -o OUT.exr)");
+    if (bad) {
+        free(parts);
+        return bad;
+    }
+    double t0 = fb_now();
+    fb_result rc = fb_merge(parts, n, out, threads);
+    if (!rc && !quiet)
+        fprintf(stderr, "fractalbake: merged %d part%s into %s in %.2f s\n", n, n == 1 ? "" : "s", out, fb_now() - t0);
+    free(parts);
+    return finish(rc);
 }
 
 static int cmd_info(int argc, char **argv)
@@ -385,6 +537,7 @@ int main(int argc, char **argv)
     }
     if (!strcmp(cmd, "compare")) return cmd_compare(argc - 2, argv + 2);
     if (!strcmp(cmd, "info")) return cmd_info(argc - 2, argv + 2);
+    if (!strcmp(cmd, "merge")) return cmd_merge(argc - 2, argv + 2);
     if (!strcmp(cmd, "devices")) return cmd_devices(argc - 2, argv + 2);
     if (!strcmp(cmd, "bench")) return finish(fb_bench_main(argc - 2, argv + 2));
     return usage_error("%s: unknown command (see fractalbake --help)", cmd);

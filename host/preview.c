@@ -12,13 +12,20 @@
 
 struct fb_preview {
     int width, height; /* source */
+    int stride;        /* values per source row given to fb_preview_add_rows */
     int scale;         /* source pixels per preview pixel, per axis */
     int pw, ph;
-    int channels;
-    double *sum; /* channels values per preview pixel */
+    int channels; /* 1 (grey or hillshade) or 3 (RGB), plus 1 when `alpha` */
+    bool alpha;   /* the last channel is a coverage in [0, 1] (used by the over composite) */
+    double *sum;  /* channels values per preview pixel */
     uint32_t *count;
     double shade_dx, shade_dy; /* > 0: one channel drawn as a hillshade; world units per source pixel */
 };
+
+void fb_preview_set_row_stride(fb_preview *p, int stride)
+{
+    p->stride = stride;
+}
 
 void fb_preview_set_hillshade(fb_preview *p, double dx, double dy)
 {
@@ -32,12 +39,12 @@ static double at_clamped(const fb_preview *p, int x, int y)
     x = x < 0 ? 0 : x >= p->pw ? p->pw - 1 : x;
     y = y < 0 ? 0 : y >= p->ph ? p->ph - 1 : y;
     size_t i = (size_t)y * p->pw + x;
-    return p->count[i] ? p->sum[i] / p->count[i] : NAN;
+    return p->count[i] ? p->sum[i * p->channels] / p->count[i] : NAN;
 }
 
 /* Lambertian shading under a light from the north-west, 45 degrees up (the cartographers'
  * convention), from central differences on the preview grid. */
-static uint8_t hillshade(const fb_preview *p, int x, int y)
+static double hillshade(const fb_preview *p, int x, int y)
 {
     double c = at_clamped(p, x, y);
     if (!isfinite(c)) return 0;
@@ -48,21 +55,28 @@ static uint8_t hillshade(const fb_preview *p, int x, int y)
     double nx = -gx, ny = -gy, nz = 1, len = sqrt(nx * nx + ny * ny + nz * nz);
     const double lx = -0.5, ly = 0.5, lz = 0.70710678118654752; /* unit: from the north-west, 45 deg */
     double v = (nx * lx + ny * ly + nz * lz) / len;
-    return (uint8_t)lrint(255.0 * (v < 0 ? 0 : v));
+    return v < 0 ? 0 : v;
 }
 
 fb_result fb_preview_create(int width, int height, int max_side, int channels, fb_preview **out)
+{
+    return fb_preview_create_alpha(width, height, max_side, channels, false, out);
+}
+
+fb_result fb_preview_create_alpha(int width, int height, int max_side, int channels, bool alpha, fb_preview **out)
 {
     fb_preview *p = calloc(1, sizeof *p);
     if (!p) return fb_fail(FB_ERR_NOMEM, "out of memory");
     int longest = width > height ? width : height;
     p->width = width;
     p->height = height;
+    p->stride = width;
     p->scale = (longest + max_side - 1) / max_side;
     if (p->scale < 1) p->scale = 1;
     p->pw = (width + p->scale - 1) / p->scale;
     p->ph = (height + p->scale - 1) / p->scale;
-    p->channels = channels == 3 ? 3 : 1;
+    p->channels = (channels == 3 ? 3 : 1) + (alpha ? 1 : 0);
+    p->alpha = alpha;
     p->sum = calloc((size_t)p->pw * p->ph * p->channels, sizeof *p->sum);
     p->count = calloc((size_t)p->pw * p->ph, sizeof *p->count);
     if (!p->sum || !p->count) {
@@ -87,7 +101,7 @@ void fb_preview_add_rows(fb_preview *p, int y0, int n, const float *const *rows)
     for (int r = 0; r < n; r++) {
         size_t base = (size_t)((y0 + r) / p->scale) * p->pw;
         for (int x = 0; x < p->width; x++) {
-            size_t at = base + x / p->scale, src = (size_t)r * p->width + x;
+            size_t at = base + x / p->scale, src = (size_t)r * p->stride + x;
             bool finite = true;
             for (int c = 0; c < p->channels; c++) finite = finite && isfinite(rows[c][src]);
             if (!finite) continue;
@@ -104,38 +118,44 @@ static uint8_t srgb8(double v)
     return (uint8_t)lrint(255.0 * v);
 }
 
+static fb_result write_png(const char *path, int pw, int ph, int nc, const uint8_t *img);
+
 fb_result fb_preview_write_png(const fb_preview *p, const char *path)
 {
     size_t n = (size_t)p->pw * p->ph;
-    int nc = p->channels;
+    int nc = p->channels - (p->alpha ? 1 : 0);
     uint8_t *volatile img = malloc(n * nc); /* volatile: survives libpng's longjmp */
     if (!img) return fb_fail(FB_ERR_NOMEM, "out of memory");
     if (nc == 3) {
         for (size_t i = 0; i < n; i++)
-            for (int c = 0; c < 3; c++) img[i * 3 + c] = p->count[i] ? srgb8(p->sum[i * 3 + c] / p->count[i]) : 0;
+            for (int c = 0; c < 3; c++)
+                img[i * 3 + c] = p->count[i] ? srgb8(p->sum[i * p->channels + c] / p->count[i]) : 0;
     } else if (p->shade_dx > 0) {
         for (int y = 0; y < p->ph; y++)
-            for (int x = 0; x < p->pw; x++) img[(size_t)y * p->pw + x] = hillshade(p, x, y);
+            for (int x = 0; x < p->pw; x++) img[(size_t)y * p->pw + x] = (uint8_t)lrint(255.0 * hillshade(p, x, y));
     } else {
         double lo = INFINITY, hi = -INFINITY;
         for (size_t i = 0; i < n; i++) {
             if (!p->count[i]) continue;
-            double v = p->sum[i] / p->count[i];
+            double v = p->sum[i * p->channels] / p->count[i];
             lo = v < lo ? v : lo;
             hi = v > hi ? v : hi;
         }
         double range = hi > lo ? hi - lo : 1.0;
         for (size_t i = 0; i < n; i++)
-            img[i] = p->count[i] ? (uint8_t)lrint(255.0 * (p->sum[i] / p->count[i] - lo) / range) : 0;
+            img[i] = p->count[i] ? (uint8_t)lrint(255.0 * (p->sum[i * p->channels] / p->count[i] - lo) / range) : 0;
     }
+    fb_result rc = write_png(path, p->pw, p->ph, nc, img);
+    free((void *)img);
+    return rc;
+}
 
+static fb_result write_png(const char *path, int pw, int ph, int nc, const uint8_t *img)
+{
     char tmp[4200];
     fb_temp_path(path, tmp, sizeof tmp);
     FILE *f = fopen(tmp, "wb");
-    if (!f) {
-        free((void *)img);
-        return fb_fail(FB_ERR_IO, "%s: cannot create preview: %s", path, strerror(errno));
-    }
+    if (!f) return fb_fail(FB_ERR_IO, "%s: cannot create preview: %s", path, strerror(errno));
     fb_result rc = FB_OK;
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
     png_infop info = png ? png_create_info_struct(png) : NULL;
@@ -145,17 +165,71 @@ fb_result fb_preview_write_png(const fb_preview *p, const char *path)
         rc = fb_fail(FB_ERR_IO, "%s: cannot write preview", path);
     } else {
         png_init_io(png, f);
-        png_set_IHDR(png, info, (png_uint_32)p->pw, (png_uint_32)p->ph, 8,
-                     nc == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE,
-                     PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+        png_set_IHDR(png, info, (png_uint_32)pw, (png_uint_32)ph, 8, nc == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_GRAY,
+                     PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
         png_write_info(png, info);
-        for (int y = 0; y < p->ph; y++) png_write_row(png, (uint8_t *)img + (size_t)y * p->pw * nc);
+        for (int y = 0; y < ph; y++) png_write_row(png, img + (size_t)y * pw * nc);
         png_write_end(png, NULL);
     }
     png_destroy_write_struct(png ? &png : NULL, info ? &info : NULL);
     if (fclose(f) != 0 && !rc) rc = fb_fail(FB_ERR_IO, "%s: cannot write preview: %s", path, strerror(errno));
     if (!rc && rename(tmp, path) != 0) rc = fb_fail(FB_ERR_IO, "%s: cannot move preview into place", path);
     if (rc) unlink(tmp);
-    free((void *)img);
+    return rc;
+}
+
+/* The range of channel 0 over the pixels that received a value (for grey levels). */
+static void grey_range(const fb_preview *p, double *lo, double *hi)
+{
+    *lo = INFINITY, *hi = -INFINITY;
+    for (size_t i = 0; i < (size_t)p->pw * p->ph; i++) {
+        if (!p->count[i]) continue;
+        double v = p->sum[i * p->channels] / p->count[i];
+        *lo = v < *lo ? v : *lo;
+        *hi = v > *hi ? v : *hi;
+    }
+    if (!(*hi > *lo)) *hi = *lo + 1.0;
+}
+
+fb_result fb_preview_write_over(const fb_preview *const *layers, int n, const char *path)
+{
+    const fb_preview *p0 = layers[0];
+    size_t npix = (size_t)p0->pw * p0->ph;
+    uint8_t *img = malloc(npix * 3);
+    double(*lohi)[2] = calloc((size_t)n, sizeof *lohi);
+    if (!img || !lohi) {
+        free(img);
+        free(lohi);
+        return fb_fail(FB_ERR_NOMEM, "out of memory");
+    }
+    for (int k = 0; k < n; k++) grey_range(layers[k], &lohi[k][0], &lohi[k][1]);
+    static const double earth[3] = {0.45, 0.41, 0.35}; /* the hillshade's tint, linear */
+    for (int y = 0; y < p0->ph; y++)
+        for (int x = 0; x < p0->pw; x++) {
+            size_t i = (size_t)y * p0->pw + x;
+            double out[3] = {0, 0, 0};
+            for (int k = 0; k < n; k++) {
+                const fb_preview *p = layers[k];
+                if (!p->count[i]) continue;
+                const double *s = p->sum + i * p->channels;
+                double inv = 1.0 / p->count[i];
+                double a = p->alpha ? s[p->channels - 1] * inv : 1.0;
+                a = a < 0 ? 0 : a > 1 ? 1 : a;
+                double c[3];
+                if (p->channels - (p->alpha ? 1 : 0) == 3) {
+                    /* colour layers with a coverage hold premultiplied colour; opaque ones plain colour */
+                    for (int j = 0; j < 3; j++) c[j] = s[j] * inv;
+                } else {
+                    double v =
+                        p->shade_dx > 0 ? hillshade(p, x, y) : (s[0] * inv - lohi[k][0]) / (lohi[k][1] - lohi[k][0]);
+                    for (int j = 0; j < 3; j++) c[j] = a * (p->shade_dx > 0 ? earth[j] * v : v);
+                }
+                for (int j = 0; j < 3; j++) out[j] = c[j] + (1 - a) * out[j];
+            }
+            for (int j = 0; j < 3; j++) img[i * 3 + j] = srgb8(out[j]);
+        }
+    fb_result rc = write_png(path, p0->pw, p0->ph, 3, img);
+    free(img);
+    free(lohi);
     return rc;
 }

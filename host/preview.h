@@ -8,15 +8,27 @@
 
 #include "fb.h"
 
+#include <stdbool.h>
+
 typedef struct fb_preview fb_preview;
 
 fb_result fb_preview_create(int width, int height, int max_side, int channels, fb_preview **out);
+/* The same with one more channel after the 1 or 3: a coverage in [0, 1], used by the over composite. */
+fb_result fb_preview_create_alpha(int width, int height, int max_side, int channels, bool alpha, fb_preview **out);
 void fb_preview_destroy(fb_preview **p);
 /* One channel drawn as a hillshade instead of grey levels: the channel is a height in the units of
  * the plane, dx and dy world units per source pixel (x right, y up). */
 void fb_preview_set_hillshade(fb_preview *p, double dx, double dy);
-/* Adds rows [y0, y0 + n) of the preview's 1 or 3 float channels (n * width values each). */
+/* The rows given to fb_preview_add_rows are `stride` values apart (default: the width). */
+void fb_preview_set_row_stride(fb_preview *p, int stride);
+/* Adds rows [y0, y0 + n) of the preview's 1 or 3 float channels, then its coverage if it has one
+ * (n * width values each). */
 void fb_preview_add_rows(fb_preview *p, int y0, int n, const float *const *rows);
 fb_result fb_preview_write_png(const fb_preview *p, const char *path);
+/* Composites previews of the same size back to front (layers[0] at the back) with the "over"
+ * operator and writes an RGB PNG. Per layer: 3 channels are colour (premultiplied when the preview
+ * has a coverage), 1 channel a hillshade (tinted) or grey levels of its own range; the coverage is
+ * the alpha, 1 without one. */
+fb_result fb_preview_write_over(const fb_preview *const *layers, int n, const char *path);
 
 #endif

@@ -353,6 +353,10 @@ static int locate(cursor *c, const char *path)
 typedef struct vctx {
     const char *origin; /* file name, or NULL for the command line */
     const char *text;
+    /* --set overrides: what the user typed, and the key path each one set ("layers[0].c") */
+    const char *const *sets;
+    char (*set_paths)[256];
+    int nsets;
 } vctx;
 
 /* Logs "FILE:LINE: PATH: message" (file) or "--KEY: message" (command line) and returns FB_ERR_INPUT. */
@@ -364,6 +368,12 @@ static fb_result verr(const vctx *v, const char *path, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
+    for (int i = v->nsets - 1; i >= 0; i--) { /* a value given by --set is reported as that --set */
+        size_t n = strlen(v->set_paths[i]);
+        if (!strncmp(path, v->set_paths[i], n) && (!path[n] || path[n] == '.' || path[n] == '['))
+            return fb_fail(FB_ERR_USAGE, "--set %s: %s%s%s", v->sets[i], path[n] ? path + n + 1 : "",
+                           path[n] ? ": " : "", msg);
+    }
     if (v->origin) {
         cursor c = {v->text, 1};
         int line = locate(&c, path);
@@ -1121,7 +1131,126 @@ static fb_result parse_root(const vctx *v, json_t *root, fb_scene *s)
     return FB_OK;
 }
 
+/* ---- --set KEY.PATH=VALUE -------------------------------------------------------------------- */
+
+/* The value of a --set: JSON when it parses as JSON ("5", "[1, 2]", "\"x\"", "true"); WxH as
+ * [W, H]; a comma-separated list as an array of such values; anything else as a string. */
+static json_t *set_value(const char *text)
+{
+    json_t *j = json_loads(text, JSON_DECODE_ANY, NULL);
+    if (j) return j;
+    int w, h, used = 0;
+    if (sscanf(text, "%d%*[x]%d%n", &w, &h, &used) == 2 && !text[used]) return json_pack("[ii]", w, h);
+    if (!strchr(text, ',')) return json_string(text);
+    json_t *arr = json_array();
+    for (const char *p = text; arr;) {
+        size_t n = strcspn(p, ",");
+        char *item = strndup(p, n);
+        json_t *e = item ? json_loads(item, JSON_DECODE_ANY, NULL) : NULL;
+        if (!e && item) e = json_string(item);
+        free(item);
+        if (!e || json_array_append_new(arr, e) != 0) {
+            json_decref(arr);
+            return NULL;
+        }
+        if (!p[n]) break;
+        p += n + 1;
+    }
+    return arr;
+}
+
+/* The default name of a layer of type `type` (its keys' "name" default), or "". */
+static void default_layer_name(const json_t *layer, char *out, size_t n)
+{
+    const keyspec *keys, *k;
+    int nk;
+    const char *type = json_string_value(json_object_get(layer, "type"));
+    const char *def = type && kind_keys(type, &keys, &nk) && (k = find_key(keys, nk, "name")) ? k->def : "\"\"";
+    snprintf(out, n, "%.*s", (int)strlen(def) - 2, def + 1);
+}
+
+/* Applies one override to the scene's JSON, creating intermediate objects as needed; writes the key
+ * path it set (layers[2].c) to jpath. In lists, a segment is an index or a layer name. */
+static fb_result apply_set(json_t *root, const char *set, char jpath[256])
+{
+    const char *eq = strchr(set, '=');
+    if (!eq || eq == set)
+        return fb_fail(FB_ERR_USAGE, "--set %s: expected KEY.PATH=VALUE (e.g. layers.sky.c=-0.8,0.156)", set);
+    json_t *node = root, *val = set_value(eq + 1);
+    if (!val) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    jpath[0] = 0;
+    const char *seg = set;
+    size_t created = 0; /* the length of jpath where the first object this override created starts */
+    for (;;) {
+        size_t n = strcspn(seg, ".=");
+        bool last = seg[n] == '=';
+        char key[128];
+        if (n == 0 || n >= sizeof key) {
+            json_decref(val);
+            return fb_fail(FB_ERR_USAGE, "--set %s: empty or overlong key in the path", set);
+        }
+        snprintf(key, sizeof key, "%.*s", (int)n, seg);
+        size_t at = strlen(jpath);
+        json_t *child = NULL;
+        if (json_is_object(node)) {
+            snprintf(jpath + at, 256 - at, "%s%s", at ? "." : "", key);
+            if (last) {
+                if (created) jpath[created] = 0; /* errors inside what it created are this override's */
+                return json_object_set_new(node, key, val) ? fb_fail(FB_ERR_NOMEM, "out of memory") : FB_OK;
+            }
+            child = json_object_get(node, key);
+            if (!child) {
+                if (!created) created = strlen(jpath);
+                child = json_object();
+                if (!child || json_object_set_new(node, key, child) != 0) {
+                    json_decref(val);
+                    return fb_fail(FB_ERR_NOMEM, "out of memory");
+                }
+            }
+        } else if (json_is_array(node)) {
+            char *end;
+            long idx = strtol(key, &end, 10);
+            size_t count = json_array_size(node);
+            if (*end || end == key) { /* a name: the element whose "name" (or default name) is key */
+                idx = -1;
+                for (size_t i = 0; i < count && idx < 0; i++) {
+                    json_t *e = json_array_get(node, i);
+                    char name[128];
+                    if (json_is_string(json_object_get(e, "name")))
+                        snprintf(name, sizeof name, "%s", json_string_value(json_object_get(e, "name")));
+                    else
+                        default_layer_name(e, name, sizeof name);
+                    if (!strcmp(name, key)) idx = (long)i;
+                }
+                if (idx < 0) {
+                    json_decref(val);
+                    return fb_fail(FB_ERR_USAGE, "--set %s: no element named \"%s\" in %s", set, key,
+                                   at ? jpath : "the scene");
+                }
+            } else if (idx < 0 || (size_t)idx >= count) {
+                json_decref(val);
+                return fb_fail(FB_ERR_USAGE, "--set %s: index %ld is out of range (%s has %zu)", set, idx,
+                               at ? jpath : "the list", count);
+            }
+            snprintf(jpath + at, 256 - at, "[%ld]", idx);
+            if (last)
+                return json_array_set_new(node, (size_t)idx, val) ? fb_fail(FB_ERR_NOMEM, "out of memory") : FB_OK;
+            child = json_array_get(node, (size_t)idx);
+        } else {
+            json_decref(val);
+            return fb_fail(FB_ERR_USAGE, "--set %s: %s is a value, not an object or a list", set, jpath);
+        }
+        node = child;
+        seg += n + 1;
+    }
+}
+
 fb_result fb_scene_parse(const char *text, const char *origin, fb_scene *out)
+{
+    return fb_scene_parse_sets(text, origin, NULL, 0, out);
+}
+
+fb_result fb_scene_parse_sets(const char *text, const char *origin, const char *const *sets, int nsets, fb_scene *out)
 {
     memset(out, 0, sizeof *out);
     json_error_t err;
@@ -1131,17 +1260,29 @@ fb_result fb_scene_parse(const char *text, const char *origin, fb_scene *out)
             return fb_fail(FB_ERR_INPUT, "%s:%d:%d: malformed JSON: %s", origin, err.line, err.column, err.text);
         return fb_fail(FB_ERR_INPUT, "scene: malformed JSON: %s", err.text);
     }
-    vctx v = {origin, text};
-    fb_result rc = parse_root(&v, root, out);
+    char(*paths)[256] = nsets > 0 ? calloc((size_t)nsets, sizeof *paths) : NULL;
+    fb_result rc = nsets > 0 && !paths ? fb_fail(FB_ERR_NOMEM, "out of memory") : FB_OK;
+    if (!rc && nsets > 0 && !json_is_object(root))
+        rc = fb_fail(FB_ERR_INPUT, "%s: expected a JSON object with \"size\", \"seed\" and \"layers\"",
+                     origin ? origin : "scene");
+    for (int i = 0; i < nsets && !rc; i++) rc = apply_set(root, sets[i], paths[i]);
+    vctx v = {origin, text, sets, paths, nsets};
+    if (!rc) rc = parse_root(&v, root, out);
     if (!rc) {
         out->json = json_dumps(root, JSON_SORT_KEYS | JSON_INDENT(2) | JSON_REAL_PRECISION(17));
         if (!out->json) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     }
+    free(paths);
     json_decref(root);
     return rc;
 }
 
 fb_result fb_scene_load(const char *path, fb_scene *out)
+{
+    return fb_scene_load_sets(path, NULL, 0, out);
+}
+
+fb_result fb_scene_load_sets(const char *path, const char *const *sets, int nsets, fb_scene *out)
 {
     memset(out, 0, sizeof *out);
     FILE *f = fopen(path, "rb");
@@ -1179,7 +1320,7 @@ fb_result fb_scene_load(const char *path, fb_scene *out)
         free(text);
         return fb_fail(FB_ERR_INPUT, "%s: scene contains a NUL byte (not a JSON text file)", path);
     }
-    fb_result rc = fb_scene_parse(text, path, out);
+    fb_result rc = fb_scene_parse_sets(text, path, sets, nsets, out);
     free(text);
     return rc;
 }
@@ -1191,14 +1332,36 @@ void fb_scene_fini(fb_scene *s)
     memset(s, 0, sizeof *s);
 }
 
+/* The showcase: a polar night sky (a warped Julia galaxy with turbulence), a terrain refined from a
+ * small built-in survey (48 points over 1000 x 190 units, the hull's top edge a ridge, so the
+ * terrain sits below the sky in the frame), and the paper's plant population in front. */
 const char *fb_scene_default_json(void)
 {
     return "{\n"
            "  \"size\": [1024, 512],\n"
            "  \"seed\": 7,\n"
            "  \"layers\": [\n"
-           "    {\"type\": \"fbm\", \"name\": \"fbm\", \"hurst\": 0.85, \"octaves\": 10, \"frequency\": 3.0,\n"
-           "     \"warp\": 0.6}\n"
+           "    {\"type\": \"julia\", \"name\": \"sky\", \"mapping\": \"polar\", \"alpha\": [-0.3, 0], \"turbulence\": "
+           "0.2,\n"
+           "     \"palette\": \"nebula\", \"density\": 2.5, \"samples\": 4},\n"
+           "    {\"type\": \"terrain\", \"name\": \"terrain\", \"insert\": 20000, \"hurst\": 0.85, \"bounds\": [0, "
+           "1000, 0, 500],\n"
+           "     \"points\": [\n"
+           "      [0, 115, 29.1], [125, 143.7, 69.8], [250, 168, 96], [375, 184.3, 112.6], [500, 190, 85.3],\n"
+           "      [625, 184.3, 82], [750, 168, 74.9], [875, 143.7, 38.7], [1000, 115, 7.1], [0, 0, 26.8],\n"
+           "      [125, 0, 34.7], [250, 0, 50.3], [375, 0, 48.2], [500, 0, 46.2], [625, 0, 49.9],\n"
+           "      [750, 0, 50.5], [875, 0, 24.9], [1000, 0, 11.7], [613.1, 132.6, 113.9], [771.6, 146, 98.1],\n"
+           "      [720.7, 150.8, 109.8], [66.7, 61.5, 44.3], [907.9, 85.5, 29.8], [868.8, 24.2, 41.2],\n"
+           "      [471.5, 51.8, 75.5], [540.3, 107.2, 114.7], [52.1, 33.2, 33.7], [297.1, 152.3, 128.5],\n"
+           "      [744.5, 33.8, 79.1], [773.4, 30, 77.3], [608.1, 31, 75.4], [41.6, 101.3, 33.2],\n"
+           "      [232.7, 41.3, 66.2], [943.8, 104.4, 18.7], [306.2, 160.5, 114.1], [536.1, 124.9, 112.5],\n"
+           "      [228.4, 145.8, 106.5], [675.4, 163.6, 105.6], [862.2, 47.8, 42.4], [372.3, 37.2, 66.2],\n"
+           "      [174, 18.7, 57.4], [317.3, 105.3, 125.6], [43.1, 81.3, 33.5], [350.9, 60.2, 91.1],\n"
+           "      [793, 77.5, 99.7], [330.5, 86.8, 121.1], [688.3, 19, 71.5], [937.1, 12.5, 13]\n"
+           "     ]},\n"
+           "    {\"type\": \"ifs\", \"name\": \"plants\", \"preset\": \"population\", \"points\": 60000000, "
+           "\"brightness\": 6,\n"
+           "     \"bounds\": [-0.08, 1.06, -0.03, 0.54]}\n"
            "  ]\n"
            "}\n";
 }

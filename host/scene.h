@@ -135,6 +135,13 @@ fb_result fb_scene_parse(const char *text, const char *origin, fb_scene *out);
 /* Reads a scene file and parses it. */
 fb_result fb_scene_load(const char *path, fb_scene *out);
 
+/* The same with overrides applied before validation, in order: "KEY.PATH=VALUE" as given to --set.
+ * The path's segments are object keys, or in a list an index or a layer name (layers.sky.c);
+ * missing objects on the way are created. VALUE is JSON if it parses as JSON, WxH a size, a
+ * comma-separated list an array, else a string. Errors in an overridden value name the --set. */
+fb_result fb_scene_parse_sets(const char *text, const char *origin, const char *const *sets, int nsets, fb_scene *out);
+fb_result fb_scene_load_sets(const char *path, const char *const *sets, int nsets, fb_scene *out);
+
 /* The embedded default scene. */
 const char *fb_scene_default_json(void);
 

@@ -403,6 +403,61 @@ printf 'x,y,D,sigma\n25,50,2.1,\n75,50,2.7,0.5\n' > centers.csv
 "$FB" $Tr --points pts.csv --centers centers.csv --insert 3000 -o tc.exr && ok || bad "terrain with centres failed"
 "$FB" terrain --help | grep -q -- "--from-heightfield" && ok || bad "terrain --help lists no --from-heightfield"
 
+# ---- scenes: the default showcase, previews, --set, --from, --region and merge ----
+png_wh() { printf '%d %d' "0x$(od -An -tx1 -j16 -N4 "$1" | tr -d ' ')" "0x$(od -An -tx1 -j20 -N4 "$1" | tr -d ' ')"; }
+if "$FB" render -o def.exr --preview def.png --quiet 2> err.txt; then ok; else bad "the default scene failed: $(cat err.txt)"; fi
+"$FB" info def.exr > def.txt
+grep -q "size: *1024 x 512" def.txt && ok || bad "the default scene is not 1024 x 512"
+grep -q "layer sky .*B (half), G (half), R (half)" def.txt && ok || bad "default scene: no sky colour: $(cat def.txt)"
+grep -q "layer terrain .*Y (float)" def.txt && ok || bad "default scene: no terrain.Y"
+grep -q "layer plants .*A (half)" def.txt && ok || bad "default scene: no plants.A"
+[ "$(png_wh def.png)" = "1024 512" ] && [ "$(od -An -tu1 -j25 -N1 def.png | tr -d ' ')" = "2" ] && ok || bad "the default preview is not a 1024 x 512 RGB PNG"
+# the over composite differs from the sky alone; a layer by name; an unknown layer is refused
+S3="--set size=128x64 --set layers.plants.points=200000 --set layers.terrain.insert=2000 --quiet"
+"$FB" render $S3 -o c.exr --preview over.png && "$FB" render $S3 -o c2.exr --preview sky.png --preview-layer sky && ok || bad "previews failed"
+cmp -s over.png sky.png && bad "the over composite equals the sky alone" || ok
+"$FB" render $S3 -o c3.exr --preview ter.png --preview-layer terrain && [ "$(od -An -tu1 -j25 -N1 ter.png | tr -d ' ')" = "0" ] && ok || bad "the terrain preview is not a grey hillshade"
+expect_fail 2 'no layer named "moon" (layers: sky, terrain, plants' o.exr -- render $S3 -o o.exr --preview o.png --preview-layer moon
+[ -e o.png ] && bad "a failed preview left o.png" || ok
+# --set: overrides reach the stored scene and the pixels; bad overrides name the --set
+"$FB" render $S3 --set seed=9 --set layers.sky.c=-0.7,0.27 -o set.exr && ok || bad "--set failed"
+"$FB" info set.exr | tr -d ' \n' | grep -q '"c":\[-0.69999999999999996,0.27000000000000002\]' && ok || bad "--set c not stored"
+"$FB" info set.exr | grep -q '"seed": 9' && ok || bad "--set seed not stored"
+"$FB" compare c.exr set.exr --layer sky > /dev/null; [ $? -eq 1 ] && ok || bad "--set c changed no pixel"
+expect_fail 2 "\-\-set layers.sky.foo=1: unknown key for a julia layer" o.exr -- render $S3 --set layers.sky.foo=1 -o o.exr
+expect_fail 2 '\-\-set layers.moon.c=1: no element named "moon"' o.exr -- render $S3 --set layers.moon.c=1 -o o.exr
+expect_fail 2 "\-\-set layers.sky.c=1: expected \[x, y\]" o.exr -- render $S3 --set layers.sky.c=1 -o o.exr
+expect_fail 2 "\-\-set layers.7.c=1: index 7 is out of range" o.exr -- render $S3 --set layers.7.c=1 -o o.exr
+expect_fail 2 "\-\-set seed: expected KEY.PATH=VALUE" o.exr -- render $S3 --set seed -o o.exr
+expect_fail 2 "\-\-set size=0x3: expected \[width, height\]" o.exr -- render --set size=0x3 -o o.exr
+# --from: the same file, byte for byte (same backend); with an override, another
+if "$FB" render --from set.exr -o from.exr --quiet; then ok; else bad "--from failed"; fi
+cmp -s set.exr from.exr && ok || bad "--from did not reproduce the file byte for byte"
+"$FB" render --from set.exr --set layers.sky.max-iter=50 -o from2.exr --quiet && ! cmp -s set.exr from2.exr && ok || bad "--from with --set changed nothing"
+printf 'not an exr' > junk.exr
+expect_fail 2 "not a readable OpenEXR" o.exr -- render --from junk.exr -o o.exr
+expect_fail 2 "either a scene file or --from" o.exr -- render mixed.json --from set.exr -o o.exr
+# --region and merge: the parts, merged, are the whole bake byte for byte, whatever the strips and backend
+for be in vulkan native; do
+  "$FB" render $S3 --backend $be -o whole_$be.exr --strip-rows 7 || bad "whole bake ($be) failed"
+  "$FB" render $S3 --backend $be -o pa_$be.exr --region 0,0,128,21 --strip-rows 5 &&
+    "$FB" render $S3 --backend $be -o pb_$be.exr --region 0,21,50,43 &&
+    "$FB" render $S3 --backend $be -o pc_$be.exr --region 50,21,78,43 --strip-rows 64 && ok || bad "region bakes ($be) failed"
+  "$FB" merge pc_$be.exr pa_$be.exr pb_$be.exr -o merged_$be.exr --quiet && ok || bad "merge ($be) failed"
+  cmp -s whole_$be.exr merged_$be.exr && ok || bad "merged regions ($be) differ from the whole bake"
+  valid_exr pb_$be.exr
+done
+"$FB" info pb_vulkan.exr | grep -q "the region 0,21,50,43 of a 128 x 64 image" && ok || bad "info does not show the region"
+"$FB" compare pb_vulkan.exr pc_vulkan.exr > /dev/null; [ $? -eq 1 ] && ok || bad "compare of two regions passed"
+"$FB" render --from pb_vulkan.exr -o pb2.exr --quiet && cmp -s pb_vulkan.exr pb2.exr && ok || bad "--from a region file did not reproduce it"
+expect_fail 2 "a region is missing" o.exr -- merge pa_vulkan.exr pb_vulkan.exr -o o.exr
+expect_fail 2 "overlap" o.exr -- merge pa_vulkan.exr pb_vulkan.exr pc_vulkan.exr pb_vulkan.exr -o o.exr
+expect_fail 2 "another scene" o.exr -- merge pa_vulkan.exr pb_vulkan.exr set.exr -o o.exr
+expect_fail 2 "not inside the 128 x 64 image" o.exr -- render $S3 --region 100,0,29,64 -o o.exr
+expect_fail 2 "region: expected X,Y,W,H" o.exr -- render $S3 --region 1,2,3 -o o.exr
+expect_fail 2 "no region files" o.exr -- merge -o o.exr
+expect_fail 3 "nope.exr: cannot open" o.exr -- merge nope.exr -o o.exr
+
 # ---- device selection (where a Vulkan device exists) ----
 if "$FB" devices | grep -q '^0 '; then
   "$FB" fbm $S --backend vulkan --device 0 -o d0.exr && ok || bad "--device 0 failed"

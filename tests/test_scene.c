@@ -160,8 +160,43 @@ static void test_julia_keys(void)
     fb_scene_fini(&s);
 }
 
+/* --set: values by their form, list elements by index or (default) layer name, objects created on the
+ * way, later overrides win; and the default scene's layers are the ones the README promises. */
+static void test_sets(void)
+{
+    fb_scene s;
+    const char *base = "{\"size\": [64, 32], \"layers\": [{\"type\": \"fbm\"}, {\"type\": \"julia\"}]}";
+    const char *sets[] = {"size=300x100",           "seed=12",
+                          "layers.fbm.octaves=3",   "layers.sky.c=-0.5,0.25",
+                          "layers.1.palette=ember", "layers.0.hurst=0.25",
+                          "layers.fbm.hurst=0.75",  "compression=piz"};
+    CHECK(fb_scene_parse_sets(base, "t", sets, 8, &s) == FB_OK);
+    CHECK(s.width == 300 && s.height == 100 && s.seed == 12 && s.compression == EXRIO_PIZ);
+    CHECK(s.layers[0].fbm.octaves == 3 && s.layers[0].fbm.hurst == 0.75); /* the later override wins */
+    CHECK(s.layers[1].julia.c[0] == -0.5 && s.layers[1].julia.c[1] == 0.25);
+    CHECK(strstr(s.json, "\"ember\"") != NULL);
+    fb_scene_fini(&s);
+    /* a string that looks like nothing else stays a string; a nested object is created */
+    const char *cond[] = {"layers.0.condensation.preset=tree", "layers.0.maps=[[0.75,0,0,0.75,0.25,0]]"};
+    CHECK(fb_scene_parse_sets("{\"layers\": [{\"type\": \"ifs\"}]}", "t", cond, 2, &s) == FB_OK);
+    CHECK(s.layers[0].ifs.has_cond && s.layers[0].ifs.cond_lsys);
+    fb_scene_fini(&s);
+    const char *bad[] = {"layers.fbm.octaves=many"};
+    CHECK(fb_scene_parse_sets(base, "t", bad, 1, &s) != FB_OK);
+
+    CHECK(fb_scene_parse(fb_scene_default_json(), "(default)", &s) == FB_OK);
+    CHECK(s.nlayers == 3 && !strcmp(s.layers[0].name, "sky") && !strcmp(s.layers[1].name, "terrain") &&
+          !strcmp(s.layers[2].name, "plants"));
+    CHECK(s.layers[0].kind == FB_LAYER_JULIA && s.layers[0].julia.polar && s.layers[0].julia.turbulence > 0 &&
+          (s.layers[0].julia.alpha[0] != 0 || s.layers[0].julia.alpha[1] != 0));
+    CHECK(s.layers[1].kind == FB_LAYER_TERRAIN && s.layers[1].terrain.points_inline);
+    CHECK(s.layers[2].kind == FB_LAYER_IFS && s.layers[2].ifs.has_cond);
+    fb_scene_fini(&s);
+}
+
 int main(void)
 {
+    test_sets();
     test_julia_keys();
     test_keys();
     test_flags();
