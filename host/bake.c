@@ -82,7 +82,7 @@ static fb_result run_init(fb_engine *e, layer_run *lr, int strip_rows)
     const fb_scene *s = lr->gen.scene;
     size_t bytes = (size_t)s->width * (size_t)strip_rows * 4;
     fb_result rc = FB_OK;
-    if (e->kind == FB_BACKEND_VULKAN && !lr->gen.prepare) {
+    if (e->kind == FB_BACKEND_VULKAN && !lr->gen.prepare && !lr->gen.host_op) {
         rc =
             vkc_pipeline_create(e->vk,
                                 &(vkc_pipeline_desc){.spv = lr->gen.spv,
@@ -127,7 +127,7 @@ static void run_fini(fb_engine *e, layer_run *lr)
 
 static fb_result run_submit(fb_engine *e, layer_run *lr, int slot, int y0, int n)
 {
-    if (lr->gen.prepare) return FB_OK; /* computed in prepare; its strips come from the host */
+    if (lr->gen.prepare || lr->gen.host_op) return FB_OK; /* its strips come from the host */
     uint8_t push[FB_GEN_MAX_PUSH];
     uint32_t groups[3];
     fb_gen_push(&lr->gen, y0, n, push);
@@ -200,7 +200,9 @@ static fb_result previews_create(const fb_scene *s, const layer_run *runs, const
     int at = 0;
     for (int i = 0; i < s->nlayers; i++) {
         const fb_gen *g = &runs[i].gen;
-        if (pv->over || i == only) {
+        /* op layers are data (masks, sums): shown by name, left out of the composite */
+        bool shown = pv->over ? !g->host_op || (i == s->nlayers - 1 && pv->n == 0) : i == only;
+        if (shown) {
             int k = pv->n++;
             pv->layer[k] = i;
             pv->offset[k] = at;
@@ -290,6 +292,12 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
             channels[nch++] = (exrio_channel){runs[i].gen.channel_names[c], runs[i].gen.channel_types[c]};
         if (!rc) rc = run_init(e, &runs[i], strip);
     }
+    /* Op layers find their inputs among the planes of a strip. */
+    int offset[FB_MAX_LAYERS];
+    const fb_gen *gens[FB_MAX_LAYERS];
+    for (int i = 0, at = 0; i < s->nlayers; at += runs[i].gen.nchannels, i++) offset[i] = at, gens[i] = &runs[i].gen;
+    for (int i = 0; i < s->nlayers && !rc; i++)
+        if (runs[i].gen.host_op) rc = fb_gen_op_resolve(&runs[i].gen, gens, offset);
     /* Layers computed as a whole (the chaos game) run before the first strip. */
     for (int i = 0; i < s->nlayers && !rc; i++) {
         if (!runs[i].gen.prepare) continue;
@@ -346,8 +354,14 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         const void *planes[FB_MAX_LAYERS * FB_GEN_MAX_CHANNELS];
         int at = 0;
         for (int i = 0; i < s->nlayers && !rc; i++) {
-            rc = run_collect(e, &runs[i], k % SLOTS, y0, n, planes + at, &gpu);
+            if (!runs[i].gen.host_op) rc = run_collect(e, &runs[i], k % SLOTS, y0, n, planes + at, &gpu);
             at += runs[i].gen.nchannels;
+        }
+        for (int j = 0; j < s->nlayers && !rc; j++) { /* op layers, after the layers they use */
+            layer_run *lr = &runs[s->order[j]];
+            if (!lr->gen.host_op) continue;
+            fb_gen_op_rows(&lr->gen, (size_t)n * s->width, planes, lr->planes[0]);
+            planes[offset[s->order[j]]] = lr->planes[0];
         }
         if (rc) break;
         for (int c = 0; c < at; c++) planes[c] = (const uint8_t *)planes[c] + (size_t)rx * 4; /* the region's columns */

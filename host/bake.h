@@ -41,7 +41,7 @@ typedef struct fb_bake_desc {
     const char *out;     /* EXR path; NULL computes without writing (benchmarks) */
     const char *preview; /* PNG path or NULL */
     /* What the preview shows: a layer's name, or "over" (every layer composited back to front by its
-     * coverage channel A). NULL: the only layer, or "over" when there are several. */
+     * coverage channel A; op layers are left out). NULL: the only layer, or "over" when there are several. */
     const char *preview_layer;
     int strip_rows; /* 0: automatic */
     /* Only the pixels [x, x + w) x [y, y + h) of the image, as in the full bake, into a file whose

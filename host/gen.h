@@ -52,6 +52,10 @@ struct fb_gen {
     char summary[512];       /* set by prepare: one human line about the layer's computation, or "" */
     char summary_json[1024]; /* the same as a JSON object, or "" */
 
+    /* An op layer: computed on the host from other layers' planes of the same strip (fb_gen_op_rows)
+     * once fb_gen_op_resolve has found its inputs; neither native_rows nor a shader. */
+    bool host_op;
+
     bool scalar; /* native: the portable kernel only, no hand-vectorised path (benchmark reference) */
     _Alignas(16) unsigned char params[256]; /* generator-private, e.g. K_FbmParams */
     void *owned;                            /* generator-owned memory (freed by fb_gen_fini) */
@@ -81,6 +85,13 @@ fb_result fb_gen_julia_init(fb_gen *g);
 fb_result fb_gen_ifs_init(fb_gen *g);
 fb_result fb_gen_lsystem_init(fb_gen *g);
 fb_result fb_gen_terrain_init(fb_gen *g);
+fb_result fb_gen_op_init(fb_gen *g);
+
+/* Op layers: finds the planes of the inputs among every generator's (gens, all of the scene's, in
+ * scene order; plane_offset[i] is the first plane of layer i in a strip). */
+fb_result fb_gen_op_resolve(fb_gen *g, const fb_gen *const *gens, const int *plane_offset);
+/* Computes count values of the op layer from the strip's planes (of every layer). */
+void fb_gen_op_rows(const fb_gen *g, size_t count, const void *const *planes, float *out);
 
 /* The chaos-game statistics of an ifs layer after prepare (NULL for other layers). */
 struct fb_ifs_stats;

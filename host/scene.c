@@ -37,6 +37,8 @@ typedef enum ktype {
     T_IFSREF, /* a preset name or a map list */
     T_POINTS, /* a file path, or an inline list [[x, y, z], ...] */
     T_RULES,  /* L-system productions: ["X=successor", "X(p)=successor", ...] (flag: --rule, repeatable) */
+    T_REF,    /* another layer's channel "layer.channel" (or "layer": its Y), or a number */
+    T_REFS,   /* 1..8 of T_REF */
 } ktype;
 
 typedef struct keyspec {
@@ -195,6 +197,23 @@ static const keyspec terrain_keys[] = {
     {"half", T_BOOL, 0, 0, false, NULL, "false", "store Y as half (flags: --half, --float)"},
 };
 
+static const keyspec op_keys[] = {
+    {"type", T_TYPE, 0, 0, false, NULL, NULL, "generator: \"op\""},
+    {"name", T_NAME, 0, 0, false, NULL, "\"op\"", "layer name; the channel is NAME.Y"},
+    {"op", T_ENUM, 0, 0, false, "add|multiply|mix|remap|threshold", NULL,
+     "add: sum of w_i x_i; multiply: product; mix: a + (b - a) m; remap: linear range change; threshold: 0/1 step"},
+    {"inputs", T_REFS, 0, 0, false, NULL, NULL,
+     "channels \"layer.channel\" (\"layer\": its Y) or numbers: 2-8 (add, multiply), 2 (mix), 1 (remap, threshold)"},
+    {"weights", T_FRACS, -1e15, 1e15, false, NULL, NULL, "add: one weight per input (default all 1)"},
+    {"mask", T_REF, 0, 0, false, NULL, NULL, "mix: the mask m, clamped to [0, 1]"},
+    {"from", T_VEC2, -1e15, 1e15, false, NULL, NULL, "remap: the source range [lo, hi]"},
+    {"to", T_VEC2, -1e15, 1e15, false, NULL, NULL, "remap: the target range [lo, hi] (default [0, 1])"},
+    {"clamp", T_BOOL, 0, 0, false, NULL, NULL, "remap: clamp to the target range (default true)"},
+    {"level", T_NUM, -1e15, 1e15, false, NULL, NULL, "threshold: 1 at and above the level, 0 below"},
+    {"width", T_NUM, 0, 1e15, false, NULL, NULL, "threshold: a smooth step this wide around the level (default 0)"},
+    {"half", T_BOOL, 0, 0, false, NULL, "false", "store Y as half (flags: --half, --float)"},
+};
+
 /* The keys of an L-system condensation set of an ifs layer ("condensation": {"preset": "tree"}). */
 static const keyspec cond_lsystem_keys[] = {
     {"preset", T_ENUM, 0, 0, false, FB_LSYS_PRESETS, NULL, "built-in L-system"},
@@ -242,6 +261,11 @@ static bool kind_keys(const char *kind, const keyspec **keys, int *n)
     if (!strcmp(kind, "terrain")) {
         *keys = terrain_keys;
         *n = NKEYS(terrain_keys);
+        return true;
+    }
+    if (!strcmp(kind, "op")) {
+        *keys = op_keys;
+        *n = NKEYS(op_keys);
         return true;
     }
     return false;
@@ -540,6 +564,26 @@ static fb_result check_value(const vctx *v, const char *path, const keyspec *k, 
                         "expected 2 to %d stops [t, r, g, b] with t rising from 0 to exactly 1 and colours >= 0, "
                         "found %s",
                         FB_PALETTE_MAX_STOPS, shown);
+        return FB_OK;
+    }
+    case T_REFS:
+        if (!json_is_array(j) || json_array_size(j) < 1 || json_array_size(j) > FB_OP_MAX_INPUTS)
+            return verr(v, path, "expected a list of 1 to %d channels or numbers, found %s", FB_OP_MAX_INPUTS, shown);
+        for (size_t i = 0; i < json_array_size(j); i++) {
+            char sub[300];
+            snprintf(sub, sizeof sub, "%s[%zu]", path, i);
+            fb_result rc = check_value(v, sub, &(keyspec){.type = T_REF}, json_array_get(j, i));
+            if (rc) return rc;
+        }
+        return FB_OK;
+    case T_REF: {
+        if (json_is_number(j)) {
+            if (!isfinite(json_number_value(j))) return verr(v, path, "expected a finite number, found %s", shown);
+            return FB_OK;
+        }
+        const char *r = json_is_string(j) ? json_string_value(j) : NULL;
+        bool ok = r && *r && strlen(r) < 128 && r[0] != '.' && r[strlen(r) - 1] != '.';
+        if (!ok) return verr(v, path, "expected \"layer.channel\", \"layer\" or a number, found %s", shown);
         return FB_OK;
     }
     case T_STRING:
@@ -1073,6 +1117,156 @@ static fb_result parse_terrain(const vctx *v, const char *path, json_t *obj, fb_
     return FB_OK;
 }
 
+static void ref_of(const json_t *j, fb_ref *r)
+{
+    memset(r, 0, sizeof *r);
+    r->layer = -1;
+    if (json_is_number(j)) {
+        r->value = json_number_value(j);
+        return;
+    }
+    r->layer = -2; /* resolved by name in resolve_refs; the whole reference is kept in channel until then */
+    snprintf(r->channel, sizeof r->channel, "%s", json_string_value(j));
+}
+
+static fb_result parse_op(const vctx *v, const char *path, json_t *obj, fb_layer *L)
+{
+    fb_result rc = check_object(v, path, obj, op_keys, NKEYS(op_keys), "an op layer");
+    if (rc) return rc;
+    char sub[256];
+    fb_op_params *o = &L->op;
+    o->mask.layer = -1; /* no mask unless mix */
+    const json_t *opj = json_object_get(obj, "op"), *in = json_object_get(obj, "inputs");
+    if (!opj || !in) {
+        snprintf(sub, sizeof sub, "%s.%s", path, opj ? "inputs" : "op");
+        return verr(v, sub, "required for an op layer (%s)",
+                    opj ? "the channels it combines" : "add|multiply|mix|remap|threshold");
+    }
+    int idx = 0;
+    enum_index("add|multiply|mix|remap|threshold", json_string_value(opj), &idx);
+    o->op = (fb_op_kind)idx;
+    o->ninputs = (int)json_array_size(in);
+    for (int i = 0; i < o->ninputs; i++) {
+        ref_of(json_array_get(in, (size_t)i), &o->inputs[i]);
+        o->weights[i] = 1.0;
+    }
+    static const int lo[] = {2, 2, 2, 1, 1}, hi[] = {8, 8, 2, 1, 1};
+    static const char *const names[] = {"add", "multiply", "mix", "remap", "threshold"};
+    if (o->ninputs < lo[idx] || o->ninputs > hi[idx]) {
+        snprintf(sub, sizeof sub, "%s.inputs", path);
+        if (lo[idx] == hi[idx])
+            return verr(v, sub, "%s takes %d input%s, found %d", names[idx], lo[idx], lo[idx] == 1 ? "" : "s",
+                        o->ninputs);
+        return verr(v, sub, "%s takes %d to %d inputs, found %d", names[idx], lo[idx], hi[idx], o->ninputs);
+    }
+    /* each option belongs to one op; given to another it would be ignored, so it is refused */
+    static const struct {
+        const char *key;
+        fb_op_kind op;
+    } owner[] = {{"weights", FB_OP_ADD}, {"mask", FB_OP_MIX},        {"from", FB_OP_REMAP},     {"to", FB_OP_REMAP},
+                 {"clamp", FB_OP_REMAP}, {"level", FB_OP_THRESHOLD}, {"width", FB_OP_THRESHOLD}};
+    for (size_t k = 0; k < sizeof owner / sizeof owner[0]; k++)
+        if (json_object_get(obj, owner[k].key) && owner[k].op != o->op) {
+            snprintf(sub, sizeof sub, "%s.%s", path, owner[k].key);
+            return verr(v, sub, "only for op %s, not %s", names[owner[k].op], names[idx]);
+        }
+    static const struct {
+        const char *key;
+        fb_op_kind op;
+    } required[] = {{"mask", FB_OP_MIX}, {"from", FB_OP_REMAP}, {"level", FB_OP_THRESHOLD}};
+    for (size_t k = 0; k < sizeof required / sizeof required[0]; k++)
+        if (required[k].op == o->op && !json_object_get(obj, required[k].key)) {
+            snprintf(sub, sizeof sub, "%s.%s", path, required[k].key);
+            return verr(v, sub, "required for op %s", names[idx]);
+        }
+    const json_t *w = json_object_get(obj, "weights");
+    if (w) {
+        if ((int)json_array_size(w) != o->ninputs) {
+            snprintf(sub, sizeof sub, "%s.weights", path);
+            return verr(v, sub, "expected one weight per input (%d), found %zu", o->ninputs, json_array_size(w));
+        }
+        for (int i = 0; i < o->ninputs; i++) o->weights[i] = json_number_value(json_array_get(w, (size_t)i));
+    }
+    if (o->op == FB_OP_MIX) ref_of(json_object_get(obj, "mask"), &o->mask);
+    if (o->op == FB_OP_REMAP) {
+        vec2_of(obj, "from", o->from);
+        o->to[0] = 0, o->to[1] = 1;
+        if (json_object_get(obj, "to")) vec2_of(obj, "to", o->to);
+        o->clamp = json_object_get(obj, "clamp") ? boolean(obj, "clamp") : true;
+        if (!(o->from[1] != o->from[0])) {
+            snprintf(sub, sizeof sub, "%s.from", path);
+            return verr(v, sub, "the source range must not be empty ([lo, hi] with lo != hi)");
+        }
+    }
+    if (o->op == FB_OP_THRESHOLD) {
+        o->level = num(obj, "level");
+        o->width = json_object_get(obj, "width") ? num(obj, "width") : 0.0;
+    }
+    L->half = boolean(obj, "half");
+    return FB_OK;
+}
+
+/* Resolves the op layers' references to layer indices and orders the layers so that each comes
+ * after those it uses; a missing layer or a cycle is an error that names both layers. */
+static fb_result resolve_refs(const vctx *v, fb_scene *s)
+{
+    char sub[128], names[FB_MAX_LAYERS * 66] = "";
+    for (int i = 0; i < s->nlayers; i++)
+        snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", i ? ", " : "", s->layers[i].name);
+    for (int i = 0; i < s->nlayers; i++) {
+        fb_op_params *o = &s->layers[i].op;
+        if (s->layers[i].kind != FB_LAYER_OP) continue;
+        for (int k = 0; k <= o->ninputs; k++) {
+            fb_ref *r = k < o->ninputs ? &o->inputs[k] : &o->mask;
+            if (r->layer != -2) continue;
+            char name[128];
+            snprintf(name, sizeof name, "%s", r->channel);
+            char *dot = strchr(name, '.');
+            if (dot) *dot = 0;
+            r->layer = -1;
+            for (int j = 0; j < s->nlayers; j++)
+                if (!strcmp(s->layers[j].name, name)) r->layer = j;
+            if (k < o->ninputs)
+                snprintf(sub, sizeof sub, "layers[%d].inputs[%d]", i, k);
+            else
+                snprintf(sub, sizeof sub, "layers[%d].mask", i);
+            if (r->layer < 0)
+                return verr(v, sub, "layer \"%s\" refers to \"%s\", but no layer is named \"%s\" (layers: %s)",
+                            s->layers[i].name, r->channel, name, names);
+            snprintf(r->channel, sizeof r->channel, "%s", dot ? dot + 1 : ""); /* name was a copy */
+        }
+    }
+    /* depth-first topological order; state 1: on the stack, 2: placed */
+    int state[FB_MAX_LAYERS] = {0}, n = 0;
+    int stack[FB_MAX_LAYERS], next[FB_MAX_LAYERS], top = 0;
+    for (int i = 0; i < s->nlayers; i++)
+        if (s->layers[i].kind != FB_LAYER_OP) s->order[n++] = i, state[i] = 2;
+    for (int root = 0; root < s->nlayers; root++) {
+        if (state[root]) continue;
+        stack[top] = root, next[top++] = 0, state[root] = 1;
+        while (top) {
+            int cur = stack[top - 1];
+            const fb_op_params *o = &s->layers[cur].op;
+            if (next[top - 1] > o->ninputs) {
+                state[cur] = 2;
+                s->order[n++] = cur;
+                top--;
+                continue;
+            }
+            int k = next[top - 1]++;
+            const fb_ref *r = k < o->ninputs ? &o->inputs[k] : &o->mask;
+            if (r->layer < 0 || state[r->layer] == 2) continue;
+            if (state[r->layer] == 1) {
+                snprintf(sub, sizeof sub, "layers[%d]", cur);
+                return verr(v, sub, "layer \"%s\" uses layer \"%s\", which depends on \"%s\": a cycle",
+                            s->layers[cur].name, s->layers[r->layer].name, s->layers[cur].name);
+            }
+            stack[top] = r->layer, next[top++] = 0, state[r->layer] = 1;
+        }
+    }
+    return FB_OK;
+}
+
 static fb_result parse_root(const vctx *v, json_t *root, fb_scene *s)
 {
     char path[64];
@@ -1112,11 +1306,15 @@ static fb_result parse_root(const vctx *v, json_t *root, fb_scene *s)
         } else if (!strcmp(t, "terrain")) {
             L->kind = FB_LAYER_TERRAIN;
             rc = parse_terrain(v, path, lj, L);
+        } else if (!strcmp(t, "op")) {
+            L->kind = FB_LAYER_OP;
+            rc = parse_op(v, path, lj, L);
         } else {
             char sub[80], shown[64];
             snprintf(sub, sizeof sub, "%s.type", path);
             show(type, shown, sizeof shown);
-            rc = verr(v, sub, "unknown generator %s (available: \"fbm\", \"julia\", \"ifs\", \"lsystem\", \"terrain\")",
+            rc = verr(v, sub,
+                      "unknown generator %s (available: \"fbm\", \"julia\", \"ifs\", \"lsystem\", \"terrain\", \"op\")",
                       shown);
         }
         if (rc) return rc;
@@ -1128,7 +1326,7 @@ static fb_result parse_root(const vctx *v, json_t *root, fb_scene *s)
                 return verr(v, sub, "layer name \"%s\" is already used by layers[%d]", L->name, k);
             }
     }
-    return FB_OK;
+    return resolve_refs(v, s);
 }
 
 /* ---- --set KEY.PATH=VALUE -------------------------------------------------------------------- */

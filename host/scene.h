@@ -24,7 +24,8 @@ typedef enum fb_layer_kind {
     FB_LAYER_JULIA = 1,
     FB_LAYER_IFS = 2,
     FB_LAYER_LSYSTEM = 3,
-    FB_LAYER_TERRAIN = 4
+    FB_LAYER_TERRAIN = 4,
+    FB_LAYER_OP = 5
 } fb_layer_kind;
 
 typedef struct fb_fbm_params {
@@ -108,6 +109,28 @@ typedef struct fb_terrain_layer_params {
     char mesh[1024]; /* .ply or .obj, or "" */
 } fb_terrain_layer_params;
 
+/* A reference to another layer's channel ("terrain.Y", or "terrain": its Y) or a constant. */
+typedef struct fb_ref {
+    int layer;        /* index in the scene's layers; -1: the constant `value` */
+    char channel[64]; /* "" : the layer's Y */
+    double value;
+} fb_ref;
+
+#define FB_OP_MAX_INPUTS 8
+typedef enum fb_op_kind { FB_OP_ADD = 0, FB_OP_MULTIPLY, FB_OP_MIX, FB_OP_REMAP, FB_OP_THRESHOLD } fb_op_kind;
+
+/* A compositing layer: one channel NAME.Y computed per pixel from other layers' channels. */
+typedef struct fb_op_params {
+    fb_op_kind op;
+    int ninputs;
+    fb_ref inputs[FB_OP_MAX_INPUTS];
+    double weights[FB_OP_MAX_INPUTS]; /* add: sum of w_i x_i */
+    fb_ref mask;                      /* mix: a + (b - a) clamp(m, 0, 1) */
+    double from[2], to[2];            /* remap: from[0]..from[1] -> to[0]..to[1] */
+    bool clamp;                       /* remap: clamp to the target range */
+    double level, width;              /* threshold: smoothstep over level -/+ width/2 (a step if 0) */
+} fb_op_params;
+
 typedef struct fb_layer {
     fb_layer_kind kind;
     char name[64];
@@ -117,6 +140,7 @@ typedef struct fb_layer {
     fb_ifs_params ifs;
     fb_lsystem_params lsystem;
     fb_terrain_layer_params terrain;
+    fb_op_params op;
 } fb_layer;
 
 typedef struct fb_scene {
@@ -125,7 +149,8 @@ typedef struct fb_scene {
     exrio_compression compression;
     int nlayers;
     fb_layer layers[FB_MAX_LAYERS];
-    char *json; /* the scene with every default filled in, canonical (sorted keys); owned */
+    int order[FB_MAX_LAYERS]; /* every layer after the layers it refers to (op layers last, in dependency order) */
+    char *json;               /* the scene with every default filled in, canonical (sorted keys); owned */
 } fb_scene;
 
 /* Parses and validates JSON text. `origin` names the file for messages (NULL: the command line,

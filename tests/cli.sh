@@ -458,6 +458,21 @@ expect_fail 2 "region: expected X,Y,W,H" o.exr -- render $S3 --region 1,2,3 -o o
 expect_fail 2 "no region files" o.exr -- merge -o o.exr
 expect_fail 3 "nope.exr: cannot open" o.exr -- merge nope.exr -o o.exr
 
+# op layers: fBm detail on a refined terrain, plants masked by height; a cycle names both layers
+printf '{"size": [96, 48], "layers": [{"type": "op", "name": "ground", "op": "add", "inputs": ["terrain.Y", "detail"], "weights": [1, 4]},
+ {"type": "terrain", "points": [[0,0,0],[10,0,1],[0,5,2],[10,5,4],[5,2.5,9]], "insert": 500},
+ {"type": "fbm", "name": "detail", "octaves": 4},
+ {"type": "op", "name": "high", "op": "threshold", "inputs": ["ground"], "level": 3, "width": 1},
+ {"type": "ifs", "points": 100000},
+ {"type": "op", "name": "lowplants", "op": "mix", "inputs": ["plants.A", 0], "mask": "high"}]}' > ops.json
+"$FB" render ops.json -o ops.exr --preview ops.png --quiet && ok || bad "op scene failed"
+"$FB" info ops.exr | grep -q "layer lowplants *Y (float)" && ok || bad "op layer missing from the file"
+"$FB" render ops.json -o ops_n.exr --backend native --quiet && "$FB" compare ops.exr ops_n.exr --layer lowplants > /dev/null && ok || bad "op layer differs between backends"
+printf '{"layers": [{"type": "fbm"}, {"type": "op", "name": "a", "op": "add", "inputs": ["fbm", "b"]},\n {"type": "op", "name": "b", "op": "add", "inputs": ["a", 1]}]}' > cyc.json
+expect_fail 2 'cyc.json:2: layers\[2\]: layer "b" uses layer "a", which depends on "b": a cycle' o.exr -- render cyc.json -o o.exr
+printf '{"layers": [{"type": "fbm"}, {"type": "op", "op": "add", "inputs": ["fbm", "sky.R"]}]}' > miss.json
+expect_fail 2 'no layer is named "sky"' o.exr -- render miss.json -o o.exr
+
 # ---- device selection (where a Vulkan device exists) ----
 if "$FB" devices | grep -q '^0 '; then
   "$FB" fbm $S --backend vulkan --device 0 -o d0.exr && ok || bad "--device 0 failed"
