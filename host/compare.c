@@ -4,6 +4,7 @@
 #include "compare.h"
 
 #include "exrio.h"
+#include "preview.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -53,6 +54,7 @@ fb_result fb_compare(const fb_compare_desc *d, bool *pass)
     fb_result rc = FB_OK;
     exrio_reader *a = NULL, *b = NULL;
     exrio_writer *diff = NULL;
+    fb_preview *png = NULL;
     chan_stats *st = NULL;
     void **pa = NULL, **pb = NULL;
     float **pd = NULL;
@@ -147,9 +149,30 @@ fb_result fb_compare(const fb_compare_desc *d, bool *pass)
     }
 
     double tol = d->has_max_abs ? d->max_abs : 0.0;
+    float *pic[3] = {NULL, NULL, NULL};
+    if (d->diff_png && nst > 0) {
+        if ((rc = fb_preview_create(W, H, 2048, 3, &png))) goto out;
+        for (int k = 0; k < 3; k++)
+            if (!(pic[k] = malloc(block * 4))) {
+                rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+                goto out_pic;
+            }
+    }
     for (int y0 = 0; y0 < H; y0 += BLOCK_ROWS) {
         int n = y0 + BLOCK_ROWS <= H ? BLOCK_ROWS : H - y0;
-        if ((rc = exrio_read_rows(a, y0, n, pa)) || (rc = exrio_read_rows(b, y0, n, pb))) goto out;
+        if ((rc = exrio_read_rows(a, y0, n, pa)) || (rc = exrio_read_rows(b, y0, n, pb))) goto out_pic;
+        if (png) { /* the background: A's first compared channel, grey over its block range, dimmed */
+            double lo = INFINITY, hi = -INFINITY;
+            for (size_t i = 0; i < (size_t)W * n; i++) {
+                double v = value(pa[st[0].ia], st[0].uint_a, i);
+                if (isfinite(v)) lo = v < lo ? v : lo, hi = v > hi ? v : hi;
+            }
+            for (size_t i = 0; i < (size_t)W * n; i++) {
+                double v = value(pa[st[0].ia], st[0].uint_a, i);
+                float g = isfinite(v) && hi > lo ? (float)(0.25 * (v - lo) / (hi - lo)) : 0.0f;
+                pic[0][i] = pic[1][i] = pic[2][i] = g;
+            }
+        }
         for (int s = 0; s < nst; s++) {
             chan_stats *c = &st[s];
             const void *A = pa[c->ia], *B = pb[c->ib];
@@ -180,10 +203,16 @@ fb_result fb_compare(const fb_compare_desc *d, bool *pass)
                     if (ad > tol) c->beyond++;
                 }
                 if (pd) pd[s][i] = (float)ad;
+                if (png && ad > tol) pic[0][i] = 1.0f, pic[1][i] = pic[2][i] = 0.0f;
             }
         }
-        if (diff && (rc = exrio_writer_rows(diff, y0, n, (const void *const *)pd))) goto out;
+        if (png) fb_preview_add_rows(png, y0, n, (const float *const *)pic);
+        if (diff && (rc = exrio_writer_rows(diff, y0, n, (const void *const *)pd))) goto out_pic;
     }
+    if (png) rc = fb_preview_write_png(png, d->diff_png);
+out_pic:
+    for (int k = 0; k < 3; k++) free(pic[k]);
+    if (rc) goto out;
 
     uint64_t total = (uint64_t)W * H;
     for (int s = 0; s < nst; s++) {
@@ -213,6 +242,7 @@ fb_result fb_compare(const fb_compare_desc *d, bool *pass)
     }
     if (diff) rc = exrio_writer_finish(&diff);
 out:
+    fb_preview_destroy(&png);
     exrio_writer_abort(&diff);
     if (st)
         for (int s = 0; s < nst; s++) {

@@ -13,7 +13,8 @@ typedef struct fb_compare_desc {
     bool has_max_abs, has_rmse, has_psnr, has_fail_percent;
     double max_abs, rmse, psnr, fail_percent;
     bool ignore_missing;
-    const char *diff; /* write |A - B| per common channel here */
+    const char *diff;     /* write |A - B| per common channel here */
+    const char *diff_png; /* and a picture: red where any channel is beyond --max-abs, A's grey elsewhere */
     void (*print)(const char *line, void *user);
     void *user;
 } fb_compare_desc;

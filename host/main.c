@@ -390,18 +390,21 @@ static int cmd_compare(int argc, char **argv)
             if (!parse_double_arg(val, dst) || *dst < 0) return usage_error("%s: expected a finite number >= 0", a);
             *has = true;
             i++;
-        } else if (!strcmp(a, "--layer") || !strcmp(a, "--diff")) {
+        } else if (!strcmp(a, "--layer") || !strcmp(a, "--diff") || !strcmp(a, "--diff-png")) {
             if (!val) return usage_error("%s: missing value", a);
-            *(!strcmp(a, "--layer") ? &d.layer : &d.diff) = val;
+            *(!strcmp(a, "--layer") ? &d.layer : !strcmp(a, "--diff") ? &d.diff : &d.diff_png) = val;
             i++;
         } else if (!strcmp(a, "--ignore-missing")) {
             d.ignore_missing = true;
         } else if (!strcmp(a, "--help")) {
             printf("usage: fractalbake compare A.exr B.exr [--layer L] [--max-abs E] [--rmse E] [--psnr DB]\n"
-                   "                          [--fail-percent P] [--ignore-missing] [--diff OUT.exr]\n"
+                   "                          [--fail-percent P] [--ignore-missing] [--diff OUT.exr] [--diff-png "
+                   "OUT.png]\n"
                    "Per channel: max abs error and where, RMSE, PSNR, percent of pixels beyond --max-abs.\n"
                    "With no threshold every pixel must be equal. --fail-percent P fails only when more than P%%\n"
-                   "of the pixels exceed --max-abs. Exit 0 within thresholds, 1 beyond, 2 on error.\n");
+                   "of the pixels exceed --max-abs. Exit 0 within thresholds, 1 beyond, 2 on error.\n"
+                   "--diff writes |A - B| per channel; --diff-png a picture: red where any channel is beyond\n"
+                   "--max-abs (0 without it), over A's first channel in dim grey.\n");
             return 0;
         } else if (a[0] == '-' && a[1]) {
             return usage_error("%s: unknown flag for `fractalbake compare`", a);

@@ -4,6 +4,7 @@
 # atomic replacement. Usage: cli.sh PATH/TO/fractalbake
 set -u
 FB=$(realpath "$1")
+HERE=$(cd "$(dirname "$0")" && pwd)
 T=$(mktemp -d /tmp/fb-test-cli-XXXXXX)
 trap 'rm -rf "$T"' EXIT
 cd "$T" || exit 1
@@ -472,6 +473,23 @@ printf '{"layers": [{"type": "fbm"}, {"type": "op", "name": "a", "op": "add", "i
 expect_fail 2 'cyc.json:2: layers\[2\]: layer "b" uses layer "a", which depends on "b": a cycle' o.exr -- render cyc.json -o o.exr
 printf '{"layers": [{"type": "fbm"}, {"type": "op", "op": "add", "inputs": ["fbm", "sky.R"]}]}' > miss.json
 expect_fail 2 'no layer is named "sky"' o.exr -- render miss.json -o o.exr
+
+# the Slurm job-array example of docs/scenes.md, run as three array tasks, merges to the whole bake
+slurm=$HERE/../docs/examples/slurm-bake.sh
+for t in 0 1 2; do
+  PATH=$(dirname "$FB"):$PATH SLURM_ARRAY_TASK_ID=$t SLURM_ARRAY_TASK_COUNT=3 bash "$slurm" ops.json 96x48 bands/ops || bad "slurm task $t failed"
+done
+"$FB" render ops.json -o ops_w.exr --set size=96x48 --quiet
+"$FB" merge bands/ops.part*.exr -o ops_m.exr --quiet && cmp -s ops_w.exr ops_m.exr && ok || bad "the Slurm example's bands do not merge to the whole bake"
+
+# bounded memory: the bake streams strips to the file, so peak RSS does not grow with the image
+# (a 16384 x 16384 half image is 512 MiB; held whole it would exceed the bound several times)
+for n in 8192 16384; do # /usr/bin/time: Debian's `time` package (scripts/setup.sh)
+  /usr/bin/time -f "%M" -o rss_$n.txt "$FB" fbm --size ${n}x${n} --octaves 2 --half --compression none --backend native -o big.exr --quiet || bad "the ${n}^2 bake failed"
+  rm -f big.exr
+  kb=$(tail -1 rss_$n.txt)
+  [ "$kb" -lt 131072 ] && ok || bad "the ${n}^2 bake peaked at $kb KiB resident, over the 128 MiB bound"
+done
 
 # ---- device selection (where a Vulkan device exists) ----
 if "$FB" devices | grep -q '^0 '; then

@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# Golden images: small reference EXRs for every generator, rendered on lavapipe.
+#
+#   scripts/golden.sh check  [FRACTALBAKE] [OUTDIR]   render each scene, compare with its reference at
+#                                                     the thresholds of tests/golden/thresholds.txt;
+#                                                     for each failure OUTDIR holds NAME.exr (this
+#                                                     render), NAME.diff.exr (|A - B| per channel) and
+#                                                     NAME.diff.png (red: pixels beyond the threshold)
+#   scripts/golden.sh update [FRACTALBAKE]            re-render the references on the Vulkan backend
+#                                                     (lavapipe where there is no GPU), then review
+#                                                     `git diff --stat tests/golden` and the PNGs
+#
+# FRACTALBAKE defaults to build/fractalbake; OUTDIR to build/golden.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+mode=${1:-check}
+fb=$(realpath "${2:-$root/build/fractalbake}")
+out=${3:-$root/build/golden}
+gold=$root/tests/golden
+export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp}
+mkdir -p "$out"
+
+render() { # NAME OUT.exr [extra args]
+  local name=$1 dst=$2
+  shift 2
+  if [ "$name" = default ]; then
+    "$fb" render --set size=256x128 -o "$dst" --quiet "$@"
+  else
+    "$fb" render "$gold/scenes/$name.json" -o "$dst" --quiet "$@"
+  fi
+}
+
+case $mode in
+update)
+  grep -v '^#' "$gold/thresholds.txt" | while read -r name _; do
+    [ -n "$name" ] || continue
+    render "$name" "$gold/$name.exr" --backend vulkan --preview "$out/$name.png"
+    echo "updated tests/golden/$name.exr (preview $out/$name.png)"
+  done
+  ;;
+check)
+  failed=0 n=0
+  while read -r name args; do
+    [ -n "$name" ] || continue
+    args=${args%%#*}
+    args=$(echo $args)
+    [ "$args" = "-" ] && args=""
+    n=$((n + 1))
+    if ! render "$name" "$out/$name.exr"; then
+      echo "golden $name: render failed"
+      failed=$((failed + 1))
+      continue
+    fi
+    # shellcheck disable=SC2086
+    if "$fb" compare "$gold/$name.exr" "$out/$name.exr" $args > "$out/$name.txt"; then
+      echo "golden $name: ok (${args:-exact})"
+    else
+      "$fb" compare "$gold/$name.exr" "$out/$name.exr" $args --diff "$out/$name.diff.exr" --diff-png "$out/$name.diff.png" > /dev/null || true
+      echo "golden $name: BEYOND thresholds (${args:-exact}); see $out/$name.txt and $out/$name.diff.png"
+      grep FAIL "$out/$name.txt" | head -5
+      failed=$((failed + 1))
+    fi
+  done < <(grep -v '^#' "$gold/thresholds.txt")
+  echo "$((n - failed)) of $n golden scenes within thresholds"
+  [ "$failed" -eq 0 ]
+  ;;
+*)
+  echo "usage: scripts/golden.sh check|update [FRACTALBAKE] [OUTDIR]" >&2
+  exit 2
+  ;;
+esac
