@@ -289,7 +289,8 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         rc = fb_gen_init(&runs[i].gen, s, &s->layers[i]);
         runs[i].gen.scalar = e->scalar;
         for (int c = 0; c < runs[i].gen.nchannels && !rc; c++)
-            channels[nch++] = (exrio_channel){runs[i].gen.channel_names[c], runs[i].gen.channel_types[c]};
+            channels[nch++] =
+                (exrio_channel){runs[i].gen.channel_names[c], runs[i].gen.channel_types[c], s->multipart ? i : 0};
         if (!rc) rc = run_init(e, &runs[i], strip);
     }
     /* Op layers find their inputs among the planes of a strip. */
@@ -319,6 +320,9 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
             {"fractalbake/region", reg}, /* last: left out of whole-image files */
         };
         bool partial = d->region[2] > 0;
+        const char *part_names[FB_MAX_LAYERS];
+        exrio_compression part_comp[FB_MAX_LAYERS];
+        for (int i = 0; i < s->nlayers; i++) part_names[i] = s->layers[i].name, part_comp[i] = s->layers[i].compression;
         rc = exrio_writer_create(&(exrio_writer_desc){.path = d->out,
                                                       .width = rw,
                                                       .height = rh,
@@ -327,6 +331,9 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
                                                       .full_width = partial ? s->width : 0,
                                                       .full_height = partial ? s->height : 0,
                                                       .row_stride = s->width,
+                                                      .nparts = s->multipart ? s->nlayers : 1,
+                                                      .part_names = s->multipart ? part_names : NULL,
+                                                      .part_compression = s->multipart ? part_comp : NULL,
                                                       .compression = s->compression,
                                                       .channels = channels,
                                                       .nchannels = nch,

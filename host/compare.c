@@ -279,7 +279,13 @@ fb_result fb_info(const char *path, void (*print)(const char *line, void *user),
           win[1], exrio_width(r), exrio_height(r), win[2], win[3]);
     else
         P("size:        %d x %d", exrio_width(r), exrio_height(r));
-    P("compression: %s", exrio_compression_of(r));
+    if (exrio_nparts(r) > 1) {
+        P("parts:       %d", exrio_nparts(r));
+        for (int p = 0; p < exrio_nparts(r); p++)
+            P("  part %-2d %-12s compression %s", p, exrio_part_name(r, p), exrio_part_compression(r, p));
+    } else {
+        P("compression: %s", exrio_compression_of(r));
+    }
     P("channels:    %d", exrio_nchannels(r));
     /* Group channels by layer (the text before the last dot). */
     for (int c = 0; c < exrio_nchannels(r); c++) {

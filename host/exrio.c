@@ -54,16 +54,27 @@ static exr_pixel_type_t pixel_type(exrio_type t)
 
 /* ---- writer --------------------------------------------------------------------------------- */
 
-/* One batch of whole chunks: the rows as given (4 bytes a value), then the compressed chunks. */
+/* One batch of whole chunks (of every part): the rows as given (4 bytes a value), then the
+ * compressed chunks of each part. */
 typedef struct batch {
     int y0, nrows;
     uint8_t *rows; /* nchannels planes of nrows * width values */
-    int nchunks;
-    void **chunk_data; /* compressed bytes of each chunk, written in order */
-    uint64_t *chunk_size;
+    int nchunks[EXRIO_MAX_PARTS];
+    void **chunk_data[EXRIO_MAX_PARTS]; /* compressed bytes of each chunk, written in order */
+    uint64_t *chunk_size[EXRIO_MAX_PARTS];
     bool done;
     struct batch *next; /* queue link */
 } batch;
+
+/* One part of the file. OpenEXRCore writes the parts one after the other, so the chunks of every
+ * part but the first go to a spool file (unlinked, beside the output) and are copied in at the end:
+ * memory stays bounded and each strip is computed once. */
+typedef struct wpart {
+    int chunk_rows;
+    int nch;
+    int *file_order; /* file_order[i]: index into the caller's channel list of the part's i-th channel */
+    FILE *spool;
+} wpart;
 
 struct exrio_writer {
     exr_context_t ctx;
@@ -71,8 +82,9 @@ struct exrio_writer {
     int width, height, nchannels;
     int x0, y0, row_stride;
     exrio_type *types;
-    int *file_order; /* file_order[i]: index into the caller's channel list of the file's i-th channel */
-    int chunk_rows, batch_rows;
+    int nparts;
+    wpart parts[EXRIO_MAX_PARTS];
+    int batch_rows;
     size_t plane_bytes_per_row;
 
     batch *filling; /* the batch receiving rows */
@@ -93,9 +105,11 @@ struct exrio_writer {
 static void batch_free(batch *b)
 {
     if (!b) return;
-    for (int i = 0; i < b->nchunks && b->chunk_data; i++) free(b->chunk_data[i]);
-    free(b->chunk_data);
-    free(b->chunk_size);
+    for (int p = 0; p < EXRIO_MAX_PARTS; p++) {
+        for (int i = 0; i < b->nchunks[p] && b->chunk_data[p]; i++) free(b->chunk_data[p][i]);
+        free(b->chunk_data[p]);
+        free(b->chunk_size[p]);
+    }
     free(b->rows);
     free(b);
 }
@@ -111,49 +125,52 @@ static void set_error(exrio_writer *w, fb_result rc, const char *msg)
  * of different chunks; we clear yield/write so that nothing is written from here). */
 static fb_result encode_batch(exrio_writer *w, batch *b, char *msg, size_t msgsz)
 {
-    exr_encode_pipeline_t enc = {0};
-    bool init = false;
     fb_result rc = FB_OK;
-    for (int k = 0; k < b->nchunks; k++) {
-        int y = b->y0 + k * w->chunk_rows;
-        exr_chunk_info_t cinfo;
-        exr_result_t er = exr_write_scanline_chunk_info(w->ctx, 0, y + w->y0, &cinfo);
-        if (er == EXR_ERR_SUCCESS)
-            er = init ? exr_encoding_update(w->ctx, 0, &cinfo, &enc) : exr_encoding_initialize(w->ctx, 0, &cinfo, &enc);
-        if (er != EXR_ERR_SUCCESS) goto exr_fail;
-        init = true;
-        for (int c = 0; c < enc.channel_count; c++) {
-            int src = w->file_order[c];
-            size_t row_bytes = (size_t)w->width * 4;
-            enc.channels[c].encode_from_ptr =
-                b->rows + (size_t)src * b->nrows * row_bytes + (size_t)(y - b->y0) * row_bytes;
-            enc.channels[c].user_pixel_stride = 4;
-            enc.channels[c].user_line_stride = (int32_t)row_bytes;
-            enc.channels[c].user_bytes_per_element = 4;
-            enc.channels[c].user_data_type = w->types[src] == EXRIO_UINT ? EXR_PIXEL_UINT : EXR_PIXEL_FLOAT;
+    for (int p = 0; p < w->nparts && !rc; p++) {
+        const wpart *wp = &w->parts[p];
+        exr_encode_pipeline_t enc = {0};
+        bool init = false;
+        for (int k = 0; k < b->nchunks[p]; k++) {
+            int y = b->y0 + k * wp->chunk_rows;
+            exr_chunk_info_t cinfo;
+            exr_result_t er = exr_write_scanline_chunk_info(w->ctx, p, y + w->y0, &cinfo);
+            if (er == EXR_ERR_SUCCESS)
+                er = init ? exr_encoding_update(w->ctx, p, &cinfo, &enc)
+                          : exr_encoding_initialize(w->ctx, p, &cinfo, &enc);
+            if (er != EXR_ERR_SUCCESS) goto exr_fail;
+            init = true;
+            for (int c = 0; c < enc.channel_count; c++) {
+                int src = wp->file_order[c];
+                size_t row_bytes = (size_t)w->width * 4;
+                enc.channels[c].encode_from_ptr =
+                    b->rows + (size_t)src * b->nrows * row_bytes + (size_t)(y - b->y0) * row_bytes;
+                enc.channels[c].user_pixel_stride = 4;
+                enc.channels[c].user_line_stride = (int32_t)row_bytes;
+                enc.channels[c].user_bytes_per_element = 4;
+                enc.channels[c].user_data_type = w->types[src] == EXRIO_UINT ? EXR_PIXEL_UINT : EXR_PIXEL_FLOAT;
+            }
+            er = exr_encoding_choose_default_routines(w->ctx, p, &enc);
+            if (er != EXR_ERR_SUCCESS) goto exr_fail;
+            enc.yield_until_ready_fn = NULL;
+            enc.write_fn = NULL;
+            er = exr_encoding_run(w->ctx, p, &enc);
+            if (er != EXR_ERR_SUCCESS) goto exr_fail;
+            b->chunk_size[p][k] = enc.compressed_bytes;
+            b->chunk_data[p][k] = malloc(enc.compressed_bytes ? enc.compressed_bytes : 1);
+            if (!b->chunk_data[p][k]) {
+                snprintf(msg, msgsz, "out of memory compressing rows %d..%d", y, y + cinfo.height - 1);
+                rc = FB_ERR_NOMEM;
+                break;
+            }
+            memcpy(b->chunk_data[p][k], enc.compressed_buffer, enc.compressed_bytes);
+            continue;
+        exr_fail:
+            snprintf(msg, msgsz, "%s: encoding rows from %d failed: %s", w->path, y, t_exr_msg);
+            rc = FB_ERR_EXR;
+            break;
         }
-        er = exr_encoding_choose_default_routines(w->ctx, 0, &enc);
-        if (er != EXR_ERR_SUCCESS) goto exr_fail;
-        enc.yield_until_ready_fn = NULL;
-        enc.write_fn = NULL;
-        er = exr_encoding_run(w->ctx, 0, &enc);
-        if (er != EXR_ERR_SUCCESS) goto exr_fail;
-        b->chunk_size[k] = enc.compressed_bytes;
-        b->chunk_data[k] = malloc(enc.compressed_bytes ? enc.compressed_bytes : 1);
-        if (!b->chunk_data[k]) {
-            snprintf(msg, msgsz, "out of memory compressing rows %d..%d", y, y + cinfo.height - 1);
-            rc = FB_ERR_NOMEM;
-            goto out;
-        }
-        memcpy(b->chunk_data[k], enc.compressed_buffer, enc.compressed_bytes);
-        continue;
-    exr_fail:
-        snprintf(msg, msgsz, "%s: encoding rows from %d failed: %s", w->path, y, t_exr_msg);
-        rc = FB_ERR_EXR;
-        goto out;
+        if (init) exr_encoding_destroy(w->ctx, &enc);
     }
-out:
-    if (init) exr_encoding_destroy(w->ctx, &enc);
     free(b->rows); /* the raw rows are no longer needed: keep only compressed data in memory */
     b->rows = NULL;
     return rc;
@@ -165,15 +182,23 @@ static void commit_ready(exrio_writer *w)
 {
     while (w->committed < w->submitted && w->order[w->committed] && w->order[w->committed]->done) {
         batch *b = w->order[w->committed];
-        for (int k = 0; k < b->nchunks && !w->error; k++) {
-            int y = b->y0 + k * w->chunk_rows;
-            exr_result_t er = exr_write_scanline_chunk(w->ctx, 0, y + w->y0, b->chunk_data[k], b->chunk_size[k]);
+        for (int k = 0; k < b->nchunks[0] && !w->error; k++) {
+            int y = b->y0 + k * w->parts[0].chunk_rows;
+            exr_result_t er = exr_write_scanline_chunk(w->ctx, 0, y + w->y0, b->chunk_data[0][k], b->chunk_size[0][k]);
             if (er != EXR_ERR_SUCCESS) {
                 char m[600];
                 snprintf(m, sizeof m, "%s: writing rows from %d failed: %s", w->path, y, t_exr_msg);
                 set_error(w, er == EXR_ERR_WRITE_IO ? FB_ERR_IO : FB_ERR_EXR, m);
             }
         }
+        for (int p = 1; p < w->nparts && !w->error; p++) /* spooled: size, then bytes */
+            for (int k = 0; k < b->nchunks[p] && !w->error; k++)
+                if (fwrite(&b->chunk_size[p][k], 8, 1, w->parts[p].spool) != 1 ||
+                    fwrite(b->chunk_data[p][k], 1, b->chunk_size[p][k], w->parts[p].spool) != b->chunk_size[p][k]) {
+                    char m[600];
+                    snprintf(m, sizeof m, "%s: cannot spool part %d: %s", w->path, p, strerror(errno));
+                    set_error(w, FB_ERR_IO, m);
+                }
         w->order[w->committed] = NULL;
         batch_free(b);
         w->committed++;
@@ -212,11 +237,15 @@ static batch *batch_new(exrio_writer *w, int y0)
     b->y0 = y0;
     b->nrows = w->batch_rows;
     if (y0 + b->nrows > w->height) b->nrows = w->height - y0;
-    b->nchunks = (b->nrows + w->chunk_rows - 1) / w->chunk_rows;
     b->rows = malloc(w->plane_bytes_per_row * (size_t)w->nchannels * (size_t)b->nrows);
-    b->chunk_data = calloc((size_t)b->nchunks, sizeof *b->chunk_data);
-    b->chunk_size = calloc((size_t)b->nchunks, sizeof *b->chunk_size);
-    if (!b->rows || !b->chunk_data || !b->chunk_size) {
+    bool ok = b->rows != NULL;
+    for (int p = 0; p < w->nparts; p++) {
+        b->nchunks[p] = (b->nrows + w->parts[p].chunk_rows - 1) / w->parts[p].chunk_rows;
+        b->chunk_data[p] = calloc((size_t)b->nchunks[p], sizeof *b->chunk_data[p]);
+        b->chunk_size[p] = calloc((size_t)b->nchunks[p], sizeof *b->chunk_size[p]);
+        ok = ok && b->chunk_data[p] && b->chunk_size[p];
+    }
+    if (!ok) {
         batch_free(b);
         return NULL;
     }
@@ -249,53 +278,87 @@ fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
         rc = fb_fail(FB_ERR_IO, "%s: cannot create output file: %s", d->path, e ? strerror(e) : t_exr_msg);
         goto fail;
     }
-    int part = 0;
-    exr_compression_t ct = d->compression == EXRIO_ZIP   ? EXR_COMPRESSION_ZIP
-                           : d->compression == EXRIO_PIZ ? EXR_COMPRESSION_PIZ
-                                                         : EXR_COMPRESSION_NONE;
-    er = exr_add_part(w->ctx, "fractalbake", EXR_STORAGE_SCANLINE, &part);
-    if (er == EXR_ERR_SUCCESS) er = exr_initialize_required_attr_simple(w->ctx, part, d->width, d->height, ct);
-    if (er == EXR_ERR_SUCCESS && d->full_width > 0) {
-        exr_attr_box2i_t dw, disp;
-        dw.min.x = d->x0, dw.min.y = d->y0, dw.max.x = d->x0 + d->width - 1, dw.max.y = d->y0 + d->height - 1;
-        disp.min.x = 0, disp.min.y = 0, disp.max.x = d->full_width - 1, disp.max.y = d->full_height - 1;
-        er = exr_set_display_window(w->ctx, part, &disp);
-        if (er == EXR_ERR_SUCCESS) er = exr_set_data_window(w->ctx, part, &dw);
+    w->nparts = d->nparts > 0 ? d->nparts : 1;
+    if (w->nparts > EXRIO_MAX_PARTS) {
+        rc = fb_fail(FB_ERR_INTERNAL, "%s: %d parts (at most %d)", d->path, w->nparts, EXRIO_MAX_PARTS);
+        goto fail;
     }
-    for (int c = 0; c < d->nchannels && er == EXR_ERR_SUCCESS; c++)
-        er = exr_add_channel(w->ctx, part, d->channels[c].name, pixel_type(d->channels[c].type),
-                             d->channels[c].type == EXRIO_UINT ? EXR_PERCEPTUALLY_LINEAR : EXR_PERCEPTUALLY_LOGARITHMIC,
-                             1, 1);
-    for (int a = 0; a < d->nattrs && er == EXR_ERR_SUCCESS; a++)
-        er = exr_attr_set_string(w->ctx, part, d->attrs[a].name, d->attrs[a].value);
+    for (int p = 0; p < w->nparts && er == EXR_ERR_SUCCESS; p++) {
+        int part = 0;
+        exrio_compression comp = d->part_compression ? d->part_compression[p] : d->compression;
+        exr_compression_t ct = comp == EXRIO_ZIP   ? EXR_COMPRESSION_ZIP
+                               : comp == EXRIO_PIZ ? EXR_COMPRESSION_PIZ
+                                                   : EXR_COMPRESSION_NONE;
+        er = exr_add_part(w->ctx, d->part_names ? d->part_names[p] : "fractalbake", EXR_STORAGE_SCANLINE, &part);
+        if (er == EXR_ERR_SUCCESS) er = exr_initialize_required_attr_simple(w->ctx, part, d->width, d->height, ct);
+        if (er == EXR_ERR_SUCCESS && d->full_width > 0) {
+            exr_attr_box2i_t dw, disp;
+            dw.min.x = d->x0, dw.min.y = d->y0, dw.max.x = d->x0 + d->width - 1, dw.max.y = d->y0 + d->height - 1;
+            disp.min.x = 0, disp.min.y = 0, disp.max.x = d->full_width - 1, disp.max.y = d->full_height - 1;
+            er = exr_set_display_window(w->ctx, part, &disp);
+            if (er == EXR_ERR_SUCCESS) er = exr_set_data_window(w->ctx, part, &dw);
+        }
+        for (int c = 0; c < d->nchannels && er == EXR_ERR_SUCCESS; c++)
+            if (d->channels[c].part == p)
+                er = exr_add_channel(
+                    w->ctx, part, d->channels[c].name, pixel_type(d->channels[c].type),
+                    d->channels[c].type == EXRIO_UINT ? EXR_PERCEPTUALLY_LINEAR : EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+        for (int a = 0; a < d->nattrs && er == EXR_ERR_SUCCESS && p == 0; a++)
+            er = exr_attr_set_string(w->ctx, part, d->attrs[a].name, d->attrs[a].value);
+    }
     if (er == EXR_ERR_SUCCESS) er = exr_write_header(w->ctx);
     if (er != EXR_ERR_SUCCESS) {
         rc = fb_fail(FB_ERR_EXR, "%s: cannot write the EXR header: %s", d->path, t_exr_msg);
         goto fail;
     }
-    int32_t spc = 1;
-    exr_get_scanlines_per_chunk(w->ctx, part, &spc);
-    w->chunk_rows = spc > 0 ? spc : 1;
-    w->batch_rows = w->chunk_rows * (64 / w->chunk_rows > 0 ? 64 / w->chunk_rows : 1);
-
-    /* The file stores channels sorted by name; map each back to the caller's plane index. */
-    const exr_attr_chlist_t *cl = NULL;
-    exr_get_channels(w->ctx, part, &cl);
+    w->batch_rows = 64; /* a multiple of every scanline compression's chunk height used (1, 16, 32) */
     w->types = calloc((size_t)d->nchannels, sizeof *w->types);
-    w->file_order = calloc((size_t)d->nchannels, sizeof *w->file_order);
-    if (!w->types || !w->file_order || !cl || cl->num_channels != d->nchannels) {
-        rc = fb_fail(FB_ERR_INTERNAL, "%s: channel list mismatch (duplicate channel names?)", d->path);
+    if (!w->types) {
+        rc = fb_fail(FB_ERR_NOMEM, "out of memory");
         goto fail;
     }
     for (int c = 0; c < d->nchannels; c++) w->types[c] = d->channels[c].type;
-    for (int i = 0; i < cl->num_channels; i++) {
-        w->file_order[i] = -1;
-        for (int c = 0; c < d->nchannels; c++)
-            if (!strcmp(cl->entries[i].name.str, d->channels[c].name)) w->file_order[i] = c;
-        if (w->file_order[i] < 0) {
-            rc = fb_fail(FB_ERR_INTERNAL, "%s: channel %s lost", d->path, cl->entries[i].name.str);
+    int total = 0;
+    for (int p = 0; p < w->nparts; p++) {
+        wpart *wp = &w->parts[p];
+        int32_t spc = 1;
+        exr_get_scanlines_per_chunk(w->ctx, p, &spc);
+        wp->chunk_rows = spc > 0 ? spc : 1;
+        /* The file stores channels sorted by name; map each back to the caller's plane index. */
+        const exr_attr_chlist_t *cl = NULL;
+        exr_get_channels(w->ctx, p, &cl);
+        wp->nch = cl ? cl->num_channels : 0;
+        wp->file_order = calloc((size_t)wp->nch + 1, sizeof *wp->file_order);
+        if (!wp->file_order || wp->nch == 0 || w->batch_rows % wp->chunk_rows) {
+            rc = fb_fail(FB_ERR_INTERNAL, "%s: part %d has no channels or chunks of %d rows", d->path, p,
+                         wp->chunk_rows);
             goto fail;
         }
+        for (int i = 0; i < cl->num_channels; i++) {
+            wp->file_order[i] = -1;
+            for (int c = 0; c < d->nchannels; c++)
+                if (d->channels[c].part == p && !strcmp(cl->entries[i].name.str, d->channels[c].name))
+                    wp->file_order[i] = c;
+            if (wp->file_order[i] < 0) {
+                rc = fb_fail(FB_ERR_INTERNAL, "%s: channel %s lost", d->path, cl->entries[i].name.str);
+                goto fail;
+            }
+        }
+        total += wp->nch;
+        if (p > 0) {
+            char spool[4300];
+            snprintf(spool, sizeof spool, "%s.part%d", w->tmp, p);
+            wp->spool = fopen(spool, "w+b");
+            if (!wp->spool) {
+                rc = fb_fail(FB_ERR_IO, "%s: cannot create a spool file beside it: %s", d->path, strerror(errno));
+                goto fail;
+            }
+            unlink(spool); /* lives while open */
+        }
+    }
+    if (total != d->nchannels) {
+        rc = fb_fail(FB_ERR_INTERNAL, "%s: channel list mismatch (duplicate channel names?)", d->path);
+        goto fail;
     }
 
     int nbatches = (d->height + w->batch_rows - 1) / w->batch_rows;
@@ -397,11 +460,50 @@ static void writer_free(exrio_writer *w)
     free(w->order);
     free(w->threads);
     free(w->types);
-    free(w->file_order);
+    for (int p = 0; p < EXRIO_MAX_PARTS; p++) {
+        free(w->parts[p].file_order);
+        if (w->parts[p].spool) fclose(w->parts[p].spool);
+    }
     pthread_mutex_destroy(&w->mu);
     pthread_cond_destroy(&w->cv);
     memset(w, 0, sizeof *w);
     free(w);
+}
+
+/* Writes part p's spooled chunks into the file, in order. */
+static fb_result copy_spool(exrio_writer *w, int p)
+{
+    wpart *wp = &w->parts[p];
+    void *buf = NULL;
+    size_t cap = 0;
+    fb_result rc = FB_OK;
+    if (fflush(wp->spool) != 0 || fseek(wp->spool, 0, SEEK_SET) != 0)
+        return fb_fail(FB_ERR_IO, "%s: cannot read back the spool of part %d: %s", w->path, p, strerror(errno));
+    for (int y = 0; y < w->height && !rc; y += wp->chunk_rows) {
+        uint64_t size = 0;
+        if (fread(&size, 8, 1, wp->spool) != 1 || size > (1ull << 31)) {
+            rc = fb_fail(FB_ERR_IO, "%s: the spool of part %d is short", w->path, p);
+            break;
+        }
+        if (size > cap) {
+            void *nb = realloc(buf, size);
+            if (!nb) {
+                rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+                break;
+            }
+            buf = nb, cap = size;
+        }
+        if (fread(buf, 1, size, wp->spool) != size) {
+            rc = fb_fail(FB_ERR_IO, "%s: the spool of part %d is short", w->path, p);
+            break;
+        }
+        exr_result_t er = exr_write_scanline_chunk(w->ctx, p, y + w->y0, buf, size);
+        if (er != EXR_ERR_SUCCESS)
+            rc = fb_fail(er == EXR_ERR_WRITE_IO ? FB_ERR_IO : FB_ERR_EXR, "%s: writing part %d failed: %s", w->path, p,
+                         t_exr_msg);
+    }
+    free(buf);
+    return rc;
 }
 
 fb_result exrio_writer_finish(exrio_writer **pw)
@@ -417,6 +519,7 @@ fb_result exrio_writer_finish(exrio_writer **pw)
     }
     stop_workers(w);
     if (!rc && w->error) rc = fb_fail(w->error, "%s", w->error_msg);
+    for (int p = 1; p < w->nparts && !rc; p++) rc = copy_spool(w, p);
     exr_result_t er = exr_finish(&w->ctx);
     if (!rc && er != EXR_ERR_SUCCESS)
         rc = fb_fail(er == EXR_ERR_WRITE_IO ? FB_ERR_IO : FB_ERR_EXR, "%s: cannot complete the file: %s", w->path,
@@ -448,12 +551,25 @@ struct exrio_reader {
     exr_context_t ctx;
     char path[4096];
     int width, height, x0, y0, full_width, full_height;
-    int dw_y; /* the data window's first row in file coordinates */
-    int nchannels;
-    const exr_attr_chlist_t *chlist;
-    int chunk_rows;
-    uint8_t *chunk_buf; /* one decoded chunk, all channels */
+    int dw_y;      /* the data window's first row in file coordinates */
+    int nchannels; /* over every part: the parts' channels one after the other */
+    int nparts;
+    struct rpart {
+        const exr_attr_chlist_t *chlist;
+        int first; /* its first channel's flat index */
+        int chunk_rows;
+        uint8_t *chunk_buf; /* one decoded chunk, all channels of the part */
+    } parts[EXRIO_MAX_PARTS];
 };
+
+/* The part of flat channel c and c's index within it. */
+static int part_of(const exrio_reader *r, int c, int *within)
+{
+    int p = r->nparts - 1;
+    while (p > 0 && c < r->parts[p].first) p--;
+    *within = c - r->parts[p].first;
+    return p;
+}
 
 fb_result exrio_open(const char *path, exrio_reader **out)
 {
@@ -471,41 +587,58 @@ fb_result exrio_open(const char *path, exrio_reader **out)
         rc = fb_fail(FB_ERR_INPUT, "%s: not a readable OpenEXR file: %s", path, t_exr_msg);
         goto fail;
     }
-    exr_storage_t st;
-    exr_attr_box2i_t dw;
-    if (exr_get_storage(r->ctx, 0, &st) != EXR_ERR_SUCCESS || st != EXR_STORAGE_SCANLINE) {
-        rc = fb_fail(FB_ERR_INPUT, "%s: only scanline (not tiled or deep) EXR files are supported", path);
+    int np = 0;
+    if (exr_get_count(r->ctx, &np) != EXR_ERR_SUCCESS || np < 1 || np > EXRIO_MAX_PARTS) {
+        rc = fb_fail(FB_ERR_INPUT, "%s: %d parts; fractalbake reads 1 to %d", path, np, EXRIO_MAX_PARTS);
         goto fail;
     }
-    if (exr_get_data_window(r->ctx, 0, &dw) != EXR_ERR_SUCCESS || exr_get_channels(r->ctx, 0, &r->chlist) ||
-        !r->chlist) {
-        rc = fb_fail(FB_ERR_INPUT, "%s: missing data window or channel list", path);
-        goto fail;
-    }
-    exr_attr_box2i_t disp;
-    if (exr_get_display_window(r->ctx, 0, &disp) != EXR_ERR_SUCCESS) disp = dw;
-    r->full_width = disp.max.x - disp.min.x + 1;
-    r->full_height = disp.max.y - disp.min.y + 1;
-    r->x0 = dw.min.x - disp.min.x;
-    r->y0 = dw.min.y - disp.min.y;
-    r->dw_y = dw.min.y;
-    r->width = dw.max.x - dw.min.x + 1;
-    r->height = dw.max.y - dw.min.y + 1;
-    r->nchannels = r->chlist->num_channels;
-    for (int c = 0; c < r->nchannels; c++)
-        if (r->chlist->entries[c].x_sampling != 1 || r->chlist->entries[c].y_sampling != 1) {
-            rc = fb_fail(FB_ERR_INPUT, "%s: channel %s is subsampled, which is not supported", path,
-                         r->chlist->entries[c].name.str);
+    r->nparts = np;
+    exr_attr_box2i_t dw0 = {0}, disp0 = {0};
+    for (int p = 0; p < np; p++) {
+        exr_storage_t st;
+        exr_attr_box2i_t dw, disp;
+        struct rpart *rp = &r->parts[p];
+        if (exr_get_storage(r->ctx, p, &st) != EXR_ERR_SUCCESS || st != EXR_STORAGE_SCANLINE) {
+            rc = fb_fail(FB_ERR_INPUT, "%s: only scanline (not tiled or deep) EXR files are supported", path);
             goto fail;
         }
-    int32_t spc = 1;
-    exr_get_scanlines_per_chunk(r->ctx, 0, &spc);
-    r->chunk_rows = spc > 0 ? spc : 1;
-    r->chunk_buf = malloc((size_t)r->width * 4 * (size_t)r->chunk_rows * (size_t)(r->nchannels ? r->nchannels : 1));
-    if (!r->chunk_buf) {
-        rc = fb_fail(FB_ERR_NOMEM, "%s: out of memory", path);
-        goto fail;
+        if (exr_get_data_window(r->ctx, p, &dw) != EXR_ERR_SUCCESS || exr_get_channels(r->ctx, p, &rp->chlist) ||
+            !rp->chlist) {
+            rc = fb_fail(FB_ERR_INPUT, "%s: missing data window or channel list", path);
+            goto fail;
+        }
+        if (exr_get_display_window(r->ctx, p, &disp) != EXR_ERR_SUCCESS) disp = dw;
+        if (p == 0) {
+            dw0 = dw, disp0 = disp;
+        } else if (memcmp(&dw, &dw0, sizeof dw) || memcmp(&disp, &disp0, sizeof disp)) {
+            rc = fb_fail(FB_ERR_INPUT, "%s: part %d has another data or display window than part 0 (not supported)",
+                         path, p);
+            goto fail;
+        }
+        for (int c = 0; c < rp->chlist->num_channels; c++)
+            if (rp->chlist->entries[c].x_sampling != 1 || rp->chlist->entries[c].y_sampling != 1) {
+                rc = fb_fail(FB_ERR_INPUT, "%s: channel %s is subsampled, which is not supported", path,
+                             rp->chlist->entries[c].name.str);
+                goto fail;
+            }
+        rp->first = r->nchannels;
+        r->nchannels += rp->chlist->num_channels;
+        int32_t spc = 1;
+        exr_get_scanlines_per_chunk(r->ctx, p, &spc);
+        rp->chunk_rows = spc > 0 ? spc : 1;
+        int w = dw.max.x - dw.min.x + 1, n = rp->chlist->num_channels;
+        if (!(rp->chunk_buf = malloc((size_t)w * 4 * (size_t)rp->chunk_rows * (size_t)(n ? n : 1)))) {
+            rc = fb_fail(FB_ERR_NOMEM, "%s: out of memory", path);
+            goto fail;
+        }
     }
+    r->full_width = disp0.max.x - disp0.min.x + 1;
+    r->full_height = disp0.max.y - disp0.min.y + 1;
+    r->x0 = dw0.min.x - disp0.min.x;
+    r->y0 = dw0.min.y - disp0.min.y;
+    r->dw_y = dw0.min.y;
+    r->width = dw0.max.x - dw0.min.x + 1;
+    r->height = dw0.max.y - dw0.min.y + 1;
     *out = r;
     return FB_OK;
 fail:
@@ -518,7 +651,7 @@ void exrio_close(exrio_reader **pr)
     if (!pr || !*pr) return;
     exrio_reader *r = *pr;
     if (r->ctx) exr_finish(&r->ctx);
-    free(r->chunk_buf);
+    for (int p = 0; p < EXRIO_MAX_PARTS; p++) free(r->parts[p].chunk_buf);
     memset(r, 0, sizeof *r);
     free(r);
     *pr = NULL;
@@ -545,11 +678,29 @@ int exrio_nchannels(const exrio_reader *r)
 }
 const char *exrio_channel_name(const exrio_reader *r, int c)
 {
-    return r->chlist->entries[c].name.str;
+    int k, p = part_of(r, c, &k);
+    return r->parts[p].chlist->entries[k].name.str;
+}
+int exrio_channel_part(const exrio_reader *r, int c)
+{
+    int k;
+    return part_of(r, c, &k);
+}
+int exrio_nparts(const exrio_reader *r)
+{
+    return r->nparts;
+}
+const char *exrio_part_name(const exrio_reader *r, int p)
+{
+    const char *name = NULL;
+    int32_t len = 0;
+    if (exr_attr_get_string(r->ctx, p, "name", &len, &name) != EXR_ERR_SUCCESS) return "";
+    return name;
 }
 exrio_type exrio_channel_type(const exrio_reader *r, int c)
 {
-    exr_pixel_type_t t = r->chlist->entries[c].pixel_type;
+    int k, p = part_of(r, c, &k);
+    exr_pixel_type_t t = r->parts[p].chlist->entries[k].pixel_type;
     return t == EXR_PIXEL_UINT ? EXRIO_UINT : t == EXR_PIXEL_HALF ? EXRIO_HALF : EXRIO_FLOAT;
 }
 int exrio_find_channel(const exrio_reader *r, const char *name)
@@ -561,8 +712,13 @@ int exrio_find_channel(const exrio_reader *r, const char *name)
 
 const char *exrio_compression_of(const exrio_reader *r)
 {
+    return exrio_part_compression(r, 0);
+}
+
+const char *exrio_part_compression(const exrio_reader *r, int p)
+{
     exr_compression_t c = EXR_COMPRESSION_NONE;
-    exr_get_compression(r->ctx, 0, &c);
+    exr_get_compression(r->ctx, p, &c);
     static const char *names[] = {"none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa", "dwab"};
     return (unsigned)c < sizeof names / sizeof names[0] ? names[c] : "unknown";
 }
@@ -598,43 +754,54 @@ fb_result exrio_read_rows(exrio_reader *r, int y0, int nrows, void *const *plane
     if (y0 < 0 || nrows < 0 || y0 + nrows > r->height)
         return fb_fail(FB_ERR_INTERNAL, "%s: rows %d..%d out of range", r->path, y0, y0 + nrows - 1);
     fb_result rc = FB_OK;
-    exr_decode_pipeline_t dec = {0};
-    bool init = false;
     size_t rb = (size_t)r->width * 4;
-    int y = y0;
-    while (y < y0 + nrows) {
-        exr_chunk_info_t cinfo;
-        exr_result_t er = exr_read_scanline_chunk_info(r->ctx, 0, y + r->dw_y, &cinfo);
-        if (er == EXR_ERR_SUCCESS)
-            er = init ? exr_decoding_update(r->ctx, 0, &cinfo, &dec) : exr_decoding_initialize(r->ctx, 0, &cinfo, &dec);
-        if (er != EXR_ERR_SUCCESS) goto exr_fail;
-        init = true;
-        int cy0 = cinfo.start_y - r->dw_y, ch = cinfo.height;
-        for (int c = 0; c < dec.channel_count; c++) {
-            int idx = exrio_find_channel(r, dec.channels[c].channel_name);
-            dec.channels[c].decode_to_ptr = r->chunk_buf + (size_t)idx * rb * (size_t)r->chunk_rows;
-            dec.channels[c].user_pixel_stride = 4;
-            dec.channels[c].user_line_stride = (int32_t)rb;
-            dec.channels[c].user_bytes_per_element = 4;
-            dec.channels[c].user_data_type =
-                dec.channels[c].data_type == EXR_PIXEL_UINT ? EXR_PIXEL_UINT : EXR_PIXEL_FLOAT;
+    for (int p = 0; p < r->nparts && !rc; p++) {
+        struct rpart *rp = &r->parts[p];
+        bool wanted = false;
+        for (int c = 0; c < rp->chlist->num_channels; c++) wanted = wanted || planes[rp->first + c];
+        if (!wanted) continue;
+        exr_decode_pipeline_t dec = {0};
+        bool init = false;
+        int y = y0;
+        while (y < y0 + nrows) {
+            exr_chunk_info_t cinfo;
+            exr_result_t er = exr_read_scanline_chunk_info(r->ctx, p, y + r->dw_y, &cinfo);
+            if (er == EXR_ERR_SUCCESS)
+                er = init ? exr_decoding_update(r->ctx, p, &cinfo, &dec)
+                          : exr_decoding_initialize(r->ctx, p, &cinfo, &dec);
+            if (er != EXR_ERR_SUCCESS) goto exr_fail;
+            init = true;
+            int cy0 = cinfo.start_y - r->dw_y, ch = cinfo.height;
+            for (int c = 0; c < dec.channel_count; c++) {
+                int idx = -1;
+                for (int k = 0; k < rp->chlist->num_channels; k++)
+                    if (!strcmp(rp->chlist->entries[k].name.str, dec.channels[c].channel_name)) idx = k;
+                dec.channels[c].decode_to_ptr = rp->chunk_buf + (size_t)idx * rb * (size_t)rp->chunk_rows;
+                dec.channels[c].user_pixel_stride = 4;
+                dec.channels[c].user_line_stride = (int32_t)rb;
+                dec.channels[c].user_bytes_per_element = 4;
+                dec.channels[c].user_data_type =
+                    dec.channels[c].data_type == EXR_PIXEL_UINT ? EXR_PIXEL_UINT : EXR_PIXEL_FLOAT;
+            }
+            er = exr_decoding_choose_default_routines(r->ctx, p, &dec);
+            if (er == EXR_ERR_SUCCESS) er = exr_decoding_run(r->ctx, p, &dec);
+            if (er != EXR_ERR_SUCCESS) goto exr_fail;
+            int from = y > cy0 ? y : cy0;
+            int to = (y0 + nrows < cy0 + ch) ? y0 + nrows : cy0 + ch;
+            for (int c = 0; c < rp->chlist->num_channels; c++) {
+                void *dst = planes[rp->first + c];
+                if (!dst) continue;
+                const uint8_t *src =
+                    rp->chunk_buf + (size_t)c * rb * (size_t)rp->chunk_rows + (size_t)(from - cy0) * rb;
+                memcpy((uint8_t *)dst + (size_t)(from - y0) * rb, src, (size_t)(to - from) * rb);
+            }
+            y = to;
+            continue;
+        exr_fail:
+            rc = fb_fail(FB_ERR_INPUT, "%s: cannot decode rows from %d: %s", r->path, y, t_exr_msg);
+            break;
         }
-        er = exr_decoding_choose_default_routines(r->ctx, 0, &dec);
-        if (er == EXR_ERR_SUCCESS) er = exr_decoding_run(r->ctx, 0, &dec);
-        if (er != EXR_ERR_SUCCESS) goto exr_fail;
-        int from = y > cy0 ? y : cy0;
-        int to = (y0 + nrows < cy0 + ch) ? y0 + nrows : cy0 + ch;
-        for (int c = 0; c < r->nchannels; c++) {
-            if (!planes[c]) continue;
-            const uint8_t *src = r->chunk_buf + (size_t)c * rb * (size_t)r->chunk_rows + (size_t)(from - cy0) * rb;
-            memcpy((uint8_t *)planes[c] + (size_t)(from - y0) * rb, src, (size_t)(to - from) * rb);
-        }
-        y = to;
-        continue;
-    exr_fail:
-        rc = fb_fail(FB_ERR_INPUT, "%s: cannot decode rows from %d: %s", r->path, y, t_exr_msg);
-        break;
+        if (init) exr_decoding_destroy(r->ctx, &dec);
     }
-    if (init) exr_decoding_destroy(r->ctx, &dec);
     return rc;
 }

@@ -22,9 +22,12 @@ int exrio_compression_parse(const char *s);
 const char *exrio_compression_name(exrio_compression c);
 const char *exrio_type_name(exrio_type t);
 
+#define EXRIO_MAX_PARTS 16
+
 typedef struct exrio_channel {
     const char *name; /* "layer.channel" */
     exrio_type type;  /* stored type; rows are given as float for HALF/FLOAT, uint32 for UINT */
+    int part;         /* the part it is stored in (multi-part files), 0.. nparts - 1 */
 } exrio_channel;
 
 typedef struct exrio_attr {
@@ -39,6 +42,12 @@ typedef struct exrio_writer_desc {
      * full_height (0: the data window is the whole image). */
     int x0, y0, full_width, full_height;
     int row_stride; /* values per row in the planes given to exrio_writer_rows (0: width) */
+    /* Multi-part files: nparts parts (0 or 1: one part named "fractalbake"), their names and
+     * compressions (NULL: `compression` for every part); each channel says its part. Attributes go
+     * to the first part. */
+    int nparts;
+    const char *const *part_names;
+    const exrio_compression *part_compression;
     exrio_compression compression;
     const exrio_channel *channels;
     int nchannels;
@@ -81,7 +90,14 @@ const char *exrio_channel_name(const exrio_reader *r, int c);
 exrio_type exrio_channel_type(const exrio_reader *r, int c);
 /* Index of the channel named `name`, or -1. */
 int exrio_find_channel(const exrio_reader *r, const char *name);
-const char *exrio_compression_of(const exrio_reader *r);
+const char *exrio_compression_of(const exrio_reader *r); /* of the first part */
+
+/* Multi-part files appear as one list of channels, the parts' one after the other; every part must
+ * have the same data and display windows. */
+int exrio_nparts(const exrio_reader *r);
+int exrio_channel_part(const exrio_reader *r, int c);
+const char *exrio_part_name(const exrio_reader *r, int p);
+const char *exrio_part_compression(const exrio_reader *r, int p);
 
 /* The value of a string attribute, or NULL. Valid until exrio_close. */
 const char *exrio_attr_string(const exrio_reader *r, const char *name);

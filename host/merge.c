@@ -53,6 +53,11 @@ static fb_result check_parts(part *p, int n, const char *const *paths, int *W, i
                 return fb_fail(FB_ERR_INPUT, "%s: channel %s is %s, unlike in %s", paths[i],
                                exrio_channel_name(p[0].r, c), k < 0 ? "missing" : "of another type", paths[0]);
         }
+        bool same_parts = exrio_nparts(p[i].r) == exrio_nparts(p[0].r);
+        for (int c = 0; c < exrio_nchannels(p[0].r) && same_parts; c++)
+            same_parts = exrio_channel_part(p[i].r, c) == exrio_channel_part(p[0].r, c) &&
+                         !strcmp(exrio_channel_name(p[i].r, c), exrio_channel_name(p[0].r, c));
+        if (!same_parts) return fb_fail(FB_ERR_INPUT, "%s: its EXR parts differ from those of %s", paths[i], paths[0]);
         const char *scene = exrio_attr_string(p[i].r, "fractalbake/scene");
         if ((scene == NULL) != (scene0 == NULL) || (scene && strcmp(scene, scene0)))
             return fb_fail(FB_ERR_INPUT, "%s: baked from another scene than %s (attribute fractalbake/scene)", paths[i],
@@ -93,7 +98,8 @@ fb_result fb_merge(const char *const *paths, int n, const char *out, int threads
         goto out;
     }
     for (int c = 0; c < nch; c++) {
-        ch[c] = (exrio_channel){exrio_channel_name(p[0].r, c), exrio_channel_type(p[0].r, c)};
+        ch[c] = (exrio_channel){exrio_channel_name(p[0].r, c), exrio_channel_type(p[0].r, c),
+                                exrio_channel_part(p[0].r, c)};
         if (!(full[c] = malloc((size_t)W * MERGE_STRIP * 4))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     }
     for (int i = 0; i < n && !rc; i++)
@@ -108,6 +114,15 @@ fb_result fb_merge(const char *const *paths, int n, const char *out, int threads
         const char *v = exrio_attr_string(p[0].r, k_attrs[a]);
         if (v) attrs[nattrs++] = (exrio_attr){k_attrs[a], v};
     }
+    /* the parts' structure (names, compressions) as in the first region file */
+    int nparts = exrio_nparts(p[0].r);
+    const char *part_names[EXRIO_MAX_PARTS];
+    exrio_compression part_comp[EXRIO_MAX_PARTS];
+    for (int k = 0; k < nparts; k++) {
+        int c = exrio_compression_parse(exrio_part_compression(p[0].r, k));
+        part_names[k] = exrio_part_name(p[0].r, k);
+        part_comp[k] = c < 0 ? EXRIO_ZIP : (exrio_compression)c;
+    }
     int comp = exrio_compression_parse(exrio_compression_of(p[0].r));
     rc = exrio_writer_create(&(exrio_writer_desc){.path = out,
                                                   .width = W,
@@ -117,7 +132,10 @@ fb_result fb_merge(const char *const *paths, int n, const char *out, int threads
                                                   .nchannels = nch,
                                                   .attrs = attrs,
                                                   .nattrs = nattrs,
-                                                  .threads = threads},
+                                                  .threads = threads,
+                                                  .nparts = nparts,
+                                                  .part_names = part_names,
+                                                  .part_compression = part_comp},
                              &w);
     for (int y0 = 0; y0 < H && !rc; y0 += MERGE_STRIP) {
         int rows = y0 + MERGE_STRIP <= H ? MERGE_STRIP : H - y0;

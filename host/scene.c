@@ -56,6 +56,8 @@ static const keyspec scene_keys[] = {
     {"size", T_SIZE, 1, FB_MAX_DIM, false, NULL, "[1024, 1024]", "image size in pixels (flag: --size WxH)"},
     {"seed", T_INT, 0, 4294967295.0, false, NULL, "1", "random seed"},
     {"compression", T_ENUM, 0, 0, false, "zip|piz|none", "\"zip\"", "EXR compression"},
+    {"parts", T_ENUM, 0, 0, false, "single|per-layer", "\"single\"",
+     "one EXR part with every layer, or one part per layer (multi-part; each may have its own compression)"},
     {"layers", T_LAYERS, 1, FB_MAX_LAYERS, false, NULL, NULL, "the layers, each a generator"},
 };
 
@@ -77,6 +79,8 @@ static const keyspec fbm_keys[] = {
     {"warp", T_NUM, 0, 100, false, NULL, "0.0", "domain-warp strength, in first-octave cells"},
     {"tileable", T_BOOL, 0, 0, false, NULL, "false", "periodic in x and y: the image wraps without a seam"},
     {"half", T_BOOL, 0, 0, false, NULL, "false", "store as half instead of float (flags: --half, --float)"},
+    {"compression", T_ENUM, 0, 0, false, "zip|piz|none", NULL,
+     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
 };
 
 static const keyspec julia_keys[] = {
@@ -110,6 +114,8 @@ static const keyspec julia_keys[] = {
     {"density-count", T_NUM, 1, 1e6, false, NULL, "48.0", "smooth count at which brightness is full"},
     {"inside-color", T_NUMLIST, 0, 1e3, false, NULL, "[0.0, 0.0, 0.0]", "colour of points inside the set (R,G,B)", 3},
     {"half", T_BOOL, 0, 0, false, NULL, "true", "store R, G, B as half (flags: --half, --float)"},
+    {"compression", T_ENUM, 0, 0, false, "zip|piz|none", NULL,
+     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
 };
 
 static const keyspec ifs_keys[] = {
@@ -145,6 +151,8 @@ static const keyspec ifs_keys[] = {
     {"highlight-power", T_NUM, -1, 100, false, NULL, "1.0",
      "over-bright pixels: < 0 clip per channel, 0 keep hue, larger fade to white"},
     {"half", T_BOOL, 0, 0, false, NULL, "true", "store R, G, B, A as half (flags: --half, --float)"},
+    {"compression", T_ENUM, 0, 0, false, "zip|piz|none", NULL,
+     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
 };
 
 static const keyspec lsystem_keys[] = {
@@ -172,6 +180,8 @@ static const keyspec lsystem_keys[] = {
     {"stops", T_STOPS, 0, 1e3, false, NULL, NULL,
      "gradient: [[t, r, g, b], ...], t rising from 0 to 1 (flag: \"t,r,g,b;t,r,g,b\")"},
     {"half", T_BOOL, 0, 0, false, NULL, "true", "store A, R, G, B as half (flags: --half, --float)"},
+    {"compression", T_ENUM, 0, 0, false, "zip|piz|none", NULL,
+     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
 };
 
 static const keyspec terrain_keys[] = {
@@ -195,6 +205,8 @@ static const keyspec terrain_keys[] = {
      "area rasterised: \"auto\" (the points' bounding box) or [xmin, xmax, ymin, ymax]"},
     {"mesh", T_STRING, 0, 0, false, NULL, NULL, "also write the refined mesh: OUT.ply (binary) or OUT.obj"},
     {"half", T_BOOL, 0, 0, false, NULL, "false", "store Y as half (flags: --half, --float)"},
+    {"compression", T_ENUM, 0, 0, false, "zip|piz|none", NULL,
+     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
 };
 
 static const keyspec op_keys[] = {
@@ -212,6 +224,8 @@ static const keyspec op_keys[] = {
     {"level", T_NUM, -1e15, 1e15, false, NULL, NULL, "threshold: 1 at and above the level, 0 below"},
     {"width", T_NUM, 0, 1e15, false, NULL, NULL, "threshold: a smooth step this wide around the level (default 0)"},
     {"half", T_BOOL, 0, 0, false, NULL, "false", "store Y as half (flags: --half, --float)"},
+    {"compression", T_ENUM, 0, 0, false, "zip|piz|none", NULL,
+     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
 };
 
 /* The keys of an L-system condensation set of an ifs layer ("condensation": {"preset": "tree"}). */
@@ -1280,6 +1294,7 @@ static fb_result parse_root(const vctx *v, json_t *root, fb_scene *s)
     s->seed = (uint32_t)json_integer_value(json_object_get(root, "seed"));
     s->compression =
         (exrio_compression)exrio_compression_parse(json_string_value(json_object_get(root, "compression")));
+    s->multipart = !strcmp(json_string_value(json_object_get(root, "parts")), "per-layer");
     json_t *layers = json_object_get(root, "layers");
     s->nlayers = (int)json_array_size(layers);
     for (int i = 0; i < s->nlayers; i++) {
@@ -1319,6 +1334,13 @@ static fb_result parse_root(const vctx *v, json_t *root, fb_scene *s)
         }
         if (rc) return rc;
         snprintf(L->name, sizeof L->name, "%s", json_string_value(json_object_get(lj, "name")));
+        const json_t *lc = json_object_get(lj, "compression");
+        L->compression = lc ? (exrio_compression)exrio_compression_parse(json_string_value(lc)) : s->compression;
+        if (lc && !s->multipart) {
+            char sub[80];
+            snprintf(sub, sizeof sub, "%s.compression", path);
+            return verr(v, sub, "a compression per layer needs \"parts\": \"per-layer\" (an EXR part has one)");
+        }
         for (int k = 0; k < i; k++)
             if (!strcmp(s->layers[k].name, L->name)) {
                 char sub[80];
@@ -1578,6 +1600,10 @@ static const keyspec *flag_spec(const char *kind, const char *flag, bool *scene_
     else if (!strcmp(flag, "rule") && !strcmp(kind, "lsystem"))
         flag = "rules"; /* --rule X=... (repeatable) */
     if (!strcmp(flag, "type") || !strcmp(flag, "layers")) return NULL;
+    if (!strcmp(flag, "compression") || !strcmp(flag, "parts")) { /* the file's, not the layer's */
+        *scene_level = true;
+        return find_key(scene_keys, NKEYS(scene_keys), flag);
+    }
     if (kind_keys(kind, &keys, &n)) {
         const keyspec *k = find_key(keys, n, flag);
         if (k) return k;

@@ -134,7 +134,8 @@ typedef struct fb_op_params {
 typedef struct fb_layer {
     fb_layer_kind kind;
     char name[64];
-    bool half; /* store colour/height as half instead of float */
+    bool half;                     /* store colour/height as half instead of float */
+    exrio_compression compression; /* its part's, when the scene has one part per layer */
     fb_fbm_params fbm;
     fb_julia_params julia;
     fb_ifs_params ifs;
@@ -147,6 +148,7 @@ typedef struct fb_scene {
     int width, height;
     uint32_t seed;
     exrio_compression compression;
+    bool multipart; /* "parts": "per-layer": one EXR part per layer, named after it */
     int nlayers;
     fb_layer layers[FB_MAX_LAYERS];
     int order[FB_MAX_LAYERS]; /* every layer after the layers it refers to (op layers last, in dependency order) */

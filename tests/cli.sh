@@ -459,6 +459,20 @@ expect_fail 2 "region: expected X,Y,W,H" o.exr -- render $S3 --region 1,2,3 -o o
 expect_fail 2 "no region files" o.exr -- merge -o o.exr
 expect_fail 3 "nope.exr: cannot open" o.exr -- merge nope.exr -o o.exr
 
+# one EXR part per layer, each with its own compression: the same pixels as one part; regions merge
+MP="--set parts=per-layer --set layers.sky.compression=piz --set layers.terrain.compression=none"
+"$FB" render $S3 $MP -o mp.exr && ok || bad "multi-part bake failed"
+"$FB" info mp.exr > mp.txt
+grep -q "parts: *3" mp.txt && grep -q "part 0  sky *compression piz" mp.txt && grep -q "part 1  terrain *compression none" mp.txt && grep -q "part 2  plants *compression zip" mp.txt && ok || bad "multi-part structure: $(cat mp.txt)"
+exrinfo --strict mp.exr > /dev/null 2>&1 && ok || bad "the multi-part file fails exrinfo --strict"
+rm -rf sep && mkdir sep && exrmultipart -separate -i mp.exr -o sep/p > /dev/null 2>&1 && [ -e sep/p.3.exr ] && ok || bad "exrmultipart cannot separate the parts"
+"$FB" compare c.exr mp.exr > /dev/null && ok || bad "multi-part pixels differ from the single-part bake"
+"$FB" render $S3 $MP --region 0,0,128,30 -o mpa.exr && "$FB" render $S3 $MP --region 0,30,128,34 -o mpb.exr && "$FB" merge mpa.exr mpb.exr -o mpm.exr --quiet && cmp -s mp.exr mpm.exr && ok || bad "multi-part regions do not merge to the whole file"
+"$FB" render --from mp.exr -o mp2.exr --quiet && cmp -s mp.exr mp2.exr && ok || bad "--from a multi-part file did not reproduce it"
+expect_fail 2 "its EXR parts differ" o.exr -- merge mpa.exr pb_vulkan.exr -o o.exr
+expect_fail 2 'set layers.sky.compression=piz: a compression per layer needs "parts": "per-layer"' o.exr -- render $S3 --set layers.sky.compression=piz -o o.exr
+"$FB" fbm $S --compression piz -o fpiz.exr && "$FB" info fpiz.exr | grep -q "compression: piz" && ok || bad "fbm --compression piz"
+
 # op layers: fBm detail on a refined terrain, plants masked by height; a cycle names both layers
 printf '{"size": [96, 48], "layers": [{"type": "op", "name": "ground", "op": "add", "inputs": ["terrain.Y", "detail"], "weights": [1, 4]},
  {"type": "terrain", "points": [[0,0,0],[10,0,1],[0,5,2],[10,5,4],[5,2.5,9]], "insert": 500},
