@@ -3,6 +3,7 @@
  */
 #include "bake.h"
 
+#include "ifs.h"
 #include "preview.h"
 #include "progress.h"
 
@@ -311,15 +312,30 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         char seed[16], reg[64];
         snprintf(seed, sizeof seed, "%u", s->seed);
         snprintf(reg, sizeof reg, "%d,%d,%d,%d", rx, ry, rw, rh);
-        exrio_attr attrs[] = {
+        bool partial = d->region[2] > 0;
+        exrio_attr attrs[8] = {
             {"fractalbake/scene", s->json},
             {"fractalbake/seed", seed},
             {"fractalbake/backend", fb_backend_name(e->kind)},
             {"fractalbake/device", e->device},
             {"fractalbake/version", FB_VERSION},
-            {"fractalbake/region", reg}, /* last: left out of whole-image files */
         };
-        bool partial = d->region[2] > 0;
+        int nattrs = 5;
+        if (partial) attrs[nattrs++] = (exrio_attr){"fractalbake/region", reg};
+        /* a points part: which, and each chaos-game layer's points outside the frame (merge needs
+         * them for the density) */
+        char part[32], outside[FB_MAX_LAYERS * 90] = "";
+        if (s->points_part[1] > 0) {
+            snprintf(part, sizeof part, "%d/%d", s->points_part[0], s->points_part[1]);
+            for (int i = 0; i < s->nlayers; i++) {
+                const fb_ifs_stats *st = fb_gen_ifs_stats(&runs[i].gen);
+                if (st)
+                    snprintf(outside + strlen(outside), sizeof outside - strlen(outside), "%s%s=%llu",
+                             outside[0] ? ";" : "", s->layers[i].name, (unsigned long long)st->outside);
+            }
+            attrs[nattrs++] = (exrio_attr){"fractalbake/points-part", part};
+            attrs[nattrs++] = (exrio_attr){"fractalbake/ifs-outside", outside};
+        }
         const char *part_names[FB_MAX_LAYERS];
         exrio_compression part_comp[FB_MAX_LAYERS];
         for (int i = 0; i < s->nlayers; i++) part_names[i] = s->layers[i].name, part_comp[i] = s->layers[i].compression;
@@ -338,7 +354,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
                                                       .channels = channels,
                                                       .nchannels = nch,
                                                       .attrs = attrs,
-                                                      .nattrs = (int)(sizeof attrs / sizeof attrs[0]) - !partial,
+                                                      .nattrs = nattrs,
                                                       .threads = e->threads},
                                  &w);
         if (rc) goto out;

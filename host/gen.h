@@ -10,7 +10,7 @@
 #include "exrio.h"
 #include "scene.h"
 
-#define FB_GEN_MAX_CHANNELS 8
+#define FB_GEN_MAX_CHANNELS 10
 #define FB_GEN_MAX_PUSH     128
 
 typedef struct fb_gen fb_gen;
@@ -96,5 +96,10 @@ void fb_gen_op_rows(const fb_gen *g, size_t count, const void *const *planes, fl
 /* The chaos-game statistics of an ifs layer after prepare (NULL for other layers). */
 struct fb_ifs_stats;
 const struct fb_ifs_stats *fb_gen_ifs_stats(const fb_gen *g);
+
+/* fractalbake merge of points parts: an ifs layer's pixels from the parts' summed hits and colour
+ * sums (each width x height) and outside count, in place of its chaos game; then native_rows gives
+ * the channels the whole game would have. */
+fb_result fb_gen_ifs_from_sums(fb_gen *g, const uint64_t *hits, const uint64_t *sums, uint64_t outside);
 
 #endif

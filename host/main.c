@@ -78,6 +78,8 @@ static const char *const k_usage =
     "  --strip-rows N        rows computed per strip (the result does not depend on it)\n"
     "  --region X,Y,W,H      bake only these pixels (the same as in the full bake) into a region file;\n"
     "                        `fractalbake merge` joins region files into the whole image\n"
+    "  --points-part K/N     bake the K-th of N shares of every chaos game's points (ifs layers; the\n"
+    "                        other layers whole); `fractalbake merge` adds the N parts' hits exactly\n"
     "  --validation          enable VK_LAYER_KHRONOS_validation (also FB_VK_VALIDATION=1)\n"
     "  --quiet               no progress bar, no warnings, no summaries\n"
     "  --json                layer summaries (terrain: points, time per stage) as JSON lines on stdout\n"
@@ -90,7 +92,8 @@ typedef struct common_opts {
     const char *out, *preview, *preview_layer, *device;
     fb_backend backend;
     int threads, strip_rows;
-    int region[4]; /* x, y, w, h; w == 0: none */
+    int region[4];      /* x, y, w, h; w == 0: none */
+    int points_part[2]; /* K, N; N == 0: none */
     bool quiet, validation, help, json;
 } common_opts;
 
@@ -168,6 +171,15 @@ static int common_option(int argc, char **argv, int *i, common_opts *o)
             fb_fail(FB_ERR_USAGE, "--region: expected X,Y,W,H (integers, W and H >= 1), found \"%s\"", val);
             return -1;
         }
+    } else if (!strcmp(a, "--points-part")) {
+        NEED_VALUE();
+        int used = 0;
+        if (sscanf(val, "%d/%d%n", &o->points_part[0], &o->points_part[1], &used) != 2 || val[used] ||
+            o->points_part[1] < 1 || o->points_part[1] > 4096 || o->points_part[0] < 1 ||
+            o->points_part[0] > o->points_part[1]) {
+            fb_fail(FB_ERR_USAGE, "--points-part: expected K/N with 1 <= K <= N <= 4096, found \"%s\"", val);
+            return -1;
+        }
     } else if (!strcmp(a, "--quiet")) {
         o->quiet = true;
     } else if (!strcmp(a, "--json")) {
@@ -193,8 +205,18 @@ static void report(const char *layer, const char *summary, const char *json, voi
         fprintf(stderr, "fractalbake: %s\n", summary);
 }
 
-static fb_result bake_scene(const fb_scene *scene, const common_opts *o)
+static fb_result bake_scene(fb_scene *scene, const common_opts *o)
 {
+    if (o->points_part[1] > 0) {
+        bool chaos = false;
+        for (int i = 0; i < scene->nlayers; i++) chaos = chaos || scene->layers[i].kind == FB_LAYER_IFS;
+        if (!chaos)
+            return fb_fail(FB_ERR_USAGE, "--points-part: the scene has no chaos-game (ifs) layer to split by points");
+        if (o->region[2] > 0)
+            return fb_fail(FB_ERR_USAGE, "--points-part: not with --region (split a bake by pixels or by points)");
+        scene->points_part[0] = o->points_part[0];
+        scene->points_part[1] = o->points_part[1];
+    }
     fb_engine e;
     fb_result rc = fb_engine_open(
         &(fb_engine_desc){
@@ -262,7 +284,7 @@ static int cmd_generator(const char *kind, int argc, char **argv)
 }
 
 /* The scene stored in a file baked by fractalbake, and the backend that baked it. */
-static fb_result stored_scene(const char *path, char **json, fb_backend *backend, int region[4])
+static fb_result stored_scene(const char *path, char **json, fb_backend *backend, int region[4], int points_part[2])
 {
     exrio_reader *r = NULL;
     fb_result rc = exrio_open(path, &r);
@@ -270,6 +292,9 @@ static fb_result stored_scene(const char *path, char **json, fb_backend *backend
     const char *text = exrio_attr_string(r, "fractalbake/scene");
     const char *be = exrio_attr_string(r, "fractalbake/backend");
     const char *reg = exrio_attr_string(r, "fractalbake/region");
+    const char *pp = exrio_attr_string(r, "fractalbake/points-part");
+    if (pp && sscanf(pp, "%d/%d", &points_part[0], &points_part[1]) != 2)
+        rc = fb_fail(FB_ERR_INPUT, "%s: malformed attribute fractalbake/points-part \"%s\"", path, pp);
     if (reg && !parse_region(reg, region))
         rc = fb_fail(FB_ERR_INPUT, "%s: malformed attribute fractalbake/region \"%s\"", path, reg);
     if (rc)
@@ -346,9 +371,12 @@ static int cmd_render(int argc, char **argv)
     } else if (from) {
         char *json = NULL, origin[1100];
         fb_backend stored = FB_BACKEND_AUTO;
-        int region[4] = {0};
-        rc = stored_scene(from, &json, &stored, region);
-        if (!rc && o.region[2] == 0) memcpy(o.region, region, sizeof region);
+        int region[4] = {0}, part[2] = {0};
+        rc = stored_scene(from, &json, &stored, region, part);
+        if (!rc && o.region[2] == 0 && o.points_part[1] == 0) {
+            memcpy(o.region, region, sizeof region);
+            memcpy(o.points_part, part, sizeof part);
+        }
         snprintf(origin, sizeof origin, "%s (stored scene)", from);
         if (!rc) rc = fb_scene_parse_sets(json, origin, sets, nsets, &scene);
         if (o.backend == FB_BACKEND_AUTO) o.backend = stored;

@@ -10,6 +10,8 @@
 #include "merge.h"
 
 #include "exrio.h"
+#include "gen.h"
+#include "scene.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -79,6 +81,8 @@ static fb_result check_parts(part *p, int n, const char *const *paths, int *W, i
     return FB_OK;
 }
 
+static fb_result merge_points(part *p, int n, const char *const *paths, const char *out, int threads);
+
 fb_result fb_merge(const char *const *paths, int n, const char *out, int threads)
 {
     if (n < 1) return fb_fail(FB_ERR_USAGE, "merge: no parts given");
@@ -90,6 +94,17 @@ fb_result fb_merge(const char *const *paths, int n, const char *out, int threads
     int W = 0, H = 0, nch = 0;
     if (!p) return fb_fail(FB_ERR_NOMEM, "out of memory");
     for (int i = 0; i < n && !rc; i++) rc = exrio_open(paths[i], &p[i].r);
+    int points = 0;
+    for (int i = 0; i < n && !rc; i++) points += exrio_attr_string(p[i].r, "fractalbake/points-part") != NULL;
+    if (!rc && points > 0 && points < n)
+        rc = fb_fail(FB_ERR_INPUT,
+                     "merge: %d of the %d files are points parts (--points-part), the others regions: "
+                     "merge one kind at a time",
+                     points, n);
+    if (!rc && points) {
+        rc = merge_points(p, n, paths, out, threads);
+        goto out;
+    }
     if (!rc) rc = check_parts(p, n, paths, &W, &H);
     if (rc) goto out;
     nch = exrio_nchannels(p[0].r);
@@ -164,5 +179,209 @@ out:
         exrio_close(&p[i].r);
     }
     free(p);
+    return rc;
+}
+
+/* ---- points parts: chaos-game hits added ------------------------------------------------------ */
+
+/* The outside count of layer `name` in a part's "fractalbake/ifs-outside" ("a=12;b=0"). */
+static bool outside_of(const char *attr, const char *name, uint64_t *out)
+{
+    size_t len = strlen(name);
+    for (const char *q = attr; q && *q; q = strchr(q, ';') ? strchr(q, ';') + 1 : NULL)
+        if (!strncmp(q, name, len) && q[len] == '=') {
+            char *end;
+            *out = strtoull(q + len + 1, &end, 10);
+            return end != q + len + 1;
+        }
+    return false;
+}
+
+typedef struct chaos_layer {
+    fb_gen gen;
+    uint64_t *hits, *sums;
+} chaos_layer;
+
+static fb_result merge_points(part *p, int n, const char *const *paths, const char *out, int threads)
+{
+    fb_result rc = FB_OK;
+    int N = 0, seen[4097] = {0};
+    const char *scene_json = exrio_attr_string(p[0].r, "fractalbake/scene");
+    int W = exrio_width(p[0].r), H = exrio_height(p[0].r), nch = exrio_nchannels(p[0].r);
+    for (int i = 0; i < n; i++) {
+        int k = 0, nn = 0;
+        const char *pp = exrio_attr_string(p[i].r, "fractalbake/points-part");
+        const char *scene = exrio_attr_string(p[i].r, "fractalbake/scene");
+        if (sscanf(pp, "%d/%d", &k, &nn) != 2 || k < 1 || nn < 1 || k > nn || nn > 4096)
+            return fb_fail(FB_ERR_INPUT, "%s: malformed attribute fractalbake/points-part \"%s\"", paths[i], pp);
+        if (i == 0) N = nn;
+        if (nn != N) return fb_fail(FB_ERR_INPUT, "%s: part %d of %d, but %s is of %d", paths[i], k, nn, paths[0], N);
+        if (seen[k]++) return fb_fail(FB_ERR_INPUT, "%s: points part %d/%d is given twice", paths[i], k, N);
+        if (!scene || !scene_json || strcmp(scene, scene_json))
+            return fb_fail(FB_ERR_INPUT, "%s: baked from another scene than %s (attribute fractalbake/scene)", paths[i],
+                           paths[0]);
+        int a[4], b[4];
+        exrio_window(p[i].r, &a[0], &a[1], &a[2], &a[3]);
+        exrio_window(p[0].r, &b[0], &b[1], &b[2], &b[3]);
+        bool same =
+            !memcmp(a, b, sizeof a) && exrio_nchannels(p[i].r) == nch && exrio_nparts(p[i].r) == exrio_nparts(p[0].r);
+        for (int c = 0; c < nch && same; c++)
+            same = !strcmp(exrio_channel_name(p[i].r, c), exrio_channel_name(p[0].r, c)) &&
+                   exrio_channel_type(p[i].r, c) == exrio_channel_type(p[0].r, c) &&
+                   exrio_channel_part(p[i].r, c) == exrio_channel_part(p[0].r, c);
+        if (!same)
+            return fb_fail(FB_ERR_INPUT, "%s: its image, channels or parts differ from those of %s", paths[i],
+                           paths[0]);
+    }
+    if (n != N) {
+        for (int k = 1; k <= N; k++)
+            if (!seen[k]) return fb_fail(FB_ERR_INPUT, "merge: points part %d/%d is missing", k, N);
+    }
+    fb_scene sc = {0};
+    chaos_layer *cl = NULL;
+    int ncl = 0;
+    exrio_channel *ch = calloc((size_t)nch, sizeof *ch);
+    int *src = calloc((size_t)nch, sizeof *src); /* output channel -> part channel index, or -1 - chaos layer */
+    void **in = calloc((size_t)nch, sizeof *in), **cmp = calloc((size_t)nch, sizeof *cmp);
+    void *outp[FB_MERGE_MAX_CHANNELS] = {0};
+    exrio_writer *w = NULL;
+    int nout = 0;
+    if (!ch || !src || !in || !cmp) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (!rc) rc = fb_scene_parse(scene_json, paths[0], &sc);
+    if (!rc && (sc.width != W || sc.height != H))
+        rc = fb_fail(FB_ERR_INPUT, "%s: %d x %d, but its scene is %d x %d", paths[0], W, H, sc.width, sc.height);
+    if (!rc && !(cl = calloc((size_t)sc.nlayers, sizeof *cl))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    /* the chaos-game layers: their hits and colour sums, added over the parts */
+    for (int l = 0; l < sc.nlayers && !rc; l++) {
+        if (sc.layers[l].kind != FB_LAYER_IFS) continue;
+        chaos_layer *c = &cl[ncl++];
+        const char *name = sc.layers[l].name;
+        char cn[3][96];
+        snprintf(cn[0], sizeof cn[0], "%s.count", name);
+        snprintf(cn[1], sizeof cn[1], "%s.colour_sum_lo", name);
+        snprintf(cn[2], sizeof cn[2], "%s.colour_sum_hi", name);
+        int idx[3];
+        for (int j = 0; j < 3; j++)
+            if ((idx[j] = exrio_find_channel(p[0].r, cn[j])) < 0)
+                rc = fb_fail(FB_ERR_INPUT, "%s: no channel %s (not a points part of this scene)", paths[0], cn[j]);
+        size_t npx = (size_t)W * H;
+        c->hits = calloc(npx, sizeof *c->hits);
+        c->sums = calloc(npx, sizeof *c->sums);
+        uint32_t *rows[3] = {malloc((size_t)W * MERGE_STRIP * 4), malloc((size_t)W * MERGE_STRIP * 4),
+                             malloc((size_t)W * MERGE_STRIP * 4)};
+        if (!rc && (!c->hits || !c->sums || !rows[0] || !rows[1] || !rows[2]))
+            rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        uint64_t outside = 0;
+        for (int i = 0; i < n && !rc; i++) {
+            uint64_t o = 0;
+            if (!outside_of(exrio_attr_string(p[i].r, "fractalbake/ifs-outside"), name, &o))
+                rc = fb_fail(FB_ERR_INPUT, "%s: no outside count for layer %s (attribute fractalbake/ifs-outside)",
+                             paths[i], name);
+            outside += o;
+            for (int y0 = 0; y0 < H && !rc; y0 += MERGE_STRIP) {
+                int rowsn = y0 + MERGE_STRIP <= H ? MERGE_STRIP : H - y0;
+                memset(in, 0, (size_t)nch * sizeof *in);
+                for (int j = 0; j < 3; j++) in[idx[j]] = rows[j];
+                rc = exrio_read_rows(p[i].r, y0, rowsn, in);
+                for (size_t q = 0; q < (size_t)rowsn * W && !rc; q++) {
+                    c->hits[(size_t)y0 * W + q] += rows[0][q];
+                    c->sums[(size_t)y0 * W + q] += (uint64_t)rows[2][q] << 32 | rows[1][q];
+                }
+            }
+        }
+        for (int j = 0; j < 3; j++) free(rows[j]);
+        if (!rc) rc = fb_gen_init(&c->gen, &sc, &sc.layers[l]); /* the whole game's layer: 7 channels */
+        if (!rc) rc = fb_gen_ifs_from_sums(&c->gen, c->hits, c->sums, outside);
+    }
+    /* the output: every channel but the colour sums; chaos layers' from their generator */
+    for (int c = 0; c < nch && !rc; c++) {
+        const char *name = exrio_channel_name(p[0].r, c);
+        size_t len = strlen(name);
+        if (len > 14 && (!strcmp(name + len - 14, ".colour_sum_lo") || !strcmp(name + len - 14, ".colour_sum_hi")))
+            continue;
+        src[nout] = c;
+        for (int k = 0; k < ncl; k++)
+            for (int j = 0; j < cl[k].gen.nchannels; j++)
+                if (!strcmp(cl[k].gen.channel_names[j], name)) src[nout] = -1 - k;
+        ch[nout] = (exrio_channel){name, exrio_channel_type(p[0].r, c), exrio_channel_part(p[0].r, c)};
+        if (!(outp[nout] = malloc((size_t)W * MERGE_STRIP * 4))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        nout++;
+    }
+    const char *part_names[EXRIO_MAX_PARTS];
+    exrio_compression part_comp[EXRIO_MAX_PARTS];
+    int nparts = exrio_nparts(p[0].r);
+    for (int k = 0; k < nparts; k++) {
+        int cpr = exrio_compression_parse(exrio_part_compression(p[0].r, k));
+        part_names[k] = exrio_part_name(p[0].r, k);
+        part_comp[k] = cpr < 0 ? EXRIO_ZIP : (exrio_compression)cpr;
+    }
+    exrio_attr attrs[sizeof k_attrs / sizeof k_attrs[0]];
+    int nattrs = 0;
+    for (size_t a = 0; a < sizeof k_attrs / sizeof k_attrs[0]; a++) {
+        const char *v = exrio_attr_string(p[0].r, k_attrs[a]);
+        if (v) attrs[nattrs++] = (exrio_attr){k_attrs[a], v};
+    }
+    if (!rc)
+        rc = exrio_writer_create(&(exrio_writer_desc){.path = out,
+                                                      .width = W,
+                                                      .height = H,
+                                                      .compression = part_comp[0],
+                                                      .channels = ch,
+                                                      .nchannels = nout,
+                                                      .attrs = attrs,
+                                                      .nattrs = nattrs,
+                                                      .threads = threads,
+                                                      .nparts = nparts,
+                                                      .part_names = part_names,
+                                                      .part_compression = part_comp},
+                                 &w);
+    for (int c = 0; c < nch && !rc; c++) /* buffers for every part channel: read, and compared */
+        if (!(in[c] = malloc((size_t)W * MERGE_STRIP * 4)) || !(cmp[c] = malloc((size_t)W * MERGE_STRIP * 4)))
+            rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    for (int y0 = 0; y0 < H && !rc; y0 += MERGE_STRIP) {
+        int rowsn = y0 + MERGE_STRIP <= H ? MERGE_STRIP : H - y0;
+        size_t bytes = (size_t)W * rowsn * 4;
+        rc = exrio_read_rows(p[0].r, y0, rowsn, in);
+        /* the layers that are not chaos games are the same in every part: checked, not trusted */
+        for (int i = 1; i < n && !rc; i++) {
+            rc = exrio_read_rows(p[i].r, y0, rowsn, cmp);
+            for (int o = 0; o < nout && !rc; o++)
+                if (src[o] >= 0 && memcmp(in[src[o]], cmp[src[o]], bytes))
+                    rc = fb_fail(FB_ERR_INPUT, "%s: channel %s differs from %s's near row %d: not parts of one bake",
+                                 paths[i], ch[o].name, paths[0], y0);
+        }
+        for (int k = 0; k < ncl && !rc; k++) {
+            void *planes[FB_GEN_MAX_CHANNELS] = {0};
+            for (int o = 0; o < nout; o++)
+                if (src[o] == -1 - k)
+                    for (int j = 0; j < cl[k].gen.nchannels; j++)
+                        if (!strcmp(cl[k].gen.channel_names[j], ch[o].name)) planes[j] = outp[o];
+            bool all = true;
+            for (int j = 0; j < cl[k].gen.nchannels; j++) all = all && planes[j];
+            if (!all) {
+                rc = fb_fail(FB_ERR_INPUT, "%s: layer %s lacks some of its channels", paths[0], cl[k].gen.layer->name);
+                break;
+            }
+            cl[k].gen.native_rows(&cl[k].gen, y0, rowsn, planes);
+        }
+        for (int o = 0; o < nout && !rc; o++)
+            if (src[o] >= 0) memcpy(outp[o], in[src[o]], bytes);
+        if (!rc) rc = exrio_writer_rows(w, y0, rowsn, (const void *const *)outp);
+    }
+    if (!rc) rc = exrio_writer_finish(&w);
+    exrio_writer_abort(&w);
+    for (int k = 0; k < ncl; k++) {
+        fb_gen_fini(&cl[k].gen);
+        free(cl[k].hits);
+        free(cl[k].sums);
+    }
+    for (int c = 0; c < nch && in; c++) free(in[c]), free(cmp[c]);
+    for (int o = 0; o < FB_MERGE_MAX_CHANNELS; o++) free(outp[o]);
+    free(cl);
+    free(ch);
+    free(src);
+    free(in);
+    free(cmp);
+    fb_scene_fini(&sc);
     return rc;
 }

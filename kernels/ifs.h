@@ -50,7 +50,7 @@ K_STRUCT(K_IfsParams)
     float x0, y0;        /* frame: column (x - x0) sx, row (y0 - y) sy (y up in the plane, down in the image) */
     float sx, sy;
     float limit; /* a chain whose |x| or |y| exceeds this restarts */
-    float pad1;
+    uint chain0; /* chains below it are not run (a points part of a split bake runs [chain0, dispatch end)) */
 }
 K_END(K_IfsParams)
 

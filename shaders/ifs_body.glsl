@@ -53,7 +53,7 @@ void main()
 {
     uint i = gl_GlobalInvocationID.x;
     K_IfsParams p = pc.p;
-    if (i >= p.chains) return;
+    if (i < p.chain0 || i >= p.chains) return;
     if (CONDENSATION == 0u) p.cmaps = 0u;
     uint total = k_ifs_total(p, i);
     uint end = min(total, p.step0 + p.nsteps);

@@ -473,6 +473,27 @@ expect_fail 2 "its EXR parts differ" o.exr -- merge mpa.exr pb_vulkan.exr -o o.e
 expect_fail 2 'set layers.sky.compression=piz: a compression per layer needs "parts": "per-layer"' o.exr -- render $S3 --set layers.sky.compression=piz -o o.exr
 "$FB" fbm $S --compression piz -o fpiz.exr && "$FB" info fpiz.exr | grep -q "compression: piz" && ok || bad "fbm --compression piz"
 
+# a bake split by chaos-game points: three parts' hits add up to the whole game, byte for byte
+printf '{"size": [120, 72], "seed": 4, "layers": [{"type": "fbm", "name": "ground", "octaves": 5, "warp": 0.5},
+ {"type": "ifs", "name": "fern", "preset": "fern", "points": 2000000, "oversample": 2},
+ {"type": "ifs", "name": "pop", "preset": "population", "points": 600000, "half": false}]}' > pp.json
+for be in vulkan native; do
+  "$FB" render pp.json --backend $be -o ppw_$be.exr --quiet
+  for k in 1 2 3; do "$FB" render pp.json --backend $be --points-part $k/3 -o pp${k}_$be.exr --quiet || bad "points part $k ($be) failed"; done
+  "$FB" merge pp2_$be.exr pp3_$be.exr pp1_$be.exr -o ppm_$be.exr --quiet && cmp -s ppw_$be.exr ppm_$be.exr && ok || bad "points parts ($be) do not merge to the whole bake"
+  "$FB" compare ppw_$be.exr pp2_$be.exr --layer fern > /dev/null; [ $? -eq 1 ] && ok || bad "a points part ($be) holds the whole game"
+done
+# the backends give the same bits here, so parts from both merge to the same file
+"$FB" merge pp1_vulkan.exr pp2_native.exr pp3_vulkan.exr -o ppx.exr --quiet && "$FB" compare ppw_vulkan.exr ppx.exr > /dev/null && ok || bad "parts from two backends do not merge"
+"$FB" info pp1_vulkan.exr | grep -q "fractalbake/points-part string *1/3" && ok || bad "the part is not recorded"
+"$FB" render --from pp2_vulkan.exr -o pp2b.exr --quiet && cmp -s pp2_vulkan.exr pp2b.exr && ok || bad "--from a points part did not reproduce it"
+expect_fail 2 "points part 2/3 is missing" o.exr -- merge pp1_vulkan.exr pp3_vulkan.exr -o o.exr
+expect_fail 2 "points part 1/3 is given twice" o.exr -- merge pp1_vulkan.exr pp1_vulkan.exr pp3_vulkan.exr -o o.exr
+expect_fail 2 "merge one kind at a time" o.exr -- merge pp1_vulkan.exr pa_vulkan.exr -o o.exr
+expect_fail 2 "no chaos-game (ifs) layer" o.exr -- render mixed.json --points-part 1/2 -o o.exr
+expect_fail 2 "not with --region" o.exr -- render pp.json --points-part 1/2 --region 0,0,10,10 -o o.exr
+expect_fail 2 "points-part: expected K/N" o.exr -- render pp.json --points-part 3/2 -o o.exr
+
 # op layers: fBm detail on a refined terrain, plants masked by height; a cycle names both layers
 printf '{"size": [96, 48], "layers": [{"type": "op", "name": "ground", "op": "add", "inputs": ["terrain.Y", "detail"], "weights": [1, 4]},
  {"type": "terrain", "points": [[0,0,0],[10,0,1],[0,5,2],[10,5,4],[5,2.5,9]], "insert": 500},

@@ -36,12 +36,15 @@ typedef struct ifs_state {
     K_IfsParams p;
     K_IfsMap *table; /* w1..wN, then C's maps or its segments */
     uint32_t ntable;
-    uint32_t k; /* oversampling */
-    uint64_t points;
+    uint32_t k;        /* oversampling */
+    uint64_t points;   /* this bake's: all of them, or a points part's share */
+    uint32_t cr0, cr1; /* the chains this bake runs: all, or a points part's range */
+    bool part;         /* a points part: the colour sums are output too, for fractalbake merge */
     fb_ifs_stats stats;
     /* the image-resolution results (prepare) */
     uint32_t *count;
     float *density, *colour;
+    uint64_t *sum; /* a points part: each pixel's colour sum (channels colour_sum_lo/hi) */
     fb_ifs_tone tone;
 } ifs_state;
 
@@ -183,8 +186,9 @@ static void native_task(void *ctx, int task)
 {
     native_run *r = ctx;
     const K_IfsParams p = r->p;
-    uint32_t c0 = (uint32_t)((uint64_t)p.chains * (uint64_t)task / (uint64_t)r->ntasks);
-    uint32_t c1 = (uint32_t)((uint64_t)p.chains * (uint64_t)(task + 1) / (uint64_t)r->ntasks);
+    uint64_t span = r->st->cr1 - r->st->cr0;
+    uint32_t c0 = r->st->cr0 + (uint32_t)(span * (uint64_t)task / (uint64_t)r->ntasks);
+    uint32_t c1 = r->st->cr0 + (uint32_t)(span * (uint64_t)(task + 1) / (uint64_t)r->ntasks);
     native_hist *h = r->private_hist ? &r->hist[task] : &r->hist[0];
     for (uint32_t i = c0; i < c1; i++) {
         uint32_t total = k_ifs_total(p, i), end = total < p.step0 + p.nsteps ? total : p.step0 + p.nsteps;
@@ -256,36 +260,25 @@ static inline void cell_at(const cells_view *v, size_t cell, uint64_t *hits, uin
     }
 }
 
-/* Sums the K x K cells of each pixel. */
-static fb_result reduce(ifs_state *st, int width, int height, const cells_view *view)
+/* Count, mean colour and density of every pixel from its hits and colour sum (also what merge
+ * calls, with the points parts' sums added). */
+static fb_result finish_pixels(ifs_state *st, size_t n, const uint64_t *hits, const uint64_t *sums)
 {
-    size_t n = (size_t)width * height;
-    uint32_t k = st->k, hw = st->p.hist_w;
     st->count = malloc(n * sizeof *st->count);
     st->density = malloc(n * sizeof *st->density);
     st->colour = malloc(n * sizeof *st->colour);
     if (!st->count || !st->density || !st->colour) return fb_fail(FB_ERR_NOMEM, "out of memory for the plant layer");
     uint64_t total = 0;
-    for (int y = 0; y < height; y++)
-        for (int x = 0; x < width; x++) {
-            uint64_t c = 0, s = 0;
-            for (uint32_t j = 0; j < k; j++)
-                for (uint32_t i = 0; i < k; i++) {
-                    size_t cell = ((size_t)y * k + j) * hw + (size_t)x * k + i;
-                    uint64_t hc, sc;
-                    cell_at(view, cell, &hc, &sc);
-                    c += hc;
-                    s += sc;
-                }
-            size_t at = (size_t)y * width + x;
-            total += c;
-            if (c > 0xffffffffu) {
-                st->stats.saturated++;
-                c = 0xffffffffu;
-            }
-            st->count[at] = (uint32_t)c;
-            st->colour[at] = c ? (float)((double)s / (255.0 * (double)c)) : 0.0f;
+    for (size_t at = 0; at < n; at++) {
+        uint64_t c = hits[at], sm = sums[at];
+        total += c;
+        if (c > 0xffffffffu) {
+            st->stats.saturated++;
+            c = 0xffffffffu;
         }
+        st->count[at] = (uint32_t)c;
+        st->colour[at] = c ? (float)((double)sm / (255.0 * (double)c)) : 0.0f;
+    }
     st->stats.hits = total;
     /* density: hits per pixel relative to the plotted points spread evenly over the frame */
     uint64_t plotted = st->stats.hits + st->stats.outside;
@@ -295,6 +288,47 @@ static fb_result reduce(ifs_state *st, int width, int height, const cells_view *
     return FB_OK;
 }
 
+/* Sums the K x K cells of each pixel. */
+static fb_result reduce(ifs_state *st, int width, int height, const cells_view *view)
+{
+    size_t n = (size_t)width * height;
+    uint32_t k = st->k, hw = st->p.hist_w;
+    uint64_t *hits = malloc(n * sizeof *hits), *sums = malloc(n * sizeof *sums);
+    if (!hits || !sums) {
+        free(hits);
+        free(sums);
+        return fb_fail(FB_ERR_NOMEM, "out of memory for the plant layer");
+    }
+    for (int y = 0; y < height; y++)
+        for (int x = 0; x < width; x++) {
+            uint64_t c = 0, sm = 0;
+            for (uint32_t j = 0; j < k; j++)
+                for (uint32_t i = 0; i < k; i++) {
+                    size_t cell = ((size_t)y * k + j) * hw + (size_t)x * k + i;
+                    uint64_t hc, sc;
+                    cell_at(view, cell, &hc, &sc);
+                    c += hc;
+                    sm += sc;
+                }
+            hits[(size_t)y * width + x] = c;
+            sums[(size_t)y * width + x] = sm;
+        }
+    fb_result rc = finish_pixels(st, n, hits, sums);
+    free(hits);
+    if (st->part && !rc)
+        st->sum = sums;
+    else
+        free(sums);
+    return rc;
+}
+
+fb_result fb_gen_ifs_from_sums(fb_gen *g, const uint64_t *hits, const uint64_t *sums, uint64_t outside)
+{
+    ifs_state *st = state(g);
+    st->stats.outside = outside;
+    return finish_pixels(st, (size_t)g->scene->width * g->scene->height, hits, sums);
+}
+
 /* ---- prepare: the whole chaos game ------------------------------------------------------------ */
 
 static uint32_t max_total(const K_IfsParams *p)
@@ -302,9 +336,9 @@ static uint32_t max_total(const K_IfsParams *p)
     return p->base + (p->extra ? 1u : 0u);
 }
 
-static void add_counts(ifs_state *st, const uint32_t (*counts)[4], uint32_t chains)
+static void add_counts(ifs_state *st, const uint32_t (*counts)[4])
 {
-    for (uint32_t i = 0; i < chains; i++) {
+    for (uint32_t i = st->cr0; i < st->cr1; i++) {
         st->stats.outside += counts[i][0];
         st->stats.discarded += counts[i][1];
         st->stats.restarts += counts[i][2];
@@ -322,7 +356,7 @@ static void avx2_task(void *ctx, int task)
 {
     avx2_round *r = ctx;
     uint64_t c0 = (uint64_t)r->c0 + (uint64_t)r->block * (uint64_t)task, c1 = c0 + r->block;
-    if (c1 > r->st->p.chains) c1 = r->st->p.chains;
+    if (c1 > r->st->cr1) c1 = r->st->cr1;
     if (c0 < c1)
         fb_ifs_avx2_chains(&r->st->p, r->st->table, (uint32_t)c0, (uint32_t)c1, r->hist[task].hits, r->hist[task].sum,
                            r->counts[task]);
@@ -362,7 +396,7 @@ static fb_result prepare_native(fb_gen *g, fb_engine *e, fb_progress *prog)
      * whole chains per task, in rounds of one task per histogram so that the bar moves. */
     bool avx2 = !rc && !g->scalar && (priv || threads == 1) && fb_ifs_avx2_supported(&st->p);
     const uint32_t block = 512; /* chains per task */
-    for (uint32_t c0 = 0; avx2 && c0 < st->p.chains; c0 += block * (uint32_t)threads) {
+    for (uint32_t c0 = st->cr0; avx2 && c0 < st->cr1; c0 += block * (uint32_t)threads) {
         avx2_round r = {st, hist, c0, block, {{0}}};
         if (e->pool)
             fb_pool_run(e->pool, threads, avx2_task, &r);
@@ -374,7 +408,7 @@ static fb_result prepare_native(fb_gen *g, fb_engine *e, fb_progress *prog)
             st->stats.restarts += r.counts[t][2];
         }
         uint64_t c1 = (uint64_t)c0 + (uint64_t)block * (uint64_t)threads;
-        uint64_t done = st->points * (c1 < st->p.chains ? c1 : st->p.chains) / st->p.chains;
+        uint64_t done = st->points * ((c1 < st->cr1 ? c1 : st->cr1) - st->cr0) / (st->cr1 - st->cr0);
         fb_progress_update(prog, done, st->points);
     }
     for (uint32_t step0 = 0; !avx2 && step0 < last && !rc; step0 += st->p.nsteps) {
@@ -383,8 +417,8 @@ static fb_result prepare_native(fb_gen *g, fb_engine *e, fb_progress *prog)
             fb_pool_run(e->pool, run.ntasks, native_task, &run);
         else
             for (int t = 0; t < run.ntasks; t++) native_task(&run, t);
-        add_counts(st, (const uint32_t(*)[4])counts, st->p.chains);
-        uint64_t done = (uint64_t)(step0 + st->p.nsteps < last ? step0 + st->p.nsteps : last) * st->p.chains;
+        add_counts(st, (const uint32_t(*)[4])counts);
+        uint64_t done = (uint64_t)(step0 + st->p.nsteps < last ? step0 + st->p.nsteps : last) * (st->cr1 - st->cr0);
         fb_progress_update(prog, done < st->points ? done : st->points, st->points);
     }
     if (!rc && nhist > 1) {
@@ -450,13 +484,14 @@ static fb_result prepare_vulkan(fb_gen *g, fb_engine *e, fb_progress *prog, doub
     for (uint32_t step0 = 0; step0 < last && !rc; step0 += st->p.nsteps) {
         K_IfsParams p = st->p;
         p.step0 = step0;
-        uint32_t groups[3] = {(p.chains + 63) / 64, 1, 1};
+        p.chain0 = st->cr0;
+        uint32_t groups[3] = {(st->cr1 + 63) / 64, 1, 1};
         double t = -1;
         rc = vkc_job_submit(vk, job, buf, NBUF, &p, groups);
         if (!rc) rc = vkc_job_wait(vk, job, &t);
         if (t > 0) *gpu_seconds += t;
-        if (!rc) add_counts(st, vkc_buffer_data(buf[B_COUNTS]), p.chains);
-        uint64_t done = (uint64_t)(step0 + p.nsteps < last ? step0 + p.nsteps : last) * p.chains;
+        if (!rc) add_counts(st, vkc_buffer_data(buf[B_COUNTS]));
+        uint64_t done = (uint64_t)(step0 + p.nsteps < last ? step0 + p.nsteps : last) * (st->cr1 - st->cr0);
         fb_progress_update(prog, done < st->points ? done : st->points, st->points);
     }
     st->stats.game_seconds = fb_now() - t0;
@@ -519,6 +554,12 @@ static void ifs_rows(const fb_gen *g, int y0, int n, void *const *planes)
     memcpy(planes[1], st->density + at, len * 4);
     memcpy(planes[2], st->colour + at, len * 4);
     fb_ifs_tonemap_row(&st->tone, st->density + at, st->colour + at, len, planes[3], planes[4], planes[5], planes[6]);
+    if (g->nchannels > 7) /* a points part: the colour sums, split into two uint words */
+        for (size_t i = 0; i < len; i++) {
+            uint64_t v = st->sum ? st->sum[at + i] : 0;
+            ((uint32_t *)planes[7])[i] = (uint32_t)v;
+            ((uint32_t *)planes[8])[i] = (uint32_t)(v >> 32);
+        }
 }
 
 static void ifs_fini(fb_gen *g)
@@ -528,6 +569,7 @@ static void ifs_fini(fb_gen *g)
     free(st->count);
     free(st->density);
     free(st->colour);
+    free(st->sum);
     free(st->table);
 }
 
@@ -596,6 +638,18 @@ fb_result fb_gen_ifs_init(fb_gen *g)
     p->base = (uint32_t)(st->points / chains);
     p->extra = (uint32_t)(st->points % chains);
     p->nsteps = POINTS_PER_DISPATCH / p->chains ? POINTS_PER_DISPATCH / p->chains : 1;
+    /* A points part K of N runs the K-th share of the chains, cut at multiples of 64 (a workgroup):
+     * the parts' histograms add up to the whole game's exactly. */
+    st->cr0 = 0, st->cr1 = p->chains;
+    st->part = s->points_part[1] > 0;
+    if (st->part) {
+        uint64_t groups = (p->chains + 63) / 64, k = (uint64_t)s->points_part[0], parts = (uint64_t)s->points_part[1];
+        uint64_t c0 = groups * (k - 1) / parts * 64, c1 = groups * k / parts * 64;
+        st->cr0 = (uint32_t)(c0 < p->chains ? c0 : p->chains);
+        st->cr1 = (uint32_t)(c1 < p->chains ? c1 : p->chains);
+        uint64_t extra = p->extra > st->cr0 ? (p->extra < st->cr1 ? p->extra : st->cr1) - st->cr0 : 0;
+        st->points = (uint64_t)(st->cr1 - st->cr0) * p->base + extra;
+    }
 
     double b[4];
     if (f->auto_bounds)
@@ -624,11 +678,13 @@ fb_result fb_gen_ifs_init(fb_gen *g)
     t->highlight = f->highlight_power;
     fb_palette_build(&f->palette, t->palette);
 
-    static const char *const suffix[7] = {"count", "density", "colour", "R", "G", "B", "A"};
+    static const char *const suffix[9] = {"count", "density",       "colour",       "R", "G", "B",
+                                          "A",     "colour_sum_lo", "colour_sum_hi"};
     exrio_type colour = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
-    const exrio_type types[7] = {EXRIO_UINT, EXRIO_FLOAT, EXRIO_FLOAT, colour, colour, colour, colour};
-    g->nchannels = 7;
-    for (int c = 0; c < 7; c++) {
+    const exrio_type types[9] = {EXRIO_UINT, EXRIO_FLOAT, EXRIO_FLOAT, colour,    colour,
+                                 colour,     colour,      EXRIO_UINT,  EXRIO_UINT};
+    g->nchannels = st->part ? 9 : 7; /* a points part also carries the colour sums, which merge adds */
+    for (int c = 0; c < g->nchannels; c++) {
         snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
         g->channel_types[c] = types[c];
     }
