@@ -1,11 +1,21 @@
 #!/usr/bin/env bash
 # Runs every benchmark once and appends the machine-readable lines, with date and machine, to
 # bench/results.jsonl. Usage: bench/run.sh [--size WxH]
+# The Delaunay peer (CGAL's Delaunay_triangulation_2, bench/cgal_delaunay.cpp) is built and run
+# beside fractalbake's own when libcgal-dev can be installed; fractalbake never links CGAL.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh
 export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp}
 machine="$(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores"
-./build/fractalbake bench --json "$@" | while read -r line; do
+peer=""
+if dpkg-query -W -f='${Status}' libcgal-dev 2>/dev/null | grep -q "install ok installed" ||
+  { [ "$(id -u)" -eq 0 ] && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends libcgal-dev g++ > /dev/null 2>&1; }; then
+  g++ -O3 -march=native -DNDEBUG -o build/cgal_delaunay bench/cgal_delaunay.cpp -lgmp -lmpfr && peer=build/cgal_delaunay
+fi
+{
+  ./build/fractalbake bench --json "$@"
+  if [ -n "$peer" ]; then "$peer" --json; fi
+} | while read -r line; do
   echo "{\"date\": \"$(date -u +%Y-%m-%d)\", \"machine\": \"$machine\", \"result\": $line}"
 done | tee -a bench/results.jsonl

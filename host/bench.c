@@ -6,6 +6,8 @@
  * machine.
  */
 #include "bench.h"
+#include "delaunay.h"
+#include "terrain.h"
 
 #include "bake.h"
 #include "fbm_avx2.h"
@@ -13,6 +15,7 @@
 #include "ifs_avx2.h"
 #include "julia_avx2.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -24,7 +27,7 @@ typedef struct bench_opts {
     const char *device;
     int threads;
     bool vulkan, native;
-    bool fbm, julia, ifs;
+    bool fbm, julia, ifs, terrain;
     double points; /* ifs: chaos-game steps per run */
 } bench_opts;
 
@@ -319,6 +322,83 @@ static fb_result run_case(const bench_opts *o, bench_case *bc, fb_scene *s, cons
     return rc;
 }
 
+/* ---- Delaunay triangulation and terrain refinement (CPU, one thread) ----------------------------- */
+
+/* The benchmark's points: splitmix64, so that bench/cgal_delaunay.cpp generates the same ones. */
+static uint64_t splitmix64(uint64_t *s)
+{
+    uint64_t z = (*s += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+static double unit_of(uint64_t *s)
+{
+    return (double)(splitmix64(s) >> 11) * 0x1.0p-53;
+}
+
+static void report_inserts(const bench_opts *o, const char *generator, const char *mode, double inserts, double seconds)
+{
+    double rate = inserts / seconds * 1e-6;
+    if (o->json)
+        printf("{\"generator\": \"%s\", \"backend\": \"native\", \"device\": \"native C\", \"mode\": \"%s\", "
+               "\"unit\": \"Minserts/s\", \"rate\": %.3f, \"inserts\": %.0f, \"seconds\": %.3f, \"threads\": 1}\n",
+               generator, mode, rate, inserts, seconds);
+    else
+        printf("%-8s native  %-22s %8.3f Minserts/s  (%.0f inserts in %.3f s)  [native C, 1 thread]\n", generator, mode,
+               rate, inserts, seconds);
+    fflush(stdout);
+}
+
+static fb_result run_terrain(const bench_opts *o)
+{
+    const size_t n = 1000000;
+    double *xy = malloc(n * 2 * sizeof *xy), *xyz = malloc(1000 * 3 * sizeof *xyz);
+    double w[3];
+    fb_result rc = xy && xyz ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory");
+    uint64_t seed = 1;
+    for (size_t i = 0; i < 2 * n && !rc; i++) xy[i] = unit_of(&seed);
+    if (!o->json)
+        printf("Delaunay: 10^6 uniform random points; terrain: 10^3 survey points refined by 10^6; median of 3\n");
+    for (int i = -1; i < 3 && !rc; i++) { /* a warm-up, then three */
+        fb_dt d;
+        memset(&d, 0, sizeof d);
+        double t0 = fb_now();
+        rc = fb_dt_build(&d, xy, n, NULL, "bench");
+        if (i >= 0) w[i] = fb_now() - t0;
+        fb_dt_free(&d);
+    }
+    if (!rc) {
+        qsort(w, 3, sizeof w[0], cmp_double);
+        report_inserts(o, "delaunay", "build-1e6-uniform", (double)n, w[1]);
+    }
+    /* survey points: a smooth hill with noise over a 1000 x 1000 area */
+    for (size_t i = 0; i < 1000 && !rc; i++) {
+        double x = 1000 * unit_of(&seed), y = 1000 * unit_of(&seed);
+        xyz[3 * i] = x, xyz[3 * i + 1] = y;
+        xyz[3 * i + 2] = 300 * exp(-((x - 500) * (x - 500) + (y - 450) * (y - 450)) / 1.2e5) + 20 * unit_of(&seed);
+    }
+    for (int i = -1; i < 3 && !rc; i++) {
+        fb_terrain t;
+        fb_terrain_stats st;
+        memset(&t, 0, sizeof t);
+        rc = fb_terrain_build(&t, xyz, 1000, "bench", &st);
+        if (!rc)
+            rc = fb_terrain_refine(&t, &(fb_terrain_opts){.insert = 1000000, .hurst = 0.85, .sigma = -1, .seed = 1},
+                                   "bench", &st);
+        if (!rc && i >= 0) w[i] = st.refine_seconds;
+        fb_terrain_free(&t);
+    }
+    if (!rc) {
+        qsort(w, 3, sizeof w[0], cmp_double);
+        report_inserts(o, "refine", "refine-1e3-by-1e6", 1e6, w[1]);
+    }
+    free(xy);
+    free(xyz);
+    return rc;
+}
+
 fb_result fb_bench_main(int argc, char **argv)
 {
     bench_opts o = {.width = 4096,
@@ -328,6 +408,7 @@ fb_result fb_bench_main(int argc, char **argv)
                     .fbm = true,
                     .julia = true,
                     .ifs = true,
+                    .terrain = true,
                     .points = 268435456};
     for (int i = 0; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -348,8 +429,9 @@ fb_result fb_bench_main(int argc, char **argv)
             o.fbm = !strcmp(v, "fbm");
             o.julia = !strcmp(v, "julia");
             o.ifs = !strcmp(v, "ifs");
-            if (!o.fbm && !o.julia && !o.ifs)
-                return fb_fail(FB_ERR_USAGE, "--generator: expected fbm, julia or ifs, found \"%s\"", v);
+            o.terrain = !strcmp(v, "terrain");
+            if (!o.fbm && !o.julia && !o.ifs && !o.terrain)
+                return fb_fail(FB_ERR_USAGE, "--generator: expected fbm, julia, ifs or terrain, found \"%s\"", v);
             i++;
         } else if (!strcmp(a, "--points") && v) {
             char *end;
@@ -366,7 +448,8 @@ fb_result fb_bench_main(int argc, char **argv)
             if (o.threads < 1) return fb_fail(FB_ERR_USAGE, "--threads: expected a positive integer, found \"%s\"", v);
             i++;
         } else if (!strcmp(a, "--help")) {
-            printf("usage: fractalbake bench [--json] [--size WxH] [--generator fbm|julia|ifs] [--points N] [--backend "
+            printf("usage: fractalbake bench [--json] [--size WxH] [--generator fbm|julia|ifs|terrain] [--points N] "
+                   "[--backend "
                    "vulkan|native] "
                    "[--device D] [--threads N]\n");
             return FB_OK;
@@ -424,6 +507,7 @@ fb_result fb_bench_main(int argc, char **argv)
         }
         fb_scene_fini(&s);
     }
+    if (!rc && o.terrain && o.native) rc = run_terrain(&o);
     unlink(out);
     rmdir(dir);
     return rc;

@@ -542,6 +542,11 @@ fi
 grep -q -E "\*|no Vulkan device" dev.txt && ok || bad "devices marks no chosen device"
 "$FB" --version | grep -q "fractalbake 0" && ok || bad "--version"
 "$FB" fbm --help | grep -q -- "--octaves" && ok || bad "fbm --help lists no --octaves"
+# the terrain benchmark's JSON lines (rates are measured, not asserted: only their form and sign)
+"$FB" bench --generator terrain --json > bt.json && ok || bad "bench --generator terrain failed"
+grep -q '"generator": "delaunay", "backend": "native".*"unit": "Minserts/s", "rate": [0-9]*\.[0-9]*[1-9]' bt.json && ok || bad "bench: no delaunay line: $(cat bt.json)"
+grep -q '"generator": "refine", "backend": "native".*"unit": "Minserts/s", "rate": [0-9]*\.[0-9]*[1-9]' bt.json && ok || bad "bench: no refine line: $(cat bt.json)"
+expect_fail 2 "generator: expected fbm, julia, ifs or terrain" "" -- bench --generator mesh
 
 echo "$pass passed, $fail failed"
 [ $fail -eq 0 ]
