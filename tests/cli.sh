@@ -517,6 +517,10 @@ done
 "$FB" render ops.json -o ops_w.exr --set size=96x48 --quiet
 "$FB" merge bands/ops.part*.exr -o ops_m.exr --quiet && cmp -s ops_w.exr ops_m.exr && ok || bad "the Slurm example's bands do not merge to the whole bake"
 
+# mismatched sizes: region files of two different images do not merge
+"$FB" render $S3 --set size=128x32 --region 0,0,128,32 -o small.exr && ok || bad "small region failed"
+expect_fail 2 "a region of a 128 x 32 image, but pa_vulkan.exr is of a 128 x 64 image" o.exr -- merge pa_vulkan.exr small.exr -o o.exr
+
 # bounded memory: the bake streams strips to the file, so peak RSS does not grow with the image.
 # 16384^2 has 4x the pixels of 8192^2 (384 MiB more half data): RSS may grow by < 64 MiB (the
 # writer's queue grows with the width), and stays under 512 MiB, the size of the image held whole

@@ -169,9 +169,50 @@ static void test_errors(void)
     expect_error(j, "expected \"layer.channel\", \"layer\" or a number");
 }
 
+/* terrain.slope: on a plane z = 0.5 x + 0.25 y every pixel in the hull has the plane's slope,
+ * atan(|grad z|); an op masks by it. */
+static void test_slope(void)
+{
+    const char *json = "{\"size\": [40, 30], \"layers\": [{\"type\": \"terrain\", \"insert\": 0, \"points\": "
+                       "[[0, 0, 0], [40, 0, 20], [0, 30, 7.5], [40, 30, 27.5], [13, 11, 9.25]]},"
+                       "{\"type\": \"op\", \"name\": \"steep\", \"op\": \"threshold\", \"inputs\": [\"terrain.slope\"],"
+                       " \"level\": 29}]}";
+    fb_scene s;
+    CHECKF(fb_scene_parse(json, "slope", &s) == FB_OK, "%s", g_msg);
+    fb_engine e;
+    CHECK(fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = 2}, &e) == FB_OK);
+    CHECK(fb_bake(&e, &(fb_bake_desc){.scene = &s, .out = "/tmp/fb-test-slope.exr"}, NULL) == FB_OK);
+    exrio_reader *r = NULL;
+    CHECK(exrio_open("/tmp/fb-test-slope.exr", &r) == FB_OK);
+    size_t n = 40 * 30;
+    float *A = malloc(n * 4), *S = malloc(n * 4), *M = malloc(n * 4);
+    void *planes[16] = {0};
+    planes[exrio_find_channel(r, "terrain.A")] = A;
+    planes[exrio_find_channel(r, "terrain.slope")] = S;
+    planes[exrio_find_channel(r, "steep.Y")] = M;
+    CHECK(exrio_read_rows(r, 0, 30, planes) == FB_OK);
+    double want = atan(sqrt(0.5 * 0.5 + 0.25 * 0.25)) * 180.0 / M_PI; /* 29.206 degrees */
+    size_t inside = 0, bad = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (A[i] == 1.0f) {
+            inside++;
+            bad += fabs(S[i] - want) > 1e-4 || M[i] != 1.0f;
+        } else {
+            bad += S[i] != 0.0f || M[i] != 0.0f;
+        }
+    }
+    CHECKF(inside == n && bad == 0, "%zu of %zu inside, %zu wrong (want %.6f)", inside, n, bad, want);
+    exrio_close(&r);
+    unlink("/tmp/fb-test-slope.exr");
+    free(A), free(S), free(M);
+    fb_engine_close(&e);
+    fb_scene_fini(&s);
+}
+
 int main(void)
 {
     fb_log_set_sink(sink, NULL);
+    test_slope();
     test_values();
     test_errors();
     TEST_REPORT();

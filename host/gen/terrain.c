@@ -6,8 +6,9 @@
  * two triangles claim a pixel (a shared edge) the later one in that order wins, so the image does
  * not depend on the strip height or the thread count.
  *
- * Channels: NAME.Y (height; float unless half) and NAME.A (1 inside the hull, 0 outside, where Y
- * holds the lowest input height).
+ * Channels: NAME.Y (height; float unless half), NAME.A (1 inside the hull, 0 outside, where Y
+ * holds the lowest input height) and NAME.slope (the slope of the pixel's triangle in degrees, 0 to
+ * 90, from its plane in world units: exact for the TIN, no neighbouring pixels needed; 0 outside).
  */
 #include "../gen.h"
 #include "../terrain.h"
@@ -62,8 +63,8 @@ static void terrain_rows(const fb_gen *g, int y0, int n, void *const *planes)
     const terrain_state *s = state(g);
     const fb_dt *d = &s->t.dt;
     const int W = g->scene->width, H = g->scene->height;
-    float *Y = planes[0], *A = planes[1];
-    for (size_t i = 0; i < (size_t)n * W; i++) Y[i] = (float)s->fill, A[i] = 0;
+    float *Y = planes[0], *A = planes[1], *S = planes[2];
+    for (size_t i = 0; i < (size_t)n * W; i++) Y[i] = (float)s->fill, A[i] = 0, S[i] = 0;
     const double sx = (s->bounds[1] - s->bounds[0]) / W, sy = (s->bounds[3] - s->bounds[2]) / H;
     for (uint32_t b = (uint32_t)y0 / BAND; b <= (uint32_t)(y0 + n - 1) / BAND && b < s->nbands; b++) {
         int r0 = (int)b * BAND > y0 ? (int)b * BAND : y0;
@@ -79,6 +80,14 @@ static void terrain_rows(const fb_gen *g, int y0, int n, void *const *planes)
             }
             double area = (px[1] - px[0]) * (py[2] - py[0]) - (py[1] - py[0]) * (px[2] - px[0]);
             if (area == 0) continue;
+            /* the slope of the triangle's plane in world units: the angle of its normal from vertical */
+            double ax = d->xy[2 * (size_t)v[1]] - d->xy[2 * (size_t)v[0]],
+                   ay = d->xy[2 * (size_t)v[1] + 1] - d->xy[2 * (size_t)v[0] + 1];
+            double bx = d->xy[2 * (size_t)v[2]] - d->xy[2 * (size_t)v[0]],
+                   by = d->xy[2 * (size_t)v[2] + 1] - d->xy[2 * (size_t)v[0] + 1];
+            double az = z[1] - z[0], bz = z[2] - z[0];
+            double nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
+            float slope = (float)(atan2(sqrt(nx * nx + ny * ny), fabs(nz)) * (180.0 / M_PI));
             double ylo = fmin(py[0], fmin(py[1], py[2])), yhi = fmax(py[0], fmax(py[1], py[2]));
             double xlo = fmin(px[0], fmin(px[1], px[2])), xhi = fmax(px[0], fmax(px[1], px[2]));
             int ya = (int)ceil(ylo - 0.5), yb = (int)floor(yhi - 0.5), xa = (int)ceil(xlo - 0.5),
@@ -102,6 +111,7 @@ static void terrain_rows(const fb_gen *g, int y0, int n, void *const *planes)
                     size_t i = (size_t)(y - y0) * W + x;
                     Y[i] = (float)((w0 * z[0] + w1 * z[1] + w2 * z[2]) / sum);
                     A[i] = 1;
+                    S[i] = slope;
                 }
             }
         }
@@ -288,12 +298,13 @@ fb_result fb_gen_terrain_init(fb_gen *g)
     if (!rc && P->centers[0]) rc = fb_terrain_read_centers(P->centers, &s->centers, &s->ncenters);
     if (rc) return rc;
 
-    static const char *const suffix[2] = {"Y", "A"};
-    g->nchannels = 2;
-    for (int c = 0; c < 2; c++)
+    static const char *const suffix[3] = {"Y", "A", "slope"};
+    g->nchannels = 3;
+    for (int c = 0; c < 3; c++)
         snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
     g->channel_types[0] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
     g->channel_types[1] = EXRIO_HALF;
+    g->channel_types[2] = g->channel_types[0];
     g->preview_channel = 0;
     g->native_rows = terrain_rows;
     g->prepare = terrain_prepare;
