@@ -6,6 +6,7 @@
  * machine.
  */
 #include "bench.h"
+#include "constrain.h"
 #include "delaunay.h"
 #include "terrain.h"
 
@@ -27,7 +28,7 @@ typedef struct bench_opts {
     const char *device;
     int threads;
     bool vulkan, native;
-    bool fbm, julia, ifs, terrain;
+    bool fbm, julia, ifs, terrain, constrain;
     double points; /* ifs: chaos-game steps per run */
 } bench_opts;
 
@@ -399,6 +400,61 @@ static fb_result run_terrain(const bench_opts *o)
     return rc;
 }
 
+/* The FBM constraint model at the benchmark size with 100 discrete and 20 continuous constraints. */
+static fb_result run_constrain(const bench_opts *o)
+{
+    int W = o->width, H = o->height;
+    float *m = malloc((size_t)W * H * sizeof *m);
+    fb_cpoint pts[100];
+    fb_cregion regs[20];
+    uint64_t seed = 7;
+    for (int i = 0; i < 100; i++) pts[i] = (fb_cpoint){(int)(unit_of(&seed) * W), (int)(unit_of(&seed) * H)};
+    for (int i = 0; i < 20; i++)
+        regs[i] = (fb_cregion){(int)(unit_of(&seed) * W), (int)(unit_of(&seed) * H), i % 2 == 0, i % 2 ? 0.1 : 0.9};
+    if (!m) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    fb_constrain_macro("boss", W, H, 10, m);
+    fb_constrain_desc d = {.width = W,
+                           .height = H,
+                           .seed = 1,
+                           .hurst = 0.8,
+                           .T = 0.3,
+                           .sigma = 1,
+                           .delta = 0.01,
+                           .macro = m,
+                           .points = pts,
+                           .npoints = 100,
+                           .regions = regs,
+                           .nregions = 20,
+                           .domain = 8,
+                           .falloff = 0.0005,
+                           .threads = o->threads};
+    double w[3];
+    fb_result rc = FB_OK;
+    int threads = o->threads > 0 ? o->threads : fb_cpu_count();
+    if (!o->json)
+        printf("FBM constraint model %d x %d, 100 discrete and 20 continuous constraints; median of 3\n", W, H);
+    for (int i = 0; i < 3 && !rc; i++) {
+        fb_constrain_out out;
+        double t0 = fb_now();
+        rc = fb_constrain_run(&d, false, &out);
+        w[i] = fb_now() - t0;
+        free(out.D), free(out.T), free(out.H);
+    }
+    free(m);
+    if (rc) return rc;
+    qsort(w, 3, sizeof w[0], cmp_double);
+    double rate = (double)W * H / w[1] * 1e-6;
+    if (o->json)
+        printf("{\"generator\": \"constrain\", \"backend\": \"native\", \"device\": \"native C\", \"mode\": "
+               "\"generate\", \"unit\": \"Mpix/s\", \"rate\": %.3f, \"size\": [%d, %d], \"threads\": %d}\n",
+               rate, W, H, threads);
+    else
+        printf("%-8s native  %-22s %8.2f Mpix/s  (%.3f s)  [native C, %d threads]\n", "constrain", "generate", rate,
+               w[1], threads);
+    fflush(stdout);
+    return FB_OK;
+}
+
 fb_result fb_bench_main(int argc, char **argv)
 {
     bench_opts o = {.width = 4096,
@@ -409,6 +465,7 @@ fb_result fb_bench_main(int argc, char **argv)
                     .julia = true,
                     .ifs = true,
                     .terrain = true,
+                    .constrain = true,
                     .points = 268435456};
     for (int i = 0; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -430,8 +487,10 @@ fb_result fb_bench_main(int argc, char **argv)
             o.julia = !strcmp(v, "julia");
             o.ifs = !strcmp(v, "ifs");
             o.terrain = !strcmp(v, "terrain");
-            if (!o.fbm && !o.julia && !o.ifs && !o.terrain)
-                return fb_fail(FB_ERR_USAGE, "--generator: expected fbm, julia, ifs or terrain, found \"%s\"", v);
+            o.constrain = !strcmp(v, "constrain");
+            if (!o.fbm && !o.julia && !o.ifs && !o.terrain && !o.constrain)
+                return fb_fail(FB_ERR_USAGE,
+                               "--generator: expected fbm, julia, ifs, terrain or constrain, found \"%s\"", v);
             i++;
         } else if (!strcmp(a, "--points") && v) {
             char *end;
@@ -448,7 +507,8 @@ fb_result fb_bench_main(int argc, char **argv)
             if (o.threads < 1) return fb_fail(FB_ERR_USAGE, "--threads: expected a positive integer, found \"%s\"", v);
             i++;
         } else if (!strcmp(a, "--help")) {
-            printf("usage: fractalbake bench [--json] [--size WxH] [--generator fbm|julia|ifs|terrain] [--points N] "
+            printf("usage: fractalbake bench [--json] [--size WxH] [--generator fbm|julia|ifs|terrain|constrain] "
+                   "[--points N] "
                    "[--backend "
                    "vulkan|native] "
                    "[--device D] [--threads N]\n");
@@ -508,6 +568,7 @@ fb_result fb_bench_main(int argc, char **argv)
         fb_scene_fini(&s);
     }
     if (!rc && o.terrain && o.native) rc = run_terrain(&o);
+    if (!rc && o.constrain && o.native) rc = run_constrain(&o);
     unlink(out);
     rmdir(dir);
     return rc;

@@ -86,6 +86,7 @@ fb_result fb_gen_ifs_init(fb_gen *g);
 fb_result fb_gen_lsystem_init(fb_gen *g);
 fb_result fb_gen_terrain_init(fb_gen *g);
 fb_result fb_gen_op_init(fb_gen *g);
+fb_result fb_gen_constrain_init(fb_gen *g);
 
 /* Op layers: finds the planes of the inputs among every generator's (gens, all of the scene's, in
  * scene order; plane_offset[i] is the first plane of layer i in a strip). */

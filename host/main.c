@@ -60,6 +60,7 @@ static const char *const k_usage =
     "  ifs [options] -o OUT.exr           an IFS chaos game (plants: fern, tree, population...), one layer\n"
     "  lsystem [options] -o OUT.exr       an L-system plant (bush, tree, ... or --axiom/--rule), one layer\n"
     "  terrain --points F.xyz -o OUT.exr  survey points refined by Delaunay midpoint displacement, one layer\n"
+    "  constrain [options] -o OUT.exr    fBm detail on a macro shape under discrete/continuous constraints\n"
     "  tonemap IN.exr -o OUT.exr [tone]   re-run an ifs layer's tone mapping (no new chaos game)\n"
     "  compare A.exr B.exr [thresholds]   exit 0 within thresholds, 1 beyond, 2 on error\n"
     "  merge PARTS... -o OUT.exr          join region files (render --region X,Y,W,H) into the whole image\n"
@@ -561,6 +562,7 @@ int main(int argc, char **argv)
     if (!strcmp(cmd, "ifs")) return cmd_generator("ifs", argc - 2, argv + 2);
     if (!strcmp(cmd, "lsystem")) return cmd_generator("lsystem", argc - 2, argv + 2);
     if (!strcmp(cmd, "terrain")) return cmd_generator("terrain", argc - 2, argv + 2);
+    if (!strcmp(cmd, "constrain")) return cmd_generator("constrain", argc - 2, argv + 2);
     if (!strcmp(cmd, "tonemap")) {
         bool quiet = false;
         fb_result rc = fb_tonemap_main(argc - 2, argv + 2, &quiet);

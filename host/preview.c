@@ -233,3 +233,8 @@ fb_result fb_preview_write_over(const fb_preview *const *layers, int n, const ch
     free(lohi);
     return rc;
 }
+
+fb_result fb_png_write_rgb(const char *path, int width, int height, const uint8_t *rgb)
+{
+    return write_png(path, width, height, 3, rgb);
+}

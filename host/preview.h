@@ -9,6 +9,7 @@
 #include "fb.h"
 
 #include <stdbool.h>
+#include <stdint.h>
 
 typedef struct fb_preview fb_preview;
 
@@ -30,5 +31,8 @@ fb_result fb_preview_write_png(const fb_preview *p, const char *path);
  * has a coverage), 1 channel a hillshade (tinted) or grey levels of its own range; the coverage is
  * the alpha, 1 without one. */
 fb_result fb_preview_write_over(const fb_preview *const *layers, int n, const char *path);
+
+/* Writes 8-bit RGB pixels (row by row) as a PNG, atomically. */
+fb_result fb_png_write_rgb(const char *path, int width, int height, const uint8_t *rgb);
 
 #endif

@@ -30,15 +30,17 @@ typedef enum ktype {
     T_TYPE,
     T_NUMLIST,
     T_STOPS,
-    T_STRING, /* any non-empty string (a file path, an entry name) */
-    T_MAPS,   /* IFS maps: [[a, b, c, d, e, f(, p)], ...] */
-    T_BOUNDS, /* "auto" or [xmin, xmax, ymin, ymax] */
-    T_FRACS,  /* 1..64 numbers in [lo, hi] */
-    T_IFSREF, /* a preset name or a map list */
-    T_POINTS, /* a file path, or an inline list [[x, y, z], ...] */
-    T_RULES,  /* L-system productions: ["X=successor", "X(p)=successor", ...] (flag: --rule, repeatable) */
-    T_REF,    /* another layer's channel "layer.channel" (or "layer": its Y), or a number */
-    T_REFS,   /* 1..8 of T_REF */
+    T_STRING,   /* any non-empty string (a file path, an entry name) */
+    T_MAPS,     /* IFS maps: [[a, b, c, d, e, f(, p)], ...] */
+    T_BOUNDS,   /* "auto" or [xmin, xmax, ymin, ymax] */
+    T_FRACS,    /* 1..64 numbers in [lo, hi] */
+    T_IFSREF,   /* a preset name or a map list */
+    T_POINTS,   /* a file path, or an inline list [[x, y, z], ...] */
+    T_RULES,    /* L-system productions: ["X=successor", "X(p)=successor", ...] (flag: --rule, repeatable) */
+    T_REF,      /* another layer's channel "layer.channel" (or "layer": its Y), or a number */
+    T_REFS,     /* 1..8 of T_REF */
+    T_CPOINTS,  /* a file, or [[x, y], ...] integer pixels */
+    T_CREGIONS, /* a file, or [[x, y, "T" or "H", value], ...] */
 } ktype;
 
 typedef struct keyspec {
@@ -228,6 +230,34 @@ static const keyspec op_keys[] = {
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
 };
 
+static const keyspec constrain_keys[] = {
+    {"type", T_TYPE, 0, 0, false, NULL, NULL, "generator: \"constrain\""},
+    {"name", T_NAME, 0, 0, false, NULL, "\"terrain\"", "layer name; channels NAME.Y, .macro, .detail, .T, .H"},
+    {"macro", T_STRING, 0, 0, false, NULL, NULL,
+     "macro shape d: cone | ridge | boss | bowl, or IN.exr[:layer.channel] (default boss)"},
+    {"macro-height", T_NUM, -1e6, 1e6, false, NULL, "10.0", "height of a built-in macro shape"},
+    {"profile", T_STRING, 0, 0, false, NULL, NULL, "1D (height 1): a CSV profile (d, or x,d per line) as the macro"},
+    {"T", T_NUM, 0, 1e6, false, NULL, "0.3", "approximation degree T (small: close to the macro shape)"},
+    {"hurst", T_NUM, 0, 1, true, NULL, "0.8", "roughness degree H in (0, 1) (large: smoother)"},
+    {"sigma", T_NUM, 0, 1e6, true, NULL, "1.0", "standard deviation of P_fbm's first level"},
+    {"delta", T_NUM, 0, 1e6, true, NULL, "0.01", "delta of Z = 1 / (sqrt(6) sigma + delta)"},
+    {"points", T_CPOINTS, 0, 0, false, NULL, NULL,
+     "discrete constraints D = d: a file of x,y per line or [[x, y], ...] (pixels from the top left)"},
+    {"regions", T_CREGIONS, 0, 0, false, NULL, NULL,
+     "continuous constraints: a file of x,y,T|H,value per line or [[x, y, \"H\", 0.95], ...]"},
+    {"domain", T_INT, 0, 16, false, NULL, "4", "a region reaches pixels within 2^domain (L1 distance, eq. 13)"},
+    {"falloff", T_NUM, 0, 1e6, false, NULL, "0.01", "f_d of eq. 14: fall-off with the squared distance"},
+    {"buffering", T_ENUM, 0, 0, false, "regional|none|naive", "\"regional\"",
+     "discrete constraints: regional buffering, none (zeroed when made), naive (zeroed after)"},
+    {"water", T_NUM, -1e15, 1e15, false, NULL, NULL, "a water level: channel NAME.A is 1 where D >= water"},
+    {"csv", T_STRING, 0, 0, false, NULL, NULL, "1D: also write x, d, D per line to this CSV file"},
+    {"plot", T_STRING, 0, 0, false, NULL, NULL,
+     "1D: also draw d (blue), D (black) and the constraints (red) to this PNG"},
+    {"half", T_BOOL, 0, 0, false, NULL, "false", "store the channels as half (flags: --half, --float)"},
+    {"compression", T_ENUM, 0, 0, false, "zip|piz|none", NULL,
+     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+};
+
 /* The keys of an L-system condensation set of an ifs layer ("condensation": {"preset": "tree"}). */
 static const keyspec cond_lsystem_keys[] = {
     {"preset", T_ENUM, 0, 0, false, FB_LSYS_PRESETS, NULL, "built-in L-system"},
@@ -280,6 +310,11 @@ static bool kind_keys(const char *kind, const keyspec **keys, int *n)
     if (!strcmp(kind, "op")) {
         *keys = op_keys;
         *n = NKEYS(op_keys);
+        return true;
+    }
+    if (!strcmp(kind, "constrain")) {
+        *keys = constrain_keys;
+        *n = NKEYS(constrain_keys);
         return true;
     }
     return false;
@@ -590,6 +625,35 @@ static fb_result check_value(const vctx *v, const char *path, const keyspec *k, 
             if (rc) return rc;
         }
         return FB_OK;
+    case T_CPOINTS:
+    case T_CREGIONS: {
+        bool reg = k->type == T_CREGIONS;
+        if (json_is_string(j) && *json_string_value(j) && strlen(json_string_value(j)) < 1024) return FB_OK;
+        size_t n = json_is_array(j) ? json_array_size(j) : 0;
+        if (!n)
+            return verr(v, path, "expected a file name or a list %s, found %s",
+                        reg ? "[[x, y, \"T\" or \"H\", value], ...]" : "[[x, y], ...]", shown);
+        for (size_t i = 0; i < n; i++) {
+            const json_t *pt = json_array_get(j, i);
+            bool good = json_is_array(pt) && json_array_size(pt) == (reg ? 4u : 2u);
+            for (size_t c = 0; good && c < 2; c++) good = json_is_integer(json_array_get(pt, c));
+            if (good && reg) {
+                const char *kind = json_string_value(json_array_get(pt, 2));
+                const json_t *val = json_array_get(pt, 3);
+                good = kind && (!strcmp(kind, "T") || !strcmp(kind, "H")) && json_is_number(val) &&
+                       isfinite(json_number_value(val));
+            }
+            if (!good) {
+                char sub[256];
+                snprintf(sub, sizeof sub, "%s[%zu]", path, i);
+                show(pt, shown, sizeof shown);
+                return verr(v, sub, "expected %s, found %s",
+                            reg ? "[x, y, \"T\" or \"H\", value] with integer pixel x, y" : "[x, y] integer pixels",
+                            shown);
+            }
+        }
+        return FB_OK;
+    }
     case T_REF: {
         if (json_is_number(j)) {
             if (!isfinite(json_number_value(j))) return verr(v, path, "expected a finite number, found %s", shown);
@@ -1281,6 +1345,77 @@ static fb_result resolve_refs(const vctx *v, fb_scene *s)
     return FB_OK;
 }
 
+static fb_result parse_constrain(const vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
+{
+    fb_result rc = check_object(v, path, obj, constrain_keys, NKEYS(constrain_keys), "a constrain layer");
+    if (rc) return rc;
+    fb_constrain_params *c = &L->constrain;
+    char sub[256];
+    const json_t *macro = json_object_get(obj, "macro"), *prof = json_object_get(obj, "profile");
+    if (macro && prof) {
+        snprintf(sub, sizeof sub, "%s.profile", path);
+        return verr(v, sub, "give a macro or a profile, not both");
+    }
+    if (prof && s->height != 1) {
+        snprintf(sub, sizeof sub, "%s.profile", path);
+        return verr(v, sub, "a CSV profile is a 1D macro: the scene's height must be 1 (it is %d)", s->height);
+    }
+    for (int k = 0; k < 2; k++)
+        if (json_object_get(obj, k ? "plot" : "csv") && s->height != 1) {
+            snprintf(sub, sizeof sub, "%s.%s", path, k ? "plot" : "csv");
+            return verr(v, sub, "%s output is for 1D profiles: the scene's height must be 1 (it is %d)",
+                        k ? "plot" : "CSV", s->height);
+        }
+    snprintf(c->macro, sizeof c->macro, "%s", macro ? json_string_value(macro) : prof ? "" : "boss");
+    string_to(obj, "profile", c->profile, sizeof c->profile);
+    string_to(obj, "csv", c->csv, sizeof c->csv);
+    string_to(obj, "plot", c->plot, sizeof c->plot);
+    if (macro && !strstr(c->macro, ".exr") && strcmp(c->macro, "cone") && strcmp(c->macro, "ridge") &&
+        strcmp(c->macro, "boss") && strcmp(c->macro, "bowl")) {
+        snprintf(sub, sizeof sub, "%s.macro", path);
+        return verr(v, sub, "expected cone, ridge, boss, bowl or IN.exr[:layer.channel], found \"%s\"", c->macro);
+    }
+    c->macro_height = num(obj, "macro-height");
+    c->T = num(obj, "T");
+    c->hurst = num(obj, "hurst");
+    c->sigma = num(obj, "sigma");
+    c->delta = num(obj, "delta");
+    c->domain = (int)json_integer_value(json_object_get(obj, "domain"));
+    c->falloff = num(obj, "falloff");
+    int b = 0;
+    enum_index("regional|none|naive", json_string_value(json_object_get(obj, "buffering")), &b);
+    c->buffering = b;
+    c->has_water = json_object_get(obj, "water") != NULL;
+    c->water = c->has_water ? num(obj, "water") : 0;
+    const json_t *pts = json_object_get(obj, "points"), *regs = json_object_get(obj, "regions");
+    c->points_inline = pts && json_is_array(pts);
+    c->regions_inline = regs && json_is_array(regs);
+    if (pts && !c->points_inline) string_to(obj, "points", c->points, sizeof c->points);
+    if (regs && !c->regions_inline) string_to(obj, "regions", c->regions, sizeof c->regions);
+    /* inline points and regions: inside the image; region values in range */
+    for (size_t i = 0; c->points_inline && i < json_array_size(pts); i++) {
+        const json_t *p = json_array_get(pts, i);
+        long long x = json_integer_value(json_array_get(p, 0)), y = json_integer_value(json_array_get(p, 1));
+        if (x < 0 || y < 0 || x >= s->width || y >= s->height) {
+            snprintf(sub, sizeof sub, "%s.points[%zu]", path, i);
+            return verr(v, sub, "pixel (%lld, %lld) is outside the %d x %d image", x, y, s->width, s->height);
+        }
+    }
+    for (size_t i = 0; c->regions_inline && i < json_array_size(regs); i++) {
+        const json_t *p = json_array_get(regs, i);
+        long long x = json_integer_value(json_array_get(p, 0)), y = json_integer_value(json_array_get(p, 1));
+        bool is_h = !strcmp(json_string_value(json_array_get(p, 2)), "H");
+        double val = json_number_value(json_array_get(p, 3));
+        snprintf(sub, sizeof sub, "%s.regions[%zu]", path, i);
+        if (x < 0 || y < 0 || x >= s->width || y >= s->height)
+            return verr(v, sub, "pixel (%lld, %lld) is outside the %d x %d image", x, y, s->width, s->height);
+        if (is_h ? !(val > 0 && val < 1) : !(val >= 0))
+            return verr(v, sub, "%s = %g is out of range (%s)", is_h ? "H" : "T", val, is_h ? "0 < H < 1" : "T >= 0");
+    }
+    L->half = boolean(obj, "half");
+    return FB_OK;
+}
+
 static fb_result parse_root(const vctx *v, json_t *root, fb_scene *s)
 {
     char path[64];
@@ -1324,12 +1459,16 @@ static fb_result parse_root(const vctx *v, json_t *root, fb_scene *s)
         } else if (!strcmp(t, "op")) {
             L->kind = FB_LAYER_OP;
             rc = parse_op(v, path, lj, L);
+        } else if (!strcmp(t, "constrain")) {
+            L->kind = FB_LAYER_CONSTRAIN;
+            rc = parse_constrain(v, path, lj, s, L);
         } else {
             char sub[80], shown[64];
             snprintf(sub, sizeof sub, "%s.type", path);
             show(type, shown, sizeof shown);
             rc = verr(v, sub,
-                      "unknown generator %s (available: \"fbm\", \"julia\", \"ifs\", \"lsystem\", \"terrain\", \"op\")",
+                      "unknown generator %s (available: \"fbm\", \"julia\", \"ifs\", \"lsystem\", \"terrain\", \"op\", "
+                      "\"constrain\")",
                       shown);
         }
         if (rc) return rc;
@@ -1853,6 +1992,7 @@ void fb_scene_print_keys(const char *kind, void (*print)(const char *line, void 
         for (int i = 0; i < nk; i++) {
             const keyspec *k = &ks[i];
             if (k->type == T_TYPE || k->type == T_LAYERS) continue;
+            if (!pass && !strcmp(k->key, "compression")) continue; /* the flag sets the scene's (listed below) */
             char range[96] = "";
             if (k->type == T_INT || k->type == T_NUM)
                 snprintf(range, sizeof range, " %s%g..%g%s", k->lo_open ? "(" : "[", k->lo, k->hi, "]");

@@ -25,7 +25,8 @@ typedef enum fb_layer_kind {
     FB_LAYER_IFS = 2,
     FB_LAYER_LSYSTEM = 3,
     FB_LAYER_TERRAIN = 4,
-    FB_LAYER_OP = 5
+    FB_LAYER_OP = 5,
+    FB_LAYER_CONSTRAIN = 6
 } fb_layer_kind;
 
 typedef struct fb_fbm_params {
@@ -131,6 +132,24 @@ typedef struct fb_op_params {
     double level, width;              /* threshold: smoothstep over level -/+ width/2 (a step if 0) */
 } fb_op_params;
 
+/* The FBM constraint model (host/constrain.h). Points and regions come from the scene's JSON (inline)
+ * or from files, read when the layer is set up. */
+typedef struct fb_constrain_params {
+    char macro[1024];    /* "cone" | "ridge" | "boss" | "bowl" | IN.exr[:layer.channel] */
+    double macro_height; /* built-in shapes */
+    char profile[1024];  /* 1D: a CSV profile instead of macro, or "" */
+    double T, hurst, sigma, delta;
+    bool points_inline, regions_inline;
+    char points[1024], regions[1024]; /* files, or "" */
+    int domain;
+    double falloff;
+    int buffering; /* fb_buffering */
+    bool has_water;
+    double water;
+    char csv[1024];  /* 1D: write x, d, D here, or "" */
+    char plot[1024]; /* 1D: a PNG plot of d and D here, or "" */
+} fb_constrain_params;
+
 typedef struct fb_layer {
     fb_layer_kind kind;
     char name[64];
@@ -142,6 +161,7 @@ typedef struct fb_layer {
     fb_lsystem_params lsystem;
     fb_terrain_layer_params terrain;
     fb_op_params op;
+    fb_constrain_params constrain;
 } fb_layer;
 
 typedef struct fb_scene {

@@ -532,6 +532,33 @@ done
 k1=$(tail -1 rss_8192.txt) k2=$(tail -1 rss_16384.txt)
 [ "$k2" -lt 524288 ] && [ $((k2 - k1)) -lt 65536 ] && ok || bad "peak RSS $k1 KiB at 8192^2, $k2 KiB at 16384^2: not bounded"
 
+# ---- constrain: the FBM constraint model ----
+C="constrain --size 120x80 --quiet"
+printf '10,10\n60,40\n119,79\n' > cpts.csv
+printf 'x,y,kind,value\n30,30,H,0.95\n90,50,T,0.05\n' > cregs.csv
+if "$FB" $C --points cpts.csv --regions cregs.csv --water 5 -o con.exr --preview con.png 2> err.txt; then ok; else bad "constrain failed: $(cat err.txt)"; fi
+"$FB" info con.exr | grep -q "layer terrain .*A (half), H (float), T (float), Y (float), detail (float), macro (float)" && ok || bad "constrain channels: $("$FB" info con.exr | grep layer)"
+"$FB" $C --points cpts.csv --regions cregs.csv --water 5 --backend native -o con_n.exr && "$FB" compare con.exr con_n.exr > /dev/null && ok || bad "constrain differs between backends"
+"$FB" $C --points cpts.csv --regions cregs.csv --water 5 --threads 1 --backend native -o con_1.exr && "$FB" compare con.exr con_1.exr > /dev/null && ok || bad "constrain depends on the thread count"
+"$FB" $C --T 0.05 -o con_t.exr && "$FB" compare con.exr con_t.exr --layer terrain > /dev/null; [ $? -eq 1 ] && ok || bad "--T changed nothing"
+# 1D: a CSV profile in, x,d,D out; the constraint rows have D == d
+printf 'x,d\n0,0\n50,10\n100,0\n' > prof.csv
+"$FB" constrain --size 256x1 --profile prof.csv --points <(printf '128,0\n40,0\n') --csv out1d.csv -o p1d.exr --quiet && ok || bad "1D constrain failed"
+[ "$(wc -l < out1d.csv)" = 257 ] && head -1 out1d.csv | grep -q "^x,d,D$" && ok || bad "1D CSV: $(head -2 out1d.csv)"
+awk -F, '$1 == 128 || $1 == 40 {if ($2 != $3) bad = 1} END {exit bad}' out1d.csv && ok || bad "1D constraints not exact in the CSV"
+# a macro shape from an EXR channel, and its size must match
+"$FB" fbm --size 120x80 --quiet --octaves 3 -o macro.exr
+"$FB" $C --macro macro.exr:fbm.Y -o cm.exr && ok || bad "macro from an EXR failed"
+expect_fail 2 "macro.exr: 120 x 80, but the scene is 64 x 64" o.exr -- constrain --size 64x64 --macro macro.exr -o o.exr
+expect_fail 2 "cpts.csv:3: the pixel is outside the image" o.exr -- constrain --size 100x50 --points cpts.csv -o o.exr
+expect_fail 2 "H must be in (0, 1)" o.exr -- constrain --size 120x80 --regions <(printf '1,1,H,1.5\n') -o o.exr
+expect_fail 2 "expected cone, ridge, boss, bowl or IN.exr" o.exr -- $C --macro volcano -o o.exr
+expect_fail 2 "needs the scene's height to be 1\|height must be 1" o.exr -- $C --profile prof.csv -o o.exr
+expect_fail 3 "nope.csv: cannot open constraint points" o.exr -- $C --points nope.csv -o o.exr
+printf '{"size": [64, 64], "layers": [{"type": "constrain", "points": [[3, 4], [64, 2]]}]}' > cbad.json
+expect_fail 2 'cbad.json:1: layers\[0\].points\[1\]: pixel (64, 2) is outside the 64 x 64 image' o.exr -- render cbad.json -o o.exr
+"$FB" constrain --help | grep -c -- "--compression" | grep -q "^1$" && ok || bad "constrain --help lists --compression twice"
+
 # ---- device selection (where a Vulkan device exists) ----
 if "$FB" devices | grep -q '^0 '; then
   "$FB" fbm $S --backend vulkan --device 0 -o d0.exr && ok || bad "--device 0 failed"
@@ -550,7 +577,8 @@ grep -q -E "\*|no Vulkan device" dev.txt && ok || bad "devices marks no chosen d
 "$FB" bench --generator terrain --json > bt.json && ok || bad "bench --generator terrain failed"
 grep -q '"generator": "delaunay", "backend": "native".*"unit": "Minserts/s", "rate": [0-9]*\.[0-9]*[1-9]' bt.json && ok || bad "bench: no delaunay line: $(cat bt.json)"
 grep -q '"generator": "refine", "backend": "native".*"unit": "Minserts/s", "rate": [0-9]*\.[0-9]*[1-9]' bt.json && ok || bad "bench: no refine line: $(cat bt.json)"
-expect_fail 2 "generator: expected fbm, julia, ifs or terrain" "" -- bench --generator mesh
+expect_fail 2 "generator: expected fbm, julia, ifs, terrain or constrain" "" -- bench --generator mesh
+"$FB" bench --generator constrain --size 256x256 --json > bc.json && grep -q '"generator": "constrain", "backend": "native".*"unit": "Mpix/s", "rate": [0-9]*\.[0-9]*[1-9]' bc.json && ok || bad "bench: no constrain line: $(cat bc.json)"
 
 echo "$pass passed, $fail failed"
 [ $fail -eq 0 ]

@@ -21,6 +21,8 @@ fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer)
         return fb_gen_terrain_init(g);
     case FB_LAYER_OP:
         return fb_gen_op_init(g);
+    case FB_LAYER_CONSTRAIN:
+        return fb_gen_constrain_init(g);
     }
     return fb_fail(FB_ERR_INTERNAL, "layer %s: no generator", layer->name);
 }

@@ -1,0 +1,425 @@
+/*
+ * The constrain layer: the FBM constraint model (host/constrain.c) over the whole image, on the CPU
+ * in prepare (both backends give the same bits); strips are copied out.
+ *
+ * Channels: NAME.Y (D), NAME.macro (d), NAME.detail (D - d), NAME.T and NAME.H (the fields used),
+ * and NAME.A (1 where D >= water) when a water level is given. 1D profiles (height 1) can also be
+ * written as CSV (x, d, D), renamed into place after the EXR like a terrain mesh.
+ */
+#include "../constrain.h"
+#include "../exrio.h"
+#include "../gen.h"
+#include "../preview.h"
+
+#include <errno.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+typedef struct constrain_state {
+    float *macro;
+    fb_cpoint *points;
+    int npoints;
+    fb_cregion *regions;
+    int nregions;
+    fb_constrain_out out;
+    char csv_tmp[1100], plot_tmp[1100];
+    bool csv_pending, plot_pending;
+} constrain_state;
+
+static constrain_state *state(const fb_gen *g)
+{
+    return g->owned;
+}
+
+static void constrain_fini(fb_gen *g)
+{
+    constrain_state *s = state(g);
+    if (!s) return;
+    if (s->csv_pending) unlink(s->csv_tmp);
+    if (s->plot_pending) unlink(s->plot_tmp);
+    free(s->macro);
+    free(s->points);
+    free(s->regions);
+    free(s->out.D);
+    free(s->out.T);
+    free(s->out.H);
+    free(s->out.P);
+}
+
+/* ---- inputs --------------------------------------------------------------------------------- */
+
+/* Calls fn on each non-empty, non-comment line of a text file (fields split at commas, spaces or
+ * tabs); fn returns an error message or NULL. */
+static fb_result each_line(const char *path, const char *what, const char *(*fn)(void *ctx, char **f, int nf),
+                           void *ctx)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) return fb_fail(FB_ERR_IO, "%s: cannot open %s: %s", path, what, strerror(errno));
+    char line[4096];
+    int no = 0;
+    fb_result rc = FB_OK;
+    while (!rc && fgets(line, sizeof line, f)) {
+        no++;
+        char *hash = strchr(line, '#');
+        if (hash) *hash = 0;
+        char *fields[8];
+        int nf = 0;
+        for (char *tok = strtok(line, ", \t\r\n"); tok && nf < 8; tok = strtok(NULL, ", \t\r\n")) fields[nf++] = tok;
+        if (nf == 0) continue;
+        const char *err = fn(ctx, fields, nf);
+        if (err && no == 1 && strstr(err, "number")) continue; /* a header line */
+        if (err) rc = fb_fail(FB_ERR_INPUT, "%s:%d: %s", path, no, err);
+    }
+    fclose(f);
+    return rc;
+}
+
+static bool number(const char *s, double *out)
+{
+    char *end;
+    *out = strtod(s, &end);
+    return *s && !*end && isfinite(*out);
+}
+
+typedef struct reader {
+    constrain_state *s;
+    const fb_scene *sc;
+    double *xs, *ds; /* a profile */
+    int n, cap;
+} reader;
+
+static bool grow(reader *r, size_t elem, void **arr)
+{
+    if (r->n < r->cap) return true;
+    int cap = r->cap ? 2 * r->cap : 64;
+    void *a = realloc(*arr, (size_t)cap * elem);
+    if (!a) return false;
+    *arr = a;
+    r->cap = cap;
+    return true;
+}
+
+static const char *pixel_of(const reader *r, char **f, int *x, int *y)
+{
+    double vx, vy;
+    if (!number(f[0], &vx) || !number(f[1], &vy)) return "expected a number for x and y";
+    if (vx != floor(vx) || vy != floor(vy)) return "x and y are pixels: whole numbers";
+    if (vx < 0 || vy < 0 || vx >= r->sc->width || vy >= r->sc->height) return "the pixel is outside the image";
+    *x = (int)vx, *y = (int)vy;
+    return NULL;
+}
+
+static const char *point_line(void *ctx, char **f, int nf)
+{
+    reader *r = ctx;
+    if (nf != 2) return "expected x,y (a number each)";
+    int x, y;
+    const char *e = pixel_of(r, f, &x, &y);
+    if (e) return e;
+    if (!grow(r, sizeof *r->s->points, (void **)&r->s->points)) return "out of memory";
+    r->s->points[r->n++] = (fb_cpoint){x, y};
+    return NULL;
+}
+
+static const char *region_line(void *ctx, char **f, int nf)
+{
+    reader *r = ctx;
+    if (nf != 4) return "expected x,y,T|H,value (number, number, T or H, number)";
+    int x, y;
+    double val;
+    const char *e = pixel_of(r, f, &x, &y);
+    if (e) return e;
+    bool is_h = !strcmp(f[2], "H");
+    if (!is_h && strcmp(f[2], "T")) return "the third field must be T or H";
+    if (!number(f[3], &val)) return "expected a number for the value";
+    if (is_h ? !(val > 0 && val < 1) : !(val >= 0)) return is_h ? "H must be in (0, 1)" : "T must be >= 0";
+    if (!grow(r, sizeof *r->s->regions, (void **)&r->s->regions)) return "out of memory";
+    r->s->regions[r->n++] = (fb_cregion){x, y, is_h, val};
+    return NULL;
+}
+
+static const char *profile_line(void *ctx, char **f, int nf)
+{
+    reader *r = ctx;
+    double x = r->n, d;
+    if (nf > 2) return "expected d, or x,d";
+    if ((nf == 2 && !number(f[0], &x)) || !number(f[nf - 1], &d)) return "expected a number";
+    if (r->n && x <= r->xs[r->n - 1]) return "x must increase from line to line";
+    if (r->n >= r->cap) {
+        int cap = r->cap ? 2 * r->cap : 64;
+        double *a = realloc(r->xs, (size_t)cap * sizeof *a), *b = a ? realloc(r->ds, (size_t)cap * sizeof *b) : NULL;
+        if (a) r->xs = a;
+        if (!b) return "out of memory";
+        r->ds = b;
+        r->cap = cap;
+    }
+    r->xs[r->n] = x, r->ds[r->n] = d;
+    r->n++;
+    return NULL;
+}
+
+/* The macro shape from "IN.exr[:layer.channel]": one channel of the scene's size. */
+static fb_result macro_from_exr(const fb_gen *g, const char *spec, float *out)
+{
+    char path[1024], chan[256] = "";
+    const char *colon = strstr(spec, ".exr:");
+    snprintf(path, sizeof path, "%.*s", colon ? (int)(colon + 4 - spec) : (int)strlen(spec), spec);
+    if (colon) snprintf(chan, sizeof chan, "%s", colon + 5);
+    exrio_reader *r = NULL;
+    fb_result rc = exrio_open(path, &r);
+    if (rc) return rc;
+    int c = -1, n = exrio_nchannels(r);
+    if (chan[0]) {
+        c = exrio_find_channel(r, chan);
+        if (c < 0) rc = fb_fail(FB_ERR_INPUT, "%s: no channel %s", path, chan);
+    } else {
+        for (int i = 0; i < n; i++) {
+            size_t len = strlen(exrio_channel_name(r, i));
+            if (n == 1 || (len >= 2 && !strcmp(exrio_channel_name(r, i) + len - 2, ".Y"))) c = c < 0 ? i : -2;
+        }
+        if (c < 0) rc = fb_fail(FB_ERR_INPUT, "%s: name the channel of the macro shape: %s:layer.channel", path, path);
+    }
+    if (!rc && (exrio_width(r) != g->scene->width || exrio_height(r) != g->scene->height))
+        rc = fb_fail(FB_ERR_INPUT, "%s: %d x %d, but the scene is %d x %d (the macro shape must match)", path,
+                     exrio_width(r), exrio_height(r), g->scene->width, g->scene->height);
+    if (!rc && exrio_channel_type(r, c) == EXRIO_UINT)
+        rc = fb_fail(FB_ERR_INPUT, "%s: channel %s holds integers, not heights", path, exrio_channel_name(r, c));
+    void **planes = rc ? NULL : calloc((size_t)n, sizeof *planes);
+    if (!rc && !planes) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (!rc) {
+        planes[c] = out;
+        rc = exrio_read_rows(r, 0, g->scene->height, planes);
+    }
+    for (size_t i = 0; !rc && i < (size_t)g->scene->width * g->scene->height; i++)
+        if (!isfinite(out[i])) rc = fb_fail(FB_ERR_INPUT, "%s: the macro shape has a NaN or infinite value", path);
+    free(planes);
+    exrio_close(&r);
+    return rc;
+}
+
+/* The inline "points" or "regions" array of this layer in the canonical scene. */
+static json_t *inline_array(const fb_gen *g, json_t *root, const char *key)
+{
+    return json_object_get(json_array_get(json_object_get(root, "layers"), (size_t)(g->layer - g->scene->layers)), key);
+}
+
+static fb_result read_inputs(fb_gen *g, constrain_state *s)
+{
+    const fb_constrain_params *P = &g->layer->constrain;
+    const fb_scene *sc = g->scene;
+    size_t n = (size_t)sc->width * sc->height;
+    fb_result rc = FB_OK;
+    if (!(s->macro = malloc(n * sizeof *s->macro))) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (P->profile[0]) {
+        reader r = {.s = s, .sc = sc};
+        rc = each_line(P->profile, "profile", profile_line, &r);
+        if (!rc && r.n < 2) rc = fb_fail(FB_ERR_INPUT, "%s: a profile needs at least two values", P->profile);
+        for (int x = 0; !rc && x < sc->width; x++) { /* linear resampling of x onto the pixels */
+            double u = r.xs[0] + (r.xs[r.n - 1] - r.xs[0]) * (sc->width > 1 ? (double)x / (sc->width - 1) : 0);
+            int k = 0;
+            while (k + 2 < r.n && r.xs[k + 1] < u) k++;
+            double t = (u - r.xs[k]) / (r.xs[k + 1] - r.xs[k]);
+            s->macro[x] = (float)(r.ds[k] + (r.ds[k + 1] - r.ds[k]) * t);
+        }
+        free(r.xs);
+        free(r.ds);
+    } else if (strstr(P->macro, ".exr")) {
+        rc = macro_from_exr(g, P->macro, s->macro);
+    } else {
+        fb_constrain_macro(P->macro, sc->width, sc->height, P->macro_height, s->macro);
+    }
+    json_t *root = (P->points_inline || P->regions_inline) ? json_loads(sc->json, 0, NULL) : NULL;
+    if (!rc && P->points_inline) {
+        json_t *a = inline_array(g, root, "points");
+        s->npoints = (int)json_array_size(a);
+        if (!(s->points = malloc((size_t)s->npoints * sizeof *s->points))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        for (int i = 0; !rc && i < s->npoints; i++)
+            s->points[i] = (fb_cpoint){(int)json_integer_value(json_array_get(json_array_get(a, (size_t)i), 0)),
+                                       (int)json_integer_value(json_array_get(json_array_get(a, (size_t)i), 1))};
+    } else if (!rc && P->points[0]) {
+        reader r = {.s = s, .sc = sc};
+        rc = each_line(P->points, "constraint points", point_line, &r);
+        s->npoints = r.n;
+    }
+    if (!rc && P->regions_inline) {
+        json_t *a = inline_array(g, root, "regions");
+        s->nregions = (int)json_array_size(a);
+        if (!(s->regions = malloc((size_t)s->nregions * sizeof *s->regions)))
+            rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        for (int i = 0; !rc && i < s->nregions; i++) {
+            const json_t *e = json_array_get(a, (size_t)i);
+            s->regions[i] = (fb_cregion){
+                (int)json_integer_value(json_array_get(e, 0)), (int)json_integer_value(json_array_get(e, 1)),
+                !strcmp(json_string_value(json_array_get(e, 2)), "H"), json_number_value(json_array_get(e, 3))};
+        }
+    } else if (!rc && P->regions[0]) {
+        reader r = {.s = s, .sc = sc};
+        rc = each_line(P->regions, "regions", region_line, &r);
+        s->nregions = r.n;
+    }
+    json_decref(root);
+    return rc;
+}
+
+/* ---- 1D plot ------------------------------------------------------------------------------------ */
+
+static void dot(uint8_t *img, int w, int h, int x, int y, const uint8_t c[3])
+{
+    if (x < 0 || y < 0 || x >= w || y >= h) return;
+    memcpy(img + 3 * ((size_t)y * w + x), c, 3);
+}
+
+/* d in blue, D in black (one line segment per pixel column), constraints as red crosses. */
+static fb_result write_plot(const constrain_state *s, int n, const char *path)
+{
+    const int w = n < 256 ? 256 : n > 4096 ? 4096 : n, h = 240, m = 10;
+    uint8_t *img = malloc((size_t)w * h * 3);
+    if (!img) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    memset(img, 255, (size_t)w * h * 3);
+    double lo = INFINITY, hi = -INFINITY;
+    for (int i = 0; i < n; i++) {
+        lo = fmin(lo, fmin(s->macro[i], s->out.D[i]));
+        hi = fmax(hi, fmax(s->macro[i], s->out.D[i]));
+    }
+    if (!(hi > lo)) hi = lo + 1;
+    static const uint8_t blue[3] = {40, 90, 220}, black[3] = {0, 0, 0}, red[3] = {220, 30, 30};
+    for (int pass = 0; pass < 2; pass++) {
+        const float *v = pass ? s->out.D : s->macro;
+        int prev = -1;
+        for (int px = 0; px < w; px++) {
+            double u = n > 1 ? (double)px * (n - 1) / (w - 1) : 0;
+            int i = (int)u;
+            double t = u - i, val = i + 1 < n ? v[i] + (v[i + 1] - v[i]) * t : v[i];
+            int py = h - 1 - m - (int)lrint((val - lo) / (hi - lo) * (h - 1 - 2 * m));
+            int a = prev < 0 ? py : prev, b = py;
+            for (int y = a < b ? a : b; y <= (a < b ? b : a); y++) dot(img, w, h, px, y, pass ? black : blue);
+            prev = py;
+        }
+    }
+    for (int k = 0; k < s->npoints; k++) {
+        int px = n > 1 ? (int)lrint((double)s->points[k].x * (w - 1) / (n - 1)) : 0;
+        int py = h - 1 - m - (int)lrint((s->out.D[s->points[k].x] - lo) / (hi - lo) * (h - 1 - 2 * m));
+        for (int e = -3; e <= 3; e++) dot(img, w, h, px + e, py + e, red), dot(img, w, h, px + e, py - e, red);
+    }
+    fb_result rc = fb_png_write_rgb(path, w, h, img);
+    free(img);
+    return rc;
+}
+
+/* ---- prepare and rows ----------------------------------------------------------------------- */
+
+static fb_result constrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
+{
+    (void)e, (void)progress;
+    constrain_state *s = state(g);
+    const fb_constrain_params *P = &g->layer->constrain;
+    const fb_scene *sc = g->scene;
+    fb_constrain_desc d = {.width = sc->width,
+                           .height = sc->height,
+                           .seed = sc->seed,
+                           .hurst = P->hurst,
+                           .T = P->T,
+                           .sigma = P->sigma,
+                           .delta = P->delta,
+                           .macro = s->macro,
+                           .points = s->points,
+                           .npoints = s->npoints,
+                           .regions = s->regions,
+                           .nregions = s->nregions,
+                           .domain = P->domain,
+                           .falloff = P->falloff,
+                           .buffering = (fb_buffering)P->buffering};
+    double t0 = fb_now();
+    fb_result rc = fb_constrain_run(&d, false, &s->out);
+    if (rc) return rc;
+    double secs = fb_now() - t0, maxdev = 0;
+    for (size_t i = 0; i < (size_t)sc->width * sc->height; i++) maxdev = fmax(maxdev, fabs(s->out.D[i] - s->macro[i]));
+    if (P->csv[0]) {
+        fb_temp_path(P->csv, s->csv_tmp, sizeof s->csv_tmp);
+        FILE *f = fopen(s->csv_tmp, "w");
+        if (!f) return fb_fail(FB_ERR_IO, "%s: cannot create: %s", P->csv, strerror(errno));
+        s->csv_pending = true;
+        fprintf(f, "x,d,D\n");
+        for (int x = 0; x < sc->width; x++) fprintf(f, "%d,%.9g,%.9g\n", x, s->macro[x], s->out.D[x]);
+        if (fclose(f) != 0) return fb_fail(FB_ERR_IO, "%s: cannot write: %s", P->csv, strerror(errno));
+    }
+    if (P->plot[0]) {
+        fb_temp_path(P->plot, s->plot_tmp, sizeof s->plot_tmp);
+        s->plot_pending = true; /* written under the temporary name, renamed by finish */
+        fb_result prc = write_plot(s, sc->width, s->plot_tmp);
+        if (prc) {
+            s->plot_pending = false;
+            return prc;
+        }
+    }
+    snprintf(g->summary, sizeof g->summary,
+             "%s: %d x %d, %d discrete and %d continuous constraints, T %.3g, H %.3g; max |D - d| %.4g; %.3f s",
+             g->layer->name, sc->width, sc->height, s->npoints, s->nregions, P->T, P->hurst, maxdev, secs);
+    snprintf(g->summary_json, sizeof g->summary_json,
+             "{\"layer\": \"%s\", \"generator\": \"constrain\", \"width\": %d, \"height\": %d, \"points\": %d, "
+             "\"regions\": %d, \"max_deviation\": %.9g, \"seconds\": %.6f}",
+             g->layer->name, sc->width, sc->height, s->npoints, s->nregions, maxdev, secs);
+    return FB_OK;
+}
+
+static void constrain_rows(const fb_gen *g, int y0, int n, void *const *planes)
+{
+    const constrain_state *s = state(g);
+    size_t at = (size_t)y0 * g->scene->width, len = (size_t)n * g->scene->width;
+    float *Y = planes[0], *M = planes[1], *Dt = planes[2];
+    for (size_t i = 0; i < len; i++) {
+        Y[i] = s->out.D[at + i];
+        M[i] = s->macro[at + i];
+        Dt[i] = s->out.D[at + i] - s->macro[at + i];
+    }
+    memcpy(planes[3], s->out.T + at, len * 4);
+    memcpy(planes[4], s->out.H + at, len * 4);
+    if (g->nchannels > 5)
+        for (size_t i = 0; i < len; i++) ((float *)planes[5])[i] = s->out.D[at + i] >= g->layer->constrain.water;
+}
+
+static fb_result constrain_finish(fb_gen *g)
+{
+    constrain_state *s = state(g);
+    if (s->csv_pending) {
+        if (rename(s->csv_tmp, g->layer->constrain.csv) != 0)
+            return fb_fail(FB_ERR_IO, "%s: cannot move the CSV into place", g->layer->constrain.csv);
+        s->csv_pending = false;
+    }
+    if (s->plot_pending) {
+        if (rename(s->plot_tmp, g->layer->constrain.plot) != 0)
+            return fb_fail(FB_ERR_IO, "%s: cannot move the plot into place", g->layer->constrain.plot);
+        s->plot_pending = false;
+    }
+    return FB_OK;
+}
+
+fb_result fb_gen_constrain_init(fb_gen *g)
+{
+    constrain_state *s = calloc(1, sizeof *s);
+    if (!s) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    g->owned = s;
+    g->fini = constrain_fini;
+    fb_result rc = read_inputs(g, s);
+    if (rc) return rc;
+    static const char *const suffix[6] = {"Y", "macro", "detail", "T", "H", "A"};
+    g->nchannels = g->layer->constrain.has_water ? 6 : 5;
+    for (int c = 0; c < g->nchannels; c++) {
+        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        g->channel_types[c] = g->layer->half || c == 5 ? EXRIO_HALF : EXRIO_FLOAT;
+    }
+    g->preview_channel = 0;
+    if (g->scene->height > 1) { /* the preview: a hillshade, the grid taken as 40 units across */
+        int side = g->scene->width > g->scene->height ? g->scene->width : g->scene->height;
+        g->preview_shade[0] = g->preview_shade[1] = 40.0 / side;
+    }
+    g->native_rows = constrain_rows;
+    g->prepare = constrain_prepare;
+    g->finish = constrain_finish;
+    g->prepare_gpu_seconds = -1;
+    return FB_OK;
+}

@@ -1,0 +1,232 @@
+/*
+ * The FBM constraint model (SPEC.md section 5): discrete constraints hold D = d to the last bit;
+ * D - d scales with sqrt(T); the structure function of P_fbm tracks 2H; regional buffering keeps
+ * the increments near a constraint those of the free field while the naive reading makes spikes;
+ * a region of higher H is smoother; overlapping regions average by equation 15 (checked by hand);
+ * the result does not depend on the thread count.
+ */
+#include "constrain.h"
+
+#include "testhelp.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void out_free(fb_constrain_out *o)
+{
+    free(o->D), free(o->T), free(o->H), free(o->P);
+}
+
+static fb_constrain_desc base(int w, int h, const float *macro)
+{
+    return (fb_constrain_desc){.width = w,
+                               .height = h,
+                               .seed = 5,
+                               .hurst = 0.8,
+                               .T = 0.2,
+                               .sigma = 1,
+                               .delta = 0.01,
+                               .macro = macro,
+                               .domain = 4,
+                               .falloff = 0.01};
+}
+
+static void test_exact(void)
+{
+    float *m2 = malloc(200 * 150 * 4), *m1 = malloc(300 * 4);
+    CHECK(fb_constrain_macro("boss", 200, 150, 12, m2) && fb_constrain_macro("cone", 300, 1, 5, m1));
+    CHECK(!fb_constrain_macro("volcano", 10, 10, 1, m1));
+    fb_cpoint p2[7] = {{0, 0}, {199, 149}, {100, 75}, {37, 120}, {150, 10}, {101, 75}, {64, 64}};
+    fb_cpoint p1[8] = {{0, 0}, {299, 0}, {17, 0}, {64, 0}, {65, 0}, {128, 0}, {200, 0}, {233, 0}};
+    for (int mode = 0; mode < 3; mode++) {
+        fb_constrain_desc d = base(200, 150, m2);
+        d.points = p2, d.npoints = 7, d.buffering = (fb_buffering)mode;
+        fb_constrain_out o;
+        CHECK(fb_constrain_run(&d, false, &o) == FB_OK);
+        int bad = 0, moved = 0;
+        for (int i = 0; i < 7; i++) bad += memcmp(&o.D[p2[i].y * 200 + p2[i].x], &m2[p2[i].y * 200 + p2[i].x], 4) != 0;
+        for (int i = 0; i < 200 * 150; i++) moved += o.D[i] != m2[i];
+        CHECKF(bad == 0 && moved > 200 * 150 / 2, "2D mode %d: %d constraints missed, %d pixels moved", mode, bad,
+               moved);
+        out_free(&o);
+        d = base(300, 1, m1);
+        d.points = p1, d.npoints = 8, d.buffering = (fb_buffering)mode;
+        CHECK(fb_constrain_run(&d, false, &o) == FB_OK);
+        bad = 0;
+        for (int i = 0; i < 8; i++) bad += memcmp(&o.D[p1[i].x], &m1[p1[i].x], 4) != 0;
+        CHECKF(bad == 0, "1D mode %d: %d constraints missed", mode, bad);
+        out_free(&o);
+    }
+    free(m2), free(m1);
+}
+
+/* D - d = -/+ sqrt(-2 T ln(Z P_d)) with the same P: a quarter of T gives exactly half the detail. */
+static void test_sqrt_t(void)
+{
+    float *m = calloc(129 * 97, 4);
+    fb_constrain_desc d = base(129, 97, m);
+    fb_constrain_out a, b;
+    CHECK(fb_constrain_run(&d, false, &a) == FB_OK);
+    d.T = 0.05;
+    CHECK(fb_constrain_run(&d, false, &b) == FB_OK);
+    double worst = 0, maxa = 0, maxb = 0;
+    for (int i = 0; i < 129 * 97; i++) {
+        worst = fmax(worst, fabs(a.D[i] - 2.0 * b.D[i]) / fmax(1e-30, fabs(a.D[i])));
+        maxa = fmax(maxa, fabs(a.D[i])), maxb = fmax(maxb, fabs(b.D[i]));
+    }
+    CHECKF(worst < 1e-6 && maxa > 0.05, "relative error %g, max |D - d| %g", worst, maxa);
+    CHECK(fabs(maxa / maxb - 2.0) < 1e-6); /* max |D - d| shrinks with sqrt(T) */
+    out_free(&a), out_free(&b);
+    free(m);
+}
+
+/* The slope of log S(lag) against log lag, S the mean squared increment of P over 1D profiles. */
+static double sf_slope(double H)
+{
+    const int W = 4097, lags[5] = {1, 2, 4, 8, 16};
+    float *m = calloc(W, 4);
+    double S[5] = {0};
+    for (int seed = 1; seed <= 8; seed++) {
+        fb_constrain_desc d = base(W, 1, m);
+        d.hurst = H, d.seed = (uint32_t)seed;
+        fb_constrain_out o;
+        CHECK(fb_constrain_run(&d, true, &o) == FB_OK);
+        for (int k = 0; k < 5; k++)
+            for (int x = 0; x + lags[k] < W; x++) S[k] += pow(o.P[x + lags[k]] - o.P[x], 2);
+        out_free(&o);
+    }
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (int k = 0; k < 5; k++) {
+        double x = log(lags[k]), y = log(S[k]);
+        sx += x, sy += y, sxx += x * x, sxy += x * y;
+    }
+    free(m);
+    return (5 * sxy - sx * sy) / (5 * sxx - sx * sx);
+}
+
+static void test_roughness(void)
+{
+    double s5 = sf_slope(0.5), s9 = sf_slope(0.9);
+    CHECKF(fabs(s5 - 1.0) < 0.25 && fabs(s9 - 1.8) < 0.25, "structure-function slopes %.3f (2H = 1) and %.3f (1.8)", s5,
+           s9);
+    CHECK(s9 > s5 + 0.5);
+    printf("structure-function slopes: %.3f at H = 0.5, %.3f at H = 0.9\n", s5, s9);
+}
+
+/* Mean squared lag-1 increment of P within 6 pixels of the constraints, over 20 seeds. */
+static double near_sf(fb_buffering mode, bool constrained)
+{
+    const int W = 4097;
+    float *m = calloc(W, 4);
+    fb_cpoint pts[40];
+    for (int i = 0; i < 40; i++) pts[i] = (fb_cpoint){50 + i * 100 + (i * 37) % 23, 0};
+    double s = 0;
+    long n = 0;
+    for (int seed = 1; seed <= 20; seed++) {
+        fb_constrain_desc d = base(W, 1, m);
+        d.seed = (uint32_t)seed, d.buffering = mode;
+        if (constrained) d.points = pts, d.npoints = 40;
+        fb_constrain_out o;
+        CHECK(fb_constrain_run(&d, true, &o) == FB_OK);
+        for (int i = 0; i < 40; i++)
+            for (int x = pts[i].x - 6; x < pts[i].x + 6; x++) s += pow(o.P[x + 1] - o.P[x], 2), n++;
+        out_free(&o);
+    }
+    free(m);
+    return s / n;
+}
+
+static void test_buffering(void)
+{
+    double free_sf = near_sf(FB_BUFFER_REGIONAL, false), reg = near_sf(FB_BUFFER_REGIONAL, true);
+    double none = near_sf(FB_BUFFER_NONE, true), naive = near_sf(FB_BUFFER_NAIVE, true);
+    /* 20 x 40 x 12 increments: the mean of the free field is known to a few percent */
+    CHECKF(reg > 0.6 * free_sf && reg < 1.5 * free_sf, "regional %.3g vs free %.3g", reg, free_sf);
+    CHECKF(naive > 100 * free_sf && none > 100 * free_sf, "naive %.3g, none %.3g vs free %.3g: expected spikes", naive,
+           none, free_sf);
+}
+
+/* A region of H = 0.95 (base 0.80) is smoother: lag-1 increments of P near it against far from it. */
+static void test_region_roughness(void)
+{
+    const int W = 257;
+    float *m = calloc((size_t)W * W, 4);
+    fb_cregion r = {128, 128, true, 0.95};
+    double in = 0, out = 0;
+    long ni = 0, no = 0;
+    for (int seed = 1; seed <= 4; seed++) {
+        fb_constrain_desc d = base(W, W, m);
+        d.seed = (uint32_t)seed, d.regions = &r, d.nregions = 1, d.domain = 6, d.falloff = 0.0001;
+        fb_constrain_out o;
+        CHECK(fb_constrain_run(&d, true, &o) == FB_OK);
+        CHECK(fabs(o.H[128 * W + 128] - 0.95f) < 1e-6 && fabs(o.H[0] - 0.8f) < 1e-6);
+        for (int y = 0; y < W - 1; y++)
+            for (int x = 0; x < W - 1; x++) {
+                double g = pow(o.P[y * W + x + 1] - o.P[y * W + x], 2);
+                int dist = abs(x - 128) + abs(y - 128);
+                if (dist <= 16) in += g, ni++;
+                if (dist >= 150) out += g, no++;
+            }
+        out_free(&o);
+    }
+    free(m);
+    CHECKF(in / ni < 0.5 * (out / no), "increments %.3g inside H = 0.95, %.3g outside (0.80)", in / ni, out / no);
+}
+
+/* Equation 15 by hand: two T regions reaching (105, 100) at L1 distance 5 each. */
+static void test_harmonic(void)
+{
+    const int W = 200, H = 160;
+    float *m = calloc((size_t)W * H, 4);
+    fb_cregion r[3] = {{100, 100, false, 0.05}, {110, 100, false, 0.6}, {30, 30, true, 0.9}};
+    fb_constrain_desc d = base(W, H, m);
+    d.T = 0.3, d.regions = r, d.nregions = 3, d.domain = 5, d.falloff = 0.01;
+    fb_constrain_out o;
+    CHECK(fb_constrain_run(&d, false, &o) == FB_OK);
+    double f = 0.3 + ((0.05 - 0.3) / (1 + 0.01 * 25) + (0.6 - 0.3) / (1 + 0.01 * 25)) / 2; /* 0.32 */
+    CHECKF(o.T[100 * W + 105] == (float)f, "T(105, 100) = %.9g, by hand %.9g", o.T[100 * W + 105], f);
+    /* one region only: (95, 100) is 5 from the first and 15 from the second (both within 32) */
+    double g = 0.3 + ((0.05 - 0.3) / (1 + 0.01 * 25) + (0.6 - 0.3) / (1 + 0.01 * 225)) / 2;
+    CHECK(o.T[100 * W + 95] == (float)g);
+    CHECK(o.T[100 * W + 140] == (float)(0.3 + (0.6 - 0.3) / (1 + 0.01 * 900))); /* 40 from the first: out of reach */
+    CHECK(o.T[0] == (float)0.3 && o.H[30 * W + 30] == (float)0.9 && o.H[100 * W + 105] == (float)0.8);
+    int bad = 0;
+    for (int y = 0; y < H; y += 7)
+        for (int x = 0; x < W; x += 5)
+            bad += o.T[y * W + x] != (float)fb_constrain_field(&d, false, x, y) ||
+                   o.H[y * W + x] != (float)fb_constrain_field(&d, true, x, y);
+    CHECK(bad == 0);
+    out_free(&o);
+    free(m);
+}
+
+static void test_threads(void)
+{
+    const int W = 300, H = 200;
+    float *m = malloc((size_t)W * H * 4);
+    fb_constrain_macro("ridge", W, H, 8, m);
+    fb_cpoint p[3] = {{10, 10}, {150, 100}, {299, 199}};
+    fb_cregion r = {150, 50, true, 0.6};
+    fb_constrain_out a, b;
+    fb_constrain_desc d = base(W, H, m);
+    d.points = p, d.npoints = 3, d.regions = &r, d.nregions = 1, d.threads = 1;
+    CHECK(fb_constrain_run(&d, true, &a) == FB_OK);
+    d.threads = 3;
+    CHECK(fb_constrain_run(&d, true, &b) == FB_OK);
+    CHECK(!memcmp(a.D, b.D, (size_t)W * H * 4) && !memcmp(a.P, b.P, (size_t)W * H * 4));
+    out_free(&a), out_free(&b);
+    free(m);
+}
+
+int main(void)
+{
+    test_exact();
+    test_sqrt_t();
+    test_roughness();
+    test_buffering();
+    test_region_roughness();
+    test_harmonic();
+    test_threads();
+    TEST_REPORT();
+}
