@@ -300,8 +300,25 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     for (int i = 0, at = 0; i < s->nlayers; at += runs[i].gen.nchannels, i++) offset[i] = at, gens[i] = &runs[i].gen;
     for (int i = 0; i < s->nlayers && !rc; i++)
         if (runs[i].gen.host_op) rc = fb_gen_op_resolve(&runs[i].gen, gens, offset);
+    for (int i = 0; i < s->nlayers && !rc; i++) { /* a macro shape from another layer */
+        const fb_ref *m = &s->layers[i].constrain.macro_ref;
+        if (s->layers[i].kind != FB_LAYER_CONSTRAIN || m->layer < 0) continue;
+        const fb_gen *src = &runs[m->layer].gen;
+        int c = fb_gen_channel_of(src, m->channel, s->layers[i].name, "macro");
+        if (c < 0) {
+            rc = FB_ERR_INPUT;
+        } else if (src->host_op || src->channel_types[c] == EXRIO_UINT) {
+            rc = fb_fail(FB_ERR_INPUT, "layer \"%s\": macro \"%s\": %s", s->layers[i].name, src->channel_names[c],
+                         src->host_op ? "an op layer cannot be a macro shape yet (bake it, then give IN.exr:layer.Y)"
+                                      : "a channel of integers, not heights");
+        } else {
+            runs[i].gen.macro_src = src;
+            runs[i].gen.macro_channel = c;
+        }
+    }
     /* Layers computed as a whole (the chaos game) run before the first strip. */
-    for (int i = 0; i < s->nlayers && !rc; i++) {
+    for (int j = 0; j < s->nlayers && !rc; j++) { /* in dependency order: a macro's source first */
+        int i = s->order[j];
         if (!runs[i].gen.prepare) continue;
         rc = runs[i].gen.prepare(&runs[i].gen, e, d->progress);
         if (runs[i].gen.prepare_gpu_seconds > 0) gpu += runs[i].gen.prepare_gpu_seconds;

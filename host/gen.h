@@ -56,6 +56,11 @@ struct fb_gen {
      * once fb_gen_op_resolve has found its inputs; neither native_rows nor a shader. */
     bool host_op;
 
+    /* A constrain layer whose macro shape is another layer's channel: set by the bake before the
+     * prepares, which run in dependency order (the source's first). */
+    const struct fb_gen *macro_src;
+    int macro_channel;
+
     bool scalar; /* native: the portable kernel only, no hand-vectorised path (benchmark reference) */
     _Alignas(16) unsigned char params[256]; /* generator-private, e.g. K_FbmParams */
     void *owned;                            /* generator-owned memory (freed by fb_gen_fini) */
@@ -91,6 +96,9 @@ fb_result fb_gen_constrain_init(fb_gen *g);
 /* Op layers: finds the planes of the inputs among every generator's (gens, all of the scene's, in
  * scene order; plane_offset[i] is the first plane of layer i in a strip). */
 fb_result fb_gen_op_resolve(fb_gen *g, const fb_gen *const *gens, const int *plane_offset);
+/* The index of channel "LAYER.channel" ("" : LAYER.Y) of generator src, or -1 with an error logged
+ * that names the layer `who` and the channels src has. */
+int fb_gen_channel_of(const fb_gen *src, const char *channel, const char *who, const char *what);
 /* Computes count values of the op layer from the strip's planes (of every layer). */
 void fb_gen_op_rows(const fb_gen *g, size_t count, const void *const *planes, float *out);
 

@@ -1286,16 +1286,39 @@ static fb_result parse_op(const vctx *v, const char *path, json_t *obj, fb_layer
 
 /* Resolves the op layers' references to layer indices and orders the layers so that each comes
  * after those it uses; a missing layer or a cycle is an error that names both layers. */
+/* The references of layer i to other layers (op inputs and mask, a constrain layer's macro). */
+static int layer_refs(fb_scene *s, int i, fb_ref **out, char names[][24])
+{
+    fb_layer *L = &s->layers[i];
+    int n = 0;
+    if (L->kind == FB_LAYER_OP) {
+        for (int k = 0; k < L->op.ninputs; k++) {
+            snprintf(names[n], 24, "inputs[%d]", k);
+            out[n++] = &L->op.inputs[k];
+        }
+        if (L->op.mask.layer != -1) {
+            snprintf(names[n], 24, "mask");
+            out[n++] = &L->op.mask;
+        }
+    } else if (L->kind == FB_LAYER_CONSTRAIN && L->constrain.macro_ref.layer != -1) {
+        snprintf(names[n], 24, "macro");
+        out[n++] = &L->constrain.macro_ref;
+    }
+    return n;
+}
+
+/* Resolves the references between layers to layer indices and orders the layers so that each comes
+ * after those it uses; a missing layer or a cycle is an error that names both layers. */
 static fb_result resolve_refs(const vctx *v, fb_scene *s)
 {
-    char sub[128], names[FB_MAX_LAYERS * 66] = "";
+    char sub[128], names[FB_MAX_LAYERS * 66] = "", rn[FB_OP_MAX_INPUTS + 1][24];
+    fb_ref *refs[FB_OP_MAX_INPUTS + 1];
     for (int i = 0; i < s->nlayers; i++)
         snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", i ? ", " : "", s->layers[i].name);
     for (int i = 0; i < s->nlayers; i++) {
-        fb_op_params *o = &s->layers[i].op;
-        if (s->layers[i].kind != FB_LAYER_OP) continue;
-        for (int k = 0; k <= o->ninputs; k++) {
-            fb_ref *r = k < o->ninputs ? &o->inputs[k] : &o->mask;
+        int nr = layer_refs(s, i, refs, rn);
+        for (int k = 0; k < nr; k++) {
+            fb_ref *r = refs[k];
             if (r->layer != -2) continue;
             char name[128];
             snprintf(name, sizeof name, "%s", r->channel);
@@ -1304,10 +1327,12 @@ static fb_result resolve_refs(const vctx *v, fb_scene *s)
             r->layer = -1;
             for (int j = 0; j < s->nlayers; j++)
                 if (!strcmp(s->layers[j].name, name)) r->layer = j;
-            if (k < o->ninputs)
-                snprintf(sub, sizeof sub, "layers[%d].inputs[%d]", i, k);
-            else
-                snprintf(sub, sizeof sub, "layers[%d].mask", i);
+            snprintf(sub, sizeof sub, "layers[%d].%s", i, rn[k]);
+            if (r->layer < 0 && !strcmp(rn[k], "macro"))
+                return verr(v, sub,
+                            "\"%s\" is not cone, ridge, boss, bowl, IN.exr[:layer.channel] or a layer of the scene "
+                            "(layers: %s)",
+                            r->channel, names);
             if (r->layer < 0)
                 return verr(v, sub, "layer \"%s\" refers to \"%s\", but no layer is named \"%s\" (layers: %s)",
                             s->layers[i].name, r->channel, name, names);
@@ -1317,22 +1342,19 @@ static fb_result resolve_refs(const vctx *v, fb_scene *s)
     /* depth-first topological order; state 1: on the stack, 2: placed */
     int state[FB_MAX_LAYERS] = {0}, n = 0;
     int stack[FB_MAX_LAYERS], next[FB_MAX_LAYERS], top = 0;
-    for (int i = 0; i < s->nlayers; i++)
-        if (s->layers[i].kind != FB_LAYER_OP) s->order[n++] = i, state[i] = 2;
     for (int root = 0; root < s->nlayers; root++) {
         if (state[root]) continue;
         stack[top] = root, next[top++] = 0, state[root] = 1;
         while (top) {
             int cur = stack[top - 1];
-            const fb_op_params *o = &s->layers[cur].op;
-            if (next[top - 1] > o->ninputs) {
+            int nr = layer_refs(s, cur, refs, rn);
+            if (next[top - 1] >= nr) {
                 state[cur] = 2;
                 s->order[n++] = cur;
                 top--;
                 continue;
             }
-            int k = next[top - 1]++;
-            const fb_ref *r = k < o->ninputs ? &o->inputs[k] : &o->mask;
+            const fb_ref *r = refs[next[top - 1]++];
             if (r->layer < 0 || state[r->layer] == 2) continue;
             if (state[r->layer] == 1) {
                 snprintf(sub, sizeof sub, "layers[%d]", cur);
@@ -1370,10 +1392,20 @@ static fb_result parse_constrain(const vctx *v, const char *path, json_t *obj, c
     string_to(obj, "profile", c->profile, sizeof c->profile);
     string_to(obj, "csv", c->csv, sizeof c->csv);
     string_to(obj, "plot", c->plot, sizeof c->plot);
+    c->macro_ref.layer = -1;
     if (macro && !strstr(c->macro, ".exr") && strcmp(c->macro, "cone") && strcmp(c->macro, "ridge") &&
         strcmp(c->macro, "boss") && strcmp(c->macro, "bowl")) {
-        snprintf(sub, sizeof sub, "%s.macro", path);
-        return verr(v, sub, "expected cone, ridge, boss, bowl or IN.exr[:layer.channel], found \"%s\"", c->macro);
+        /* another layer of the scene, "layer" or "layer.channel": resolved with the op layers' inputs */
+        size_t len = strlen(c->macro);
+        if (c->macro[0] == '.' || c->macro[len - 1] == '.' || len >= sizeof c->macro_ref.channel) {
+            snprintf(sub, sizeof sub, "%s.macro", path);
+            return verr(
+                v, sub,
+                "expected cone, ridge, boss, bowl, IN.exr[:layer.channel] or a layer of the scene, found \"%s\"",
+                c->macro);
+        }
+        c->macro_ref.layer = -2;
+        snprintf(c->macro_ref.channel, sizeof c->macro_ref.channel, "%s", c->macro);
     }
     c->macro_height = num(obj, "macro-height");
     c->T = num(obj, "T");

@@ -136,6 +136,7 @@ typedef struct fb_op_params {
  * or from files, read when the layer is set up. */
 typedef struct fb_constrain_params {
     char macro[1024];    /* "cone" | "ridge" | "boss" | "bowl" | IN.exr[:layer.channel] */
+    fb_ref macro_ref;    /* the macro shape from another layer of the scene (layer -1: none) */
     double macro_height; /* built-in shapes */
     char profile[1024];  /* 1D: a CSV profile instead of macro, or "" */
     double T, hurst, sigma, delta;

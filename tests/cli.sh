@@ -552,12 +552,26 @@ awk -F, '$1 == 128 || $1 == 40 {if ($2 != $3) bad = 1} END {exit bad}' out1d.csv
 expect_fail 2 "macro.exr: 120 x 80, but the scene is 64 x 64" o.exr -- constrain --size 64x64 --macro macro.exr -o o.exr
 expect_fail 2 "cpts.csv:3: the pixel is outside the image" o.exr -- constrain --size 100x50 --points cpts.csv -o o.exr
 expect_fail 2 "H must be in (0, 1)" o.exr -- constrain --size 120x80 --regions <(printf '1,1,H,1.5\n') -o o.exr
-expect_fail 2 "expected cone, ridge, boss, bowl or IN.exr" o.exr -- $C --macro volcano -o o.exr
+expect_fail 2 '"volcano" is not cone, ridge, boss, bowl, IN.exr\[:layer.channel\] or a layer of the scene' o.exr -- $C --macro volcano -o o.exr
 expect_fail 2 "needs the scene's height to be 1\|height must be 1" o.exr -- $C --profile prof.csv -o o.exr
 expect_fail 3 "nope.csv: cannot open constraint points" o.exr -- $C --points nope.csv -o o.exr
 printf '{"size": [64, 64], "layers": [{"type": "constrain", "points": [[3, 4], [64, 2]]}]}' > cbad.json
 expect_fail 2 'cbad.json:1: layers\[0\].points\[1\]: pixel (64, 2) is outside the 64 x 64 image' o.exr -- render cbad.json -o o.exr
 "$FB" constrain --help | grep -c -- "--compression" | grep -q "^1$" && ok || bad "constrain --help lists --compression twice"
+# the macro shape from another layer of the scene (listed after it) equals the same layer baked to an EXR first
+printf '{"size": [96, 64], "seed": 2, "layers": [{"type": "constrain", "name": "shaped", "macro": "terrain", "T": 0.5, "points": [[10, 10], [50, 30]]},
+ {"type": "terrain", "points": [[0,0,0],[10,0,3],[0,5,6],[10,5,2],[5,2.5,9]], "insert": 800}]}' > mac.json
+"$FB" render mac.json -o mac.exr --quiet && ok || bad "macro from a layer failed"
+printf '0 0 0\n10 0 3\n0 5 6\n10 5 2\n5 2.5 9\n' > mac.xyz
+"$FB" terrain --size 96x64 --seed 2 --points mac.xyz --insert 800 -o mact.exr --quiet
+"$FB" constrain --size 96x64 --seed 2 --layer shaped --macro mact.exr:terrain.Y --T 0.5 --points <(printf '10,10\n50,30\n') -o macc.exr --quiet
+"$FB" compare macc.exr mac.exr --layer shaped > /dev/null && ok || bad "a macro from a layer differs from the same layer's EXR"
+printf '{"layers": [{"type": "constrain", "macro": "m"}, {"type": "op", "name": "m", "op": "add", "inputs": ["terrain", 1]}]}' > mcyc.json
+expect_fail 2 'layer "m" uses layer "terrain", which depends on "m": a cycle' o.exr -- render mcyc.json -o o.exr
+printf '{"layers": [{"type": "constrain", "macro": "hill.Y"}]}' > mmiss.json
+expect_fail 2 'layers\[0\].macro: "hill.Y" is not cone' o.exr -- render mmiss.json -o o.exr
+printf '{"size": [32, 32], "layers": [{"type": "constrain", "macro": "sky.iter"}, {"type": "julia"}]}' > mint.json
+expect_fail 2 'a channel of integers' o.exr -- render mint.json -o o.exr
 
 # ---- device selection (where a Vulkan device exists) ----
 if "$FB" devices | grep -q '^0 '; then

@@ -227,6 +227,8 @@ static fb_result read_inputs(fb_gen *g, constrain_state *s)
         }
         free(r.xs);
         free(r.ds);
+    } else if (P->macro_ref.layer != -1) {
+        /* another layer: read in prepare, once that layer is computed */
     } else if (strstr(P->macro, ".exr")) {
         rc = macro_from_exr(g, P->macro, s->macro);
     } else {
@@ -334,7 +336,25 @@ static fb_result constrain_prepare(fb_gen *g, struct fb_engine *e, bool progress
                            .falloff = P->falloff,
                            .buffering = (fb_buffering)P->buffering};
     double t0 = fb_now();
-    fb_result rc = fb_constrain_run(&d, false, &s->out);
+    fb_result rc = FB_OK;
+    if (g->macro_src) { /* the source layer's channel, row band by row band on the host */
+        const fb_gen *src = g->macro_src;
+        const int band = 64;
+        void *planes[FB_GEN_MAX_CHANNELS] = {0};
+        for (int c = 0; c < src->nchannels && !rc; c++)
+            if (!(planes[c] = malloc((size_t)sc->width * band * 4))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        for (int y0 = 0; y0 < sc->height && !rc; y0 += band) {
+            int n = y0 + band <= sc->height ? band : sc->height - y0;
+            src->native_rows(src, y0, n, planes);
+            memcpy(s->macro + (size_t)y0 * sc->width, planes[g->macro_channel], (size_t)n * sc->width * 4);
+        }
+        for (int c = 0; c < src->nchannels; c++) free(planes[c]);
+        for (size_t i = 0; !rc && i < (size_t)sc->width * sc->height; i++)
+            if (!isfinite(s->macro[i]))
+                rc = fb_fail(FB_ERR_INPUT, "layer %s: the macro shape from layer %s has a NaN or infinite value",
+                             g->layer->name, src->layer->name);
+    }
+    if (!rc) rc = fb_constrain_run(&d, false, &s->out);
     if (rc) return rc;
     double secs = fb_now() - t0, maxdev = 0;
     for (size_t i = 0; i < (size_t)sc->width * sc->height; i++) maxdev = fmax(maxdev, fabs(s->out.D[i] - s->macro[i]));

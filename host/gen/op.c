@@ -28,6 +28,22 @@ fb_result fb_gen_op_init(fb_gen *g)
     return FB_OK;
 }
 
+int fb_gen_channel_of(const fb_gen *src, const char *channel, const char *who, const char *what)
+{
+    char want[160], have[FB_GEN_MAX_CHANNELS * 40] = "";
+    snprintf(want, sizeof want, "%s.%s", src->layer->name, channel[0] ? channel : "Y");
+    int c = -1;
+    for (int i = 0; i < src->nchannels; i++) {
+        if (!strcmp(src->channel_names[i], want)) c = i;
+        snprintf(have + strlen(have), sizeof have - strlen(have), "%s%s", i ? ", " : "",
+                 strchr(src->channel_names[i], '.') + 1);
+    }
+    if (c < 0)
+        fb_fail(FB_ERR_INPUT, "layer \"%s\": %s \"%s\": layer \"%s\" has no channel %s (channels: %s)", who, what, want,
+                src->layer->name, channel[0] ? channel : "Y (name one)", have);
+    return c;
+}
+
 fb_result fb_gen_op_resolve(fb_gen *g, const fb_gen *const *gens, const int *plane_offset)
 {
     const fb_op_params *o = &g->layer->op;
@@ -37,18 +53,8 @@ fb_result fb_gen_op_resolve(fb_gen *g, const fb_gen *const *gens, const int *pla
         const fb_ref *r = k < o->ninputs ? &o->inputs[k] : &o->mask;
         if (r->layer < 0 || (k == o->ninputs && o->op != FB_OP_MIX)) continue;
         const fb_gen *src = gens[r->layer];
-        char want[160], have[FB_GEN_MAX_CHANNELS * 40] = "";
-        snprintf(want, sizeof want, "%s.%s", src->layer->name, r->channel[0] ? r->channel : "Y");
-        int c = -1;
-        for (int i = 0; i < src->nchannels; i++) {
-            if (!strcmp(src->channel_names[i], want)) c = i;
-            snprintf(have + strlen(have), sizeof have - strlen(have), "%s%s", i ? ", " : "",
-                     strchr(src->channel_names[i], '.') + 1);
-        }
-        if (c < 0)
-            return fb_fail(FB_ERR_INPUT, "layer \"%s\": %s \"%s\": layer \"%s\" has no channel %s (channels: %s)",
-                           g->layer->name, k < o->ninputs ? "input" : "mask", want, src->layer->name,
-                           r->channel[0] ? r->channel : "Y (name one)", have);
+        int c = fb_gen_channel_of(src, r->channel, g->layer->name, k < o->ninputs ? "input" : "mask");
+        if (c < 0) return FB_ERR_INPUT;
         st.plane[k] = plane_offset[r->layer] + c;
         st.is_uint[k] = src->channel_types[c] == EXRIO_UINT;
     }
