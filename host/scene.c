@@ -237,7 +237,7 @@ static const keyspec constrain_keys[] = {
      "macro shape d: cone | ridge | boss | bowl, or IN.exr[:layer.channel] (default boss)"},
     {"macro-height", T_NUM, -1e6, 1e6, false, NULL, "10.0", "height of a built-in macro shape"},
     {"profile", T_STRING, 0, 0, false, NULL, NULL, "1D (height 1): a CSV profile (d, or x,d per line) as the macro"},
-    {"T", T_NUM, 0, 1e6, false, NULL, "0.3", "approximation degree T (small: close to the macro shape)"},
+    {"T", T_NUM, 0, 1e6, true, NULL, "0.3", "approximation degree T > 0 (small: close to the macro shape)"},
     {"hurst", T_NUM, 0, 1, true, NULL, "0.8", "roughness degree H in (0, 1) (large: smoother)"},
     {"sigma", T_NUM, 0, 1e6, true, NULL, "1.0", "standard deviation of P_fbm's first level"},
     {"delta", T_NUM, 0, 1e6, true, NULL, "0.01", "delta of Z = 1 / (sqrt(6) sigma + delta)"},
@@ -1407,6 +1407,10 @@ static fb_result parse_constrain(const vctx *v, const char *path, json_t *obj, c
         c->macro_ref.layer = -2;
         snprintf(c->macro_ref.channel, sizeof c->macro_ref.channel, "%s", c->macro);
     }
+    if (num(obj, "hurst") >= 1) {
+        snprintf(sub, sizeof sub, "%s.hurst", path);
+        return verr(v, sub, "expected a roughness H in (0, 1), found %g", num(obj, "hurst"));
+    }
     c->macro_height = num(obj, "macro-height");
     c->T = num(obj, "T");
     c->hurst = num(obj, "hurst");
@@ -1441,8 +1445,8 @@ static fb_result parse_constrain(const vctx *v, const char *path, json_t *obj, c
         snprintf(sub, sizeof sub, "%s.regions[%zu]", path, i);
         if (x < 0 || y < 0 || x >= s->width || y >= s->height)
             return verr(v, sub, "pixel (%lld, %lld) is outside the %d x %d image", x, y, s->width, s->height);
-        if (is_h ? !(val > 0 && val < 1) : !(val >= 0))
-            return verr(v, sub, "%s = %g is out of range (%s)", is_h ? "H" : "T", val, is_h ? "0 < H < 1" : "T >= 0");
+        if (is_h ? !(val > 0 && val < 1) : !(val > 0))
+            return verr(v, sub, "%s = %g is out of range (%s)", is_h ? "H" : "T", val, is_h ? "0 < H < 1" : "T > 0");
     }
     L->half = boolean(obj, "half");
     return FB_OK;

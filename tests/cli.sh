@@ -555,6 +555,11 @@ expect_fail 2 "H must be in (0, 1)" o.exr -- constrain --size 120x80 --regions <
 expect_fail 2 '"volcano" is not cone, ridge, boss, bowl, IN.exr\[:layer.channel\] or a layer of the scene' o.exr -- $C --macro volcano -o o.exr
 expect_fail 2 "needs the scene's height to be 1\|height must be 1" o.exr -- $C --profile prof.csv -o o.exr
 expect_fail 3 "nope.csv: cannot open constraint points" o.exr -- $C --points nope.csv -o o.exr
+expect_fail 2 "hurst: expected a roughness H in (0, 1)" o.exr -- $C --hurst 1 -o o.exr
+expect_fail 2 "T" o.exr -- $C --T 0 -o o.exr
+expect_fail 2 "sigma" o.exr -- $C --sigma 0 -o o.exr
+printf '1,2\n3\n' > bad.csv
+expect_fail 2 "bad.csv:2: expected x,y" o.exr -- $C --points bad.csv -o o.exr
 printf '{"size": [64, 64], "layers": [{"type": "constrain", "points": [[3, 4], [64, 2]]}]}' > cbad.json
 expect_fail 2 'cbad.json:1: layers\[0\].points\[1\]: pixel (64, 2) is outside the 64 x 64 image' o.exr -- render cbad.json -o o.exr
 "$FB" constrain --help | grep -c -- "--compression" | grep -q "^1$" && ok || bad "constrain --help lists --compression twice"

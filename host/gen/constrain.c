@@ -136,7 +136,7 @@ static const char *region_line(void *ctx, char **f, int nf)
     bool is_h = !strcmp(f[2], "H");
     if (!is_h && strcmp(f[2], "T")) return "the third field must be T or H";
     if (!number(f[3], &val)) return "expected a number for the value";
-    if (is_h ? !(val > 0 && val < 1) : !(val >= 0)) return is_h ? "H must be in (0, 1)" : "T must be >= 0";
+    if (is_h ? !(val > 0 && val < 1) : !(val > 0)) return is_h ? "H must be in (0, 1)" : "T must be > 0";
     if (!grow(r, sizeof *r->s->regions, (void **)&r->s->regions)) return "out of memory";
     r->s->regions[r->n++] = (fb_cregion){x, y, is_h, val};
     return NULL;
