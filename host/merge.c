@@ -30,6 +30,40 @@ typedef struct part {
 static const char *const k_attrs[] = {"fractalbake/scene", "fractalbake/seed", "fractalbake/backend",
                                       "fractalbake/device", "fractalbake/version"};
 
+/* The merged file, W x H: the channels given, the EXR parts (names, compressions) and the fractalbake
+ * attributes of the first input. */
+static fb_result open_output(const exrio_reader *first, const char *out, int W, int H, const exrio_channel *ch, int nch,
+                             int threads, exrio_writer **w)
+{
+    exrio_attr attrs[sizeof k_attrs / sizeof k_attrs[0]];
+    int nattrs = 0;
+    for (size_t a = 0; a < sizeof k_attrs / sizeof k_attrs[0]; a++) {
+        const char *v = exrio_attr_string(first, k_attrs[a]);
+        if (v) attrs[nattrs++] = (exrio_attr){k_attrs[a], v};
+    }
+    int nparts = exrio_nparts(first);
+    const char *part_names[EXRIO_MAX_PARTS];
+    exrio_compression part_comp[EXRIO_MAX_PARTS];
+    for (int k = 0; k < nparts; k++) {
+        int c = exrio_compression_parse(exrio_part_compression(first, k));
+        part_names[k] = exrio_part_name(first, k);
+        part_comp[k] = c < 0 ? EXRIO_ZIP : (exrio_compression)c;
+    }
+    return exrio_writer_create(&(exrio_writer_desc){.path = out,
+                                                    .width = W,
+                                                    .height = H,
+                                                    .compression = part_comp[0],
+                                                    .channels = ch,
+                                                    .nchannels = nch,
+                                                    .attrs = attrs,
+                                                    .nattrs = nattrs,
+                                                    .threads = threads,
+                                                    .nparts = nparts,
+                                                    .part_names = part_names,
+                                                    .part_compression = part_comp},
+                               w);
+}
+
 static fb_result check_parts(part *p, int n, const char *const *paths, int *W, int *H)
 {
     int fw, fh, x, y;
@@ -123,35 +157,7 @@ fb_result fb_merge(const char *const *paths, int n, const char *out, int threads
                 rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     if (rc) goto out;
 
-    exrio_attr attrs[sizeof k_attrs / sizeof k_attrs[0]];
-    int nattrs = 0;
-    for (size_t a = 0; a < sizeof k_attrs / sizeof k_attrs[0]; a++) {
-        const char *v = exrio_attr_string(p[0].r, k_attrs[a]);
-        if (v) attrs[nattrs++] = (exrio_attr){k_attrs[a], v};
-    }
-    /* the parts' structure (names, compressions) as in the first region file */
-    int nparts = exrio_nparts(p[0].r);
-    const char *part_names[EXRIO_MAX_PARTS];
-    exrio_compression part_comp[EXRIO_MAX_PARTS];
-    for (int k = 0; k < nparts; k++) {
-        int c = exrio_compression_parse(exrio_part_compression(p[0].r, k));
-        part_names[k] = exrio_part_name(p[0].r, k);
-        part_comp[k] = c < 0 ? EXRIO_ZIP : (exrio_compression)c;
-    }
-    int comp = exrio_compression_parse(exrio_compression_of(p[0].r));
-    rc = exrio_writer_create(&(exrio_writer_desc){.path = out,
-                                                  .width = W,
-                                                  .height = H,
-                                                  .compression = comp < 0 ? EXRIO_ZIP : (exrio_compression)comp,
-                                                  .channels = ch,
-                                                  .nchannels = nch,
-                                                  .attrs = attrs,
-                                                  .nattrs = nattrs,
-                                                  .threads = threads,
-                                                  .nparts = nparts,
-                                                  .part_names = part_names,
-                                                  .part_compression = part_comp},
-                             &w);
+    rc = open_output(p[0].r, out, W, H, ch, nch, threads, &w);
     for (int y0 = 0; y0 < H && !rc; y0 += MERGE_STRIP) {
         int rows = y0 + MERGE_STRIP <= H ? MERGE_STRIP : H - y0;
         for (int i = 0; i < n && !rc; i++) {
@@ -307,34 +313,7 @@ static fb_result merge_points(part *p, int n, const char *const *paths, const ch
         if (!(outp[nout] = malloc((size_t)W * MERGE_STRIP * 4))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
         nout++;
     }
-    const char *part_names[EXRIO_MAX_PARTS];
-    exrio_compression part_comp[EXRIO_MAX_PARTS];
-    int nparts = exrio_nparts(p[0].r);
-    for (int k = 0; k < nparts; k++) {
-        int cpr = exrio_compression_parse(exrio_part_compression(p[0].r, k));
-        part_names[k] = exrio_part_name(p[0].r, k);
-        part_comp[k] = cpr < 0 ? EXRIO_ZIP : (exrio_compression)cpr;
-    }
-    exrio_attr attrs[sizeof k_attrs / sizeof k_attrs[0]];
-    int nattrs = 0;
-    for (size_t a = 0; a < sizeof k_attrs / sizeof k_attrs[0]; a++) {
-        const char *v = exrio_attr_string(p[0].r, k_attrs[a]);
-        if (v) attrs[nattrs++] = (exrio_attr){k_attrs[a], v};
-    }
-    if (!rc)
-        rc = exrio_writer_create(&(exrio_writer_desc){.path = out,
-                                                      .width = W,
-                                                      .height = H,
-                                                      .compression = part_comp[0],
-                                                      .channels = ch,
-                                                      .nchannels = nout,
-                                                      .attrs = attrs,
-                                                      .nattrs = nattrs,
-                                                      .threads = threads,
-                                                      .nparts = nparts,
-                                                      .part_names = part_names,
-                                                      .part_compression = part_comp},
-                                 &w);
+    if (!rc) rc = open_output(p[0].r, out, W, H, ch, nout, threads, &w);
     for (int c = 0; c < nch && !rc; c++) /* buffers for every part channel: read, and compared */
         if (!(in[c] = malloc((size_t)W * MERGE_STRIP * 4)) || !(cmp[c] = malloc((size_t)W * MERGE_STRIP * 4)))
             rc = fb_fail(FB_ERR_NOMEM, "out of memory");
