@@ -191,9 +191,8 @@ static fb_result previews_create(const fb_scene *s, const layer_run *runs, const
         for (int i = 0; i < s->nlayers; i++)
             if (!strcmp(s->layers[i].name, which)) only = i;
         if (only < 0) {
-            char names[FB_MAX_LAYERS * 66] = "";
-            for (int i = 0; i < s->nlayers; i++)
-                snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", i ? ", " : "", s->layers[i].name);
+            char names[FB_MAX_LAYERS * 66];
+            fb_scene_layer_names(s, names, sizeof names);
             return fb_fail(FB_ERR_USAGE, "--preview-layer: no layer named \"%s\" (layers: %s; or \"over\")", which,
                            names);
         }
@@ -429,7 +428,7 @@ out:
     if (stats) {
         stats->seconds = fb_now() - t0;
         stats->gpu_seconds = e->kind == FB_BACKEND_VULKAN ? gpu : -1;
-        stats->pixels = d->region[2] > 0 ? (uint64_t)d->region[2] * d->region[3] : (uint64_t)s->width * s->height;
+        stats->pixels = (uint64_t)rw * rh;
     }
     return rc;
 }

@@ -108,7 +108,6 @@ typedef struct grid {
     const float *Hf;  /* H per pixel */
     const char *is_c; /* per node: a discrete constraint */
     double span;      /* N - 1 */
-
 } grid;
 
 static double node_h(const grid *g, int x, int y)
@@ -118,14 +117,15 @@ static double node_h(const grid *g, int x, int y)
     return x < d->width && y < d->height ? (double)g->Hf[(size_t)y * d->width + x] : (double)(float)d->hurst;
 }
 
-/* The displacement of node (x, y) whose parents are at distance r. */
+/* The standard deviation of the displacement of a node of roughness H whose parents are r away. */
 static double scale_of(const grid *g, double H, double r)
 {
     double s = g->d->sigma;
     return sqrt(s * s * (1.0 - pow(2.0, 2 * H - 2)) * pow(r / g->span, 2 * H));
 }
 
-/* base_sd: scale_of at the base H (the same for most nodes of a step, so computed once) */
+/* The displacement of node (x, y) whose parents are r away; base_sd: scale_of at the base H (the
+ * same for most nodes of a step, so computed once). */
 static double displacement(const grid *g, int x, int y, double r, double base_sd)
 {
     double H = node_h(g, x, y);

@@ -63,7 +63,7 @@ static const char *const k_usage =
     "  constrain [options] -o OUT.exr    fBm detail on a macro shape under discrete/continuous constraints\n"
     "  tonemap IN.exr -o OUT.exr [tone]   re-run an ifs layer's tone mapping (no new chaos game)\n"
     "  compare A.exr B.exr [thresholds]   exit 0 within thresholds, 1 beyond, 2 on error\n"
-    "  merge PARTS... -o OUT.exr          join region files (render --region X,Y,W,H) into the whole image\n"
+    "  merge PARTS... -o OUT.exr          join region files (--region) or points parts (--points-part)\n"
     "  info FILE.exr                      layers, channels, types, attributes and the stored scene\n"
     "  devices                            the Vulkan devices found, and which one is chosen\n"
     "  bench [--json] [--size WxH]        throughput of every generator on each backend\n"
@@ -117,6 +117,13 @@ static bool parse_region(const char *s, int r[4])
         if (v[i] < (i < 2 ? 0 : 1) || v[i] > FB_MAX_DIM) return false;
     for (int i = 0; i < 4; i++) r[i] = (int)v[i];
     return true;
+}
+
+static bool parse_points_part(const char *s, int pp[2])
+{
+    int used = 0;
+    return sscanf(s, "%d/%d%n", &pp[0], &pp[1], &used) == 2 && !s[used] && pp[1] >= 1 && pp[1] <= 4096 && pp[0] >= 1 &&
+           pp[0] <= pp[1];
 }
 
 /* Consumes a common option at argv[*i]; returns 1 if consumed, 0 if not common, -1 on error (logged). */
@@ -174,10 +181,7 @@ static int common_option(int argc, char **argv, int *i, common_opts *o)
         }
     } else if (!strcmp(a, "--points-part")) {
         NEED_VALUE();
-        int used = 0;
-        if (sscanf(val, "%d/%d%n", &o->points_part[0], &o->points_part[1], &used) != 2 || val[used] ||
-            o->points_part[1] < 1 || o->points_part[1] > 4096 || o->points_part[0] < 1 ||
-            o->points_part[0] > o->points_part[1]) {
+        if (!parse_points_part(val, o->points_part)) {
             fb_fail(FB_ERR_USAGE, "--points-part: expected K/N with 1 <= K <= N <= 4096, found \"%s\"", val);
             return -1;
         }
@@ -294,7 +298,7 @@ static fb_result stored_scene(const char *path, char **json, fb_backend *backend
     const char *be = exrio_attr_string(r, "fractalbake/backend");
     const char *reg = exrio_attr_string(r, "fractalbake/region");
     const char *pp = exrio_attr_string(r, "fractalbake/points-part");
-    if (pp && sscanf(pp, "%d/%d", &points_part[0], &points_part[1]) != 2)
+    if (pp && !parse_points_part(pp, points_part))
         rc = fb_fail(FB_ERR_INPUT, "%s: malformed attribute fractalbake/points-part \"%s\"", path, pp);
     if (reg && !parse_region(reg, region))
         rc = fb_fail(FB_ERR_INPUT, "%s: malformed attribute fractalbake/region \"%s\"", path, reg);
@@ -468,7 +472,7 @@ static int cmd_merge(int argc, char **argv)
         if (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--threads")) {
             if (!val)
                 bad = usage_error("%s: missing value", a);
-            else if (a[1] == 'o' || a[2] == 'o')
+            else if (strcmp(a, "--threads"))
                 out = val;
             else if (!parse_int_arg(val, 1, 1024, &threads))
                 bad = usage_error("--threads: expected an integer in 1..1024, found \"%s\"", val);
@@ -477,8 +481,9 @@ static int cmd_merge(int argc, char **argv)
             quiet = true;
         } else if (!strcmp(a, "--help")) {
             printf("usage: fractalbake merge PART.exr... -o OUT.exr [--threads N] [--quiet]\n"
-                   "Joins the region files of `fractalbake render --region X,Y,W,H` into the whole image. The parts\n"
-                   "must be regions of one bake (same size, channels and scene) that cover it with no overlap.\n");
+                   "Joins the region files of `fractalbake render --region X,Y,W,H` into the whole image: regions\n"
+                   "of one bake (same size, channels and scene) that cover it with no overlap. Or adds the N points\n"
+                   "parts of `render --points-part K/N` (chaos games split by points) into the whole game.\n");
             free(parts);
             return 0;
         } else if (a[0] == '-' && a[1]) {

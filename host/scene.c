@@ -1311,10 +1311,9 @@ static int layer_refs(fb_scene *s, int i, fb_ref **out, char names[][24])
  * after those it uses; a missing layer or a cycle is an error that names both layers. */
 static fb_result resolve_refs(const vctx *v, fb_scene *s)
 {
-    char sub[128], names[FB_MAX_LAYERS * 66] = "", rn[FB_OP_MAX_INPUTS + 1][24];
+    char sub[128], names[FB_MAX_LAYERS * 66], rn[FB_OP_MAX_INPUTS + 1][24];
     fb_ref *refs[FB_OP_MAX_INPUTS + 1];
-    for (int i = 0; i < s->nlayers; i++)
-        snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", i ? ", " : "", s->layers[i].name);
+    fb_scene_layer_names(s, names, sizeof names);
     for (int i = 0; i < s->nlayers; i++) {
         int nr = layer_refs(s, i, refs, rn);
         for (int k = 0; k < nr; k++) {
@@ -1718,6 +1717,13 @@ fb_result fb_scene_load_sets(const char *path, const char *const *sets, int nset
     fb_result rc = fb_scene_parse_sets(text, path, sets, nsets, out);
     free(text);
     return rc;
+}
+
+void fb_scene_layer_names(const fb_scene *s, char *out, size_t size)
+{
+    out[0] = 0;
+    for (int i = 0; i < s->nlayers; i++)
+        snprintf(out + strlen(out), size - strlen(out), "%s%s", i ? ", " : "", s->layers[i].name);
 }
 
 void fb_scene_fini(fb_scene *s)

@@ -198,6 +198,9 @@ const char *fb_scene_default_json(void);
 
 void fb_scene_fini(fb_scene *s);
 
+/* "a, b, c": the scene's layer names, for messages. */
+void fb_scene_layer_names(const fb_scene *s, char *out, size_t size);
+
 /* For the command line: converts `--flag value` of a single-generator command into the JSON scene
  * it stands for. `kind` is the generator ("fbm"). argv holds only the generator's flags. Returns
  * malloc'd JSON text in *json. Global flags (--size, --seed, --compression) become scene keys. */

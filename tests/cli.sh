@@ -449,6 +449,8 @@ for be in vulkan native; do
   valid_exr pb_$be.exr
 done
 "$FB" info pb_vulkan.exr | grep -q "the region 0,21,50,43 of a 128 x 64 image" && ok || bad "info does not show the region"
+"$FB" merge pc_vulkan.exr pa_vulkan.exr pb_vulkan.exr -o merged_t1.exr --threads 1 --quiet && cmp -s merged_vulkan.exr merged_t1.exr && ok || bad "merge --threads 1 differs"
+"$FB" compare c.exr set.exr --max-abs 0.01 --diff-png cd.png > /dev/null; [ $? -eq 1 ] && [ "$(od -An -tu1 -j25 -N1 cd.png | tr -d ' ')" = "2" ] && [ "$(png_wh cd.png)" = "128 64" ] && ok || bad "compare --diff-png wrote no RGB picture"
 "$FB" compare pb_vulkan.exr pc_vulkan.exr > /dev/null; [ $? -eq 1 ] && ok || bad "compare of two regions passed"
 "$FB" render --from pb_vulkan.exr -o pb2.exr --quiet && cmp -s pb_vulkan.exr pb2.exr && ok || bad "--from a region file did not reproduce it"
 expect_fail 2 "a region is missing" o.exr -- merge pa_vulkan.exr pb_vulkan.exr -o o.exr
@@ -541,11 +543,20 @@ if "$FB" $C --points cpts.csv --regions cregs.csv --water 5 -o con.exr --preview
 "$FB" $C --points cpts.csv --regions cregs.csv --water 5 --backend native -o con_n.exr && "$FB" compare con.exr con_n.exr > /dev/null && ok || bad "constrain differs between backends"
 "$FB" $C --points cpts.csv --regions cregs.csv --water 5 --threads 1 --backend native -o con_1.exr && "$FB" compare con.exr con_1.exr > /dev/null && ok || bad "constrain depends on the thread count"
 "$FB" $C --T 0.05 -o con_t.exr && "$FB" compare con.exr con_t.exr --layer terrain > /dev/null; [ $? -eq 1 ] && ok || bad "--T changed nothing"
+# every model key reaches the computation: each one changes the result
+"$FB" $C --points cpts.csv --regions cregs.csv -o cbase.exr
+for f in "--macro cone" "--macro-height 5" "--hurst 0.6" "--sigma 2" "--delta 0.5" "--buffering naive" "--domain 2" "--falloff 0.5" "--seed 9"; do
+  "$FB" $C --points cpts.csv --regions cregs.csv $f -o cf.exr
+  "$FB" compare cbase.exr cf.exr > /dev/null; [ $? -eq 1 ] && ok || bad "constrain $f changed nothing"
+done
 # 1D: a CSV profile in, x,d,D out; the constraint rows have D == d
 printf 'x,d\n0,0\n50,10\n100,0\n' > prof.csv
 "$FB" constrain --size 256x1 --profile prof.csv --points <(printf '128,0\n40,0\n') --csv out1d.csv -o p1d.exr --quiet && ok || bad "1D constrain failed"
 [ "$(wc -l < out1d.csv)" = 257 ] && head -1 out1d.csv | grep -q "^x,d,D$" && ok || bad "1D CSV: $(head -2 out1d.csv)"
 awk -F, '$1 == 128 || $1 == 40 {if ($2 != $3) bad = 1} END {exit bad}' out1d.csv && ok || bad "1D constraints not exact in the CSV"
+"$FB" constrain --size 256x1 --profile prof.csv --points <(printf '128,0\n') --plot p1d.png -o p1d2.exr --quiet &&
+  [ "$(od -An -tu1 -j25 -N1 p1d.png | tr -d ' ')" = "2" ] && [ "$(png_wh p1d.png)" = "256 240" ] && ok || bad "1D plot is not a 256 x 240 RGB PNG"
+expect_fail 2 "plot output is for 1D profiles" o.exr -- $C --plot x.png -o o.exr
 # a macro shape from an EXR channel, and its size must match
 "$FB" fbm --size 120x80 --quiet --octaves 3 -o macro.exr
 "$FB" $C --macro macro.exr:fbm.Y -o cm.exr && ok || bad "macro from an EXR failed"

@@ -1,5 +1,6 @@
 #include "../gen.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -49,4 +50,20 @@ void fb_gen_groups(const fb_gen *g, int n, uint32_t out[3])
     out[0] = ((uint32_t)g->scene->width + 63) / 64;
     out[1] = (uint32_t)n;
     out[2] = 1;
+}
+
+int fb_gen_channel_of(const fb_gen *src, const char *channel, const char *who, const char *what)
+{
+    char want[160], have[FB_GEN_MAX_CHANNELS * 40] = "";
+    snprintf(want, sizeof want, "%s.%s", src->layer->name, channel[0] ? channel : "Y");
+    int c = -1;
+    for (int i = 0; i < src->nchannels; i++) {
+        if (!strcmp(src->channel_names[i], want)) c = i;
+        snprintf(have + strlen(have), sizeof have - strlen(have), "%s%s", i ? ", " : "",
+                 strchr(src->channel_names[i], '.') + 1);
+    }
+    if (c < 0)
+        fb_fail(FB_ERR_INPUT, "layer \"%s\": %s \"%s\": layer \"%s\" has no channel %s (channels: %s)", who, what, want,
+                src->layer->name, channel[0] ? channel : "Y (name one)", have);
+    return c;
 }

@@ -28,22 +28,6 @@ fb_result fb_gen_op_init(fb_gen *g)
     return FB_OK;
 }
 
-int fb_gen_channel_of(const fb_gen *src, const char *channel, const char *who, const char *what)
-{
-    char want[160], have[FB_GEN_MAX_CHANNELS * 40] = "";
-    snprintf(want, sizeof want, "%s.%s", src->layer->name, channel[0] ? channel : "Y");
-    int c = -1;
-    for (int i = 0; i < src->nchannels; i++) {
-        if (!strcmp(src->channel_names[i], want)) c = i;
-        snprintf(have + strlen(have), sizeof have - strlen(have), "%s%s", i ? ", " : "",
-                 strchr(src->channel_names[i], '.') + 1);
-    }
-    if (c < 0)
-        fb_fail(FB_ERR_INPUT, "layer \"%s\": %s \"%s\": layer \"%s\" has no channel %s (channels: %s)", who, what, want,
-                src->layer->name, channel[0] ? channel : "Y (name one)", have);
-    return c;
-}
-
 fb_result fb_gen_op_resolve(fb_gen *g, const fb_gen *const *gens, const int *plane_offset)
 {
     const fb_op_params *o = &g->layer->op;
