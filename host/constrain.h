@@ -59,6 +59,10 @@ fb_result fb_constrain_run(const fb_constrain_desc *d, bool want_p, fb_constrain
  * kind whose domain reaches it (F0 when none does). Used by fb_constrain_run and by the tests. */
 double fb_constrain_field(const fb_constrain_desc *d, bool is_h, int x, int y);
 
+/* The standard normal deviate the recursion uses for node `index` (row-major on the grid): the
+ * normal quantile (Acklam's approximation) of a 32-bit hash of (seed, index). For the tests. */
+double fb_constrain_normal(uint32_t seed, uint32_t index);
+
 /* Built-in macro shapes over the image ("cone", "ridge", "boss", "bowl"), height h; 1D profiles
  * use the row. Returns false for an unknown name. */
 bool fb_constrain_macro(const char *name, int width, int height, double h, float *out);

@@ -66,4 +66,8 @@ void fb_temp_path(const char *path, char *out, size_t size);
 /* Number of online CPU cores (at least 1). */
 int fb_cpu_count(void);
 
+/* malloc for arrays of hundreds of MiB: 2 MiB-aligned and marked for transparent huge pages, so the
+ * first touch costs a fault per 2 MiB instead of per 4 KiB (the kernel may decline). Free with free(). */
+void *fb_malloc_large(size_t size);
+
 #endif

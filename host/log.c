@@ -2,7 +2,9 @@
 
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -91,4 +93,16 @@ int fb_cpu_count(void)
 {
     long n = sysconf(_SC_NPROCESSORS_ONLN);
     return n > 0 ? (int)n : 1;
+}
+
+void *fb_malloc_large(size_t size)
+{
+    const size_t huge = (size_t)2 << 20;
+    if (size < huge) return malloc(size);
+    void *p = NULL;
+    if (posix_memalign(&p, huge, size)) return NULL;
+#ifdef MADV_HUGEPAGE
+    madvise(p, size & ~(size_t)4095, MADV_HUGEPAGE); /* advice only: failure changes nothing */
+#endif
+    return p;
 }

@@ -199,8 +199,8 @@ static void test_harmonic(void)
     CHECK(o.T[100 * W + 140] == (float)(0.3 + (0.6 - 0.3) / (1 + 0.01 * 900))); /* 40 from the first: out of reach */
     CHECK(o.T[0] == (float)0.3 && o.H[30 * W + 30] == (float)0.9 && o.H[100 * W + 105] == (float)0.8);
     int bad = 0;
-    for (int y = 0; y < H; y += 7)
-        for (int x = 0; x < W; x += 5)
+    for (int y = 0; y < H; y++) /* every pixel, the domains clipped at the image edges included */
+        for (int x = 0; x < W; x++)
             bad += o.T[y * W + x] != (float)fb_constrain_field(&d, false, x, y) ||
                    o.H[y * W + x] != (float)fb_constrain_field(&d, true, x, y);
     CHECK(bad == 0);
@@ -222,12 +222,50 @@ static void test_threads(void)
     d.threads = 3;
     CHECK(fb_constrain_run(&d, true, &b) == FB_OK);
     CHECK(!memcmp(a.D, b.D, (size_t)W * H * 4) && !memcmp(a.P, b.P, (size_t)W * H * 4));
+    CHECK(!memcmp(a.T, b.T, (size_t)W * H * 4) && !memcmp(a.H, b.H, (size_t)W * H * 4));
     out_free(&a), out_free(&b);
     free(m);
 }
 
+static int cmp_d(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The node deviates are standard normal: Kolmogorov-Smirnov distance to Phi(z) = erfc(-z/sqrt 2)/2
+ * below the 0.1% critical value 1.95/sqrt(n), mean and variance within 5 standard errors, and the
+ * share beyond 3 sigma (0.0027) within 5 of its standard errors. */
+static void test_normal(void)
+{
+    enum { n = 1 << 20 };
+    double *z = malloc(n * sizeof *z), m = 0, v = 0, ks = 0;
+    int tail = 0;
+    for (int i = 0; i < n; i++) {
+        z[i] = fb_constrain_normal(5, (uint32_t)i * 3u);
+        m += z[i];
+        tail += fabs(z[i]) > 3;
+    }
+    m /= n;
+    for (int i = 0; i < n; i++) v += (z[i] - m) * (z[i] - m);
+    v /= n - 1;
+    qsort(z, n, sizeof *z, cmp_d);
+    for (int i = 0; i < n; i++) {
+        double F = 0.5 * erfc(-z[i] / sqrt(2.0)), lo = fabs(F - (double)i / n), hi = fabs(F - (double)(i + 1) / n);
+        ks = fmax(ks, fmax(lo, hi));
+    }
+    double p3 = erfc(3 / sqrt(2.0));
+    CHECK(ks < 1.95 / sqrt((double)n));
+    CHECK(fabs(m) < 5 / sqrt((double)n));
+    CHECK(fabs(v - 1) < 5 * sqrt(2.0 / n));
+    CHECK(fabs((double)tail / n - p3) < 5 * sqrt(p3 * (1 - p3) / n));
+    CHECK(z[0] > -6.5 && z[n - 1] < 6.5 && z[0] < -4 && z[n - 1] > 4);
+    free(z);
+}
+
 int main(void)
 {
+    test_normal();
     test_exact();
     test_sqrt_t();
     test_roughness();
