@@ -162,7 +162,12 @@ static fb_result encode_batch(exrio_writer *w, batch *b, char *msg, size_t msgsz
                 rc = FB_ERR_NOMEM;
                 break;
             }
-            memcpy(b->chunk_data[p][k], enc.compressed_buffer, enc.compressed_bytes);
+            /* A chunk whose size equals its packed size is raw to every reader. OpenEXRCore 3.1.5
+             * (Debian 12) falls back to the raw rows only when deflate's output is larger, so a chunk
+             * that deflates to exactly its raw size was written compressed and read back as garbage
+             * (a julia layer storing only `de` hit it). The packed rows are the raw data. */
+            const void *bytes = enc.compressed_bytes == enc.packed_bytes ? enc.packed_buffer : enc.compressed_buffer;
+            memcpy(b->chunk_data[p][k], bytes, enc.compressed_bytes);
             continue;
         exr_fail:
             snprintf(msg, msgsz, "%s: encoding rows from %d failed: %s", w->path, y, t_exr_msg);
