@@ -2,7 +2,8 @@
 # Runs every benchmark once and appends the machine-readable lines, with date and machine, to
 # bench/results.jsonl. Usage: bench/run.sh [--size WxH]
 # The Delaunay peer (CGAL's Delaunay_triangulation_2, bench/cgal_delaunay.cpp) is built and run
-# beside fractalbake's own when libcgal-dev can be installed; fractalbake never links CGAL.
+# beside fractalbake's own when libcgal-dev can be installed, and the chaos-game peer (libflam3 rendering
+# the fern, bench/flam3_fern.c) when libflam3-dev can; fractalbake never links either.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh
@@ -13,9 +14,15 @@ if dpkg-query -W -f='${Status}' libcgal-dev 2>/dev/null | grep -q "install ok in
   { [ "$(id -u)" -eq 0 ] && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends libcgal-dev g++ > /dev/null 2>&1; }; then
   g++ -O3 -march=native -DNDEBUG -o build/cgal_delaunay bench/cgal_delaunay.cpp -lgmp -lmpfr && peer=build/cgal_delaunay
 fi
+flam3=""
+if dpkg-query -W -f='${Status}' libflam3-dev 2>/dev/null | grep -q "install ok installed" ||
+  { [ "$(id -u)" -eq 0 ] && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends libflam3-dev pkg-config > /dev/null 2>&1; }; then
+  gcc -O3 -march=native -o build/flam3_fern bench/flam3_fern.c $(pkg-config --cflags --libs flam3) && flam3=build/flam3_fern
+fi
 {
   ./build/fractalbake bench --json "$@"
   if [ -n "$peer" ]; then "$peer" --json; fi
+  if [ -n "$flam3" ]; then "$flam3" --json "$@"; fi
 } | while read -r line; do
   echo "{\"date\": \"$(date -u +%Y-%m-%d)\", \"machine\": \"$machine\", \"result\": $line}"
 done | tee -a bench/results.jsonl
