@@ -205,7 +205,33 @@ struct vkc_context {
     float timestamp_period;
     bool validation;
     uint32_t validation_messages;
+    struct vkc_pipeline *pipes; /* every pipeline made, for reuse (freed with the context) */
 };
+
+/* Pipelines are kept by the context and reused: a compute pipeline's compilation is a large share
+ * of a small bake on lavapipe (0.1 to 0.3 s for the Julia shader), and lavapipe's VkPipelineCache
+ * does not keep compiled code. The key is the whole description (the SPIR-V by address: it is
+ * embedded in the binary). */
+struct vkc_pipeline {
+    VkDescriptorSetLayout dsl;
+    VkPipelineLayout layout;
+    VkPipeline pipeline;
+    uint32_t push_size;
+    uint32_t buffers;
+    const uint32_t *spv;
+    size_t spv_size;
+    uint32_t spec[8], nspec;
+    struct vkc_pipeline *next;
+};
+
+static void pipeline_free(vkc_context *ctx, vkc_pipeline *p)
+{
+    if (p->pipeline) g_vk.vkDestroyPipeline(ctx->device, p->pipeline, NULL);
+    if (p->layout) g_vk.vkDestroyPipelineLayout(ctx->device, p->layout, NULL);
+    if (p->dsl) g_vk.vkDestroyDescriptorSetLayout(ctx->device, p->dsl, NULL);
+    memset(p, 0, sizeof *p);
+    free(p);
+}
 
 static VKAPI_ATTR VkBool32 VKAPI_CALL debug_cb(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                                VkDebugUtilsMessageTypeFlagsEXT types,
@@ -674,6 +700,11 @@ void vkc_destroy(vkc_context **pctx)
             g_vk.vkDestroyPipelineCache(ctx->device, ctx->cache, NULL);
         }
         if (ctx->pool) g_vk.vkDestroyCommandPool(ctx->device, ctx->pool, NULL);
+        while (ctx->pipes) {
+            vkc_pipeline *p = ctx->pipes;
+            ctx->pipes = p->next;
+            pipeline_free(ctx, p);
+        }
         g_vk.vkDestroyDevice(ctx->device, NULL);
     }
     if (ctx->messenger) g_vk.vkDestroyDebugUtilsMessengerEXT(ctx->instance, ctx->messenger, NULL);
@@ -700,24 +731,27 @@ bool vkc_validation_enabled(const vkc_context *ctx)
 
 /* ---- pipelines ------------------------------------------------------------------------------ */
 
-struct vkc_pipeline {
-    VkDescriptorSetLayout dsl;
-    VkPipelineLayout layout;
-    VkPipeline pipeline;
-    uint32_t push_size;
-    uint32_t buffers;
-};
-
 fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, vkc_pipeline **out)
 {
     fb_result rc = FB_OK;
     VkShaderModule module = VK_NULL_HANDLE;
     if (desc->buffers > 8 || desc->push_size > 128 || desc->push_size % 4 != 0)
         return fb_fail(FB_ERR_INTERNAL, "vulkan: pipeline %s: bad description", desc->name);
+    uint32_t nspec = desc->nspec < 8 ? desc->nspec : 8;
+    for (vkc_pipeline *q = ctx->pipes; q; q = q->next)
+        if (q->spv == desc->spv && q->spv_size == desc->spv_size && q->push_size == desc->push_size &&
+            q->buffers == desc->buffers && q->nspec == nspec && !memcmp(q->spec, desc->spec, 4 * nspec)) {
+            *out = q;
+            return FB_OK;
+        }
     vkc_pipeline *p = calloc(1, sizeof *p);
     if (!p) return fb_fail(FB_ERR_NOMEM, "out of memory creating pipeline %s", desc->name);
     p->push_size = desc->push_size;
     p->buffers = desc->buffers;
+    p->spv = desc->spv;
+    p->spv_size = desc->spv_size;
+    p->nspec = nspec;
+    if (nspec) memcpy(p->spec, desc->spec, 4 * nspec);
 
     VkDescriptorSetLayoutBinding bindings[8];
     for (uint32_t i = 0; i < desc->buffers; i++)
@@ -751,7 +785,6 @@ fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, v
     /* Specialization lets the device compiler fold uniform choices (noise kind, style flags) away:
      * on lavapipe every branch it cannot prove uniform costs both sides. */
     VkSpecializationMapEntry entries[8];
-    uint32_t nspec = desc->nspec < 8 ? desc->nspec : 8;
     for (uint32_t i = 0; i < nspec; i++)
         entries[i] = (VkSpecializationMapEntry){.constantID = i, .offset = 4 * i, .size = 4};
     VkSpecializationInfo spec = {
@@ -774,24 +807,21 @@ fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, v
     };
     VKC_CHECK(g_vk.vkCreateComputePipelines(ctx->device, ctx->cache, 1, &cpci, NULL, &p->pipeline), fail);
     g_vk.vkDestroyShaderModule(ctx->device, module, NULL);
+    p->next = ctx->pipes;
+    ctx->pipes = p;
     *out = p;
     return FB_OK;
 fail:
     if (module) g_vk.vkDestroyShaderModule(ctx->device, module, NULL);
-    vkc_pipeline_destroy(ctx, &p);
+    pipeline_free(ctx, p);
     return rc;
 }
 
+/* The context keeps the pipeline for reuse; it is freed with the context. */
 void vkc_pipeline_destroy(vkc_context *ctx, vkc_pipeline **pp)
 {
-    if (!pp || !*pp) return;
-    vkc_pipeline *p = *pp;
-    if (p->pipeline) g_vk.vkDestroyPipeline(ctx->device, p->pipeline, NULL);
-    if (p->layout) g_vk.vkDestroyPipelineLayout(ctx->device, p->layout, NULL);
-    if (p->dsl) g_vk.vkDestroyDescriptorSetLayout(ctx->device, p->dsl, NULL);
-    memset(p, 0, sizeof *p);
-    free(p);
-    *pp = NULL;
+    (void)ctx;
+    if (pp) *pp = NULL;
 }
 
 /* ---- buffers -------------------------------------------------------------------------------- */

@@ -67,6 +67,8 @@ typedef struct vkc_pipeline_desc {
 
 #define FB_SPV(arr) .spv = (arr), .spv_size = sizeof(arr)
 
+/* A pipeline for the description: made once per context and then reused (the context owns it, and
+ * frees it in vkc_destroy). vkc_pipeline_destroy gives the handle back and sets it to NULL. */
 fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, vkc_pipeline **out);
 void vkc_pipeline_destroy(vkc_context *ctx, vkc_pipeline **p);
 
