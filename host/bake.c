@@ -74,7 +74,8 @@ static void native_task_fn(void *ctx, int t)
     int r1 = r0 + nt->rows_per_task < nt->n ? r0 + nt->rows_per_task : nt->n;
     size_t row_bytes = (size_t)nt->gen->scene->width * 4;
     void *planes[FB_GEN_MAX_CHANNELS];
-    for (int c = 0; c < nt->gen->nchannels; c++) planes[c] = (uint8_t *)nt->planes[c] + (size_t)r0 * row_bytes;
+    for (int k = 0; k < fb_gen_nplanes(nt->gen); k++)
+        planes[k] = nt->planes[k] ? (uint8_t *)nt->planes[k] + (size_t)r0 * row_bytes : NULL;
     nt->gen->native_rows(nt->gen, nt->y0 + r0, r1 - r0, planes);
 }
 
@@ -83,37 +84,40 @@ static fb_result run_init(fb_engine *e, layer_run *lr, int strip_rows)
     const fb_scene *s = lr->gen.scene;
     size_t bytes = (size_t)s->width * (size_t)strip_rows * 4;
     fb_result rc = FB_OK;
+    const int np = fb_gen_nplanes(&lr->gen);
     if (e->kind == FB_BACKEND_VULKAN && !lr->gen.prepare && !lr->gen.host_op) {
-        rc =
-            vkc_pipeline_create(e->vk,
-                                &(vkc_pipeline_desc){.spv = lr->gen.spv,
-                                                     .spv_size = lr->gen.spv_size,
-                                                     .push_size = lr->gen.push_size,
-                                                     .buffers = (uint32_t)lr->gen.nchannels + (lr->gen.input ? 1u : 0u),
-                                                     .spec = lr->gen.spec,
-                                                     .nspec = lr->gen.nspec,
-                                                     .name = lr->gen.layer->name},
-                                &lr->pipe);
+        rc = vkc_pipeline_create(e->vk,
+                                 &(vkc_pipeline_desc){.spv = lr->gen.spv,
+                                                      .spv_size = lr->gen.spv_size,
+                                                      .push_size = lr->gen.push_size,
+                                                      .buffers = (uint32_t)np + (lr->gen.input ? 1u : 0u),
+                                                      .spec = lr->gen.spec,
+                                                      .nspec = lr->gen.nspec,
+                                                      .name = lr->gen.layer->name},
+                                 &lr->pipe);
         for (int k = 0; k < SLOTS && !rc; k++) {
             rc = vkc_job_create(e->vk, lr->pipe, &lr->job[k]);
-            for (int c = 0; c < lr->gen.nchannels && !rc; c++) rc = vkc_buffer_create(e->vk, bytes, &lr->buf[k][c]);
+            /* a plane the layer does not store is never written: a token buffer binds it */
+            for (int c = 0; c < np && !rc; c++)
+                rc = vkc_buffer_create(e->vk, fb_gen_plane_stored(&lr->gen, c) ? bytes : 16, &lr->buf[k][c]);
         }
         if (!rc && lr->gen.input) {
-            int at = lr->gen.nchannels;
+            int at = np;
             rc = vkc_buffer_create(e->vk, lr->gen.input_size, &lr->buf[0][at]);
             if (!rc) rc = vkc_buffer_upload(e->vk, lr->buf[0][at], lr->gen.input, lr->gen.input_size);
             for (int k = 1; k < SLOTS; k++) lr->buf[k][at] = lr->buf[0][at]; /* one input, both slots */
         }
         return rc;
     }
-    for (int c = 0; c < lr->gen.nchannels; c++)
-        if (!(lr->planes[c] = malloc(bytes))) return fb_fail(FB_ERR_NOMEM, "out of memory for a strip of rows");
+    for (int c = 0; c < np; c++)
+        if (fb_gen_plane_stored(&lr->gen, c) && !(lr->planes[c] = malloc(bytes)))
+            return fb_fail(FB_ERR_NOMEM, "out of memory for a strip of rows");
     return FB_OK;
 }
 
 static void run_fini(fb_engine *e, layer_run *lr)
 {
-    for (int k = 1; k < SLOTS; k++) lr->buf[k][lr->gen.nchannels] = NULL; /* the shared input: freed once */
+    for (int k = 1; k < SLOTS; k++) lr->buf[k][fb_gen_nplanes(&lr->gen)] = NULL; /* the shared input: freed once */
     for (int k = 0; k < SLOTS; k++) {
         if (e->vk) vkc_job_destroy(e->vk, &lr->job[k]);
         for (int c = 0; c <= FB_GEN_MAX_CHANNELS; c++) {
@@ -133,8 +137,8 @@ static fb_result run_submit(fb_engine *e, layer_run *lr, int slot, int y0, int n
     uint32_t groups[3];
     fb_gen_push(&lr->gen, y0, n, push);
     fb_gen_groups(&lr->gen, n, groups);
-    return vkc_job_submit(e->vk, lr->job[slot], lr->buf[slot], (uint32_t)lr->gen.nchannels + (lr->gen.input ? 1u : 0u),
-                          push, groups);
+    return vkc_job_submit(e->vk, lr->job[slot], lr->buf[slot],
+                          (uint32_t)fb_gen_nplanes(&lr->gen) + (lr->gen.input ? 1u : 0u), push, groups);
 }
 
 /* Makes the strip [y0, y0+n) available in planes[]: waits for the GPU job, or computes it natively. */
@@ -146,7 +150,8 @@ static fb_result run_collect(fb_engine *e, layer_run *lr, int slot, int y0, int 
         fb_result rc = vkc_job_wait(e->vk, lr->job[slot], &t);
         if (rc) return rc;
         if (t > 0) *gpu_seconds += t;
-        for (int c = 0; c < lr->gen.nchannels; c++) planes[c] = vkc_buffer_data(lr->buf[slot][c]);
+        for (int c = 0; c < lr->gen.nchannels; c++)
+            planes[c] = vkc_buffer_data(lr->buf[slot][fb_gen_plane_of(&lr->gen, c)]);
         return FB_OK;
     }
     int threads = e->pool ? fb_pool_threads(e->pool) : 1;
@@ -157,7 +162,7 @@ static fb_result run_collect(fb_engine *e, layer_run *lr, int slot, int y0, int 
         fb_pool_run(e->pool, (n + per - 1) / per, native_task_fn, &nt);
     else /* a host-side layer (tone mapping) on the vulkan backend */
         for (int t = 0; t < (n + per - 1) / per; t++) native_task_fn(&nt, t);
-    for (int c = 0; c < lr->gen.nchannels; c++) planes[c] = lr->planes[c];
+    for (int c = 0; c < lr->gen.nchannels; c++) planes[c] = lr->planes[fb_gen_plane_of(&lr->gen, c)];
     return FB_OK;
 }
 
@@ -170,6 +175,9 @@ typedef struct previews {
     fb_preview *p[FB_MAX_LAYERS];
     int layer[FB_MAX_LAYERS], first[FB_MAX_LAYERS], alpha[FB_MAX_LAYERS]; /* channel indices; alpha -1: none */
     int offset[FB_MAX_LAYERS]; /* the layer's first plane among all planes of a strip */
+    bool uint[FB_MAX_LAYERS];  /* a scalar uint channel (a julia layer's iter alone): shown as float */
+    float *conv;               /* its rows as float: region width x strip rows */
+    int width, stride;         /* the region's width; the planes' row stride */
 } previews;
 
 static int alpha_channel(const fb_gen *g)
@@ -206,31 +214,45 @@ static fb_result previews_create(const fb_scene *s, const layer_run *runs, const
             int k = pv->n++;
             pv->layer[k] = i;
             pv->offset[k] = at;
-            pv->first[k] = g->preview_rgb > 0 ? g->preview_rgb : g->preview_channel;
+            pv->first[k] = g->preview_rgb >= 0 ? g->preview_rgb : g->preview_channel;
             pv->alpha[k] = pv->over ? alpha_channel(g) : -1;
-            fb_result rc = fb_preview_create_alpha(region[2], region[3], 2048, g->preview_rgb > 0 ? 3 : 1,
+            fb_result rc = fb_preview_create_alpha(region[2], region[3], 2048, g->preview_rgb >= 0 ? 3 : 1,
                                                    pv->alpha[k] >= 0, &pv->p[k]);
             if (rc) return rc;
             fb_preview_set_row_stride(pv->p[k], s->width);
-            if (g->preview_rgb <= 0 && g->preview_shade[0] > 0)
+            pv->uint[k] = g->preview_rgb < 0 && g->channel_types[g->preview_channel] == EXRIO_UINT;
+            if (g->preview_rgb < 0 && g->preview_shade[0] > 0)
                 fb_preview_set_hillshade(pv->p[k], g->preview_shade[0], g->preview_shade[1]);
         }
         at += g->nchannels;
     }
+    pv->width = region[2];
+    pv->stride = s->width;
     return FB_OK;
 }
 
 /* planes: the region's first column of each strip row, rows the image width apart; y0 in the region */
-static void previews_add(previews *pv, const layer_run *runs, int y0, int n, const void *const *planes)
+static fb_result previews_add(previews *pv, const layer_run *runs, int y0, int n, const void *const *planes)
 {
     for (int k = 0; k < pv->n; k++) {
         const fb_gen *g = &runs[pv->layer[k]].gen;
         const void *const *lp = planes + pv->offset[k];
-        int f = pv->first[k], three = g->preview_rgb > 0;
+        int f = pv->first[k], three = g->preview_rgb >= 0;
         const float *rows[4] = {lp[f], lp[three ? f + 1 : f], lp[three ? f + 2 : f], NULL};
         if (pv->alpha[k] >= 0) rows[three ? 3 : 1] = lp[pv->alpha[k]];
+        if (pv->uint[k]) { /* converted into rows of the same stride */
+            float *conv = realloc(pv->conv, (size_t)n * pv->stride * sizeof *conv);
+            if (!conv) return fb_fail(FB_ERR_NOMEM, "out of memory for the preview");
+            pv->conv = conv;
+            const uint32_t *src = lp[f];
+            for (int r = 0; r < n; r++)
+                for (int x = 0; x < pv->width; x++)
+                    conv[(size_t)r * pv->stride + x] = (float)src[(size_t)r * pv->stride + x];
+            rows[0] = conv;
+        }
         fb_preview_add_rows(pv->p[k], y0, n, rows);
     }
+    return FB_OK;
 }
 
 static fb_result previews_write(const previews *pv, const char *path)
@@ -404,8 +426,8 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         }
         if (rc) break;
         for (int c = 0; c < at; c++) planes[c] = (const uint8_t *)planes[c] + (size_t)rx * 4; /* the region's columns */
-        if (d->preview) previews_add(&pv, runs, y0 - ry, n, planes);
-        if (w) rc = exrio_writer_rows(w, y0 - ry, n, planes);
+        if (d->preview) rc = previews_add(&pv, runs, y0 - ry, n, planes);
+        if (!rc && w) rc = exrio_writer_rows(w, y0 - ry, n, planes);
         fb_progress_update(&prog, (uint64_t)(y0 - ry + n) * rw, (uint64_t)rh * rw);
     }
     fb_progress_finish(&prog);
@@ -423,6 +445,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
 out:
     exrio_writer_abort(&w);
     for (int k = 0; k < pv.n; k++) fb_preview_destroy(&pv.p[k]);
+    free(pv.conv);
     for (int i = 0; i < s->nlayers; i++) run_fini(e, &runs[i]);
     free(runs);
     if (stats) {

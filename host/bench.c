@@ -323,6 +323,30 @@ static fb_result run_case(const bench_opts *o, bench_case *bc, fb_scene *s, cons
     return rc;
 }
 
+/* The layer alone (no file) on each backend, under another mode name: a variant of a case whose work
+ * run_case has measured (a julia layer storing only `iter`: like for like with the AVX2 loop). */
+static fb_result run_variant(const bench_opts *o, const bench_case *bc, fb_scene *s, const char *mode)
+{
+    fb_result rc = FB_OK;
+    double wall, gpu;
+    fb_engine e;
+    bool have_vulkan = false;
+    if (o->vulkan && !(rc = open_vulkan(o, &e, &have_vulkan)) && have_vulkan) {
+        rc = timed(&e, s, NULL, &wall, &gpu);
+        if (!rc) report(o, bc, e.device, "vulkan", mode, 0, wall, gpu);
+        fb_engine_close(&e);
+    }
+    if (!rc && o->native) {
+        rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = o->threads}, &e);
+        if (!rc) {
+            rc = timed(&e, s, NULL, &wall, &gpu);
+            if (!rc) report(o, bc, e.device, "native", mode, e.threads, wall, -1);
+            fb_engine_close(&e);
+        }
+    }
+    return rc;
+}
+
 /* ---- Delaunay triangulation and terrain refinement (CPU, one thread) ----------------------------- */
 
 /* The benchmark's points: splitmix64, so that bench/cgal_delaunay.cpp generates the same ones. */
@@ -551,6 +575,14 @@ fb_result fb_bench_main(int argc, char **argv)
                        o.width, o.height);
             rc = run_case(&o, &bc, &s, out);
         }
+        fb_scene_fini(&s);
+        /* the same layer storing `iter` only: the escape loop alone, as the AVX2 reference runs it */
+        snprintf(json, sizeof json,
+                 "{\"size\": [%d, %d], \"seed\": 1, \"layers\": [{\"type\": \"julia\", \"c\": [-0.8, 0.156], "
+                 "\"max-iter\": 256, \"channels\": [\"iter\"]}]}",
+                 o.width, o.height);
+        if (!rc) rc = fb_scene_parse(json, NULL, &s);
+        if (!rc) rc = run_variant(&o, &bc, &s, "generate-iter-only");
         fb_scene_fini(&s);
     }
     if (!rc && o.ifs) {

@@ -21,12 +21,19 @@ struct fb_gen {
     const fb_layer *layer;
     int nchannels;
     int preview_channel; /* the float channel a grey preview shows */
-    int preview_rgb;     /* if > 0: the first of three float channels R, G, B shown in colour instead */
+    int preview_rgb;     /* if >= 0: the first of three float channels R, G, B shown in colour instead (-1) */
     char channel_names[FB_GEN_MAX_CHANNELS][80];
     exrio_type channel_types[FB_GEN_MAX_CHANNELS];
 
-    /* native: fill rows [y0, y0 + n); planes[c] holds n * width values (4 bytes each) */
+    /* native: fill rows [y0, y0 + n); planes[k] holds n * width values (4 bytes each) for each of the
+     * kernel's planes (see nkernel), NULL for a plane the layer does not store */
     void (*native_rows)(const fb_gen *g, int y0, int n, void *const *planes);
+
+    /* A kernel that can compute more channels than the layer stores (a julia layer's `channels`):
+     * nkernel planes (the shader's buffers 0..nkernel-1), stored channel c being plane kernel_of[c].
+     * Planes not stored are neither computed nor written. nkernel 0: the planes are the channels. */
+    int nkernel;
+    int kernel_of[FB_GEN_MAX_CHANNELS];
 
     /* vulkan: the shader, its push constants for a strip, and its workgroup counts */
     const uint32_t *spv;
@@ -35,7 +42,7 @@ struct fb_gen {
     uint32_t params_size;
     const void *input; /* read-only data for the kernel (binding nchannels), or NULL */
     uint32_t input_size;
-    uint32_t spec[4]; /* specialization constants 0..nspec-1 */
+    uint32_t spec[8]; /* specialization constants 0..nspec-1 */
     uint32_t nspec;
 
     /* Layers that are not a function of the pixel (the chaos game) compute everything here, once, on
@@ -61,6 +68,8 @@ struct fb_gen {
     const struct fb_gen *macro_src;
     int macro_channel;
 
+    int per_invocation; /* vulkan: pixels of a row per invocation (0: 1) */
+
     bool scalar; /* native: the portable kernel only, no hand-vectorised path (benchmark reference) */
     _Alignas(16) unsigned char params[256]; /* generator-private, e.g. K_FbmParams */
     void *owned;                            /* generator-owned memory (freed by fb_gen_fini) */
@@ -70,10 +79,17 @@ struct fb_gen {
 /* Sets up the generator of `layer`. */
 fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer);
 
+/* The kernel's planes (nkernel, or the channels), the plane of stored channel c, and whether plane k
+ * is stored. */
+int fb_gen_nplanes(const fb_gen *g);
+int fb_gen_plane_of(const fb_gen *g, int c);
+bool fb_gen_plane_stored(const fb_gen *g, int k);
+
 /* The push constants of a strip: the generator's parameter block, then y0 and the row count. */
 void fb_gen_push(const fb_gen *g, int y0, int n, void *out);
 
-/* Workgroups for a strip of n rows: 64 invocations wide, one per pixel, one row of groups per row. */
+/* Workgroups for a strip of n rows: 64 invocations wide, each for `per_invocation` pixels (1 unless
+ * the generator says), one row of groups per row. */
 void fb_gen_groups(const fb_gen *g, int n, uint32_t out[3]);
 
 /* Frees what the generator owns. Null-safe, idempotent. */

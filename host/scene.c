@@ -34,6 +34,7 @@ typedef enum ktype {
     T_MAPS,     /* IFS maps: [[a, b, c, d, e, f(, p)], ...] */
     T_BOUNDS,   /* "auto" or [xmin, xmax, ymin, ymax] */
     T_FRACS,    /* 1..64 numbers in [lo, hi] */
+    T_NAMES,    /* 1..32 distinct names from `enums` (flag: a comma list) */
     T_IFSREF,   /* a preset name or a map list */
     T_POINTS,   /* a file path, or an inline list [[x, y, z], ...] */
     T_RULES,    /* L-system productions: ["X=successor", "X(p)=successor", ...] (flag: --rule, repeatable) */
@@ -103,6 +104,9 @@ static const keyspec julia_keys[] = {
     {"turbulence-octaves", T_INT, 1, 32, false, NULL, "6", "octaves of W"},
     {"turbulence-frequency", T_NUM, 0, 1e4, true, NULL, "4.0", "cycles of W's first octave across the image"},
     {"samples", T_INT, 1, 1024, false, NULL, "1", "jittered colour samples per pixel (iter, n, inside, de: centre)"},
+    {"channels", T_NAMES, 0, 0, false, "iter|n|inside|de|R|G|B",
+     "[\"iter\", \"n\", \"inside\", \"de\", \"R\", \"G\", \"B\"]",
+     "channels to store; what none of them needs is not computed (R, G, B go together)"},
     {"palette", T_ENUM, 0, 0, false, FB_PALETTE_NAMES, "\"night\"", "named colour map"},
     {"cosine", T_NUMLIST, -10, 10, false, NULL, NULL,
      "cosine palette a + b cos(2 pi (c t + d)): 12 numbers aR,aG,aB,bR,bG,bB,cR,cG,cB,dR,dG,dB", 12},
@@ -730,6 +734,18 @@ static fb_result check_value(const vctx *v, const char *path, const keyspec *k, 
             return verr(v, path, "expected 1 to %d numbers in %g..%g, found %s", FB_IFS_MAX_MAPS, k->lo, k->hi, shown);
         return FB_OK;
     }
+    case T_NAMES: {
+        size_t n = json_is_array(j) ? json_array_size(j) : 0;
+        bool good = n >= 1 && n <= 32;
+        for (size_t i = 0; good && i < n; i++) {
+            const json_t *e = json_array_get(j, i);
+            good = json_is_string(e) && enum_index(k->enums, json_string_value(e), &idx);
+            for (size_t m = 0; good && m < i; m++)
+                good = strcmp(json_string_value(json_array_get(j, m)), json_string_value(e));
+        }
+        if (!good) return verr(v, path, "expected a list of distinct names from %s, found %s", k->enums, shown);
+        return FB_OK;
+    }
     case T_RULES: {
         size_t n = json_is_array(j) ? json_array_size(j) : 0;
         if (!json_is_array(j) || n > FB_LSYS_MAX_RULES)
@@ -899,6 +915,19 @@ static fb_result parse_julia(const vctx *v, const char *path, json_t *obj, const
     j->density_count = num(obj, "density-count");
     json_t *ic = json_object_get(obj, "inside-color");
     for (size_t i = 0; i < 3; i++) j->inside_color[i] = json_number_value(json_array_get(ic, i));
+    json_t *chs = json_object_get(obj, "channels");
+    j->channels = 0;
+    for (size_t i = 0; i < json_array_size(chs); i++) {
+        int idx = 0;
+        enum_index("iter|n|inside|de|R|G|B", json_string_value(json_array_get(chs, i)), &idx);
+        j->channels |= 1u << idx;
+    }
+    unsigned rgb = j->channels & 0x70u;
+    if (rgb && rgb != 0x70u) {
+        char sub[256];
+        snprintf(sub, sizeof sub, "%s.channels", path);
+        return verr(v, sub, "R, G and B go together: list all three or none");
+    }
     L->half = boolean(obj, "half");
     if (!(j->scale[0] > 0 && j->scale[1] > 0)) {
         char sub[256];
@@ -1931,6 +1960,17 @@ static json_t *flag_value(const keyspec *k, const char *flag, const char *s)
         }
         return arr;
     }
+    case T_NAMES: { /* "iter,n,R,G,B": the names are checked with the scene */
+        json_t *arr = json_array();
+        for (const char *q = s;;) {
+            const char *e = strchr(q, ',');
+            size_t len = e ? (size_t)(e - q) : strlen(q);
+            json_array_append_new(arr, json_stringn(q, len));
+            if (!e) break;
+            q = e + 1;
+        }
+        return arr;
+    }
     case T_BOUNDS:
     case T_FRACS: {
         if (k->type == T_BOUNDS && !strcmp(s, "auto")) return json_string(s);
@@ -2040,6 +2080,8 @@ void fb_scene_print_keys(const char *kind, void (*print)(const char *line, void 
                 snprintf(range, sizeof range, " %s%g..%g%s", k->lo_open ? "(" : "[", k->lo, k->hi, "]");
             else if (k->type == T_ENUM)
                 snprintf(range, sizeof range, " %s", k->enums);
+            else if (k->type == T_NAMES)
+                snprintf(range, sizeof range, " (comma list of %s)", k->enums);
             const char *flag = !strcmp(k->key, "name") ? "layer" : k->type == T_RULES ? "rule" : k->key;
             snprintf(line, sizeof line, "  --%-12s %s%s%s%s", flag, k->help, range, k->def ? "; default " : "",
                      k->def ? k->def : "");

@@ -59,6 +59,7 @@ typedef struct fb_julia_params {
     double turbulence, turb_hurst, turb_frequency;
     int turb_octaves;
     int samples;
+    unsigned channels; /* bit k: stored channel k of iter, n, inside, de, R, G, B */
 } fb_julia_params;
 
 typedef struct fb_ifs_params {

@@ -104,14 +104,44 @@ K_FN k_vec2 k_julia_dstart(K_JuliaParams p, float u, float v)
     return k_vec2(p.rot_c * dx - p.rot_s * dy, p.rot_s * dx + p.rot_c * dy);
 }
 
-/* (tw_re, tw_im): the turbulence term lambda W(p) added to z0 (eq. 13); 0 for none. */
-K_FN K_JuliaResult k_julia_orbit(K_JuliaParams p, float px, float py, float dpx, float dpy, float tw_re, float tw_im)
+/* What an orbit must produce beyond the escape count: the smooth count (also what colour needs)
+ * and the distance estimate. Channels a layer does not store are not computed; what is computed is
+ * the same to the bit whatever else is. */
+#define K_JULIA_WANT_SMOOTH 1u
+#define K_JULIA_WANT_DE     2u
+#define K_JULIA_WANT_ALL    3u
+
+/* z without its derivative: the same z, to the bit, as k_julia_step. */
+K_FN K_JuliaZ k_julia_step_z(K_JuliaZ o, float c_re, float c_im)
 {
-    K_JuliaResult res;
-    res.iter = 0u;
-    res.inside = 0u;
-    res.nsmooth = 0.0f;
-    res.de = 0.0f;
+    K_PRECISE K_JuliaZ r = o;
+    r.zr = o.zr * o.zr - o.zi * o.zi + c_re;
+    r.zi = 2.0f * o.zr * o.zi + c_im;
+    return r;
+}
+
+K_FN K_JuliaZ k_julia_advance(K_JuliaZ o, float c_re, float c_im, uint want)
+{
+    return (want & K_JULIA_WANT_DE) != 0u ? k_julia_step(o, c_re, c_im) : k_julia_step_z(o, c_re, c_im);
+}
+
+/* An orbit's start: z0 and dz0/dx; ok = 0 where it escapes before the first iteration. */
+K_STRUCT(K_JuliaStart)
+{
+    K_JuliaZ o;
+    uint ok;
+}
+K_END(K_JuliaStart)
+
+/* (tw_re, tw_im): the turbulence term lambda W(p) added to z0 (eq. 13); 0 for none. */
+K_FN K_JuliaStart k_julia_begin(K_JuliaParams p, float px, float py, float dpx, float dpy, float tw_re, float tw_im)
+{
+    K_PRECISE K_JuliaStart s;
+    s.ok = 0u;
+    s.o.zr = 0.0f;
+    s.o.zi = 0.0f;
+    s.o.dzr = 0.0f;
+    s.o.dzi = 0.0f;
     /* z0 = (p - conj(a)) / (1 - a p); dz0/dx = (1 - |a|^2) / (1 - a p)^2 * dp/dx */
     K_PRECISE float nr = px - p.a_re;
     K_PRECISE float ni = py + p.a_im;
@@ -120,7 +150,7 @@ K_FN K_JuliaResult k_julia_orbit(K_JuliaParams p, float px, float py, float dpx,
     K_PRECISE float den = dr * dr + di * di;
     /* The pole p = 1/a sends z0 to infinity, which lies outside every filled Julia set: the pixel
      * escapes before the first iteration. Nothing non-finite reaches the output. */
-    if (!(den > 1.0e-30f)) return res;
+    if (!(den > 1.0e-30f)) return s;
     float inv = 1.0f / den;
     /* precise: an orbit is chaotic, so one fused rounding would change the escape count of
      * boundary pixels between a device and C. */
@@ -129,13 +159,53 @@ K_FN K_JuliaResult k_julia_orbit(K_JuliaParams p, float px, float py, float dpx,
     float k = 1.0f - (p.a_re * p.a_re + p.a_im * p.a_im);
     float sr = (dr * dr - di * di) * inv * inv, si = -2.0f * dr * di * inv * inv; /* 1 / (1 - a p)^2 */
     float wr = k * sr, wi = k * si;
-    K_PRECISE K_JuliaZ o;
-    o.zr = zr;
-    o.zi = zi;
-    o.dzr = wr * dpx - wi * dpy;
-    o.dzi = wr * dpy + wi * dpx;
-    if (!(zr * zr + zi * zi < 1.0e30f)) return res;
+    s.o.zr = zr;
+    s.o.zi = zi;
+    s.o.dzr = wr * dpx - wi * dpy;
+    s.o.dzi = wr * dpy + wi * dpx;
+    s.ok = zr * zr + zi * zi < 1.0e30f ? 1u : 0u;
+    return s;
+}
 
+/* The result of an orbit that took n steps (escaped: it reached the bailout; else it stayed
+ * inside for max_iter steps). */
+K_FN K_JuliaResult k_julia_end(K_JuliaParams p, K_JuliaZ o, uint n, bool escaped, uint want)
+{
+    K_JuliaResult res;
+    res.iter = n;
+    res.inside = 0u;
+    res.nsmooth = 0.0f;
+    res.de = 0.0f;
+    if (!escaped) {
+        res.inside = 1u;
+        res.nsmooth = K_F(p.max_iter);
+        return res;
+    }
+    if (want == 0u) return res;
+    /* Continue to the big radius (at most K_JULIA_EXTRA_ITER steps; from |z| >= 2 the orbit grows
+     * doubly exponentially, so a handful suffice). */
+    uint m = n;
+    for (uint j = 0u; j < K_JULIA_EXTRA_ITER; j++) {
+        if (o.zr * o.zr + o.zi * o.zi > K_JULIA_BIG_RADIUS2) break;
+        o = k_julia_advance(o, p.c_re, p.c_im, want);
+        m++;
+    }
+    float r2 = o.zr * o.zr + o.zi * o.zi;
+    float lnr = 0.5f * k_log2(r2) * 0.69314718f; /* ln |z| */
+    if ((want & K_JULIA_WANT_SMOOTH) != 0u) res.nsmooth = K_F(m) + 1.0f - k_log2(lnr);
+    if ((want & K_JULIA_WANT_DE) != 0u) {
+        float dz = k_sqrt(o.dzr * o.dzr + o.dzi * o.dzi);
+        /* an overflowed derivative (inf or NaN) gives 0, never a non-finite value */
+        res.de = (dz > 0.0f && dz < 3.0e38f) ? k_sqrt(r2) * lnr / dz : 0.0f;
+    }
+    return res;
+}
+
+/* One orbit from its start to its result. */
+K_FN K_JuliaResult k_julia_run(K_JuliaParams p, K_JuliaStart s, uint want)
+{
+    if (s.ok == 0u) return k_julia_end(p, s.o, 0u, true, 0u);
+    K_JuliaZ o = s.o;
     uint n = 0u;
     bool escaped = false;
     for (uint i = 0u; i < p.max_iter; i++) {
@@ -143,31 +213,58 @@ K_FN K_JuliaResult k_julia_orbit(K_JuliaParams p, float px, float py, float dpx,
             escaped = true;
             break;
         }
-        o = k_julia_step(o, p.c_re, p.c_im);
+        o = k_julia_advance(o, p.c_re, p.c_im, want);
         n++;
     }
     if (!escaped && o.zr * o.zr + o.zi * o.zi >= p.bailout2) escaped = true;
-    res.iter = n;
-    if (!escaped) {
-        res.inside = 1u;
-        res.nsmooth = K_F(p.max_iter);
-        return res;
+    return k_julia_end(p, o, n, escaped, want);
+}
+
+K_FN K_JuliaResult k_julia_orbit(K_JuliaParams p, float px, float py, float dpx, float dpy, float tw_re, float tw_im)
+{
+    return k_julia_run(p, k_julia_begin(p, px, py, dpx, dpy, tw_re, tw_im), K_JULIA_WANT_ALL);
+}
+
+/* Two orbits in one loop: two independent dependency chains interleave in the pipeline (on a SIMD
+ * CPU device each lane then carries two pixels). Each orbit runs exactly the steps it would alone,
+ * so the results are those of k_julia_run to the bit. has_b = false: a alone. */
+K_STRUCT(K_JuliaPair)
+{
+    K_JuliaResult a, b;
+}
+K_END(K_JuliaPair)
+
+K_FN K_JuliaPair k_julia_orbit2(K_JuliaParams p, K_JuliaStart sa, K_JuliaStart sb, bool has_b, uint want)
+{
+    K_JuliaZ a = sa.o, b = sb.o;
+    bool da = sa.ok == 0u, db = !has_b || sb.ok == 0u; /* done */
+    bool ea = da, eb = db;                             /* escaped (the pole: before the first step) */
+    uint na = 0u, nb = 0u;
+    for (uint i = 0u; i < p.max_iter; i++) {
+        if (!da && a.zr * a.zr + a.zi * a.zi >= p.bailout2) {
+            da = true;
+            ea = true;
+        }
+        if (!db && b.zr * b.zr + b.zi * b.zi >= p.bailout2) {
+            db = true;
+            eb = true;
+        }
+        if (da && db) break;
+        if (!da) {
+            a = k_julia_advance(a, p.c_re, p.c_im, want);
+            na++;
+        }
+        if (!db) {
+            b = k_julia_advance(b, p.c_re, p.c_im, want);
+            nb++;
+        }
     }
-    /* Continue to the big radius (at most K_JULIA_EXTRA_ITER steps; from |z| >= 2 the orbit grows
-     * doubly exponentially, so a handful suffice). */
-    uint m = n;
-    for (uint j = 0u; j < K_JULIA_EXTRA_ITER; j++) {
-        if (o.zr * o.zr + o.zi * o.zi > K_JULIA_BIG_RADIUS2) break;
-        o = k_julia_step(o, p.c_re, p.c_im);
-        m++;
-    }
-    float r2 = o.zr * o.zr + o.zi * o.zi;
-    float lnr = 0.5f * k_log2(r2) * 0.69314718f; /* ln |z| */
-    res.nsmooth = K_F(m) + 1.0f - k_log2(lnr);
-    float dz = k_sqrt(o.dzr * o.dzr + o.dzi * o.dzi);
-    /* an overflowed derivative (inf or NaN) gives 0, never a non-finite value */
-    res.de = (dz > 0.0f && dz < 3.0e38f) ? k_sqrt(r2) * lnr / dz : 0.0f;
-    return res;
+    if (!ea && a.zr * a.zr + a.zi * a.zi >= p.bailout2) ea = true;
+    if (!eb && b.zr * b.zr + b.zi * b.zi >= p.bailout2) eb = true;
+    K_JuliaPair r;
+    r.a = k_julia_end(p, a, na, ea, sa.ok == 0u ? 0u : want);
+    r.b = k_julia_end(p, b, nb, eb, sb.ok == 0u ? 0u : want);
+    return r;
 }
 
 /* W(p) in [0, 1]^2 scaled by lambda: two decorrelated streams of the shared fBm over (u, v); the
@@ -180,15 +277,21 @@ K_FN k_vec2 k_julia_turbulence(K_JuliaParams p, K_FbmParams t, float u, float v)
     return k_vec2(p.lambda * wr, p.lambda * wi);
 }
 
-/* The orbit of the point at continuous pixel coordinates (fx, fy) (pixel centres at +0.5). */
-K_FN K_JuliaResult k_julia_at(K_JuliaParams p, K_FbmParams turb, float fx, float fy)
+/* The start of the orbit of the point at continuous pixel coordinates (fx, fy) (pixel centres at
+ * +0.5), turbulence included. */
+K_FN K_JuliaStart k_julia_start_at(K_JuliaParams p, K_FbmParams turb, float fx, float fy)
 {
     K_PRECISE float u = fx * p.inv_width;
     K_PRECISE float v = 1.0f - fy * p.inv_height;
     k_vec2 s = k_julia_start(p, u, v);
     k_vec2 d = k_julia_dstart(p, u, v);
     k_vec2 w = k_julia_turbulence(p, turb, u, v);
-    return k_julia_orbit(p, s.x, s.y, d.x, d.y, w.x, w.y);
+    return k_julia_begin(p, s.x, s.y, d.x, d.y, w.x, w.y);
+}
+
+K_FN K_JuliaResult k_julia_at(K_JuliaParams p, K_FbmParams turb, float fx, float fy)
+{
+    return k_julia_run(p, k_julia_start_at(p, turb, fx, fy), K_JULIA_WANT_ALL);
 }
 
 /* Pixel (x, y) at its centre: u = (x + 0.5)/W, v = 1 - (y + 0.5)/H. */
@@ -197,15 +300,33 @@ K_FN K_JuliaResult k_julia_pixel(K_JuliaParams p, K_FbmParams turb, uint x, uint
     return k_julia_at(p, turb, K_F(x) + 0.5f, K_F(y) + 0.5f);
 }
 
-/* Sample k of pixel (x, y) for anti-aliasing: sample 0 is the centre, the others jittered uniformly
- * over the pixel by the counter-based hash of (seed, sample, absolute pixel index), so a sample is
- * the same whatever strip, thread or device computes it. */
-K_FN K_JuliaResult k_julia_sample(K_JuliaParams p, K_FbmParams turb, uint seed, uint x, uint y, uint k)
+/* The continuous coordinates of sample k of pixel (x, y) for anti-aliasing: sample 0 is the centre,
+ * the others jittered uniformly over the pixel by the counter-based hash of (seed, sample, absolute
+ * pixel index), so a sample is the same whatever strip, thread or device computes it. */
+K_FN k_vec2 k_julia_sample_xy(K_JuliaParams p, uint seed, uint x, uint y, uint k)
 {
-    if (k == 0u) return k_julia_pixel(p, turb, x, y);
+    if (k == 0u) return k_vec2(K_F(x) + 0.5f, K_F(y) + 0.5f);
     uint idx = y * p.width + x;
     float jx = k_rand01(seed, 0x5a00u + 2u * k, idx), jy = k_rand01(seed, 0x5a01u + 2u * k, idx);
-    return k_julia_at(p, turb, K_F(x) + jx, K_F(y) + jy);
+    return k_vec2(K_F(x) + jx, K_F(y) + jy);
+}
+
+K_FN K_JuliaResult k_julia_sample(K_JuliaParams p, K_FbmParams turb, uint seed, uint x, uint y, uint k)
+{
+    k_vec2 f = k_julia_sample_xy(p, seed, x, y, k);
+    return k_julia_at(p, turb, f.x, f.y);
+}
+
+/* Sample k of pixels (x, y) and (x + 1, y) together (has_b = false: the first only). */
+K_FN K_JuliaPair k_julia_sample2(K_JuliaParams p, K_FbmParams turb, uint seed, uint x, uint y, uint k, bool has_b,
+                                 uint want)
+{
+    k_vec2 fa = k_julia_sample_xy(p, seed, x, y, k);
+    k_vec2 fb = k_julia_sample_xy(p, seed, has_b ? x + 1u : x, y, k);
+    K_JuliaStart sa = k_julia_start_at(p, turb, fa.x, fa.y);
+    K_JuliaStart sb = sa;
+    if (has_b) sb = k_julia_start_at(p, turb, fb.x, fb.y);
+    return k_julia_orbit2(p, sa, sb, has_b, want);
 }
 
 #endif

@@ -1,5 +1,6 @@
 #version 450
-// Warped Julia sets: one invocation per pixel of a strip. The math is kernels/julia.h.
+// Warped Julia sets: one invocation per two neighbouring pixels of a row, their orbits iterated in
+// one loop (two dependency chains in flight). The math is kernels/julia.h.
 #extension GL_GOOGLE_include_directive : require
 #define K_GLSL 1
 #include "../kernels/julia.h"
@@ -16,6 +17,9 @@ layout(constant_id = 2) const uint SAMPLES = 1u;
 // bit 0: gamma != 1, bit 1: density > 0. A ternary on a buffer value compiles to a select that
 // evaluates pow() whatever the value; known constants fold it away.
 layout(constant_id = 3) const uint COLOUR_FLAGS = 3u;
+// bit k: the layer stores channel k of iter, n, inside, de, R, G, B. What no stored channel needs
+// is not computed; a buffer not stored is bound but never written.
+layout(constant_id = 4) const uint OUTPUTS = 127u;
 
 layout(push_constant) uniform Push
 {
@@ -56,26 +60,45 @@ vec3 sky_colour(K_JuliaResult res)
                 k_sky_channel(c, k_mix(e0.b, e1.b, f), w));
 }
 
+void store(uint i, K_JuliaResult res)
+{
+    if ((OUTPUTS & 1u) != 0u) o_iter.v[i] = res.iter;
+    if ((OUTPUTS & 2u) != 0u) o_n.v[i] = res.nsmooth;
+    if ((OUTPUTS & 4u) != 0u) o_inside.v[i] = float(res.inside);
+    if ((OUTPUTS & 8u) != 0u) o_de.v[i] = res.de;
+}
+
+void store_colour(uint i, vec3 sum)
+{
+    float s = pal.colour.inv_samples;
+    o_r.v[i] = SAMPLES == 1u ? sum.r : sum.r * s;
+    o_g.v[i] = SAMPLES == 1u ? sum.g : sum.g * s;
+    o_b.v[i] = SAMPLES == 1u ? sum.b : sum.b * s;
+}
+
 void main()
 {
-    uint x = gl_GlobalInvocationID.x;
+    uint x = 2u * gl_GlobalInvocationID.x;
     uint r = gl_GlobalInvocationID.y;
     if (x >= pc.p.width || r >= pc.rows) return;
     K_JuliaParams p = pc.p;
     p.mapping = MAPPING;
     if (TURBULENCE == 0u) p.lambda = 0.0f;
-    K_JuliaResult res = k_julia_pixel(p, pal.turb, x, pc.y0 + r);
+    uint want = ((OUTPUTS & 0x72u) != 0u ? K_JULIA_WANT_SMOOTH : 0u) | ((OUTPUTS & 8u) != 0u ? K_JULIA_WANT_DE : 0u);
+    bool has_b = x + 1u < p.width;
+    uint y = pc.y0 + r;
+    K_JuliaPair res = k_julia_sample2(p, pal.turb, pal.colour.seed, x, y, 0u, has_b, want);
     uint i = r * p.width + x;
-    o_iter.v[i] = res.iter;
-    o_n.v[i] = res.nsmooth;
-    o_inside.v[i] = float(res.inside);
-    o_de.v[i] = res.de;
+    store(i, res.a);
+    if (has_b) store(i + 1u, res.b);
+    if ((OUTPUTS & 0x70u) == 0u) return;
     // Colour: the average of `samples` jittered samples in linear colour (sample 0 is the centre).
-    vec3 sum = sky_colour(res);
-    for (uint k = 1u; k < SAMPLES; k++)
-        sum += sky_colour(k_julia_sample(p, pal.turb, pal.colour.seed, x, pc.y0 + r, k));
-    float s = pal.colour.inv_samples;
-    o_r.v[i] = SAMPLES == 1u ? sum.r : sum.r * s;
-    o_g.v[i] = SAMPLES == 1u ? sum.g : sum.g * s;
-    o_b.v[i] = SAMPLES == 1u ? sum.b : sum.b * s;
+    vec3 sa = sky_colour(res.a), sb = sky_colour(res.b);
+    for (uint k = 1u; k < SAMPLES; k++) {
+        K_JuliaPair q = k_julia_sample2(p, pal.turb, pal.colour.seed, x, y, k, has_b, K_JULIA_WANT_SMOOTH);
+        sa += sky_colour(q.a);
+        sb += sky_colour(q.b);
+    }
+    store_colour(i, sa);
+    if (has_b) store_colour(i + 1u, sb);
 }

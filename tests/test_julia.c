@@ -254,8 +254,57 @@ static void test_turbulence(void)
     CHECK(diff == 0);
 }
 
+static bool same_result(K_JuliaResult a, K_JuliaResult b, uint want)
+{
+    return a.iter == b.iter && a.inside == b.inside &&
+           (!(want & K_JULIA_WANT_SMOOTH) || !memcmp(&a.nsmooth, &b.nsmooth, 4)) &&
+           (!(want & K_JULIA_WANT_DE) || !memcmp(&a.de, &b.de, 4));
+}
+
+/* Two orbits in one loop (the shader's pairs) and orbits that skip the smooth count or the distance
+ * give the single full orbit's values to the bit: escape counts of very different lengths side by
+ * side, the pole, a lone last pixel, with turbulence, and a jittered sample. */
+static void test_pairs(void)
+{
+    int bad = 0, checked = 0;
+    for (int variant = 0; variant < 3; variant++) {
+        K_JuliaParams p = base(-0.8, 0.156, variant == 1 ? 0.5 : 0.0, variant == 1 ? 0.25 : 0.0, 300);
+        p.width = 97, p.height = 41;
+        p.inv_width = 1.0f / 97, p.inv_height = 1.0f / 41;
+        K_FbmParams t = g_turb;
+        if (variant == 2) { /* polar with turbulence */
+            p.mapping = K_JULIA_POLAR;
+            p.lambda = 0.2f;
+            p.turb_norm = 0.5f;
+            t.octaves = 3;
+        }
+        for (uint y = 0; y < p.height; y++)
+            for (uint x = 0; x < p.width; x += 2)
+                for (uint want = 0; want <= K_JULIA_WANT_ALL; want++)
+                    for (uint k = 0; k < 2; k++) {
+                        bool has_b = x + 1 < p.width;
+                        K_JuliaPair q = k_julia_sample2(p, t, 9, x, y, k, has_b, want);
+                        K_JuliaResult a = k_julia_sample(p, t, 9, x, y, k);
+                        bad += !same_result(q.a, a, want);
+                        if (has_b) bad += !same_result(q.b, k_julia_sample(p, t, 9, x + 1, y, k), want);
+                        checked += 1 + has_b;
+                    }
+    }
+    /* the pole p = 1/a beside an ordinary pixel */
+    K_JuliaParams p = base(-0.8, 0.156, 0.5, 0, 256);
+    K_JuliaStart pole = k_julia_begin(p, 2.0f, 0.0f, 1e-3f, 0, 0, 0), ok = k_julia_begin(p, 0.1f, 0.2f, 1e-3f, 0, 0, 0);
+    K_JuliaPair q = k_julia_orbit2(p, pole, ok, true, K_JULIA_WANT_ALL),
+                r = k_julia_orbit2(p, ok, pole, true, K_JULIA_WANT_ALL);
+    K_JuliaResult a = k_julia_orbit(p, 2.0f, 0.0f, 1e-3f, 0, 0, 0), b = k_julia_orbit(p, 0.1f, 0.2f, 1e-3f, 0, 0, 0);
+    bad += !same_result(q.a, a, K_JULIA_WANT_ALL) + !same_result(q.b, b, K_JULIA_WANT_ALL);
+    bad += !same_result(r.a, b, K_JULIA_WANT_ALL) + !same_result(r.b, a, K_JULIA_WANT_ALL);
+    CHECKF(bad == 0 && checked > 20000, "%d of %d paired or partial orbits differ from the full single orbit", bad,
+           checked);
+}
+
 int main(void)
 {
+    test_pairs();
     test_turbulence();
     test_known_points();
     test_warp_circle();

@@ -341,14 +341,16 @@ static fb_result constrain_prepare(fb_gen *g, struct fb_engine *e, bool progress
         const fb_gen *src = g->macro_src;
         const int band = 64;
         void *planes[FB_GEN_MAX_CHANNELS] = {0};
-        for (int c = 0; c < src->nchannels && !rc; c++)
-            if (!(planes[c] = malloc((size_t)sc->width * band * 4))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        for (int k = 0; k < fb_gen_nplanes(src) && !rc; k++)
+            if (fb_gen_plane_stored(src, k) && !(planes[k] = malloc((size_t)sc->width * band * 4)))
+                rc = fb_fail(FB_ERR_NOMEM, "out of memory");
         for (int y0 = 0; y0 < sc->height && !rc; y0 += band) {
             int n = y0 + band <= sc->height ? band : sc->height - y0;
             src->native_rows(src, y0, n, planes);
-            memcpy(s->macro + (size_t)y0 * sc->width, planes[g->macro_channel], (size_t)n * sc->width * 4);
+            memcpy(s->macro + (size_t)y0 * sc->width, planes[fb_gen_plane_of(src, g->macro_channel)],
+                   (size_t)n * sc->width * 4);
         }
-        for (int c = 0; c < src->nchannels; c++) free(planes[c]);
+        for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(planes[k]);
         for (size_t i = 0; !rc && i < (size_t)sc->width * sc->height; i++)
             if (!isfinite(s->macro[i]))
                 rc = fb_fail(FB_ERR_INPUT, "layer %s: the macro shape from layer %s has a NaN or infinite value",

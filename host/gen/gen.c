@@ -9,6 +9,7 @@ fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer)
     memset(g, 0, sizeof *g);
     g->scene = scene;
     g->layer = layer;
+    g->preview_rgb = -1;
     switch (layer->kind) {
     case FB_LAYER_FBM:
         return fb_gen_fbm_init(g);
@@ -45,9 +46,27 @@ void fb_gen_push(const fb_gen *g, int y0, int n, void *out)
     memcpy((uint8_t *)out + g->params_size, strip, sizeof strip);
 }
 
+int fb_gen_nplanes(const fb_gen *g)
+{
+    return g->nkernel > 0 ? g->nkernel : g->nchannels;
+}
+
+int fb_gen_plane_of(const fb_gen *g, int c)
+{
+    return g->nkernel > 0 ? g->kernel_of[c] : c;
+}
+
+bool fb_gen_plane_stored(const fb_gen *g, int k)
+{
+    for (int c = 0; c < g->nchannels; c++)
+        if (fb_gen_plane_of(g, c) == k) return true;
+    return false;
+}
+
 void fb_gen_groups(const fb_gen *g, int n, uint32_t out[3])
 {
-    out[0] = ((uint32_t)g->scene->width + 63) / 64;
+    uint32_t per = g->per_invocation > 1 ? (uint32_t)g->per_invocation : 1u;
+    out[0] = ((uint32_t)g->scene->width + 64 * per - 1) / (64 * per);
     out[1] = (uint32_t)n;
     out[2] = 1;
 }

@@ -1,6 +1,7 @@
 /*
  * The Julia sky generator: kernels/julia.h, driven natively or by shaders/julia.comp.
- * Channels: NAME.iter (uint), NAME.n (smooth count), NAME.inside (0/1), NAME.de (pixels).
+ * Channels: NAME.iter (uint), NAME.n (smooth count), NAME.inside (0/1), NAME.de (pixels), NAME.R/G/B;
+ * the layer's `channels` stores a subset, and what no stored channel needs is not computed.
  */
 #include "../gen.h"
 
@@ -66,32 +67,55 @@ static void sky_colour(const julia_palette *pal, K_JuliaResult res, float rgb[3]
     for (int ch = 0; ch < 3; ch++) rgb[ch] = k_sky_channel(c, k_mix(pal->entries[i0][ch], pal->entries[i1][ch], f), w);
 }
 
+/* Kernel planes: iter, n, inside, de, R, G, B (bit k of the stored mask: plane k stored). */
+enum { P_ITER, P_N, P_INSIDE, P_DE, P_R, P_G, P_B, NPLANES };
+
+/* What the orbits must compute for the stored planes. */
+static uint32_t want_of(uint32_t stored)
+{
+    uint32_t smooth = (1u << P_N) | (1u << P_R) | (1u << P_G) | (1u << P_B);
+    return ((stored & smooth) ? K_JULIA_WANT_SMOOTH : 0u) | ((stored & (1u << P_DE)) ? K_JULIA_WANT_DE : 0u);
+}
+
+static void store(void *const *planes, size_t i, K_JuliaResult res)
+{
+    if (planes[P_ITER]) ((uint32_t *)planes[P_ITER])[i] = res.iter;
+    if (planes[P_N]) ((float *)planes[P_N])[i] = res.nsmooth;
+    if (planes[P_INSIDE]) ((float *)planes[P_INSIDE])[i] = (float)res.inside;
+    if (planes[P_DE]) ((float *)planes[P_DE])[i] = res.de;
+}
+
+static void store_colour(void *const *planes, size_t i, const julia_palette *pal, const float sum[3])
+{
+    float s = pal->colour.samples == 1 ? 1.0f : pal->colour.inv_samples;
+    for (int ch = 0; ch < 3; ch++) ((float *)planes[P_R + ch])[i] = pal->colour.samples == 1 ? sum[ch] : sum[ch] * s;
+}
+
+/* One pixel at a time: the shader's pairs give the same results to the bit (their point is two
+ * dependency chains per SIMD lane; scalar C ran slower with them). */
 static void julia_rows(const fb_gen *g, int y0, int n, void *const *planes)
 {
     const K_JuliaParams *p = params(g);
     const julia_palette *pal = g->input;
-    uint32_t *iter = planes[0];
-    float *sm = planes[1], *inside = planes[2], *de = planes[3], *R = planes[4], *G = planes[5], *B = planes[6];
+    const uint32_t want = want_of(g->spec[4]);
+    const bool colour = planes[P_R] != NULL;
     for (int r = 0; r < n; r++)
         for (uint32_t x = 0; x < p->width; x++) {
             uint32_t y = (uint32_t)(y0 + r);
-            K_JuliaResult res = k_julia_pixel(*p, pal->turb, x, y);
+            K_JuliaResult res =
+                k_julia_run(*p, k_julia_start_at(*p, pal->turb, (float)x + 0.5f, (float)y + 0.5f), want);
             size_t i = (size_t)r * p->width + x;
-            iter[i] = res.iter;
-            sm[i] = res.nsmooth;
-            inside[i] = (float)res.inside;
-            de[i] = res.de;
+            store(planes, i, res);
+            if (!colour) continue;
             /* the average of `samples` jittered samples in linear colour (sample 0 is the centre) */
             float sum[3], c[3];
             sky_colour(pal, res, sum);
             for (uint32_t k = 1; k < pal->colour.samples; k++) {
-                sky_colour(pal, k_julia_sample(*p, pal->turb, pal->colour.seed, x, y, k), c);
+                k_vec2 f = k_julia_sample_xy(*p, pal->colour.seed, x, y, k);
+                sky_colour(pal, k_julia_run(*p, k_julia_start_at(*p, pal->turb, f.x, f.y), K_JULIA_WANT_SMOOTH), c);
                 for (int ch = 0; ch < 3; ch++) sum[ch] += c[ch];
             }
-            float s = pal->colour.samples == 1 ? 1.0f : pal->colour.inv_samples;
-            R[i] = pal->colour.samples == 1 ? sum[0] : sum[0] * s;
-            G[i] = pal->colour.samples == 1 ? sum[1] : sum[1] * s;
-            B[i] = pal->colour.samples == 1 ? sum[2] : sum[2] * s;
+            store_colour(planes, i, pal, sum);
         }
 }
 
@@ -159,16 +183,27 @@ fb_result fb_gen_julia_init(fb_gen *g)
     g->input = pal;
     g->input_size = sizeof *pal;
 
-    static const char *const suffix[7] = {"iter", "n", "inside", "de", "R", "G", "B"};
+    static const char *const suffix[NPLANES] = {"iter", "n", "inside", "de", "R", "G", "B"};
     exrio_type colour = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
-    const exrio_type types[7] = {EXRIO_UINT, EXRIO_FLOAT, EXRIO_HALF, EXRIO_FLOAT, colour, colour, colour};
-    g->nchannels = 7;
-    for (int c = 0; c < 7; c++) {
-        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
-        g->channel_types[c] = types[c];
+    const exrio_type types[NPLANES] = {EXRIO_UINT, EXRIO_FLOAT, EXRIO_HALF, EXRIO_FLOAT, colour, colour, colour};
+    uint32_t stored = (uint32_t)j->channels & ((1u << NPLANES) - 1);
+    g->nkernel = NPLANES;
+    g->nchannels = 0;
+    for (int k = 0; k < NPLANES; k++) {
+        if (!(stored & (1u << k))) continue;
+        int c = g->nchannels++;
+        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[k]);
+        g->channel_types[c] = types[k];
+        g->kernel_of[c] = k;
     }
-    g->preview_channel = 1; /* the smooth count */
-    g->preview_rgb = 4;     /* R, G, B */
+    /* the preview: colour if stored, else the first float channel (n, inside, de), else iter */
+    g->preview_rgb = -1;
+    g->preview_channel = 0;
+    for (int c = g->nchannels - 1; c >= 0; c--) {
+        if (g->kernel_of[c] == P_R) g->preview_rgb = c;
+        if (g->kernel_of[c] != P_ITER && g->kernel_of[c] != P_R && g->kernel_of[c] != P_G && g->kernel_of[c] != P_B)
+            g->preview_channel = c;
+    }
     g->native_rows = julia_rows;
     g->spv = julia_comp;
     g->spv_size = sizeof julia_comp;
@@ -178,6 +213,8 @@ fb_result fb_gen_julia_init(fb_gen *g)
     g->spec[1] = p->lambda != 0.0f;
     g->spec[2] = (uint32_t)j->samples;
     g->spec[3] = (pal->colour.gamma != 1.0f ? 1u : 0u) | (pal->colour.density > 0.0f ? 2u : 0u);
-    g->nspec = 4;
+    g->spec[4] = stored;
+    g->nspec = 5;
+    g->per_invocation = 2;
     return FB_OK;
 }
