@@ -84,6 +84,16 @@ expect_fail 2 "turbulence" o.exr -- julia $S --turbulence -0.1 -o o.exr
 expect_fail 2 "samples" o.exr -- julia $S --samples 0 -o o.exr
 expect_fail 2 "samples" o.exr -- julia $S --samples 100000 -o o.exr
 expect_fail 2 "turbulence-octaves" o.exr -- julia $S --turbulence 0.2 --turbulence-octaves 0 -o o.exr
+expect_fail 2 "channels: expected a list of distinct names" o.exr -- julia $S --channels iter,speed -o o.exr
+expect_fail 2 "channels: expected a list of distinct names" o.exr -- julia $S --channels iter,iter -o o.exr
+expect_fail 2 "channels: expected a list of distinct names" o.exr -- julia $S --channels "" -o o.exr
+expect_fail 2 "R, G and B go together" o.exr -- julia $S --channels iter,R -o o.exr
+printf '{"size": [64, 32], "layers": [{"type": "julia", "channels": []}]}' > chan.json
+expect_fail 2 "layers\[0\].channels" o.exr -- render chan.json -o o.exr --quiet
+# a subset of channels: exactly those in the file, equal to the full layer's; iter alone previews
+if "$FB" julia $S --channels iter,de -o sub.exr --preview sub.png && "$FB" julia $S -o full.exr &&
+  [ "$("$FB" info sub.exr | sed -n 's/^channels: *//p')" = 2 ] && "$FB" compare sub.exr full.exr --ignore-missing > /dev/null &&
+  "$FB" julia $S --channels iter -o it.exr --preview it.png && [ -s it.png ] && [ -s sub.png ]; then ok; else bad "julia --channels"; fi
 "$FB" julia $S --stops "0,0,0,0;0.5,1,0,0;1,1,1,1" --density 0 --brightness 2 -o js.exr && ok || bad "julia with stops failed"
 if "$FB" julia $S --alpha 0.5,0.25 -o j.exr --preview j.png 2> err.txt; then ok; else bad "julia bake failed: $(cat err.txt)"; fi
 [ "$(od -An -tu1 -j25 -N1 j.png | tr -d ' ')" = "2" ] && ok || bad "the julia preview is not an RGB PNG"
