@@ -88,7 +88,8 @@ static const keyspec fbm_keys[] = {
 
 static const keyspec julia_keys[] = {
     {"type", T_TYPE, 0, 0, false, NULL, NULL, "generator: \"julia\""},
-    {"name", T_NAME, 0, 0, false, NULL, "\"sky\"", "layer name; channels NAME.iter, .n, .inside, .de (flag: --layer)"},
+    {"name", T_NAME, 0, 0, false, NULL, "\"sky\"",
+     "layer name; channels NAME.iter, .n, .inside, .de, .R, .G, .B (flag: --layer)"},
     {"mapping", T_ENUM, 0, 0, false, "rect|polar", "\"rect\"",
      "starting grid: rect (eq. 7) or polar (eq. 8, seamless left/right)"},
     {"scale", T_VEC2, 0, 1e6, false, NULL, NULL, "rect: width and height of the grid (default 3 wide, square pixels)"},
