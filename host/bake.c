@@ -86,6 +86,11 @@ static fb_result run_init(fb_engine *e, layer_run *lr, int strip_rows)
     fb_result rc = FB_OK;
     const int np = fb_gen_nplanes(&lr->gen);
     if (e->kind == FB_BACKEND_VULKAN && !lr->gen.prepare && !lr->gen.host_op) {
+        if (lr->gen.needs_float64 && !vkc_info(e->vk)->float64)
+            return fb_fail(FB_ERR_INPUT,
+                           "layer %s: precision \"double\" needs a Vulkan device with shaderFloat64, and %s has none "
+                           "(use --backend native)",
+                           lr->gen.layer->name, e->device);
         rc = vkc_pipeline_create(e->vk,
                                  &(vkc_pipeline_desc){.spv = lr->gen.spv,
                                                       .spv_size = lr->gen.spv_size,

@@ -69,6 +69,7 @@ struct fb_gen {
     int macro_channel;
 
     int per_invocation; /* vulkan: pixels of a row per invocation (0: 1) */
+    bool needs_float64; /* vulkan: the shader uses doubles (the device must have shaderFloat64) */
 
     bool scalar; /* native: the portable kernel only, no hand-vectorised path (benchmark reference) */
     _Alignas(16) unsigned char params[256]; /* generator-private, e.g. K_FbmParams */

@@ -105,6 +105,9 @@ static const keyspec julia_keys[] = {
     {"turbulence-octaves", T_INT, 1, 32, false, NULL, "6", "octaves of W"},
     {"turbulence-frequency", T_NUM, 0, 1e4, true, NULL, "4.0", "cycles of W's first octave across the image"},
     {"samples", T_INT, 1, 1024, false, NULL, "1", "jittered colour samples per pixel (iter, n, inside, de: centre)"},
+    {"precision", T_ENUM, 0, 0, false, "float|double", "\"float\"",
+     "the grid and orbits in float, or double (escape counts as a double reference has them; Vulkan "
+     "devices need shaderFloat64)"},
     {"channels", T_NAMES, 0, 0, false, "iter|n|inside|de|R|G|B",
      "[\"iter\", \"n\", \"inside\", \"de\", \"R\", \"G\", \"B\"]",
      "channels to store; what none of them needs is not computed (R, G, B go together)"},
@@ -916,6 +919,7 @@ static fb_result parse_julia(const vctx *v, const char *path, json_t *obj, const
     j->density_count = num(obj, "density-count");
     json_t *ic = json_object_get(obj, "inside-color");
     for (size_t i = 0; i < 3; i++) j->inside_color[i] = json_number_value(json_array_get(ic, i));
+    j->double_precision = !strcmp(json_string_value(json_object_get(obj, "precision")), "double");
     json_t *chs = json_object_get(obj, "channels");
     j->channels = 0;
     for (size_t i = 0; i < json_array_size(chs); i++) {

@@ -60,6 +60,7 @@ typedef struct fb_julia_params {
     int turb_octaves;
     int samples;
     unsigned channels; /* bit k: stored channel k of iter, n, inside, de, R, G, B */
+    bool double_precision;
 } fb_julia_params;
 
 typedef struct fb_ifs_params {

@@ -635,12 +635,15 @@ fb_result vkc_create(const vkc_desc *desc, vkc_context **out)
             for (uint32_t i = 0; i < next; i++) has_ext = has_ext || !strcmp(ep[i].extensionName, ext);
         free(ep);
     }
-    if (has_ext) g_vk.vkGetPhysicalDeviceFeatures2(ctx->phys, &f2);
+    if (!has_ext) f2.pNext = NULL; /* the plain features only */
+    g_vk.vkGetPhysicalDeviceFeatures2(ctx->phys, &f2);
     ctx->info.int64_atomics =
         has_ext && f2.features.shaderInt64 && a64.shaderBufferInt64Atomics && !env_true("FB_VK_NO_INT64");
+    /* doubles in shaders, for julia layers in double precision */
+    ctx->info.float64 = f2.features.shaderFloat64 && !env_true("FB_VK_NO_FLOAT64");
     VkPhysicalDeviceShaderAtomicInt64Features a64_on = {
         .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_INT64_FEATURES, .shaderBufferInt64Atomics = VK_TRUE};
-    VkPhysicalDeviceFeatures on = {.shaderInt64 = VK_TRUE};
+    VkPhysicalDeviceFeatures on = {.shaderInt64 = ctx->info.int64_atomics, .shaderFloat64 = ctx->info.float64};
     VkDeviceCreateInfo dci = {
         .sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO,
         .pNext = ctx->info.int64_atomics ? &a64_on : NULL,
@@ -648,7 +651,7 @@ fb_result vkc_create(const vkc_desc *desc, vkc_context **out)
         .pQueueCreateInfos = &qci,
         .enabledExtensionCount = ctx->info.int64_atomics ? 1u : 0u,
         .ppEnabledExtensionNames = &ext,
-        .pEnabledFeatures = ctx->info.int64_atomics ? &on : NULL,
+        .pEnabledFeatures = ctx->info.int64_atomics || ctx->info.float64 ? &on : NULL,
     };
     VKC_CHECK(g_vk.vkCreateDevice(ctx->phys, &dci, NULL, &ctx->device), fail);
     rc = load_device_fns(ctx->device);

@@ -28,6 +28,7 @@ typedef struct vkc_device_info {
     uint32_t api_version;
     uint64_t max_storage_buffer_range;
     bool int64_atomics; /* 64-bit storage-buffer atomics enabled (VK_KHR_shader_atomic_int64); FB_VK_NO_INT64=1: off */
+    bool float64;       /* shaderFloat64 enabled (double arithmetic in shaders); FB_VK_NO_FLOAT64=1: off */
     bool chosen;
 } vkc_device_info;
 

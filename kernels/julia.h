@@ -329,4 +329,182 @@ K_FN K_JuliaPair k_julia_sample2(K_JuliaParams p, K_FbmParams turb, uint seed, u
     return k_julia_orbit2(p, sa, sb, has_b, want);
 }
 
+/* ---- double precision (a layer's "precision": "double") ------------------------------------------
+ * The grid, the warp and the orbit in double, for escape counts that agree with a double reference
+ * wherever float's 2^-24 would change them. Every constant that is not exact in float comes from the
+ * host in K_JuliaD (GLSL has no suffix-free double literals), and sin/cos are computed here, so that
+ * C and a device with shaderFloat64 run the same operations. The tail (smooth count, distance) is
+ * float, as stored. Shaders define K_JULIA_F64 to compile this part. */
+#if !defined(K_GLSL) || defined(K_JULIA_F64)
+
+#ifdef K_GLSL
+#define K_DF(x)      double(x)
+#define K_DU(x)      uint(x)
+#define k_floor_d(x) floor(x)
+#define k_sqrt_d(x)  sqrt(x)
+#else
+#define K_DF(x)      ((double)(x))
+#define K_DU(x)      ((uint)(x))
+#define k_floor_d(x) floor(x)
+#define k_sqrt_d(x)  sqrt(x)
+#endif
+
+K_STRUCT(K_JuliaD)
+{
+    double c_re, c_im, a_re, a_im;
+    double scale_u, scale_v, radius, center_re, center_im, rot_c, rot_s;
+    double bailout2, huge;                     /* R^2; (double)1e30f: beyond it z0 escapes at once */
+    double two_pi, pio2_hi, pio2_lo, inv_pio2; /* pi/2 = pio2_hi + pio2_lo */
+    double s1, s2, s3, s4, s5, s6;             /* fdlibm's __kernel_sin and __kernel_cos polynomials */
+    double c1, c2, c3, c4, c5, c6;
+}
+K_END(K_JuliaD)
+
+#ifndef K_GLSL
+/* The constants of K_JuliaD (the host sets the parameters): pi/2 in two parts, and fdlibm's
+ * polynomials for sin and cos on [-pi/4, pi/4]. */
+static inline void k_julia_d_constants(K_JuliaD *d)
+{
+    d->huge = (double)1.0e30f;
+    d->two_pi = 6.28318530717958647692;
+    d->pio2_hi = 1.57079632673412561417e+00;
+    d->pio2_lo = 6.07710050650619224932e-11;
+    d->inv_pio2 = 6.36619772367581382433e-01;
+    d->s1 = -1.66666666666666324348e-01;
+    d->s2 = 8.33333333332248946124e-03;
+    d->s3 = -1.98412698298579493134e-04;
+    d->s4 = 2.75573137070700676789e-06;
+    d->s5 = -2.50507602534068634195e-08;
+    d->s6 = 1.58969099521155010221e-10;
+    d->c1 = 4.16666666666666019037e-02;
+    d->c2 = -1.38888888888741095749e-03;
+    d->c3 = 2.48015872894767294178e-05;
+    d->c4 = -2.75573143513906633035e-07;
+    d->c5 = 2.08757232129817482790e-09;
+    d->c6 = -1.13596475577881948265e-11;
+}
+#endif
+
+K_STRUCT(K_JuliaSinCos)
+{
+    double s, c;
+}
+K_END(K_JuliaSinCos)
+
+/* sin and cos of x >= 0 (a few turns at most): x - q pi/2 in two parts, then the polynomials on
+ * [-pi/4, pi/4]; within 2 ulp of the libm values. */
+K_FN K_JuliaSinCos k_julia_sincos_d(K_JuliaD d, double x)
+{
+    K_PRECISE double q = k_floor_d(x * d.inv_pio2 + 0.5);
+    K_PRECISE double r = (x - q * d.pio2_hi) - q * d.pio2_lo;
+    K_PRECISE double z = r * r;
+    K_PRECISE double sn = r + r * z * (d.s1 + z * (d.s2 + z * (d.s3 + z * (d.s4 + z * (d.s5 + z * d.s6)))));
+    K_PRECISE double cs = 1.0 - 0.5 * z + z * z * (d.c1 + z * (d.c2 + z * (d.c3 + z * (d.c4 + z * (d.c5 + z * d.c6)))));
+    uint n = K_DU(q) & 3u;
+    K_JuliaSinCos o;
+    o.s = n == 0u ? sn : n == 1u ? cs : n == 2u ? -sn : -cs;
+    o.c = n == 0u ? cs : n == 1u ? -sn : n == 2u ? -cs : sn;
+    return o;
+}
+
+/* The orbit of the point at continuous pixel coordinates (fx, fy), in double. */
+K_FN K_JuliaResult k_julia_run_d(K_JuliaParams p, K_JuliaD d, K_FbmParams turb, double fx, double fy, uint want)
+{
+    K_JuliaResult res;
+    res.iter = 0u;
+    res.inside = 0u;
+    res.nsmooth = 0.0f;
+    res.de = 0.0f;
+    K_PRECISE double u = fx / K_DF(p.width);
+    K_PRECISE double v = 1.0 - fy / K_DF(p.height);
+    K_PRECISE double x, y, ddx, ddy;
+    if (p.mapping == K_JULIA_POLAR) {
+        K_PRECISE double rr = d.radius * v;
+        K_PRECISE double ang = d.two_pi * (u - k_floor_d(u)); /* wrapped first: t(0, v) = t(1, v) */
+        K_JuliaSinCos sc = k_julia_sincos_d(d, ang);
+        K_PRECISE double k = d.two_pi * rr / K_DF(p.width);
+        x = rr * sc.c;
+        y = rr * sc.s;
+        ddx = -k * sc.s;
+        ddy = k * sc.c;
+    } else {
+        x = d.scale_u * (u - 0.5);
+        y = d.scale_v * (v - 0.5);
+        ddx = d.scale_u / K_DF(p.width);
+        ddy = 0.0;
+    }
+    K_PRECISE double px = d.center_re + (d.rot_c * x - d.rot_s * y);
+    K_PRECISE double py = d.center_im + (d.rot_s * x + d.rot_c * y);
+    K_PRECISE double dpx = d.rot_c * ddx - d.rot_s * ddy;
+    K_PRECISE double dpy = d.rot_s * ddx + d.rot_c * ddy;
+    k_vec2 w = k_julia_turbulence(p, turb, K_F(u), K_F(v));
+    /* z0 = (p - conj(a)) / (1 - a p), dz0/dx = (1 - |a|^2) / (1 - a p)^2 dp/dx, as in float */
+    K_PRECISE double nr = px - d.a_re;
+    K_PRECISE double ni = py + d.a_im;
+    K_PRECISE double dr = 1.0 - (d.a_re * px - d.a_im * py);
+    K_PRECISE double di = -(d.a_re * py + d.a_im * px);
+    K_PRECISE double den = dr * dr + di * di;
+    if (!(den > 0.0)) return res; /* the pole */
+    K_PRECISE double inv = 1.0 / den;
+    K_PRECISE double zr = (nr * dr + ni * di) * inv + K_DF(w.x);
+    K_PRECISE double zi = (ni * dr - nr * di) * inv + K_DF(w.y);
+    K_PRECISE double kk = 1.0 - (d.a_re * d.a_re + d.a_im * d.a_im);
+    K_PRECISE double wr = kk * ((dr * dr - di * di) * inv * inv), wi = kk * (-2.0 * dr * di * inv * inv);
+    K_PRECISE double dzr = wr * dpx - wi * dpy;
+    K_PRECISE double dzi = wr * dpy + wi * dpx;
+    if (!(zr * zr + zi * zi < d.huge)) return res;
+    uint n = 0u;
+    bool escaped = false;
+    for (uint i = 0u; i < p.max_iter; i++) {
+        if (zr * zr + zi * zi >= d.bailout2) {
+            escaped = true;
+            break;
+        }
+        if ((want & K_JULIA_WANT_DE) != 0u) {
+            K_PRECISE double tr = 2.0 * (zr * dzr - zi * dzi);
+            K_PRECISE double ti = 2.0 * (zr * dzi + zi * dzr);
+            dzr = tr;
+            dzi = ti;
+        }
+        K_PRECISE double xr = zr * zr - zi * zi + d.c_re;
+        K_PRECISE double xi = 2.0 * zr * zi + d.c_im;
+        zr = xr;
+        zi = xi;
+        n++;
+    }
+    if (!escaped && zr * zr + zi * zi >= d.bailout2) escaped = true;
+    res.iter = n;
+    if (!escaped) {
+        res.inside = 1u;
+        res.nsmooth = K_F(p.max_iter);
+        return res;
+    }
+    if (want == 0u) return res;
+    uint m = n;
+    for (uint j = 0u; j < K_JULIA_EXTRA_ITER; j++) {
+        if (zr * zr + zi * zi > 4294967296.0) break;
+        if ((want & K_JULIA_WANT_DE) != 0u) {
+            K_PRECISE double tr = 2.0 * (zr * dzr - zi * dzi);
+            K_PRECISE double ti = 2.0 * (zr * dzi + zi * dzr);
+            dzr = tr;
+            dzi = ti;
+        }
+        K_PRECISE double xr = zr * zr - zi * zi + d.c_re;
+        K_PRECISE double xi = 2.0 * zr * zi + d.c_im;
+        zr = xr;
+        zi = xi;
+        m++;
+    }
+    float r2 = K_F(zr * zr + zi * zi);
+    float lnr = 0.5f * k_log2(r2) * 0.69314718f;
+    if ((want & K_JULIA_WANT_SMOOTH) != 0u) res.nsmooth = K_F(m) + 1.0f - k_log2(lnr);
+    if ((want & K_JULIA_WANT_DE) != 0u) {
+        float dz = K_F(k_sqrt_d(dzr * dzr + dzi * dzi));
+        res.de = (dz > 0.0f && dz < 3.0e38f) ? k_sqrt(r2) * lnr / dz : 0.0f;
+    }
+    return res;
+}
+
+#endif
+
 #endif

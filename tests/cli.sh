@@ -88,6 +88,8 @@ expect_fail 2 "channels: expected a list of distinct names" o.exr -- julia $S --
 expect_fail 2 "channels: expected a list of distinct names" o.exr -- julia $S --channels iter,iter -o o.exr
 expect_fail 2 "channels: expected a list of distinct names" o.exr -- julia $S --channels "" -o o.exr
 expect_fail 2 "R, G and B go together" o.exr -- julia $S --channels iter,R -o o.exr
+expect_fail 2 "precision: expected one of float|double" o.exr -- julia $S --precision quad -o o.exr
+FB_VK_NO_FLOAT64=1 expect_fail 2 "needs a Vulkan device with shaderFloat64" o.exr -- julia $S --precision double --backend vulkan -o o.exr
 printf '{"size": [64, 32], "layers": [{"type": "julia", "channels": []}]}' > chan.json
 expect_fail 2 "layers\[0\].channels" o.exr -- render chan.json -o o.exr --quiet
 # a subset of channels: exactly those in the file, equal to the full layer's; iter alone previews

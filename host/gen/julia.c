@@ -8,6 +8,7 @@
 #include "../../kernels/julia.h"
 #include "../../kernels/palette.h"
 #include "../palette.h"
+#include "julia64_comp.h"
 #include "julia_comp.h"
 
 #include <math.h>
@@ -43,10 +44,12 @@ typedef struct julia_palette {
     K_FbmParams turb;
     float pad[3];
     float entries[K_PALETTE_SIZE][4];
+    K_JuliaD dp; /* the double-precision shader's parameters and constants */
 } julia_palette;
 _Static_assert(sizeof(K_SkyColour) == 48 && offsetof(julia_palette, turb) == 48, "std430 offset");
 _Static_assert(sizeof(K_FbmParams) == 84 && offsetof(julia_palette, entries) == 144, "std430: vec4 array at 144");
 _Static_assert(FB_PALETTE_ENTRIES == K_PALETTE_SIZE, "palette size");
+_Static_assert(offsetof(julia_palette, dp) == 144 + 16 * K_PALETTE_SIZE && sizeof(K_JuliaD) == 29 * 8, "std430");
 
 static const K_JuliaParams *params(const fb_gen *g)
 {
@@ -98,12 +101,13 @@ static void julia_rows(const fb_gen *g, int y0, int n, void *const *planes)
     const K_JuliaParams *p = params(g);
     const julia_palette *pal = g->input;
     const uint32_t want = want_of(g->spec[4]);
-    const bool colour = planes[P_R] != NULL;
+    const bool colour = planes[P_R] != NULL, dbl = g->needs_float64;
     for (int r = 0; r < n; r++)
         for (uint32_t x = 0; x < p->width; x++) {
             uint32_t y = (uint32_t)(y0 + r);
             K_JuliaResult res =
-                k_julia_run(*p, k_julia_start_at(*p, pal->turb, (float)x + 0.5f, (float)y + 0.5f), want);
+                dbl ? k_julia_run_d(*p, pal->dp, pal->turb, x + 0.5, y + 0.5, want)
+                    : k_julia_run(*p, k_julia_start_at(*p, pal->turb, (float)x + 0.5f, (float)y + 0.5f), want);
             size_t i = (size_t)r * p->width + x;
             store(planes, i, res);
             if (!colour) continue;
@@ -112,7 +116,10 @@ static void julia_rows(const fb_gen *g, int y0, int n, void *const *planes)
             sky_colour(pal, res, sum);
             for (uint32_t k = 1; k < pal->colour.samples; k++) {
                 k_vec2 f = k_julia_sample_xy(*p, pal->colour.seed, x, y, k);
-                sky_colour(pal, k_julia_run(*p, k_julia_start_at(*p, pal->turb, f.x, f.y), K_JULIA_WANT_SMOOTH), c);
+                sky_colour(pal,
+                           dbl ? k_julia_run_d(*p, pal->dp, pal->turb, f.x, f.y, K_JULIA_WANT_SMOOTH)
+                               : k_julia_run(*p, k_julia_start_at(*p, pal->turb, f.x, f.y), K_JULIA_WANT_SMOOTH),
+                           c);
                 for (int ch = 0; ch < 3; ch++) sum[ch] += c[ch];
             }
             store_colour(planes, i, pal, sum);
@@ -162,6 +169,22 @@ fb_result fb_gen_julia_init(fb_gen *g)
         .inv_samples = (float)(1.0 / j->samples),
     };
     fb_palette_build(&j->palette, pal->entries);
+    /* double precision: the parameters unrounded, and the constants of k_julia_sincos_d */
+    pal->dp = (K_JuliaD){
+        .c_re = j->c[0],
+        .c_im = j->c[1],
+        .a_re = j->alpha[0],
+        .a_im = j->alpha[1],
+        .scale_u = j->scale[0],
+        .scale_v = j->scale[1],
+        .radius = j->radius,
+        .center_re = j->center[0],
+        .center_im = j->center[1],
+        .rot_c = cos(a),
+        .rot_s = sin(a),
+        .bailout2 = j->bailout * j->bailout,
+    };
+    k_julia_d_constants(&pal->dp);
     /* Turbulence W: fBm over (u, v) with the layer's own parameters; tileable for polar grids. */
     K_FbmParams *t = &pal->turb;
     t->seed = s->seed;
@@ -205,8 +228,9 @@ fb_result fb_gen_julia_init(fb_gen *g)
             g->preview_channel = c;
     }
     g->native_rows = julia_rows;
-    g->spv = julia_comp;
-    g->spv_size = sizeof julia_comp;
+    g->needs_float64 = j->double_precision;
+    g->spv = j->double_precision ? julia64_comp : julia_comp;
+    g->spv_size = j->double_precision ? sizeof julia64_comp : sizeof julia_comp;
     g->params_size = sizeof(K_JuliaParams);
     g->push_size = sizeof(julia_push);
     g->spec[0] = p->mapping;

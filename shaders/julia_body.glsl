@@ -1,0 +1,125 @@
+// Warped Julia sets: one invocation per two neighbouring pixels of a row, their orbits iterated in
+// one loop (two dependency chains in flight). The math is kernels/julia.h. Included by julia.comp
+// (float) and julia64.comp (K_JULIA_F64: the grid and orbit in double; needs shaderFloat64).
+#define K_GLSL 1
+#include "../kernels/julia.h"
+#include "../kernels/palette.h"
+
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
+
+// The mapping, fixed per pipeline so that the compiler folds the other one away.
+layout(constant_id = 0) const uint MAPPING = 0u;
+// Turbulence on or off and the colour sample count, fixed per pipeline: code that cannot run is
+// folded away (on lavapipe the unused turbulence fBm alone cost 4x).
+layout(constant_id = 1) const uint TURBULENCE = 0u;
+layout(constant_id = 2) const uint SAMPLES = 1u;
+// bit 0: gamma != 1, bit 1: density > 0. A ternary on a buffer value compiles to a select that
+// evaluates pow() whatever the value; known constants fold it away.
+layout(constant_id = 3) const uint COLOUR_FLAGS = 3u;
+// bit k: the layer stores channel k of iter, n, inside, de, R, G, B. What no stored channel needs
+// is not computed; a buffer not stored is bound but never written.
+layout(constant_id = 4) const uint OUTPUTS = 127u;
+
+layout(push_constant) uniform Push
+{
+    K_JuliaParams p;
+    uint y0;   // first image row of this strip
+    uint rows; // rows in this strip
+}
+pc;
+
+layout(std430, set = 0, binding = 0) writeonly buffer Iter { uint v[]; } o_iter;
+layout(std430, set = 0, binding = 1) writeonly buffer Smooth { float v[]; } o_n;
+layout(std430, set = 0, binding = 2) writeonly buffer Inside { float v[]; } o_inside;
+layout(std430, set = 0, binding = 3) writeonly buffer De { float v[]; } o_de;
+layout(std430, set = 0, binding = 4) writeonly buffer Red { float v[]; } o_r;
+layout(std430, set = 0, binding = 5) writeonly buffer Green { float v[]; } o_g;
+layout(std430, set = 0, binding = 6) writeonly buffer Blue { float v[]; } o_b;
+layout(std430, set = 0, binding = 7) readonly buffer Palette
+{
+    K_SkyColour colour;
+    K_FbmParams turb;
+    float pad0, pad1, pad2;
+    vec4 entries[K_PALETTE_SIZE];
+#ifdef K_JULIA_F64
+    K_JuliaD dp; // the double parameters and constants
+#endif
+}
+pal;
+
+// The same table lookup as host/gen/julia.c.
+vec3 sky_colour(K_JuliaResult res)
+{
+    K_SkyColour c = pal.colour;
+    if ((COLOUR_FLAGS & 1u) == 0u) c.gamma = 1.0f;
+    if ((COLOUR_FLAGS & 2u) == 0u) c.density = 0.0f;
+    if (res.inside != 0u) return vec3(c.inside_r, c.inside_g, c.inside_b);
+    float pos = k_palette_pos(c, res.nsmooth);
+    uint i0 = uint(pos), i1 = min(i0 + 1u, K_PALETTE_SIZE - 1u);
+    float f = pos - float(i0), w = k_sky_weight(c, res.nsmooth);
+    vec4 e0 = pal.entries[i0], e1 = pal.entries[i1];
+    return vec3(k_sky_channel(c, k_mix(e0.r, e1.r, f), w), k_sky_channel(c, k_mix(e0.g, e1.g, f), w),
+                k_sky_channel(c, k_mix(e0.b, e1.b, f), w));
+}
+
+void store(uint i, K_JuliaResult res)
+{
+    if ((OUTPUTS & 1u) != 0u) o_iter.v[i] = res.iter;
+    if ((OUTPUTS & 2u) != 0u) o_n.v[i] = res.nsmooth;
+    if ((OUTPUTS & 4u) != 0u) o_inside.v[i] = float(res.inside);
+    if ((OUTPUTS & 8u) != 0u) o_de.v[i] = res.de;
+}
+
+void store_colour(uint i, vec3 sum)
+{
+    float s = pal.colour.inv_samples;
+    o_r.v[i] = SAMPLES == 1u ? sum.r : sum.r * s;
+    o_g.v[i] = SAMPLES == 1u ? sum.g : sum.g * s;
+    o_b.v[i] = SAMPLES == 1u ? sum.b : sum.b * s;
+}
+
+void main()
+{
+    uint x = 2u * gl_GlobalInvocationID.x;
+    uint r = gl_GlobalInvocationID.y;
+    if (x >= pc.p.width || r >= pc.rows) return;
+    K_JuliaParams p = pc.p;
+    p.mapping = MAPPING;
+    if (TURBULENCE == 0u) p.lambda = 0.0f;
+    uint want = ((OUTPUTS & 0x72u) != 0u ? K_JULIA_WANT_SMOOTH : 0u) | ((OUTPUTS & 8u) != 0u ? K_JULIA_WANT_DE : 0u);
+    bool has_b = x + 1u < p.width;
+    uint y = pc.y0 + r;
+#ifdef K_JULIA_F64
+    // double precision: the two pixels one after the other
+    K_JuliaPair res;
+    res.a = k_julia_run_d(p, pal.dp, pal.turb, double(x) + 0.5, double(y) + 0.5, want);
+    res.b = res.a;
+    if (has_b) res.b = k_julia_run_d(p, pal.dp, pal.turb, double(x) + 1.5, double(y) + 0.5, want);
+#else
+    K_JuliaPair res = k_julia_sample2(p, pal.turb, pal.colour.seed, x, y, 0u, has_b, want);
+#endif
+    uint i = r * p.width + x;
+    store(i, res.a);
+    if (has_b) store(i + 1u, res.b);
+    if ((OUTPUTS & 0x70u) == 0u) return;
+    // Colour: the average of `samples` jittered samples in linear colour (sample 0 is the centre).
+    vec3 sa = sky_colour(res.a), sb = sky_colour(res.b);
+    for (uint k = 1u; k < SAMPLES; k++) {
+#ifdef K_JULIA_F64
+        K_JuliaPair q;
+        k_vec2 fa = k_julia_sample_xy(p, pal.colour.seed, x, y, k);
+        q.a = k_julia_run_d(p, pal.dp, pal.turb, double(fa.x), double(fa.y), K_JULIA_WANT_SMOOTH);
+        q.b = q.a;
+        if (has_b) {
+            k_vec2 fb = k_julia_sample_xy(p, pal.colour.seed, x + 1u, y, k);
+            q.b = k_julia_run_d(p, pal.dp, pal.turb, double(fb.x), double(fb.y), K_JULIA_WANT_SMOOTH);
+        }
+#else
+        K_JuliaPair q = k_julia_sample2(p, pal.turb, pal.colour.seed, x, y, k, has_b, K_JULIA_WANT_SMOOTH);
+#endif
+        sa += sky_colour(q.a);
+        sb += sky_colour(q.b);
+    }
+    store_colour(i, sa);
+    if (has_b) store_colour(i + 1u, sb);
+}
