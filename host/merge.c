@@ -205,7 +205,11 @@ static bool outside_of(const char *attr, const char *name, uint64_t *out)
 
 typedef struct chaos_layer {
     fb_gen gen;
-    uint64_t *hits, *sums;
+    int layer;             /* its index in the scene */
+    int idx[3];            /* the parts' count, colour_sum_lo and colour_sum_hi channels */
+    uint32_t *rows[3];     /* a strip of each */
+    uint64_t *hits, *sums; /* added over the parts */
+    uint64_t outside;
 } chaos_layer;
 
 static fb_result merge_points(part *p, int n, const char *const *paths, const char *out, int threads)
@@ -257,47 +261,56 @@ static fb_result merge_points(part *p, int n, const char *const *paths, const ch
     if (!rc && (sc.width != W || sc.height != H))
         rc = fb_fail(FB_ERR_INPUT, "%s: %d x %d, but its scene is %d x %d", paths[0], W, H, sc.width, sc.height);
     if (!rc && !(cl = calloc((size_t)sc.nlayers, sizeof *cl))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
-    /* the chaos-game layers: their hits and colour sums, added over the parts */
+    /* the chaos-game layers: their hits and colour sums, added over the parts (each part read once) */
+    size_t npx = (size_t)W * H;
     for (int l = 0; l < sc.nlayers && !rc; l++) {
         if (sc.layers[l].kind != FB_LAYER_IFS) continue;
         chaos_layer *c = &cl[ncl++];
         const char *name = sc.layers[l].name;
-        char cn[3][96];
-        snprintf(cn[0], sizeof cn[0], "%s.count", name);
-        snprintf(cn[1], sizeof cn[1], "%s.colour_sum_lo", name);
-        snprintf(cn[2], sizeof cn[2], "%s.colour_sum_hi", name);
-        int idx[3];
-        for (int j = 0; j < 3; j++)
-            if ((idx[j] = exrio_find_channel(p[0].r, cn[j])) < 0)
-                rc = fb_fail(FB_ERR_INPUT, "%s: no channel %s (not a points part of this scene)", paths[0], cn[j]);
-        size_t npx = (size_t)W * H;
+        static const char *const suffix[3] = {"count", "colour_sum_lo", "colour_sum_hi"};
+        c->layer = l;
+        for (int j = 0; j < 3 && !rc; j++) {
+            char cn[96];
+            snprintf(cn, sizeof cn, "%s.%s", name, suffix[j]);
+            if ((c->idx[j] = exrio_find_channel(p[0].r, cn)) < 0)
+                rc = fb_fail(FB_ERR_INPUT, "%s: no channel %s (not a points part of this scene)", paths[0], cn);
+            c->rows[j] = malloc((size_t)W * MERGE_STRIP * 4);
+        }
         c->hits = calloc(npx, sizeof *c->hits);
         c->sums = calloc(npx, sizeof *c->sums);
-        uint32_t *rows[3] = {malloc((size_t)W * MERGE_STRIP * 4), malloc((size_t)W * MERGE_STRIP * 4),
-                             malloc((size_t)W * MERGE_STRIP * 4)};
-        if (!rc && (!c->hits || !c->sums || !rows[0] || !rows[1] || !rows[2]))
+        if (!rc && (!c->hits || !c->sums || !c->rows[0] || !c->rows[1] || !c->rows[2]))
             rc = fb_fail(FB_ERR_NOMEM, "out of memory");
-        uint64_t outside = 0;
-        for (int i = 0; i < n && !rc; i++) {
+    }
+    for (int i = 0; i < n && !rc; i++) {
+        for (int k = 0; k < ncl && !rc; k++) {
             uint64_t o = 0;
+            const char *name = sc.layers[cl[k].layer].name;
             if (!outside_of(exrio_attr_string(p[i].r, "fractalbake/ifs-outside"), name, &o))
                 rc = fb_fail(FB_ERR_INPUT, "%s: no outside count for layer %s (attribute fractalbake/ifs-outside)",
                              paths[i], name);
-            outside += o;
-            for (int y0 = 0; y0 < H && !rc; y0 += MERGE_STRIP) {
-                int rowsn = y0 + MERGE_STRIP <= H ? MERGE_STRIP : H - y0;
-                memset(in, 0, (size_t)nch * sizeof *in);
-                for (int j = 0; j < 3; j++) in[idx[j]] = rows[j];
-                rc = exrio_read_rows(p[i].r, y0, rowsn, in);
-                for (size_t q = 0; q < (size_t)rowsn * W && !rc; q++) {
-                    c->hits[(size_t)y0 * W + q] += rows[0][q];
-                    c->sums[(size_t)y0 * W + q] += (uint64_t)rows[2][q] << 32 | rows[1][q];
+            cl[k].outside += o;
+        }
+        for (int y0 = 0; y0 < H && !rc && ncl > 0; y0 += MERGE_STRIP) {
+            int rowsn = y0 + MERGE_STRIP <= H ? MERGE_STRIP : H - y0;
+            memset(in, 0, (size_t)nch * sizeof *in);
+            for (int k = 0; k < ncl; k++)
+                for (int j = 0; j < 3; j++) in[cl[k].idx[j]] = cl[k].rows[j];
+            rc = exrio_read_rows(p[i].r, y0, rowsn, in);
+            for (int k = 0; k < ncl && !rc; k++) {
+                chaos_layer *c = &cl[k];
+                for (size_t q = 0; q < (size_t)rowsn * W; q++) {
+                    c->hits[(size_t)y0 * W + q] += c->rows[0][q];
+                    c->sums[(size_t)y0 * W + q] += (uint64_t)c->rows[2][q] << 32 | c->rows[1][q];
                 }
             }
         }
-        for (int j = 0; j < 3; j++) free(rows[j]);
-        if (!rc) rc = fb_gen_init(&c->gen, &sc, &sc.layers[l]); /* the whole game's layer: 7 channels */
-        if (!rc) rc = fb_gen_ifs_from_sums(&c->gen, c->hits, c->sums, outside);
+    }
+    if (in) memset(in, 0, (size_t)nch * sizeof *in); /* it pointed at the layers' rows, not its own */
+    for (int k = 0; k < ncl && !rc; k++) {
+        chaos_layer *c = &cl[k];
+        for (int j = 0; j < 3; j++) free(c->rows[j]), c->rows[j] = NULL;
+        rc = fb_gen_init(&c->gen, &sc, &sc.layers[c->layer]); /* the whole game's layer: 7 channels */
+        if (!rc) rc = fb_gen_ifs_from_sums(&c->gen, c->hits, c->sums, c->outside);
     }
     /* the output: every channel but the colour sums; chaos layers' from their generator */
     for (int c = 0; c < nch && !rc; c++) {
@@ -353,6 +366,7 @@ static fb_result merge_points(part *p, int n, const char *const *paths, const ch
         fb_gen_fini(&cl[k].gen);
         free(cl[k].hits);
         free(cl[k].sums);
+        for (int j = 0; j < 3; j++) free(cl[k].rows[j]);
     }
     for (int c = 0; c < nch && in; c++) free(in[c]), free(cmp[c]);
     for (int o = 0; o < FB_MERGE_MAX_CHANNELS; o++) free(outp[o]);
