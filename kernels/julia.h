@@ -407,6 +407,25 @@ K_FN K_JuliaSinCos k_julia_sincos_d(K_JuliaD d, double x)
     return o;
 }
 
+/* An orbit's state in double, and one step of it (z' <- 2 z z' only when the distance is wanted). */
+K_STRUCT(K_JuliaZD)
+{
+    double zr, zi, dzr, dzi;
+}
+K_END(K_JuliaZD)
+
+K_FN K_JuliaZD k_julia_step_d(K_JuliaZD o, K_JuliaD d, uint want)
+{
+    K_PRECISE K_JuliaZD r = o;
+    if ((want & K_JULIA_WANT_DE) != 0u) {
+        r.dzr = 2.0 * (o.zr * o.dzr - o.zi * o.dzi);
+        r.dzi = 2.0 * (o.zr * o.dzi + o.zi * o.dzr);
+    }
+    r.zr = o.zr * o.zr - o.zi * o.zi + d.c_re;
+    r.zi = 2.0 * o.zr * o.zi + d.c_im;
+    return r;
+}
+
 /* The orbit of the point at continuous pixel coordinates (fx, fy), in double. */
 K_FN K_JuliaResult k_julia_run_d(K_JuliaParams p, K_JuliaD d, K_FbmParams turb, double fx, double fy, uint want)
 {
@@ -450,29 +469,23 @@ K_FN K_JuliaResult k_julia_run_d(K_JuliaParams p, K_JuliaD d, K_FbmParams turb, 
     K_PRECISE double zi = (ni * dr - nr * di) * inv + K_DF(w.y);
     K_PRECISE double kk = 1.0 - (d.a_re * d.a_re + d.a_im * d.a_im);
     K_PRECISE double wr = kk * ((dr * dr - di * di) * inv * inv), wi = kk * (-2.0 * dr * di * inv * inv);
-    K_PRECISE double dzr = wr * dpx - wi * dpy;
-    K_PRECISE double dzi = wr * dpy + wi * dpx;
+    K_PRECISE K_JuliaZD o;
+    o.zr = zr;
+    o.zi = zi;
+    o.dzr = wr * dpx - wi * dpy;
+    o.dzi = wr * dpy + wi * dpx;
     if (!(zr * zr + zi * zi < d.huge)) return res;
     uint n = 0u;
     bool escaped = false;
     for (uint i = 0u; i < p.max_iter; i++) {
-        if (zr * zr + zi * zi >= d.bailout2) {
+        if (o.zr * o.zr + o.zi * o.zi >= d.bailout2) {
             escaped = true;
             break;
         }
-        if ((want & K_JULIA_WANT_DE) != 0u) {
-            K_PRECISE double tr = 2.0 * (zr * dzr - zi * dzi);
-            K_PRECISE double ti = 2.0 * (zr * dzi + zi * dzr);
-            dzr = tr;
-            dzi = ti;
-        }
-        K_PRECISE double xr = zr * zr - zi * zi + d.c_re;
-        K_PRECISE double xi = 2.0 * zr * zi + d.c_im;
-        zr = xr;
-        zi = xi;
+        o = k_julia_step_d(o, d, want);
         n++;
     }
-    if (!escaped && zr * zr + zi * zi >= d.bailout2) escaped = true;
+    if (!escaped && o.zr * o.zr + o.zi * o.zi >= d.bailout2) escaped = true;
     res.iter = n;
     if (!escaped) {
         res.inside = 1u;
@@ -482,24 +495,15 @@ K_FN K_JuliaResult k_julia_run_d(K_JuliaParams p, K_JuliaD d, K_FbmParams turb, 
     if (want == 0u) return res;
     uint m = n;
     for (uint j = 0u; j < K_JULIA_EXTRA_ITER; j++) {
-        if (zr * zr + zi * zi > 4294967296.0) break;
-        if ((want & K_JULIA_WANT_DE) != 0u) {
-            K_PRECISE double tr = 2.0 * (zr * dzr - zi * dzi);
-            K_PRECISE double ti = 2.0 * (zr * dzi + zi * dzr);
-            dzr = tr;
-            dzi = ti;
-        }
-        K_PRECISE double xr = zr * zr - zi * zi + d.c_re;
-        K_PRECISE double xi = 2.0 * zr * zi + d.c_im;
-        zr = xr;
-        zi = xi;
+        if (o.zr * o.zr + o.zi * o.zi > 4294967296.0) break;
+        o = k_julia_step_d(o, d, want);
         m++;
     }
-    float r2 = K_F(zr * zr + zi * zi);
+    float r2 = K_F(o.zr * o.zr + o.zi * o.zi);
     float lnr = 0.5f * k_log2(r2) * 0.69314718f;
     if ((want & K_JULIA_WANT_SMOOTH) != 0u) res.nsmooth = K_F(m) + 1.0f - k_log2(lnr);
     if ((want & K_JULIA_WANT_DE) != 0u) {
-        float dz = K_F(k_sqrt_d(dzr * dzr + dzi * dzi));
+        float dz = K_F(k_sqrt_d(o.dzr * o.dzr + o.dzi * o.dzi));
         res.de = (dz > 0.0f && dz < 3.0e38f) ? k_sqrt(r2) * lnr / dz : 0.0f;
     }
     return res;

@@ -124,10 +124,19 @@ static bool unstable(double complex pt, double complex a, double complex c, int 
     return false;
 }
 
+/* The cases compared with the reference: c values, alpha values (each with both mappings). */
+static const double cs[4][2] = {{-0.8, 0.156}, {-0.4, 0.6}, {0.285, 0.01}, {-1.0, 0.0}};
+static const double as[3][2] = {{0, 0}, {0.5, 0.25}, {-0.3, 0}};
+
+/* The reference's starting point of pixel (x, y), in double: the rect grid 3 wide, or polar r = 1.5. */
+static double complex reference_point(int mapping, uint x, uint y, uint W, uint H)
+{
+    double u = (x + 0.5) / W, v = 1.0 - (y + 0.5) / H;
+    return mapping ? 1.5 * v * cexp(I * 2 * M_PI * u) : 3.0 * (u - 0.5) + I * 3.0 * (v - 0.5);
+}
+
 static void test_against_reference(void)
 {
-    const double cs[4][2] = {{-0.8, 0.156}, {-0.4, 0.6}, {0.285, 0.01}, {-1.0, 0.0}};
-    const double as[3][2] = {{0, 0}, {0.5, 0.25}, {-0.3, 0}};
     for (int mapping = 0; mapping < 2; mapping++)
         for (int ci = 0; ci < 4; ci++)
             for (int ai = 0; ai < 3; ai++) {
@@ -139,9 +148,7 @@ static void test_against_reference(void)
                 int agree = 0, total = 0, stable = 0, stable_agree = 0;
                 for (uint y = 0; y < p.height; y++)
                     for (uint x = 0; x < p.width; x++) {
-                        double u = (x + 0.5) / p.width, v = 1.0 - (y + 0.5) / p.height;
-                        double complex pt =
-                            mapping ? 1.5 * v * cexp(I * 2 * M_PI * u) : 3.0 * (u - 0.5) + I * 3.0 * (v - 0.5);
+                        double complex pt = reference_point(mapping, x, y, p.width, p.height);
                         int ref = reference_iter(pt, a, c, 256, 2.0);
                         bool same = (int)k_julia_pixel(p, g_turb, x, y).iter == ref;
                         agree += same;
@@ -269,8 +276,6 @@ static void test_double(void)
         worst = fmax(worst, fmax(fabs(sc.s - sin(x)), fabs(sc.c - cos(x))));
     }
     CHECKF(worst < 4e-16, "sincos_d: max error %g", worst);
-    const double cs[4][2] = {{-0.8, 0.156}, {-0.4, 0.6}, {0.285, 0.01}, {-1.0, 0.0}};
-    const double as[3][2] = {{0, 0}, {0.5, 0.25}, {-0.3, 0}};
     double lowest = 1;
     for (int mapping = 0; mapping < 2; mapping++)
         for (int ci = 0; ci < 4; ci++)
@@ -284,9 +289,7 @@ static void test_double(void)
                 int agree = 0, total = 0;
                 for (uint y = 0; y < p.height; y++)
                     for (uint x = 0; x < p.width; x++) {
-                        double u = (x + 0.5) / p.width, v = 1.0 - (y + 0.5) / p.height;
-                        double complex pt =
-                            mapping ? 1.5 * v * cexp(I * 2 * M_PI * u) : 3.0 * (u - 0.5) + I * 3.0 * (v - 0.5);
+                        double complex pt = reference_point(mapping, x, y, p.width, p.height);
                         int ref = reference_iter(pt, a, c, 256, 2.0);
                         agree += (int)k_julia_run_d(p, d, g_turb, x + 0.5, y + 0.5, 0).iter == ref;
                         total++;
