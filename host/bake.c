@@ -4,9 +4,11 @@
 #include "bake.h"
 
 #include "ifs.h"
+#include "output.h"
 #include "preview.h"
 #include "progress.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -268,6 +270,38 @@ static fb_result previews_write(const previews *pv, const char *path)
 
 /* ---- the bake ------------------------------------------------------------------------------- */
 
+/* No stored float or half channel may hold a NaN or an infinity: every generator's inputs are checked
+ * so that none can, and this cheap pass over each strip (one compare per value, next to generating
+ * and compressing it) turns a breach into an error instead of a silently broken file. */
+static fb_result check_finite(const layer_run *runs, int nlayers, const void *const *planes, int y0, int n, int x0,
+                              int w, int stride)
+{
+    int at = 0;
+    for (int i = 0; i < nlayers; i++) {
+        const fb_gen *g = &runs[i].gen;
+        for (int c = 0; c < g->nchannels; c++, at++) {
+            if (g->channel_types[c] == EXRIO_UINT) continue;
+            for (int r = 0; r < n; r++) {
+                const uint32_t *row = (const uint32_t *)planes[at] + (size_t)r * stride;
+                uint32_t any = 0;
+                for (int x = 0; x < w; x++) any |= (row[x] & 0x7f800000u) == 0x7f800000u;
+                if (!any) continue;
+                for (int x = 0; x < w; x++) {
+                    float v;
+                    memcpy(&v, &row[x], 4);
+                    if (!isfinite(v))
+                        return fb_fail(FB_ERR_INTERNAL,
+                                       "layer %s: channel %s holds %s at pixel (%d, %d): an internal error, please "
+                                       "report it with the scene",
+                                       g->layer->name, g->channel_names[c], isnan(v) ? "NaN" : "an infinity", x0 + x,
+                                       y0 + r);
+                }
+            }
+        }
+    }
+    return FB_OK;
+}
+
 static int auto_strip_rows(const fb_scene *s)
 {
     /* About 4 MiB per channel buffer: well inside lavapipe's 128 MiB maxStorageBufferRange and small
@@ -290,8 +324,17 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     previews pv = {0};
     double t0 = fb_now(), gpu = 0;
     if (!runs) return fb_fail(FB_ERR_NOMEM, "out of memory");
-
     int rx = 0, ry = 0, rw = s->width, rh = s->height;
+    fb_outputs_begin();
+    /* Every output is reserved before any work: a bad target (named twice, a directory, a device
+     * node, a folder that does not exist) fails now, not after minutes of computing. */
+    if (d->out) rc = fb_output_reserve(d->out, "output");
+    if (!rc && d->preview) rc = fb_output_reserve(d->preview, "preview");
+    const char *side[FB_MAX_OUTPUTS], *side_what[FB_MAX_OUTPUTS];
+    int nside = fb_scene_outputs(s, side, side_what, FB_MAX_OUTPUTS);
+    for (int i = 0; i < nside && !rc; i++) rc = fb_output_reserve(side[i], side_what[i]);
+    if (rc) goto out;
+
     if (d->region[2] > 0) {
         rx = d->region[0], ry = d->region[1], rw = d->region[2], rh = d->region[3];
         if (rx < 0 || ry < 0 || rh <= 0 || (long)rx + rw > s->width || (long)ry + rh > s->height) {
@@ -431,7 +474,8 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         }
         if (rc) break;
         for (int c = 0; c < at; c++) planes[c] = (const uint8_t *)planes[c] + (size_t)rx * 4; /* the region's columns */
-        if (d->preview) rc = previews_add(&pv, runs, y0 - ry, n, planes);
+        rc = check_finite(runs, s->nlayers, planes, y0, n, rx, rw, s->width);
+        if (!rc && d->preview) rc = previews_add(&pv, runs, y0 - ry, n, planes);
         if (!rc && w) rc = exrio_writer_rows(w, y0 - ry, n, planes);
         fb_progress_update(&prog, (uint64_t)(y0 - ry + n) * rw, (uint64_t)rh * rw);
     }
@@ -442,13 +486,12 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
                      vkc_validation_messages(e->vk));
     if (!rc && w) rc = exrio_writer_finish(&w);
     if (!rc && d->preview) rc = previews_write(&pv, d->preview);
-    for (int i = 0; i < s->nlayers && !rc; i++)
-        if (runs[i].gen.finish) rc = runs[i].gen.finish(&runs[i].gen);
     for (int i = 0; i < s->nlayers && !rc && d->report; i++)
         if (runs[i].gen.summary[0])
             d->report(runs[i].gen.layer->name, runs[i].gen.summary, runs[i].gen.summary_json, d->user);
 out:
     exrio_writer_abort(&w);
+    rc = fb_outputs_end(rc); /* every output renamed into place now, or none */
     for (int k = 0; k < pv.n; k++) fb_preview_destroy(&pv.p[k]);
     free(pv.conv);
     for (int i = 0; i < s->nlayers; i++) run_fini(e, &runs[i]);

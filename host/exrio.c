@@ -3,6 +3,8 @@
  */
 #include "exrio.h"
 
+#include "output.h"
+
 #include <openexr.h>
 
 #include <errno.h>
@@ -78,7 +80,8 @@ typedef struct wpart {
 
 struct exrio_writer {
     exr_context_t ctx;
-    char path[4096], tmp[4200];
+    char path[4096];
+    int fd; /* the output transaction's temporary file (output.h) */
     int width, height, nchannels;
     int x0, y0, row_stride;
     exrio_type *types;
@@ -257,6 +260,31 @@ static batch *batch_new(exrio_writer *w, int y0)
     return b;
 }
 
+/* OpenEXRCore's write callback: every write at its offset, into the transaction's file. */
+static int64_t write_fd(exr_const_context_t ctxt, void *user, const void *buf, uint64_t size, uint64_t offset,
+                        exr_stream_error_func_ptr_t error_cb)
+{
+    const exrio_writer *w = user;
+    uint64_t done = 0;
+    while (done < size) {
+        ssize_t n = pwrite(w->fd, (const uint8_t *)buf + done, size - done, (off_t)(offset + done));
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+            error_cb(ctxt, EXR_ERR_WRITE_IO, "%s", strerror(n < 0 ? errno : EIO));
+            return -1;
+        }
+        done += (uint64_t)n;
+    }
+    return (int64_t)size;
+}
+
+static void free_unstarted(exrio_writer *w)
+{
+    pthread_mutex_destroy(&w->mu);
+    pthread_cond_destroy(&w->cv);
+    free(w);
+}
+
 fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
 {
     fb_result rc = FB_OK;
@@ -273,14 +301,19 @@ fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
     w->y0 = d->y0;
     w->row_stride = d->row_stride > 0 ? d->row_stride : d->width;
 
-    fb_temp_path(d->path, w->tmp, sizeof w->tmp);
+    w->fd = -1;
+    if ((rc = fb_output_open(d->path, d->what ? d->what : "output", &w->fd))) {
+        free_unstarted(w);
+        return rc;
+    }
 
     exr_context_initializer_t init = initializer();
-    exr_result_t er = exr_start_write(&w->ctx, w->tmp, EXR_WRITE_FILE_DIRECTLY, &init);
+    init.user_data = w;
+    init.write_fn = write_fd; /* OpenEXRCore opens nothing: the filename is for its messages */
+    exr_result_t er = exr_start_write(&w->ctx, d->path, EXR_WRITE_FILE_DIRECTLY, &init);
     if (er != EXR_ERR_SUCCESS) {
-        int e = errno;
         w->ctx = NULL;
-        rc = fb_fail(FB_ERR_IO, "%s: cannot create output file: %s", d->path, e ? strerror(e) : t_exr_msg);
+        rc = fb_fail(FB_ERR_EXR, "%s: cannot start the output file: %s", d->path, t_exr_msg);
         goto fail;
     }
     w->nparts = d->nparts > 0 ? d->nparts : 1;
@@ -351,14 +384,7 @@ fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
         }
         total += wp->nch;
         if (p > 0) {
-            char spool[4300];
-            snprintf(spool, sizeof spool, "%s.part%d", w->tmp, p);
-            wp->spool = fopen(spool, "w+b");
-            if (!wp->spool) {
-                rc = fb_fail(FB_ERR_IO, "%s: cannot create a spool file beside it: %s", d->path, strerror(errno));
-                goto fail;
-            }
-            unlink(spool); /* lives while open */
+            if ((rc = fb_output_spool(d->path, (void **)&wp->spool))) goto fail;
         }
     }
     if (total != d->nchannels) {
@@ -529,9 +555,9 @@ fb_result exrio_writer_finish(exrio_writer **pw)
     if (!rc && er != EXR_ERR_SUCCESS)
         rc = fb_fail(er == EXR_ERR_WRITE_IO ? FB_ERR_IO : FB_ERR_EXR, "%s: cannot complete the file: %s", w->path,
                      t_exr_msg);
-    if (!rc && rename(w->tmp, w->path) != 0)
-        rc = fb_fail(FB_ERR_IO, "%s: cannot move the finished file into place: %s", w->path, strerror(errno));
-    if (rc) unlink(w->tmp);
+    if (close(w->fd) != 0 && !rc) rc = fb_fail(FB_ERR_IO, "%s: cannot write: %s", w->path, strerror(errno));
+    w->fd = -1;
+    rc = fb_output_done(w->path, rc); /* renamed with the run's other outputs (output.h) */
     writer_free(w);
     return rc;
 }
@@ -546,7 +572,10 @@ void exrio_writer_abort(exrio_writer **pw)
     pthread_mutex_unlock(&w->mu);
     stop_workers(w);
     if (w->ctx) exr_finish(&w->ctx);
-    unlink(w->tmp);
+    if (w->fd >= 0) {
+        close(w->fd);
+        fb_output_discard(w->path);
+    }
     writer_free(w);
 }
 

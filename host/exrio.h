@@ -37,6 +37,7 @@ typedef struct exrio_attr {
 
 typedef struct exrio_writer_desc {
     const char *path;
+    const char *what; /* the output's role in messages ("output", "diff"...); NULL: "output" */
     int width, height; /* the data window's size */
     /* A region file: the data window starts at (x0, y0) of a display window of full_width x
      * full_height (0: the data window is the whole image). */
@@ -58,7 +59,7 @@ typedef struct exrio_writer_desc {
 
 typedef struct exrio_writer exrio_writer;
 
-/* Opens the temporary file and writes the header. */
+/* Takes the path's temporary file from the output transaction (output.h) and writes the header. */
 fb_result exrio_writer_create(const exrio_writer_desc *desc, exrio_writer **out);
 
 /* Appends rows [y0, y0 + nrows) of the data window (y0 counts from its top and must be the next row
@@ -67,8 +68,9 @@ fb_result exrio_writer_create(const exrio_writer_desc *desc, exrio_writer **out)
  * the compression queue is full. */
 fb_result exrio_writer_rows(exrio_writer *w, int y0, int nrows, const void *const *planes);
 
-/* Waits for the last chunks, completes the file and renames it into place. Frees the writer,
- * whatever the result; on failure the temporary file is removed. */
+/* Waits for the last chunks and completes the temporary file, which the output transaction renames
+ * into place with the run's other outputs. Frees the writer, whatever the result; on failure the
+ * temporary file is removed. */
 fb_result exrio_writer_finish(exrio_writer **w);
 
 /* Abandons the file: the temporary file is removed, nothing is renamed. Null-safe. */

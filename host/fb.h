@@ -59,10 +59,6 @@ void fb_log(int level, const char *fmt, ...) __attribute__((format(printf, 2, 3)
 /* Seconds on a monotonic clock. */
 double fb_now(void);
 
-/* The temporary name an output file is written under before rename() moves it into place: beside
- * it (same directory, so the rename is atomic), hidden, with the process id: DIR/.NAME.PID.tmp */
-void fb_temp_path(const char *path, char *out, size_t size);
-
 /* Number of online CPU cores (at least 1). */
 int fb_cpu_count(void);
 

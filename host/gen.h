@@ -51,9 +51,8 @@ struct fb_gen {
     fb_result (*prepare)(fb_gen *g, struct fb_engine *e, bool progress);
     double prepare_gpu_seconds; /* set by prepare: dispatch time on the GPU, else -1 */
 
-    /* Side outputs (a mesh file) are written to temporary files by prepare and moved into place by
-     * finish, called only after the EXR is complete, so that a failed bake leaves no output. */
-    fb_result (*finish)(fb_gen *g);
+    /* Side outputs (a mesh, a CSV) are written by prepare through the output transaction
+     * (output.h), which renames them with the EXR when the whole run succeeds. */
     double preview_shade[2]; /* > 0: the preview shows preview_channel as a hillshade (world units per
                                 pixel in x and y) */
     char summary[512];       /* set by prepare: one human line about the layer's computation, or "" */

@@ -35,10 +35,12 @@ typedef struct avx2_job {
 
 #define G 2 /* vectors of 8 chains in flight */
 
-/* Chains [c0, c1) (groups of 8 * G chains vectorised, the rest scalar) into histogram h; adds the
- * points outside the frame, discarded and restarted to n[0..2]. */
-AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t c0, uint32_t c1, avx2_hist *h,
-                           uint64_t n[3])
+/* Steps [t0, t1) of chains [c0, c1) (groups of 8 * G chains vectorised, the rest scalar) into
+ * histogram h; adds the points outside the frame, discarded and restarted to n[0..2]. A chain starts
+ * at t0 == 0 and otherwise from state[chain], where its state after the window is stored (state may
+ * be NULL when the window holds every step). */
+AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t c0, uint32_t c1, uint32_t t0,
+                           uint32_t t1, K_IfsChain *state, avx2_hist *h, uint64_t n[3])
 {
     float coef[7][8] = {{0}};
     int thr[8];
@@ -66,7 +68,7 @@ AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t 
             int ls[8], hs[8];
             for (int l = 0; l < 8; l++) {
                 uint32_t i = c + 8 * (uint32_t)g + (uint32_t)l;
-                K_IfsChain s = k_ifs_init(*p, i);
+                K_IfsChain s = t0 == 0 ? k_ifs_init(*p, i) : state[i];
                 xs[l] = s.x, ys[l] = s.y, cs[l] = s.c, ls[l] = (int)s.left;
                 hs[l] = (int)k_hash(i ^ k_hash(p->seed ^ 0x9e3779b9u));
                 uint32_t ti = k_ifs_total(*p, i);
@@ -76,7 +78,8 @@ AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t 
             left[g] = _mm256_loadu_si256((const __m256i *)ls);
             chainh[g] = _mm256_loadu_si256((const __m256i *)hs);
         }
-        for (uint32_t t = 0; t < total; t++) {
+        if (total > t1) total = t1;
+        for (uint32_t t = t0; t < total; t++) {
             for (int g = 0; g < G; g++) {
                 /* r = k_hash3(seed, chain, t) = hash(t ^ hash(chain ^ hash(seed ^ k))) */
                 __m256i r = hash8(_mm256_xor_si256(_mm256_set1_epi32((int)t), chainh[g]));
@@ -143,12 +146,24 @@ AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t 
                 }
             }
         }
+        for (int g = 0; g < G && state; g++) { /* the window ends: where each chain stands */
+            float xs[8], ys[8], cs[8];
+            int ls[8];
+            _mm256_storeu_ps(xs, x[g]), _mm256_storeu_ps(ys, y[g]), _mm256_storeu_ps(cs, col[g]);
+            _mm256_storeu_si256((__m256i *)ls, left[g]);
+            for (int l = 0; l < 8; l++) {
+                K_IfsChain *st = &state[c + 8 * (uint32_t)g + (uint32_t)l];
+                st->x = xs[l], st->y = ys[l], st->c = cs[l], st->left = (uint32_t)ls[l];
+                st->status = K_IFS_SKIP; /* the loop reads none of the rest (no condensation here) */
+            }
+        }
     }
     /* the chains left over: the kernel itself */
     for (; c < c1; c++) {
-        K_IfsChain s = k_ifs_init(*p, c);
+        K_IfsChain s = t0 == 0 ? k_ifs_init(*p, c) : state[c];
         uint32_t total = k_ifs_total(*p, c);
-        for (uint32_t t = 0; t < total; t++) {
+        if (total > t1) total = t1;
+        for (uint32_t t = t0; t < total; t++) {
             s = k_ifs_step(*p, s, c, t, maps);
             n[1] += s.status != K_IFS_PLOT;
             n[2] += s.status == K_IFS_RESTART;
@@ -160,6 +175,7 @@ AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t 
             h->hits[cell]++;
             h->sum[cell] += k_ifs_quant(s.c);
         }
+        if (state) state[c] = s;
     }
 }
 
@@ -169,7 +185,7 @@ static void avx2_task(void *ctx, int task)
     uint32_t n = j->p->chains, per = (n / (uint32_t)j->ntasks + 15) / 16 * 16;
     uint32_t c0 = per * (uint32_t)task, c1 = c0 + per < n ? c0 + per : n;
     uint64_t counts[3] = {0, 0, 0};
-    if (c0 < n) game_avx2(j->p, j->maps, c0, c1, &j->hist[task], counts);
+    if (c0 < n) game_avx2(j->p, j->maps, c0, c1, 0, UINT32_MAX, NULL, &j->hist[task], counts);
 }
 
 static void merge_task(void *ctx, int task)
@@ -183,11 +199,11 @@ static void merge_task(void *ctx, int task)
         }
 }
 
-void fb_ifs_avx2_chains(const void *params, const void *maps, uint32_t c0, uint32_t c1, uint32_t *hits, uint64_t *sum,
-                        uint64_t counts[3])
+void fb_ifs_avx2_chains(const void *params, const void *maps, uint32_t c0, uint32_t c1, uint32_t t0, uint32_t t1,
+                        void *state, uint32_t *hits, uint64_t *sum, uint64_t counts[3])
 {
     avx2_hist h = {hits, sum};
-    game_avx2(params, maps, c0, c1, &h, counts);
+    game_avx2(params, maps, c0, c1, t0, t1, state, &h, counts);
 }
 
 bool fb_ifs_avx2_supported(const void *params)
@@ -232,10 +248,10 @@ bool fb_ifs_avx2_supported(const void *params)
     return false;
 }
 
-void fb_ifs_avx2_chains(const void *params, const void *maps, uint32_t c0, uint32_t c1, uint32_t *hits, uint64_t *sum,
-                        uint64_t counts[3])
+void fb_ifs_avx2_chains(const void *params, const void *maps, uint32_t c0, uint32_t c1, uint32_t t0, uint32_t t1,
+                        void *state, uint32_t *hits, uint64_t *sum, uint64_t counts[3])
 {
-    (void)params, (void)maps, (void)c0, (void)c1, (void)hits, (void)sum, (void)counts;
+    (void)params, (void)maps, (void)c0, (void)c1, (void)t0, (void)t1, (void)state, (void)hits, (void)sum, (void)counts;
 }
 
 fb_result fb_ifs_avx2_game(const void *params, const void *maps, int threads, uint32_t *hits, uint64_t *sum)

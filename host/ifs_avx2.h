@@ -16,10 +16,13 @@ bool fb_ifs_avx2_supported(const void *params);
  * sums sum[] (hist_w * hist_h cells each, overwritten): the same sums as the kernel. */
 fb_result fb_ifs_avx2_game(const void *params, const void *maps, int threads, uint32_t *hits, uint64_t *sum);
 
-/* Chains [c0, c1) of `params`, every step, added to hits[] and sum[]; adds the points outside the
- * frame, discarded and restarted to counts[0..2]. Needs fb_ifs_avx2_supported. */
-void fb_ifs_avx2_chains(const void *params, const void *maps, uint32_t c0, uint32_t c1, uint32_t *hits, uint64_t *sum,
-                        uint64_t counts[3]);
+/* Steps [t0, t1) of chains [c0, c1) of `params`, added to hits[] and sum[]; adds the points outside
+ * the frame, discarded and restarted to counts[0..2]. Chains start at t0 == 0, else resume from
+ * state[chain] (a K_IfsChain per chain of the run), where the window's end is stored; state may be
+ * NULL for a window of every step (t0 = 0, t1 = UINT32_MAX). Windows one after another give the
+ * sums of one window of every step, bit for bit. Needs fb_ifs_avx2_supported. */
+void fb_ifs_avx2_chains(const void *params, const void *maps, uint32_t c0, uint32_t c1, uint32_t t0, uint32_t t1,
+                        void *state, uint32_t *hits, uint64_t *sum, uint64_t counts[3]);
 
 /* The textbook chaos game on one core: one chain of `points` steps, xorshift32, the first `skip`
  * points discarded. Adds to hits[] and sum[]; returns the points plotted inside the frame. */

@@ -82,13 +82,6 @@ double fb_now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-void fb_temp_path(const char *path, char *out, size_t size)
-{
-    const char *slash = strrchr(path, '/');
-    int dirlen = slash ? (int)(slash - path + 1) : 0;
-    snprintf(out, size, "%.*s.%s.%ld.tmp", dirlen, path, path + dirlen, (long)getpid());
-}
-
 int fb_cpu_count(void)
 {
     long n = sysconf(_SC_NPROCESSORS_ONLN);

@@ -8,13 +8,16 @@
 #include "compare.h"
 #include "exrio.h"
 #include "merge.h"
+#include "output.h"
 #include "scene.h"
 #include "vkc.h"
 
 #include <errno.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 /* The first error is the one line the user sees; warnings are shown as they come. */
 static char g_first_error[2048];
@@ -383,7 +386,15 @@ static int cmd_render(int argc, char **argv)
             memcpy(o.points_part, part, sizeof part);
         }
         snprintf(origin, sizeof origin, "%s (stored scene)", from);
-        if (!rc) rc = fb_scene_parse_sets(json, origin, sets, nsets, &scene);
+        /* A file from elsewhere must not choose what this run writes: its layers' output paths go,
+         * and --set puts back the ones the user names. */
+        char *kept = NULL, dropped[2048];
+        if (!rc) rc = fb_scene_drop_outputs(json, &kept, dropped, sizeof dropped);
+        if (!rc && dropped[0])
+            fb_log(FB_LOG_WARN, "--from %s: not writing the stored scene's outputs (%s); name them with --set", from,
+                   dropped);
+        if (!rc) rc = fb_scene_parse_sets(kept, origin, sets, nsets, &scene);
+        free(kept);
         if (o.backend == FB_BACKEND_AUTO) o.backend = stored;
         free(json);
     } else if (scene_path) {
@@ -545,9 +556,44 @@ static int cmd_devices(int argc, char **argv)
     return 0;
 }
 
+/* SIGINT, SIGTERM, SIGHUP: this run's temporary files go, no output is renamed into place, and the
+ * exit status is 128 + the signal (130 for Ctrl-C), as a shell reports a process killed by it. */
+static void on_signal(int sig)
+{
+    fb_outputs_unlink_all();
+    _exit(128 + sig);
+}
+
+static void install_signal_handlers(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigfillset(&sa.sa_mask); /* no second signal inside the handler */
+    const int sigs[] = {SIGINT, SIGTERM, SIGHUP};
+    for (size_t i = 0; i < sizeof sigs / sizeof sigs[0]; i++) sigaction(sigs[i], &sa, NULL);
+}
+
+static int run_command(int argc, char **argv);
+
 int main(int argc, char **argv)
 {
     fb_log_set_sink(sink, NULL);
+    install_signal_handlers();
+    /* bench bakes to a scratch file again and again: each of its bakes is a transaction of its own */
+    if (argc >= 2 && !strcmp(argv[1], "bench")) return run_command(argc, argv);
+    /* Every file the command writes is renamed into place here, together, or none is (output.h).
+     * A comparison beyond threshold (1) still writes its diff pictures. */
+    fb_outputs_begin();
+    int code = run_command(argc, argv);
+    g_first_error[0] = 0;
+    fb_result rc = fb_outputs_end(code == 0 || code == 1 ? FB_OK : FB_ERR_INTERNAL);
+    if (rc && (code == 0 || code == 1)) code = finish(rc);
+    return code;
+}
+
+static int run_command(int argc, char **argv)
+{
     if (argc < 2) {
         fputs(k_usage, stderr);
         return 2;

@@ -1,5 +1,7 @@
 #include "preview.h"
 
+#include "output.h"
+
 #include <png.h>
 
 #include <errno.h>
@@ -118,7 +120,7 @@ static uint8_t srgb8(double v)
     return (uint8_t)lrint(255.0 * v);
 }
 
-static fb_result write_png(const char *path, int pw, int ph, int nc, const uint8_t *img);
+static fb_result write_png(const char *path, const char *what, int pw, int ph, int nc, const uint8_t *img);
 
 fb_result fb_preview_write_png(const fb_preview *p, const char *path)
 {
@@ -145,24 +147,22 @@ fb_result fb_preview_write_png(const fb_preview *p, const char *path)
         for (size_t i = 0; i < n; i++)
             img[i] = p->count[i] ? (uint8_t)lrint(255.0 * (p->sum[i * p->channels] / p->count[i] - lo) / range) : 0;
     }
-    fb_result rc = write_png(path, p->pw, p->ph, nc, img);
+    fb_result rc = write_png(path, "preview", p->pw, p->ph, nc, img);
     free((void *)img);
     return rc;
 }
 
-static fb_result write_png(const char *path, int pw, int ph, int nc, const uint8_t *img)
+static fb_result write_png(const char *path, const char *what, int pw, int ph, int nc, const uint8_t *img)
 {
-    char tmp[4200];
-    fb_temp_path(path, tmp, sizeof tmp);
-    FILE *f = fopen(tmp, "wb");
-    if (!f) return fb_fail(FB_ERR_IO, "%s: cannot create preview: %s", path, strerror(errno));
-    fb_result rc = FB_OK;
+    FILE *f = NULL;
+    fb_result rc = fb_output_fopen(path, what, (void **)&f);
+    if (rc) return rc;
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
     png_infop info = png ? png_create_info_struct(png) : NULL;
     if (!png || !info) {
         rc = fb_fail(FB_ERR_NOMEM, "out of memory writing %s", path);
     } else if (setjmp(png_jmpbuf(png))) {
-        rc = fb_fail(FB_ERR_IO, "%s: cannot write preview", path);
+        rc = fb_fail(FB_ERR_IO, "%s: cannot write %s", path, what);
     } else {
         png_init_io(png, f);
         png_set_IHDR(png, info, (png_uint_32)pw, (png_uint_32)ph, 8, nc == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_GRAY,
@@ -172,10 +172,8 @@ static fb_result write_png(const char *path, int pw, int ph, int nc, const uint8
         png_write_end(png, NULL);
     }
     png_destroy_write_struct(png ? &png : NULL, info ? &info : NULL);
-    if (fclose(f) != 0 && !rc) rc = fb_fail(FB_ERR_IO, "%s: cannot write preview: %s", path, strerror(errno));
-    if (!rc && rename(tmp, path) != 0) rc = fb_fail(FB_ERR_IO, "%s: cannot move preview into place", path);
-    if (rc) unlink(tmp);
-    return rc;
+    if (fclose(f) != 0 && !rc) rc = fb_fail(FB_ERR_IO, "%s: cannot write %s: %s", path, what, strerror(errno));
+    return fb_output_done(path, rc); /* renamed with the run's other outputs (output.h) */
 }
 
 /* The range of channel 0 over the pixels that received a value (for grey levels). */
@@ -228,13 +226,13 @@ fb_result fb_preview_write_over(const fb_preview *const *layers, int n, const ch
             }
             for (int j = 0; j < 3; j++) img[i * 3 + j] = srgb8(out[j]);
         }
-    fb_result rc = write_png(path, p0->pw, p0->ph, 3, img);
+    fb_result rc = write_png(path, "preview", p0->pw, p0->ph, 3, img);
     free(img);
     free(lohi);
     return rc;
 }
 
-fb_result fb_png_write_rgb(const char *path, int width, int height, const uint8_t *rgb)
+fb_result fb_png_write_rgb(const char *path, const char *what, int width, int height, const uint8_t *rgb)
 {
-    return write_png(path, width, height, 3, rgb);
+    return write_png(path, what, width, height, 3, rgb);
 }

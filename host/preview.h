@@ -32,7 +32,8 @@ fb_result fb_preview_write_png(const fb_preview *p, const char *path);
  * the alpha, 1 without one. */
 fb_result fb_preview_write_over(const fb_preview *const *layers, int n, const char *path);
 
-/* Writes 8-bit RGB pixels (row by row) as a PNG, atomically. */
-fb_result fb_png_write_rgb(const char *path, int width, int height, const uint8_t *rgb);
+/* Writes 8-bit RGB pixels (row by row) as a PNG, through the output transaction (output.h); `what`
+ * names the output in messages ("plot", "diff picture"). */
+fb_result fb_png_write_rgb(const char *path, const char *what, int width, int height, const uint8_t *rgb);
 
 #endif

@@ -1,5 +1,6 @@
-/* A progress bar on stderr, drawn only when stderr is a terminal and the work has lasted about a
- * second, so that short runs and logs stay clean. */
+/* Progress on stderr: a bar redrawn every 0.1 s when stderr is a terminal and the work has lasted a
+ * second; for a log, a line after 10 s and then one a minute (rate and time left), so that short
+ * runs and logs stay clean and long ones are never silent. */
 #ifndef FB_PROGRESS_H
 #define FB_PROGRESS_H
 
@@ -7,7 +8,7 @@
 #include <stdint.h>
 
 typedef struct fb_progress {
-    bool enabled, drawn;
+    bool enabled, drawn, tty;
     double start, last;
     const char *label;
     const char *unit;

@@ -31,6 +31,7 @@ typedef enum ktype {
     T_NUMLIST,
     T_STOPS,
     T_STRING,   /* any non-empty string (a file path, an entry name) */
+    T_OUTPUT,   /* a file this layer writes besides the EXR: never taken from a stored scene (--from) */
     T_MAPS,     /* IFS maps: [[a, b, c, d, e, f(, p)], ...] */
     T_BOUNDS,   /* "auto" or [xmin, xmax, ymin, ymax] */
     T_FRACS,    /* 1..64 numbers in [lo, hi] */
@@ -142,7 +143,9 @@ static const keyspec ifs_keys[] = {
      "condensation set C: an IFS preset name or map list, or an L-system {\"preset\": \"tree\", ...} (flag: "
      "lsystem:tree); w0 sends any point onto C"},
     {"condensation-probability", T_NUM, 0, 1, true, NULL, "0.5", "probability of the condensation map w0"},
-    {"points", T_INT, 0, 1e14, false, NULL, "0", "chaos-game steps in all (0: 64 per histogram cell)"},
+    {"points", T_INT, 0, 1e14, false, NULL, "0",
+     "chaos-game steps in all (0: 64 per histogram cell); at about 1e8 a second, 1e14 takes days: "
+     "progress is shown and Ctrl-C stops it"},
     {"skip", T_INT, 0, 1000000, false, NULL, "0",
      "transient steps discarded after each (re)start (0: from the maps' mean contraction)"},
     {"chains", T_INT, 0, 1048576, false, NULL, "0", "independent chains (0: from points and skip, at most 65536)"},
@@ -213,7 +216,7 @@ static const keyspec terrain_keys[] = {
     {"centers", T_STRING, 0, 0, false, NULL, NULL, "CSV of centres x,y,D,sigma: regions of their own D and sigma"},
     {"bounds", T_BOUNDS, -1e15, 1e15, false, NULL, "\"auto\"",
      "area rasterised: \"auto\" (the points' bounding box) or [xmin, xmax, ymin, ymax]"},
-    {"mesh", T_STRING, 0, 0, false, NULL, NULL, "also write the refined mesh: OUT.ply (binary) or OUT.obj"},
+    {"mesh", T_OUTPUT, 0, 0, false, NULL, NULL, "also write the refined mesh: OUT.ply (binary) or OUT.obj"},
     {"half", T_BOOL, 0, 0, false, NULL, "false", "store Y as half (flags: --half, --float)"},
     {"compression", T_ENUM, 0, 0, false, "zip|piz|none", NULL,
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
@@ -258,8 +261,8 @@ static const keyspec constrain_keys[] = {
     {"buffering", T_ENUM, 0, 0, false, "regional|none|naive", "\"regional\"",
      "discrete constraints: regional buffering, none (zeroed when made), naive (zeroed after)"},
     {"water", T_NUM, -1e15, 1e15, false, NULL, NULL, "a water level: channel NAME.A is 1 where D >= water"},
-    {"csv", T_STRING, 0, 0, false, NULL, NULL, "1D: also write x, d, D per line to this CSV file"},
-    {"plot", T_STRING, 0, 0, false, NULL, NULL,
+    {"csv", T_OUTPUT, 0, 0, false, NULL, NULL, "1D: also write x, d, D per line to this CSV file"},
+    {"plot", T_OUTPUT, 0, 0, false, NULL, NULL,
      "1D: also draw d (blue), D (black) and the constraints (red) to this PNG"},
     {"half", T_BOOL, 0, 0, false, NULL, "false", "store the channels as half (flags: --half, --float)"},
     {"compression", T_ENUM, 0, 0, false, "zip|piz|none", NULL,
@@ -673,6 +676,7 @@ static fb_result check_value(const vctx *v, const char *path, const keyspec *k, 
         return FB_OK;
     }
     case T_STRING:
+    case T_OUTPUT:
         if (!json_is_string(j) || !*json_string_value(j) || strlen(json_string_value(j)) >= 4096)
             return verr(v, path, "expected a non-empty string, found %s", shown);
         return FB_OK;
@@ -1758,6 +1762,48 @@ void fb_scene_layer_names(const fb_scene *s, char *out, size_t size)
     out[0] = 0;
     for (int i = 0; i < s->nlayers; i++)
         snprintf(out + strlen(out), size - strlen(out), "%s%s", i ? ", " : "", s->layers[i].name);
+}
+
+int fb_scene_outputs(const fb_scene *s, const char **paths, const char **what, int max)
+{
+    int n = 0;
+    for (int i = 0; i < s->nlayers; i++) {
+        const fb_layer *l = &s->layers[i];
+        const char *p[2] = {NULL, NULL}, *w[2] = {NULL, NULL};
+        if (l->kind == FB_LAYER_TERRAIN) p[0] = l->terrain.mesh, w[0] = "mesh";
+        if (l->kind == FB_LAYER_CONSTRAIN)
+            p[0] = l->constrain.csv, w[0] = "csv", p[1] = l->constrain.plot, w[1] = "plot";
+        for (int k = 0; k < 2; k++)
+            if (p[k] && p[k][0] && n < max) paths[n] = p[k], what[n++] = w[k];
+    }
+    return n;
+}
+
+fb_result fb_scene_drop_outputs(const char *text, char **out, char *dropped, size_t size)
+{
+    dropped[0] = 0;
+    *out = NULL;
+    json_t *root = json_loads(text, 0, NULL);
+    if (!root) return fb_fail(FB_ERR_INPUT, "the stored scene is not JSON");
+    json_t *layers = json_object_get(root, "layers");
+    for (size_t i = 0; i < json_array_size(layers); i++) {
+        json_t *l = json_array_get(layers, i);
+        const char *type = json_string_value(json_object_get(l, "type"));
+        const char *name = json_string_value(json_object_get(l, "name"));
+        const keyspec *keys;
+        int nk;
+        if (!type || !kind_keys(type, &keys, &nk)) continue;
+        for (int k = 0; k < nk; k++) {
+            const char *v = keys[k].type == T_OUTPUT ? json_string_value(json_object_get(l, keys[k].key)) : NULL;
+            if (!v) continue;
+            snprintf(dropped + strlen(dropped), size - strlen(dropped), "%slayers.%s.%s=%s", dropped[0] ? ", " : "",
+                     name ? name : "?", keys[k].key, v);
+            json_object_del(l, keys[k].key);
+        }
+    }
+    *out = json_dumps(root, JSON_COMPACT);
+    json_decref(root);
+    return *out ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory");
 }
 
 void fb_scene_fini(fb_scene *s)

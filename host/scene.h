@@ -203,6 +203,15 @@ void fb_scene_fini(fb_scene *s);
 /* "a, b, c": the scene's layer names, for messages. */
 void fb_scene_layer_names(const fb_scene *s, char *out, size_t size);
 
+/* The files the scene's layers write besides the EXR (a terrain's mesh, a constrain layer's CSV and
+ * plot): up to max paths (pointers into s) and what each is. Returns the count. */
+int fb_scene_outputs(const fb_scene *s, const char **paths, const char **what, int max);
+
+/* A stored scene (JSON text) without the output paths of its layers: a file baked elsewhere must not
+ * choose which files this run writes. *out is the new text (free()); `dropped` lists what was removed
+ * as "layers.NAME.KEY=PATH, ..." ("" if nothing). */
+fb_result fb_scene_drop_outputs(const char *text, char **out, char *dropped, size_t size);
+
 /* For the command line: converts `--flag value` of a single-generator command into the JSON scene
  * it stands for. `kind` is the generator ("fbm"). argv holds only the generator's flags. Returns
  * malloc'd JSON text in *json. Global flags (--size, --seed, --compression) become scene keys. */

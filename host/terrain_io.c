@@ -4,6 +4,7 @@
 #include "terrain_io.h"
 
 #include "exrio.h"
+#include "output.h"
 
 #include <errno.h>
 #include <math.h>
@@ -252,13 +253,14 @@ static void put_u32(unsigned char *b, uint32_t v)
     for (int i = 0; i < 4; i++) b[i] = (unsigned char)(v >> (8 * i));
 }
 
-fb_result fb_terrain_write_mesh(const fb_terrain *t, const char *path, const char *shown)
+fb_result fb_terrain_write_mesh(const fb_terrain *t, const char *path)
 {
     const fb_dt *d = &t->dt;
-    const char *dot = strrchr(shown, '.');
+    const char *dot = strrchr(path, '.');
     bool ply = dot && !strcasecmp(dot, ".ply");
-    FILE *f = fopen(path, "wb");
-    if (!f) return fb_fail(FB_ERR_IO, "%s: cannot write the mesh: %s", shown, strerror(errno));
+    FILE *f = NULL;
+    fb_result rc = fb_output_fopen(path, "mesh", (void **)&f);
+    if (rc) return rc;
     if (ply) {
         fprintf(f,
                 "ply\nformat binary_little_endian 1.0\ncomment fractalbake terrain\nelement vertex %u\n"
@@ -295,9 +297,6 @@ fb_result fb_terrain_write_mesh(const fb_terrain *t, const char *path, const cha
     }
     bool bad = ferror(f) != 0;
     if (fclose(f) != 0) bad = true;
-    if (bad) {
-        remove(path);
-        return fb_fail(FB_ERR_IO, "%s: cannot write the mesh: %s", shown, strerror(errno));
-    }
-    return FB_OK;
+    if (bad) rc = fb_fail(FB_ERR_IO, "%s: cannot write the mesh: %s", path, strerror(errno));
+    return fb_output_done(path, rc);
 }

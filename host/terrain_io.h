@@ -24,10 +24,10 @@ fb_result fb_terrain_read_heightfield(const char *spec, int step, double **xyz, 
 /* x,y,D[,sigma] per line (sigma may be empty: estimated from the data); D in (2, 3). */
 fb_result fb_terrain_read_centers(const char *path, fb_terrain_center **out, int *n);
 
-/* Writes the finite triangles and all vertices to `path` (the caller renames it into place). The
- * extension of `shown`, the name messages use, picks the format: .ply (binary little endian:
- * vertex x, y, z as double, then faces as uchar-counted int lists) or .obj. */
-fb_result fb_terrain_write_mesh(const fb_terrain *t, const char *path, const char *shown);
+/* Writes the finite triangles and all vertices to `path` through the output transaction (output.h:
+ * renamed into place with the run's other outputs). The extension picks the format: .ply (binary
+ * little endian: vertex x, y, z as double, then faces as uchar-counted int lists) or .obj. */
+fb_result fb_terrain_write_mesh(const fb_terrain *t, const char *path);
 
 /* True when the extension of `path` is .ply or .obj (case-insensitive). */
 bool fb_terrain_mesh_format_ok(const char *path);

@@ -552,8 +552,13 @@ static void save_cache(vkc_context *ctx)
     if (!data) return;
     if (g_vk.vkGetPipelineCacheData(ctx->device, ctx->cache, &size, data) == VK_SUCCESS) {
         char tmp[1100];
-        snprintf(tmp, sizeof tmp, "%s.%ld.tmp", ctx->cache_path, (long)getpid());
-        FILE *f = fopen(tmp, "wb");
+        snprintf(tmp, sizeof tmp, "%s.XXXXXX", ctx->cache_path);
+        int fd = mkstemp(tmp); /* exclusive, unpredictable: nothing planted can be written through */
+        FILE *f = fd >= 0 ? fdopen(fd, "wb") : NULL;
+        if (fd >= 0 && !f) {
+            close(fd);
+            unlink(tmp);
+        }
         if (f) {
             bool ok = fwrite(data, 1, size, f) == size;
             ok = (fclose(f) == 0) && ok;

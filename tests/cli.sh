@@ -61,7 +61,7 @@ expect_fail 2 "offset" o.exr -- fbm $S --offset 1 -o o.exr
 expect_fail 2 "layer" o.exr -- fbm $S --layer a.b -o o.exr
 expect_fail 2 "\-o" "" -- fbm $S
 expect_fail 2 "unknown command" "" -- frobnicate
-expect_fail 3 "cannot create" "$T/nodir/o.exr" -- fbm $S -o "$T/nodir/o.exr"
+expect_fail 2 "nodir/o.exr: cannot create the output: folder" "$T/nodir/o.exr" -- fbm $S -o "$T/nodir/o.exr"
 expect_fail 2 "device" o.exr -- fbm $S --backend vulkan --device no-such-gpu -o o.exr
 
 # ---- bad input: julia ----
@@ -379,9 +379,9 @@ expect_fail 2 "mesh format comes from the extension" o.exr -- $Tr --points pts.c
 expect_fail 2 "drop hurst" o.exr -- $Tr --points pts.csv --centers badcenters.csv --hurst 0.7 -o o.exr
 printf '0 0 5\n1 0 5\n0 1 5\n' > flat.xyz
 expect_fail 2 "give sigma" o.exr -- $Tr --points flat.xyz -o o.exr
-expect_fail 3 "nodir/m.ply: cannot write the mesh" o.exr -- $Tr --points pts.csv --mesh nodir/m.ply -o o.exr
+expect_fail 2 "nodir/m.ply: cannot create the mesh" o.exr -- $Tr --points pts.csv --mesh nodir/m.ply -o o.exr
 [ ! -e nodir/m.ply ] && ok || bad "a mesh was left behind"
-expect_fail 3 "" tm.ply -- $Tr --points pts.csv --mesh tm.ply -o nodir/o.exr
+expect_fail 2 "nodir/o.exr: cannot create the output" tm.ply -- $Tr --points pts.csv --mesh tm.ply -o nodir/o.exr
 if "$FB" terrain --size 64x64 --points pts.csv --insert 5000 --mesh tm.ply -o tr.exr --preview tr.png --json > tr.json 2> err.txt; then ok; else bad "terrain failed: $(cat err.txt)"; fi
 valid_exr tr.exr
 grep -q '"input_points": 300, "duplicates": 0, "inserted": 5000' tr.json && ok || bad "terrain --json summary: $(cat tr.json)"

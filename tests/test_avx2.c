@@ -94,7 +94,21 @@ int main(void)
         size_t cells = (size_t)p->hist_w * p->hist_h, n = (size_t)s.width * s.height;
         uint32_t *hits = calloc(cells, 4), *count = malloc(n * 4);
         uint64_t *sum = calloc(cells, 8), counts[3] = {0, 0, 0};
-        fb_ifs_avx2_chains(g.params, g.input, 0, p->chains, hits, sum, counts);
+        fb_ifs_avx2_chains(g.params, g.input, 0, p->chains, 0, UINT32_MAX, NULL, hits, sum, counts);
+        /* the same chains in step windows one after another (uneven, some past a chain's end): the
+         * same sums, bit for bit, and the same counters */
+        {
+            uint32_t *h2 = calloc(cells, 4);
+            uint64_t *s2 = calloc(cells, 8), n2[3] = {0, 0, 0};
+            K_IfsChain *state = calloc(p->chains, sizeof *state);
+            const uint32_t win[] = {0, 1, 8, 1000, 1777, 1000000, UINT32_MAX};
+            for (int w = 0; w + 1 < 7; w++)
+                fb_ifs_avx2_chains(g.params, g.input, 0, p->chains, win[w], win[w + 1], state, h2, s2, n2);
+            CHECKF(!memcmp(h2, hits, cells * 4) && !memcmp(s2, sum, cells * 8),
+                   "ifs %d: step windows give other sums than one window", k);
+            CHECKF(!memcmp(n2, counts, sizeof n2), "ifs %d: step windows give other counters", k);
+            free(h2), free(s2), free(state);
+        }
         float *rest[6];
         for (int c = 0; c < 6; c++) rest[c] = malloc(n * 4);
         void *planes[7] = {count, rest[0], rest[1], rest[2], rest[3], rest[4], rest[5]};

@@ -104,12 +104,12 @@ static void failures(void)
 {
     exrio_channel ch[1] = {{"a.Y", EXRIO_FLOAT}};
     char path[128];
-    /* an output folder that does not exist: an I/O error naming the path */
+    /* an output folder that does not exist: bad usage naming the path */
     snprintf(path, sizeof path, "%s/missing/dir/x.exr", g_dir);
     exrio_writer *w = NULL;
     CHECK(
         exrio_writer_create(&(exrio_writer_desc){.path = path, .width = 4, .height = 4, .channels = ch, .nchannels = 1},
-                            &w) == FB_ERR_IO);
+                            &w) == FB_ERR_USAGE);
     CHECK(w == NULL);
 
     /* an aborted write keeps the old file and leaves no temporary */

@@ -1,7 +1,8 @@
 /*
  * A minimal test harness in the manner of Redis's testhelp.h: CHECK counts failures and reports the
  * file, line and condition; tests end with TEST_REPORT(), which prints "N passed, N failed" and
- * returns non-zero on any failure. TEST_SKIP() returns 77, which CTest reports as not run.
+ * returns non-zero on any failure. REQUIRE is a CHECK that stops the test when it fails (a setup the
+ * rest depends on). TEST_SKIP() returns 77, which CTest reports as not run.
  */
 #ifndef FB_TESTHELP_H
 #define FB_TESTHELP_H
@@ -30,6 +31,18 @@ static int th_passed, th_failed;
             fprintf(stderr, "FAIL %s:%d: %s: ", __FILE__, __LINE__, #cond);                                            \
             fprintf(stderr, __VA_ARGS__);                                                                              \
             fprintf(stderr, "\n");                                                                                     \
+        }                                                                                                              \
+    } while (0)
+
+/* A check that the rest of the test depends on: on failure, report and stop (exit 1). */
+#define REQUIRE(cond)                                                                                                  \
+    do {                                                                                                               \
+        if (cond) {                                                                                                    \
+            th_passed++;                                                                                               \
+        } else {                                                                                                       \
+            fprintf(stderr, "FAIL (fatal) %s:%d: %s\n", __FILE__, __LINE__, #cond);                                    \
+            printf("%d passed, %d failed\n", th_passed, th_failed + 1);                                                \
+            exit(1);                                                                                                   \
         }                                                                                                              \
     } while (0)
 

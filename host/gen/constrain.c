@@ -9,6 +9,7 @@
 #include "../constrain.h"
 #include "../exrio.h"
 #include "../gen.h"
+#include "../output.h"
 #include "../preview.h"
 
 #include <errno.h>
@@ -26,8 +27,6 @@ typedef struct constrain_state {
     fb_cregion *regions;
     int nregions;
     fb_constrain_out out;
-    char csv_tmp[1100], plot_tmp[1100];
-    bool csv_pending, plot_pending;
 } constrain_state;
 
 static constrain_state *state(const fb_gen *g)
@@ -39,8 +38,6 @@ static void constrain_fini(fb_gen *g)
 {
     constrain_state *s = state(g);
     if (!s) return;
-    if (s->csv_pending) unlink(s->csv_tmp);
-    if (s->plot_pending) unlink(s->plot_tmp);
     free(s->macro);
     free(s->points);
     free(s->regions);
@@ -307,7 +304,7 @@ static fb_result write_plot(const constrain_state *s, int n, const char *path)
         int py = h - 1 - m - (int)lrint((s->out.D[s->points[k].x] - lo) / (hi - lo) * (h - 1 - 2 * m));
         for (int e = -3; e <= 3; e++) dot(img, w, h, px + e, py + e, red), dot(img, w, h, px + e, py - e, red);
     }
-    fb_result rc = fb_png_write_rgb(path, w, h, img);
+    fb_result rc = fb_png_write_rgb(path, "plot", w, h, img);
     free(img);
     return rc;
 }
@@ -360,24 +357,17 @@ static fb_result constrain_prepare(fb_gen *g, struct fb_engine *e, bool progress
     if (rc) return rc;
     double secs = fb_now() - t0, maxdev = 0;
     for (size_t i = 0; i < (size_t)sc->width * sc->height; i++) maxdev = fmax(maxdev, fabs(s->out.D[i] - s->macro[i]));
+    /* Both go through the output transaction (output.h): renamed with the EXR when the run succeeds. */
     if (P->csv[0]) {
-        fb_temp_path(P->csv, s->csv_tmp, sizeof s->csv_tmp);
-        FILE *f = fopen(s->csv_tmp, "w");
-        if (!f) return fb_fail(FB_ERR_IO, "%s: cannot create: %s", P->csv, strerror(errno));
-        s->csv_pending = true;
+        FILE *f = NULL;
+        if ((rc = fb_output_fopen(P->csv, "csv", (void **)&f))) return rc;
         fprintf(f, "x,d,D\n");
         for (int x = 0; x < sc->width; x++) fprintf(f, "%d,%.9g,%.9g\n", x, s->macro[x], s->out.D[x]);
-        if (fclose(f) != 0) return fb_fail(FB_ERR_IO, "%s: cannot write: %s", P->csv, strerror(errno));
+        bool bad = ferror(f) != 0;
+        if (fclose(f) != 0 || bad) rc = fb_fail(FB_ERR_IO, "%s: cannot write the csv: %s", P->csv, strerror(errno));
+        if ((rc = fb_output_done(P->csv, rc))) return rc;
     }
-    if (P->plot[0]) {
-        fb_temp_path(P->plot, s->plot_tmp, sizeof s->plot_tmp);
-        s->plot_pending = true; /* written under the temporary name, renamed by finish */
-        fb_result prc = write_plot(s, sc->width, s->plot_tmp);
-        if (prc) {
-            s->plot_pending = false;
-            return prc;
-        }
-    }
+    if (P->plot[0] && (rc = write_plot(s, sc->width, P->plot))) return rc;
     snprintf(g->summary, sizeof g->summary,
              "%s: %d x %d, %d discrete and %d continuous constraints, T %.3g, H %.3g; max |D - d| %.4g; %.3f s",
              g->layer->name, sc->width, sc->height, s->npoints, s->nregions, P->T, P->hurst, maxdev, secs);
@@ -404,22 +394,6 @@ static void constrain_rows(const fb_gen *g, int y0, int n, void *const *planes)
         for (size_t i = 0; i < len; i++) ((float *)planes[5])[i] = s->out.D[at + i] >= g->layer->constrain.water;
 }
 
-static fb_result constrain_finish(fb_gen *g)
-{
-    constrain_state *s = state(g);
-    if (s->csv_pending) {
-        if (rename(s->csv_tmp, g->layer->constrain.csv) != 0)
-            return fb_fail(FB_ERR_IO, "%s: cannot move the CSV into place", g->layer->constrain.csv);
-        s->csv_pending = false;
-    }
-    if (s->plot_pending) {
-        if (rename(s->plot_tmp, g->layer->constrain.plot) != 0)
-            return fb_fail(FB_ERR_IO, "%s: cannot move the plot into place", g->layer->constrain.plot);
-        s->plot_pending = false;
-    }
-    return FB_OK;
-}
-
 fb_result fb_gen_constrain_init(fb_gen *g)
 {
     constrain_state *s = calloc(1, sizeof *s);
@@ -441,7 +415,6 @@ fb_result fb_gen_constrain_init(fb_gen *g)
     }
     g->native_rows = constrain_rows;
     g->prepare = constrain_prepare;
-    g->finish = constrain_finish;
     g->prepare_gpu_seconds = -1;
     return FB_OK;
 }

@@ -348,18 +348,23 @@ static void add_counts(ifs_state *st, const uint32_t (*counts)[4])
 typedef struct avx2_round {
     const ifs_state *st;
     native_hist *hist;
-    uint32_t c0, block;
+    K_IfsChain *chains;
+    uint32_t t0, t1;
+    int ntasks;
     uint64_t counts[64][3];
 } avx2_round;
 
+/* One task's share of a round: a contiguous run of chains (a multiple of 16, the loop's vector
+ * width) for the round's steps, into the task's own histogram. */
 static void avx2_task(void *ctx, int task)
 {
     avx2_round *r = ctx;
-    uint64_t c0 = (uint64_t)r->c0 + (uint64_t)r->block * (uint64_t)task, c1 = c0 + r->block;
+    uint64_t span = r->st->cr1 - r->st->cr0, per = (span / (uint64_t)r->ntasks + 15) / 16 * 16;
+    uint64_t c0 = r->st->cr0 + per * (uint64_t)task, c1 = c0 + per;
     if (c1 > r->st->cr1) c1 = r->st->cr1;
     if (c0 < c1)
-        fb_ifs_avx2_chains(&r->st->p, r->st->table, (uint32_t)c0, (uint32_t)c1, r->hist[task].hits, r->hist[task].sum,
-                           r->counts[task]);
+        fb_ifs_avx2_chains(&r->st->p, r->st->table, (uint32_t)c0, (uint32_t)c1, r->t0, r->t1, r->chains,
+                           r->hist[task].hits, r->hist[task].sum, r->counts[task]);
 }
 
 static fb_result prepare_native(fb_gen *g, fb_engine *e, fb_progress *prog)
@@ -392,24 +397,24 @@ static fb_result prepare_native(fb_gen *g, fb_engine *e, fb_progress *prog)
                       .ntasks = priv ? threads : threads * 8};
     uint32_t last = max_total(&st->p);
     double t0 = fb_now();
-    /* The hand-vectorised loop (bit-exact with the kernel, tests/test_avx2.c) where it applies:
-     * whole chains per task, in rounds of one task per histogram so that the bar moves. */
+    /* The hand-vectorised loop (bit-exact with the kernel, tests/test_avx2.c) where it applies: one
+     * task per histogram, in rounds of the dispatch's steps (POINTS_PER_DISPATCH points, a fraction
+     * of a second) so that the bar moves at any point count. */
     bool avx2 = !rc && !g->scalar && (priv || threads == 1) && fb_ifs_avx2_supported(&st->p);
-    const uint32_t block = 512; /* chains per task */
-    for (uint32_t c0 = st->cr0; avx2 && c0 < st->cr1; c0 += block * (uint32_t)threads) {
-        avx2_round r = {st, hist, c0, block, {{0}}};
+    for (uint32_t step0 = 0; avx2 && step0 < last; step0 += st->p.nsteps) {
+        uint32_t t1 = last - step0 > st->p.nsteps ? step0 + st->p.nsteps : last;
+        avx2_round r = {st, hist, chains, step0, t1, nhist, {{0}}};
         if (e->pool)
-            fb_pool_run(e->pool, threads, avx2_task, &r);
+            fb_pool_run(e->pool, nhist, avx2_task, &r);
         else
             avx2_task(&r, 0);
-        for (int t = 0; t < threads; t++) {
+        for (int t = 0; t < nhist; t++) {
             st->stats.outside += r.counts[t][0];
             st->stats.discarded += r.counts[t][1];
             st->stats.restarts += r.counts[t][2];
         }
-        uint64_t c1 = (uint64_t)c0 + (uint64_t)block * (uint64_t)threads;
-        uint64_t done = st->points * ((c1 < st->cr1 ? c1 : st->cr1) - st->cr0) / (st->cr1 - st->cr0);
-        fb_progress_update(prog, done, st->points);
+        uint64_t done = (uint64_t)t1 * (st->cr1 - st->cr0);
+        fb_progress_update(prog, done < st->points ? done : st->points, st->points);
     }
     for (uint32_t step0 = 0; !avx2 && step0 < last && !rc; step0 += st->p.nsteps) {
         run.p.step0 = step0;

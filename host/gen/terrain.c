@@ -35,8 +35,6 @@ typedef struct terrain_state {
     uint32_t nbands;
     uint32_t *band_start; /* nbands + 1 */
     uint32_t *band_tris;
-    char mesh_tmp[1100];
-    bool mesh_pending;
 } terrain_state;
 
 static terrain_state *state(const fb_gen *g)
@@ -48,7 +46,6 @@ static void terrain_fini(fb_gen *g)
 {
     terrain_state *s = state(g);
     if (!s) return;
-    if (s->mesh_pending) unlink(s->mesh_tmp);
     free(s->xyz);
     free(s->centers);
     free(s->band_start);
@@ -223,14 +220,7 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     g->preview_shade[1] = (s->bounds[3] - s->bounds[2]) / g->scene->height;
     double t0 = fb_now();
     if ((rc = bin_triangles(g))) return rc;
-    if (P->mesh[0]) {
-        fb_temp_path(P->mesh, s->mesh_tmp, sizeof s->mesh_tmp);
-        s->mesh_pending = true;
-        if ((rc = fb_terrain_write_mesh(&s->t, s->mesh_tmp, P->mesh))) {
-            s->mesh_pending = false;
-            return rc;
-        }
-    }
+    if (P->mesh[0] && (rc = fb_terrain_write_mesh(&s->t, P->mesh))) return rc; /* renamed with the EXR */
     double t_out = fb_now() - t0;
     const fb_terrain_stats *st = &s->st;
     snprintf(g->summary, sizeof g->summary,
@@ -247,16 +237,6 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
              g->layer->name, st->input, (unsigned long long)st->duplicates, (unsigned long long)st->inserted,
              (unsigned long long)st->clamped, (unsigned long long)st->rejected, st->stages, s->t.dt.nv, s->t.dt.nfinite,
              st->sigma, st->build_seconds, st->refine_seconds, t_out);
-    return FB_OK;
-}
-
-static fb_result terrain_finish(fb_gen *g)
-{
-    terrain_state *s = state(g);
-    if (!s->mesh_pending) return FB_OK;
-    if (rename(s->mesh_tmp, g->layer->terrain.mesh) != 0)
-        return fb_fail(FB_ERR_IO, "%s: cannot move the mesh into place", g->layer->terrain.mesh);
-    s->mesh_pending = false;
     return FB_OK;
 }
 
@@ -308,7 +288,6 @@ fb_result fb_gen_terrain_init(fb_gen *g)
     g->preview_channel = 0;
     g->native_rows = terrain_rows;
     g->prepare = terrain_prepare;
-    g->finish = terrain_finish;
     g->prepare_gpu_seconds = -1;
     return FB_OK;
 }

@@ -1,0 +1,311 @@
+#define _GNU_SOURCE /* O_TMPFILE */
+/*
+ * The output transaction. See output.h.
+ */
+#include "output.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/random.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+enum { FREE = 0, RESERVED = 1, TAKEN = 2 };
+
+typedef struct entry {
+    volatile sig_atomic_t live; /* the temporary file exists: the signal handler removes it */
+    int state;
+    int fd; /* RESERVED: the open temporary file, until taken */
+    char what[32];
+    char path[PATH_MAX]; /* as the user gave it */
+    char key[PATH_MAX];  /* the folder resolved, then the name: two spellings of one file compare equal */
+    char tmp[PATH_MAX];
+} entry;
+
+static entry g_out[FB_MAX_OUTPUTS];
+static volatile sig_atomic_t g_count; /* entries in use are below it */
+static int g_depth;
+static pthread_mutex_t g_mu = PTHREAD_MUTEX_INITIALIZER;
+
+static const char *kind_of(mode_t m)
+{
+    return S_ISDIR(m)    ? "a directory"
+           : S_ISLNK(m)  ? "a symbolic link"
+           : S_ISCHR(m)  ? "a character device"
+           : S_ISBLK(m)  ? "a block device"
+           : S_ISFIFO(m) ? "a FIFO"
+           : S_ISSOCK(m) ? "a socket"
+                         : "not a regular file";
+}
+
+/* The folder and the name of path: "a/b.exr" -> "a", "b.exr"; "b.exr" -> ".", "b.exr". */
+static void split(const char *path, char *dir, size_t dsize, const char **base)
+{
+    const char *slash = strrchr(path, '/');
+    if (!slash) {
+        snprintf(dir, dsize, ".");
+        *base = path;
+    } else {
+        snprintf(dir, dsize, "%.*s", slash == path ? 1 : (int)(slash - path), path);
+        *base = slash + 1;
+    }
+}
+
+static uint64_t random64(void)
+{
+    uint64_t r = 0;
+    if (getrandom(&r, sizeof r, 0) != (ssize_t)sizeof r) { /* no entropy source: still unique, less secret */
+        static uint64_t n;
+        r = ((uint64_t)getpid() << 32) ^ (uint64_t)(fb_now() * 1e9) ^ (++n * 0x9E3779B97F4A7C15ull);
+    }
+    return r;
+}
+
+static entry *find(const char *key)
+{
+    for (int i = 0; i < g_count; i++)
+        if (g_out[i].state != FREE && !strcmp(g_out[i].key, key)) return &g_out[i];
+    return NULL;
+}
+
+static void drop(entry *e)
+{
+    if (e->fd >= 0) close(e->fd);
+    e->fd = -1;
+    if (e->live) unlink(e->tmp);
+    e->live = 0;
+    e->state = FREE;
+}
+
+/* Resolves path to its key; checks the target; creates the temporary file. Called locked. */
+static fb_result reserve_locked(const char *path, const char *what, entry **out)
+{
+    char dir[PATH_MAX], real[PATH_MAX], key[PATH_MAX];
+    const char *base;
+    if (!path || !*path) return fb_fail(FB_ERR_USAGE, "%s: an empty file name", what);
+    if (strlen(path) >= PATH_MAX - 64) return fb_fail(FB_ERR_USAGE, "%s: path too long for the %s", path, what);
+    split(path, dir, sizeof dir, &base);
+    if (!*base || !strcmp(base, ".") || !strcmp(base, ".."))
+        return fb_fail(FB_ERR_USAGE, "%s: names a folder, not a file for the %s", path, what);
+    if (!realpath(dir, real))
+        return fb_fail(FB_ERR_USAGE, "%s: cannot create the %s: folder %s: %s", path, what, dir, strerror(errno));
+    snprintf(key, sizeof key, "%s/%s", strcmp(real, "/") ? real : "", base);
+    entry *dup = find(key);
+    if (dup)
+        return fb_fail(FB_ERR_USAGE, "%s: named as the %s and as the %s: two outputs cannot share one path", path,
+                       dup->what, what);
+    struct stat st;
+    if (lstat(path, &st) == 0 && !S_ISREG(st.st_mode))
+        return fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", path,
+                       kind_of(st.st_mode), what);
+    entry *e = NULL;
+    for (int i = 0; i < g_count && !e; i++)
+        if (g_out[i].state == FREE && !g_out[i].live) e = &g_out[i];
+    if (!e) {
+        if (g_count == FB_MAX_OUTPUTS) return fb_fail(FB_ERR_USAGE, "%s: more than %d outputs", path, FB_MAX_OUTPUTS);
+        e = &g_out[g_count];
+    }
+    int fd = -1;
+    for (int tries = 0; tries < 16 && fd < 0; tries++) {
+        char tmp[PATH_MAX];
+        snprintf(tmp, sizeof tmp, "%s/.%.180s.%016llx.tmp", dir, base, (unsigned long long)random64());
+        /* The name is written before the file exists, so that a signal between the two removes
+         * nothing else: unlink of a name that does not exist yet is harmless. */
+        memcpy(e->tmp, tmp, sizeof tmp);
+        fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0666);
+        if (fd < 0 && errno != EEXIST) break;
+    }
+    if (fd < 0) {
+        int err = errno;
+        return fb_fail(err == EACCES || err == EROFS || err == ENOENT || err == ENOTDIR ? FB_ERR_USAGE : FB_ERR_IO,
+                       "%s: cannot create the %s: %s", path, what, strerror(err));
+    }
+    e->fd = fd;
+    e->state = RESERVED;
+    snprintf(e->what, sizeof e->what, "%s", what);
+    snprintf(e->path, sizeof e->path, "%s", path);
+    memcpy(e->key, key, sizeof key);
+    e->live = 1;
+    if (e == &g_out[g_count]) g_count = g_count + 1;
+    *out = e;
+    return FB_OK;
+}
+
+void fb_outputs_begin(void)
+{
+    pthread_mutex_lock(&g_mu);
+    g_depth++;
+    pthread_mutex_unlock(&g_mu);
+}
+
+static void abort_locked(void)
+{
+    for (int i = 0; i < g_count; i++) drop(&g_out[i]);
+    g_count = 0;
+}
+
+fb_result fb_outputs_end(fb_result rc)
+{
+    pthread_mutex_lock(&g_mu);
+    if (g_depth > 0) g_depth--;
+    if (rc) {
+        abort_locked();
+    } else if (g_depth == 0) {
+        for (int i = 0; i < g_count && !rc; i++)
+            if (g_out[i].state == RESERVED)
+                rc =
+                    fb_fail(FB_ERR_INTERNAL, "%s: the %s was reserved but never written", g_out[i].path, g_out[i].what);
+        /* Checked again just before the renames: a target that became a non-regular file since. */
+        struct stat st;
+        for (int i = 0; i < g_count && !rc; i++)
+            if (g_out[i].state == TAKEN && lstat(g_out[i].path, &st) == 0 && !S_ISREG(st.st_mode))
+                rc = fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", g_out[i].path,
+                             kind_of(st.st_mode), g_out[i].what);
+        for (int i = 0; i < g_count && !rc; i++) {
+            entry *e = &g_out[i];
+            if (e->state != TAKEN) continue;
+            if (rename(e->tmp, e->path) != 0) {
+                rc = fb_fail(FB_ERR_IO, "%s: cannot move the %s into place: %s", e->path, e->what, strerror(errno));
+                break;
+            }
+            e->live = 0; /* renamed: the handler must not remove it any more */
+            e->state = FREE;
+        }
+        abort_locked(); /* after a failed rename: the rest are removed */
+    }
+    pthread_mutex_unlock(&g_mu);
+    return rc;
+}
+
+fb_result fb_output_reserve(const char *path, const char *what)
+{
+    entry *e;
+    pthread_mutex_lock(&g_mu);
+    fb_result rc = reserve_locked(path, what, &e);
+    pthread_mutex_unlock(&g_mu);
+    return rc;
+}
+
+static bool key_of(const char *path, char *key)
+{
+    char dir[PATH_MAX], real[PATH_MAX];
+    const char *base;
+    split(path, dir, sizeof dir, &base);
+    if (!realpath(dir, real)) return false;
+    snprintf(key, PATH_MAX, "%s/%s", strcmp(real, "/") ? real : "", base);
+    return true;
+}
+
+fb_result fb_output_open(const char *path, const char *what, int *fd)
+{
+    char key[PATH_MAX];
+    fb_result rc = FB_OK;
+    entry *e = NULL;
+    pthread_mutex_lock(&g_mu);
+    if (path && *path && key_of(path, key) && (e = find(key))) {
+        if (e->state != RESERVED)
+            rc = fb_fail(FB_ERR_USAGE, "%s: named as the %s and as the %s: two outputs cannot share one path", path,
+                         e->what, what);
+    } else {
+        rc = reserve_locked(path, what, &e);
+    }
+    if (!rc) {
+        *fd = e->fd;
+        e->fd = -1;
+        e->state = TAKEN;
+    }
+    pthread_mutex_unlock(&g_mu);
+    return rc;
+}
+
+fb_result fb_output_fopen(const char *path, const char *what, void **file)
+{
+    int fd = -1;
+    fb_result rc = fb_output_open(path, what, &fd);
+    if (rc) return rc;
+    FILE *f = fdopen(fd, "wb");
+    if (!f) {
+        close(fd);
+        return fb_fail(FB_ERR_NOMEM, "%s: %s: %s", what, path, strerror(errno));
+    }
+    *file = f;
+    return FB_OK;
+}
+
+fb_result fb_output_spool(const char *path, void **file)
+{
+    char dir[PATH_MAX];
+    const char *base;
+    split(path, dir, sizeof dir, &base);
+    int fd = open(dir, O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
+    if (fd < 0 && (errno == EOPNOTSUPP || errno == EISDIR || errno == EINVAL)) { /* no O_TMPFILE here */
+        char tmp[PATH_MAX];
+        snprintf(tmp, sizeof tmp, "%s/.%.180s.spool.XXXXXX", dir, base);
+        fd = mkstemp(tmp);
+        if (fd >= 0) unlink(tmp);
+    }
+    FILE *f = fd >= 0 ? fdopen(fd, "w+b") : NULL;
+    if (!f) {
+        int err = errno;
+        if (fd >= 0) close(fd);
+        return fb_fail(FB_ERR_IO, "%s: cannot create a spool file beside it: %s", path, strerror(err));
+    }
+    *file = f;
+    return FB_OK;
+}
+
+fb_result fb_output_done(const char *path, fb_result rc)
+{
+    if (rc) {
+        fb_output_discard(path);
+        return rc;
+    }
+    char key[PATH_MAX];
+    pthread_mutex_lock(&g_mu);
+    entry *e = key_of(path, key) ? find(key) : NULL;
+    if (!e || e->state != TAKEN) {
+        rc = fb_fail(FB_ERR_INTERNAL, "%s: finished but never opened as an output", path);
+    } else if (g_depth == 0) {
+        struct stat st;
+        if (lstat(e->path, &st) == 0 && !S_ISREG(st.st_mode))
+            rc = fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", e->path,
+                         kind_of(st.st_mode), e->what);
+        else if (rename(e->tmp, e->path) != 0)
+            rc = fb_fail(FB_ERR_IO, "%s: cannot move the %s into place: %s", e->path, e->what, strerror(errno));
+        else
+            e->live = 0;
+        drop(e);
+    }
+    pthread_mutex_unlock(&g_mu);
+    return rc;
+}
+
+void fb_output_discard(const char *path)
+{
+    char key[PATH_MAX];
+    pthread_mutex_lock(&g_mu);
+    entry *e = path && key_of(path, key) ? find(key) : NULL;
+    if (e) drop(e);
+    pthread_mutex_unlock(&g_mu);
+}
+
+bool fb_output_pending(const char *path)
+{
+    char key[PATH_MAX];
+    pthread_mutex_lock(&g_mu);
+    bool yes = path && key_of(path, key) && find(key);
+    pthread_mutex_unlock(&g_mu);
+    return yes;
+}
+
+void fb_outputs_unlink_all(void)
+{
+    for (int i = 0; i < g_count; i++)
+        if (g_out[i].live) unlink(g_out[i].tmp);
+}

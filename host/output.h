@@ -1,0 +1,66 @@
+/*
+ * The files a run writes, as one transaction.
+ *
+ * Every output (the EXR, its preview, a terrain mesh, a CSV, a plot, a diff image) is written to a
+ * temporary file created exclusively (O_CREAT | O_EXCL, mode 0666 less the umask, a name of 64
+ * random bits) in the target's folder. Nothing is renamed into place until the whole run has
+ * succeeded; then every temporary file is renamed over its target, one after another. On any failure,
+ * and on SIGINT, SIGTERM or SIGHUP (main() installs the handler), every temporary file is removed and
+ * no target is touched.
+ *
+ * Only regular files are replaced: a target that exists and is anything else (a directory, a device
+ * node, a symbolic link, a FIFO) is refused before anything is computed, as is one path named twice.
+ *
+ * Transactions nest: fb_outputs_begin() / fb_outputs_end() pairs may be called inside one another
+ * (main() around a command, fb_bake() around a bake); only the outermost end commits, and any
+ * failed end aborts everything. The registry is process-wide and thread-safe.
+ */
+#ifndef FB_OUTPUT_H
+#define FB_OUTPUT_H
+
+#include "fb.h"
+
+#include <stdbool.h>
+
+#define FB_MAX_OUTPUTS 64
+
+/* Opens a transaction (or a nested level of one). */
+void fb_outputs_begin(void);
+
+/* Closes a level. rc != FB_OK aborts the whole transaction (every temporary file removed) and is
+ * returned. At the outermost level with rc == FB_OK, renames every output into place; returns
+ * FB_ERR_IO (logged) when a rename fails, or FB_ERR_INTERNAL when an output was reserved but never
+ * written. */
+fb_result fb_outputs_end(fb_result rc);
+
+/* Reserves `path` (what: "output", "preview", "mesh"... for messages) before any work is done: checks
+ * that it is not named twice and is not an existing non-regular file, and creates its temporary file.
+ * Failures are FB_ERR_USAGE (the command line named a bad target) or FB_ERR_IO (cannot create). */
+fb_result fb_output_reserve(const char *path, const char *what);
+
+/* A file descriptor open for writing on path's temporary file, to be written and closed by the caller.
+ * Takes a reservation, or reserves the path now. Taking one path twice is FB_ERR_USAGE. */
+fb_result fb_output_open(const char *path, const char *what, int *fd);
+
+/* Called by a writer when it has written and closed path's file: rc != FB_OK discards it (and is
+ * returned). Inside a transaction the file then waits for fb_outputs_end; outside any, it is its
+ * own transaction and is renamed into place now. */
+fb_result fb_output_done(const char *path, fb_result rc);
+
+/* fopen-style: fb_output_open and fdopen. */
+fb_result fb_output_fopen(const char *path, const char *what, void **file);
+
+/* An anonymous scratch file (no name: gone when closed) in path's folder, open for reading and
+ * writing: for data too large for memory that ends up in the output (an EXR's later parts). */
+fb_result fb_output_spool(const char *path, void **file);
+
+/* Drops one output from the transaction: its temporary file is removed. Safe on unknown paths. */
+void fb_output_discard(const char *path);
+
+/* Whether the path is reserved in the open transaction. */
+bool fb_output_pending(const char *path);
+
+/* For a signal handler: removes every temporary file of the transaction. Async-signal-safe. */
+void fb_outputs_unlink_all(void);
+
+#endif

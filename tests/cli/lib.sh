@@ -1,0 +1,58 @@
+# Shared by the tests/cli/*.sh scripts: a private scratch folder, pass/fail counters, and checks.
+# Source it after setting nothing; call `cli_init "$@"` first and `cli_finish` last.
+# Usage of a script: SCRIPT.sh PATH/TO/fractalbake
+set -u
+
+cli_init() {
+  FB=$(realpath "$1")
+  HERE=$(cd "$(dirname "${BASH_SOURCE[1]}")" && pwd)
+  ROOT=$(cd "$HERE/../.." && pwd)
+  T=$(mktemp -d "${TMPDIR:-/tmp}/fb-cli-XXXXXX")
+  trap 'rm -rf "$T"' EXIT
+  cd "$T" || exit 1
+  export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-$T}
+  pass=0
+  fail=0
+}
+
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "FAIL: $*" >&2; }
+
+# check DESCRIPTION COMMAND...: passes when the command succeeds
+check() {
+  local what=$1
+  shift
+  if "$@"; then ok; else bad "$what"; fi
+}
+
+# no_temp_files [DIR]: no hidden temporary output (".NAME.XXXX.tmp") left in DIR (default: here)
+no_temp_files() {
+  ! ls -A "${1:-.}" | grep -q '\.tmp$'
+}
+
+# expect_fail CODE PATTERN OUTFILE -- ARGS: exit CODE, exactly one stderr line matching PATTERN,
+# no OUTFILE and no temporary file left
+expect_fail() {
+  local code=$1 pat=$2 out=$3
+  shift 4
+  "$FB" "$@" > "$T/stdout" 2> "$T/stderr"
+  local rc=$? lines
+  lines=$(wc -l < "$T/stderr")
+  if [ $rc -ne "$code" ]; then bad "$* : exit $rc, wanted $code ($(cat "$T/stderr"))"; return; fi
+  if [ "$lines" -ne 1 ]; then bad "$* : $lines stderr lines, wanted 1: $(cat "$T/stderr")"; return; fi
+  if ! grep -q -- "$pat" "$T/stderr"; then bad "$* : stderr lacks '$pat': $(cat "$T/stderr")"; return; fi
+  if [ -n "$out" ] && [ -e "$out" ]; then bad "$* : left $out behind"; return; fi
+  if ! no_temp_files "$T"; then bad "$* : left a temporary file"; return; fi
+  ok
+}
+
+# have_vulkan: a Vulkan device (lavapipe at least) answers
+have_vulkan() {
+  "$FB" devices 2> /dev/null | grep -q '^0 '
+}
+
+# cli_finish: the closing line CTest's log shows; exit 1 on any failure
+cli_finish() {
+  echo "$pass passed, $fail failed"
+  [ "$fail" -eq 0 ]
+}
