@@ -302,6 +302,62 @@ static fb_result check_finite(const layer_run *runs, int nlayers, const void *co
     return FB_OK;
 }
 
+/* The bake's predicted peak: the process and its backend, every layer's own arrays (the largest
+ * transient one at a time, as layers prepare one after another, on top of what every layer keeps),
+ * its strip buffers (two slots a layer on Vulkan), then either the preparing or the writer's queue
+ * (2 x threads + 3 batches of 64 rows, raw and compressed) and the preview's sums. Pages a layer
+ * allocates but never touches (a chaos game's empty histogram cells) count: it is a bound. Fails naming the largest
+ * layer when the peak is beyond fb_memory_limit(). */
+static fb_result plan_memory(const fb_engine *e, const fb_bake_desc *d, const layer_run *runs, int strip, int nch,
+                             int rw, fb_bake_plan *plan)
+{
+    const fb_scene *s = d->scene;
+    memset(plan, 0, sizeof *plan);
+    plan->nlayers = s->nlayers;
+    plan->limit = fb_memory_limit();
+    plan->base = e->kind == FB_BACKEND_VULKAN ? (uint64_t)96 << 20 : (uint64_t)12 << 20;
+    uint64_t hold_sum = 0, extra_max = 0, strips_sum = 0;
+    int largest = 0;
+    for (int i = 0; i < s->nlayers; i++) {
+        const fb_gen *g = &runs[i].gen;
+        uint64_t hold = 0, peak = g->memory ? g->memory(g, e, &hold) : 0;
+        bool gpu = e->kind == FB_BACKEND_VULKAN && !g->prepare && !g->host_op;
+        uint64_t planes = 0;
+        for (int c = 0; c < fb_gen_nplanes(g); c++) planes += fb_gen_plane_stored(g, c);
+        uint64_t strips = (gpu ? SLOTS : 1) * planes * (uint64_t)s->width * (uint64_t)strip * 4 +
+                          (gpu && g->input ? g->input_size : 0);
+        hold_sum += hold;
+        strips_sum += strips;
+        if (peak - hold > extra_max) extra_max = peak - hold;
+        snprintf(plan->layers[i].name, sizeof plan->layers[i].name, "%s", s->layers[i].name);
+        plan->layers[i].bytes = peak + strips;
+        if (plan->layers[i].bytes > plan->layers[largest].bytes) largest = i;
+    }
+    /* the raw rows of every batch in flight, and their compressed chunks (a quarter of that, on
+     * average over what the generators make) */
+    if (d->out) plan->writer = (uint64_t)(2 * e->threads + 3) * 64 * (uint64_t)rw * 4 * (uint64_t)nch * 5 / 4;
+    if (d->preview) {
+        int side = rw > d->scene->height ? rw : d->scene->height, scale = (side + 2047) / 2048;
+        uint64_t px = (uint64_t)((rw + scale - 1) / scale) * (uint64_t)((s->height + scale - 1) / scale);
+        plan->preview = px * (4 * 8 + 4) * (uint64_t)s->nlayers;
+    }
+    /* Layers prepare (chaos game, mesh, grid) before the writer and the preview exist: the peak is
+     * the worse of the two phases. */
+    uint64_t prepare = extra_max, strips = plan->writer + plan->preview;
+    plan->peak = plan->base + strips_sum + hold_sum + (prepare > strips ? prepare : strips);
+    if (plan->peak > plan->limit) {
+        char need[32], lim[32], big[32];
+        fb_format_bytes(plan->peak, need, sizeof need);
+        fb_format_bytes(plan->limit, lim, sizeof lim);
+        fb_format_bytes(plan->layers[largest].bytes, big, sizeof big);
+        return fb_fail(FB_ERR_INPUT,
+                       "the bake needs about %s, more than --max-memory %s; layer %s alone needs %s (lower its size, "
+                       "points or insertions, or raise --max-memory)",
+                       need, lim, plan->layers[largest].name, big);
+    }
+    return FB_OK;
+}
+
 static int auto_strip_rows(const fb_scene *s)
 {
     /* About 4 MiB per channel buffer: well inside lavapipe's 128 MiB maxStorageBufferRange and small
@@ -327,11 +383,12 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     int rx = 0, ry = 0, rw = s->width, rh = s->height;
     fb_outputs_begin();
     /* Every output is reserved before any work: a bad target (named twice, a directory, a device
-     * node, a folder that does not exist) fails now, not after minutes of computing. */
-    if (d->out) rc = fb_output_reserve(d->out, "output");
-    if (!rc && d->preview) rc = fb_output_reserve(d->preview, "preview");
+     * node, a folder that does not exist) fails now, not after minutes of computing. A dry run
+     * writes nothing. */
+    if (d->out && !d->dry_run) rc = fb_output_reserve(d->out, "output");
+    if (!rc && d->preview && !d->dry_run) rc = fb_output_reserve(d->preview, "preview");
     const char *side[FB_MAX_OUTPUTS], *side_what[FB_MAX_OUTPUTS];
-    int nside = fb_scene_outputs(s, side, side_what, FB_MAX_OUTPUTS);
+    int nside = d->dry_run ? 0 : fb_scene_outputs(s, side, side_what, FB_MAX_OUTPUTS);
     for (int i = 0; i < nside && !rc; i++) rc = fb_output_reserve(side[i], side_what[i]);
     if (rc) goto out;
 
@@ -361,8 +418,12 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         for (int c = 0; c < runs[i].gen.nchannels && !rc; c++)
             channels[nch++] =
                 (exrio_channel){runs[i].gen.channel_names[c], runs[i].gen.channel_types[c], s->multipart ? i : 0};
-        if (!rc) rc = run_init(e, &runs[i], strip);
     }
+    /* Memory is predicted, not discovered: the whole bake's peak, before anything large exists. */
+    fb_bake_plan plan_local, *plan = d->plan ? d->plan : &plan_local;
+    if (!rc) rc = plan_memory(e, d, runs, strip, nch, rw, plan);
+    if (!rc && d->dry_run) goto out;
+    for (int i = 0; i < s->nlayers && !rc; i++) rc = run_init(e, &runs[i], strip);
     /* Op layers find their inputs among the planes of a strip. */
     int offset[FB_MAX_LAYERS];
     const fb_gen *gens[FB_MAX_LAYERS];

@@ -36,6 +36,20 @@ fb_result fb_engine_open(const fb_engine_desc *desc, fb_engine *out);
 void fb_engine_close(fb_engine *e);
 const char *fb_backend_name(fb_backend b);
 
+/* The predicted peak memory of a bake (bytes), before anything large is allocated. */
+typedef struct fb_bake_plan {
+    int nlayers;
+    struct {
+        char name[64];
+        uint64_t bytes; /* the layer's own peak (histogram, mesh, grid) and its strip buffers */
+    } layers[FB_MAX_LAYERS];
+    uint64_t base;    /* the process and its backend (a Vulkan driver is tens of MiB) */
+    uint64_t writer;  /* the EXR writer's queue of rows and compressed chunks */
+    uint64_t preview; /* the preview's sums */
+    uint64_t peak;    /* all of it at the worst moment */
+    uint64_t limit;   /* --max-memory */
+} fb_bake_plan;
+
 typedef struct fb_bake_desc {
     const fb_scene *scene;
     const char *out;     /* EXR path; NULL computes without writing (benchmarks) */
@@ -48,6 +62,10 @@ typedef struct fb_bake_desc {
      * data window is that region (fractalbake merge joins such files). w == 0: the whole image. */
     int region[4];
     bool progress; /* draw a progress bar on stderr */
+    /* Fill *plan (if not NULL) with the predicted memory; dry_run: stop there, writing nothing. A
+     * bake whose peak exceeds fb_memory_limit() fails before it allocates (FB_ERR_INPUT). */
+    fb_bake_plan *plan;
+    bool dry_run;
     /* Called after a successful bake for each layer that reports on its computation (terrain):
      * a human line and a JSON object. NULL: no reports. */
     void (*report)(const char *layer, const char *summary, const char *json, void *user);

@@ -4,6 +4,7 @@
 #include "exrio.h"
 
 #include "output.h"
+#include "textin.h"
 
 #include <openexr.h>
 
@@ -12,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 /* OpenEXRCore reports details through a callback; keep the last message of this thread so that
@@ -592,6 +594,7 @@ struct exrio_reader {
         const exr_attr_chlist_t *chlist;
         int first; /* its first channel's flat index */
         int chunk_rows;
+        int buf_rows;       /* rows of chunk_buf per channel: chunk_rows, or the image's height if less */
         uint8_t *chunk_buf; /* one decoded chunk, all channels of the part */
     } parts[EXRIO_MAX_PARTS];
 };
@@ -605,11 +608,59 @@ static int part_of(const exrio_reader *r, int c, int *within)
     return p;
 }
 
+/* A window the reader can hold: non-empty, its sides within FB_MAX_DIM (the sizes fractalbake bakes),
+ * computed without overflow. */
+static fb_result check_window(const char *path, int part, const exr_attr_box2i_t *dw, const exr_attr_box2i_t *disp)
+{
+    int64_t w = (int64_t)dw->max.x - dw->min.x + 1, h = (int64_t)dw->max.y - dw->min.y + 1;
+    int64_t fw = (int64_t)disp->max.x - disp->min.x + 1, fh = (int64_t)disp->max.y - disp->min.y + 1;
+    if (w < 1 || h < 1 || w > EXRIO_MAX_DIM || h > EXRIO_MAX_DIM || fw < 1 || fh < 1 || fw > EXRIO_MAX_DIM ||
+        fh > EXRIO_MAX_DIM)
+        return fb_fail(FB_ERR_INPUT,
+                       "%s: part %d: data window %lld x %lld, display window %lld x %lld: each side must be 1 to %d",
+                       path, part, (long long)w, (long long)h, (long long)fw, (long long)fh, EXRIO_MAX_DIM);
+    int64_t ox = (int64_t)dw->min.x - disp->min.x, oy = (int64_t)dw->min.y - disp->min.y;
+    if (ox < INT32_MIN / 2 || ox > INT32_MAX / 2 || oy < INT32_MIN / 2 || oy > INT32_MAX / 2)
+        return fb_fail(FB_ERR_INPUT, "%s: part %d: the data window lies %lld, %lld pixels from the display window",
+                       path, part, (long long)ox, (long long)oy);
+    return FB_OK;
+}
+
+/* Refuses, before anything is allocated for it, a header that claims more pixels than the file can
+ * hold: every chunk needs its offset (8 bytes) and its own header (8), and a chunk's pixels cannot
+ * be more than the compression's largest ratio times its bytes (deflate: 1032; RLE: 64; B44: 11;
+ * PIZ and DWA, whose Huffman runs have no small bound: 4096). A 1 KB file asking for gigabytes is
+ * damaged or hostile, and is bad input. */
+static fb_result check_size(const char *path, int part, int w, int h, const struct rpart *rp, exr_compression_t comp,
+                            uint64_t file_size)
+{
+    if (file_size == UINT64_MAX) return FB_OK; /* not a regular file: its size is unknown */
+    uint64_t chunks = ((uint64_t)h + (uint64_t)rp->chunk_rows - 1) / (uint64_t)rp->chunk_rows;
+    uint64_t bytes = 0;
+    for (int c = 0; c < rp->chlist->num_channels; c++)
+        bytes += (uint64_t)w * (uint64_t)h * (rp->chlist->entries[c].pixel_type == EXR_PIXEL_HALF ? 2u : 4u);
+    double ratio = comp == EXR_COMPRESSION_NONE                                  ? 1
+                   : comp == EXR_COMPRESSION_RLE                                 ? 64
+                   : comp == EXR_COMPRESSION_ZIPS || comp == EXR_COMPRESSION_ZIP ? 1032
+                   : comp == EXR_COMPRESSION_PXR24                               ? 1376
+                   : comp == EXR_COMPRESSION_B44 || comp == EXR_COMPRESSION_B44A ? 11
+                                                                                 : 4096;
+    if (chunks * 16 > file_size || (double)bytes > ratio * (double)file_size + 4096.0)
+        return fb_fail(FB_ERR_INPUT,
+                       "%s: part %d claims %d x %d pixels in %d channels (%.3g MB of pixels in %llu chunks), more than "
+                       "a file of %llu bytes can hold: damaged or not an EXR fractalbake can read",
+                       path, part, w, h, rp->chlist->num_channels, (double)bytes * 1e-6, (unsigned long long)chunks,
+                       (unsigned long long)file_size);
+    return FB_OK;
+}
+
 fb_result exrio_open(const char *path, exrio_reader **out)
 {
     fb_result rc = FB_OK;
-    FILE *probe = fopen(path, "rb");
-    if (!probe) return fb_fail(FB_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    FILE *probe = NULL;
+    if ((rc = fb_input_open(path, "EXR", &probe))) return rc;
+    struct stat fst;
+    uint64_t file_size = fstat(fileno(probe), &fst) == 0 && S_ISREG(fst.st_mode) ? (uint64_t)fst.st_size : UINT64_MAX;
     fclose(probe);
     exrio_reader *r = calloc(1, sizeof *r);
     if (!r) return fb_fail(FB_ERR_NOMEM, "out of memory");
@@ -642,6 +693,7 @@ fb_result exrio_open(const char *path, exrio_reader **out)
             goto fail;
         }
         if (exr_get_display_window(r->ctx, p, &disp) != EXR_ERR_SUCCESS) disp = dw;
+        if ((rc = check_window(path, p, &dw, &disp))) goto fail;
         if (p == 0) {
             dw0 = dw, disp0 = disp;
         } else if (memcmp(&dw, &dw0, sizeof dw) || memcmp(&disp, &disp0, sizeof disp)) {
@@ -661,7 +713,11 @@ fb_result exrio_open(const char *path, exrio_reader **out)
         exr_get_scanlines_per_chunk(r->ctx, p, &spc);
         rp->chunk_rows = spc > 0 ? spc : 1;
         int w = dw.max.x - dw.min.x + 1, n = rp->chlist->num_channels;
-        if (!(rp->chunk_buf = malloc((size_t)w * 4 * (size_t)rp->chunk_rows * (size_t)(n ? n : 1)))) {
+        exr_compression_t comp = EXR_COMPRESSION_NONE;
+        exr_get_compression(r->ctx, p, &comp);
+        if ((rc = check_size(path, p, w, dw.max.y - dw.min.y + 1, rp, comp, file_size))) goto fail;
+        rp->buf_rows = rp->chunk_rows < dw.max.y - dw.min.y + 1 ? rp->chunk_rows : dw.max.y - dw.min.y + 1;
+        if (!(rp->chunk_buf = malloc((size_t)w * 4 * (size_t)rp->buf_rows * (size_t)(n ? n : 1)))) {
             rc = fb_fail(FB_ERR_NOMEM, "%s: out of memory", path);
             goto fail;
         }
@@ -810,7 +866,7 @@ fb_result exrio_read_rows(exrio_reader *r, int y0, int nrows, void *const *plane
                 int idx = -1;
                 for (int k = 0; k < rp->chlist->num_channels; k++)
                     if (!strcmp(rp->chlist->entries[k].name.str, dec.channels[c].channel_name)) idx = k;
-                dec.channels[c].decode_to_ptr = rp->chunk_buf + (size_t)idx * rb * (size_t)rp->chunk_rows;
+                dec.channels[c].decode_to_ptr = rp->chunk_buf + (size_t)idx * rb * (size_t)rp->buf_rows;
                 dec.channels[c].user_pixel_stride = 4;
                 dec.channels[c].user_line_stride = (int32_t)rb;
                 dec.channels[c].user_bytes_per_element = 4;
@@ -825,8 +881,7 @@ fb_result exrio_read_rows(exrio_reader *r, int y0, int nrows, void *const *plane
             for (int c = 0; c < rp->chlist->num_channels; c++) {
                 void *dst = planes[rp->first + c];
                 if (!dst) continue;
-                const uint8_t *src =
-                    rp->chunk_buf + (size_t)c * rb * (size_t)rp->chunk_rows + (size_t)(from - cy0) * rb;
+                const uint8_t *src = rp->chunk_buf + (size_t)c * rb * (size_t)rp->buf_rows + (size_t)(from - cy0) * rb;
                 memcpy((uint8_t *)dst + (size_t)(from - y0) * rb, src, (size_t)(to - from) * rb);
             }
             y = to;

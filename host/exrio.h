@@ -23,6 +23,8 @@ const char *exrio_compression_name(exrio_compression c);
 const char *exrio_type_name(exrio_type t);
 
 #define EXRIO_MAX_PARTS 16
+/* The longest side of an image the reader opens. */
+#define EXRIO_MAX_DIM (1 << 20)
 
 typedef struct exrio_channel {
     const char *name; /* "layer.channel" */
@@ -37,7 +39,7 @@ typedef struct exrio_attr {
 
 typedef struct exrio_writer_desc {
     const char *path;
-    const char *what; /* the output's role in messages ("output", "diff"...); NULL: "output" */
+    const char *what;  /* the output's role in messages ("output", "diff"...); NULL: "output" */
     int width, height; /* the data window's size */
     /* A region file: the data window starts at (x0, y0) of a display window of full_width x
      * full_height (0: the data window is the whole image). */

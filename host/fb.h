@@ -7,6 +7,7 @@
 #ifndef FB_H
 #define FB_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -61,6 +62,21 @@ double fb_now(void);
 
 /* Number of online CPU cores (at least 1). */
 int fb_cpu_count(void);
+
+/* Physical memory, or the container's (cgroup v2 memory.max) where that is less. */
+uint64_t fb_physical_memory(void);
+
+/* The memory a run may use (--max-memory): a bake whose predicted peak exceeds it stops before it
+ * allocates. Default 80% of fb_physical_memory(). */
+uint64_t fb_memory_limit(void);
+void fb_memory_set_limit(uint64_t bytes); /* 0: the default */
+
+/* "512M", "8G", "8GiB", "1.5T", "12345678" (bytes), "50%" (of physical memory): at least 1 MiB.
+ * False for anything else. */
+bool fb_parse_memory(const char *s, uint64_t *out);
+
+/* "12.3 MiB" / "1.25 GiB" */
+void fb_format_bytes(uint64_t bytes, char *out, size_t size);
 
 /* malloc for arrays of hundreds of MiB: 2 MiB-aligned and marked for transparent huge pages, so the
  * first touch costs a fault per 2 MiB instead of per 4 KiB (the kernel may decline). Free with free(). */

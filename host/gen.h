@@ -51,6 +51,11 @@ struct fb_gen {
     fb_result (*prepare)(fb_gen *g, struct fb_engine *e, bool progress);
     double prepare_gpu_seconds; /* set by prepare: dispatch time on the GPU, else -1 */
 
+    /* The bytes this layer will allocate besides the bake's strips, predicted before it does (after
+     * init, which reads the inputs): returns the peak (prepare's arrays and what it keeps) and sets
+     * *hold to what it keeps while the strips are produced. NULL: nothing worth counting. */
+    uint64_t (*memory)(const fb_gen *g, const struct fb_engine *e, uint64_t *hold);
+
     /* Side outputs (a mesh, a CSV) are written by prepare through the output transaction
      * (output.h), which renames them with the EXR when the whole run succeeds. */
     double preview_shade[2]; /* > 0: the preview shows preview_channel as a hillshade (world units per
@@ -93,6 +98,10 @@ void fb_gen_push(const fb_gen *g, int y0, int n, void *out);
 void fb_gen_groups(const fb_gen *g, int n, uint32_t out[3]);
 
 /* Frees what the generator owns. Null-safe, idempotent. */
+/* For an init about to allocate what the layer's size alone decides (before the bake's own check):
+ * FB_ERR_INPUT naming the layer when `bytes` exceed fb_memory_limit(). */
+fb_result fb_gen_check_memory(const fb_gen *g, uint64_t bytes);
+
 void fb_gen_fini(fb_gen *g);
 
 /* Completes an fBm parameter block whose frequencies are set: the image size and the reciprocals the

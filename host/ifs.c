@@ -3,6 +3,8 @@
  */
 #include "ifs.h"
 
+#include "textin.h"
+
 #include <ctype.h>
 #include <errno.h>
 #include <math.h>
@@ -211,8 +213,9 @@ fb_result fb_ifs_parse_text(const char *text, const char *origin, const char *en
 
 fb_result fb_ifs_read_file(const char *path, const char *entry, fb_ifs *out)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) return fb_fail(FB_ERR_INPUT, "%s: cannot open: %s", path, strerror(errno));
+    FILE *f = NULL;
+    fb_result orc = fb_input_open(path, ".ifs", &f);
+    if (orc) return orc;
     char *text = NULL;
     size_t len = 0, cap = 0;
     for (;;) {

@@ -1,6 +1,9 @@
 #include "fb.h"
 
+#include <errno.h>
+#include <math.h>
 #include <stdarg.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -98,4 +101,63 @@ void *fb_malloc_large(size_t size)
     madvise(p, size & ~(size_t)4095, MADV_HUGEPAGE); /* advice only: failure changes nothing */
 #endif
     return p;
+}
+
+static uint64_t g_memory_limit; /* 0: not set, the default applies */
+
+uint64_t fb_physical_memory(void)
+{
+    long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+    uint64_t phys = pages > 0 && page > 0 ? (uint64_t)pages * (uint64_t)page : (uint64_t)8 << 30;
+    /* A container's limit (cgroup v2) is the machine a run really has. */
+    FILE *f = fopen("/sys/fs/cgroup/memory.max", "r");
+    unsigned long long lim = 0;
+    if (f) {
+        if (fscanf(f, "%llu", &lim) == 1 && lim > 0 && lim < phys) phys = lim;
+        fclose(f);
+    }
+    return phys;
+}
+
+uint64_t fb_memory_limit(void)
+{
+    return g_memory_limit ? g_memory_limit : fb_physical_memory() / 10 * 8;
+}
+
+void fb_memory_set_limit(uint64_t bytes)
+{
+    g_memory_limit = bytes;
+}
+
+bool fb_parse_memory(const char *s, uint64_t *out)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (end == s || errno || !(v > 0) || !isfinite(v)) return false;
+    double scale = 1;
+    if (*end == '%') {
+        if (v > 100) return false;
+        scale = (double)fb_physical_memory() / 100.0;
+        end++;
+    } else if (*end) {
+        const char *units = "KMGT";
+        const char *u = strchr(units, *end);
+        if (!u) return false;
+        scale = (double)(1ull << (10 * (u - units + 1)));
+        end++;
+        if (*end == 'i') end++;
+        if (*end == 'B') end++;
+    }
+    if (*end || v * scale < 1 << 20 || v * scale > 9.0e18) return false;
+    *out = (uint64_t)(v * scale);
+    return true;
+}
+
+void fb_format_bytes(uint64_t bytes, char *out, size_t size)
+{
+    if (bytes >= (1ull << 30))
+        snprintf(out, size, "%.2f GiB", (double)bytes / (double)(1ull << 30));
+    else
+        snprintf(out, size, "%.1f MiB", (double)bytes / (double)(1ull << 20));
 }

@@ -170,6 +170,7 @@ typedef struct prodtab {
     int rule[256][FB_LSYS_MAX_RULES];
     uint64_t thr[256][FB_LSYS_MAX_RULES]; /* production k when r < thr[k] (the last: 2^32) */
     size_t len[FB_LSYS_MAX_RULES];
+    size_t nf[FB_LSYS_MAX_RULES]; /* F symbols in the successor */
 } prodtab;
 
 static void build_table(const fb_lsys *ls, prodtab *t)
@@ -179,6 +180,8 @@ static void build_table(const fb_lsys *ls, prodtab *t)
         unsigned char c = (unsigned char)ls->rules[i].pred;
         t->rule[c][t->count[c]++] = i;
         t->len[i] = strlen(ls->rules[i].succ);
+        t->nf[i] = 0;
+        for (const char *q = ls->rules[i].succ; *q; q++) t->nf[i] += *q == 'F';
     }
     for (int c = 0; c < 256; c++) {
         double cum = 0;
@@ -201,8 +204,67 @@ static inline int choose(const prodtab *t, unsigned char c, uint32_t seed, int i
     return t->rule[c][k];
 }
 
-fb_result fb_lsys_derive(const fb_lsys *ls, uint32_t seed, uint64_t max_symbols, const char *who, char **out,
-                         size_t *len)
+/* Before any string exists: how many of each symbol every iteration holds at least (each symbol
+ * rewritten by whichever of its productions gives the fewest) and at most. For a deterministic
+ * system the two are the exact counts, so an explosion is refused at once instead of after gigabytes
+ * of rewriting; for a stochastic one, only what must happen is refused here, and derive checks each
+ * string's real length before allocating it. */
+static fb_result predict(const fb_lsys *ls, const prodtab *t, uint64_t max_symbols, uint64_t max_f, const char *who)
+{
+    static double lo[256], hi[256], nlo[256], nhi[256]; /* doubles: saturate instead of wrapping */
+    double cmin[256], cmax[256];
+    memset(lo, 0, sizeof lo);
+    for (const char *q = ls->axiom; *q; q++) lo[(unsigned char)*q]++;
+    memcpy(hi, lo, sizeof hi);
+    double prev = (double)strlen(ls->axiom);
+    for (int it = 0; it < ls->iterations; it++) {
+        memset(nlo, 0, sizeof nlo);
+        memset(nhi, 0, sizeof nhi);
+        for (int c = 0; c < 256; c++) {
+            if (hi[c] == 0) continue;
+            if (t->count[c] == 0) { /* no production: the symbol stays */
+                nlo[c] += lo[c], nhi[c] += hi[c];
+                continue;
+            }
+            for (int k = 0; k < 256; k++) cmin[k] = INFINITY, cmax[k] = 0;
+            for (int p = 0; p < t->count[c]; p++) {
+                double cnt[256] = {0};
+                for (const char *q = ls->rules[t->rule[c][p]].succ; *q; q++) cnt[(unsigned char)*q]++;
+                for (int k = 0; k < 256; k++) cmin[k] = fmin(cmin[k], cnt[k]), cmax[k] = fmax(cmax[k], cnt[k]);
+            }
+            for (int k = 0; k < 256; k++)
+                if (cmax[k] > 0) nlo[k] += lo[c] * cmin[k], nhi[k] += hi[c] * cmax[k];
+        }
+        memcpy(lo, nlo, sizeof lo);
+        memcpy(hi, nhi, sizeof hi);
+        double m = 0;
+        for (int k = 0; k < 256; k++) m += lo[k];
+        if (m > (double)max_symbols)
+            return fb_fail(FB_ERR_INPUT,
+                           "%s: the string would exceed max-symbols (%llu) at iteration %d of %d (at least %.4g "
+                           "symbols); use fewer iterations or raise max-symbols",
+                           who, (unsigned long long)max_symbols, it + 1, ls->iterations, m);
+        if (prev + m + 2 > (double)fb_memory_limit()) {
+            char need[32], lim[32];
+            fb_format_bytes((uint64_t)fmin(prev + m + 2, 9e18), need, sizeof need);
+            fb_format_bytes(fb_memory_limit(), lim, sizeof lim);
+            return fb_fail(FB_ERR_INPUT,
+                           "%s: iteration %d of %d needs at least %s for its strings, more than --max-memory %s; use "
+                           "fewer iterations",
+                           who, it + 1, ls->iterations, need, lim);
+        }
+        prev = m;
+    }
+    if (max_f && lo['F'] > (double)max_f)
+        return fb_fail(FB_ERR_INPUT,
+                       "%s: the derived string would draw at least %.4g segments (F symbols), more than the %llu the "
+                       "rasteriser takes; use fewer iterations",
+                       who, lo['F'], (unsigned long long)max_f);
+    return FB_OK;
+}
+
+fb_result fb_lsys_derive(const fb_lsys *ls, uint32_t seed, uint64_t max_symbols, uint64_t max_f, const char *who,
+                         char **out, size_t *len)
 {
     *out = NULL;
     *len = 0;
@@ -215,6 +277,11 @@ fb_result fb_lsys_derive(const fb_lsys *ls, uint32_t seed, uint64_t max_symbols,
         return fb_fail(FB_ERR_INPUT, "%s: the axiom has %zu symbols, more than max-symbols (%llu)", who, n,
                        (unsigned long long)max_symbols);
     }
+    fb_result rc = predict(ls, t, max_symbols, max_f, who);
+    if (rc) {
+        free(t);
+        return rc;
+    }
     char *cur = malloc(n + 1);
     if (!cur) {
         free(t);
@@ -223,10 +290,30 @@ fb_result fb_lsys_derive(const fb_lsys *ls, uint32_t seed, uint64_t max_symbols,
     memcpy(cur, ls->axiom, n + 1);
     for (int it = 0; it < ls->iterations; it++) {
         /* the new length first, so that an explosion is refused before any memory is asked for */
-        uint64_t m = 0;
+        uint64_t m = 0, f = 0;
         for (size_t i = 0; i < n && m <= max_symbols; i++) {
             int r = choose(t, (unsigned char)cur[i], seed, it, i);
             m += r < 0 ? 1 : t->len[r];
+            f += r < 0 ? cur[i] == 'F' : t->nf[r];
+        }
+        char need[32], lim[32];
+        if (m <= max_symbols && (uint64_t)n + m + 2 > fb_memory_limit()) {
+            fb_format_bytes((uint64_t)n + m + 2, need, sizeof need);
+            fb_format_bytes(fb_memory_limit(), lim, sizeof lim);
+            free(cur);
+            free(t);
+            return fb_fail(FB_ERR_INPUT,
+                           "%s: iteration %d of %d needs %s for its strings (%llu symbols), more than --max-memory %s; "
+                           "use fewer iterations",
+                           who, it + 1, ls->iterations, need, (unsigned long long)m, lim);
+        }
+        if (m <= max_symbols && max_f && it + 1 == ls->iterations && f > max_f) {
+            free(cur);
+            free(t);
+            return fb_fail(FB_ERR_INPUT,
+                           "%s: the derived string would draw %llu segments (F symbols), more than the %llu the "
+                           "rasteriser takes; use fewer iterations",
+                           who, (unsigned long long)f, (unsigned long long)max_f);
         }
         if (m > max_symbols) {
             free(cur);

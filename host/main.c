@@ -84,6 +84,9 @@ static const char *const k_usage =
     "                        `fractalbake merge` joins region files into the whole image\n"
     "  --points-part K/N     bake the K-th of N shares of every chaos game's points (ifs layers; the\n"
     "                        other layers whole); `fractalbake merge` adds the N parts' hits exactly\n"
+    "  --dry-run             print the predicted peak memory per layer, bake nothing, write nothing\n"
+    "  --max-memory SIZE     stop before allocating when the predicted peak is larger (8G, 512M, 50%;\n"
+    "                        default 80% of this machine's memory)\n"
     "  --validation          enable VK_LAYER_KHRONOS_validation (also FB_VK_VALIDATION=1)\n"
     "  --quiet               no progress bar, no warnings, no summaries\n"
     "  --json                layer summaries (terrain: points, time per stage) as JSON lines on stdout\n"
@@ -98,7 +101,8 @@ typedef struct common_opts {
     int threads, strip_rows;
     int region[4];      /* x, y, w, h; w == 0: none */
     int points_part[2]; /* K, N; N == 0: none */
-    bool quiet, validation, help, json;
+    bool quiet, validation, help, json, dry_run;
+    uint64_t max_memory; /* 0: the default (80% of physical memory) */
 } common_opts;
 
 static bool parse_int_arg(const char *s, long lo, long hi, int *out)
@@ -188,6 +192,14 @@ static int common_option(int argc, char **argv, int *i, common_opts *o)
             fb_fail(FB_ERR_USAGE, "--points-part: expected K/N with 1 <= K <= N <= 4096, found \"%s\"", val);
             return -1;
         }
+    } else if (!strcmp(a, "--max-memory")) {
+        NEED_VALUE();
+        if (!fb_parse_memory(val, &o->max_memory)) {
+            fb_fail(FB_ERR_USAGE, "--max-memory: expected a size such as 8G, 512M or 50%%, found \"%s\"", val);
+            return -1;
+        }
+    } else if (!strcmp(a, "--dry-run")) {
+        o->dry_run = true;
     } else if (!strcmp(a, "--quiet")) {
         o->quiet = true;
     } else if (!strcmp(a, "--json")) {
@@ -213,6 +225,38 @@ static void report(const char *layer, const char *summary, const char *json, voi
         fprintf(stderr, "fractalbake: %s\n", summary);
 }
 
+/* --dry-run: the predicted peak memory, per layer and in all, on stdout. */
+static void print_plan(const fb_bake_plan *p, bool json)
+{
+    char a[32], b[32];
+    if (json) {
+        printf("{\"peak_bytes\": %llu, \"limit_bytes\": %llu, \"base_bytes\": %llu, \"writer_bytes\": %llu, "
+               "\"preview_bytes\": %llu, \"layers\": [",
+               (unsigned long long)p->peak, (unsigned long long)p->limit, (unsigned long long)p->base,
+               (unsigned long long)p->writer, (unsigned long long)p->preview);
+        for (int i = 0; i < p->nlayers; i++)
+            printf("%s{\"name\": \"%s\", \"bytes\": %llu}", i ? ", " : "", p->layers[i].name,
+                   (unsigned long long)p->layers[i].bytes);
+        printf("]}\n");
+        return;
+    }
+    for (int i = 0; i < p->nlayers; i++) {
+        fb_format_bytes(p->layers[i].bytes, a, sizeof a);
+        printf("layer %-20s %12s\n", p->layers[i].name, a);
+    }
+    fb_format_bytes(p->base, a, sizeof a);
+    printf("%-26s %12s\n", "process and backend", a);
+    fb_format_bytes(p->writer, a, sizeof a);
+    printf("%-26s %12s\n", "EXR writer queue", a);
+    if (p->preview) {
+        fb_format_bytes(p->preview, a, sizeof a);
+        printf("%-26s %12s\n", "preview", a);
+    }
+    fb_format_bytes(p->peak, a, sizeof a);
+    fb_format_bytes(p->limit, b, sizeof b);
+    printf("%-26s %12s  (--max-memory %s)\n", "predicted peak", a, b);
+}
+
 static fb_result bake_scene(fb_scene *scene, const common_opts *o)
 {
     if (o->points_part[1] > 0) {
@@ -232,6 +276,8 @@ static fb_result bake_scene(fb_scene *scene, const common_opts *o)
         &e);
     if (rc) return rc;
     fb_bake_stats st;
+    fb_bake_plan plan;
+    fb_memory_set_limit(o->max_memory);
     rc = fb_bake(&e,
                  &(fb_bake_desc){.scene = scene,
                                  .out = o->out,
@@ -240,10 +286,14 @@ static fb_result bake_scene(fb_scene *scene, const common_opts *o)
                                  .strip_rows = o->strip_rows,
                                  .region = {o->region[0], o->region[1], o->region[2], o->region[3]},
                                  .progress = !o->quiet,
+                                 .plan = &plan,
+                                 .dry_run = o->dry_run,
                                  .report = report,
                                  .user = (void *)o},
                  &st);
-    if (!rc && !o->quiet)
+    if (!rc && o->dry_run) {
+        print_plan(&plan, o->json);
+    } else if (!rc && !o->quiet)
         fprintf(stderr, "fractalbake: wrote %s (%d x %d%s, %d layer%s) in %.2f s on %s\n", o->out,
                 o->region[2] ? o->region[2] : scene->width, o->region[2] ? o->region[3] : scene->height,
                 o->region[2] ? " region" : "", scene->nlayers, scene->nlayers == 1 ? "" : "s", st.seconds, e.device);
@@ -283,7 +333,8 @@ static int cmd_generator(const char *kind, int argc, char **argv)
     fb_scene scene = {0};
     rc = fb_scene_from_flags(kind, ngen, gen_args, &json);
     if (!rc) rc = fb_scene_parse(json, NULL, &scene);
-    if (!rc && !o.out) rc = fb_fail(FB_ERR_USAGE, "-o: missing output file (fractalbake %s ... -o OUT.exr)", kind);
+    if (!rc && !o.out && !o.dry_run)
+        rc = fb_fail(FB_ERR_USAGE, "-o: missing output file (fractalbake %s ... -o OUT.exr)", kind);
     if (!rc) rc = bake_scene(&scene, &o);
     fb_scene_fini(&scene);
     free(json);

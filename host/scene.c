@@ -3,6 +3,8 @@
  */
 #include "scene.h"
 
+#include "textin.h"
+
 #include "palette.h"
 
 #include "../kernels/noise.h"
@@ -1717,8 +1719,9 @@ fb_result fb_scene_load(const char *path, fb_scene *out)
 fb_result fb_scene_load_sets(const char *path, const char *const *sets, int nsets, fb_scene *out)
 {
     memset(out, 0, sizeof *out);
-    FILE *f = fopen(path, "rb");
-    if (!f) return fb_fail(FB_ERR_IO, "%s: cannot open scene: %s", path, strerror(errno));
+    FILE *f = NULL;
+    fb_result orc = fb_input_open(path, "scene", &f);
+    if (orc) return orc;
     char *text = NULL;
     size_t len = 0, cap = 0;
     for (;;) {
@@ -1745,7 +1748,7 @@ fb_result fb_scene_load_sets(const char *path, const char *const *sets, int nset
     fclose(f);
     if (bad) {
         free(text);
-        return fb_fail(FB_ERR_IO, "%s: cannot read scene: %s", path, strerror(errno));
+        return fb_fail(FB_ERR_INPUT, "%s: cannot read scene: %s", path, strerror(errno));
     }
     text[len] = 0;
     if (strlen(text) != len) {

@@ -230,6 +230,17 @@ fb_result fb_terrain_refine(fb_terrain *t, const fb_terrain_opts *o, const char 
                                        : fb_terrain_sigma2_estimate(t, c->hurst);
         }
     }
+    /* Refuse what would turn the mesh into NaN or infinities: a variance that overflowed (heights or
+     * distances too large for their squares), given or estimated. */
+    bool finite = isfinite(sigma2);
+    for (int i = 0; i < o->ncenters && csig2; i++) finite = finite && isfinite(csig2[i]);
+    if (!finite) {
+        free(csig2);
+        return fb_fail(FB_ERR_INPUT,
+                       "%s: the variance of the height increments is not a finite number (sigma^2 = %g): the "
+                       "points' heights or distances are too large",
+                       who, sigma2);
+    }
     hint_grid g = {0};
     if (!o->sweep && !grid_rebuild(&g, t)) {
         free(csig2);

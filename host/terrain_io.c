@@ -5,6 +5,7 @@
 
 #include "exrio.h"
 #include "output.h"
+#include "textin.h"
 
 #include <errno.h>
 #include <math.h>
@@ -13,105 +14,46 @@
 #include <string.h>
 #include <strings.h>
 
-/* Splits a line into at most `max` fields separated by commas and/or blanks; a comma between two
- * commas gives an empty field. Returns the field count (max + 1 when there are more). */
-static int fields(char *line, char **f, int max)
-{
-    int n = 0;
-    char *p = line;
-    while (*p == ' ' || *p == '\t') p++;
-    if (!*p) return 0;
-    for (;;) {
-        if (n == max) return max + 1;
-        f[n++] = p;
-        while (*p && *p != ',' && *p != ' ' && *p != '\t') p++;
-        char *end = p;
-        while (*p == ' ' || *p == '\t') p++;
-        bool comma = *p == ',';
-        if (comma) p++;
-        *end = 0;
-        while (*p == ' ' || *p == '\t') p++;
-        if (!*p) {
-            if (comma) {
-                if (n == max) return max + 1;
-                f[n++] = p; /* a trailing empty field */
-            }
-            return n;
-        }
-    }
-}
-
-static bool number(const char *s, double *out)
-{
-    if (!*s) return false;
-    char *end;
-    errno = 0;
-    *out = strtod(s, &end);
-    return !*end && errno != ERANGE;
-}
-
-/* Reads the next content line (comments and line ends stripped); false at the end. */
-static bool next_line(FILE *f, char **buf, size_t *cap, int *lineno)
-{
-    for (;;) {
-        ssize_t len = getline(buf, cap, f);
-        if (len < 0) return false;
-        (*lineno)++;
-        char *s = *buf;
-        s[strcspn(s, "#\r\n")] = 0;
-        for (char *p = s; *p; p++)
-            if (*p != ' ' && *p != '\t') return true;
-    }
-}
-
 fb_result fb_terrain_read_points(const char *path, double **xyz, size_t *n)
 {
     *xyz = NULL;
     *n = 0;
-    FILE *f = fopen(path, "r");
-    if (!f) return fb_fail(FB_ERR_IO, "%s: cannot open points: %s", path, strerror(errno));
-    char *line = NULL, *fld[4];
-    size_t cap = 0, count = 0, alloc = 0;
+    fb_lines in;
+    fb_result rc = fb_lines_open(&in, path, "points");
+    if (rc) return rc;
+    char *fld[4];
+    size_t count = 0, alloc = 0;
     double *p = NULL;
-    int lineno = 0;
-    bool any = false;
-    fb_result rc = FB_OK;
-    while (next_line(f, &line, &cap, &lineno)) {
-        int nf = fields(line, fld, 3);
+    int nf, got;
+    while (!rc && (got = fb_lines_next(&in, fld, 3, &nf)) > 0) {
         double v[3];
-        bool ok = nf == 3 && number(fld[0], &v[0]) && number(fld[1], &v[1]) && number(fld[2], &v[2]);
-        if (!ok && !any && nf == 3 && !number(fld[0], &v[0])) { /* a header line */
-            any = true;
-            continue;
-        }
-        any = true;
-        if (!ok) {
-            rc = fb_fail(FB_ERR_INPUT, "%s:%d: expected three numbers x y z (or x,y,z)", path, lineno);
-            break;
-        }
-        if (!isfinite(v[0]) || !isfinite(v[1]) || !isfinite(v[2])) {
-            rc = fb_fail(FB_ERR_INPUT, "%s:%d: coordinate is not a finite number", path, lineno);
-            break;
-        }
-        if (count == FB_TERRAIN_MAX_POINTS) {
-            rc = fb_fail(FB_ERR_INPUT, "%s:%d: more than %llu points", path, lineno, FB_TERRAIN_MAX_POINTS);
-            break;
-        }
-        if (count == alloc) {
-            alloc = alloc ? 2 * alloc : 1024;
-            double *q = realloc(p, alloc * 3 * sizeof *q);
-            if (!q) {
-                rc = fb_fail(FB_ERR_NOMEM, "%s: out of memory for %zu points", path, count);
-                break;
+        if (nf != 3 || !fb_text_number(fld[0], &v[0]) || !fb_text_number(fld[1], &v[1]) ||
+            !fb_text_number(fld[2], &v[2])) {
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: expected three numbers x y z (or x,y,z)", path, in.lineno);
+        } else if (!isfinite(v[0]) || !isfinite(v[1]) || !isfinite(v[2])) {
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: coordinate is not a finite number", path, in.lineno);
+        } else if (fabs(v[0]) > FB_TERRAIN_MAX_COORD || fabs(v[1]) > FB_TERRAIN_MAX_COORD ||
+                   fabs(v[2]) > FB_TERRAIN_MAX_COORD) {
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: coordinate beyond +-%g (heights and squared distances must stay finite)",
+                         path, in.lineno, FB_TERRAIN_MAX_COORD);
+        } else if (count == FB_TERRAIN_MAX_POINTS) {
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: more than %llu points", path, in.lineno, FB_TERRAIN_MAX_POINTS);
+        } else {
+            if (count == alloc) {
+                alloc = alloc ? 2 * alloc : 1024;
+                double *q = realloc(p, alloc * 3 * sizeof *q);
+                if (!q) {
+                    rc = fb_fail(FB_ERR_NOMEM, "%s: out of memory for %zu points", path, count);
+                    break;
+                }
+                p = q;
             }
-            p = q;
+            memcpy(p + 3 * count++, v, sizeof v);
         }
-        memcpy(p + 3 * count++, v, sizeof v);
     }
-    if (!rc && ferror(f)) rc = fb_fail(FB_ERR_IO, "%s: cannot read points: %s", path, strerror(errno));
+    if (!rc && got < 0) rc = FB_ERR_INPUT;
     if (!rc && !count) rc = fb_fail(FB_ERR_INPUT, "%s: no points (expected lines of x y z)", path);
-    free(line);
-    fclose(f);
+    fb_lines_close(&in);
     if (rc) {
         free(p);
         return rc;
@@ -175,9 +117,9 @@ fb_result fb_terrain_read_heightfield(const char *spec, int step, double **xyz, 
         rc = exrio_read_rows(r, y, 1, planes);
         for (size_t i = 0; i < nx && !rc; i++) {
             int x = i + 1 == nx ? W - 1 : (int)(i * (size_t)step);
-            if (!isfinite(row[x])) {
-                rc = fb_fail(FB_ERR_INPUT, "%s: pixel (%d, %d) of %s is not a finite number", path, x, y,
-                             exrio_channel_name(r, c));
+            if (!isfinite(row[x]) || fabs(row[x]) > FB_TERRAIN_MAX_COORD) {
+                rc = fb_fail(FB_ERR_INPUT, "%s: pixel (%d, %d) of %s is %s", path, x, y, exrio_channel_name(r, c),
+                             isfinite(row[x]) ? "beyond +-1e15" : "not a finite number");
                 break;
             }
             p[3 * count] = x, p[3 * count + 1] = H - 1 - y, p[3 * count + 2] = row[x];
@@ -199,40 +141,35 @@ fb_result fb_terrain_read_centers(const char *path, fb_terrain_center **out, int
 {
     *out = NULL;
     *n = 0;
-    FILE *f = fopen(path, "r");
-    if (!f) return fb_fail(FB_ERR_IO, "%s: cannot open centres: %s", path, strerror(errno));
+    fb_lines in;
+    fb_result rc = fb_lines_open(&in, path, "centres");
+    if (rc) return rc;
     fb_terrain_center *c = calloc(FB_TERRAIN_MAX_CENTERS, sizeof *c);
-    char *line = NULL, *fld[5];
-    size_t cap = 0;
-    int lineno = 0, count = 0;
-    bool any = false;
-    fb_result rc = c ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory");
-    while (!rc && next_line(f, &line, &cap, &lineno)) {
-        int nf = fields(line, fld, 4);
+    char *fld[5];
+    int count = 0, nf, got = 0;
+    if (!c) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    while (!rc && (got = fb_lines_next(&in, fld, 4, &nf)) > 0) {
         double v[4] = {0, 0, 0, -1};
-        bool ok = (nf == 3 || nf == 4) && number(fld[0], &v[0]) && number(fld[1], &v[1]) && number(fld[2], &v[2]) &&
-                  (nf == 3 || !*fld[3] || number(fld[3], &v[3]));
-        if (!ok && !any && nf >= 3 && !number(fld[0], &v[0])) {
-            any = true;
-            continue;
-        }
-        any = true;
+        bool ok = (nf == 3 || nf == 4) && fb_text_number(fld[0], &v[0]) && fb_text_number(fld[1], &v[1]) &&
+                  fb_text_number(fld[2], &v[2]) && (nf == 3 || !*fld[3] || fb_text_number(fld[3], &v[3]));
         if (!ok)
-            rc = fb_fail(FB_ERR_INPUT, "%s:%d: expected x,y,D or x,y,D,sigma", path, lineno);
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: expected x,y,D or x,y,D,sigma", path, in.lineno);
         else if (!isfinite(v[0]) || !isfinite(v[1]) || !isfinite(v[3]))
-            rc = fb_fail(FB_ERR_INPUT, "%s:%d: not a finite number", path, lineno);
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: not a finite number", path, in.lineno);
+        else if (fabs(v[0]) > FB_TERRAIN_MAX_COORD || fabs(v[1]) > FB_TERRAIN_MAX_COORD || v[3] > FB_TERRAIN_MAX_COORD)
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: beyond +-%g", path, in.lineno, FB_TERRAIN_MAX_COORD);
         else if (!(v[2] > 2 && v[2] < 3))
-            rc = fb_fail(FB_ERR_INPUT, "%s:%d: fractal dimension D = %g is outside (2, 3)", path, lineno, v[2]);
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: fractal dimension D = %g is outside (2, 3)", path, in.lineno, v[2]);
         else if (nf == 4 && *fld[3] && !(v[3] >= 0))
-            rc = fb_fail(FB_ERR_INPUT, "%s:%d: sigma %g is negative", path, lineno, v[3]);
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: sigma %g is negative", path, in.lineno, v[3]);
         else if (count == FB_TERRAIN_MAX_CENTERS)
-            rc = fb_fail(FB_ERR_INPUT, "%s:%d: more than %d centres", path, lineno, FB_TERRAIN_MAX_CENTERS);
+            rc = fb_fail(FB_ERR_INPUT, "%s:%d: more than %d centres", path, in.lineno, FB_TERRAIN_MAX_CENTERS);
         else
             c[count++] = (fb_terrain_center){v[0], v[1], 3 - v[2], v[3]};
     }
+    if (!rc && got < 0) rc = FB_ERR_INPUT;
     if (!rc && !count) rc = fb_fail(FB_ERR_INPUT, "%s: no centres (expected lines of x,y,D,sigma)", path);
-    free(line);
-    fclose(f);
+    fb_lines_close(&in);
     if (rc) {
         free(c);
         return rc;

@@ -11,6 +11,9 @@
 #include <stddef.h>
 
 #define FB_TERRAIN_MAX_POINTS 50000000ull
+/* The largest |coordinate| accepted (as for inline points): products of four coordinates, as the
+ * exact predicates and the variances form them, stay far inside double's range. */
+#define FB_TERRAIN_MAX_COORD 1e15
 
 /* x y z or x,y,z per line; # starts a comment; the first line may be a header. *xyz is malloc'd
  * (3 doubles per point). At least one point, all finite. */

@@ -383,7 +383,7 @@ static void test_io(void)
     fprintf(f, "# nothing\n");
     fclose(f);
     CHECK(fb_terrain_read_points(path, &xyz, &n) == FB_ERR_INPUT);
-    CHECK(fb_terrain_read_points("/nonexistent/points.xyz", &xyz, &n) == FB_ERR_IO);
+    CHECK(fb_terrain_read_points("/nonexistent/points.xyz", &xyz, &n) == FB_ERR_INPUT);
     f = fopen(path, "w");
     fprintf(f, "x,y,D,sigma\n0,0,2.2,\n5,5,2.7,0.5\n");
     fclose(f);

@@ -11,6 +11,7 @@
 #include "../gen.h"
 #include "../output.h"
 #include "../preview.h"
+#include "../textin.h"
 
 #include <errno.h>
 #include <jansson.h>
@@ -49,37 +50,28 @@ static void constrain_fini(fb_gen *g)
 
 /* ---- inputs --------------------------------------------------------------------------------- */
 
-/* Calls fn on each non-empty, non-comment line of a text file (fields split at commas, spaces or
- * tabs); fn returns an error message or NULL. */
+/* Calls fn on each data line of a text file (textin.h: comments, blank lines and a header line by
+ * its form skipped; fields split at commas and/or blanks); fn returns an error message or NULL. */
 static fb_result each_line(const char *path, const char *what, const char *(*fn)(void *ctx, char **f, int nf),
                            void *ctx)
 {
-    FILE *f = fopen(path, "r");
-    if (!f) return fb_fail(FB_ERR_IO, "%s: cannot open %s: %s", path, what, strerror(errno));
-    char line[4096];
-    int no = 0;
-    fb_result rc = FB_OK;
-    while (!rc && fgets(line, sizeof line, f)) {
-        no++;
-        char *hash = strchr(line, '#');
-        if (hash) *hash = 0;
-        char *fields[8];
-        int nf = 0;
-        for (char *tok = strtok(line, ", \t\r\n"); tok && nf < 8; tok = strtok(NULL, ", \t\r\n")) fields[nf++] = tok;
-        if (nf == 0) continue;
+    fb_lines in;
+    fb_result rc = fb_lines_open(&in, path, what);
+    if (rc) return rc;
+    char *fields[8];
+    int nf, got;
+    while (!rc && (got = fb_lines_next(&in, fields, 7, &nf)) > 0) {
         const char *err = fn(ctx, fields, nf);
-        if (err && no == 1 && strstr(err, "number")) continue; /* a header line */
-        if (err) rc = fb_fail(FB_ERR_INPUT, "%s:%d: %s", path, no, err);
+        if (err) rc = fb_fail(FB_ERR_INPUT, "%s:%d: %s", path, in.lineno, err);
     }
-    fclose(f);
+    if (!rc && got < 0) rc = FB_ERR_INPUT;
+    fb_lines_close(&in);
     return rc;
 }
 
 static bool number(const char *s, double *out)
 {
-    char *end;
-    *out = strtod(s, &end);
-    return *s && !*end && isfinite(*out);
+    return fb_text_number(s, out) && isfinite(*out);
 }
 
 typedef struct reader {
@@ -394,8 +386,25 @@ static void constrain_rows(const fb_gen *g, int y0, int n, void *const *planes)
         for (size_t i = 0; i < len; i++) ((float *)planes[5])[i] = s->out.D[at + i] >= g->layer->constrain.water;
 }
 
+/* The model's arrays (host/constrain.c): the grid of N x N nodes (N = 2^k + 1 >= the longer side, 4
+ * bytes each), the H and T fields, the macro shape and the result D (4 bytes a pixel each); H, T,
+ * the macro and D are kept for the strips. */
+static uint64_t constrain_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
+{
+    (void)e;
+    const fb_scene *sc = g->scene;
+    uint64_t side = (uint64_t)(sc->width > sc->height ? sc->width : sc->height), N = 2;
+    while (N - 1 < side - 1 || N < 3) N = 2 * (N - 1) + 1;
+    uint64_t npx = (uint64_t)sc->width * sc->height, nodes = sc->height > 1 ? N * N : N;
+    *hold = 16 * npx;
+    return 4 * nodes + 16 * npx;
+}
+
 fb_result fb_gen_constrain_init(fb_gen *g)
 {
+    uint64_t hold, peak = constrain_memory(g, NULL, &hold);
+    fb_result mrc = fb_gen_check_memory(g, peak); /* the macro shape alone is 4 bytes a pixel */
+    if (mrc) return mrc;
     constrain_state *s = calloc(1, sizeof *s);
     if (!s) return fb_fail(FB_ERR_NOMEM, "out of memory");
     g->owned = s;
@@ -415,6 +424,7 @@ fb_result fb_gen_constrain_init(fb_gen *g)
     }
     g->native_rows = constrain_rows;
     g->prepare = constrain_prepare;
+    g->memory = constrain_memory;
     g->prepare_gpu_seconds = -1;
     return FB_OK;
 }

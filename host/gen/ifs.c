@@ -12,6 +12,7 @@
 #include "../ifs_avx2.h"
 #include "../lsys.h"
 #include "../palette.h"
+#include "../pool.h"
 #include "../progress.h"
 
 #include "../../kernels/ifs.h"
@@ -125,7 +126,7 @@ static fb_result lsystem_condensation(const fb_gen *g, K_IfsMap **out, uint32_t 
     fb_lsys_seg *segs = NULL;
     int depth = 0;
     snprintf(who, sizeof who, "layer %s: condensation", g->layer->name);
-    fb_result rc = fb_lsys_derive(&f->cond_sys, g->scene->seed, f->cond_max_symbols, who, &str, &len);
+    fb_result rc = fb_lsys_derive(&f->cond_sys, g->scene->seed, f->cond_max_symbols, 0, who, &str, &len);
     if (rc) return rc;
     size_t nf = 0;
     for (size_t i = 0; i < len; i++) nf += str[i] == 'F';
@@ -583,6 +584,26 @@ const fb_ifs_stats *fb_gen_ifs_stats(const fb_gen *g)
     return g->layer->kind == FB_LAYER_IFS && g->owned ? &state(g)->stats : NULL;
 }
 
+/* The chaos game's memory: its histogram (12 bytes a cell: hits and colour sums; one per thread
+ * where they fit in 1 GiB, as prepare_native decides), the chains' state, and the reduction to
+ * pixels (16 bytes a pixel, then the 12 kept: count, density, colour; 8 more for a points part). */
+static uint64_t ifs_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
+{
+    const ifs_state *st = state(g);
+    uint64_t cells = (uint64_t)st->p.hist_w * st->p.hist_h, n = (uint64_t)g->scene->width * g->scene->height;
+    uint64_t keep = 12 * n + (st->part ? 8 * n : 0), hist;
+    if (e->kind == FB_BACKEND_VULKAN) {
+        hist = 12 * cells + 48ull * st->p.chains;
+    } else {
+        int threads = e->pool ? fb_pool_threads(e->pool) : 1;
+        if (threads > 64) threads = 64;
+        bool priv = threads > 1 && (uint64_t)threads * cells * 12 <= (1ull << 30);
+        hist = (priv ? (uint64_t)threads : 1) * cells * 12 + 48ull * st->p.chains;
+    }
+    *hold = keep;
+    return hist + 16 * n + keep;
+}
+
 fb_result fb_gen_ifs_init(fb_gen *g)
 {
     const fb_scene *s = g->scene;
@@ -697,5 +718,6 @@ fb_result fb_gen_ifs_init(fb_gen *g)
     g->preview_rgb = 3;
     g->native_rows = ifs_rows;
     g->prepare = ifs_prepare;
+    g->memory = ifs_memory;
     return FB_OK;
 }

@@ -5,6 +5,7 @@
  *
  * Channels: NAME.A (coverage) and NAME.R, .G, .B (premultiplied by A).
  */
+#include "../bake.h"
 #include "../gen.h"
 #include "../lsys.h"
 #include "../palette.h"
@@ -206,6 +207,15 @@ static fb_result frame_segments(fb_gen *g, const fb_lsys_seg *in, size_t n, int 
     return FB_OK;
 }
 
+/* What the L-system keeps: its raster input (the tiles' segment lists), and on Vulkan the device's
+ * copy. The rewriting and the turtle ran in init, their strings checked against the memory limit
+ * before each was allocated (fb_lsys_derive). */
+static uint64_t lsystem_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
+{
+    *hold = (uint64_t)g->input_size * (e->kind == FB_BACKEND_VULKAN ? 2u : 1u);
+    return *hold;
+}
+
 fb_result fb_gen_lsystem_init(fb_gen *g)
 {
     const fb_scene *sc = g->scene;
@@ -225,12 +235,13 @@ fb_result fb_gen_lsystem_init(fb_gen *g)
     double bounds[4];
     char who[80];
     snprintf(who, sizeof who, "layer %s", g->layer->name);
-    fb_result rc = fb_lsys_derive(&L->sys, sc->seed, L->max_symbols, who, &str, &len);
+    uint64_t tiles = (uint64_t)p->tiles_x * ((p->height + TILE - 1) / TILE);
+    uint64_t max_f = tiles + 1 < MAX_INPUT_WORDS ? (MAX_INPUT_WORDS - tiles - 1) / (K_LSYS_SEG_WORDS + 1) : 1;
+    fb_result rc = fb_lsys_derive(&L->sys, sc->seed, L->max_symbols, max_f, who, &str, &len);
     if (rc) return rc;
     /* Refuse a drawing the rasteriser cannot take before the turtle allocates its segments. */
     size_t nf = 0;
     for (size_t i = 0; i < len; i++) nf += str[i] == 'F';
-    uint64_t tiles = (uint64_t)p->tiles_x * ((p->height + TILE - 1) / TILE);
     if (tiles + 1 + (uint64_t)nf * (K_LSYS_SEG_WORDS + 1) > MAX_INPUT_WORDS) {
         free(str);
         return fb_fail(FB_ERR_INPUT,
@@ -259,6 +270,7 @@ fb_result fb_gen_lsystem_init(fb_gen *g)
     g->preview_channel = 0; /* A */
     g->preview_rgb = 1;     /* R, G, B */
     g->native_rows = lsystem_rows;
+    g->memory = lsystem_memory;
     g->spv = lsys_comp;
     g->spv_size = sizeof lsys_comp;
     g->params_size = sizeof(K_LsysParams);

@@ -261,6 +261,18 @@ static fb_result inline_points(fb_gen *g, terrain_state *s)
     return FB_OK;
 }
 
+/* The refined mesh: per vertex its position, height and links (32 bytes), two triangles of
+ * corners and neighbours (2 x 28), the triangles' band lists and the refinement's hint grid (about
+ * 12 more); the input points (24 bytes each) are freed once triangulated. */
+static uint64_t terrain_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
+{
+    (void)e;
+    const terrain_state *s = state(g);
+    uint64_t v = (uint64_t)s->n + (uint64_t)g->layer->terrain.insert;
+    *hold = 100 * v;
+    return 24 * (uint64_t)s->n + *hold;
+}
+
 fb_result fb_gen_terrain_init(fb_gen *g)
 {
     const fb_terrain_layer_params *P = &g->layer->terrain;
@@ -288,6 +300,7 @@ fb_result fb_gen_terrain_init(fb_gen *g)
     g->preview_channel = 0;
     g->native_rows = terrain_rows;
     g->prepare = terrain_prepare;
+    g->memory = terrain_memory;
     g->prepare_gpu_seconds = -1;
     return FB_OK;
 }

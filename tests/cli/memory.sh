@@ -1,0 +1,97 @@
+#!/usr/bin/env bash
+# Memory is predicted, not discovered: --dry-run's prediction against the measured peak RSS of the
+# same bake (within 25%) for every generator, and a bake beyond --max-memory refused at once.
+# Usage: memory.sh PATH/TO/fractalbake
+. "$(dirname "$0")/lib.sh"
+cli_init "$@"
+if ldd "$FB" | grep -q 'libasan'; then
+  echo "sanitizer build: its shadow memory makes RSS meaningless here (not run)"
+  exit 77
+fi
+printf 'x,y,z\n0,0,0\n10,0,1\n0,10,2\n10,10,3\n5,5,1\n' > pts.csv
+# The unit square as its own attractor (four half-size copies): every histogram cell is hit, so every
+# page the prediction counts is touched.
+cat > square.json << 'JSON'
+{"size": [4096, 4096], "layers": [{"type": "ifs", "name": "square", "bounds": [0, 1, 0, 1], "points": 100000000,
+ "maps": [[0.5, 0, 0, 0.5, 0, 0], [0.5, 0, 0, 0.5, 0.5, 0], [0.5, 0, 0, 0.5, 0, 0.5], [0.5, 0, 0, 0.5, 0.5, 0.5]]}]}
+JSON
+
+# predicted_vs_measured NAME ARGS...: the dry run's peak within 25% of the real run's peak RSS
+predicted_vs_measured() {
+  local name=$1 pred rss
+  shift
+  pred=$("$FB" "$@" -o m.exr --dry-run --json | sed -n 's/.*"peak_bytes": \([0-9]*\).*/\1/p')
+  rss=$( (/usr/bin/time -f "%M" "$FB" "$@" -o m.exr --quiet > /dev/null) 2>&1 | tail -1)
+  if [ -z "$pred" ] || [ -z "$rss" ]; then bad "$name: no prediction ($pred) or no measurement ($rss)"; return; fi
+  if [ ! -s m.exr ]; then bad "$name: the bake wrote nothing"; return; fi
+  rm -f m.exr
+  local r
+  r=$(awk -v p="$pred" -v k="$rss" 'BEGIN { printf "%.3f", p / (k * 1024) }')
+  echo "$name: predicted $((pred >> 20)) MiB, measured $((rss >> 10)) MiB, ratio $r"
+  if awk -v r="$r" 'BEGIN { exit !(r >= 0.75 && r <= 1.25) }'; then ok; else bad "$name: prediction/measured = $r, outside 0.75..1.25"; fi
+}
+
+N="--backend native"
+predicted_vs_measured "fbm, native" fbm $N --size 16384x4096
+predicted_vs_measured "julia, native" julia $N --size 8192x2048
+predicted_vs_measured "ifs, native" render square.json $N
+predicted_vs_measured "lsystem, native" lsystem $N --preset tree --size 8192x8192
+predicted_vs_measured "terrain, native" terrain $N --points pts.csv --insert 3000000 --size 1024x1024
+predicted_vs_measured "constrain, native" constrain $N --size 4097x4097
+cat > ops.json << 'JSON'
+{"size": [8192, 4096], "layers": [{"type": "fbm", "name": "height", "octaves": 6},
+ {"type": "op", "name": "snow", "op": "threshold", "inputs": ["height"], "level": 0.2, "width": 0.1}]}
+JSON
+predicted_vs_measured "op, native" render ops.json $N
+if have_vulkan; then
+  V="--backend vulkan"
+  predicted_vs_measured "fbm, vulkan" fbm $V --size 8192x4096
+  predicted_vs_measured "julia, vulkan" julia $V --size 4096x4096
+  predicted_vs_measured "ifs, vulkan" render square.json $V
+  predicted_vs_measured "lsystem, vulkan" lsystem $V --preset tree --size 4096x4096
+  predicted_vs_measured "terrain, vulkan" terrain $V --points pts.csv --insert 2000000 --size 2048x2048
+  predicted_vs_measured "default scene, vulkan" render $V
+fi
+
+# Beyond --max-memory: refused before allocating, in a moment, one line naming the layer.
+refused() {
+  local what=$1 pat=$2
+  shift 2
+  local t0 rc ms rss
+  t0=$(date +%s%N)
+  /usr/bin/time -f "%M" -o rss.txt "$FB" "$@" -o r.exr > /dev/null 2> r.txt
+  rc=$?
+  ms=$((($(date +%s%N) - t0) / 1000000))
+  rss=$(tail -1 rss.txt)
+  check "$what: exit $rc, wanted 2" test $rc -eq 2
+  check "$what: message: $(cat r.txt)" grep -q -- "$pat" r.txt
+  check "$what: one line" test "$(wc -l < r.txt)" -eq 1
+  check "$what: took $ms ms and $((rss >> 10)) MiB before refusing" test $ms -lt 3000 -a "$rss" -lt 400000
+  check "$what: no output" test ! -e r.exr
+}
+refused "ifs 16384^2 under 4G" "needs about 10.0. GiB, more than --max-memory 4.00 GiB; layer plants alone" \
+  ifs $N --size 16384x16384 --max-memory 4G
+refused "constrain 65536x32768 under 8G" "layer terrain needs about .* GiB, more than --max-memory 8.00 GiB" \
+  constrain $N --size 65536x32768 --max-memory 8G
+refused "terrain of 1e8 insertions under 2G" "more than --max-memory 2.00 GiB; layer terrain" \
+  terrain $N --points pts.csv --insert 100000000 --max-memory 2G
+refused "an exploding L-system" "would exceed max-symbols (2147483648) at iteration 18 of 20" \
+  lsystem $N --preset tree --iterations 20 --max-symbols 2147483648
+refused "an L-system whose strings pass --max-memory" "needs at least .* for its strings, more than --max-memory 64.0 MiB" \
+  lsystem $N --axiom X --rule X=XX --iterations 27 --max-memory 64M
+refused "an L-system drawing more than the rasteriser takes" "would draw at least 7.109e+06 segments" \
+  lsystem $N --preset tree --iterations 13
+
+# --dry-run writes nothing; --max-memory takes sizes people write and refuses the rest
+"$FB" fbm $N --size 64x64 -o d.exr --preview d.png --dry-run > dry.txt
+check "--dry-run wrote a file" test ! -e d.exr -a ! -e d.png
+check "--dry-run prints the predicted peak" grep -q "predicted peak" dry.txt
+for v in 512M 8G 1.5GiB 50% 1073741824; do
+  "$FB" fbm $N --size 16x16 -o v.exr --max-memory $v --quiet && ok || bad "--max-memory $v refused"
+done
+rm -f v.exr
+for v in abc 0 -1G 101% 12Q 100; do
+  expect_fail 2 "max-memory: expected a size" v.exr -- fbm $N --size 16x16 -o v.exr --max-memory "$v"
+done
+
+cli_finish
