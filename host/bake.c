@@ -265,7 +265,7 @@ static fb_result previews_add(previews *pv, const layer_run *runs, int y0, int n
 static fb_result previews_write(const previews *pv, const char *path)
 {
     if (pv->over) return fb_preview_write_over((const fb_preview *const *)pv->p, pv->n, path);
-    return fb_preview_write_png(pv->p[0], path);
+    return fb_preview_write_png(pv->p[0], path, "preview");
 }
 
 /* ---- the bake ------------------------------------------------------------------------------- */

@@ -137,6 +137,7 @@ fb_result fb_compare(const fb_compare_desc *d, bool *pass)
         }
         exrio_attr attrs[] = {{"fractalbake/diff", "absolute difference |A - B| of each common channel"}};
         rc = exrio_writer_create(&(exrio_writer_desc){.path = d->diff,
+                                                      .what = "diff",
                                                       .width = W,
                                                       .height = H,
                                                       .compression = EXRIO_ZIP,
@@ -209,7 +210,7 @@ fb_result fb_compare(const fb_compare_desc *d, bool *pass)
         if (png) fb_preview_add_rows(png, y0, n, (const float *const *)pic);
         if (diff && (rc = exrio_writer_rows(diff, y0, n, (const void *const *)pd))) goto out_pic;
     }
-    if (png) rc = fb_preview_write_png(png, d->diff_png);
+    if (png) rc = fb_preview_write_png(png, d->diff_png, "diff picture");
 out_pic:
     for (int k = 0; k < 3; k++) free(pic[k]);
     if (rc) goto out;

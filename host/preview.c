@@ -122,7 +122,7 @@ static uint8_t srgb8(double v)
 
 static fb_result write_png(const char *path, const char *what, int pw, int ph, int nc, const uint8_t *img);
 
-fb_result fb_preview_write_png(const fb_preview *p, const char *path)
+fb_result fb_preview_write_png(const fb_preview *p, const char *path, const char *what)
 {
     size_t n = (size_t)p->pw * p->ph;
     int nc = p->channels - (p->alpha ? 1 : 0);
@@ -147,7 +147,7 @@ fb_result fb_preview_write_png(const fb_preview *p, const char *path)
         for (size_t i = 0; i < n; i++)
             img[i] = p->count[i] ? (uint8_t)lrint(255.0 * (p->sum[i * p->channels] / p->count[i] - lo) / range) : 0;
     }
-    fb_result rc = write_png(path, "preview", p->pw, p->ph, nc, img);
+    fb_result rc = write_png(path, what, p->pw, p->ph, nc, img);
     free((void *)img);
     return rc;
 }

@@ -25,7 +25,7 @@ void fb_preview_set_row_stride(fb_preview *p, int stride);
 /* Adds rows [y0, y0 + n) of the preview's 1 or 3 float channels, then its coverage if it has one
  * (n * width values each). */
 void fb_preview_add_rows(fb_preview *p, int y0, int n, const float *const *rows);
-fb_result fb_preview_write_png(const fb_preview *p, const char *path);
+fb_result fb_preview_write_png(const fb_preview *p, const char *path, const char *what);
 /* Composites previews of the same size back to front (layers[0] at the back) with the "over"
  * operator and writes an RGB PNG. Per layer: 3 channels are colour (premultiplied when the preview
  * has a coverage), 1 channel a hillshade (tinted) or grey levels of its own range; the coverage is

@@ -38,60 +38,11 @@ valid_exr() {
 S="--size 96x64 --quiet"
 
 # ---- bad input: flags ----
-expect_fail 2 "unknown flag" o.exr -- fbm $S --octavs 3 -o o.exr
-expect_fail 2 "missing value" o.exr -- fbm $S -o o.exr --octaves
-expect_fail 2 "size" o.exr -- fbm --size 0x64 -o o.exr
-expect_fail 2 "size" o.exr -- fbm --size 1000000x1000000 -o o.exr
-expect_fail 2 "size" o.exr -- fbm --size 64 -o o.exr
-expect_fail 2 "pixels" o.exr -- fbm --size 65536x65536 -o o.exr
-expect_fail 2 "octaves" o.exr -- fbm $S --octaves 0 -o o.exr
-expect_fail 2 "octaves" o.exr -- fbm $S --octaves 1000 -o o.exr
-expect_fail 2 "hurst.*finite" o.exr -- fbm $S --hurst nan -o o.exr
-expect_fail 2 "hurst" o.exr -- fbm $S --hurst 1.5 -o o.exr
-expect_fail 2 "lacunarity.*finite" o.exr -- fbm $S --lacunarity inf -o o.exr
-expect_fail 2 "frequency" o.exr -- fbm $S --frequency 0 -o o.exr
-expect_fail 2 "not both" o.exr -- fbm $S --hurst 0.5 --gain 0.7 -o o.exr
-expect_fail 2 "ridged and billow" o.exr -- fbm $S --ridged --billow -o o.exr
-expect_fail 2 "simplex" o.exr -- fbm $S --noise simplex --tileable -o o.exr
-expect_fail 2 "noise.*one of" o.exr -- fbm $S --noise perlin -o o.exr
-expect_fail 2 "seed" o.exr -- fbm $S --seed -1 -o o.exr
-expect_fail 2 "threads" o.exr -- fbm $S --threads 0 -o o.exr
-expect_fail 2 "backend" o.exr -- fbm $S --backend cuda -o o.exr
-expect_fail 2 "offset" o.exr -- fbm $S --offset 1 -o o.exr
-expect_fail 2 "layer" o.exr -- fbm $S --layer a.b -o o.exr
-expect_fail 2 "\-o" "" -- fbm $S
-expect_fail 2 "unknown command" "" -- frobnicate
 expect_fail 2 "nodir/o.exr: cannot create the output: folder" "$T/nodir/o.exr" -- fbm $S -o "$T/nodir/o.exr"
-expect_fail 2 "device" o.exr -- fbm $S --backend vulkan --device no-such-gpu -o o.exr
 
 # ---- bad input: julia ----
-expect_fail 2 "\-\-c: expected two finite numbers" o.exr -- julia $S --c 1 -o o.exr
-expect_fail 2 "\-\-c: expected two finite numbers" o.exr -- julia $S --c nan,0 -o o.exr
-expect_fail 2 "alpha: expected two finite numbers" o.exr -- julia $S --alpha 0,inf -o o.exr
-expect_fail 2 "max-iter" o.exr -- julia $S --max-iter 0 -o o.exr
-expect_fail 2 "bailout" o.exr -- julia $S --bailout 1.5 -o o.exr
-expect_fail 2 "radius" o.exr -- julia $S --mapping polar --radius 0 -o o.exr
-expect_fail 2 "radius" o.exr -- julia $S --radius -1 -o o.exr
-expect_fail 2 "mapping" o.exr -- julia $S --mapping sphere -o o.exr
-expect_fail 2 "scale" o.exr -- julia $S --scale 0,1 -o o.exr
-expect_fail 2 "cosine: expected 12" o.exr -- julia $S --cosine 1,2,3 -o o.exr
-expect_fail 2 "stops" o.exr -- julia $S --stops "0,0,0,0;0.5,1,1" -o o.exr
-expect_fail 2 "stops: expected 2 to 16 stops" o.exr -- julia $S --stops "0.2,0,0,0;1,1,1,1" -o o.exr
-expect_fail 2 "not both" o.exr -- julia $S --stops "0,0,0,0;1,1,1,1" --cosine 0,0,0,1,1,1,1,1,1,0,0,0 -o o.exr
-expect_fail 2 "palette" o.exr -- julia $S --palette sunset -o o.exr
-expect_fail 2 "gamma" o.exr -- julia $S --gamma 0 -o o.exr
-expect_fail 2 "turbulence" o.exr -- julia $S --turbulence -0.1 -o o.exr
-expect_fail 2 "samples" o.exr -- julia $S --samples 0 -o o.exr
-expect_fail 2 "samples" o.exr -- julia $S --samples 100000 -o o.exr
-expect_fail 2 "turbulence-octaves" o.exr -- julia $S --turbulence 0.2 --turbulence-octaves 0 -o o.exr
-expect_fail 2 "channels: expected a list of distinct names" o.exr -- julia $S --channels iter,speed -o o.exr
-expect_fail 2 "channels: expected a list of distinct names" o.exr -- julia $S --channels iter,iter -o o.exr
-expect_fail 2 "channels: expected a list of distinct names" o.exr -- julia $S --channels "" -o o.exr
-expect_fail 2 "R, G and B go together" o.exr -- julia $S --channels iter,R -o o.exr
-expect_fail 2 "precision: expected one of float|double" o.exr -- julia $S --precision quad -o o.exr
 FB_VK_NO_FLOAT64=1 expect_fail 2 "needs a Vulkan device with shaderFloat64" o.exr -- julia $S --precision double --backend vulkan -o o.exr
 printf '{"size": [64, 32], "layers": [{"type": "julia", "channels": []}]}' > chan.json
-expect_fail 2 "layers\[0\].channels" o.exr -- render chan.json -o o.exr --quiet
 # a subset of channels: exactly those in the file, equal to the full layer's; iter alone previews
 if "$FB" julia $S --channels iter,de -o sub.exr --preview sub.png && "$FB" julia $S -o full.exr &&
   [ "$("$FB" info sub.exr | sed -n 's/^channels: *//p')" = 2 ] && "$FB" compare sub.exr full.exr --ignore-missing > /dev/null &&
@@ -106,31 +57,11 @@ valid_exr j.exr
 
 # ---- bad input: ifs ----
 I="ifs --size 96x64 --quiet --points 200000"
-expect_fail 2 "maps\[1\]: probability -0.5 is negative" o.exr -- $I --maps "0.5,0,0,0.5,0,0,0.5;0.5,0,0,0.5,1,0,-0.5" -o o.exr
-expect_fail 2 "probabilities sum to 0" o.exr -- $I --maps "0.5,0,0,0.5,0,0,0;0.5,0,0,0.5,1,0,0" -o o.exr
-expect_fail 2 "maps\[0\]: the map is not contractive" o.exr -- $I --maps "1.2,0,0,0.5,0,0;0.5,0,0,0.5,1,0" -o o.exr
-expect_fail 2 "expected maps" o.exr -- $I --maps "0.5,0,x" -o o.exr
-expect_fail 2 "every map or for none" o.exr -- $I --maps "0.5,0,0,0.5,0,0,0.5;0.5,0,0,0.5,1,0" -o o.exr
 printf '{"size": [64, 32], "layers": [{"type": "ifs",\n "maps": []}]}' > empty.json
-expect_fail 2 "empty.json:2: layers\[0\].maps: expected a list of 1 to 64 maps" o.exr -- render empty.json -o o.exr --quiet
 printf '{"size": [64, 32], "layers": [{"type": "ifs", "maps": [[0.5, 0, 0, 0.5, 0, 0],\n [0.5, 0, 0, 0.5, 1, NaN]]}]}' > nanmap.json
-expect_fail 2 "nanmap.json:2:.*malformed JSON" o.exr -- render nanmap.json -o o.exr --quiet
-expect_fail 2 "one of preset, maps or file" o.exr -- $I --preset fern --maps "0.5,0,0,0.5,0,0" -o o.exr
-expect_fail 2 "preset" o.exr -- $I --preset oak -o o.exr
-expect_fail 2 "bounds" o.exr -- $I --bounds 1,0,0,1 -o o.exr
-expect_fail 2 "bounds" o.exr -- $I --bounds 0,1,0 -o o.exr
-expect_fail 2 "oversample" o.exr -- $I --oversample 0 -o o.exr
-expect_fail 2 "points" o.exr -- $I --points -5 -o o.exr
-expect_fail 2 "points" o.exr -- $I --points 1e20 -o o.exr
-expect_fail 2 "points: expected an integer" o.exr -- $I --points 2.5 -o o.exr
 "$FB" ifs --size 64x48 --quiet --points 1e5 -o e5.exr && "$FB" info e5.exr | grep -q '"points": 100000' && ok || bad "--points 1e5 is not the integer 100000"
-expect_fail 2 "colour coordinates for 4 maps" o.exr -- $I --colors 0,1 -o o.exr
-expect_fail 2 "own condensation set" o.exr -- $I --preset population --condensation tree -o o.exr
-expect_fail 2 "nofile.ifs: cannot open" o.exr -- $I --file nofile.ifs -o o.exr
 printf 'leaf {\n  .5 0 0 .5 0 0 .5\n  .5 0 0 .5 1 0 zz\n}\n' > broken.ifs
-expect_fail 2 "broken.ifs:3:17: expected a number, found \"zz\"" o.exr -- $I --file broken.ifs -o o.exr
 printf 'halves { .5 0 0 .5 0 0 .5 .5 0 0 .5 1 0 .5 }\nthirds {\n .33 0 0 .33 0 0 .3 .33 0 0 .33 .66 0 .3 .33 0 0 .33 .33 .5 .4\n}\n' > two.ifs
-expect_fail 2 "no 2D entry named \"quarters\" (entries: halves, thirds)" o.exr -- $I --file two.ifs --name quarters -o o.exr
 if "$FB" $I --file two.ifs --name thirds -o t.exr 2> err.txt; then ok; else bad "ifs from a file failed: $(cat err.txt)"; fi
 "$FB" info t.exr | grep -q '0.66' && ok || bad "the file's maps are not stored in the scene"
 "$FB" info t.exr | grep -q '"file"' && bad "the stored scene still names the file" || ok
@@ -161,27 +92,10 @@ expect_fail 2 "not a tone-mapping flag" x.exr -- tonemap tm1.exr -o x.exr --poin
 expect_fail 2 "brightness" x.exr -- tonemap tm1.exr -o x.exr --brightness -1
 "$FB" fbm $S -o f0.exr
 expect_fail 2 "no ifs layer" x.exr -- tonemap f0.exr -o x.exr
-expect_fail 2 "nofile.exr: cannot open" x.exr -- tonemap nofile.exr -o x.exr
 
 # ---- lsystem ----
 L="lsystem --size 96x64 --quiet"
-expect_fail 2 "\-\-axiom: the axiom has unbalanced brackets: ']' at symbol 2" o.exr -- $L --axiom 'F]' -o o.exr
-expect_fail 2 "\-\-rule: the rule for F has unbalanced brackets: 1 '\[' never closed" o.exr -- $L --axiom F --rule 'F=F[+F' -o o.exr
-expect_fail 2 "max-symbols (268435456) at iteration 29 of 40" o.exr -- $L --axiom F --rule 'F=FF' --iterations 40 -o o.exr
-expect_fail 2 "max-symbols (100) at iteration 3 of 5" o.exr -- $L --preset bush --max-symbols 100 -o o.exr
-expect_fail 2 "rules need an axiom" o.exr -- $L --rule 'F=FF' -o o.exr
-expect_fail 2 "probabilities of the rules for F sum to 0.9" o.exr -- $L --axiom F --rule 'F(0.5)=F+F' --rule 'F(0.4)=F-F' -o o.exr
-expect_fail 2 "give every one a probability" o.exr -- $L --axiom F --rule 'F(0.5)=F+F' --rule 'F=F-F' -o o.exr
-expect_fail 2 "expected a rule X=successor" o.exr -- $L --axiom F --rule '=F' -o o.exr
-expect_fail 2 "brackets cannot be rewritten" o.exr -- $L --axiom F --rule '[=F' -o o.exr
-expect_fail 2 "\-\-preset: expected one of bush" o.exr -- $L --preset oak -o o.exr
-expect_fail 2 "iterations" o.exr -- $L --iterations 65 -o o.exr
-expect_fail 2 "taper" o.exr -- $L --taper 0 -o o.exr
-expect_fail 2 "width.*finite" o.exr -- $L --width nan -o o.exr
-expect_fail 2 "\-\-rule: missing value" o.exr -- $L --axiom F -o o.exr --rule
-expect_fail 2 "segments (F symbols), more than" o.exr -- $L --axiom F --rule 'F=FF' --iterations 22 -o o.exr
 printf '{"size": [64, 32], "layers": [{"type": "lsystem", "axiom": "F",\n "rules": ["F=F[+F]", 3]}]}' > lrule.json
-expect_fail 2 "lrule.json:2: layers\[0\].rules\[1\]: expected a rule" o.exr -- render lrule.json -o o.exr --quiet
 if "$FB" lsystem --size 96x64 --preset tree -o lt.exr --preview lt.png 2> err.txt; then ok; else bad "lsystem failed: $(cat err.txt)"; fi
 grep -q "wrote lt.exr" err.txt && ok || bad "lsystem: no summary line"
 valid_exr lt.exr
@@ -215,32 +129,17 @@ if "$FB" ifs --size 96x48 --quiet --points 300000 --maps "0.75,0,0,0.75,0.25,0" 
 "$FB" compare lc.exr lc2.exr > /dev/null; [ $? -eq 1 ] && ok || bad "the condensation height changed nothing"
 "$FB" ifs --size 96x48 --quiet --points 300000 --maps "0.75,0,0,0.75,0.25,0" --condensation '{"preset": "tree", "heading": 80}' -o lc3.exr
 "$FB" compare lc.exr lc3.exr > /dev/null; [ $? -eq 1 ] && ok || bad "the condensation heading changed nothing"
-expect_fail 2 "condensation: the string would exceed max-symbols (50) at iteration 2 of 6" o.exr -- $I --maps "0.75,0,0,0.75,0.25,0" --condensation '{"preset": "tree", "max-symbols": 50}' -o o.exr
-expect_fail 2 "\-\-condensation: width: unknown key for an L-system condensation set" o.exr -- $I --maps "0.75,0,0,0.75,0.25,0" --condensation '{"preset": "tree", "width": 2}' -o o.exr
-expect_fail 2 "condensation: expected a JSON object" o.exr -- $I --maps "0.75,0,0,0.75,0.25,0" --condensation '{"preset": ' -o o.exr
-expect_fail 2 "condensation: the L-system draws 0 segments" o.exr -- $I --maps "0.75,0,0,0.75,0.25,0" --condensation '{"axiom": "X"}' -o o.exr
-expect_fail 2 "\-\-condensation: rules\[0\]: the rule for F has unbalanced brackets" o.exr -- $I --maps "0.75,0,0,0.75,0.25,0" --condensation '{"axiom": "F", "rules": ["F=F["]}' -o o.exr
 
 # ---- bad input: scene files ----
 printf '{"size": [64, 32],\n "layers": [\n  {"type": "fbm", "octaves": 3,\n   "octavez": 2}\n ]\n}\n' > unknown.json
-expect_fail 2 "unknown.json:4: layers\[0\].octavez: unknown key" o.exr -- render unknown.json -o o.exr --quiet
 printf '{"size": [64, 32], "layers": [{"type": "fbm",\n "octaves": "3"}]}' > wrongtype.json
-expect_fail 2 "wrongtype.json:2: layers\[0\].octaves: expected an integer" o.exr -- render wrongtype.json -o o.exr --quiet
 printf '{"size": [64, 32], "layers": [{"type": "fbm", "octaves": 3,]}' > malformed.json
-expect_fail 2 "malformed.json:1:.*malformed JSON" o.exr -- render malformed.json -o o.exr --quiet
 printf '{"size": [64, 32], "layers": [{"type": "fbm", "hurst": NaN}]}' > nan.json
-expect_fail 2 "nan.json:1:.*malformed JSON" o.exr -- render nan.json -o o.exr --quiet
 printf '{"size": [64, 32], "layers": [{"type": "fbm", "octaves": 0}]}' > range.json
-expect_fail 2 "range.json:1: layers\[0\].octaves: expected an integer in 1..32, found 0" o.exr -- render range.json -o o.exr --quiet
 printf '{"size": [64, 32], "layers": [{"type": "sky"}]}' > gen.json
-expect_fail 2 "unknown generator" o.exr -- render gen.json -o o.exr --quiet
 printf '{"size": [64, 32], "layers": [{"type": "fbm"}, {"type": "fbm"}]}' > dup.json
-expect_fail 2 "already used" o.exr -- render dup.json -o o.exr --quiet
 printf '{"size": [64, 32]}' > nolayers.json
-expect_fail 2 "layers" o.exr -- render nolayers.json -o o.exr --quiet
-expect_fail 2 "missing.json: cannot open" o.exr -- render missing.json -o o.exr --quiet
 mkdir -p unreadable.json
-expect_fail 2 "unreadable.json: is a directory" o.exr -- render unreadable.json -o o.exr --quiet
 
 # ---- a bake, the file, info ----
 if "$FB" fbm $S --seed 5 --octaves 6 -o a.exr --preview a.png 2> err.txt; then ok; else bad "fbm bake failed: $(cat err.txt)"; fi
@@ -251,7 +150,6 @@ if head -c 8 a.png | od -An -c | grep -q 'P   N   G'; then ok; else bad "preview
 grep -q 'layer fbm .*Y (float)' info.txt && ok || bad "info lacks the fbm layer: $(cat info.txt)"
 grep -q '"octaves": 6' info.txt && ok || bad "info lacks the stored scene"
 grep -q '"seed": 5' info.txt && ok || bad "stored scene lacks the seed"
-expect_fail 2 "not a readable OpenEXR" "" -- info malformed.json
 
 # the default scene, with every format
 for c in zip piz none; do
@@ -442,7 +340,6 @@ expect_fail 2 '\-\-set layers.moon.c=1: no element named "moon"' o.exr -- render
 expect_fail 2 "\-\-set layers.sky.c=1: expected \[x, y\]" o.exr -- render $S3 --set layers.sky.c=1 -o o.exr
 expect_fail 2 "\-\-set layers.7.c=1: index 7 is out of range" o.exr -- render $S3 --set layers.7.c=1 -o o.exr
 expect_fail 2 "\-\-set seed: expected KEY.PATH=VALUE" o.exr -- render $S3 --set seed -o o.exr
-expect_fail 2 "\-\-set size=0x3: expected \[width, height\]" o.exr -- render --set size=0x3 -o o.exr
 # --from: the same file, byte for byte (same backend); with an override, another
 if "$FB" render --from set.exr -o from.exr --quiet; then ok; else bad "--from failed"; fi
 cmp -s set.exr from.exr && ok || bad "--from did not reproduce the file byte for byte"
@@ -470,8 +367,6 @@ expect_fail 2 "overlap" o.exr -- merge pa_vulkan.exr pb_vulkan.exr pc_vulkan.exr
 expect_fail 2 "another scene" o.exr -- merge pa_vulkan.exr pb_vulkan.exr set.exr -o o.exr
 expect_fail 2 "not inside the 128 x 64 image" o.exr -- render $S3 --region 100,0,29,64 -o o.exr
 expect_fail 2 "region: expected X,Y,W,H" o.exr -- render $S3 --region 1,2,3 -o o.exr
-expect_fail 2 "no region files" o.exr -- merge -o o.exr
-expect_fail 2 "nope.exr: cannot open" o.exr -- merge nope.exr -o o.exr
 
 # one EXR part per layer, each with its own compression: the same pixels as one part; regions merge
 MP="--set parts=per-layer --set layers.sky.compression=piz --set layers.terrain.compression=none"
@@ -568,21 +463,13 @@ printf 'x,d\n0,0\n50,10\n100,0\n' > prof.csv
 awk -F, '$1 == 128 || $1 == 40 {if ($2 != $3) bad = 1} END {exit bad}' out1d.csv && ok || bad "1D constraints not exact in the CSV"
 "$FB" constrain --size 256x1 --profile prof.csv --points <(printf '128,0\n') --plot p1d.png -o p1d2.exr --quiet &&
   [ "$(od -An -tu1 -j25 -N1 p1d.png | tr -d ' ')" = "2" ] && [ "$(png_wh p1d.png)" = "256 240" ] && ok || bad "1D plot is not a 256 x 240 RGB PNG"
-expect_fail 2 "plot output is for 1D profiles" o.exr -- $C --plot x.png -o o.exr
 # a macro shape from an EXR channel, and its size must match
 "$FB" fbm --size 120x80 --quiet --octaves 3 -o macro.exr
 "$FB" $C --macro macro.exr:fbm.Y -o cm.exr && ok || bad "macro from an EXR failed"
 expect_fail 2 "macro.exr: 120 x 80, but the scene is 64 x 64" o.exr -- constrain --size 64x64 --macro macro.exr -o o.exr
 expect_fail 2 "cpts.csv:3: the pixel is outside the image" o.exr -- constrain --size 100x50 --points cpts.csv -o o.exr
 expect_fail 2 "H must be in (0, 1)" o.exr -- constrain --size 120x80 --regions <(printf '1,1,H,1.5\n') -o o.exr
-expect_fail 2 '"volcano" is not cone, ridge, boss, bowl, IN.exr\[:layer.channel\] or a layer of the scene' o.exr -- $C --macro volcano -o o.exr
-expect_fail 2 "needs the scene's height to be 1\|height must be 1" o.exr -- $C --profile prof.csv -o o.exr
-expect_fail 2 "nope.csv: cannot open constraint points" o.exr -- $C --points nope.csv -o o.exr
-expect_fail 2 "hurst: expected a roughness H in (0, 1)" o.exr -- $C --hurst 1 -o o.exr
-expect_fail 2 "T" o.exr -- $C --T 0 -o o.exr
-expect_fail 2 "sigma" o.exr -- $C --sigma 0 -o o.exr
 printf '1,2\n3\n' > bad.csv
-expect_fail 2 "bad.csv:2: expected x,y" o.exr -- $C --points bad.csv -o o.exr
 printf '{"size": [64, 64], "layers": [{"type": "constrain", "points": [[3, 4], [64, 2]]}]}' > cbad.json
 expect_fail 2 'cbad.json:1: layers\[0\].points\[1\]: pixel (64, 2) is outside the 64 x 64 image' o.exr -- render cbad.json -o o.exr
 "$FB" constrain --help | grep -c -- "--compression" | grep -q "^1$" && ok || bad "constrain --help lists --compression twice"
@@ -619,7 +506,6 @@ grep -q -E "\*|no Vulkan device" dev.txt && ok || bad "devices marks no chosen d
 "$FB" bench --generator terrain --json > bt.json && ok || bad "bench --generator terrain failed"
 grep -q '"generator": "delaunay", "backend": "native".*"unit": "Minserts/s", "rate": [0-9]*\.[0-9]*[1-9]' bt.json && ok || bad "bench: no delaunay line: $(cat bt.json)"
 grep -q '"generator": "refine", "backend": "native".*"unit": "Minserts/s", "rate": [0-9]*\.[0-9]*[1-9]' bt.json && ok || bad "bench: no refine line: $(cat bt.json)"
-expect_fail 2 "generator: expected fbm, julia, ifs, terrain or constrain" "" -- bench --generator mesh
 "$FB" bench --generator constrain --size 256x256 --json > bc.json && grep -q '"generator": "constrain", "backend": "native".*"unit": "Mpix/s", "rate": [0-9]*\.[0-9]*[1-9]' bc.json && ok || bad "bench: no constrain line: $(cat bc.json)"
 
 echo "$pass passed, $fail failed"

@@ -1,0 +1,107 @@
+#!/usr/bin/env bash
+# Every bad input in one table (bad-inputs.tsv): each row runs fractalbake in a folder of fixtures and
+# must exit with the row's code, print exactly one line on stderr matching the row's pattern, and
+# leave no file behind (the folder holds what it held before). Rows marked `vk` need a Vulkan device.
+# Usage: bad-inputs.sh PATH/TO/fractalbake [TABLE]
+. "$(dirname "$0")/lib.sh"
+TABLE=$(realpath "${2:-$(dirname "$0")/bad-inputs.tsv}")
+cli_init "$@"
+
+# ---- fixtures: the files the rows name ----
+S="--size 96x64 --quiet"
+I="ifs --size 96x64 --quiet --points 200000"
+L="lsystem --size 96x64 --quiet"
+Tr="terrain --size 64x64 --quiet"
+C="constrain --size 120x80 --quiet"
+N="--backend native"
+awk 'BEGIN { srand(4); print "# survey"; print "x,y,z"; for (i = 0; i < 300; i++) { x = rand() * 100; y = rand() * 100; printf "%.4f,%.4f,%.4f\n", x, y, 10 * sin(x / 9) + y / 10 } }' > pts.csv
+printf '0 0 1\n1 0 2\n2 0 nan\n' > nanpts.xyz
+printf '0 0 1\n1 0 2\n2 0\n' > short.xyz
+printf '0 0 1\n1 1 2\n2 2 3\n3 3 4\n' > line.xyz
+printf '# nothing here\n' > empty.xyz
+printf 'x,y,z\n' > header-only.xyz
+printf '1,1,3.4,1\n' > badcenters.csv
+printf '1,1,2.5,1e300\n' > hugecenters.csv
+printf '1 1 1\n1 1 1\n1 1 1\n' > same.xyz
+printf '0 0 5\n1 0 5\n0 1 5\n' > flat.xyz
+printf '1e300,0,0\n0,1e300,1\n1,1,1\n' > huge.xyz
+printf '0,0,0\n1,0,1e300\n0,1,1\n' > hugez.xyz
+printf '0,0,0\n2e15,0,1\n0,1,1\n' > far.xyz
+printf '0 0 1\n1 0 2\0\n0 1 3\n' > nul.xyz
+printf 'x,d\n0,0\n50,10\n100,0\n' > prof.csv
+printf '1,2\n3\n' > bad.csv
+printf '10.5,10\n' > frac.csv
+printf 'nan,5\n' > nanpt.csv
+printf '1,1,H,1.5\n' > badregion.csv
+printf '1,1,Q,0.5\n' > kindregion.csv
+printf '{"size": [64, 32],\n "layers": [\n  {"type": "fbm", "octaves": 3,\n   "octavez": 2}\n ]\n}\n' > unknown.json
+printf '{"size": [64, 32], "layers": [{"type": "fbm",\n "octaves": "3"}]}' > wrongtype.json
+printf '{"size": [64, 32], "layers": [{"type": "fbm", "octaves": 3,]}' > malformed.json
+printf '{"size": [64, 32], "layers": [{"type": "fbm", "hurst": NaN}]}' > nan.json
+printf '{"size": [64, 32], "layers": [{"type": "fbm", "octaves": 0}]}' > range.json
+printf '{"size": [64, 32], "layers": [{"type": "sky"}]}' > gen.json
+printf '{"size": [64, 32], "layers": [{"type": "fbm"}, {"type": "fbm"}]}' > dup.json
+printf '{"size": [64, 32]}' > nolayers.json
+printf '' > zero.json
+printf '{"layers": [{"type": "terrain", "points": [[1e300, 0, 0], [0, 1, 1], [1, 1, 2]]}]}' > inline.json
+printf '{"size": [64, 32], "layers": [{"type": "julia", "channels": []}]}' > chan.json
+printf '{"size": [64, 32], "layers": [{"type": "ifs",\n "maps": []}]}' > empty.json
+printf '{"size": [64, 32], "layers": [{"type": "ifs", "maps": [[0.5, 0, 0, 0.5, 0, 0],\n [0.5, 0, 0, 0.5, 1, NaN]]}]}' > nanmap.json
+printf '{"size": [64, 32], "layers": [{"type": "lsystem", "axiom": "F",\n "rules": ["F=F[+F]", 3]}]}' > lrule.json
+printf 'leaf {\n  .5 0 0 .5 0 0 .5\n  .5 0 0 .5 1 0 zz\n}\n' > broken.ifs
+printf 'halves { .5 0 0 .5 0 0 .5 .5 0 0 .5 1 0 .5 }\nthirds {\n .33 0 0 .33 0 0 .3 .33 0 0 .33 .66 0 .3 .33 0 0 .33 .33 .5 .4\n}\n' > two.ifs
+mkdir -p unreadable.json adir adir.ply adir.png
+mkfifo afifo
+echo precious > victim.txt
+ln -s victim.txt alink
+ln -s victim.txt alink.png
+"$FB" fbm $N --size 16x16 -o small.exr --quiet
+"$FB" fbm $N --size 16x16 --seed 2 -o small2.exr --quiet
+"$FB" fbm $N --size 32x16 -o wide.exr --quiet
+printf 'not an exr at all\n' > text.exr
+: > zero.exr
+head -c 300 small.exr > trunc.exr
+# a 2 KB file whose header claims 30000 x 30000 pixels
+python3 - << 'PY'
+import struct
+d = bytearray(open('small.exr', 'rb').read())
+for name in (b'dataWindow\0box2i\0', b'displayWindow\0box2i\0'):
+    i = d.index(name) + len(name) + 4
+    d[i:i + 16] = struct.pack('<4i', 0, 0, 29999, 29999)
+open('huge.exr', 'wb').write(d)
+PY
+before=$(ls -A | sort)
+vk=0
+have_vulkan && vk=1
+
+# ---- the table ----
+rows=0
+skipped=0
+while IFS=$'\t' read -r code needs pat args; do
+  case "$code" in '' | '#'*) continue ;; esac
+  rows=$((rows + 1))
+  if [ "$needs" = vk ] && [ $vk -eq 0 ]; then skipped=$((skipped + 1)); continue; fi
+  eval "set -- $args"
+  "$FB" "$@" > stdout.txt 2> stderr.txt < /dev/null
+  rc=$?
+  lines=$(wc -l < stderr.txt)
+  err=$(cat stderr.txt)
+  rm -f stdout.txt stderr.txt
+  after=$(ls -A | sort)
+  if [ $rc -ne "$code" ]; then
+    bad "[$args] exit $rc, wanted $code: $err"
+  elif [ "$lines" -ne 1 ]; then
+    bad "[$args] $lines stderr lines, wanted 1: $err"
+  elif ! grep -q -- "$pat" <<< "$err"; then
+    bad "[$args] stderr lacks '$pat': $err"
+  elif [ "$after" != "$before" ]; then
+    bad "[$args] left files: $(comm -13 <(echo "$before") <(echo "$after") | tr '\n' ' ')"
+    comm -13 <(echo "$before") <(echo "$after") | xargs -r rm -rf
+  else
+    ok
+  fi
+done < "$TABLE"
+check "the fixtures were not written through" test "$(cat victim.txt)" = precious -a -c /dev/null -a -p afifo
+echo "$rows rows ($skipped need Vulkan and were not run)"
+[ "$rows" -ge 120 ] && ok || bad "the table has $rows rows, fewer than 120"
+cli_finish
