@@ -289,12 +289,18 @@ static fb_result check_finite(const layer_run *runs, int nlayers, const void *co
                 for (int x = 0; x < w; x++) {
                     float v;
                     memcpy(&v, &row[x], 4);
-                    if (!isfinite(v))
-                        return fb_fail(FB_ERR_INTERNAL,
-                                       "layer %s: channel %s holds %s at pixel (%d, %d): an internal error, please "
-                                       "report it with the scene",
-                                       g->layer->name, g->channel_names[c], isnan(v) ? "NaN" : "an infinity", x0 + x,
-                                       y0 + r);
+                    if (isfinite(v)) continue;
+                    if (g->host_op) /* the user's numbers: weights or constants too large for a float */
+                        return fb_fail(FB_ERR_INPUT,
+                                       "layer %s: the %s gives %s at pixel (%d, %d) of %s: its inputs, weights or "
+                                       "ranges are too large for a float (at most 3.4e38)",
+                                       g->layer->name, "op", isnan(v) ? "NaN" : "an infinity", x0 + x, y0 + r,
+                                       g->channel_names[c]);
+                    return fb_fail(FB_ERR_INTERNAL,
+                                   "layer %s: channel %s holds %s at pixel (%d, %d): an internal error, please "
+                                   "report it with the scene",
+                                   g->layer->name, g->channel_names[c], isnan(v) ? "NaN" : "an infinity", x0 + x,
+                                   y0 + r);
                 }
             }
         }

@@ -43,6 +43,7 @@ printf '{"size": [64, 32], "layers": [{"type": "sky"}]}' > gen.json
 printf '{"size": [64, 32], "layers": [{"type": "fbm"}, {"type": "fbm"}]}' > dup.json
 printf '{"size": [64, 32]}' > nolayers.json
 printf '' > zero.json
+printf '{"size": [32, 16], "layers": [{"type": "fbm", "name": "h"}, {"type": "op", "name": "big", "op": "multiply", "inputs": [1e20, 1e20]}]}' > inf.json
 printf '{"layers": [{"type": "terrain", "points": [[1e300, 0, 0], [0, 1, 1], [1, 1, 2]]}]}' > inline.json
 printf '{"size": [64, 32], "layers": [{"type": "julia", "channels": []}]}' > chan.json
 printf '{"size": [64, 32], "layers": [{"type": "ifs",\n "maps": []}]}' > empty.json
