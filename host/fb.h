@@ -75,6 +75,9 @@ void fb_memory_set_limit(uint64_t bytes); /* 0: the default */
  * False for anything else. */
 bool fb_parse_memory(const char *s, uint64_t *out);
 
+/* FB_ERR_INPUT "WHO needs about X, more than --max-memory Y" when bytes exceed fb_memory_limit(). */
+fb_result fb_memory_check(uint64_t bytes, const char *who);
+
 /* "12.3 MiB" / "1.25 GiB" */
 void fb_format_bytes(uint64_t bytes, char *out, size_t size);
 

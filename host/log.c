@@ -161,3 +161,12 @@ void fb_format_bytes(uint64_t bytes, char *out, size_t size)
     else
         snprintf(out, size, "%.1f MiB", (double)bytes / (double)(1ull << 20));
 }
+
+fb_result fb_memory_check(uint64_t bytes, const char *who)
+{
+    if (bytes <= fb_memory_limit()) return FB_OK;
+    char need[32], lim[32];
+    fb_format_bytes(bytes, need, sizeof need);
+    fb_format_bytes(fb_memory_limit(), lim, sizeof lim);
+    return fb_fail(FB_ERR_INPUT, "%s needs about %s, more than --max-memory %s", who, need, lim);
+}

@@ -539,10 +539,17 @@ static int cmd_merge(int argc, char **argv)
             else if (!parse_int_arg(val, 1, 1024, &threads))
                 bad = usage_error("--threads: expected an integer in 1..1024, found \"%s\"", val);
             i++;
+        } else if (!strcmp(a, "--max-memory")) {
+            uint64_t m = 0;
+            if (!val || !fb_parse_memory(val, &m))
+                bad =
+                    usage_error("--max-memory: expected a size such as 8G, 512M or 50%%, found \"%s\"", val ? val : "");
+            fb_memory_set_limit(m);
+            i++;
         } else if (!strcmp(a, "--quiet")) {
             quiet = true;
         } else if (!strcmp(a, "--help")) {
-            printf("usage: fractalbake merge PART.exr... -o OUT.exr [--threads N] [--quiet]\n"
+            printf("usage: fractalbake merge PART.exr... -o OUT.exr [--threads N] [--max-memory SIZE] [--quiet]\n"
                    "Joins the region files of `fractalbake render --region X,Y,W,H` into the whole image: regions\n"
                    "of one bake (same size, channels and scene) that cover it with no overlap. Or adds the N points\n"
                    "parts of `render --points-part K/N` (chaos games split by points) into the whole game.\n");

@@ -263,6 +263,11 @@ static fb_result merge_points(part *p, int n, const char *const *paths, const ch
     if (!rc && !(cl = calloc((size_t)sc.nlayers, sizeof *cl))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     /* the chaos-game layers: their hits and colour sums, added over the parts (each part read once) */
     size_t npx = (size_t)W * H;
+    int nifs = 0;
+    for (int l = 0; l < sc.nlayers; l++) nifs += sc.layers[l].kind == FB_LAYER_IFS;
+    char who[4200];
+    snprintf(who, sizeof who, "merging the points parts of %s (%d x %d, %d chaos-game layers)", paths[0], W, H, nifs);
+    if (!rc) rc = fb_memory_check((uint64_t)npx * 16 * (uint64_t)nifs, who);
     for (int l = 0; l < sc.nlayers && !rc; l++) {
         if (sc.layers[l].kind != FB_LAYER_IFS) continue;
         chaos_layer *c = &cl[ncl++];

@@ -144,6 +144,9 @@ fb_result fb_tonemap_main(int argc, char **argv, bool *quiet)
         rc = fb_fail(FB_ERR_INPUT, "%s: the stored scene's size does not match the image", in);
     /* pass 1: the reference density over the whole image */
     size_t n = (size_t)width * height;
+    char who[4200];
+    snprintf(who, sizeof who, "tonemap %s (%d x %d)", in, width, height);
+    if (!rc) rc = fb_memory_check((uint64_t)n * 4, who);
     if (!rc && !(density = malloc(n * 4))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     if (!rc) {
         void **one = calloc((size_t)nch, sizeof *one);
