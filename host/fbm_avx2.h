@@ -1,4 +1,6 @@
-/* The AVX2 reference loop for the fBm benchmark (see fbm_avx2.c). `params` is a K_FbmParams. */
+/* The hand-vectorised fBm loop (see fbm_avx2.c): the native backend's fast path for the case it
+ * implements, bit-exact with k_fbm_pixel (tests/test_avx2.c compares every pixel with the scalar
+ * kernel), and the benchmark's reference. `params` is a K_FbmParams. */
 #ifndef FB_FBM_AVX2_H
 #define FB_FBM_AVX2_H
 

@@ -40,7 +40,8 @@ struct fb_gen {
     size_t spv_size;
     uint32_t push_size; /* params_size + 8: the shader's push block is {params; uint y0; uint rows;} */
     uint32_t params_size;
-    const void *input; /* read-only data for the kernel (binding nchannels), or NULL */
+    const void *input; /* read-only data for the kernel (bound after the kernel's planes: binding
+                          fb_gen_nplanes(g)), or NULL */
     uint32_t input_size;
     uint32_t spec[8]; /* specialization constants 0..nspec-1 */
     uint32_t nspec;

@@ -1,5 +1,6 @@
 /*
- * The references of the chaos-game benchmark.
+ * The hand-vectorised chaos game, the native backend's fast path (gen/ifs.c, in step windows) and
+ * the benchmark's reference, and the textbook scalar loop the benchmark also compares with.
  *
  * fb_ifs_avx2_game: a hand-vectorised AVX2 chaos game. Eight chains per vector, two vectors in
  * flight per thread to hide latency, the map coefficients held in registers and picked with

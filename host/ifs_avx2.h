@@ -1,4 +1,5 @@
-/* The chaos-game benchmark's references (see ifs_avx2.c). `params` is a K_IfsParams, `maps` its
+/* The hand-vectorised chaos game (the native fast path and the benchmark's reference) and the
+ * textbook loop (see ifs_avx2.c). `params` is a K_IfsParams, `maps` its
  * K_IfsMap table. */
 #ifndef FB_IFS_AVX2_H
 #define FB_IFS_AVX2_H
