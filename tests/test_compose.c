@@ -76,8 +76,8 @@ static void test_values(void)
     fb_engine e;
     CHECK(fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = 2}, &e) == FB_OK);
     float *a[NCH], *b[NCH];
-    CHECK(bake_read(&e, &s, 0, "/tmp/fb-test-compose-a.exr", a));
-    CHECK(bake_read(&e, &s, 7, "/tmp/fb-test-compose-b.exr", b));
+    CHECK(bake_read(&e, &s, 0, th_path("compose-a.exr"), a));
+    CHECK(bake_read(&e, &s, 7, th_path("compose-b.exr"), b));
     size_t n = (size_t)s.width * s.height, bad = 0, same = 0, highs = 0, lows = 0;
     for (size_t i = 0; i < n; i++) {
         double g = (double)a[TER][i] + 5.0 * a[DET][i] - 2.5;
@@ -181,9 +181,9 @@ static void test_slope(void)
     CHECKF(fb_scene_parse(json, "slope", &s) == FB_OK, "%s", g_msg);
     fb_engine e;
     CHECK(fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = 2}, &e) == FB_OK);
-    CHECK(fb_bake(&e, &(fb_bake_desc){.scene = &s, .out = "/tmp/fb-test-slope.exr"}, NULL) == FB_OK);
+    CHECK(fb_bake(&e, &(fb_bake_desc){.scene = &s, .out = th_path("slope.exr")}, NULL) == FB_OK);
     exrio_reader *r = NULL;
-    CHECK(exrio_open("/tmp/fb-test-slope.exr", &r) == FB_OK);
+    CHECK(exrio_open(th_path("slope.exr"), &r) == FB_OK);
     size_t n = 40 * 30;
     float *A = malloc(n * 4), *S = malloc(n * 4), *M = malloc(n * 4);
     void *planes[16] = {0};
@@ -203,7 +203,7 @@ static void test_slope(void)
     }
     CHECKF(inside == n && bad == 0, "%zu of %zu inside, %zu wrong (want %.6f)", inside, n, bad, want);
     exrio_close(&r);
-    unlink("/tmp/fb-test-slope.exr");
+    unlink(th_path("slope.exr"));
     free(A), free(S), free(M);
     fb_engine_close(&e);
     fb_scene_fini(&s);

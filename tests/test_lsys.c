@@ -429,7 +429,7 @@ static void test_engines(fb_engine *engines, int n)
                        "\"stochastic\", \"width\": 2, \"half\": false}]}";
     const int strips[4] = {0, 7, 64, 211};
     char path[64];
-    snprintf(path, sizeof path, "/tmp/fb_test_lsys_%d.exr", (int)getpid());
+    snprintf(path, sizeof path, "%s", th_path("lsys.exr"));
     planes4 first;
     CHECKF(bake_read(&engines[0], json, 0, path, &first), "%s", g_last_error);
     for (int i = 1; i < n; i++) {

@@ -9,6 +9,7 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <unistd.h>
 
 static int th_passed, th_failed;
 
@@ -45,6 +46,33 @@ static int th_passed, th_failed;
             exit(1);                                                                                                   \
         }                                                                                                              \
     } while (0)
+
+/* A scratch folder of this test process's own (mkdtemp under $TMPDIR or /tmp), removed at exit, and
+ * paths in it: no fixed names that two tests under `ctest -j` could share. */
+static char th_dir[512];
+static void th_rmdir(void)
+{
+    char cmd[600];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", th_dir);
+    if (th_dir[0] && system(cmd) != 0) fprintf(stderr, "could not remove %s\n", th_dir);
+}
+static __attribute__((unused)) const char *th_path(const char *name)
+{
+    static char buf[8][600];
+    static int k;
+    if (!th_dir[0]) {
+        const char *tmp = getenv("TMPDIR");
+        snprintf(th_dir, sizeof th_dir, "%s/fb-test-XXXXXX", tmp && *tmp ? tmp : "/tmp");
+        if (!mkdtemp(th_dir)) {
+            fprintf(stderr, "FAIL (fatal): no scratch folder\n");
+            exit(1);
+        }
+        atexit(th_rmdir);
+    }
+    k = (k + 1) % 8;
+    snprintf(buf[k], sizeof buf[k], "%s/%s", th_dir, name);
+    return buf[k];
+}
 
 #define TEST_REPORT()                                                                                                  \
     do {                                                                                                               \

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Every bad input in one table (bad-inputs.tsv): each row runs fractalbake in a folder of fixtures and
+# Every bad input in one table (bad-inputs.tsv): each row runs fractalbake in a folder of fixtures
+# and
 # must exit with the row's code, print exactly one line on stderr matching the row's pattern, and
 # leave no file behind (the folder holds what it held before). Rows marked `vk` need a Vulkan device.
 # Usage: bad-inputs.sh PATH/TO/fractalbake [TABLE]

@@ -51,6 +51,23 @@ have_vulkan() {
   "$FB" devices 2> /dev/null | grep -q '^0 '
 }
 
+# require_vulkan: a script that compares backends is not run (77) where no Vulkan device exists
+require_vulkan() {
+  if ! have_vulkan; then
+    echo "no Vulkan device: not run"
+    exit 77
+  fi
+}
+
+# valid_exr FILE: strict header check and a full decode through the OpenEXR C++ library
+valid_exr() {
+  if exrinfo --strict "$1" > /dev/null 2>&1 && exrmaketiled "$1" "$T/tiled.exr" > /dev/null 2>&1; then ok; else bad "$1 is not a valid EXR"; fi
+  rm -f "$T/tiled.exr"
+}
+
+# png_wh FILE: a PNG's width and height
+png_wh() { printf '%d %d' "0x$(od -An -tx1 -j16 -N4 "$1" | tr -d ' ')" "0x$(od -An -tx1 -j20 -N4 "$1" | tr -d ' ')"; }
+
 # cli_finish: the closing line CTest's log shows; exit 1 on any failure
 cli_finish() {
   echo "$pass passed, $fail failed"

@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Device selection and the other commands: devices, --version, --help, bench.
+# Needs a Vulkan device (lavapipe at least): it compares backends. Usage: commands.sh PATH/TO/fractalbake
+. "$(dirname "$0")/lib.sh"
+cli_init "$@"
+require_vulkan
+S="--size 96x64 --quiet"
+
+# ---- device selection (where a Vulkan device exists) ----
+if "$FB" devices | grep -q '^0 '; then
+  "$FB" fbm $S --backend vulkan --device 0 -o d0.exr && ok || bad "--device 0 failed"
+  first=$("$FB" devices | awk 'NR == 2 {print $3}')
+  "$FB" fbm $S --backend vulkan --device "$first" -o d1.exr && ok || bad "--device $first (a name) failed"
+  "$FB" info d1.exr | grep -q "fractalbake/device .*$first" && ok || bad "device not stored in the file"
+  expect_fail 2 "out of range" d2.exr -- fbm $S --backend vulkan --device 99 -o d2.exr
+fi
+
+# ---- the other commands ----
+"$FB" devices > dev.txt && ok || bad "devices failed"
+grep -q -E "\*|no Vulkan device" dev.txt && ok || bad "devices marks no chosen device"
+"$FB" --version | grep -q "fractalbake 0" && ok || bad "--version"
+"$FB" fbm --help | grep -q -- "--octaves" && ok || bad "fbm --help lists no --octaves"
+# the terrain benchmark's JSON lines (rates are measured, not asserted: only their form and sign)
+"$FB" bench --generator terrain --json > bt.json && ok || bad "bench --generator terrain failed"
+grep -q '"generator": "delaunay", "backend": "native".*"unit": "Minserts/s", "rate": [0-9]*\.[0-9]*[1-9]' bt.json && ok || bad "bench: no delaunay line: $(cat bt.json)"
+grep -q '"generator": "refine", "backend": "native".*"unit": "Minserts/s", "rate": [0-9]*\.[0-9]*[1-9]' bt.json && ok || bad "bench: no refine line: $(cat bt.json)"
+"$FB" bench --generator constrain --size 256x256 --json > bc.json && grep -q '"generator": "constrain", "backend": "native".*"unit": "Mpix/s", "rate": [0-9]*\.[0-9]*[1-9]' bc.json && ok || bad "bench: no constrain line: $(cat bc.json)"
+
+cli_finish

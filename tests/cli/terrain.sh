@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# Terrain: survey points, centres, meshes, height fields, determinism.
+# Needs a Vulkan device (lavapipe at least): it compares backends. Usage: terrain.sh PATH/TO/fractalbake
+. "$(dirname "$0")/lib.sh"
+cli_init "$@"
+require_vulkan
+S="--size 96x64 --quiet"
+
+# ---- terrain ----
+Tr="terrain --size 64x64 --quiet"
+awk 'BEGIN { srand(4); print "# survey"; print "x,y,z"; for (i = 0; i < 300; i++) { x = rand() * 100; y = rand() * 100; printf "%.4f,%.4f,%.4f\n", x, y, 10 * sin(x / 9) + y / 10 } }' > pts.csv
+printf '0 0 1\n1 0 2\n2 0 nan\n' > nanpts.xyz
+printf '0 0 1\n1 0 2\n2 0\n' > short.xyz
+printf '0 0 1\n1 1 2\n2 2 3\n3 3 4\n' > line.xyz
+printf '# nothing here\n' > empty.xyz
+printf '1,1,3.4,1\n' > badcenters.csv
+printf '1 1 1\n1 1 1\n1 1 1\n' > same.xyz
+expect_fail 2 "nanpts.xyz:3: coordinate is not a finite number" o.exr -- $Tr --points nanpts.xyz -o o.exr
+expect_fail 2 "short.xyz:3: expected three numbers" o.exr -- $Tr --points short.xyz -o o.exr
+expect_fail 2 "empty.xyz: no points" o.exr -- $Tr --points empty.xyz -o o.exr
+expect_fail 2 "all points are collinear" o.exr -- $Tr --points line.xyz -o o.exr
+expect_fail 2 "fewer than three distinct points" o.exr -- $Tr --points same.xyz -o o.exr
+expect_fail 2 "nofile.xyz: cannot open points" o.exr -- $Tr --points nofile.xyz -o o.exr
+expect_fail 2 "badcenters.csv:1: fractal dimension D = 3.4 is outside (2, 3)" o.exr -- $Tr --points pts.csv --centers badcenters.csv -o o.exr
+expect_fail 2 "dimension" o.exr -- $Tr --points pts.csv --dimension 3 -o o.exr
+expect_fail 2 "hurst" o.exr -- $Tr --points pts.csv --hurst 1 -o o.exr
+expect_fail 2 "not both" o.exr -- $Tr --points pts.csv --hurst 0.5 --dimension 2.5 -o o.exr
+expect_fail 2 "give the survey points" o.exr -- $Tr -o o.exr
+expect_fail 2 "sample is the step of from-heightfield" o.exr -- $Tr --points pts.csv --sample 4 -o o.exr
+expect_fail 2 "insert" o.exr -- $Tr --points pts.csv --insert 1000000000 -o o.exr
+expect_fail 2 "mesh format comes from the extension" o.exr -- $Tr --points pts.csv --mesh m.stl -o o.exr
+expect_fail 2 "drop hurst" o.exr -- $Tr --points pts.csv --centers badcenters.csv --hurst 0.7 -o o.exr
+printf '0 0 5\n1 0 5\n0 1 5\n' > flat.xyz
+expect_fail 2 "give sigma" o.exr -- $Tr --points flat.xyz -o o.exr
+expect_fail 2 "nodir/m.ply: cannot create the mesh" o.exr -- $Tr --points pts.csv --mesh nodir/m.ply -o o.exr
+[ ! -e nodir/m.ply ] && ok || bad "a mesh was left behind"
+expect_fail 2 "nodir/o.exr: cannot create the output" tm.ply -- $Tr --points pts.csv --mesh tm.ply -o nodir/o.exr
+if "$FB" terrain --size 64x64 --points pts.csv --insert 5000 --mesh tm.ply -o tr.exr --preview tr.png --json > tr.json 2> err.txt; then ok; else bad "terrain failed: $(cat err.txt)"; fi
+valid_exr tr.exr
+grep -q '"input_points": 300, "duplicates": 0, "inserted": 5000' tr.json && ok || bad "terrain --json summary: $(cat tr.json)"
+"$FB" info tr.exr | grep -q "layer terrain .*Y (float)" && ok || bad "terrain layer channels"
+# the PLY: header counts match the summary, and the size is exact (24 bytes a vertex, 13 a face)
+nv=$(grep -a -m1 "element vertex" tm.ply | awk '{print $3}')
+nf=$(grep -a -m1 "element face" tm.ply | awk '{print $3}')
+hdr=$(grep -a -b -m1 "end_header" tm.ply | cut -d: -f1)
+[ "$nv" = 5300 ] && ok || bad "PLY vertices $nv, wanted 5300"
+[ "$(stat -c %s tm.ply)" = $((hdr + 11 + 24 * nv + 13 * nf)) ] && ok || bad "PLY size does not match its header"
+grep -q "\"triangles\": $nf" tr.json && ok || bad "PLY faces $nf differ from the summary"
+# determinism: threads, strip rows, backend; the seed changes the terrain
+"$FB" $Tr --points pts.csv --insert 5000 --backend native --threads 1 --strip-rows 3 -o tn1.exr
+"$FB" $Tr --points pts.csv --insert 5000 --backend native --threads 2 --strip-rows 64 -o tn2.exr
+"$FB" $Tr --points pts.csv --insert 5000 -o tv1.exr
+cmp -s tn1.exr tn2.exr && ok || bad "terrain depends on threads or strip rows"
+"$FB" compare tn1.exr tv1.exr --max-abs 0 > /dev/null && ok || bad "terrain differs between backends"
+"$FB" $Tr --points pts.csv --insert 5000 --seed 2 -o ts2.exr
+"$FB" compare tn1.exr ts2.exr > /dev/null; [ $? -eq 1 ] && ok || bad "terrain ignores the seed"
+# every refinement flag changes the terrain
+for f in "--order sweep" "--variance local" "--hurst 0.5" "--dimension 2.5" "--sigma 3" "--insert 4000" "--bounds 10,90,10,90"; do
+  "$FB" $Tr --points pts.csv --insert 5000 $f -o tf.exr
+  "$FB" compare tn1.exr tf.exr > /dev/null; [ $? -eq 1 ] && ok || bad "terrain $f changed nothing"
+done
+# a height field sampled back: the refined terrain of a sampled fbm
+"$FB" fbm --size 65x65 --quiet --float -o hf.exr
+if "$FB" $Tr --from-heightfield hf.exr --sample 8 --insert 2000 --sigma 0.01 --mesh hf.obj -o th.exr; then ok; else bad "from-heightfield failed"; fi
+[ "$(grep -c '^v ' hf.obj)" = $((81 + 2000)) ] && ok || bad "height field sampled at step 8 of 65 should give 81 points"
+expect_fail 2 "no channel fbm.X" o.exr -- $Tr --from-heightfield hf.exr:fbm.X -o o.exr
+# centres: regions of their own D
+printf 'x,y,D,sigma\n25,50,2.1,\n75,50,2.7,0.5\n' > centers.csv
+"$FB" $Tr --points pts.csv --centers centers.csv --insert 3000 -o tc.exr && ok || bad "terrain with centres failed"
+"$FB" terrain --help | grep -q -- "--from-heightfield" && ok || bad "terrain --help lists no --from-heightfield"
+
+cli_finish
