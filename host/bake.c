@@ -23,6 +23,13 @@ fb_result fb_engine_open(const fb_engine_desc *d, fb_engine *e)
     memset(e, 0, sizeof *e);
     e->threads = d->threads > 0 ? d->threads : fb_cpu_count();
     if (d->backend != FB_BACKEND_NATIVE) {
+        /* lavapipe runs compute on a pool of its own, LP_NUM_THREADS threads (by default one per
+         * core), read when the device is created: --threads bounds it too. */
+        if (d->threads > 0) {
+            char n[16];
+            snprintf(n, sizeof n, "%d", d->threads);
+            setenv("LP_NUM_THREADS", n, 1);
+        }
         vkc_desc vd = {.device = d->device, .validation = d->validation};
         fb_result rc = vkc_create(&vd, &e->vk);
         if (rc == FB_OK) {

@@ -26,4 +26,25 @@ grep -q '"generator": "delaunay", "backend": "native".*"unit": "Minserts/s", "ra
 grep -q '"generator": "refine", "backend": "native".*"unit": "Minserts/s", "rate": [0-9]*\.[0-9]*[1-9]' bt.json && ok || bad "bench: no refine line: $(cat bt.json)"
 "$FB" bench --generator constrain --size 256x256 --json > bc.json && grep -q '"generator": "constrain", "backend": "native".*"unit": "Mpix/s", "rate": [0-9]*\.[0-9]*[1-9]' bc.json && ok || bad "bench: no constrain line: $(cat bc.json)"
 
+# --threads bounds every pool: native workers, EXR encoders and lavapipe's compute threads
+threads_of() {
+  "$FB" julia --size 4096x4096 --backend "$1" --threads "$2" -o th.exr --quiet &
+  local pid=$! n
+  sleep 1.5
+  n=$(ls /proc/$pid/task | wc -l)
+  kill -INT $pid
+  wait $pid 2> /dev/null
+  echo "$n"
+}
+backends=native
+"$FB" devices | grep -q '^0 *\* *llvmpipe' && backends="native vulkan" # lavapipe's pool is what is counted
+for be in $backends; do
+  one=$(threads_of $be 1)
+  four=$(threads_of $be 4)
+  check "--backend $be: --threads 1 ran $one threads, --threads 4 ran $four: wanted 3 more" test $((four - one)) -ge 3
+  # main, one encoder; on lavapipe also one compute thread and the driver's queue and cache threads
+  check "--backend $be --threads 1: $one threads, wanted at most $([ $be = native ] && echo 2 || echo 6)" \
+    test "$one" -le "$([ $be = native ] && echo 2 || echo 6)"
+done
+
 cli_finish
