@@ -297,6 +297,7 @@ static fb_result check_finite(const layer_run *runs, int nlayers, const void *co
                     float v;
                     memcpy(&v, &row[x], 4);
                     if (isfinite(v)) continue;
+                    fb_log_context("layer %s, rows %d-%d", g->layer->name, y0, y0 + n - 1);
                     if (g->host_op) /* the user's numbers: weights or constants too large for a float */
                         return fb_fail(FB_ERR_INPUT,
                                        "layer %s: the %s gives %s at pixel (%d, %d) of %s: its inputs, weights or "
@@ -426,6 +427,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     }
 
     for (int i = 0; i < s->nlayers && !rc; i++) {
+        fb_log_context("layer %s", s->layers[i].name);
         rc = fb_gen_init(&runs[i].gen, s, &s->layers[i]);
         runs[i].gen.scalar = e->scalar;
         for (int c = 0; c < runs[i].gen.nchannels && !rc; c++)
@@ -436,7 +438,10 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     fb_bake_plan plan_local, *plan = d->plan ? d->plan : &plan_local;
     if (!rc) rc = plan_memory(e, d, runs, strip, nch, rw, plan);
     if (!rc && d->dry_run) goto out;
-    for (int i = 0; i < s->nlayers && !rc; i++) rc = run_init(e, &runs[i], strip);
+    for (int i = 0; i < s->nlayers && !rc; i++) {
+        fb_log_context("layer %s", s->layers[i].name);
+        rc = run_init(e, &runs[i], strip);
+    }
     /* Op layers find their inputs among the planes of a strip. */
     int offset[FB_MAX_LAYERS];
     const fb_gen *gens[FB_MAX_LAYERS];
@@ -463,6 +468,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     for (int j = 0; j < s->nlayers && !rc; j++) { /* in dependency order: a macro's source first */
         int i = s->order[j];
         if (!runs[i].gen.prepare) continue;
+        fb_log_context("layer %s", s->layers[i].name);
         rc = runs[i].gen.prepare(&runs[i].gen, e, d->progress);
         if (runs[i].gen.prepare_gpu_seconds > 0) gpu += runs[i].gen.prepare_gpu_seconds;
     }
@@ -525,18 +531,24 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     fb_progress_init(&prog, d->progress, "bake", "pix");
     int nstrips = (rh + strip - 1) / strip;
     bool gpu_path = e->kind == FB_BACKEND_VULKAN;
-    for (int i = 0; i < s->nlayers && gpu_path && !rc; i++)
+    for (int i = 0; i < s->nlayers && gpu_path && !rc; i++) {
+        fb_log_context("layer %s, rows %d-%d", s->layers[i].name, ry, ry + (strip < rh ? strip : rh) - 1);
         rc = run_submit(e, &runs[i], 0, ry, strip < rh ? strip : rh);
+    }
     for (int k = 0; k < nstrips && !rc; k++) {
         int y0 = ry + k * strip, n = y0 + strip <= ry + rh ? strip : ry + rh - y0;
         /* Queue the next strip before consuming this one, so the device works while we write. */
         if (gpu_path && k + 1 < nstrips) {
             int y1 = y0 + strip, n1 = y1 + strip <= ry + rh ? strip : ry + rh - y1;
-            for (int i = 0; i < s->nlayers && !rc; i++) rc = run_submit(e, &runs[i], (k + 1) % SLOTS, y1, n1);
+            for (int i = 0; i < s->nlayers && !rc; i++) {
+                fb_log_context("layer %s, rows %d-%d", s->layers[i].name, y1, y1 + n1 - 1);
+                rc = run_submit(e, &runs[i], (k + 1) % SLOTS, y1, n1);
+            }
         }
         const void *planes[FB_MAX_LAYERS * FB_GEN_MAX_CHANNELS];
         int at = 0;
         for (int i = 0; i < s->nlayers && !rc; i++) {
+            fb_log_context("layer %s, rows %d-%d", s->layers[i].name, y0, y0 + n - 1);
             if (!runs[i].gen.host_op) rc = run_collect(e, &runs[i], k % SLOTS, y0, n, planes + at, &gpu);
             at += runs[i].gen.nchannels;
         }
@@ -550,7 +562,9 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         for (int c = 0; c < at; c++) planes[c] = (const uint8_t *)planes[c] + (size_t)rx * 4; /* the region's columns */
         rc = check_finite(runs, s->nlayers, planes, y0, n, rx, rw, s->width);
         if (!rc && d->preview) rc = previews_add(&pv, runs, y0 - ry, n, planes);
+        fb_log_context("rows %d-%d", y0, y0 + n - 1);
         if (!rc && w) rc = exrio_writer_rows(w, y0 - ry, n, planes);
+        fb_log_context(NULL);
         fb_progress_update(&prog, (uint64_t)(y0 - ry + n) * rw, (uint64_t)rh * rw);
     }
     fb_progress_finish(&prog);
@@ -564,6 +578,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         if (runs[i].gen.summary[0])
             d->report(runs[i].gen.layer->name, runs[i].gen.summary, runs[i].gen.summary_json, d->user);
 out:
+    fb_log_context(NULL);
     exrio_writer_abort(&w);
     rc = fb_outputs_end(rc); /* every output renamed into place now, or none */
     for (int k = 0; k < pv.n; k++) fb_preview_destroy(&pv.p[k]);

@@ -46,6 +46,12 @@ void fb_log_set_sink(fb_log_fn fn, void *user);
 fb_result fb_fail(fb_result r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 void fb_log(int level, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
+/* Sets what the calling thread is doing, "layer sky" or "layer sky, rows 512-767" (printf-style;
+ * NULL clears it): its errors and warnings then begin with it, so that a module's message needs
+ * not say which layer or rows it was about. A message that already begins with the same subject
+ * ("layer sky: ...") gets only the rest ("layer sky, rows 512-767: ..."). */
+void fb_log_context(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+
 /* SQLite's defensive-check idiom: conditions that must never happen. In debug builds they abort;
  * in release builds they still evaluate and let the caller take the error path. */
 #ifdef NDEBUG

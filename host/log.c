@@ -53,12 +53,42 @@ void fb_log_set_sink(fb_log_fn fn, void *user)
     g_sink_user = user;
 }
 
+/* What the calling thread is doing ("layer sky, rows 512-767"), put before its errors and warnings. */
+static _Thread_local char t_context[160];
+
+void fb_log_context(const char *fmt, ...)
+{
+    if (!fmt) {
+        t_context[0] = 0;
+        return;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(t_context, sizeof t_context, fmt, ap);
+    va_end(ap);
+}
+
 static void vlog(int level, const char *fmt, va_list ap)
 {
     if (!g_sink) return;
-    char buf[2048];
+    char buf[2048], msg[2048 + 192];
     vsnprintf(buf, sizeof buf, fmt, ap);
-    g_sink(level, buf, g_sink_user);
+    const char *out = buf;
+    if (t_context[0] && level <= FB_LOG_WARN) {
+        /* A message that already names the context's subject ("layer sky: ...") keeps its words;
+         * the context adds what it lacks (the rows). */
+        size_t subject = strcspn(t_context, ",");
+        if (!strncmp(buf, t_context, subject) && (buf[subject] == ':' || buf[subject] == ',')) {
+            if (t_context[subject] && buf[subject] == ':')
+                snprintf(msg, sizeof msg, "%s%s", t_context, buf + subject);
+            else
+                snprintf(msg, sizeof msg, "%s", buf);
+        } else {
+            snprintf(msg, sizeof msg, "%s: %s", t_context, buf);
+        }
+        out = msg;
+    }
+    g_sink(level, out, g_sink_user);
 }
 
 fb_result fb_fail(fb_result r, const char *fmt, ...)
