@@ -87,6 +87,25 @@ static inline k_vec2 k_vec2_make(float x, float y)
 #define k_vec2(x, y) k_vec2_make(x, y)
 #endif
 
+/* Colours: `k_vec3` (r, g, b as x, y, z) and `k_vec4` the same way. */
+#ifdef K_GLSL
+#define k_vec3 vec3
+#define k_vec4 vec4
+#else
+typedef struct k_vec3 {
+    float x, y, z;
+} k_vec3;
+typedef struct k_vec4 {
+    float x, y, z, w;
+} k_vec4;
+static inline k_vec3 k_vec3_make(float x, float y, float z)
+{
+    k_vec3 v = {x, y, z};
+    return v;
+}
+#define k_vec3(x, y, z) k_vec3_make(x, y, z)
+#endif
+
 K_FN float k_clamp(float x, float lo, float hi)
 {
     return k_min(k_max(x, lo), hi);

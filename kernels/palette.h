@@ -51,4 +51,28 @@ K_FN float k_sky_channel(K_SkyColour c, float palette_value, float weight)
     return c.gamma != 1.0f ? k_pow(k_max(v, 0.0f), c.gamma) : v;
 }
 
+/* The two palette entries around a smooth count's position: the caller fetches entries[k_sky_i0]
+ * and entries[k_sky_i1] (a buffer in GLSL, an array in C) and hands them to k_sky_rgb. */
+K_FN uint k_sky_i0(K_SkyColour c, float n)
+{
+    return K_U(k_palette_pos(c, n));
+}
+
+K_FN uint k_sky_i1(uint i0)
+{
+    return i0 + 1u < K_PALETTE_SIZE ? i0 + 1u : i0;
+}
+
+/* A Julia sample's linear colour: the inside colour, or the palette entries e0 and e1 (at k_sky_i0
+ * and k_sky_i1) mixed at the position's fraction, weighted by the distance to the set. The one
+ * colour lookup of the shader and of the native backend. */
+K_FN k_vec3 k_sky_rgb(K_SkyColour c, uint inside, float n, k_vec4 e0, k_vec4 e1)
+{
+    if (inside != 0u) return k_vec3(c.inside_r, c.inside_g, c.inside_b);
+    float pos = k_palette_pos(c, n);
+    float f = pos - K_F(K_U(pos)), w = k_sky_weight(c, n);
+    return k_vec3(k_sky_channel(c, k_mix(e0.x, e1.x, f), w), k_sky_channel(c, k_mix(e0.y, e1.y, f), w),
+                  k_sky_channel(c, k_mix(e0.z, e1.z, f), w));
+}
+
 #endif

@@ -47,19 +47,14 @@ layout(std430, set = 0, binding = 7) readonly buffer Palette
 }
 pal;
 
-// The same table lookup as host/gen/julia.c.
+// The palette lookup of kernels/palette.h (k_sky_rgb), the entries fetched from the buffer.
 vec3 sky_colour(K_JuliaResult res)
 {
     K_SkyColour c = pal.colour;
     if ((COLOUR_FLAGS & 1u) == 0u) c.gamma = 1.0f;
     if ((COLOUR_FLAGS & 2u) == 0u) c.density = 0.0f;
-    if (res.inside != 0u) return vec3(c.inside_r, c.inside_g, c.inside_b);
-    float pos = k_palette_pos(c, res.nsmooth);
-    uint i0 = uint(pos), i1 = min(i0 + 1u, K_PALETTE_SIZE - 1u);
-    float f = pos - float(i0), w = k_sky_weight(c, res.nsmooth);
-    vec4 e0 = pal.entries[i0], e1 = pal.entries[i1];
-    return vec3(k_sky_channel(c, k_mix(e0.r, e1.r, f), w), k_sky_channel(c, k_mix(e0.g, e1.g, f), w),
-                k_sky_channel(c, k_mix(e0.b, e1.b, f), w));
+    uint i0 = k_sky_i0(c, res.nsmooth);
+    return k_sky_rgb(c, res.inside, res.nsmooth, pal.entries[i0], pal.entries[k_sky_i1(i0)]);
 }
 
 void store(uint i, K_JuliaResult res)

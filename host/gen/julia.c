@@ -57,17 +57,14 @@ static const K_JuliaParams *params(const fb_gen *g)
 }
 
 /* The same table lookup as shaders/julia.comp. */
+/* The palette lookup of kernels/palette.h (k_sky_rgb), the entries fetched from the table. */
 static void sky_colour(const julia_palette *pal, K_JuliaResult res, float rgb[3])
 {
-    const K_SkyColour c = pal->colour;
-    if (res.inside) {
-        rgb[0] = c.inside_r, rgb[1] = c.inside_g, rgb[2] = c.inside_b;
-        return;
-    }
-    float pos = k_palette_pos(c, res.nsmooth);
-    uint32_t i0 = (uint32_t)pos, i1 = i0 + 1 < K_PALETTE_SIZE ? i0 + 1 : i0;
-    float f = pos - (float)i0, w = k_sky_weight(c, res.nsmooth);
-    for (int ch = 0; ch < 3; ch++) rgb[ch] = k_sky_channel(c, k_mix(pal->entries[i0][ch], pal->entries[i1][ch], f), w);
+    uint32_t i0 = k_sky_i0(pal->colour, res.nsmooth), i1 = k_sky_i1(i0);
+    const float *a = pal->entries[i0], *b = pal->entries[i1];
+    k_vec3 v = k_sky_rgb(pal->colour, res.inside, res.nsmooth, (k_vec4){a[0], a[1], a[2], a[3]},
+                         (k_vec4){b[0], b[1], b[2], b[3]});
+    rgb[0] = v.x, rgb[1] = v.y, rgb[2] = v.z;
 }
 
 /* Kernel planes: iter, n, inside, de, R, G, B (bit k of the stored mask: plane k stored). */
