@@ -166,13 +166,11 @@ AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t 
         if (total > t1) total = t1;
         for (uint32_t t = t0; t < total; t++) {
             s = k_ifs_step(*p, s, c, t, maps);
-            n[1] += s.status != K_IFS_PLOT;
-            n[2] += s.status == K_IFS_RESTART;
-            uint32_t cell = s.status == K_IFS_PLOT ? k_ifs_cell(*p, s.x, s.y) : K_IFS_NONE;
-            if (cell == K_IFS_NONE) {
-                n[0] += s.status == K_IFS_PLOT;
-                continue;
-            }
+            uint32_t cell = k_ifs_target(*p, s);
+            n[0] += k_ifs_outside(s, cell);
+            n[1] += k_ifs_discarded(s);
+            n[2] += k_ifs_restarted(s);
+            if (cell == K_IFS_NONE) continue;
             h->hits[cell]++;
             h->sum[cell] += k_ifs_quant(s.c);
         }

@@ -185,6 +185,32 @@ K_FN uint k_ifs_cell(K_IfsParams p, float x, float y)
     return K_U(py) * p.hist_w + K_U(px);
 }
 
+/* Where one step's point goes: its histogram cell, or K_IFS_NONE when nothing is plotted (a transient
+ * or restarting step, or a point outside the frame). With the three counters below, the one splat
+ * decision of the shader, of the native backend and (as its specification) of the AVX2 loop. */
+K_FN uint k_ifs_target(K_IfsParams p, K_IfsChain s)
+{
+    return s.status == K_IFS_PLOT ? k_ifs_cell(p, s.x, s.y) : K_IFS_NONE;
+}
+
+/* 1 for a plotted point outside the frame (counted, for the density), else 0. */
+K_FN uint k_ifs_outside(K_IfsChain s, uint cell)
+{
+    return s.status == K_IFS_PLOT && cell == K_IFS_NONE ? 1u : 0u;
+}
+
+/* 1 for a step that plots nothing (transient or restart), else 0. */
+K_FN uint k_ifs_discarded(K_IfsChain s)
+{
+    return s.status != K_IFS_PLOT ? 1u : 0u;
+}
+
+/* 1 for a step that restarted its chain (escaped or NaN), else 0. */
+K_FN uint k_ifs_restarted(K_IfsChain s)
+{
+    return s.status == K_IFS_RESTART ? 1u : 0u;
+}
+
 /* The colour coordinate quantised to 0..255, the unit of the colour sums. */
 K_FN uint k_ifs_quant(float c)
 {

@@ -67,26 +67,23 @@ void main()
             s = chains.s[i];
         for (uint t = p.step0; t < end; t++) {
             s = k_ifs_step(p, s, i, t);
-            if (s.status == K_IFS_PLOT) {
-                uint cell = k_ifs_cell(p, s.x, s.y);
-                if (cell == K_IFS_NONE) {
-                    n.x++;
-                } else {
-                    uint q = k_ifs_quant(s.c);
-#ifdef FB_IFS_INT64
-                    uint64_t old = atomicAdd(hits.v[cell], (uint64_t(q) << 32) | uint64_t(1u));
-                    uint lo = uint(old), hi = uint(old >> 32);
-                    if (lo == 0xffffffffu) atomicOr(flags.v[0], 1u);
-                    if (hi + q < hi) atomicAdd(carry.v[cell], 1u); // the carry out of the colour word
-#else
-                    atomicAdd(hits.v[cell], 1u);
-                    uint old = atomicAdd(sum_lo.v[cell], q);
-                    if (old + q < old) atomicAdd(sum_hi.v[cell], 1u); // the carry out of the low word
-#endif
-                }
+            uint cell = k_ifs_target(p, s);
+            if (cell == K_IFS_NONE) { // the counters move only for points not plotted
+                n.x += k_ifs_outside(s, cell);
+                n.y += k_ifs_discarded(s);
+                n.z += k_ifs_restarted(s);
             } else {
-                n.y++;
-                if (s.status == K_IFS_RESTART) n.z++;
+                uint q = k_ifs_quant(s.c);
+#ifdef FB_IFS_INT64
+                uint64_t old = atomicAdd(hits.v[cell], (uint64_t(q) << 32) | uint64_t(1u));
+                uint lo = uint(old), hi = uint(old >> 32);
+                if (lo == 0xffffffffu) atomicOr(flags.v[0], 1u);
+                if (hi + q < hi) atomicAdd(carry.v[cell], 1u); // the carry out of the colour word
+#else
+                atomicAdd(hits.v[cell], 1u);
+                uint old = atomicAdd(sum_lo.v[cell], q);
+                if (old + q < old) atomicAdd(sum_hi.v[cell], 1u); // the carry out of the low word
+#endif
             }
         }
         chains.s[i] = s;

@@ -198,21 +198,18 @@ static void native_task(void *ctx, int task)
             K_IfsChain s = p.step0 == 0 ? k_ifs_init(p, i) : r->chains[i];
             for (uint32_t t = p.step0; t < end; t++) {
                 s = k_ifs_step(p, s, i, t, r->st->table);
-                if (s.status == K_IFS_PLOT) {
-                    uint32_t cell = k_ifs_cell(p, s.x, s.y);
-                    if (cell == K_IFS_NONE) {
-                        n[0]++;
-                    } else if (r->private_hist) {
-                        h->hits[cell]++;
-                        h->sum[cell] += k_ifs_quant(s.c);
-                    } else {
-                        atomic_fetch_add_explicit((_Atomic uint32_t *)&h->hits[cell], 1u, memory_order_relaxed);
-                        atomic_fetch_add_explicit((_Atomic uint64_t *)&h->sum[cell], k_ifs_quant(s.c),
-                                                  memory_order_relaxed);
-                    }
+                uint32_t cell = k_ifs_target(p, s);
+                n[0] += k_ifs_outside(s, cell);
+                n[1] += k_ifs_discarded(s);
+                n[2] += k_ifs_restarted(s);
+                if (cell == K_IFS_NONE) continue;
+                if (r->private_hist) {
+                    h->hits[cell]++;
+                    h->sum[cell] += k_ifs_quant(s.c);
                 } else {
-                    n[1]++;
-                    n[2] += s.status == K_IFS_RESTART;
+                    atomic_fetch_add_explicit((_Atomic uint32_t *)&h->hits[cell], 1u, memory_order_relaxed);
+                    atomic_fetch_add_explicit((_Atomic uint64_t *)&h->sum[cell], k_ifs_quant(s.c),
+                                              memory_order_relaxed);
                 }
             }
             r->chains[i] = s;
