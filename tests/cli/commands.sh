@@ -28,7 +28,8 @@ grep -q '"generator": "refine", "backend": "native".*"unit": "Minserts/s", "rate
 
 # --threads bounds every pool: native workers, EXR encoders and lavapipe's compute threads
 threads_of() { # the most threads seen in 3 s of a bake (sampled every 0.1 s), then Ctrl-C
-  "$FB" julia --size 8192x8192 --backend "$1" --threads "$2" -o th.exr --quiet &
+  # (without the validation layer, which runs threads of its own)
+  FB_VK_VALIDATION=0 "$FB" julia --size 8192x8192 --backend "$1" --threads "$2" -o th.exr --quiet &
   local pid=$! n max=0
   for _ in $(seq 30); do
     n=$(ls /proc/$pid/task 2> /dev/null | wc -l)
