@@ -351,8 +351,9 @@ static fb_result plan_memory(const fb_engine *e, const fb_bake_desc *d, const la
      * average over what the generators make) */
     if (d->out) plan->writer = (uint64_t)(2 * e->threads + 3) * 64 * (uint64_t)rw * 4 * (uint64_t)nch * 5 / 4;
     if (d->preview) {
-        int side = rw > d->scene->height ? rw : d->scene->height, scale = (side + 2047) / 2048;
-        uint64_t px = (uint64_t)((rw + scale - 1) / scale) * (uint64_t)((s->height + scale - 1) / scale);
+        int rh = d->region[2] > 0 ? d->region[3] : s->height; /* the preview shows the region */
+        int side = rw > rh ? rw : rh, scale = (side + 2047) / 2048;
+        uint64_t px = (uint64_t)((rw + scale - 1) / scale) * (uint64_t)((rh + scale - 1) / scale);
         plan->preview = px * (4 * 8 + 4) * (uint64_t)s->nlayers;
     }
     /* Layers prepare (chaos game, mesh, grid) before the writer and the preview exist: the peak is

@@ -99,10 +99,6 @@ void fb_gen_push(const fb_gen *g, int y0, int n, void *out);
 void fb_gen_groups(const fb_gen *g, int n, uint32_t out[3]);
 
 /* Frees what the generator owns. Null-safe, idempotent. */
-/* For an init about to allocate what the layer's size alone decides (before the bake's own check):
- * FB_ERR_INPUT naming the layer when `bytes` exceed fb_memory_limit(). */
-fb_result fb_gen_check_memory(const fb_gen *g, uint64_t bytes);
-
 void fb_gen_fini(fb_gen *g);
 
 /* Completes an fBm parameter block whose frequencies are set: the image size and the reciprocals the

@@ -83,19 +83,30 @@ static void drop(entry *e)
     e->state = FREE;
 }
 
+/* The folder resolved, then the name: two spellings of one target give one key. False when the
+ * folder does not resolve (errno says why). */
+static bool key_of(const char *path, char *key)
+{
+    char dir[PATH_MAX], real[PATH_MAX];
+    const char *base;
+    split(path, dir, sizeof dir, &base);
+    if (!realpath(dir, real)) return false;
+    snprintf(key, PATH_MAX, "%s/%s", strcmp(real, "/") ? real : "", base);
+    return true;
+}
+
 /* Resolves path to its key; checks the target; creates the temporary file. Called locked. */
 static fb_result reserve_locked(const char *path, const char *what, entry **out)
 {
-    char dir[PATH_MAX], real[PATH_MAX], key[PATH_MAX];
+    char dir[PATH_MAX], key[PATH_MAX];
     const char *base;
     if (!path || !*path) return fb_fail(FB_ERR_USAGE, "%s: an empty file name", what);
     if (strlen(path) >= PATH_MAX - 64) return fb_fail(FB_ERR_USAGE, "%s: path too long for the %s", path, what);
     split(path, dir, sizeof dir, &base);
     if (!*base || !strcmp(base, ".") || !strcmp(base, ".."))
         return fb_fail(FB_ERR_USAGE, "%s: names a folder, not a file for the %s", path, what);
-    if (!realpath(dir, real))
+    if (!key_of(path, key))
         return fb_fail(FB_ERR_USAGE, "%s: cannot create the %s: folder %s: %s", path, what, dir, strerror(errno));
-    snprintf(key, sizeof key, "%s/%s", strcmp(real, "/") ? real : "", base);
     entry *dup = find(key);
     if (dup)
         return fb_fail(FB_ERR_USAGE, "%s: named as the %s and as the %s: two outputs cannot share one path", path,
@@ -192,16 +203,6 @@ fb_result fb_output_reserve(const char *path, const char *what)
     return rc;
 }
 
-static bool key_of(const char *path, char *key)
-{
-    char dir[PATH_MAX], real[PATH_MAX];
-    const char *base;
-    split(path, dir, sizeof dir, &base);
-    if (!realpath(dir, real)) return false;
-    snprintf(key, PATH_MAX, "%s/%s", strcmp(real, "/") ? real : "", base);
-    return true;
-}
-
 fb_result fb_output_open(const char *path, const char *what, int *fd)
 {
     char key[PATH_MAX];
@@ -293,15 +294,6 @@ void fb_output_discard(const char *path)
     entry *e = path && key_of(path, key) ? find(key) : NULL;
     if (e) drop(e);
     pthread_mutex_unlock(&g_mu);
-}
-
-bool fb_output_pending(const char *path)
-{
-    char key[PATH_MAX];
-    pthread_mutex_lock(&g_mu);
-    bool yes = path && key_of(path, key) && find(key);
-    pthread_mutex_unlock(&g_mu);
-    return yes;
 }
 
 void fb_outputs_unlink_all(void)

@@ -57,9 +57,6 @@ fb_result fb_output_spool(const char *path, void **file);
 /* Drops one output from the transaction: its temporary file is removed. Safe on unknown paths. */
 void fb_output_discard(const char *path);
 
-/* Whether the path is reserved in the open transaction. */
-bool fb_output_pending(const char *path);
-
 /* For a signal handler: removes every temporary file of the transaction. Async-signal-safe. */
 void fb_outputs_unlink_all(void);
 

@@ -403,7 +403,9 @@ static uint64_t constrain_memory(const fb_gen *g, const struct fb_engine *e, uin
 fb_result fb_gen_constrain_init(fb_gen *g)
 {
     uint64_t hold, peak = constrain_memory(g, NULL, &hold);
-    fb_result mrc = fb_gen_check_memory(g, peak); /* the macro shape alone is 4 bytes a pixel */
+    char who[96]; /* checked before the macro shape, 4 bytes a pixel, is allocated */
+    snprintf(who, sizeof who, "layer %s", g->layer->name);
+    fb_result mrc = fb_memory_check(peak, who);
     if (mrc) return mrc;
     constrain_state *s = calloc(1, sizeof *s);
     if (!s) return fb_fail(FB_ERR_NOMEM, "out of memory");

@@ -29,17 +29,6 @@ fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer)
     return fb_fail(FB_ERR_INTERNAL, "layer %s: no generator", layer->name);
 }
 
-fb_result fb_gen_check_memory(const fb_gen *g, uint64_t bytes)
-{
-    if (bytes <= fb_memory_limit()) return FB_OK;
-    char need[32], lim[32];
-    fb_format_bytes(bytes, need, sizeof need);
-    fb_format_bytes(fb_memory_limit(), lim, sizeof lim);
-    return fb_fail(FB_ERR_INPUT,
-                   "layer %s needs about %s, more than --max-memory %s (lower its size, or raise --max-memory)",
-                   g->layer->name, need, lim);
-}
-
 void fb_gen_fini(fb_gen *g)
 {
     if (!g) return;
