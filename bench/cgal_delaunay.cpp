@@ -17,7 +17,7 @@
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using DT = CGAL::Delaunay_triangulation_2<K>;
 
-// the same generator as host/bench.c
+// the same generator as fb_bench_splitmix64 (host/core/benchkit.c)
 static uint64_t splitmix64(uint64_t &s)
 {
     uint64_t z = (s += 0x9e3779b97f4a7c15ull);

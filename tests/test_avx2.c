@@ -7,7 +7,7 @@
 #include "ifs_avx2.h"
 #include "julia_avx2.h"
 #include "bake.h"
-#include "ifs.h"
+#include "gen_ifs.h"
 #include "gen.h"
 
 #include "testhelp.h"

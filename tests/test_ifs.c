@@ -4,9 +4,9 @@
  * accounting, bit-identical histograms across thread counts and backends, the condensation row's
  * 0.75 scaling, the .ifs reader and the map-list checks, and the tone curve.
  */
-#include "../host/bake.h"
-#include "../host/gen.h"
-#include "../host/ifs.h"
+#include "bake.h"
+#include "gen.h"
+#include "gen_ifs.h"
 #include "../kernels/ifs.h"
 
 #include "testengines.h"

@@ -6,10 +6,10 @@
  * one, tiling equal to a brute-force sum over all segments, width tapering, auto-framing, and the
  * same bits on 1, 2 and 3 threads, any strip height, and lavapipe.
  */
-#include "../host/bake.h"
-#include "../host/exrio.h"
-#include "../host/gen.h"
-#include "../host/lsys.h"
+#include "bake.h"
+#include "exrio.h"
+#include "gen.h"
+#include "lsys.h"
 #include "../kernels/lsys.h"
 
 #include "testengines.h"

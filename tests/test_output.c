@@ -1,5 +1,5 @@
 /*
- * The output transaction (host/output.c): exclusive temporary files, all-or-nothing renames, nesting,
+ * The output transaction (host/base/output.c): exclusive temporary files, all-or-nothing renames, nesting,
  * refusal of non-regular targets and of one path named twice, and the signal handler's clean-up.
  */
 #include "output.h"

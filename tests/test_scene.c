@@ -6,13 +6,19 @@
 #include "../kernels/fbm.h"
 #include "../kernels/julia.h"
 #include "../kernels/palette.h"
-#include "gen.h"
+#include "gen_fbm.h"
+#include "gen_ifs.h"
+#include "gen_julia.h"
+#include "gen_terrain.h"
 #include "scene.h"
 
 #include "testhelp.h"
 
 #include <math.h>
 #include <string.h>
+
+/* A layer's parameters as its generator's type. */
+#define P(T, L) ((const T *)fb_layer_params(&(L)))
 
 static K_FbmParams params_of(const char *json, fb_scene *s, fb_gen *g)
 {
@@ -173,14 +179,15 @@ static void test_sets(void)
                           "layers.fbm.hurst=0.75",  "compression=piz"};
     CHECK(fb_scene_parse_sets(base, "t", sets, 8, &s) == FB_OK);
     CHECK(s.width == 300 && s.height == 100 && s.seed == 12 && s.compression == EXRIO_PIZ);
-    CHECK(s.layers[0].fbm.octaves == 3 && s.layers[0].fbm.hurst == 0.75); /* the later override wins */
-    CHECK(s.layers[1].julia.c[0] == -0.5 && s.layers[1].julia.c[1] == 0.25);
+    CHECK(P(fb_fbm_params, s.layers[0])->octaves == 3 &&
+          P(fb_fbm_params, s.layers[0])->hurst == 0.75); /* the later override wins */
+    CHECK(P(fb_julia_params, s.layers[1])->c[0] == -0.5 && P(fb_julia_params, s.layers[1])->c[1] == 0.25);
     CHECK(strstr(s.json, "\"ember\"") != NULL);
     fb_scene_fini(&s);
     /* a string that looks like nothing else stays a string; a nested object is created */
     const char *cond[] = {"layers.0.condensation.preset=tree", "layers.0.maps=[[0.75,0,0,0.75,0.25,0]]"};
     CHECK(fb_scene_parse_sets("{\"layers\": [{\"type\": \"ifs\"}]}", "t", cond, 2, &s) == FB_OK);
-    CHECK(s.layers[0].ifs.has_cond && s.layers[0].ifs.cond_lsys);
+    CHECK(P(fb_ifs_params, s.layers[0])->has_cond && P(fb_ifs_params, s.layers[0])->cond_lsys);
     fb_scene_fini(&s);
     const char *bad[] = {"layers.fbm.octaves=many"};
     CHECK(fb_scene_parse_sets(base, "t", bad, 1, &s) != FB_OK);
@@ -188,10 +195,11 @@ static void test_sets(void)
     CHECK(fb_scene_parse(fb_scene_default_json(), "(default)", &s) == FB_OK);
     CHECK(s.nlayers == 3 && !strcmp(s.layers[0].name, "sky") && !strcmp(s.layers[1].name, "terrain") &&
           !strcmp(s.layers[2].name, "plants"));
-    CHECK(s.layers[0].kind == FB_LAYER_JULIA && s.layers[0].julia.polar && s.layers[0].julia.turbulence > 0 &&
-          (s.layers[0].julia.alpha[0] != 0 || s.layers[0].julia.alpha[1] != 0));
-    CHECK(s.layers[1].kind == FB_LAYER_TERRAIN && s.layers[1].terrain.points_inline);
-    CHECK(s.layers[2].kind == FB_LAYER_IFS && s.layers[2].ifs.has_cond);
+    CHECK(s.layers[0].cls == &fb_gen_julia && P(fb_julia_params, s.layers[0])->polar &&
+          P(fb_julia_params, s.layers[0])->turbulence > 0 &&
+          (P(fb_julia_params, s.layers[0])->alpha[0] != 0 || P(fb_julia_params, s.layers[0])->alpha[1] != 0));
+    CHECK(s.layers[1].cls == &fb_gen_terrain && P(fb_terrain_layer_params, s.layers[1])->points_inline);
+    CHECK(s.layers[2].cls == &fb_gen_ifs && P(fb_ifs_params, s.layers[2])->has_cond);
     fb_scene_fini(&s);
 }
 

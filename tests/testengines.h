@@ -5,7 +5,7 @@
 #ifndef FB_TESTENGINES_H
 #define FB_TESTENGINES_H
 
-#include "../host/bake.h"
+#include "bake.h"
 
 #include "testhelp.h"
 

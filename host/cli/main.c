@@ -1,0 +1,693 @@
+/*
+ * fractalbake: the command line. The only place that decides what the user sees and how the
+ * process exits (0 ok, 1 comparison beyond threshold, 2 bad usage or input, 3 runtime failure).
+ */
+#include "bake.h"
+#include "bench.h"
+#include "tonemap.h"
+#include "compare.h"
+#include "exrio.h"
+#include "gen_ifs.h"
+#include "merge.h"
+#include "output.h"
+#include "scene.h"
+#include "vkc.h"
+
+#include <errno.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* The first error is the one line the user sees; warnings are shown as they come. */
+static char g_first_error[2048];
+static bool g_quiet_warnings;
+
+static void sink(int level, const char *msg, void *user)
+{
+    (void)user;
+    if (level == FB_LOG_ERROR) {
+        if (!g_first_error[0]) snprintf(g_first_error, sizeof g_first_error, "%s", msg);
+    } else if (level == FB_LOG_WARN && !g_quiet_warnings) {
+        fprintf(stderr, "fractalbake: warning: %s\n", msg);
+    }
+}
+
+static int finish(fb_result rc)
+{
+    if (rc) fprintf(stderr, "fractalbake: %s\n", g_first_error[0] ? g_first_error : fb_result_string(rc));
+    return fb_result_exit_code(rc);
+}
+
+static int usage_error(const char *fmt, const char *arg)
+{
+    fprintf(stderr, "fractalbake: ");
+    fprintf(stderr, fmt, arg);
+    fprintf(stderr, "\n");
+    return 2;
+}
+
+static void print_line(const char *line, void *user)
+{
+    fprintf(user ? (FILE *)user : stdout, "%s\n", line);
+}
+
+static const char *const k_usage =
+    "usage: fractalbake COMMAND [options]\n"
+    "\n"
+    "commands:\n"
+    "  render [SCENE.json] [-o OUT.exr]   bake every layer of a scene (no scene: the embedded default);\n"
+    "         [--from OLD.exr] [--set K=V]  or the scene stored in a file; override keys\n"
+    "%s" /* one line per generator */
+    "  tonemap IN.exr -o OUT.exr [tone]   re-run an ifs layer's tone mapping (no new chaos game)\n"
+    "  compare A.exr B.exr [thresholds]   exit 0 within thresholds, 1 beyond, 2 on error\n"
+    "  merge PARTS... -o OUT.exr          join region files (--region) or points parts (--points-part)\n"
+    "  info FILE.exr                      layers, channels, types, attributes and the stored scene\n"
+    "  devices                            the Vulkan devices found, and which one is chosen\n"
+    "  bench [--json] [--size WxH]        throughput of every generator on each backend\n"
+    "\n"
+    "common options:\n"
+    "  -o, --output FILE     output EXR (written to a temporary file, renamed when complete)\n"
+    "  --preview FILE.png    also write a PNG preview (grey, colour or hillshade, as the layer suits)\n"
+    "  --preview-layer L     the layer it shows, or `over`: every layer composited back to front by\n"
+    "                        its coverage A (the default for scenes of several layers)\n"
+    "  --backend B           vulkan | native (default: vulkan if a device exists, else native)\n"
+    "  --device D            Vulkan device index or name substring (see `fractalbake devices`)\n"
+    "  --threads N           native threads, EXR compression threads and lavapipe's own compute\n"
+    "                        threads (LP_NUM_THREADS) (default: all cores)\n"
+    "  --strip-rows N        rows computed per strip (the result does not depend on it)\n"
+    "  --region X,Y,W,H      bake only these pixels (the same as in the full bake) into a region file;\n"
+    "                        `fractalbake merge` joins region files into the whole image\n"
+    "  --points-part K/N     bake the K-th of N shares of every chaos game's points (ifs layers; the\n"
+    "                        other layers whole); `fractalbake merge` adds the N parts' hits exactly\n"
+    "  --dry-run             print the predicted peak memory per layer, bake nothing, write nothing\n"
+    "  --max-memory SIZE     stop before allocating when the predicted peak is larger (8G, 512M, 50%;\n"
+    "                        default 80% of this machine's memory)\n"
+    "  --validation          enable VK_LAYER_KHRONOS_validation (also FB_VK_VALIDATION=1)\n"
+    "  --quiet               no progress bar, no warnings, no summaries\n"
+    "  --json                layer summaries (terrain: points, time per stage) as JSON lines on stdout\n"
+    "  --help, --version\n"
+    "\n"
+    "exit codes: 0 success, 1 comparison beyond threshold, 2 bad usage or input, 3 runtime failure\n";
+
+/* The top-level help, with a line for each generator that is a command. */
+static void print_usage(FILE *f)
+{
+    char gens[2048] = "";
+    for (int i = 0; fb_gen_list[i]; i++)
+        if (fb_gen_list[i]->synopsis)
+            snprintf(gens + strlen(gens), sizeof gens - strlen(gens), "  %-34s %s\n", fb_gen_list[i]->synopsis,
+                     fb_gen_list[i]->summary);
+    const char *at = strstr(k_usage, "%s");
+    fwrite(k_usage, 1, (size_t)(at - k_usage), f);
+    fputs(gens, f);
+    fputs(at + 2, f);
+}
+
+/* Options every baking command shares. */
+typedef struct common_opts {
+    const char *out, *preview, *preview_layer, *device;
+    fb_backend backend;
+    int threads, strip_rows;
+    int region[4];      /* x, y, w, h; w == 0: none */
+    int points_part[2]; /* K, N; N == 0: none */
+    bool quiet, validation, help, json, dry_run;
+    uint64_t max_memory; /* 0: the default (80% of physical memory) */
+} common_opts;
+
+static bool parse_int_arg(const char *s, long lo, long hi, int *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (!*s || *end || errno || v < lo || v > hi) return false;
+    *out = (int)v;
+    return true;
+}
+
+static bool parse_region(const char *s, int r[4])
+{
+    long v[4];
+    int used = 0;
+    if (sscanf(s, "%ld,%ld,%ld,%ld%n", &v[0], &v[1], &v[2], &v[3], &used) != 4 || s[used]) return false;
+    for (int i = 0; i < 4; i++)
+        if (v[i] < (i < 2 ? 0 : 1) || v[i] > FB_MAX_DIM) return false;
+    for (int i = 0; i < 4; i++) r[i] = (int)v[i];
+    return true;
+}
+
+static bool parse_points_part(const char *s, int pp[2])
+{
+    int used = 0;
+    return sscanf(s, "%d/%d%n", &pp[0], &pp[1], &used) == 2 && !s[used] && pp[1] >= 1 && pp[1] <= 4096 && pp[0] >= 1 &&
+           pp[0] <= pp[1];
+}
+
+/* Consumes a common option at argv[*i]; returns 1 if consumed, 0 if not common, -1 on error (logged). */
+static int common_option(int argc, char **argv, int *i, common_opts *o)
+{
+    const char *a = argv[*i];
+    const char *val = *i + 1 < argc ? argv[*i + 1] : NULL;
+#define NEED_VALUE()                                                                                                   \
+    do {                                                                                                               \
+        if (!val) {                                                                                                    \
+            fb_fail(FB_ERR_USAGE, "%s: missing value", a);                                                             \
+            return -1;                                                                                                 \
+        }                                                                                                              \
+        (*i)++;                                                                                                        \
+    } while (0)
+    if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
+        NEED_VALUE();
+        o->out = val;
+    } else if (!strcmp(a, "--preview")) {
+        NEED_VALUE();
+        o->preview = val;
+    } else if (!strcmp(a, "--preview-layer")) {
+        NEED_VALUE();
+        o->preview_layer = val;
+    } else if (!strcmp(a, "--device")) {
+        NEED_VALUE();
+        o->device = val;
+    } else if (!strcmp(a, "--backend")) {
+        NEED_VALUE();
+        if (!strcmp(val, "vulkan"))
+            o->backend = FB_BACKEND_VULKAN;
+        else if (!strcmp(val, "native"))
+            o->backend = FB_BACKEND_NATIVE;
+        else {
+            fb_fail(FB_ERR_USAGE, "--backend: expected vulkan or native, found \"%s\"", val);
+            return -1;
+        }
+    } else if (!strcmp(a, "--threads")) {
+        NEED_VALUE();
+        if (!parse_int_arg(val, 1, 1024, &o->threads)) {
+            fb_fail(FB_ERR_USAGE, "--threads: expected an integer in 1..1024, found \"%s\"", val);
+            return -1;
+        }
+    } else if (!strcmp(a, "--strip-rows")) {
+        NEED_VALUE();
+        if (!parse_int_arg(val, 1, FB_MAX_DIM, &o->strip_rows)) {
+            fb_fail(FB_ERR_USAGE, "--strip-rows: expected an integer in 1..%d, found \"%s\"", FB_MAX_DIM, val);
+            return -1;
+        }
+    } else if (!strcmp(a, "--region")) {
+        NEED_VALUE();
+        if (!parse_region(val, o->region)) {
+            fb_fail(FB_ERR_USAGE, "--region: expected X,Y,W,H (integers, W and H >= 1), found \"%s\"", val);
+            return -1;
+        }
+    } else if (!strcmp(a, "--points-part")) {
+        NEED_VALUE();
+        if (!parse_points_part(val, o->points_part)) {
+            fb_fail(FB_ERR_USAGE, "--points-part: expected K/N with 1 <= K <= N <= 4096, found \"%s\"", val);
+            return -1;
+        }
+    } else if (!strcmp(a, "--max-memory")) {
+        NEED_VALUE();
+        if (!fb_parse_memory(val, &o->max_memory)) {
+            fb_fail(FB_ERR_USAGE, "--max-memory: expected a size such as 8G, 512M or 50%%, found \"%s\"", val);
+            return -1;
+        }
+    } else if (!strcmp(a, "--dry-run")) {
+        o->dry_run = true;
+    } else if (!strcmp(a, "--quiet")) {
+        o->quiet = true;
+    } else if (!strcmp(a, "--json")) {
+        o->json = true;
+    } else if (!strcmp(a, "--validation")) {
+        o->validation = true;
+    } else if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+        o->help = true;
+    } else {
+        return 0;
+    }
+    return 1;
+#undef NEED_VALUE
+}
+
+static void report(const char *layer, const char *summary, const char *json, void *user)
+{
+    const common_opts *o = user;
+    (void)layer;
+    if (o->json)
+        printf("%s\n", json);
+    else if (!o->quiet)
+        fprintf(stderr, "fractalbake: %s\n", summary);
+}
+
+/* --dry-run: the predicted peak memory, per layer and in all, on stdout. */
+static void print_plan(const fb_bake_plan *p, bool json)
+{
+    char a[32], b[32];
+    if (json) {
+        printf("{\"peak_bytes\": %llu, \"limit_bytes\": %llu, \"base_bytes\": %llu, \"writer_bytes\": %llu, "
+               "\"preview_bytes\": %llu, \"layers\": [",
+               (unsigned long long)p->peak, (unsigned long long)p->limit, (unsigned long long)p->base,
+               (unsigned long long)p->writer, (unsigned long long)p->preview);
+        for (int i = 0; i < p->nlayers; i++)
+            printf("%s{\"name\": \"%s\", \"bytes\": %llu}", i ? ", " : "", p->layers[i].name,
+                   (unsigned long long)p->layers[i].bytes);
+        printf("]}\n");
+        return;
+    }
+    for (int i = 0; i < p->nlayers; i++) {
+        fb_format_bytes(p->layers[i].bytes, a, sizeof a);
+        printf("layer %-20s %12s\n", p->layers[i].name, a);
+    }
+    fb_format_bytes(p->base, a, sizeof a);
+    printf("%-26s %12s\n", "process and backend", a);
+    fb_format_bytes(p->writer, a, sizeof a);
+    printf("%-26s %12s\n", "EXR writer queue", a);
+    if (p->preview) {
+        fb_format_bytes(p->preview, a, sizeof a);
+        printf("%-26s %12s\n", "preview", a);
+    }
+    fb_format_bytes(p->peak, a, sizeof a);
+    fb_format_bytes(p->limit, b, sizeof b);
+    printf("%-26s %12s  (--max-memory %s)\n", "predicted peak", a, b);
+}
+
+static fb_result bake_scene(fb_scene *scene, const common_opts *o)
+{
+    if (o->points_part[1] > 0) {
+        bool chaos = false;
+        for (int i = 0; i < scene->nlayers; i++) chaos = chaos || scene->layers[i].cls == &fb_gen_ifs;
+        if (!chaos)
+            return fb_fail(FB_ERR_USAGE, "--points-part: the scene has no chaos-game (ifs) layer to split by points");
+        if (o->region[2] > 0)
+            return fb_fail(FB_ERR_USAGE, "--points-part: not with --region (split a bake by pixels or by points)");
+        scene->points_part[0] = o->points_part[0];
+        scene->points_part[1] = o->points_part[1];
+    }
+    fb_engine e;
+    fb_result rc = fb_engine_open(
+        &(fb_engine_desc){
+            .backend = o->backend, .device = o->device, .threads = o->threads, .validation = o->validation},
+        &e);
+    if (rc) return rc;
+    fb_bake_stats st;
+    fb_bake_plan plan;
+    fb_memory_set_limit(o->max_memory);
+    rc = fb_bake(&e,
+                 &(fb_bake_desc){.scene = scene,
+                                 .out = o->out,
+                                 .preview = o->preview,
+                                 .preview_layer = o->preview_layer,
+                                 .strip_rows = o->strip_rows,
+                                 .region = {o->region[0], o->region[1], o->region[2], o->region[3]},
+                                 .progress = !o->quiet,
+                                 .plan = &plan,
+                                 .dry_run = o->dry_run,
+                                 .report = report,
+                                 .user = (void *)o},
+                 &st);
+    if (!rc && o->dry_run) {
+        print_plan(&plan, o->json);
+    } else if (!rc && !o->quiet)
+        fprintf(stderr, "fractalbake: wrote %s (%d x %d%s, %d layer%s) in %.2f s on %s\n", o->out,
+                o->region[2] ? o->region[2] : scene->width, o->region[2] ? o->region[3] : scene->height,
+                o->region[2] ? " region" : "", scene->nlayers, scene->nlayers == 1 ? "" : "s", st.seconds, e.device);
+    fb_engine_close(&e);
+    return rc;
+}
+
+static int cmd_generator(const char *kind, int argc, char **argv)
+{
+    common_opts o = {0};
+    char **gen_args = calloc((size_t)argc + 1, sizeof *gen_args);
+    int ngen = 0;
+    fb_result rc = FB_OK;
+    if (!gen_args) return finish(fb_fail(FB_ERR_NOMEM, "out of memory"));
+    for (int i = 0; i < argc; i++) {
+        int c = common_option(argc, argv, &i, &o);
+        if (c < 0) {
+            free(gen_args);
+            return finish(FB_ERR_USAGE);
+        }
+        if (c > 0) continue;
+        gen_args[ngen++] = argv[i];
+        if (strncmp(argv[i], "--", 2) == 0 && fb_scene_flag_arity(kind, argv[i] + 2) == 1 && i + 1 < argc)
+            gen_args[ngen++] = argv[++i];
+    }
+    if (o.help) {
+        printf("usage: fractalbake %s [options] -o OUT.exr [--preview OUT.png]\n\noptions (each is also a scene key of "
+               "the same name):\n",
+               kind);
+        fb_scene_print_keys(kind, print_line, stdout);
+        printf("\nand the common options of `fractalbake --help`.\n");
+        free(gen_args);
+        return 0;
+    }
+    g_quiet_warnings = o.quiet;
+    char *json = NULL;
+    fb_scene scene = {0};
+    rc = fb_scene_from_flags(kind, ngen, gen_args, &json);
+    if (!rc) rc = fb_scene_parse(json, NULL, &scene);
+    if (!rc && !o.out && !o.dry_run)
+        rc = fb_fail(FB_ERR_USAGE, "-o: missing output file (fractalbake %s ... -o OUT.exr)", kind);
+    if (!rc) rc = bake_scene(&scene, &o);
+    fb_scene_fini(&scene);
+    free(json);
+    free(gen_args);
+    return finish(rc);
+}
+
+/* The scene stored in a file baked by fractalbake, and the backend that baked it. */
+static fb_result stored_scene(const char *path, char **json, fb_backend *backend, int region[4], int points_part[2])
+{
+    exrio_reader *r = NULL;
+    fb_result rc = exrio_open(path, &r);
+    if (rc) return rc;
+    const char *text = exrio_attr_string(r, "fractalbake/scene");
+    const char *be = exrio_attr_string(r, "fractalbake/backend");
+    const char *reg = exrio_attr_string(r, "fractalbake/region");
+    const char *pp = exrio_attr_string(r, "fractalbake/points-part");
+    if (pp && !parse_points_part(pp, points_part))
+        rc = fb_fail(FB_ERR_INPUT, "%s: malformed attribute fractalbake/points-part \"%s\"", path, pp);
+    if (reg && !parse_region(reg, region))
+        rc = fb_fail(FB_ERR_INPUT, "%s: malformed attribute fractalbake/region \"%s\"", path, reg);
+    if (rc)
+        ;
+    else if (!text)
+        rc = fb_fail(FB_ERR_INPUT, "%s: no stored scene (attribute fractalbake/scene): not baked by fractalbake", path);
+    else if (!(*json = strdup(text)))
+        rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    *backend = be && !strcmp(be, "native")   ? FB_BACKEND_NATIVE
+               : be && !strcmp(be, "vulkan") ? FB_BACKEND_VULKAN
+                                             : FB_BACKEND_AUTO;
+    exrio_close(&r);
+    return rc;
+}
+
+static int cmd_render(int argc, char **argv)
+{
+    common_opts o = {0};
+    const char *scene_path = NULL, *from = NULL;
+    const char **sets = calloc((size_t)argc + 1, sizeof *sets);
+    int nsets = 0;
+    if (!sets) return finish(fb_fail(FB_ERR_NOMEM, "out of memory"));
+    for (int i = 0; i < argc; i++) {
+        int c = common_option(argc, argv, &i, &o);
+        const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
+        int bad = 0;
+        if (c < 0) {
+            free(sets);
+            return finish(FB_ERR_USAGE);
+        }
+        if (c > 0) continue;
+        if (!strcmp(a, "--set") || !strcmp(a, "--from")) {
+            if (!val) {
+                free(sets);
+                return usage_error("%s: missing value", a);
+            }
+            if (!strcmp(a, "--set"))
+                sets[nsets++] = val;
+            else if (from)
+                bad = usage_error("%s: only one --from may be given", a);
+            else
+                from = val;
+            i++;
+        } else if (a[0] == '-') {
+            bad = usage_error("%s: unknown flag for `fractalbake render`", a);
+        } else if (scene_path) {
+            bad = usage_error("%s: only one scene file may be given", a);
+        } else {
+            scene_path = a;
+        }
+        if (bad) {
+            free(sets);
+            return bad;
+        }
+    }
+    if (o.help) {
+        printf("usage: fractalbake render [SCENE.json | --from OLD.exr] [--set KEY.PATH=VALUE ...] [-o OUT.exr]\n"
+               "                          [--preview OUT.png [--preview-layer NAME|over]]\n"
+               "Bakes every layer of the scene into one EXR. Without SCENE.json, bakes the embedded default scene\n"
+               "(a night sky, a refined terrain and a plant population). --from bakes the scene stored in a file\n"
+               "fractalbake wrote, on the backend that wrote it unless --backend is given: the same pixels.\n"
+               "--set overrides one key before validation: size=2048x1024, seed=9, layers.sky.c=-0.8,0.156,\n"
+               "layers.1.insert=5000 (a list element by index or by layer name; lists comma-separated).\n"
+               "Default output: fractalbake.exr in the current folder.\n");
+        free(sets);
+        return 0;
+    }
+    g_quiet_warnings = o.quiet;
+    if (!o.out) o.out = "fractalbake.exr";
+    fb_scene scene = {0};
+    fb_result rc = FB_OK;
+    if (from && scene_path) {
+        rc = fb_fail(FB_ERR_USAGE, "--from %s: give either a scene file or --from, not both", from);
+    } else if (from) {
+        char *json = NULL, origin[1100];
+        fb_backend stored = FB_BACKEND_AUTO;
+        int region[4] = {0}, part[2] = {0};
+        rc = stored_scene(from, &json, &stored, region, part);
+        if (!rc && o.region[2] == 0 && o.points_part[1] == 0) {
+            memcpy(o.region, region, sizeof region);
+            memcpy(o.points_part, part, sizeof part);
+        }
+        snprintf(origin, sizeof origin, "%s (stored scene)", from);
+        /* A file from elsewhere must not choose what this run writes: its layers' output paths go,
+         * and --set puts back the ones the user names. */
+        char *kept = NULL, dropped[2048];
+        if (!rc) rc = fb_scene_drop_outputs(json, &kept, dropped, sizeof dropped);
+        if (!rc && dropped[0])
+            fb_log(FB_LOG_WARN, "--from %s: not writing the stored scene's outputs (%s); name them with --set", from,
+                   dropped);
+        if (!rc) rc = fb_scene_parse_sets(kept, origin, sets, nsets, &scene);
+        free(kept);
+        if (o.backend == FB_BACKEND_AUTO) o.backend = stored;
+        free(json);
+    } else if (scene_path) {
+        rc = fb_scene_load_sets(scene_path, sets, nsets, &scene);
+    } else {
+        rc = fb_scene_parse_sets(fb_scene_default_json(), "(default scene)", sets, nsets, &scene);
+    }
+    if (!rc) rc = bake_scene(&scene, &o);
+    fb_scene_fini(&scene);
+    free(sets);
+    return finish(rc);
+}
+
+static bool parse_double_arg(const char *s, double *out)
+{
+    char *end;
+    errno = 0;
+    *out = strtod(s, &end);
+    return *s && !*end && errno == 0 && *out == *out && *out > -1e300 && *out < 1e300;
+}
+
+static int cmd_compare(int argc, char **argv)
+{
+    fb_compare_desc d = {.print = print_line};
+    const char *files[2];
+    int nfiles = 0;
+    for (int i = 0; i < argc; i++) {
+        const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
+        double *dst = NULL;
+        bool *has = NULL;
+        if (!strcmp(a, "--max-abs")) dst = &d.max_abs, has = &d.has_max_abs;
+        if (!strcmp(a, "--rmse")) dst = &d.rmse, has = &d.has_rmse;
+        if (!strcmp(a, "--psnr")) dst = &d.psnr, has = &d.has_psnr;
+        if (!strcmp(a, "--fail-percent")) dst = &d.fail_percent, has = &d.has_fail_percent;
+        if (dst) {
+            if (!val) return usage_error("%s: missing value", a);
+            if (!parse_double_arg(val, dst) || *dst < 0) return usage_error("%s: expected a finite number >= 0", a);
+            *has = true;
+            i++;
+        } else if (!strcmp(a, "--layer") || !strcmp(a, "--diff") || !strcmp(a, "--diff-png")) {
+            if (!val) return usage_error("%s: missing value", a);
+            *(!strcmp(a, "--layer") ? &d.layer : !strcmp(a, "--diff") ? &d.diff : &d.diff_png) = val;
+            i++;
+        } else if (!strcmp(a, "--ignore-missing")) {
+            d.ignore_missing = true;
+        } else if (!strcmp(a, "--help")) {
+            printf("usage: fractalbake compare A.exr B.exr [--layer L] [--max-abs E] [--rmse E] [--psnr DB]\n"
+                   "                          [--fail-percent P] [--ignore-missing] [--diff OUT.exr] [--diff-png "
+                   "OUT.png]\n"
+                   "Per channel: max abs error and where, RMSE, PSNR, percent of pixels beyond --max-abs.\n"
+                   "With no threshold every pixel must be equal. --fail-percent P fails only when more than P%%\n"
+                   "of the pixels exceed --max-abs. Exit 0 within thresholds, 1 beyond, 2 on error.\n"
+                   "--diff writes |A - B| per channel; --diff-png a picture: red where any channel is beyond\n"
+                   "--max-abs (0 without it), over A's first channel in dim grey.\n");
+            return 0;
+        } else if (a[0] == '-' && a[1]) {
+            return usage_error("%s: unknown flag for `fractalbake compare`", a);
+        } else if (nfiles < 2) {
+            files[nfiles++] = a;
+        } else {
+            return usage_error("%s: compare takes exactly two files", a);
+        }
+    }
+    if (nfiles != 2) return usage_error("%s", "compare: expected two EXR files: fractalbake compare A.exr B.exr");
+    d.a = files[0];
+    d.b = files[1];
+    bool pass = false;
+    fb_result rc = fb_compare(&d, &pass);
+    if (rc) {
+        finish(rc);
+        return 2; /* compare: any error is exit 2, distinct from "beyond threshold" */
+    }
+    printf("%s\n", pass ? "result: within thresholds" : "result: BEYOND thresholds");
+    return pass ? 0 : 1;
+}
+
+static int cmd_merge(int argc, char **argv)
+{
+    const char *out = NULL;
+    const char **parts = calloc((size_t)argc + 1, sizeof *parts);
+    int n = 0, threads = 0, bad = 0;
+    bool quiet = false;
+    if (!parts) return finish(fb_fail(FB_ERR_NOMEM, "out of memory"));
+    for (int i = 0; i < argc && !bad; i++) {
+        const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--threads")) {
+            if (!val)
+                bad = usage_error("%s: missing value", a);
+            else if (strcmp(a, "--threads"))
+                out = val;
+            else if (!parse_int_arg(val, 1, 1024, &threads))
+                bad = usage_error("--threads: expected an integer in 1..1024, found \"%s\"", val);
+            i++;
+        } else if (!strcmp(a, "--max-memory")) {
+            uint64_t m = 0;
+            if (!val || !fb_parse_memory(val, &m))
+                bad =
+                    usage_error("--max-memory: expected a size such as 8G, 512M or 50%%, found \"%s\"", val ? val : "");
+            fb_memory_set_limit(m);
+            i++;
+        } else if (!strcmp(a, "--quiet")) {
+            quiet = true;
+        } else if (!strcmp(a, "--help")) {
+            printf("usage: fractalbake merge PART.exr... -o OUT.exr [--threads N] [--max-memory SIZE] [--quiet]\n"
+                   "Joins the region files of `fractalbake render --region X,Y,W,H` into the whole image: regions\n"
+                   "of one bake (same size, channels and scene) that cover it with no overlap. Or adds the N points\n"
+                   "parts of `render --points-part K/N` (chaos games split by points) into the whole game.\n");
+            free(parts);
+            return 0;
+        } else if (a[0] == '-' && a[1]) {
+            bad = usage_error("%s: unknown flag for `fractalbake merge`", a);
+        } else {
+            parts[n++] = a;
+        }
+    }
+    if (!bad && !out) bad = usage_error("%s", "merge: -o OUT.exr is required (fractalbake merge PARTS... -o OUT.exr)");
+    if (!bad && n == 0) bad = usage_error("%s", "merge: no region files given (fractalbake merge PARTS... -o OUT.exr)");
+    if (bad) {
+        free(parts);
+        return bad;
+    }
+    double t0 = fb_now();
+    fb_result rc = fb_merge(parts, n, out, threads);
+    if (!rc && !quiet)
+        fprintf(stderr, "fractalbake: merged %d part%s into %s in %.2f s\n", n, n == 1 ? "" : "s", out, fb_now() - t0);
+    free(parts);
+    return finish(rc);
+}
+
+static int cmd_info(int argc, char **argv)
+{
+    if (argc != 1 || argv[0][0] == '-') {
+        if (argc == 1 && !strcmp(argv[0], "--help")) {
+            printf("usage: fractalbake info FILE.exr\n");
+            return 0;
+        }
+        return usage_error("%s", "info: expected one EXR file: fractalbake info FILE.exr");
+    }
+    return finish(fb_info(argv[0], print_line, stdout));
+}
+
+static int cmd_devices(int argc, char **argv)
+{
+    const char *sel = NULL;
+    for (int i = 0; i < argc; i++) {
+        if (!strcmp(argv[i], "--device") && i + 1 < argc)
+            sel = argv[++i];
+        else
+            return usage_error("%s: unknown argument for `fractalbake devices` (only --device D)", argv[i]);
+    }
+    vkc_device_info *infos = NULL;
+    int n = 0;
+    fb_result rc = vkc_enumerate(sel, &infos, &n);
+    if (rc == FB_ERR_NODEVICE) {
+        printf("no Vulkan device: %s\nfractalbake will use the native backend (%d threads).\n", g_first_error,
+               fb_cpu_count());
+        return 0;
+    }
+    if (rc) return finish(rc);
+    printf("%-3s %-3s %-34s %-10s %-10s %-8s %s\n", "#", "use", "name", "type", "memory", "subgroup", "driver");
+    for (int i = 0; i < n; i++)
+        printf("%-3d %-3s %-34s %-10s %-10.0f %-8u %s\n", i, infos[i].chosen ? "*" : "", infos[i].name, infos[i].type,
+               (double)infos[i].memory / (1024.0 * 1024.0), infos[i].subgroup_size, infos[i].driver);
+    printf("(memory in MiB; * marks the device fractalbake chooses%s)\n", sel ? " for --device" : "");
+    free(infos);
+    return 0;
+}
+
+/* SIGINT, SIGTERM, SIGHUP: this run's temporary files go, no output is renamed into place, and the
+ * exit status is 128 + the signal (130 for Ctrl-C), as a shell reports a process killed by it. */
+static void on_signal(int sig)
+{
+    fb_outputs_unlink_all();
+    _exit(128 + sig);
+}
+
+static void install_signal_handlers(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigfillset(&sa.sa_mask); /* no second signal inside the handler */
+    const int sigs[] = {SIGINT, SIGTERM, SIGHUP};
+    for (size_t i = 0; i < sizeof sigs / sizeof sigs[0]; i++) sigaction(sigs[i], &sa, NULL);
+}
+
+static int run_command(int argc, char **argv);
+
+int main(int argc, char **argv)
+{
+    fb_log_set_sink(sink, NULL);
+    install_signal_handlers();
+    /* bench bakes to a scratch file again and again: each of its bakes is a transaction of its own */
+    if (argc >= 2 && !strcmp(argv[1], "bench")) return run_command(argc, argv);
+    /* Every file the command writes is renamed into place here, together, or none is (output.h).
+     * A comparison beyond threshold (1) still writes its diff pictures. */
+    fb_outputs_begin();
+    int code = run_command(argc, argv);
+    g_first_error[0] = 0;
+    fb_result rc = fb_outputs_end(code == 0 || code == 1 ? FB_OK : FB_ERR_INTERNAL);
+    if (rc && (code == 0 || code == 1)) code = finish(rc);
+    return code;
+}
+
+static int run_command(int argc, char **argv)
+{
+    if (argc < 2) {
+        print_usage(stderr);
+        return 2;
+    }
+    const char *cmd = argv[1];
+    if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {
+        print_usage(stdout);
+        return 0;
+    }
+    if (!strcmp(cmd, "--version")) {
+        printf("fractalbake %s\n", FB_VERSION);
+        return 0;
+    }
+    if (!strcmp(cmd, "render")) return cmd_render(argc - 2, argv + 2);
+    const fb_gen_class *gen = fb_gen_find(cmd);
+    if (gen && gen->synopsis) return cmd_generator(gen->name, argc - 2, argv + 2);
+    if (!strcmp(cmd, "tonemap")) {
+        bool quiet = false;
+        fb_result rc = fb_tonemap_main(argc - 2, argv + 2, &quiet);
+        return finish(rc);
+    }
+    if (!strcmp(cmd, "compare")) return cmd_compare(argc - 2, argv + 2);
+    if (!strcmp(cmd, "info")) return cmd_info(argc - 2, argv + 2);
+    if (!strcmp(cmd, "merge")) return cmd_merge(argc - 2, argv + 2);
+    if (!strcmp(cmd, "devices")) return cmd_devices(argc - 2, argv + 2);
+    if (!strcmp(cmd, "bench")) return finish(fb_bench_main(argc - 2, argv + 2));
+    return usage_error("%s: unknown command (see fractalbake --help)", cmd);
+}

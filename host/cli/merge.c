@@ -1,0 +1,385 @@
+/*
+ * fractalbake merge: joins region files (render --region) into the whole image. See merge.h.
+ *
+ * The parts must be regions of one image: the same display window, the same channels with the same
+ * types, and, when they carry one, the same stored scene. Together they must cover the image with
+ * no overlap. The output is written strip by strip (bounded memory): for each strip, every part
+ * that crosses it is decoded for those rows and copied into place. Rows pass through as 4-byte
+ * values, so half channels round-trip exactly and the merged pixels are the full bake's.
+ */
+#include "merge.h"
+
+#include "exrio.h"
+#include "gen_ifs.h"
+#include "scene.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define MERGE_STRIP 64
+
+typedef struct part {
+    exrio_reader *r;
+    int x0, y0, w, h;
+    void *planes[FB_MERGE_MAX_CHANNELS]; /* MERGE_STRIP rows of the part, in the output's channel order */
+} part;
+
+/* The attributes a fractalbake file carries, in the order bake writes them (so that a merged file
+ * is byte for byte the whole-image bake); the region attribute is left out. */
+static const char *const k_attrs[] = {"fractalbake/scene", "fractalbake/seed", "fractalbake/backend",
+                                      "fractalbake/device", "fractalbake/version"};
+
+/* The merged file, W x H: the channels given, the EXR parts (names, compressions) and the fractalbake
+ * attributes of the first input. */
+static fb_result open_output(const exrio_reader *first, const char *out, int W, int H, const exrio_channel *ch, int nch,
+                             int threads, exrio_writer **w)
+{
+    exrio_attr attrs[sizeof k_attrs / sizeof k_attrs[0]];
+    int nattrs = 0;
+    for (size_t a = 0; a < sizeof k_attrs / sizeof k_attrs[0]; a++) {
+        const char *v = exrio_attr_string(first, k_attrs[a]);
+        if (v) attrs[nattrs++] = (exrio_attr){k_attrs[a], v};
+    }
+    int nparts = exrio_nparts(first);
+    const char *part_names[EXRIO_MAX_PARTS];
+    exrio_compression part_comp[EXRIO_MAX_PARTS];
+    for (int k = 0; k < nparts; k++) {
+        int c = exrio_compression_parse(exrio_part_compression(first, k));
+        part_names[k] = exrio_part_name(first, k);
+        part_comp[k] = c < 0 ? EXRIO_ZIP : (exrio_compression)c;
+    }
+    return exrio_writer_create(&(exrio_writer_desc){.path = out,
+                                                    .width = W,
+                                                    .height = H,
+                                                    .compression = part_comp[0],
+                                                    .channels = ch,
+                                                    .nchannels = nch,
+                                                    .attrs = attrs,
+                                                    .nattrs = nattrs,
+                                                    .threads = threads,
+                                                    .nparts = nparts,
+                                                    .part_names = part_names,
+                                                    .part_compression = part_comp},
+                               w);
+}
+
+static fb_result check_parts(part *p, int n, const char *const *paths, int *W, int *H)
+{
+    int fw, fh, x, y;
+    exrio_window(p[0].r, &x, &y, &fw, &fh);
+    const char *scene0 = exrio_attr_string(p[0].r, "fractalbake/scene");
+    uint64_t area = 0;
+    for (int i = 0; i < n; i++) {
+        int pw, ph;
+        exrio_window(p[i].r, &p[i].x0, &p[i].y0, &pw, &ph);
+        p[i].w = exrio_width(p[i].r);
+        p[i].h = exrio_height(p[i].r);
+        if (pw != fw || ph != fh)
+            return fb_fail(FB_ERR_INPUT, "%s: a region of a %d x %d image, but %s is of a %d x %d image", paths[i], pw,
+                           ph, paths[0], fw, fh);
+        if (p[i].x0 < 0 || p[i].y0 < 0 || p[i].x0 + p[i].w > fw || p[i].y0 + p[i].h > fh)
+            return fb_fail(FB_ERR_INPUT, "%s: its data window reaches outside the %d x %d image", paths[i], fw, fh);
+        if (exrio_nchannels(p[i].r) != exrio_nchannels(p[0].r))
+            return fb_fail(FB_ERR_INPUT, "%s: %d channels, but %s has %d", paths[i], exrio_nchannels(p[i].r), paths[0],
+                           exrio_nchannels(p[0].r));
+        for (int c = 0; c < exrio_nchannels(p[0].r); c++) {
+            int k = exrio_find_channel(p[i].r, exrio_channel_name(p[0].r, c));
+            if (k < 0 || exrio_channel_type(p[i].r, k) != exrio_channel_type(p[0].r, c))
+                return fb_fail(FB_ERR_INPUT, "%s: channel %s is %s, unlike in %s", paths[i],
+                               exrio_channel_name(p[0].r, c), k < 0 ? "missing" : "of another type", paths[0]);
+        }
+        bool same_parts = exrio_nparts(p[i].r) == exrio_nparts(p[0].r);
+        for (int c = 0; c < exrio_nchannels(p[0].r) && same_parts; c++)
+            same_parts = exrio_channel_part(p[i].r, c) == exrio_channel_part(p[0].r, c) &&
+                         !strcmp(exrio_channel_name(p[i].r, c), exrio_channel_name(p[0].r, c));
+        if (!same_parts) return fb_fail(FB_ERR_INPUT, "%s: its EXR parts differ from those of %s", paths[i], paths[0]);
+        const char *scene = exrio_attr_string(p[i].r, "fractalbake/scene");
+        if ((scene == NULL) != (scene0 == NULL) || (scene && strcmp(scene, scene0)))
+            return fb_fail(FB_ERR_INPUT, "%s: baked from another scene than %s (attribute fractalbake/scene)", paths[i],
+                           paths[0]);
+        for (int j = 0; j < i; j++) {
+            bool apart = p[i].x0 + p[i].w <= p[j].x0 || p[j].x0 + p[j].w <= p[i].x0 || p[i].y0 + p[i].h <= p[j].y0 ||
+                         p[j].y0 + p[j].h <= p[i].y0;
+            if (!apart)
+                return fb_fail(FB_ERR_INPUT, "%s and %s overlap (regions %d,%d,%d,%d and %d,%d,%d,%d)", paths[j],
+                               paths[i], p[j].x0, p[j].y0, p[j].w, p[j].h, p[i].x0, p[i].y0, p[i].w, p[i].h);
+        }
+        area += (uint64_t)p[i].w * p[i].h;
+    }
+    if (area != (uint64_t)fw * fh)
+        return fb_fail(FB_ERR_INPUT, "the parts cover %llu of the %d x %d image's %llu pixels: a region is missing",
+                       (unsigned long long)area, fw, fh, (unsigned long long)fw * fh);
+    *W = fw;
+    *H = fh;
+    return FB_OK;
+}
+
+static fb_result merge_points(part *p, int n, const char *const *paths, const char *out, int threads);
+
+fb_result fb_merge(const char *const *paths, int n, const char *out, int threads)
+{
+    if (n < 1) return fb_fail(FB_ERR_USAGE, "merge: no parts given");
+    fb_result rc = FB_OK;
+    part *p = calloc((size_t)n, sizeof *p);
+    void *full[FB_MERGE_MAX_CHANNELS] = {0};
+    exrio_channel ch[FB_MERGE_MAX_CHANNELS];
+    exrio_writer *w = NULL;
+    int W = 0, H = 0, nch = 0;
+    if (!p) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < n && !rc; i++) rc = exrio_open(paths[i], &p[i].r);
+    int points = 0;
+    for (int i = 0; i < n && !rc; i++) points += exrio_attr_string(p[i].r, "fractalbake/points-part") != NULL;
+    if (!rc && points > 0 && points < n)
+        rc = fb_fail(FB_ERR_INPUT,
+                     "merge: %d of the %d files are points parts (--points-part), the others regions: "
+                     "merge one kind at a time",
+                     points, n);
+    if (!rc && points) {
+        rc = merge_points(p, n, paths, out, threads);
+        goto out;
+    }
+    if (!rc) rc = check_parts(p, n, paths, &W, &H);
+    if (rc) goto out;
+    nch = exrio_nchannels(p[0].r);
+    if (nch > FB_MERGE_MAX_CHANNELS) {
+        rc = fb_fail(FB_ERR_INPUT, "%s: %d channels; merge handles at most %d", paths[0], nch, FB_MERGE_MAX_CHANNELS);
+        goto out;
+    }
+    for (int c = 0; c < nch; c++) {
+        ch[c] = (exrio_channel){exrio_channel_name(p[0].r, c), exrio_channel_type(p[0].r, c),
+                                exrio_channel_part(p[0].r, c)};
+        if (!(full[c] = malloc((size_t)W * MERGE_STRIP * 4))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    }
+    for (int i = 0; i < n && !rc; i++)
+        for (int c = 0; c < nch && !rc; c++)
+            if (!(p[i].planes[c] = malloc((size_t)p[i].w * MERGE_STRIP * 4)))
+                rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (rc) goto out;
+
+    rc = open_output(p[0].r, out, W, H, ch, nch, threads, &w);
+    for (int y0 = 0; y0 < H && !rc; y0 += MERGE_STRIP) {
+        int rows = y0 + MERGE_STRIP <= H ? MERGE_STRIP : H - y0;
+        for (int i = 0; i < n && !rc; i++) {
+            int from = y0 > p[i].y0 ? y0 : p[i].y0;
+            int to = y0 + rows < p[i].y0 + p[i].h ? y0 + rows : p[i].y0 + p[i].h;
+            if (from >= to) continue;
+            /* exrio_read_rows fills planes in the part's own channel order */
+            void *own[FB_MERGE_MAX_CHANNELS] = {0};
+            for (int c = 0; c < nch; c++)
+                own[exrio_find_channel(p[i].r, exrio_channel_name(p[0].r, c))] = p[i].planes[c];
+            rc = exrio_read_rows(p[i].r, from - p[i].y0, to - from, own);
+            for (int c = 0; c < nch && !rc; c++)
+                for (int y = from; y < to; y++)
+                    memcpy((uint8_t *)full[c] + ((size_t)(y - y0) * W + p[i].x0) * 4,
+                           (uint8_t *)p[i].planes[c] + (size_t)(y - from) * p[i].w * 4, (size_t)p[i].w * 4);
+        }
+        if (!rc) rc = exrio_writer_rows(w, y0, rows, (const void *const *)full);
+    }
+    if (!rc) rc = exrio_writer_finish(&w);
+out:
+    exrio_writer_abort(&w);
+    for (int c = 0; c < FB_MERGE_MAX_CHANNELS; c++) free(full[c]);
+    for (int i = 0; i < n; i++) {
+        for (int c = 0; c < FB_MERGE_MAX_CHANNELS; c++) free(p[i].planes[c]);
+        exrio_close(&p[i].r);
+    }
+    free(p);
+    return rc;
+}
+
+/* ---- points parts: chaos-game hits added ------------------------------------------------------ */
+
+/* The outside count of layer `name` in a part's "fractalbake/ifs-outside" ("a=12;b=0"). */
+static bool outside_of(const char *attr, const char *name, uint64_t *out)
+{
+    size_t len = strlen(name);
+    for (const char *q = attr; q && *q; q = strchr(q, ';') ? strchr(q, ';') + 1 : NULL)
+        if (!strncmp(q, name, len) && q[len] == '=') {
+            char *end;
+            *out = strtoull(q + len + 1, &end, 10);
+            return end != q + len + 1;
+        }
+    return false;
+}
+
+typedef struct chaos_layer {
+    fb_gen gen;
+    int layer;             /* its index in the scene */
+    int idx[3];            /* the parts' count, colour_sum_lo and colour_sum_hi channels */
+    uint32_t *rows[3];     /* a strip of each */
+    uint64_t *hits, *sums; /* added over the parts */
+    uint64_t outside;
+} chaos_layer;
+
+static fb_result merge_points(part *p, int n, const char *const *paths, const char *out, int threads)
+{
+    fb_result rc = FB_OK;
+    int N = 0, seen[4097] = {0};
+    const char *scene_json = exrio_attr_string(p[0].r, "fractalbake/scene");
+    int W = exrio_width(p[0].r), H = exrio_height(p[0].r), nch = exrio_nchannels(p[0].r);
+    for (int i = 0; i < n; i++) {
+        int k = 0, nn = 0;
+        const char *pp = exrio_attr_string(p[i].r, "fractalbake/points-part");
+        const char *scene = exrio_attr_string(p[i].r, "fractalbake/scene");
+        if (sscanf(pp, "%d/%d", &k, &nn) != 2 || k < 1 || nn < 1 || k > nn || nn > 4096)
+            return fb_fail(FB_ERR_INPUT, "%s: malformed attribute fractalbake/points-part \"%s\"", paths[i], pp);
+        if (i == 0) N = nn;
+        if (nn != N) return fb_fail(FB_ERR_INPUT, "%s: part %d of %d, but %s is of %d", paths[i], k, nn, paths[0], N);
+        if (seen[k]++) return fb_fail(FB_ERR_INPUT, "%s: points part %d/%d is given twice", paths[i], k, N);
+        if (!scene || !scene_json || strcmp(scene, scene_json))
+            return fb_fail(FB_ERR_INPUT, "%s: baked from another scene than %s (attribute fractalbake/scene)", paths[i],
+                           paths[0]);
+        int a[4], b[4];
+        exrio_window(p[i].r, &a[0], &a[1], &a[2], &a[3]);
+        exrio_window(p[0].r, &b[0], &b[1], &b[2], &b[3]);
+        bool same =
+            !memcmp(a, b, sizeof a) && exrio_nchannels(p[i].r) == nch && exrio_nparts(p[i].r) == exrio_nparts(p[0].r);
+        for (int c = 0; c < nch && same; c++)
+            same = !strcmp(exrio_channel_name(p[i].r, c), exrio_channel_name(p[0].r, c)) &&
+                   exrio_channel_type(p[i].r, c) == exrio_channel_type(p[0].r, c) &&
+                   exrio_channel_part(p[i].r, c) == exrio_channel_part(p[0].r, c);
+        if (!same)
+            return fb_fail(FB_ERR_INPUT, "%s: its image, channels or parts differ from those of %s", paths[i],
+                           paths[0]);
+    }
+    if (n != N) {
+        for (int k = 1; k <= N; k++)
+            if (!seen[k]) return fb_fail(FB_ERR_INPUT, "merge: points part %d/%d is missing", k, N);
+    }
+    fb_scene sc = {0};
+    chaos_layer *cl = NULL;
+    int ncl = 0;
+    exrio_channel *ch = calloc((size_t)nch, sizeof *ch);
+    int *src = calloc((size_t)nch, sizeof *src); /* output channel -> part channel index, or -1 - chaos layer */
+    void **in = calloc((size_t)nch, sizeof *in), **cmp = calloc((size_t)nch, sizeof *cmp);
+    void *outp[FB_MERGE_MAX_CHANNELS] = {0};
+    exrio_writer *w = NULL;
+    int nout = 0;
+    if (!ch || !src || !in || !cmp) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (!rc) rc = fb_scene_parse(scene_json, paths[0], &sc);
+    if (!rc && (sc.width != W || sc.height != H))
+        rc = fb_fail(FB_ERR_INPUT, "%s: %d x %d, but its scene is %d x %d", paths[0], W, H, sc.width, sc.height);
+    if (!rc && !(cl = calloc((size_t)sc.nlayers, sizeof *cl))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    /* the chaos-game layers: their hits and colour sums, added over the parts (each part read once) */
+    size_t npx = (size_t)W * H;
+    int nifs = 0;
+    for (int l = 0; l < sc.nlayers; l++) nifs += sc.layers[l].cls == &fb_gen_ifs;
+    char who[4200];
+    snprintf(who, sizeof who, "merging the points parts of %s (%d x %d, %d chaos-game layers)", paths[0], W, H, nifs);
+    if (!rc) rc = fb_memory_check((uint64_t)npx * 16 * (uint64_t)nifs, who);
+    for (int l = 0; l < sc.nlayers && !rc; l++) {
+        if (sc.layers[l].cls != &fb_gen_ifs) continue;
+        chaos_layer *c = &cl[ncl++];
+        const char *name = sc.layers[l].name;
+        static const char *const suffix[3] = {"count", "colour_sum_lo", "colour_sum_hi"};
+        c->layer = l;
+        for (int j = 0; j < 3 && !rc; j++) {
+            char cn[96];
+            snprintf(cn, sizeof cn, "%s.%s", name, suffix[j]);
+            if ((c->idx[j] = exrio_find_channel(p[0].r, cn)) < 0)
+                rc = fb_fail(FB_ERR_INPUT, "%s: no channel %s (not a points part of this scene)", paths[0], cn);
+            c->rows[j] = malloc((size_t)W * MERGE_STRIP * 4);
+        }
+        c->hits = calloc(npx, sizeof *c->hits);
+        c->sums = calloc(npx, sizeof *c->sums);
+        if (!rc && (!c->hits || !c->sums || !c->rows[0] || !c->rows[1] || !c->rows[2]))
+            rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    }
+    for (int i = 0; i < n && !rc; i++) {
+        for (int k = 0; k < ncl && !rc; k++) {
+            uint64_t o = 0;
+            const char *name = sc.layers[cl[k].layer].name;
+            if (!outside_of(exrio_attr_string(p[i].r, "fractalbake/ifs-outside"), name, &o))
+                rc = fb_fail(FB_ERR_INPUT, "%s: no outside count for layer %s (attribute fractalbake/ifs-outside)",
+                             paths[i], name);
+            cl[k].outside += o;
+        }
+        for (int y0 = 0; y0 < H && !rc && ncl > 0; y0 += MERGE_STRIP) {
+            int rowsn = y0 + MERGE_STRIP <= H ? MERGE_STRIP : H - y0;
+            memset(in, 0, (size_t)nch * sizeof *in);
+            for (int k = 0; k < ncl; k++)
+                for (int j = 0; j < 3; j++) in[cl[k].idx[j]] = cl[k].rows[j];
+            rc = exrio_read_rows(p[i].r, y0, rowsn, in);
+            for (int k = 0; k < ncl && !rc; k++) {
+                chaos_layer *c = &cl[k];
+                for (size_t q = 0; q < (size_t)rowsn * W; q++) {
+                    c->hits[(size_t)y0 * W + q] += c->rows[0][q];
+                    c->sums[(size_t)y0 * W + q] += (uint64_t)c->rows[2][q] << 32 | c->rows[1][q];
+                }
+            }
+        }
+    }
+    if (in) memset(in, 0, (size_t)nch * sizeof *in); /* it pointed at the layers' rows, not its own */
+    for (int k = 0; k < ncl && !rc; k++) {
+        chaos_layer *c = &cl[k];
+        for (int j = 0; j < 3; j++) free(c->rows[j]), c->rows[j] = NULL;
+        rc = fb_gen_init(&c->gen, &sc, &sc.layers[c->layer]); /* the whole game's layer: 7 channels */
+        if (!rc) rc = fb_gen_ifs_from_sums(&c->gen, c->hits, c->sums, c->outside);
+    }
+    /* the output: every channel but the colour sums; chaos layers' from their generator */
+    for (int c = 0; c < nch && !rc; c++) {
+        const char *name = exrio_channel_name(p[0].r, c);
+        size_t len = strlen(name);
+        if (len > 14 && (!strcmp(name + len - 14, ".colour_sum_lo") || !strcmp(name + len - 14, ".colour_sum_hi")))
+            continue;
+        src[nout] = c;
+        for (int k = 0; k < ncl; k++)
+            for (int j = 0; j < cl[k].gen.nchannels; j++)
+                if (!strcmp(cl[k].gen.channel_names[j], name)) src[nout] = -1 - k;
+        ch[nout] = (exrio_channel){name, exrio_channel_type(p[0].r, c), exrio_channel_part(p[0].r, c)};
+        if (!(outp[nout] = malloc((size_t)W * MERGE_STRIP * 4))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        nout++;
+    }
+    if (!rc) rc = open_output(p[0].r, out, W, H, ch, nout, threads, &w);
+    for (int c = 0; c < nch && !rc; c++) /* buffers for every part channel: read, and compared */
+        if (!(in[c] = malloc((size_t)W * MERGE_STRIP * 4)) || !(cmp[c] = malloc((size_t)W * MERGE_STRIP * 4)))
+            rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    for (int y0 = 0; y0 < H && !rc; y0 += MERGE_STRIP) {
+        int rowsn = y0 + MERGE_STRIP <= H ? MERGE_STRIP : H - y0;
+        size_t bytes = (size_t)W * rowsn * 4;
+        rc = exrio_read_rows(p[0].r, y0, rowsn, in);
+        /* the layers that are not chaos games are the same in every part: checked, not trusted */
+        for (int i = 1; i < n && !rc; i++) {
+            rc = exrio_read_rows(p[i].r, y0, rowsn, cmp);
+            for (int o = 0; o < nout && !rc; o++)
+                if (src[o] >= 0 && memcmp(in[src[o]], cmp[src[o]], bytes))
+                    rc = fb_fail(FB_ERR_INPUT, "%s: channel %s differs from %s's near row %d: not parts of one bake",
+                                 paths[i], ch[o].name, paths[0], y0);
+        }
+        for (int k = 0; k < ncl && !rc; k++) {
+            void *planes[FB_GEN_MAX_CHANNELS] = {0};
+            for (int o = 0; o < nout; o++)
+                if (src[o] == -1 - k)
+                    for (int j = 0; j < cl[k].gen.nchannels; j++)
+                        if (!strcmp(cl[k].gen.channel_names[j], ch[o].name)) planes[j] = outp[o];
+            bool all = true;
+            for (int j = 0; j < cl[k].gen.nchannels; j++) all = all && planes[j];
+            if (!all) {
+                rc = fb_fail(FB_ERR_INPUT, "%s: layer %s lacks some of its channels", paths[0], cl[k].gen.layer->name);
+                break;
+            }
+            cl[k].gen.native_rows(&cl[k].gen, y0, rowsn, planes);
+        }
+        for (int o = 0; o < nout && !rc; o++)
+            if (src[o] >= 0) memcpy(outp[o], in[src[o]], bytes);
+        if (!rc) rc = exrio_writer_rows(w, y0, rowsn, (const void *const *)outp);
+    }
+    if (!rc) rc = exrio_writer_finish(&w);
+    exrio_writer_abort(&w);
+    for (int k = 0; k < ncl; k++) {
+        fb_gen_fini(&cl[k].gen);
+        free(cl[k].hits);
+        free(cl[k].sums);
+        for (int j = 0; j < 3; j++) free(cl[k].rows[j]);
+    }
+    for (int c = 0; c < nch && in; c++) free(in[c]), free(cmp[c]);
+    for (int o = 0; o < FB_MERGE_MAX_CHANNELS; o++) free(outp[o]);
+    free(cl);
+    free(ch);
+    free(src);
+    free(in);
+    free(cmp);
+    fb_scene_fini(&sc);
+    return rc;
+}

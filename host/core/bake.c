@@ -1,0 +1,533 @@
+/*
+ * The bake driver. See bake.h.
+ */
+#include "bake.h"
+
+#include "output.h"
+#include "preview.h"
+#include "progress.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- one layer's strip producer ------------------------------------------------------------- */
+
+#define SLOTS 2 /* strips in flight per layer on the GPU: one computing while one is consumed */
+
+typedef struct layer_run {
+    fb_gen gen;
+    /* vulkan */
+    vkc_pipeline *pipe;
+    vkc_job *job[SLOTS];
+    vkc_buffer *buf[SLOTS][FB_GEN_MAX_CHANNELS + 1]; /* the outputs, then the input (shared) */
+    /* native */
+    void *planes[FB_GEN_MAX_CHANNELS];
+} layer_run;
+
+typedef struct native_task {
+    const fb_gen *gen;
+    int y0, n, rows_per_task;
+    void *const *planes;
+} native_task;
+
+static void native_task_fn(void *ctx, int t)
+{
+    const native_task *nt = ctx;
+    int r0 = t * nt->rows_per_task;
+    int r1 = r0 + nt->rows_per_task < nt->n ? r0 + nt->rows_per_task : nt->n;
+    size_t row_bytes = (size_t)nt->gen->scene->width * 4;
+    void *planes[FB_GEN_MAX_CHANNELS];
+    for (int k = 0; k < fb_gen_nplanes(nt->gen); k++)
+        planes[k] = nt->planes[k] ? (uint8_t *)nt->planes[k] + (size_t)r0 * row_bytes : NULL;
+    nt->gen->native_rows(nt->gen, nt->y0 + r0, r1 - r0, planes);
+}
+
+static fb_result run_init(fb_engine *e, layer_run *lr, int strip_rows)
+{
+    const fb_scene *s = lr->gen.scene;
+    size_t bytes = (size_t)s->width * (size_t)strip_rows * 4;
+    fb_result rc = FB_OK;
+    const int np = fb_gen_nplanes(&lr->gen);
+    if (e->kind == FB_BACKEND_VULKAN && !lr->gen.prepare && !lr->gen.host_op) {
+        if (lr->gen.needs_float64 && !vkc_info(e->vk)->float64)
+            return fb_fail(FB_ERR_INPUT,
+                           "layer %s: precision \"double\" needs a Vulkan device with shaderFloat64, and %s has none "
+                           "(use --backend native)",
+                           lr->gen.layer->name, e->device);
+        rc = vkc_pipeline_create(e->vk,
+                                 &(vkc_pipeline_desc){.spv = lr->gen.spv,
+                                                      .spv_size = lr->gen.spv_size,
+                                                      .push_size = lr->gen.push_size,
+                                                      .buffers = (uint32_t)np + (lr->gen.input ? 1u : 0u),
+                                                      .spec = lr->gen.spec,
+                                                      .nspec = lr->gen.nspec,
+                                                      .name = lr->gen.layer->name},
+                                 &lr->pipe);
+        for (int k = 0; k < SLOTS && !rc; k++) {
+            rc = vkc_job_create(e->vk, lr->pipe, &lr->job[k]);
+            /* a plane the layer does not store is never written: a token buffer binds it */
+            for (int c = 0; c < np && !rc; c++)
+                rc = vkc_buffer_create(e->vk, fb_gen_plane_stored(&lr->gen, c) ? bytes : 16, &lr->buf[k][c]);
+        }
+        if (!rc && lr->gen.input) {
+            int at = np;
+            rc = vkc_buffer_create(e->vk, lr->gen.input_size, &lr->buf[0][at]);
+            if (!rc) rc = vkc_buffer_upload(e->vk, lr->buf[0][at], lr->gen.input, lr->gen.input_size);
+            for (int k = 1; k < SLOTS; k++) lr->buf[k][at] = lr->buf[0][at]; /* one input, both slots */
+        }
+        return rc;
+    }
+    for (int c = 0; c < np; c++)
+        if (fb_gen_plane_stored(&lr->gen, c) && !(lr->planes[c] = malloc(bytes)))
+            return fb_fail(FB_ERR_NOMEM, "out of memory for a strip of rows");
+    return FB_OK;
+}
+
+static void run_fini(fb_engine *e, layer_run *lr)
+{
+    for (int k = 1; k < SLOTS; k++) lr->buf[k][fb_gen_nplanes(&lr->gen)] = NULL; /* the shared input: freed once */
+    for (int k = 0; k < SLOTS; k++) {
+        if (e->vk) vkc_job_destroy(e->vk, &lr->job[k]);
+        for (int c = 0; c <= FB_GEN_MAX_CHANNELS; c++) {
+            if (e->vk) vkc_buffer_destroy(e->vk, &lr->buf[k][c]);
+        }
+    }
+    fb_gen_fini(&lr->gen);
+    if (e->vk) vkc_pipeline_destroy(e->vk, &lr->pipe);
+    for (int c = 0; c < FB_GEN_MAX_CHANNELS; c++) free(lr->planes[c]);
+    memset(lr->planes, 0, sizeof lr->planes);
+}
+
+static fb_result run_submit(fb_engine *e, layer_run *lr, int slot, int y0, int n)
+{
+    if (lr->gen.prepare || lr->gen.host_op) return FB_OK; /* its strips come from the host */
+    uint8_t push[FB_GEN_MAX_PUSH];
+    uint32_t groups[3];
+    fb_gen_push(&lr->gen, y0, n, push);
+    fb_gen_groups(&lr->gen, n, groups);
+    return vkc_job_submit(e->vk, lr->job[slot], lr->buf[slot],
+                          (uint32_t)fb_gen_nplanes(&lr->gen) + (lr->gen.input ? 1u : 0u), push, groups);
+}
+
+/* Makes the strip [y0, y0+n) available in planes[]: waits for the GPU job, or computes it natively. */
+static fb_result run_collect(fb_engine *e, layer_run *lr, int slot, int y0, int n, const void **planes,
+                             double *gpu_seconds)
+{
+    if (e->kind == FB_BACKEND_VULKAN && !lr->gen.prepare) {
+        double t = -1;
+        fb_result rc = vkc_job_wait(e->vk, lr->job[slot], &t);
+        if (rc) return rc;
+        if (t > 0) *gpu_seconds += t;
+        for (int c = 0; c < lr->gen.nchannels; c++)
+            planes[c] = vkc_buffer_data(lr->buf[slot][fb_gen_plane_of(&lr->gen, c)]);
+        return FB_OK;
+    }
+    int threads = e->pool ? fb_pool_threads(e->pool) : 1;
+    int per = (n + 4 * threads - 1) / (4 * threads);
+    if (per < 1) per = 1;
+    native_task nt = {.gen = &lr->gen, .y0 = y0, .n = n, .rows_per_task = per, .planes = lr->planes};
+    if (e->pool)
+        fb_pool_run(e->pool, (n + per - 1) / per, native_task_fn, &nt);
+    else /* a host-side layer (tone mapping) on the vulkan backend */
+        for (int t = 0; t < (n + per - 1) / per; t++) native_task_fn(&nt, t);
+    for (int c = 0; c < lr->gen.nchannels; c++) planes[c] = lr->planes[fb_gen_plane_of(&lr->gen, c)];
+    return FB_OK;
+}
+
+/* ---- the PNG preview ------------------------------------------------------------------------ */
+
+/* One layer's preview: its colour (3 channels from `first`) or scalar channel, and its coverage. */
+typedef struct previews {
+    int n;     /* 1: one layer shown alone; more: the over composite of every layer */
+    bool over; /* composite (also with a single layer, when asked for by name "over") */
+    fb_preview *p[FB_MAX_LAYERS];
+    int layer[FB_MAX_LAYERS], first[FB_MAX_LAYERS], alpha[FB_MAX_LAYERS]; /* channel indices; alpha -1: none */
+    int offset[FB_MAX_LAYERS]; /* the layer's first plane among all planes of a strip */
+    bool uint[FB_MAX_LAYERS];  /* a scalar uint channel (a julia layer's iter alone): shown as float */
+    float *conv;               /* its rows as float: region width x strip rows */
+    int width, stride;         /* the region's width; the planes' row stride */
+} previews;
+
+static int alpha_channel(const fb_gen *g)
+{
+    for (int c = 0; c < g->nchannels; c++) {
+        size_t len = strlen(g->channel_names[c]);
+        if (len >= 2 && !strcmp(g->channel_names[c] + len - 2, ".A")) return c;
+    }
+    return -1;
+}
+
+static fb_result previews_create(const fb_scene *s, const layer_run *runs, const char *which, const int region[4],
+                                 previews *pv)
+{
+    int only = 0;
+    pv->over = which ? !strcmp(which, "over") : s->nlayers > 1;
+    if (which && !pv->over) {
+        only = -1;
+        for (int i = 0; i < s->nlayers; i++)
+            if (!strcmp(s->layers[i].name, which)) only = i;
+        if (only < 0) {
+            char names[FB_MAX_LAYERS * 66];
+            fb_scene_layer_names(s, names, sizeof names);
+            return fb_fail(FB_ERR_USAGE, "--preview-layer: no layer named \"%s\" (layers: %s; or \"over\")", which,
+                           names);
+        }
+    }
+    int at = 0;
+    for (int i = 0; i < s->nlayers; i++) {
+        const fb_gen *g = &runs[i].gen;
+        /* op layers are data (masks, sums): shown by name, left out of the composite */
+        bool shown = pv->over ? !g->host_op || (i == s->nlayers - 1 && pv->n == 0) : i == only;
+        if (shown) {
+            int k = pv->n++;
+            pv->layer[k] = i;
+            pv->offset[k] = at;
+            pv->first[k] = g->preview_rgb >= 0 ? g->preview_rgb : g->preview_channel;
+            pv->alpha[k] = pv->over ? alpha_channel(g) : -1;
+            fb_result rc = fb_preview_create_alpha(region[2], region[3], 2048, g->preview_rgb >= 0 ? 3 : 1,
+                                                   pv->alpha[k] >= 0, &pv->p[k]);
+            if (rc) return rc;
+            fb_preview_set_row_stride(pv->p[k], s->width);
+            pv->uint[k] = g->preview_rgb < 0 && g->channel_types[g->preview_channel] == EXRIO_UINT;
+            if (g->preview_rgb < 0 && g->preview_shade[0] > 0)
+                fb_preview_set_hillshade(pv->p[k], g->preview_shade[0], g->preview_shade[1]);
+        }
+        at += g->nchannels;
+    }
+    pv->width = region[2];
+    pv->stride = s->width;
+    return FB_OK;
+}
+
+/* planes: the region's first column of each strip row, rows the image width apart; y0 in the region */
+static fb_result previews_add(previews *pv, const layer_run *runs, int y0, int n, const void *const *planes)
+{
+    for (int k = 0; k < pv->n; k++) {
+        const fb_gen *g = &runs[pv->layer[k]].gen;
+        const void *const *lp = planes + pv->offset[k];
+        int f = pv->first[k], three = g->preview_rgb >= 0;
+        const float *rows[4] = {lp[f], lp[three ? f + 1 : f], lp[three ? f + 2 : f], NULL};
+        if (pv->alpha[k] >= 0) rows[three ? 3 : 1] = lp[pv->alpha[k]];
+        if (pv->uint[k]) { /* converted into rows of the same stride */
+            float *conv = realloc(pv->conv, (size_t)n * pv->stride * sizeof *conv);
+            if (!conv) return fb_fail(FB_ERR_NOMEM, "out of memory for the preview");
+            pv->conv = conv;
+            const uint32_t *src = lp[f];
+            for (int r = 0; r < n; r++)
+                for (int x = 0; x < pv->width; x++)
+                    conv[(size_t)r * pv->stride + x] = (float)src[(size_t)r * pv->stride + x];
+            rows[0] = conv;
+        }
+        fb_preview_add_rows(pv->p[k], y0, n, rows);
+    }
+    return FB_OK;
+}
+
+static fb_result previews_write(const previews *pv, const char *path)
+{
+    if (pv->over) return fb_preview_write_over((const fb_preview *const *)pv->p, pv->n, path);
+    return fb_preview_write_png(pv->p[0], path, "preview");
+}
+
+/* ---- the bake ------------------------------------------------------------------------------- */
+
+/* No stored float or half channel may hold a NaN or an infinity: every generator's inputs are checked
+ * so that none can, and this cheap pass over each strip (one compare per value, next to generating
+ * and compressing it) turns a breach into an error instead of a silently broken file. */
+static fb_result check_finite(const layer_run *runs, int nlayers, const void *const *planes, int y0, int n, int x0,
+                              int w, int stride)
+{
+    int at = 0;
+    for (int i = 0; i < nlayers; i++) {
+        const fb_gen *g = &runs[i].gen;
+        for (int c = 0; c < g->nchannels; c++, at++) {
+            if (g->channel_types[c] == EXRIO_UINT) continue;
+            for (int r = 0; r < n; r++) {
+                const uint32_t *row = (const uint32_t *)planes[at] + (size_t)r * stride;
+                uint32_t any = 0;
+                for (int x = 0; x < w; x++) any |= (row[x] & 0x7f800000u) == 0x7f800000u;
+                if (!any) continue;
+                for (int x = 0; x < w; x++) {
+                    float v;
+                    memcpy(&v, &row[x], 4);
+                    if (isfinite(v)) continue;
+                    fb_log_context("layer %s, rows %d-%d", g->layer->name, y0, y0 + n - 1);
+                    if (g->host_op) /* the user's numbers: weights or constants too large for a float */
+                        return fb_fail(FB_ERR_INPUT,
+                                       "layer %s: the %s gives %s at pixel (%d, %d) of %s: its inputs, weights or "
+                                       "ranges are too large for a float (at most 3.4e38)",
+                                       g->layer->name, "op", isnan(v) ? "NaN" : "an infinity", x0 + x, y0 + r,
+                                       g->channel_names[c]);
+                    return fb_fail(FB_ERR_INTERNAL,
+                                   "layer %s: channel %s holds %s at pixel (%d, %d): an internal error, please "
+                                   "report it with the scene",
+                                   g->layer->name, g->channel_names[c], isnan(v) ? "NaN" : "an infinity", x0 + x,
+                                   y0 + r);
+                }
+            }
+        }
+    }
+    return FB_OK;
+}
+
+/* The bake's predicted peak: the process and its backend, every layer's own arrays (the largest
+ * transient one at a time, as layers prepare one after another, on top of what every layer keeps),
+ * its strip buffers (two slots a layer on Vulkan), then either the preparing or the writer's queue
+ * (2 x threads + 3 batches of 64 rows, raw and compressed) and the preview's sums. Pages a layer
+ * allocates but never touches (a chaos game's empty histogram cells) count: it is a bound. Fails naming the largest
+ * layer when the peak is beyond fb_memory_limit(). */
+static fb_result plan_memory(const fb_engine *e, const fb_bake_desc *d, const layer_run *runs, int strip, int nch,
+                             int rw, fb_bake_plan *plan)
+{
+    const fb_scene *s = d->scene;
+    memset(plan, 0, sizeof *plan);
+    plan->nlayers = s->nlayers;
+    plan->limit = fb_memory_limit();
+    plan->base = e->kind == FB_BACKEND_VULKAN ? (uint64_t)96 << 20 : (uint64_t)12 << 20;
+    uint64_t hold_sum = 0, extra_max = 0, strips_sum = 0;
+    int largest = 0;
+    for (int i = 0; i < s->nlayers; i++) {
+        const fb_gen *g = &runs[i].gen;
+        uint64_t hold = 0, peak = g->memory ? g->memory(g, e, &hold) : 0;
+        bool gpu = e->kind == FB_BACKEND_VULKAN && !g->prepare && !g->host_op;
+        uint64_t planes = 0;
+        for (int c = 0; c < fb_gen_nplanes(g); c++) planes += fb_gen_plane_stored(g, c);
+        uint64_t strips = (gpu ? SLOTS : 1) * planes * (uint64_t)s->width * (uint64_t)strip * 4 +
+                          (gpu && g->input ? g->input_size : 0);
+        hold_sum += hold;
+        strips_sum += strips;
+        if (peak - hold > extra_max) extra_max = peak - hold;
+        snprintf(plan->layers[i].name, sizeof plan->layers[i].name, "%s", s->layers[i].name);
+        plan->layers[i].bytes = peak + strips;
+        if (plan->layers[i].bytes > plan->layers[largest].bytes) largest = i;
+    }
+    /* the raw rows of every batch in flight, and their compressed chunks (a quarter of that, on
+     * average over what the generators make) */
+    if (d->out) plan->writer = (uint64_t)(2 * e->threads + 3) * 64 * (uint64_t)rw * 4 * (uint64_t)nch * 5 / 4;
+    if (d->preview) {
+        int rh = d->region[2] > 0 ? d->region[3] : s->height; /* the preview shows the region */
+        int side = rw > rh ? rw : rh, scale = (side + 2047) / 2048;
+        uint64_t px = (uint64_t)((rw + scale - 1) / scale) * (uint64_t)((rh + scale - 1) / scale);
+        plan->preview = px * (4 * 8 + 4) * (uint64_t)s->nlayers;
+    }
+    /* Layers prepare (chaos game, mesh, grid) before the writer and the preview exist: the peak is
+     * the worse of the two phases. */
+    uint64_t prepare = extra_max, strips = plan->writer + plan->preview;
+    plan->peak = plan->base + strips_sum + hold_sum + (prepare > strips ? prepare : strips);
+    if (plan->peak > plan->limit) {
+        char need[32], lim[32], big[32];
+        fb_format_bytes(plan->peak, need, sizeof need);
+        fb_format_bytes(plan->limit, lim, sizeof lim);
+        fb_format_bytes(plan->layers[largest].bytes, big, sizeof big);
+        return fb_fail(FB_ERR_INPUT,
+                       "the bake needs about %s, more than --max-memory %s; layer %s alone needs %s (lower its size, "
+                       "points or insertions, or raise --max-memory)",
+                       need, lim, plan->layers[largest].name, big);
+    }
+    return FB_OK;
+}
+
+static int auto_strip_rows(const fb_scene *s)
+{
+    /* About 4 MiB per channel buffer: well inside lavapipe's 128 MiB maxStorageBufferRange and small
+     * enough that the writer's queue keeps memory bounded at any image size. */
+    long rows = (1L << 20) / s->width;
+    if (rows >= 64) rows -= rows % 64;
+    if (rows < 1) rows = 1;
+    if (rows > s->height) rows = s->height;
+    return (int)rows;
+}
+
+fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
+{
+    const fb_scene *s = d->scene;
+    fb_result rc = FB_OK;
+    layer_run *runs = calloc((size_t)s->nlayers, sizeof *runs);
+    exrio_channel channels[FB_MAX_LAYERS * FB_GEN_MAX_CHANNELS];
+    int nch = 0;
+    exrio_writer *w = NULL;
+    previews pv = {0};
+    double t0 = fb_now(), gpu = 0;
+    if (!runs) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    int rx = 0, ry = 0, rw = s->width, rh = s->height;
+    fb_outputs_begin();
+    /* Every output is reserved before any work: a bad target (named twice, a directory, a device
+     * node, a folder that does not exist) fails now, not after minutes of computing. A dry run
+     * writes nothing. */
+    if (d->out && !d->dry_run) rc = fb_output_reserve(d->out, "output");
+    if (!rc && d->preview && !d->dry_run) rc = fb_output_reserve(d->preview, "preview");
+    const char *side[FB_MAX_OUTPUTS], *side_what[FB_MAX_OUTPUTS];
+    int nside = d->dry_run ? 0 : fb_scene_outputs(s, side, side_what, FB_MAX_OUTPUTS);
+    for (int i = 0; i < nside && !rc; i++) rc = fb_output_reserve(side[i], side_what[i]);
+    if (rc) goto out;
+
+    if (d->region[2] > 0) {
+        rx = d->region[0], ry = d->region[1], rw = d->region[2], rh = d->region[3];
+        if (rx < 0 || ry < 0 || rh <= 0 || (long)rx + rw > s->width || (long)ry + rh > s->height) {
+            rc = fb_fail(FB_ERR_USAGE, "--region %d,%d,%d,%d: not inside the %d x %d image", rx, ry, rw, rh, s->width,
+                         s->height);
+            goto out;
+        }
+    }
+    int region[4] = {rx, ry, rw, rh};
+    int strip = d->strip_rows > 0 ? d->strip_rows : auto_strip_rows(s);
+    if (strip > rh) strip = rh;
+    if (e->kind == FB_BACKEND_VULKAN && (uint64_t)strip * s->width * 4 > vkc_info(e->vk)->max_storage_buffer_range) {
+        strip = (int)(vkc_info(e->vk)->max_storage_buffer_range / ((uint64_t)s->width * 4));
+        if (strip < 1) {
+            rc =
+                fb_fail(FB_ERR_INPUT, "image width %d is too wide for one storage buffer row on this device", s->width);
+            goto out;
+        }
+    }
+
+    for (int i = 0; i < s->nlayers && !rc; i++) {
+        fb_log_context("layer %s", s->layers[i].name);
+        rc = fb_gen_init(&runs[i].gen, s, &s->layers[i]);
+        runs[i].gen.scalar = e->scalar;
+        for (int c = 0; c < runs[i].gen.nchannels && !rc; c++)
+            channels[nch++] =
+                (exrio_channel){runs[i].gen.channel_names[c], runs[i].gen.channel_types[c], s->multipart ? i : 0};
+    }
+    /* Memory is predicted, not discovered: the whole bake's peak, before anything large exists. */
+    fb_bake_plan plan_local, *plan = d->plan ? d->plan : &plan_local;
+    if (!rc) rc = plan_memory(e, d, runs, strip, nch, rw, plan);
+    if (!rc && d->dry_run) goto out;
+    for (int i = 0; i < s->nlayers && !rc; i++) {
+        fb_log_context("layer %s", s->layers[i].name);
+        rc = run_init(e, &runs[i], strip);
+    }
+    /* Layers that use others (op inputs, a macro shape) find them among every layer's generator. */
+    int offset[FB_MAX_LAYERS];
+    const fb_gen *gens[FB_MAX_LAYERS];
+    for (int i = 0, at = 0; i < s->nlayers; at += runs[i].gen.nchannels, i++) offset[i] = at, gens[i] = &runs[i].gen;
+    for (int i = 0; i < s->nlayers && !rc; i++)
+        if (runs[i].gen.resolve) rc = runs[i].gen.resolve(&runs[i].gen, gens, offset);
+    /* Layers computed as a whole (the chaos game) run before the first strip. */
+    for (int j = 0; j < s->nlayers && !rc; j++) { /* in dependency order: a macro's source first */
+        int i = s->order[j];
+        if (!runs[i].gen.prepare) continue;
+        fb_log_context("layer %s", s->layers[i].name);
+        rc = runs[i].gen.prepare(&runs[i].gen, e, d->progress);
+        if (runs[i].gen.prepare_gpu_seconds > 0) gpu += runs[i].gen.prepare_gpu_seconds;
+    }
+    if (rc) goto out;
+
+    if (d->out) {
+        char seed[16], reg[64];
+        snprintf(seed, sizeof seed, "%u", s->seed);
+        snprintf(reg, sizeof reg, "%d,%d,%d,%d", rx, ry, rw, rh);
+        bool partial = d->region[2] > 0;
+        exrio_attr attrs[8] = {
+            {"fractalbake/scene", s->json},
+            {"fractalbake/seed", seed},
+            {"fractalbake/backend", fb_backend_name(e->kind)},
+            {"fractalbake/device", e->device},
+            {"fractalbake/version", FB_VERSION},
+        };
+        int nattrs = 5;
+        if (partial) attrs[nattrs++] = (exrio_attr){"fractalbake/region", reg};
+        /* a points part: which, and each chaos-game layer's points outside the frame (merge needs
+         * them for the density) */
+        char part[32], outside[FB_MAX_LAYERS * 90] = "";
+        if (s->points_part[1] > 0) {
+            snprintf(part, sizeof part, "%d/%d", s->points_part[0], s->points_part[1]);
+            for (int i = 0; i < s->nlayers; i++)
+                if (runs[i].gen.points_split)
+                    snprintf(outside + strlen(outside), sizeof outside - strlen(outside), "%s%s=%llu",
+                             outside[0] ? ";" : "", s->layers[i].name, (unsigned long long)runs[i].gen.points_outside);
+            attrs[nattrs++] = (exrio_attr){"fractalbake/points-part", part};
+            attrs[nattrs++] = (exrio_attr){"fractalbake/ifs-outside", outside};
+        }
+        const char *part_names[FB_MAX_LAYERS];
+        exrio_compression part_comp[FB_MAX_LAYERS];
+        for (int i = 0; i < s->nlayers; i++) part_names[i] = s->layers[i].name, part_comp[i] = s->layers[i].compression;
+        rc = exrio_writer_create(&(exrio_writer_desc){.path = d->out,
+                                                      .width = rw,
+                                                      .height = rh,
+                                                      .x0 = rx,
+                                                      .y0 = ry,
+                                                      .full_width = partial ? s->width : 0,
+                                                      .full_height = partial ? s->height : 0,
+                                                      .row_stride = s->width,
+                                                      .nparts = s->multipart ? s->nlayers : 1,
+                                                      .part_names = s->multipart ? part_names : NULL,
+                                                      .part_compression = s->multipart ? part_comp : NULL,
+                                                      .compression = s->compression,
+                                                      .channels = channels,
+                                                      .nchannels = nch,
+                                                      .attrs = attrs,
+                                                      .nattrs = nattrs,
+                                                      .threads = e->threads},
+                                 &w);
+        if (rc) goto out;
+    }
+    if (d->preview && (rc = previews_create(s, runs, d->preview_layer, region, &pv))) goto out;
+
+    fb_progress prog;
+    fb_progress_init(&prog, d->progress, "bake", "pix");
+    int nstrips = (rh + strip - 1) / strip;
+    bool gpu_path = e->kind == FB_BACKEND_VULKAN;
+    for (int i = 0; i < s->nlayers && gpu_path && !rc; i++) {
+        fb_log_context("layer %s, rows %d-%d", s->layers[i].name, ry, ry + (strip < rh ? strip : rh) - 1);
+        rc = run_submit(e, &runs[i], 0, ry, strip < rh ? strip : rh);
+    }
+    for (int k = 0; k < nstrips && !rc; k++) {
+        int y0 = ry + k * strip, n = y0 + strip <= ry + rh ? strip : ry + rh - y0;
+        /* Queue the next strip before consuming this one, so the device works while we write. */
+        if (gpu_path && k + 1 < nstrips) {
+            int y1 = y0 + strip, n1 = y1 + strip <= ry + rh ? strip : ry + rh - y1;
+            for (int i = 0; i < s->nlayers && !rc; i++) {
+                fb_log_context("layer %s, rows %d-%d", s->layers[i].name, y1, y1 + n1 - 1);
+                rc = run_submit(e, &runs[i], (k + 1) % SLOTS, y1, n1);
+            }
+        }
+        const void *planes[FB_MAX_LAYERS * FB_GEN_MAX_CHANNELS];
+        int at = 0;
+        for (int i = 0; i < s->nlayers && !rc; i++) {
+            fb_log_context("layer %s, rows %d-%d", s->layers[i].name, y0, y0 + n - 1);
+            if (!runs[i].gen.host_op) rc = run_collect(e, &runs[i], k % SLOTS, y0, n, planes + at, &gpu);
+            at += runs[i].gen.nchannels;
+        }
+        for (int j = 0; j < s->nlayers && !rc; j++) { /* op layers, after the layers they use */
+            layer_run *lr = &runs[s->order[j]];
+            if (!lr->gen.host_op) continue;
+            lr->gen.host_rows(&lr->gen, (size_t)n * s->width, planes, lr->planes[0]);
+            planes[offset[s->order[j]]] = lr->planes[0];
+        }
+        if (rc) break;
+        for (int c = 0; c < at; c++) planes[c] = (const uint8_t *)planes[c] + (size_t)rx * 4; /* the region's columns */
+        rc = check_finite(runs, s->nlayers, planes, y0, n, rx, rw, s->width);
+        if (!rc && d->preview) rc = previews_add(&pv, runs, y0 - ry, n, planes);
+        fb_log_context("rows %d-%d", y0, y0 + n - 1);
+        if (!rc && w) rc = exrio_writer_rows(w, y0 - ry, n, planes);
+        fb_log_context(NULL);
+        fb_progress_update(&prog, (uint64_t)(y0 - ry + n) * rw, (uint64_t)rh * rw);
+    }
+    fb_progress_finish(&prog);
+    /* Checked before the file is renamed into place: a validated run that broke a rule is a failure. */
+    if (!rc && e->vk && vkc_validation_messages(e->vk))
+        rc = fb_fail(FB_ERR_VULKAN, "vulkan validation reported %u message(s) (see above)",
+                     vkc_validation_messages(e->vk));
+    if (!rc && w) rc = exrio_writer_finish(&w);
+    if (!rc && d->preview) rc = previews_write(&pv, d->preview);
+    for (int i = 0; i < s->nlayers && !rc && d->report; i++)
+        if (runs[i].gen.summary[0])
+            d->report(runs[i].gen.layer->name, runs[i].gen.summary, runs[i].gen.summary_json, d->user);
+out:
+    fb_log_context(NULL);
+    exrio_writer_abort(&w);
+    rc = fb_outputs_end(rc); /* every output renamed into place now, or none */
+    for (int k = 0; k < pv.n; k++) fb_preview_destroy(&pv.p[k]);
+    free(pv.conv);
+    for (int i = 0; i < s->nlayers; i++) run_fini(e, &runs[i]);
+    free(runs);
+    if (stats) {
+        stats->seconds = fb_now() - t0;
+        stats->gpu_seconds = e->kind == FB_BACKEND_VULKAN ? gpu : -1;
+        stats->pixels = (uint64_t)rw * rh;
+    }
+    return rc;
+}

@@ -1,0 +1,59 @@
+/*
+ * The bake driver: scene -> generators -> strips -> EXR writer (and PNG preview).
+ *
+ * Every generator computes strips of rows keyed by absolute pixel coordinates, so the result does
+ * not depend on the strip height, the thread count or the order in which strips complete.
+ */
+#ifndef FB_BAKE_H
+#define FB_BAKE_H
+
+#include "engine.h"
+#include "gen.h"
+#include "scene.h"
+
+/* The predicted peak memory of a bake (bytes), before anything large is allocated. */
+typedef struct fb_bake_plan {
+    int nlayers;
+    struct {
+        char name[64];
+        uint64_t bytes; /* the layer's own peak (histogram, mesh, grid) and its strip buffers */
+    } layers[FB_MAX_LAYERS];
+    uint64_t base;    /* the process and its backend (a Vulkan driver is tens of MiB) */
+    uint64_t writer;  /* the EXR writer's queue of rows and compressed chunks */
+    uint64_t preview; /* the preview's sums */
+    uint64_t peak;    /* all of it at the worst moment */
+    uint64_t limit;   /* --max-memory */
+} fb_bake_plan;
+
+typedef struct fb_bake_desc {
+    const fb_scene *scene;
+    const char *out;     /* EXR path; NULL computes without writing (benchmarks) */
+    const char *preview; /* PNG path or NULL */
+    /* What the preview shows: a layer's name, or "over" (every layer composited back to front by its
+     * coverage channel A; op layers are left out). NULL: the only layer, or "over" when there are several. */
+    const char *preview_layer;
+    int strip_rows; /* 0: automatic */
+    /* Only the pixels [x, x + w) x [y, y + h) of the image, as in the full bake, into a file whose
+     * data window is that region (fractalbake merge joins such files). w == 0: the whole image. */
+    int region[4];
+    bool progress; /* draw a progress bar on stderr */
+    /* Fill *plan (if not NULL) with the predicted memory; dry_run: stop there, writing nothing. A
+     * bake whose peak exceeds fb_memory_limit() fails before it allocates (FB_ERR_INPUT). */
+    fb_bake_plan *plan;
+    bool dry_run;
+    /* Called after a successful bake for each layer that reports on its computation (terrain):
+     * a human line and a JSON object. NULL: no reports. */
+    void (*report)(const char *layer, const char *summary, const char *json, void *user);
+    void *user;
+} fb_bake_desc;
+
+typedef struct fb_bake_stats {
+    double seconds;     /* wall time of the whole bake */
+    double gpu_seconds; /* sum of dispatch timestamps (vulkan), else -1 */
+    uint64_t pixels;
+} fb_bake_stats;
+
+/* Bakes every layer of the scene with engine `e`. On failure no output file exists. */
+fb_result fb_bake(fb_engine *e, const fb_bake_desc *desc, fb_bake_stats *stats);
+
+#endif

@@ -1,0 +1,195 @@
+/*
+ * Benchmarks: the shared timing. See benchkit.h.
+ */
+#include "benchkit.h"
+
+#include "bake.h"
+#include "pool.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+void fb_bench_heading(const fb_bench *b, const char *fmt, ...)
+{
+    char text[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    if (b->heading) b->heading(b, text);
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+double fb_bench_median3(double t[3])
+{
+    qsort(t, 3, sizeof t[0], cmp_double);
+    return t[1];
+}
+
+fb_result fb_bench_timed(fb_engine *e, const fb_scene *s, const char *out, double *wall, double *gpu)
+{
+    double w[3], g[3];
+    fb_bake_stats st;
+    fb_result rc = fb_bake(e, &(fb_bake_desc){.scene = s, .out = out}, &st);
+    for (int i = 0; i < 3 && !rc; i++) {
+        rc = fb_bake(e, &(fb_bake_desc){.scene = s, .out = out}, &st);
+        w[i] = st.seconds;
+        g[i] = st.gpu_seconds;
+    }
+    if (rc) return rc;
+    *wall = fb_bench_median3(w);
+    *gpu = fb_bench_median3(g);
+    return FB_OK;
+}
+
+fb_result fb_bench_open_vulkan(const fb_bench *b, fb_engine *e, bool *have)
+{
+    fb_result rc =
+        fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .device = b->device, .threads = b->threads}, e);
+    *have = rc == FB_OK;
+    if (rc == FB_ERR_NODEVICE && b->native) {
+        fb_log(FB_LOG_WARN, "no Vulkan device: benchmarking the native backend only");
+        rc = FB_OK;
+    }
+    return rc;
+}
+
+void fb_bench_report(const fb_bench *b, const fb_bench_case *bc, const char *device, const char *backend,
+                     const char *mode, int threads, double seconds, double gpu_seconds)
+{
+    fb_bench_row r = {.generator = bc->generator,
+                      .backend = backend,
+                      .device = device,
+                      .mode = mode,
+                      .unit = bc->unit,
+                      .rate = bc->work / seconds / bc->unit_scale,
+                      .gpu_rate = gpu_seconds > 0 ? bc->work / gpu_seconds / bc->unit_scale : 0,
+                      .threads = threads,
+                      .size = true};
+    if (bc->extra) r.extra[r.nextra++] = (typeof(r.extra[0])){bc->extra, r.rate * bc->extra_per_work, 1};
+    b->row(b, &r);
+}
+
+/* Whole bakes with the EXR written, for each compression: what a user's bake costs. */
+static fb_result end_to_end(const fb_bench *b, const fb_bench_case *bc, fb_engine *e, fb_scene *s)
+{
+    static const exrio_compression comps[] = {EXRIO_NONE, EXRIO_ZIP, EXRIO_PIZ};
+    static const char *names[] = {"end-to-end-none", "end-to-end-zip", "end-to-end-piz"};
+    exrio_compression keep = s->compression;
+    fb_result rc = FB_OK;
+    for (int c = 0; c < 3 && !rc; c++) {
+        double wall, gpu;
+        s->compression = comps[c];
+        rc = fb_bench_timed(e, s, b->out, &wall, &gpu);
+        if (!rc) fb_bench_report(b, bc, e->device, fb_backend_name(e->kind), names[c], e->threads, wall, gpu);
+    }
+    s->compression = keep;
+    return rc;
+}
+
+fb_result fb_bench_layer(const fb_bench *b, const fb_bench_case *bc, fb_scene *s, double tref)
+{
+    fb_result rc = FB_OK;
+    double wall, gpu;
+    int threads = b->threads > 0 ? b->threads : fb_cpu_count();
+    fb_engine e;
+    bool have_vulkan = false;
+    if (b->vulkan && !(rc = fb_bench_open_vulkan(b, &e, &have_vulkan)) && have_vulkan) {
+        rc = fb_bench_timed(&e, s, NULL, &wall, &gpu);
+        if (!rc) fb_bench_report(b, bc, e.device, "vulkan", "generate", 0, wall, gpu);
+        if (!rc) rc = end_to_end(b, bc, &e, s);
+        fb_engine_close(&e);
+    }
+    if (!rc && b->native) {
+        rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = b->threads}, &e);
+        if (!rc) {
+            rc = fb_bench_timed(&e, s, NULL, &wall, &gpu);
+            if (!rc) fb_bench_report(b, bc, e.device, "native", "generate", e.threads, wall, -1);
+            if (!have_vulkan && !rc) rc = end_to_end(b, bc, &e, s);
+            fb_engine_close(&e);
+        }
+        /* The references: the same algorithm hand-vectorised with AVX2 (bit-exact with the kernel,
+         * tests/test_avx2.c) on every core, and the kernel in a plain scalar loop on one core. */
+        if (!rc && tref > 0)
+            fb_bench_report(b, bc, "hand-vectorised AVX2 C", "native", "avx2-reference", threads, tref, -1);
+        if (!rc) rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = 1, .scalar = true}, &e);
+        if (!rc) {
+            rc = fb_bench_timed(&e, s, NULL, &wall, &gpu);
+            if (!rc) fb_bench_report(b, bc, e.device, "native", "scalar-1-thread", 1, wall, -1);
+            fb_engine_close(&e);
+        }
+    }
+    return rc;
+}
+
+fb_result fb_bench_variant(const fb_bench *b, const fb_bench_case *bc, fb_scene *s, const char *mode)
+{
+    fb_result rc = FB_OK;
+    double wall, gpu;
+    fb_engine e;
+    bool have_vulkan = false;
+    if (b->vulkan && !(rc = fb_bench_open_vulkan(b, &e, &have_vulkan)) && have_vulkan) {
+        rc = fb_bench_timed(&e, s, NULL, &wall, &gpu);
+        if (!rc) fb_bench_report(b, bc, e.device, "vulkan", mode, 0, wall, gpu);
+        fb_engine_close(&e);
+    }
+    if (!rc && b->native) {
+        rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = b->threads}, &e);
+        if (!rc) {
+            rc = fb_bench_timed(&e, s, NULL, &wall, &gpu);
+            if (!rc) fb_bench_report(b, bc, e.device, "native", mode, e.threads, wall, -1);
+            fb_engine_close(&e);
+        }
+    }
+    return rc;
+}
+
+typedef struct rows_job {
+    void (*rows)(void *ctx, int y0, int n, int task);
+    void *ctx;
+    int rows_per_task, height;
+} rows_job;
+
+static void rows_task(void *ctx, int t)
+{
+    rows_job *j = ctx;
+    int y0 = t * j->rows_per_task, n = y0 + j->rows_per_task <= j->height ? j->rows_per_task : j->height - y0;
+    j->rows(j->ctx, y0, n, t);
+}
+
+double fb_bench_rows(int threads, int height, void (*rows)(void *ctx, int y0, int n, int task), void *ctx, int *ntasks)
+{
+    fb_pool *pool = NULL;
+    if (fb_pool_create(threads, &pool)) return -1;
+    rows_job j = {rows, ctx, (height + 4095) / 4096 > 16 ? (height + 4095) / 4096 : 16, height};
+    int tasks = (height + j.rows_per_task - 1) / j.rows_per_task;
+    double t[4];
+    for (int k = 0; k < 4; k++) {
+        double t0 = fb_now();
+        fb_pool_run(pool, tasks, rows_task, &j);
+        t[k] = fb_now() - t0;
+    }
+    fb_pool_destroy(&pool);
+    if (ntasks) *ntasks = tasks;
+    return fb_bench_median3(t + 1);
+}
+
+uint64_t fb_bench_splitmix64(uint64_t *s)
+{
+    uint64_t z = (*s += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+double fb_bench_unit(uint64_t *s)
+{
+    return (double)(fb_bench_splitmix64(s) >> 11) * 0x1.0p-53;
+}

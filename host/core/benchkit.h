@@ -1,0 +1,88 @@
+/*
+ * Benchmarks, the part shared by every generator's: timing a bake or a function, and the rows a
+ * measurement produces. Each generator's benchmarks live in its folder (struct fb_gen_class.bench);
+ * the bench command (cli/bench.c) parses the options and prints the rows, as text or JSON lines.
+ *
+ * Each measurement is a warm-up run (shader compilation, page faults) followed by three timed runs,
+ * of which the median is reported. Every figure of one generator comes from the same run, so that
+ * ratios between backends are meaningful on a noisy machine.
+ */
+#ifndef FB_BENCHKIT_H
+#define FB_BENCHKIT_H
+
+#include "engine.h"
+#include "scene.h"
+
+/* One measured figure. */
+typedef struct fb_bench_row {
+    const char *generator, *backend, *device, *mode, *unit;
+    double rate;     /* units per second */
+    double gpu_rate; /* from the GPU's timestamps, or <= 0 */
+    int threads;     /* 0: not a thread count (a GPU) */
+    bool size;       /* the figure is for an image of the bench's size */
+    int nextra;      /* further JSON figures, after the size */
+    struct {
+        const char *name;
+        double value;
+        int decimals;
+    } extra[4];
+    char note[96]; /* for people: "(1000000 inserts in 0.846 s)", or "" */
+} fb_bench_row;
+
+typedef struct fb_bench {
+    int width, height; /* the image of per-pixel benchmarks */
+    double points;     /* chaos-game steps per run */
+    int threads;       /* 0: one per core */
+    bool vulkan, native;
+    const char *device;
+    const char *out; /* a scratch EXR path for the end-to-end runs */
+    bool json;
+    /* the sink: a heading line for people (not in JSON), and each row */
+    void (*heading)(const struct fb_bench *b, const char *text);
+    void (*row)(const struct fb_bench *b, const fb_bench_row *r);
+} fb_bench;
+
+/* A per-pixel generator's benchmark: its one-layer scene's work and unit. */
+typedef struct fb_bench_case {
+    const char *generator; /* "fbm", "julia" */
+    const char *unit;      /* "Mpix/s", "Giter/s" */
+    double work;           /* units of work in one image (pixels, iterations) */
+    double unit_scale;     /* work per unit: 1e6 for Mpix, 1e9 for Giter */
+    const char *extra;     /* a second figure's JSON name, or NULL */
+    double extra_per_work; /* its work per unit of `work`, in millions */
+} fb_bench_case;
+
+void fb_bench_heading(const fb_bench *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/* The median of three values (sorted in place). */
+double fb_bench_median3(double t[3]);
+
+/* Median wall seconds (and GPU seconds) of three bakes after one warm-up. out NULL: no file. */
+fb_result fb_bench_timed(fb_engine *e, const fb_scene *s, const char *out, double *wall, double *gpu);
+
+/* Opens the Vulkan engine; *have is false (and the result FB_OK) when there is no device and the
+ * native backend is benchmarked anyway. */
+fb_result fb_bench_open_vulkan(const fb_bench *b, fb_engine *e, bool *have);
+
+/* Reports one timing of a case: work / seconds. */
+void fb_bench_report(const fb_bench *b, const fb_bench_case *bc, const char *device, const char *backend,
+                     const char *mode, int threads, double seconds, double gpu_seconds);
+
+/* A per-pixel layer on every backend: generate-only and end-to-end (none, zip, piz) bakes, the
+ * reference (seconds tref > 0, from the caller: a hand-vectorised loop) and the scalar kernel on one
+ * thread. */
+fb_result fb_bench_layer(const fb_bench *b, const fb_bench_case *bc, fb_scene *s, double tref);
+
+/* The layer alone (no file) on each backend, under another mode name. */
+fb_result fb_bench_variant(const fb_bench *b, const fb_bench_case *bc, fb_scene *s, const char *mode);
+
+/* Median seconds of three runs after a warm-up of rows(ctx, y0, n, task) over `height` rows cut into
+ * tasks on a pool of `threads`; *ntasks (optional) the number of tasks. -1 on failure. */
+double fb_bench_rows(int threads, int height, void (*rows)(void *ctx, int y0, int n, int task), void *ctx, int *ntasks);
+
+/* splitmix64 and a uniform double in [0, 1) from it: the benchmarks' inputs, which the peers in bench/
+ * generate the same way. */
+uint64_t fb_bench_splitmix64(uint64_t *s);
+double fb_bench_unit(uint64_t *s);
+
+#endif

@@ -1,0 +1,35 @@
+/*
+ * Engines: the backend a bake runs on (a Vulkan device, or native C on a thread pool), opened once
+ * per run and shared by its bakes.
+ */
+#ifndef FB_ENGINE_H
+#define FB_ENGINE_H
+
+#include "pool.h"
+#include "vkc.h"
+
+typedef enum fb_backend { FB_BACKEND_AUTO = 0, FB_BACKEND_VULKAN, FB_BACKEND_NATIVE } fb_backend;
+
+/* The compute backend in use: a Vulkan context, or a thread pool for the native kernels. */
+typedef struct fb_engine {
+    fb_backend kind;
+    vkc_context *vk;
+    fb_pool *pool;
+    int threads;
+    bool scalar; /* native: portable kernels only (the benchmark's scalar reference) */
+    char device[256];
+} fb_engine;
+
+typedef struct fb_engine_desc {
+    fb_backend backend; /* AUTO: vulkan if a device exists, else native with a warning */
+    const char *device;
+    int threads; /* native workers and EXR compression threads; 0: one per core */
+    bool validation;
+    bool scalar; /* native: no hand-vectorised paths */
+} fb_engine_desc;
+
+fb_result fb_engine_open(const fb_engine_desc *desc, fb_engine *out);
+void fb_engine_close(fb_engine *e);
+const char *fb_backend_name(fb_backend b);
+
+#endif

@@ -1,0 +1,148 @@
+/*
+ * Generators: what the bake driver needs to know about each layer kind. A generator fills the
+ * rows [y0, y0 + n) of its layer's channels, either in C (native backend; must be a pure function
+ * of the pixel so that any split over threads gives the same bits) or by a compute shader over the
+ * same kernel (vulkan backend), one storage buffer per channel.
+ */
+#ifndef FB_GEN_H
+#define FB_GEN_H
+
+#include "exrio.h"
+#include "scene.h"
+#include "schema.h"
+
+#define FB_GEN_MAX_CHANNELS 10
+#define FB_GEN_MAX_PUSH     128
+
+typedef struct fb_gen fb_gen;
+struct fb_engine;
+
+struct fb_gen {
+    const fb_scene *scene;
+    const fb_layer *layer;
+    int nchannels;
+    int preview_channel; /* the float channel a grey preview shows */
+    int preview_rgb;     /* if >= 0: the first of three float channels R, G, B shown in colour instead (-1) */
+    char channel_names[FB_GEN_MAX_CHANNELS][80];
+    exrio_type channel_types[FB_GEN_MAX_CHANNELS];
+
+    /* native: fill rows [y0, y0 + n); planes[k] holds n * width values (4 bytes each) for each of the
+     * kernel's planes (see nkernel), NULL for a plane the layer does not store */
+    void (*native_rows)(const fb_gen *g, int y0, int n, void *const *planes);
+
+    /* A kernel that can compute more channels than the layer stores (a julia layer's `channels`):
+     * nkernel planes (the shader's buffers 0..nkernel-1), stored channel c being plane kernel_of[c].
+     * Planes not stored are neither computed nor written. nkernel 0: the planes are the channels. */
+    int nkernel;
+    int kernel_of[FB_GEN_MAX_CHANNELS];
+
+    /* vulkan: the shader, its push constants for a strip, and its workgroup counts */
+    const uint32_t *spv;
+    size_t spv_size;
+    uint32_t push_size; /* params_size + 8: the shader's push block is {params; uint y0; uint rows;} */
+    uint32_t params_size;
+    const void *input; /* read-only data for the kernel (bound after the kernel's planes: binding
+                          fb_gen_nplanes(g)), or NULL */
+    uint32_t input_size;
+    uint32_t spec[8]; /* specialization constants 0..nspec-1 */
+    uint32_t nspec;
+
+    /* Layers that are not a function of the pixel (the chaos game) compute everything here, once, on
+     * the engine's backend before the first strip; their strips then come from native_rows on the
+     * host whatever the backend. NULL for per-pixel generators. */
+    fb_result (*prepare)(fb_gen *g, struct fb_engine *e, bool progress);
+    double prepare_gpu_seconds; /* set by prepare: dispatch time on the GPU, else -1 */
+
+    /* The bytes this layer will allocate besides the bake's strips, predicted before it does (after
+     * init, which reads the inputs): returns the peak (prepare's arrays and what it keeps) and sets
+     * *hold to what it keeps while the strips are produced. NULL: nothing worth counting. */
+    uint64_t (*memory)(const fb_gen *g, const struct fb_engine *e, uint64_t *hold);
+
+    /* Side outputs (a mesh, a CSV) are written by prepare through the output transaction
+     * (output.h), which renames them with the EXR when the whole run succeeds. */
+    double preview_shade[2]; /* > 0: the preview shows preview_channel as a hillshade (world units per
+                                pixel in x and y) */
+    char summary[512];       /* set by prepare: one human line about the layer's computation, or "" */
+    char summary_json[1024]; /* the same as a JSON object, or "" */
+
+    /* Layers that use other layers (struct fb_gen_class.refs): called once every layer's generator is
+     * set up, with all of the scene's (gens, in scene order; plane_offset[i] is the first plane of
+     * layer i in a strip), to find their sources. Prepares run in dependency order (sources first). */
+    fb_result (*resolve)(fb_gen *g, const fb_gen *const *gens, const int *plane_offset);
+
+    /* A layer computed on the host from other layers' planes of the same strip (an op layer): count
+     * values of its one float channel; neither native_rows nor a shader. */
+    void (*host_rows)(const fb_gen *g, size_t count, const void *const *planes, float *out);
+    bool host_op; /* host_rows is set */
+
+    /* A layer split by chaos-game points (render --points-part): set by prepare, the points that fell
+     * outside the frame (merge needs them for the density). */
+    bool points_split;
+    uint64_t points_outside;
+
+    int per_invocation; /* vulkan: pixels of a row per invocation (0: 1) */
+    bool needs_float64; /* vulkan: the shader uses doubles (the device must have shaderFloat64) */
+
+    bool scalar; /* native: the portable kernel only, no hand-vectorised path (benchmark reference) */
+    _Alignas(16) unsigned char params[256]; /* generator-private, e.g. K_FbmParams */
+    void *owned;                            /* generator-owned memory (freed by fb_gen_fini) */
+    void (*fini)(fb_gen *g);                /* frees what `owned` points to, before owned itself */
+};
+
+/* A generator: everything the scene engine, the bake and the commands know of one layer kind. Each
+ * lives in its folder host/gen/NAME/ (layer.c defines it); host/gen/list.c names them all. */
+struct fb_bench;
+typedef struct fb_gen_class {
+    const char *name;     /* the scene's "type", the command and the benchmark's --generator: "fbm" */
+    const char *synopsis; /* the command in the top-level help: "fbm [options] -o OUT.exr"; NULL: no command */
+    const char *summary;  /* what it makes, one line */
+    const char *what;     /* its layer in messages: "an fbm layer" */
+    const fb_keyspec *keys;
+    int nkeys;
+    size_t params_size; /* its parameters in fb_layer.params */
+    /* Reads the layer object `obj` at `path` into L->params: checks it against the keys first
+     * (fb_schema_check), then what involves several keys. s: the scene so far (size, seed). */
+    fb_result (*parse)(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L);
+    /* Its references to other layers (NULL: none): up to FB_MAX_REFS slots; returns the count. */
+    int (*refs)(fb_layer *L, fb_ref_slot *out);
+    /* The files it writes besides the EXR (NULL: none): paths (pointers into L) and what each is. */
+    int (*outputs)(const fb_layer *L, const char **paths, const char **what, int max);
+    /* Sets up a layer's generator: channels, kernel, push constants, prepare (fb_gen_init calls it). */
+    fb_result (*init)(fb_gen *g);
+    /* Its benchmarks (cli/bench.c runs them; NULL: none). */
+    fb_result (*bench)(struct fb_bench *b);
+} fb_gen_class;
+
+/* Every generator, NULL-terminated, in the order the help lists them (host/gen/list.c). */
+extern const fb_gen_class *const fb_gen_list[];
+
+/* The generator named `name`, or NULL. */
+const fb_gen_class *fb_gen_find(const char *name);
+
+/* "\"fbm\", \"julia\", ...": the names, for messages. */
+void fb_gen_names(char *out, size_t size);
+
+/* Sets up the generator of `layer`. */
+fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer);
+
+/* The kernel's planes (nkernel, or the channels), the plane of stored channel c, and whether plane k
+ * is stored. */
+int fb_gen_nplanes(const fb_gen *g);
+int fb_gen_plane_of(const fb_gen *g, int c);
+bool fb_gen_plane_stored(const fb_gen *g, int k);
+
+/* The push constants of a strip: the generator's parameter block, then y0 and the row count. */
+void fb_gen_push(const fb_gen *g, int y0, int n, void *out);
+
+/* Workgroups for a strip of n rows: 64 invocations wide, each for `per_invocation` pixels (1 unless
+ * the generator says), one row of groups per row. */
+void fb_gen_groups(const fb_gen *g, int n, uint32_t out[3]);
+
+/* Frees what the generator owns. Null-safe, idempotent. */
+void fb_gen_fini(fb_gen *g);
+
+/* The index of channel "LAYER.channel" ("" : LAYER.Y) of generator src, or -1 with an error logged
+ * that names the layer `who` and the channels src has. */
+int fb_gen_channel_of(const fb_gen *src, const char *channel, const char *who, const char *what);
+
+#endif

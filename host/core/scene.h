@@ -1,0 +1,109 @@
+/*
+ * Scenes: the validated description of a bake. A scene comes from a JSON file, from the embedded
+ * default, or from a single-generator command line (which builds the same JSON: every flag is the
+ * scene key of the same name). Every key is checked against a schema; errors name the key path,
+ * and for files the line.
+ */
+#ifndef FB_SCENE_H
+#define FB_SCENE_H
+
+#include "exrio.h"
+#include "fb.h"
+
+#include <stdbool.h>
+
+#define FB_MAX_LAYERS 16
+#define FB_MAX_DIM    65536
+#define FB_MAX_PIXELS (1ull << 31)
+
+/* A reference to another layer's channel ("terrain.Y", or "terrain": its Y) or a constant. */
+typedef struct fb_ref {
+    int layer;        /* index in the scene's layers; -1: the constant `value` */
+    char channel[64]; /* "" : the layer's Y */
+    double value;
+} fb_ref;
+
+/* A layer's references to other layers, as its generator lists them (struct fb_gen_class.refs). */
+#define FB_MAX_REFS 16
+typedef struct fb_ref_slot {
+    fb_ref *ref;
+    char key[24];         /* the key that holds it: "inputs[2]", "macro" */
+    const char *expected; /* what else the key may name, for the message when no layer has the name (or NULL) */
+} fb_ref_slot;
+
+/* The largest generator's parameters (each generator asserts that its own fit). */
+#define FB_LAYER_PARAMS_MAX 49152
+
+typedef struct fb_layer {
+    const struct fb_gen_class *cls; /* its generator */
+    char name[64];
+    bool half;                     /* store colour/height as half instead of float */
+    exrio_compression compression; /* its part's, when the scene has one part per layer */
+    /* the generator's parameters (its fb_NAME_params, cls->params_size bytes), read with fb_layer_params */
+    _Alignas(16) unsigned char params[FB_LAYER_PARAMS_MAX];
+} fb_layer;
+
+static inline const void *fb_layer_params(const fb_layer *L)
+{
+    return L->params;
+}
+
+typedef struct fb_scene {
+    int width, height;
+    uint32_t seed;
+    exrio_compression compression;
+    bool multipart; /* "parts": "per-layer": one EXR part per layer, named after it */
+    int nlayers;
+    fb_layer layers[FB_MAX_LAYERS];
+    int order[FB_MAX_LAYERS]; /* every layer after the layers it refers to (op layers last, in dependency order) */
+    char *json;               /* the scene with every default filled in, canonical (sorted keys); owned */
+    /* Not part of the scene text: a points part {K, N} (1 <= K <= N) of a bake split by chaos-game
+     * points (render --points-part K/N); N == 0: the whole game. */
+    int points_part[2];
+} fb_scene;
+
+/* Parses and validates JSON text. `origin` names the file for messages (NULL: the command line,
+ * where a key is reported as its flag, --key). */
+fb_result fb_scene_parse(const char *text, const char *origin, fb_scene *out);
+
+/* Reads a scene file and parses it. */
+fb_result fb_scene_load(const char *path, fb_scene *out);
+
+/* The same with overrides applied before validation, in order: "KEY.PATH=VALUE" as given to --set.
+ * The path's segments are object keys, or in a list an index or a layer name (layers.sky.c);
+ * missing objects on the way are created. VALUE is JSON if it parses as JSON, WxH a size, a
+ * comma-separated list an array, else a string. Errors in an overridden value name the --set. */
+fb_result fb_scene_parse_sets(const char *text, const char *origin, const char *const *sets, int nsets, fb_scene *out);
+fb_result fb_scene_load_sets(const char *path, const char *const *sets, int nsets, fb_scene *out);
+
+/* The embedded default scene. */
+const char *fb_scene_default_json(void);
+
+void fb_scene_fini(fb_scene *s);
+
+/* "a, b, c": the scene's layer names, for messages. */
+void fb_scene_layer_names(const fb_scene *s, char *out, size_t size);
+
+/* The files the scene's layers write besides the EXR (a terrain's mesh, a constrain layer's CSV and
+ * plot): up to max paths (pointers into s) and what each is. Returns the count. */
+int fb_scene_outputs(const fb_scene *s, const char **paths, const char **what, int max);
+
+/* A stored scene (JSON text) without the output paths of its layers: a file baked elsewhere must not
+ * choose which files this run writes. *out is the new text (free()); `dropped` lists what was removed
+ * as "layers.NAME.KEY=PATH, ..." ("" if nothing). */
+fb_result fb_scene_drop_outputs(const char *text, char **out, char *dropped, size_t size);
+
+/* For the command line: converts `--flag value` of a single-generator command into the JSON scene
+ * it stands for. `kind` is the generator ("fbm"; fb_gen_find). argv holds only the generator's flags. Returns
+ * malloc'd JSON text in *json. Global flags (--size, --seed, --compression) become scene keys. */
+fb_result fb_scene_from_flags(const char *kind, int argc, char **argv, char **json);
+
+/* For the command line: how many values flag `flag` (without the dashes) of generator `kind` takes:
+ * 0 for a switch (--tileable), 1 for a valued flag (--octaves 8), -1 when it is not a flag of
+ * `kind` or of the scene. */
+int fb_scene_flag_arity(const char *kind, const char *flag);
+
+/* Prints the keys of a generator with their types, ranges and defaults (for --help). */
+void fb_scene_print_keys(const char *kind, void (*print)(const char *line, void *user), void *user);
+
+#endif

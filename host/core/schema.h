@@ -1,0 +1,102 @@
+/*
+ * The scene engine's face towards the generators: the key types a schema table is written in, the
+ * validation context, and the helpers a generator's parser uses. A generator (host/gen/NAME/layer.c)
+ * declares its keys in one table; the engine checks every value against it, fills in the defaults,
+ * turns flags into keys and prints --help from it; the generator's parse then reads the checked
+ * JSON into its parameters and adds the checks that involve several keys.
+ */
+#ifndef FB_SCHEMA_H
+#define FB_SCHEMA_H
+
+#include "fb.h"
+#include "palette.h"
+
+#include <jansson.h>
+
+#include <stdbool.h>
+#include <stddef.h>
+
+/* The shapes a key's value may take. */
+typedef enum fb_ktype {
+    FB_K_INT,
+    FB_K_NUM,
+    FB_K_BOOL,
+    FB_K_ENUM,
+    FB_K_NAME,
+    FB_K_VEC2,
+    FB_K_SIZE,
+    FB_K_LAYERS,
+    FB_K_TYPE,
+    FB_K_NUMLIST,
+    FB_K_STOPS,
+    FB_K_STRING,   /* any non-empty string (a file path, an entry name) */
+    FB_K_OUTPUT,   /* a file this layer writes besides the EXR: never taken from a stored scene (--from) */
+    FB_K_MAPS,     /* affine maps: 1..count lists [a, b, c, d, e, f(, p)] in lo..hi, p >= 0 */
+    FB_K_BOUNDS,   /* "auto" or [xmin, xmax, ymin, ymax] */
+    FB_K_FRACS,    /* 1..count numbers in [lo, hi] */
+    FB_K_NAMES,    /* 1..32 distinct names from `enums` (flag: a comma list) */
+    FB_K_IFSREF,   /* a name from `enums`, a map list (as FB_K_MAPS), or an object the parser checks */
+    FB_K_POINTS,   /* a file path, or an inline list [[x, y, z], ...] */
+    FB_K_RULES,    /* up to count strings, each accepted by `check` (flag: repeatable) */
+    FB_K_REF,      /* another layer's channel "layer.channel" (or "layer": its Y), or a number */
+    FB_K_REFS,     /* 1..count of FB_K_REF */
+    FB_K_CPOINTS,  /* a file, or [[x, y], ...] integer pixels */
+    FB_K_CREGIONS, /* a file, or [[x, y, "T" or "H", value], ...] */
+} fb_ktype;
+
+typedef struct fb_keyspec {
+    const char *key;
+    fb_ktype type;
+    double lo, hi;
+    bool lo_open;      /* lo < x rather than lo <= x */
+    const char *enums; /* "a|b|c" for FB_K_ENUM, FB_K_NAMES, FB_K_IFSREF */
+    const char *def;   /* the default as JSON text; NULL: none (optional key, or required) */
+    const char *help;
+    int count;          /* FB_K_NUMLIST: how many numbers; MAPS, FRACS, RULES, REFS: at most how many */
+    const char *flag;   /* its command-line flag when not --KEY ("rule" for rules); "name" is --layer */
+    const char *unless; /* "a|b": the default is not filled in when one of these keys is given */
+    /* FB_K_RULES: checks one element; false with a message in msg */
+    bool (*check)(const char *text, char *msg, size_t size);
+} fb_keyspec;
+
+#define FB_NKEYS(a) ((int)(sizeof(a) / sizeof((a)[0])))
+
+/* Where the values come from, for messages. */
+typedef struct fb_vctx {
+    const char *origin; /* file name, or NULL for the command line */
+    const char *text;
+    /* --set overrides: what the user typed, and the key path each one set ("layers[0].c") */
+    const char *const *sets;
+    char (*set_paths)[256];
+    int nsets;
+    const struct fb_gen_class *cls; /* the command line's generator (its flags' names), or NULL */
+} fb_vctx;
+
+/* Logs "FILE:LINE: PATH: message" (file), "--set S: message" or "--FLAG: message" (command line) and
+ * returns FB_ERR_INPUT (FB_ERR_USAGE for the command line). */
+fb_result fb_schema_error(const fb_vctx *v, const char *path, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+/* Checks every key of `obj` against `keys` and fills in the defaults. `what` names the object in
+ * messages ("an fbm layer"). */
+fb_result fb_schema_check(const fb_vctx *v, const char *path, json_t *obj, const fb_keyspec *keys, int n,
+                          const char *what);
+/* Checks one value against its key. */
+fb_result fb_schema_check_value(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j);
+
+/* The colour map keys shared by the layers that have one: palette, cosine, stops. */
+fb_result fb_schema_palette(const fb_vctx *v, const char *path, const json_t *obj, fb_palette_spec *pal);
+
+/* Readers of checked values. */
+double fb_json_num(const json_t *obj, const char *key);
+bool fb_json_bool(const json_t *obj, const char *key);
+void fb_json_vec2(const json_t *obj, const char *key, double out[2]);
+void fb_json_string(const json_t *obj, const char *key, char *out, size_t size); /* "" when absent */
+struct fb_ref;
+void fb_json_ref(const json_t *j, struct fb_ref *r); /* a layer's channel is resolved after parsing */
+/* A short rendering of a JSON value for messages. */
+void fb_json_show(const json_t *j, char *buf, size_t n);
+/* The index of s in "a|b|c". */
+bool fb_enum_index(const char *enums, const char *s, int *idx);
+
+#endif

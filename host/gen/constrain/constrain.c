@@ -1,0 +1,463 @@
+/*
+ * The FBM constraint model. See constrain.h and docs/constrain.md.
+ *
+ * Grid: (2^k + 1) nodes per side covering the image (node (x, y) is pixel (x, y)); 1D profiles use
+ * one row. Node generation order: the corners (ends), then for each step s = 2^k, ..., 2 with
+ * h = s / 2: in 2D the diamond step (square centres from their 4 corners) and the square step (edge
+ * midpoints from their 3 or 4 axis neighbours); in 1D the midpoints. The displacement of a node whose
+ * parents are at distance r (pixels) has variance sigma^2 (1 - 2^(2H-2)) (r / (N - 1))^(2H), which is
+ * the paper's A_n in 1D (r = 2^-n of the span) and the same law of distance in 2D; H is the node's.
+ */
+#include "constrain.h"
+
+#include "pool.h"
+
+#include "kernels/hash.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- continuous constraints: equations 13 to 15 ------------------------------------------------ */
+
+static int l1(const fb_constrain_desc *d, int x0, int y0, int x1, int y1)
+{
+    int dx = abs(x1 - x0), dy = d->height > 1 ? abs(y1 - y0) : 0;
+    return dx + dy;
+}
+
+double fb_constrain_field(const fb_constrain_desc *d, bool is_h, int x, int y)
+{
+    double f0 = is_h ? d->hurst : d->T, sum = 0;
+    int cnt = 0, reach = 1 << d->domain;
+    for (int i = 0; i < d->nregions; i++) {
+        const fb_cregion *r = &d->regions[i];
+        if (r->is_h != is_h) continue;
+        int dist = l1(d, r->x, r->y, x, y);
+        if (dist > reach) continue;
+        sum += (r->value - f0) / (1.0 + d->falloff * (double)dist * (double)dist);
+        cnt++;
+    }
+    return cnt ? f0 + sum / cnt : f0;
+}
+
+/* The field over the image (the same sums in the same order as fb_constrain_field, so the same
+ * values), row by row: a row's work is the width of the domains that cross it, so the cost is the
+ * domains' area plus one write per pixel. Rows are shared among tasks. */
+typedef struct field_job {
+    const fb_constrain_desc *d;
+    bool is_h;
+    float *out;
+    double *sum; /* width per task */
+    int *cnt;
+    int ntasks;
+} field_job;
+
+static void field_task(void *ctx, int task)
+{
+    const field_job *j = ctx;
+    const fb_constrain_desc *d = j->d;
+    const int W = d->width, reach = 1 << d->domain;
+    const double f0 = j->is_h ? d->hurst : d->T;
+    double *sum = j->sum + (size_t)task * W;
+    int *cnt = j->cnt + (size_t)task * W;
+    int y0 = (int)((int64_t)d->height * task / j->ntasks), y1 = (int)((int64_t)d->height * (task + 1) / j->ntasks);
+    for (int y = y0; y < y1; y++) {
+        float *row = j->out + (size_t)y * W;
+        int lo = W, hi = -1;
+        for (int pass = 0; pass < 2; pass++) {
+            if (pass == 1 && lo <= hi) {
+                memset(sum + lo, 0, (size_t)(hi - lo + 1) * sizeof *sum);
+                memset(cnt + lo, 0, (size_t)(hi - lo + 1) * sizeof *cnt);
+            }
+            for (int i = 0; i < d->nregions; i++) {
+                const fb_cregion *r = &d->regions[i];
+                int left = reach - (d->height > 1 ? abs(y - r->y) : 0);
+                if (r->is_h != j->is_h || left < 0) continue;
+                int xa = r->x - left < 0 ? 0 : r->x - left, xb = r->x + left >= W ? W - 1 : r->x + left;
+                if (pass == 0) {
+                    lo = xa < lo ? xa : lo;
+                    hi = xb > hi ? xb : hi;
+                    continue;
+                }
+                for (int x = xa; x <= xb; x++) {
+                    int dist = l1(d, r->x, r->y, x, y);
+                    sum[x] += (r->value - f0) / (1.0 + d->falloff * (double)dist * (double)dist);
+                    cnt[x]++;
+                }
+            }
+        }
+        for (int x = 0; x < W; x++) row[x] = (float)(x >= lo && x <= hi && cnt[x] ? f0 + sum[x] / cnt[x] : f0);
+    }
+}
+
+static void run_tasks(fb_pool *pool, int ntasks, fb_task_fn fn, void *ctx)
+{
+    if (pool)
+        fb_pool_run(pool, ntasks, fn, ctx);
+    else
+        for (int t = 0; t < ntasks; t++) fn(ctx, t);
+}
+
+static fb_result field(const fb_constrain_desc *d, bool is_h, float *out, fb_pool *pool, int ntasks)
+{
+    field_job j = {d,
+                   is_h,
+                   out,
+                   malloc((size_t)ntasks * d->width * sizeof(double)),
+                   malloc((size_t)ntasks * d->width * sizeof(int)),
+                   ntasks};
+    if (!j.sum || !j.cnt) {
+        free(j.sum);
+        free(j.cnt);
+        return fb_fail(FB_ERR_NOMEM, "out of memory for the constraint fields");
+    }
+    run_tasks(pool, ntasks, field_task, &j);
+    free(j.sum);
+    free(j.cnt);
+    return FB_OK;
+}
+
+/* ---- the midpoint recursion -------------------------------------------------------------------- */
+
+/* The key of the node hashes: fb_constrain_normal(seed, i) draws from k_hash(i ^ key), which is
+ * k_hash3(seed, stream, i) with its two index-free rounds done once. */
+static uint32_t normal_key(uint32_t seed)
+{
+    return k_hash(0x9e3779b9u ^ k_hash(seed ^ 0x9e3779b9u));
+}
+
+/* The standard normal quantile of u in (0, 1): Acklam's rational approximations (relative error
+ * below 1.2e-9): one rational function on the central 95%, sqrt(-2 ln) of the tails outside it. */
+static double normal_quantile(double u)
+{
+    static const double a[6] = {-3.969683028665376e+01, 2.209460984245205e+02,  -2.759285104469687e+02,
+                                1.383577518672690e+02,  -3.066479806614716e+01, 2.506628277459239e+00};
+    static const double b[5] = {-5.447609879822406e+01, 1.615858368580409e+02, -1.556989798598866e+02,
+                                6.680131188771972e+01, -1.328068155288572e+01};
+    static const double c[6] = {-7.784894002430293e-03, -3.223964580411365e-01, -2.400758277161838e+00,
+                                -2.549732539343734e+00, 4.374664141464968e+00,  2.938163982698783e+00};
+    static const double e[4] = {7.784695709041462e-03, 3.224671290700398e-01, 2.445134137142996e+00,
+                                3.754408661907416e+00};
+    double q = u - 0.5;
+    if (fabs(q) <= 0.5 - 0.02425) {
+        double r = q * q;
+        return (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q /
+               (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1.0);
+    }
+    double t = sqrt(-2.0 * log(q < 0 ? u : 1.0 - u));
+    double x = (((((c[0] * t + c[1]) * t + c[2]) * t + c[3]) * t + c[4]) * t + c[5]) /
+               ((((e[0] * t + e[1]) * t + e[2]) * t + e[3]) * t + 1.0);
+    return q < 0 ? x : -x;
+}
+
+static double normal_of(uint32_t key, uint32_t index)
+{
+    return normal_quantile(((double)k_hash(index ^ key) + 0.5) * (1.0 / 4294967296.0));
+}
+
+double fb_constrain_normal(uint32_t seed, uint32_t index)
+{
+    return normal_of(normal_key(seed), index);
+}
+
+typedef struct grid {
+    const fb_constrain_desc *d;
+    int N; /* nodes per side */
+    bool two_d;
+    float *P;
+    const float *Hf; /* H per pixel */
+    uint32_t key;    /* normal_key(seed) */
+    float H0;        /* the base H, rounded as the field is */
+    size_t *cnodes;  /* the discrete constraints' node indices, sorted */
+    int ncnodes;
+    double span; /* N - 1 */
+} grid;
+
+static bool is_constraint(const grid *g, size_t at)
+{
+    int lo = 0, hi = g->ncnodes - 1;
+    while (lo <= hi) {
+        int m = (lo + hi) / 2;
+        if (g->cnodes[m] == at) return true;
+        if (g->cnodes[m] < at)
+            lo = m + 1;
+        else
+            hi = m - 1;
+    }
+    return false;
+}
+
+/* The standard deviation of the displacement of a node of roughness H whose parents are r away. */
+static double scale_of(const grid *g, double H, double r)
+{
+    double s = g->d->sigma;
+    return sqrt(s * s * (1.0 - pow(2.0, 2 * H - 2)) * pow(r / g->span, 2 * H));
+}
+
+/* The displacement of node (x, y) whose parents are r away; base_sd: scale_of at the base H (the
+ * same for most nodes of a step, so computed once). Nodes outside the image have the base H. */
+static double displacement(const grid *g, int x, int y, double r, double base_sd)
+{
+    const fb_constrain_desc *d = g->d;
+    float H = x < d->width && y < d->height ? g->Hf[(size_t)y * d->width + x] : g->H0;
+    double sd = H == g->H0 ? base_sd : scale_of(g, H, r);
+    return sd * normal_of(g->key, (uint32_t)((size_t)y * g->N + x));
+}
+
+/* One half-step of the 2D recursion over a share of its rows (nodes of a step are independent). */
+typedef struct step_job {
+    grid *g;
+    int s, h;
+    bool square;
+    double base_sd;
+    int ntasks;
+} step_job;
+
+static void step_task(void *ctx, int task)
+{
+    const step_job *j = ctx;
+    grid *g = j->g;
+    float *P = g->P;
+    const int N = g->N, s = j->s, h = j->h;
+    const double r = j->square ? h : h * 1.4142135623730951;
+    if (!j->square) { /* diamond: square centres from their 4 corners; rows h, h + s, ... */
+        int rows = (N - 1) / s, r0 = rows * task / j->ntasks, r1 = rows * (task + 1) / j->ntasks;
+        for (int k = r0; k < r1; k++) {
+            int y = h + k * s;
+            const float *up = P + (size_t)(y - h) * N, *dn = P + (size_t)(y + h) * N;
+            float *row = P + (size_t)y * N;
+            for (int x = h; x < N; x += s) {
+                double a = (double)up[x - h] + up[x + h] + dn[x - h] + dn[x + h];
+                row[x] = (float)(0.25 * a + displacement(g, x, y, r, j->base_sd));
+            }
+        }
+        return;
+    }
+    /* square: edge midpoints from their axis neighbours; rows 0, h, 2h, ... */
+    int rows = (N - 1) / h + 1, r0 = rows * task / j->ntasks, r1 = rows * (task + 1) / j->ntasks;
+    for (int k = r0; k < r1; k++) {
+        int y = k * h;
+        float *row = P + (size_t)y * N;
+        const float *up = y >= h ? row - (size_t)h * N : NULL, *dn = y + h < N ? row + (size_t)h * N : NULL;
+        int x = (k % 2 == 0) ? h : 0;
+        if (x == 0) { /* the left edge: 3 neighbours */
+            double a = (double)row[h] + (up ? up[0] : 0.0) + (dn ? dn[0] : 0.0);
+            row[0] = (float)(a / (1 + !!up + !!dn) + displacement(g, 0, y, r, j->base_sd));
+            x = s;
+        }
+        if (up && dn) /* interior rows: 4 neighbours but at the right edge */
+            for (; x < N - 1; x += s) {
+                double a = (double)row[x - h] + row[x + h] + up[x] + dn[x];
+                row[x] = (float)(0.25 * a + displacement(g, x, y, r, j->base_sd));
+            }
+        for (; x < N; x += s) {
+            double a = 0;
+            int m = 0;
+            if (x >= h) a += row[x - h], m++;
+            if (x + h < N) a += row[x + h], m++;
+            if (up) a += up[x], m++;
+            if (dn) a += dn[x], m++;
+            row[x] = (float)(a / m + displacement(g, x, y, r, j->base_sd));
+        }
+    }
+}
+
+/* The discrete constraints made at this half-step are set to 0, before anything is interpolated
+ * from them: with spacing h, the diamond step makes the nodes at odd multiples of h in both axes
+ * (centre), the square step those odd in one axis only (and the 1D step the odd ones). */
+static void pin_step(grid *g, int h, bool centre)
+{
+    const fb_constrain_desc *d = g->d;
+    for (int i = 0; i < d->npoints; i++) {
+        int px = d->points[i].x, py = g->two_d ? d->points[i].y : 0;
+        if (px % h || py % h) continue;
+        bool ox = (px / h) % 2, oy = (py / h) % 2;
+        if (centre ? (ox && oy) : (ox != oy)) g->P[(size_t)py * (g->two_d ? g->N : 0) + px] = 0.0f;
+    }
+}
+
+/* Regional buffering (our reading of equations 11 and 12; docs/constrain.md): after every level,
+ * while a constraint p* is not a node yet, the value the current grid interpolates at p* (linearly
+ * in its cell of spacing h) is removed by shifting the free nodes of that cell, so the field passes
+ * through 0 at p* at every scale. Each correction is of the size of that level's displacements, so
+ * the increments near p* keep the field's statistics; when p* is finally made it is small, and is set
+ * to 0 exactly. Nodes that are constraints are never moved. */
+static void buffer_level(grid *g, int h)
+{
+    const fb_constrain_desc *d = g->d;
+    int N = g->N;
+    for (int i = 0; i < d->npoints; i++) {
+        int px = d->points[i].x, py = g->two_d ? d->points[i].y : 0;
+        if (px % h == 0 && py % h == 0) continue; /* a node already: set to 0 when it was made */
+        int x0 = px / h * h, y0 = py / h * h;
+        int xs[2] = {x0, x0 + h < N ? x0 + h : x0}, ys[2] = {y0, g->two_d && y0 + h < N ? y0 + h : y0};
+        double tx = (double)(px - x0) / h, ty = g->two_d ? (double)(py - y0) / h : 0.0;
+        double w[4] = {(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty}, v = 0, wfree = 0;
+        size_t at[4];
+        bool fixed[4];
+        for (int c = 0; c < 4; c++) {
+            at[c] = (size_t)ys[c / 2] * (g->two_d ? N : 0) + xs[c % 2];
+            fixed[c] = is_constraint(g, at[c]);
+            v += w[c] * g->P[at[c]];
+            if (!fixed[c]) wfree += w[c];
+        }
+        /* exact when the free corners carry at least half the weight; else a partial correction
+         * (rather than pinning a free node to an extreme value) */
+        double shift = wfree >= 0.5 ? -v / wfree : -v;
+        for (int c = 0; c < 4; c++) {
+            bool dup = false; /* a cell on the image edge repeats a corner */
+            for (int e = 0; e < c; e++) dup = dup || at[e] == at[c];
+            if (!dup && !fixed[c] && w[c] > 0) g->P[at[c]] = (float)(g->P[at[c]] + shift);
+        }
+    }
+}
+
+/* D from P (equations 5 to 10) over a share of the rows. */
+typedef struct final_job {
+    const grid *g;
+    const float *Tf;
+    fb_constrain_out *out;
+    int ntasks;
+} final_job;
+
+static void final_task(void *ctx, int task)
+{
+    const final_job *j = ctx;
+    const fb_constrain_desc *d = j->g->d;
+    const double lim = sqrt(6.0) * d->sigma, Z = 1.0 / (lim + d->delta);
+    int y0 = (int)((int64_t)d->height * task / j->ntasks), y1 = (int)((int64_t)d->height * (task + 1) / j->ntasks);
+    for (int y = y0; y < y1; y++) {
+        const float *prow = j->g->P + (size_t)y * (j->g->two_d ? j->g->N : 0);
+        size_t at0 = (size_t)y * d->width;
+        if (j->out->P) memcpy(j->out->P + at0, prow, (size_t)d->width * sizeof *prow);
+        for (int x = 0; x < d->width; x++) {
+            size_t at = at0 + x;
+            double p = prow[x];
+            p = p < -lim ? -lim : p > lim ? lim : p;
+            float dm = d->macro[at];
+            if (p == 0) { /* fully constrained: D = d to the last bit */
+                j->out->D[at] = dm;
+                continue;
+            }
+            double zpd = 1.0 - Z * fabs(p); /* Z P_d with P_d = 1/Z - |P| (equation 9) */
+            double amp = sqrt(-2.0 * j->Tf[at] * log(zpd));
+            j->out->D[at] = (float)(p < 0 ? (double)dm - amp : (double)dm + amp);
+        }
+    }
+}
+
+static int cmp_size(const void *a, const void *b)
+{
+    size_t x = *(const size_t *)a, y = *(const size_t *)b;
+    return (x > y) - (x < y);
+}
+
+fb_result fb_constrain_run(const fb_constrain_desc *d, bool want_p, fb_constrain_out *out)
+{
+    memset(out, 0, sizeof *out);
+    bool two_d = d->height > 1;
+    int side = d->width > d->height ? d->width : d->height, N = 2;
+    while (N - 1 < side - 1 || N < 3) N = 2 * (N - 1) + 1;
+    size_t nodes = two_d ? (size_t)N * N : (size_t)N, npx = (size_t)d->width * d->height;
+    if (nodes > (size_t)UINT32_MAX) return fb_fail(FB_ERR_INPUT, "constrain: the %d x %d grid is too large", N, N);
+    grid g = {.d = d, .N = N, .two_d = two_d, .span = N - 1, .key = normal_key(d->seed), .H0 = (float)d->hurst};
+    int threads = d->threads > 0 ? d->threads : fb_cpu_count(), ntasks = threads * 4;
+    fb_pool *pool = NULL;
+    if (threads > 1 && two_d && fb_pool_create(threads, &pool) != FB_OK) pool = NULL; /* then one thread */
+    bool live = d->buffering != FB_BUFFER_NAIVE; /* constraints applied as nodes are made */
+    bool regional = d->buffering == FB_BUFFER_REGIONAL;
+    float *Hf = fb_malloc_large(npx * sizeof *Hf), *Tf = fb_malloc_large(npx * sizeof *Tf);
+    g.P = fb_malloc_large(nodes * sizeof *g.P);
+    g.cnodes = malloc(((size_t)d->npoints + 1) * sizeof *g.cnodes);
+    fb_result rc = Hf && Tf && g.P && g.cnodes ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory for a %d-node grid", N);
+    if (!rc) rc = field(d, true, Hf, pool, ntasks);
+    if (!rc) rc = field(d, false, Tf, pool, ntasks);
+    g.Hf = Hf;
+    for (int i = 0; i < d->npoints && !rc; i++) g.cnodes[i] = (size_t)d->points[i].y * (two_d ? N : 0) + d->points[i].x;
+    if (!rc) {
+        qsort(g.cnodes, (size_t)d->npoints, sizeof *g.cnodes, cmp_size);
+        g.ncnodes = d->npoints;
+        /* level 0: the corners (ends) */
+        int cs[4][2] = {{0, 0}, {N - 1, 0}, {0, N - 1}, {N - 1, N - 1}};
+        for (int c = 0; c < (two_d ? 4 : 2); c++) {
+            size_t at = (size_t)cs[c][1] * N + cs[c][0];
+            g.P[at] = live && is_constraint(&g, at) ? 0.0f : (float)(d->sigma * normal_of(g.key, (uint32_t)at));
+        }
+        if (regional) buffer_level(&g, N - 1);
+    }
+    for (int s = N - 1; s >= 2 && !rc; s /= 2) {
+        int h = s / 2;
+        if (!two_d) {
+            double base_sd = scale_of(&g, g.H0, h);
+            for (int x = h; x < N; x += s)
+                g.P[x] = (float)(0.5 * ((double)g.P[x - h] + (double)g.P[x + h]) + displacement(&g, x, 0, h, base_sd));
+            if (live) pin_step(&g, h, false);
+            if (regional) buffer_level(&g, h);
+            continue;
+        }
+        step_job dj = {&g, s, h, false, scale_of(&g, g.H0, h * 1.4142135623730951), ntasks};
+        run_tasks(pool, ntasks, step_task, &dj);
+        if (live) pin_step(&g, h, true);
+        step_job sj = {&g, s, h, true, scale_of(&g, g.H0, h), ntasks};
+        run_tasks(pool, ntasks, step_task, &sj);
+        if (live) pin_step(&g, h, false);
+        if (regional) buffer_level(&g, h); /* the grid is regular again, of spacing h */
+    }
+    if (!rc && !live) /* the naive reading: forced to zero after the fact */
+        for (int i = 0; i < d->npoints; i++) g.P[g.cnodes[i]] = 0.0f;
+    if (!rc) {
+        out->D = fb_malloc_large(npx * sizeof *out->D);
+        out->P = want_p ? fb_malloc_large(npx * sizeof *out->P) : NULL;
+        if (!out->D || (want_p && !out->P)) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    }
+    if (!rc) {
+        final_job fj = {&g, Tf, out, two_d ? ntasks : 1};
+        run_tasks(pool, fj.ntasks, final_task, &fj);
+        out->T = Tf, out->H = Hf;
+        Tf = Hf = NULL;
+    }
+    if (rc) {
+        free(out->D);
+        free(out->P);
+        memset(out, 0, sizeof *out);
+    }
+    free(Tf);
+    free(Hf);
+    free(g.P);
+    free(g.cnodes);
+    fb_pool_destroy(&pool);
+    return rc;
+}
+
+bool fb_constrain_macro(const char *name, int width, int height, double h, float *out)
+{
+    int kind = !strcmp(name, "cone")    ? 0
+               : !strcmp(name, "ridge") ? 1
+               : !strcmp(name, "boss")  ? 2
+               : !strcmp(name, "bowl")  ? 3
+                                        : -1;
+    if (kind < 0) return false;
+    double L = height > 1 ? (width < height ? width : height) : width;
+    double cx = 0.5 * width, cy = 0.5 * height;
+    for (int y = 0; y < height; y++)
+        for (int x = 0; x < width; x++) {
+            double dx = (x + 0.5 - cx) / L, dy = height > 1 ? (y + 0.5 - cy) / L : 0.0, r = sqrt(dx * dx + dy * dy), v;
+            switch (kind) {
+            case 0:
+                v = fmax(0.0, 1.0 - r / 0.45);
+                break; /* cone */
+            case 1:
+                v = fmax(0.0, 1.0 - fabs(height > 1 ? dy : dx) / 0.3);
+                break; /* ridge along x */
+            case 2:
+                v = exp(-r * r / (2 * 0.15 * 0.15));
+                break; /* boss: a round bump */
+            default:
+                v = fmin(1.0, (r / 0.45) * (r / 0.45));
+                break; /* bowl */
+            }
+            out[(size_t)y * width + x] = (float)(h * v);
+        }
+    return true;
+}

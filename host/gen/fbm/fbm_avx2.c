@@ -1,0 +1,143 @@
+/*
+ * A hand-vectorised AVX2 loop of the same fBm as kernels/fbm.h (gradient noise, standard shape, no
+ * warp, not tileable), eight pixels of a row per step. It is the benchmark's reference for what a
+ * CPU can do with this algorithm, and it is bit-exact with the kernel: the same operations in the
+ * same order, no FMA (tests/test_avx2.c checks every pixel).
+ */
+#include "fbm_avx2.h"
+
+#include "kernels/fbm.h"
+
+#include <stdbool.h>
+
+#if defined(__x86_64__) || defined(__i386__)
+#include "avx2_hash.h"
+
+/* k_wrap_cell(i, 4096) for 8 lanes: integer path below 2^24, the float path above, blended. */
+AVX2 static inline __m256i wrap8(__m256 i)
+{
+    const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+    __m256 small = _mm256_cmp_ps(_mm256_and_ps(i, absmask), _mm256_set1_ps(16777216.0f), _CMP_LT_OQ);
+    __m256i mask = _mm256_set1_epi32(4095);
+    __m256i a = _mm256_and_si256(_mm256_cvttps_epi32(i), mask);
+    __m256 fp = _mm256_set1_ps(4096.0f);
+    __m256 r = _mm256_sub_ps(i, _mm256_mul_ps(fp, _mm256_floor_ps(_mm256_mul_ps(i, _mm256_set1_ps(1.0f / 4096.0f)))));
+    r = _mm256_min_ps(_mm256_max_ps(r, _mm256_setzero_ps()), _mm256_set1_ps(4095.0f));
+    __m256i b = _mm256_and_si256(_mm256_cvttps_epi32(r), mask);
+    return _mm256_blendv_epi8(b, a, _mm256_castps_si256(small));
+}
+
+AVX2 static inline __m256 grad8(__m256i h, __m256 x, __m256 y)
+{
+    __m256i b = _mm256_and_si256(h, _mm256_set1_epi32(7));
+    __m256 lt4 = _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(4), b));
+    __m256 u = _mm256_blendv_ps(y, x, lt4);
+    __m256 v = _mm256_blendv_ps(x, y, lt4);
+    __m256 neg = _mm256_castsi256_ps(_mm256_set1_epi32((int)0x80000000u));
+    __m256 b1 =
+        _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(b, _mm256_set1_epi32(1)), _mm256_set1_epi32(1)));
+    __m256 b2 =
+        _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(b, _mm256_set1_epi32(2)), _mm256_set1_epi32(2)));
+    __m256 su = _mm256_xor_ps(u, _mm256_and_ps(b1, neg));
+    __m256 v2 = _mm256_mul_ps(_mm256_set1_ps(2.0f), v);
+    __m256 sv = _mm256_xor_ps(v2, _mm256_and_ps(b2, neg));
+    return _mm256_add_ps(su, sv);
+}
+
+AVX2 static inline __m256 fade8(__m256 t)
+{
+    __m256 inner =
+        _mm256_add_ps(_mm256_mul_ps(t, _mm256_sub_ps(_mm256_mul_ps(t, _mm256_set1_ps(6.0f)), _mm256_set1_ps(15.0f))),
+                      _mm256_set1_ps(10.0f));
+    return _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(t, t), t), inner);
+}
+
+AVX2 static inline __m256 mix8(__m256 a, __m256 b, __m256 t)
+{
+    return _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), t));
+}
+
+/* k_hash2i(seed, ix, iy) = hash((ix * 0x9e3779b1) ^ hash(iy ^ seed ^ 0x632be5ab)) */
+AVX2 static inline __m256i cell_hash8(__m256i ix, __m256i row)
+{
+    return hash8(_mm256_xor_si256(_mm256_mullo_epi32(ix, _mm256_set1_epi32((int)0x9e3779b1u)), row));
+}
+
+AVX2 static inline __m256 gradient8(uint32_t seed, __m256 x, __m256 y)
+{
+    __m256 fx = _mm256_floor_ps(x), fy = _mm256_floor_ps(y);
+    __m256 tx = _mm256_sub_ps(x, fx), ty = _mm256_sub_ps(y, fy);
+    __m256i m = _mm256_set1_epi32(4095), one = _mm256_set1_epi32(1);
+    __m256i ix0 = wrap8(fx), iy0 = wrap8(fy);
+    __m256i ix1 = _mm256_and_si256(_mm256_add_epi32(ix0, one), m);
+    __m256i iy1 = _mm256_and_si256(_mm256_add_epi32(iy0, one), m);
+    __m256i s = _mm256_set1_epi32((int)(seed ^ 0x632be5abu));
+    __m256i r0 = hash8(_mm256_xor_si256(iy0, s)), r1 = hash8(_mm256_xor_si256(iy1, s));
+    __m256 onef = _mm256_set1_ps(1.0f);
+    __m256 tx1 = _mm256_sub_ps(tx, onef), ty1 = _mm256_sub_ps(ty, onef);
+    __m256 n00 = grad8(cell_hash8(ix0, r0), tx, ty);
+    __m256 n10 = grad8(cell_hash8(ix1, r0), tx1, ty);
+    __m256 n01 = grad8(cell_hash8(ix0, r1), tx, ty1);
+    __m256 n11 = grad8(cell_hash8(ix1, r1), tx1, ty1);
+    __m256 u = fade8(tx), v = fade8(ty);
+    return _mm256_mul_ps(_mm256_set1_ps(0.6324555f), mix8(mix8(n00, n10, u), mix8(n01, n11, u), v));
+}
+
+AVX2 static void rows_avx2(const K_FbmParams *p, int y0, int n, float *out)
+{
+    uint32_t seed = k_hash3(p->seed, 0u, 0x0fb0u);
+    for (int r = 0; r < n; r++) {
+        float v = 1.0f - ((float)(y0 + r) + 0.5f) * p->inv_height;
+        float *row = out + (size_t)r * p->width;
+        uint32_t x0 = 0;
+        for (; x0 + 8 <= p->width; x0 += 8) {
+            __m256 px = _mm256_add_ps(_mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32((int)x0),
+                                                                          _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7))),
+                                      _mm256_set1_ps(0.5f));
+            __m256 u = _mm256_mul_ps(px, _mm256_set1_ps(p->inv_width));
+            __m256 x = _mm256_add_ps(_mm256_mul_ps(u, _mm256_set1_ps(p->freq_x)), _mm256_set1_ps(p->offset_x));
+            __m256 y = _mm256_set1_ps(v * p->freq_y + p->offset_y);
+            __m256 sum = _mm256_setzero_ps();
+            float amp = 1.0f;
+            for (uint32_t i = 0; i < p->octaves; i++) {
+                uint32_t h = k_hash(seed + i * 0x9e3779b9u);
+                sum = _mm256_add_ps(sum, _mm256_mul_ps(_mm256_set1_ps(amp), gradient8(h, x, y)));
+                amp *= p->gain;
+                __m256 L = _mm256_set1_ps(p->lacunarity), c = _mm256_set1_ps(p->rot_c), s = _mm256_set1_ps(p->rot_s);
+                __m256 nx = _mm256_mul_ps(L, _mm256_sub_ps(_mm256_mul_ps(c, x), _mm256_mul_ps(s, y)));
+                __m256 ny = _mm256_mul_ps(L, _mm256_add_ps(_mm256_mul_ps(s, x), _mm256_mul_ps(c, y)));
+                uint32_t ho = k_hash(h ^ 0x5bd1e995u);
+                x = _mm256_add_ps(nx, _mm256_set1_ps((float)(ho & 0xffffu) * (64.0f / 65536.0f)));
+                y = _mm256_add_ps(ny, _mm256_set1_ps((float)(ho >> 16) * (64.0f / 65536.0f)));
+            }
+            _mm256_storeu_ps(row + x0, sum);
+        }
+        for (; x0 < p->width; x0++) row[x0] = k_fbm_pixel(*p, x0, (uint32_t)(y0 + r));
+    }
+}
+
+bool fb_fbm_avx2_supported(const void *params)
+{
+    const K_FbmParams *p = params;
+    return __builtin_cpu_supports("avx2") && p->noise == K_NOISE_GRADIENT && p->flags == 0u && p->warp == 0.0f;
+}
+
+void fb_fbm_avx2_rows(const void *params, int y0, int n, float *out)
+{
+    rows_avx2(params, y0, n, out);
+}
+
+#else
+
+bool fb_fbm_avx2_supported(const void *params)
+{
+    (void)params;
+    return false;
+}
+
+void fb_fbm_avx2_rows(const void *params, int y0, int n, float *out)
+{
+    (void)params, (void)y0, (void)n, (void)out;
+}
+
+#endif

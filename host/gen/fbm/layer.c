@@ -1,0 +1,228 @@
+/*
+ * The fBm generator: kernels/fbm.h, driven natively or by shaders/fbm.comp.
+ */
+#include "fbm_avx2.h"
+#include "gen_fbm.h"
+
+#include "kernels/fbm.h"
+#include "fbm_comp.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <string.h>
+
+/* ---- the scene keys and their parser ---------------------------------------------------------- */
+
+static const char *const noise_names = "gradient|value|simplex|cellular|cellular-f2|sine";
+
+static const fb_keyspec fbm_keys[] = {
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"fbm\""},
+    {"name", FB_K_NAME, 0, 0, false, NULL, "\"fbm\"", "layer name; the channel is NAME.Y (flag: --layer)"},
+    {"noise", FB_K_ENUM, 0, 0, false, "gradient|value|simplex|cellular|cellular-f2|sine", "\"gradient\"", "base noise"},
+    {"hurst", FB_K_NUM, 0, 1, false, NULL, "1.0", "Hurst exponent H; gain G = 2^-H", 0, NULL, "gain"},
+    {"gain", FB_K_NUM, 0, 2, true, NULL, NULL, "octave gain G, instead of hurst"},
+    {"octaves", FB_K_INT, 1, 32, false, NULL, "8", "number of octaves"},
+    {"lacunarity", FB_K_NUM, 1.01, 8, false, NULL, "2.0", "frequency ratio between octaves"},
+    {"rotation", FB_K_NUM, -180, 180, false, NULL, "36.87", "rotation between octaves, degrees"},
+    {"frequency", FB_K_NUM, 0, 1e6, true, NULL, "4.0", "cycles of the first octave across the image width"},
+    {"offset", FB_K_VEC2, -1e6, 1e6, false, NULL, "[0.0, 0.0]", "domain offset, in first-octave cells (X,Y)"},
+    {"ridged", FB_K_BOOL, 0, 0, false, NULL, "false", "ridged octaves (1 - |n|)^2"},
+    {"billow", FB_K_BOOL, 0, 0, false, NULL, "false", "billow octaves 2|n| - 1"},
+    {"warp", FB_K_NUM, 0, 100, false, NULL, "0.0", "domain-warp strength, in first-octave cells"},
+    {"tileable", FB_K_BOOL, 0, 0, false, NULL, "false", "periodic in x and y: the image wraps without a seam"},
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store as half instead of float (flags: --half, --float)"},
+    {"compression", FB_K_ENUM, 0, 0, false, "zip|piz|none", NULL,
+     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+};
+
+static fb_result parse_fbm(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
+{
+    char sub[256];
+    fb_result rc = fb_schema_check(v, path, obj, fbm_keys, FB_NKEYS(fbm_keys), "an fbm layer");
+    if (rc) return rc;
+    fb_fbm_params *f = (void *)L->params;
+    if (json_object_get(obj, "hurst") && json_object_get(obj, "gain")) {
+        snprintf(sub, sizeof sub, "%s.gain", path);
+        return fb_schema_error(v, sub, "give hurst or gain, not both");
+    }
+    int idx = 0;
+    fb_enum_index(noise_names, json_string_value(json_object_get(obj, "noise")), &idx);
+    static const unsigned kinds[] = {K_NOISE_GRADIENT, K_NOISE_VALUE,       K_NOISE_SIMPLEX,
+                                     K_NOISE_CELLULAR, K_NOISE_CELLULAR_F2, K_NOISE_SINE};
+    f->noise = kinds[idx];
+    f->gain_given = json_object_get(obj, "gain") != NULL;
+    f->hurst = f->gain_given ? -log2(fb_json_num(obj, "gain")) : fb_json_num(obj, "hurst");
+    f->gain = f->gain_given ? fb_json_num(obj, "gain") : exp2(-f->hurst);
+    f->octaves = (int)json_integer_value(json_object_get(obj, "octaves"));
+    f->lacunarity = fb_json_num(obj, "lacunarity");
+    f->rotation = fb_json_num(obj, "rotation");
+    f->frequency = fb_json_num(obj, "frequency");
+    json_t *off = json_object_get(obj, "offset");
+    f->offset[0] = json_number_value(json_array_get(off, 0));
+    f->offset[1] = json_number_value(json_array_get(off, 1));
+    f->ridged = fb_json_bool(obj, "ridged");
+    f->billow = fb_json_bool(obj, "billow");
+    f->tileable = fb_json_bool(obj, "tileable");
+    f->warp = fb_json_num(obj, "warp");
+    if (f->ridged && f->billow) {
+        snprintf(sub, sizeof sub, "%s.billow", path);
+        return fb_schema_error(v, sub, "ridged and billow cannot both be set");
+    }
+    if (f->tileable && f->noise == K_NOISE_SIMPLEX) {
+        snprintf(sub, sizeof sub, "%s.tileable", path);
+        return fb_schema_error(v, sub,
+                    "simplex noise lives on a skewed lattice that does not tile a rectangle; use gradient, "
+                    "value, cellular, cellular-f2 or sine noise for tileable fBm");
+    }
+    return FB_OK;
+}
+
+/* ---- the layer --------------------------------------------------------------------------------- */
+
+/* The push-constant block of shaders/fbm.comp. std430 with scalars only: offsets are the C ones. */
+typedef struct fbm_push {
+    K_FbmParams p;
+    uint32_t y0;
+    uint32_t rows;
+} fbm_push;
+
+_Static_assert(offsetof(K_FbmParams, seed) == 0, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, noise) == 4, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, octaves) == 8, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, flags) == 12, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, gain) == 16, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, lacunarity) == 20, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, rot_c) == 24, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, rot_s) == 28, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, freq_x) == 32, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, freq_y) == 36, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, offset_x) == 40, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, offset_y) == 44, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, warp) == 48, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, width) == 52, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, height) == 56, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, inv_width) == 60, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, inv_height) == 64, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, inv_freq_x) == 68, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, inv_freq_y) == 72, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, pad0) == 76 && offsetof(K_FbmParams, pad1) == 80, "std430 offset");
+_Static_assert(offsetof(fbm_push, y0) == 84 && offsetof(fbm_push, rows) == 88, "std430 offset");
+_Static_assert(sizeof(fbm_push) == 92 && sizeof(fbm_push) <= FB_GEN_MAX_PUSH, "push constants");
+_Static_assert(sizeof(K_FbmParams) <= sizeof(((fb_gen *)0)->params), "params fit");
+
+static const K_FbmParams *params(const fb_gen *g)
+{
+    return (const K_FbmParams *)(const void *)g->params;
+}
+
+/* The native loop, cloned per noise kind with the kind a compile-time constant (the C counterpart of
+ * the shader's specialization constant), so that the dispatch in k_noise folds away. */
+#define FBM_ROWS(KIND)                                                                                                 \
+    static void fbm_rows_##KIND(K_FbmParams p, int y0, int n, float *out)                                              \
+    {                                                                                                                  \
+        p.noise = KIND;                                                                                                \
+        for (int r = 0; r < n; r++)                                                                                    \
+            for (uint32_t x = 0; x < p.width; x++)                                                                     \
+                out[(size_t)r * p.width + x] = k_fbm_pixel(p, x, (uint32_t)(y0 + r));                                  \
+    }
+FBM_ROWS(K_NOISE_GRADIENT)
+FBM_ROWS(K_NOISE_VALUE)
+FBM_ROWS(K_NOISE_SIMPLEX)
+FBM_ROWS(K_NOISE_CELLULAR)
+FBM_ROWS(K_NOISE_CELLULAR_F2)
+FBM_ROWS(K_NOISE_SINE)
+
+static void fbm_rows(const fb_gen *g, int y0, int n, void *const *planes)
+{
+    const K_FbmParams *p = params(g);
+    float *out = planes[0];
+    /* Bit-exact with the kernel (tests/test_avx2.c), so using it changes no result. */
+    if (!g->scalar && fb_fbm_avx2_supported(p)) {
+        fb_fbm_avx2_rows(p, y0, n, out);
+        return;
+    }
+    switch (p->noise) {
+    case K_NOISE_VALUE:
+        fbm_rows_K_NOISE_VALUE(*p, y0, n, out);
+        break;
+    case K_NOISE_SIMPLEX:
+        fbm_rows_K_NOISE_SIMPLEX(*p, y0, n, out);
+        break;
+    case K_NOISE_CELLULAR:
+        fbm_rows_K_NOISE_CELLULAR(*p, y0, n, out);
+        break;
+    case K_NOISE_CELLULAR_F2:
+        fbm_rows_K_NOISE_CELLULAR_F2(*p, y0, n, out);
+        break;
+    case K_NOISE_SINE:
+        fbm_rows_K_NOISE_SINE(*p, y0, n, out);
+        break;
+    default:
+        fbm_rows_K_NOISE_GRADIENT(*p, y0, n, out);
+        break;
+    }
+}
+
+/* Fills K_FbmParams from a validated layer. */
+void fb_fbm_params_frame(K_FbmParams *p, int width, int height)
+{
+    p->width = (uint32_t)width;
+    p->height = (uint32_t)height;
+    p->inv_width = 1.0f / (float)width;
+    p->inv_height = 1.0f / (float)height;
+    p->inv_freq_x = 1.0f / p->freq_x;
+    p->inv_freq_y = 1.0f / p->freq_y;
+}
+
+static void fb_fbm_params_fill(const fb_scene *s, const fb_layer *L, K_FbmParams *p)
+{
+    const fb_fbm_params *f = fb_layer_params(L);
+    memset(p, 0, sizeof *p);
+    p->seed = s->seed;
+    p->noise = f->noise;
+    p->octaves = (uint32_t)f->octaves;
+    p->flags = (f->ridged ? K_FBM_RIDGED : 0u) | (f->billow ? K_FBM_BILLOW : 0u) | (f->tileable ? K_FBM_TILEABLE : 0u);
+    p->gain = (float)f->gain;
+    p->lacunarity = (float)f->lacunarity;
+    double a = f->rotation * 3.14159265358979323846 / 180.0;
+    p->rot_c = (float)cos(a);
+    p->rot_s = (float)sin(a);
+    p->freq_x = (float)f->frequency;
+    p->freq_y = (float)(f->frequency * s->height / s->width); /* square cells */
+    p->offset_x = (float)f->offset[0];
+    p->offset_y = (float)f->offset[1];
+    p->warp = (float)f->warp;
+    fb_fbm_params_frame(p, s->width, s->height);
+}
+
+static fb_result fbm_init(fb_gen *g)
+{
+    fb_fbm_params_fill(g->scene, g->layer, (K_FbmParams *)(void *)g->params);
+    g->nchannels = 1;
+    snprintf(g->channel_names[0], sizeof g->channel_names[0], "%s.Y", g->layer->name);
+    g->channel_types[0] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
+    g->native_rows = fbm_rows;
+    g->spv = fbm_comp;
+    g->spv_size = sizeof fbm_comp;
+    g->params_size = sizeof(K_FbmParams);
+    g->push_size = sizeof(fbm_push);
+    g->spec[0] = params(g)->noise;
+    g->spec[1] = params(g)->flags;
+    g->nspec = 2;
+    return FB_OK;
+}
+
+const fb_gen_class fb_gen_fbm = {
+    .name = "fbm",
+    .synopsis = "fbm [options] -o OUT.exr",
+    .summary = "fBm noise, one layer (fractalbake fbm --help lists the options)",
+    .what = "an fbm layer",
+    .keys = fbm_keys,
+    .nkeys = FB_NKEYS(fbm_keys),
+    .params_size = sizeof(fb_fbm_params),
+    .parse = parse_fbm,
+    .init = fbm_init,
+    .bench = fb_fbm_bench,
+};
+_Static_assert(sizeof(fb_fbm_params) <= FB_LAYER_PARAMS_MAX, "FB_LAYER_PARAMS_MAX is too small");

@@ -1,0 +1,48 @@
+/*
+ * The ifs generator's parameters (a layer's, as parsed from the scene) and its class.
+ */
+#ifndef FB_GEN_IFS_H
+#define FB_GEN_IFS_H
+
+#include "gen.h"
+#include "ifs.h"
+#include "gen_lsystem.h"
+#include "lsys.h"
+#include "palette.h"
+
+typedef struct fb_ifs_params {
+    fb_ifs maps; /* w1..wN (probabilities as given, or -1) */
+    fb_ifs cond; /* the condensation set's IFS when has_cond */
+    bool has_cond;
+    bool cond_lsys;                 /* the condensation set is an L-system drawing instead of cond */
+    fb_lsys cond_sys;               /* ... derived with the scene's seed, drawn by the turtle */
+    double cond_heading;            /* its initial heading, degrees */
+    double cond_height;             /* its largest extent, in the IFS's units (base at the origin) */
+    uint64_t cond_max_symbols;      /* its rewriting bound */
+    double cond_p;                  /* probability of the condensation map w0 */
+    double colors[FB_IFS_MAX_MAPS]; /* colour coordinate of each map of `maps` */
+    double cond_colors[FB_IFS_MAX_MAPS];
+    double points; /* total chaos-game steps (an integer up to 1e14) */
+    int skip;      /* transient steps after each (re)start */
+    int chains;
+    bool auto_bounds;
+    double bounds[4]; /* xmin, xmax, ymin, ymax */
+    int oversample;
+    fb_palette_spec palette;
+    double brightness, gamma, gamma_threshold, vibrancy, highlight_power;
+} fb_ifs_params;
+
+extern const fb_gen_class fb_gen_ifs;
+
+/* Its benchmarks (bench.c). */
+fb_result fb_ifs_bench(struct fb_bench *b);
+
+/* The chaos-game statistics of an ifs layer after prepare (NULL for other layers). */
+const struct fb_ifs_stats *fb_gen_ifs_stats(const fb_gen *g);
+
+/* fractalbake merge of points parts: an ifs layer's pixels from the parts' summed hits and colour
+ * sums (each width x height) and outside count, in place of its chaos game; then native_rows gives
+ * the channels the whole game would have. */
+fb_result fb_gen_ifs_from_sums(fb_gen *g, const uint64_t *hits, const uint64_t *sums, uint64_t outside);
+
+#endif

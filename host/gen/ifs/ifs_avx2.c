@@ -1,0 +1,292 @@
+/*
+ * The hand-vectorised chaos game, the native backend's fast path (gen/ifs.c, in step windows) and
+ * the benchmark's reference, and the textbook scalar loop the benchmark also compares with.
+ *
+ * fb_ifs_avx2_game: a hand-vectorised AVX2 chaos game. Eight chains per vector, two vectors in
+ * flight per thread to hide latency, the map coefficients held in registers and picked with
+ * permutes (no memory gathers), and a private histogram per thread (plain adds, merged at the end).
+ * It follows kernels/ifs.h operation for operation (same hash, same thresholds, same rounding), so
+ * its histogram equals the kernel's bit for bit (tests/test_avx2.c).
+ *
+ * fb_ifs_scalar_game: the textbook loop. One chain, a xorshift generator, one core.
+ */
+#include "ifs_avx2.h"
+
+#include "kernels/ifs.h"
+#include "pool.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#if defined(__x86_64__) || defined(__i386__)
+#include "avx2_hash.h"
+
+typedef struct avx2_hist {
+    uint32_t *hits;
+    uint64_t *sum;
+} avx2_hist;
+
+typedef struct avx2_job {
+    const K_IfsParams *p;
+    const K_IfsMap *maps;
+    avx2_hist *hist;
+    int ntasks;
+    size_t cells;
+} avx2_job;
+
+#define G 2 /* vectors of 8 chains in flight */
+
+/* Steps [t0, t1) of chains [c0, c1) (groups of 8 * G chains vectorised, the rest scalar) into
+ * histogram h; adds the points outside the frame, discarded and restarted to n[0..2]. A chain starts
+ * at t0 == 0 and otherwise from state[chain], where its state after the window is stored (state may
+ * be NULL when the window holds every step). */
+AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t c0, uint32_t c1, uint32_t t0,
+                           uint32_t t1, K_IfsChain *state, avx2_hist *h, uint64_t n[3])
+{
+    float coef[7][8] = {{0}};
+    int thr[8];
+    for (uint32_t k = 0; k < 8; k++) {
+        const K_IfsMap *m = &maps[k < p->nmaps ? k : 0];
+        const float v[7] = {m->a, m->b, m->c, m->d, m->e, m->f, m->colour};
+        for (int i = 0; i < 7; i++) coef[i][k] = v[i];
+        thr[k] = (int)((k < p->nmaps ? m->thr : 0xffffffffu) ^ 0x80000000u); /* signed order = unsigned order */
+    }
+    __m256 A = _mm256_loadu_ps(coef[0]), B = _mm256_loadu_ps(coef[1]), C = _mm256_loadu_ps(coef[2]);
+    __m256 D = _mm256_loadu_ps(coef[3]), E = _mm256_loadu_ps(coef[4]), F = _mm256_loadu_ps(coef[5]);
+    __m256 COL = _mm256_loadu_ps(coef[6]);
+    const __m256i sign = _mm256_set1_epi32((int)0x80000000u);
+    const __m256 x0 = _mm256_set1_ps(p->x0), y0 = _mm256_set1_ps(p->y0), sx = _mm256_set1_ps(p->sx),
+                 sy = _mm256_set1_ps(p->sy), zero = _mm256_setzero_ps(), half = _mm256_set1_ps(0.5f);
+    const __m256 hw = _mm256_set1_ps((float)p->hist_w), hh = _mm256_set1_ps((float)p->hist_h);
+    const __m256 lim = _mm256_set1_ps(p->limit), absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+    uint32_t c = c0;
+    for (; c + 8 * G <= c1; c += 8 * G) {
+        __m256 x[G], y[G], col[G];
+        __m256i left[G], chainh[G];
+        uint32_t total = 0;
+        for (int g = 0; g < G; g++) {
+            float xs[8], ys[8], cs[8];
+            int ls[8], hs[8];
+            for (int l = 0; l < 8; l++) {
+                uint32_t i = c + 8 * (uint32_t)g + (uint32_t)l;
+                K_IfsChain s = t0 == 0 ? k_ifs_init(*p, i) : state[i];
+                xs[l] = s.x, ys[l] = s.y, cs[l] = s.c, ls[l] = (int)s.left;
+                hs[l] = (int)k_hash(i ^ k_hash(p->seed ^ 0x9e3779b9u));
+                uint32_t ti = k_ifs_total(*p, i);
+                total = ti > total ? ti : total;
+            }
+            x[g] = _mm256_loadu_ps(xs), y[g] = _mm256_loadu_ps(ys), col[g] = _mm256_loadu_ps(cs);
+            left[g] = _mm256_loadu_si256((const __m256i *)ls);
+            chainh[g] = _mm256_loadu_si256((const __m256i *)hs);
+        }
+        if (total > t1) total = t1;
+        for (uint32_t t = t0; t < total; t++) {
+            for (int g = 0; g < G; g++) {
+                /* r = k_hash3(seed, chain, t) = hash(t ^ hash(chain ^ hash(seed ^ k))) */
+                __m256i r = hash8(_mm256_xor_si256(_mm256_set1_epi32((int)t), chainh[g]));
+                __m256i rs = _mm256_xor_si256(r, sign), idx = _mm256_setzero_si256();
+                for (uint32_t k = 1; k < p->nmaps; k++) /* minus one per threshold <= r */
+                    idx = _mm256_sub_epi32(idx, _mm256_or_si256(_mm256_cmpgt_epi32(rs, _mm256_set1_epi32(thr[k])),
+                                                                _mm256_cmpeq_epi32(rs, _mm256_set1_epi32(thr[k]))));
+                __m256 a = _mm256_permutevar8x32_ps(A, idx), b = _mm256_permutevar8x32_ps(B, idx);
+                __m256 cc = _mm256_permutevar8x32_ps(C, idx), d = _mm256_permutevar8x32_ps(D, idx);
+                __m256 e = _mm256_permutevar8x32_ps(E, idx), f = _mm256_permutevar8x32_ps(F, idx);
+                __m256 nx = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(a, x[g]), _mm256_mul_ps(b, y[g])), e);
+                __m256 ny = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(cc, x[g]), _mm256_mul_ps(d, y[g])), f);
+                col[g] = _mm256_mul_ps(_mm256_add_ps(col[g], _mm256_permutevar8x32_ps(COL, idx)), half);
+                x[g] = nx, y[g] = ny;
+                __m256 bad = _mm256_or_ps(_mm256_cmp_ps(_mm256_and_ps(nx, absmask), lim, _CMP_NLE_UQ),
+                                          _mm256_cmp_ps(_mm256_and_ps(ny, absmask), lim, _CMP_NLE_UQ));
+                if (__builtin_expect(_mm256_movemask_ps(bad) != 0, 0)) { /* restarts: the kernel's own code */
+                    float xs[8], ys[8], cs[8];
+                    int ls[8];
+                    _mm256_storeu_ps(xs, x[g]), _mm256_storeu_ps(ys, y[g]), _mm256_storeu_ps(cs, col[g]);
+                    _mm256_storeu_si256((__m256i *)ls, left[g]);
+                    int mask = _mm256_movemask_ps(bad);
+                    for (int l = 0; l < 8; l++) {
+                        if (!(mask >> l & 1)) continue;
+                        K_IfsChain s = k_ifs_restart(*p, (K_IfsChain){0}, c + 8 * (uint32_t)g + (uint32_t)l, t);
+                        xs[l] = s.x, ys[l] = s.y, cs[l] = s.c, ls[l] = (int)s.left + 1; /* no plot this step */
+                    }
+                    x[g] = _mm256_loadu_ps(xs), y[g] = _mm256_loadu_ps(ys), col[g] = _mm256_loadu_ps(cs);
+                    left[g] = _mm256_loadu_si256((const __m256i *)ls);
+                }
+                /* plot where left == 0, else count one transient step down */
+                __m256i plot = _mm256_cmpeq_epi32(left[g], _mm256_setzero_si256());
+                left[g] = _mm256_add_epi32(left[g], _mm256_andnot_si256(plot, _mm256_set1_epi32(-1)));
+                __m256 px = _mm256_mul_ps(_mm256_sub_ps(x[g], x0), sx);
+                __m256 py = _mm256_mul_ps(_mm256_sub_ps(y0, y[g]), sy);
+                __m256 in = _mm256_and_ps(
+                    _mm256_and_ps(_mm256_cmp_ps(px, zero, _CMP_GE_OQ), _mm256_cmp_ps(py, zero, _CMP_GE_OQ)),
+                    _mm256_and_ps(_mm256_cmp_ps(px, hw, _CMP_LT_OQ), _mm256_cmp_ps(py, hh, _CMP_LT_OQ)));
+                int active = 0xff;
+                if (t >= p->base) /* the last step belongs only to chains below `extra` */
+                    for (int l = 0; l < 8; l++)
+                        if (c + 8 * (uint32_t)g + (uint32_t)l >= p->extra) active &= ~(1 << l);
+                int pm = _mm256_movemask_ps(_mm256_castsi256_ps(plot)) & active;
+                int m = _mm256_movemask_ps(in) & pm;
+                n[0] += (uint64_t)__builtin_popcount((unsigned)(pm & ~m));
+                n[1] += (uint64_t)__builtin_popcount((unsigned)(active & ~pm));
+                n[2] += (uint64_t)__builtin_popcount((unsigned)(_mm256_movemask_ps(bad) & active));
+                __m256i cell =
+                    _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(py), _mm256_set1_epi32((int)p->hist_w)),
+                                     _mm256_cvttps_epi32(px));
+                __m256 qf =
+                    _mm256_add_ps(_mm256_mul_ps(_mm256_min_ps(_mm256_max_ps(col[g], zero), _mm256_set1_ps(1.0f)),
+                                                _mm256_set1_ps(255.0f)),
+                                  half);
+                __m256i q = _mm256_cvttps_epi32(qf);
+                uint32_t cs[8], qs[8];
+                _mm256_storeu_si256((__m256i *)cs, cell);
+                _mm256_storeu_si256((__m256i *)qs, q);
+                while (m) {
+                    int l = __builtin_ctz((unsigned)m);
+                    m &= m - 1;
+                    h->hits[cs[l]]++;
+                    h->sum[cs[l]] += qs[l];
+                }
+            }
+        }
+        for (int g = 0; g < G && state; g++) { /* the window ends: where each chain stands */
+            float xs[8], ys[8], cs[8];
+            int ls[8];
+            _mm256_storeu_ps(xs, x[g]), _mm256_storeu_ps(ys, y[g]), _mm256_storeu_ps(cs, col[g]);
+            _mm256_storeu_si256((__m256i *)ls, left[g]);
+            for (int l = 0; l < 8; l++) {
+                K_IfsChain *st = &state[c + 8 * (uint32_t)g + (uint32_t)l];
+                st->x = xs[l], st->y = ys[l], st->c = cs[l], st->left = (uint32_t)ls[l];
+                st->status = K_IFS_SKIP; /* the loop reads none of the rest (no condensation here) */
+            }
+        }
+    }
+    /* the chains left over: the kernel itself */
+    for (; c < c1; c++) {
+        K_IfsChain s = t0 == 0 ? k_ifs_init(*p, c) : state[c];
+        uint32_t total = k_ifs_total(*p, c);
+        if (total > t1) total = t1;
+        for (uint32_t t = t0; t < total; t++) {
+            s = k_ifs_step(*p, s, c, t, maps);
+            uint32_t cell = k_ifs_target(*p, s);
+            n[0] += k_ifs_outside(s, cell);
+            n[1] += k_ifs_discarded(s);
+            n[2] += k_ifs_restarted(s);
+            if (cell == K_IFS_NONE) continue;
+            h->hits[cell]++;
+            h->sum[cell] += k_ifs_quant(s.c);
+        }
+        if (state) state[c] = s;
+    }
+}
+
+static void avx2_task(void *ctx, int task)
+{
+    avx2_job *j = ctx;
+    uint32_t n = j->p->chains, per = (n / (uint32_t)j->ntasks + 15) / 16 * 16;
+    uint32_t c0 = per * (uint32_t)task, c1 = c0 + per < n ? c0 + per : n;
+    uint64_t counts[3] = {0, 0, 0};
+    if (c0 < n) game_avx2(j->p, j->maps, c0, c1, 0, UINT32_MAX, NULL, &j->hist[task], counts);
+}
+
+static void merge_task(void *ctx, int task)
+{
+    avx2_job *j = ctx;
+    size_t c0 = j->cells * (size_t)task / 64, c1 = j->cells * (size_t)(task + 1) / 64;
+    for (int h = 1; h < j->ntasks; h++)
+        for (size_t c = c0; c < c1; c++) {
+            j->hist[0].hits[c] += j->hist[h].hits[c];
+            j->hist[0].sum[c] += j->hist[h].sum[c];
+        }
+}
+
+void fb_ifs_avx2_chains(const void *params, const void *maps, uint32_t c0, uint32_t c1, uint32_t t0, uint32_t t1,
+                        void *state, uint32_t *hits, uint64_t *sum, uint64_t counts[3])
+{
+    avx2_hist h = {hits, sum};
+    game_avx2(params, maps, c0, c1, t0, t1, state, &h, counts);
+}
+
+bool fb_ifs_avx2_supported(const void *params)
+{
+    const K_IfsParams *p = params;
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") && p->nmaps <= 8 && p->cmaps == 0 && p->csegs == 0;
+}
+
+fb_result fb_ifs_avx2_game(const void *params, const void *maps, int threads, uint32_t *hits, uint64_t *sum)
+{
+    const K_IfsParams *p = params;
+    size_t cells = (size_t)p->hist_w * p->hist_h;
+    avx2_job j = {p, maps, calloc((size_t)threads, sizeof(avx2_hist)), threads, cells};
+    fb_pool *pool = NULL;
+    fb_result rc = j.hist ? fb_pool_create(threads, &pool) : fb_fail(FB_ERR_NOMEM, "out of memory");
+    for (int t = 0; t < threads && !rc; t++) {
+        j.hist[t].hits = t ? calloc(cells, 4) : hits;
+        j.hist[t].sum = t ? calloc(cells, 8) : sum;
+        if (!j.hist[t].hits || !j.hist[t].sum) rc = fb_fail(FB_ERR_NOMEM, "out of memory for a histogram");
+    }
+    if (!rc) {
+        memset(hits, 0, cells * 4);
+        memset(sum, 0, cells * 8);
+        fb_pool_run(pool, threads, avx2_task, &j);
+        fb_pool_run(pool, 64, merge_task, &j);
+    }
+    for (int t = 1; j.hist && t < threads; t++) {
+        free(j.hist[t].hits);
+        free(j.hist[t].sum);
+    }
+    free(j.hist);
+    fb_pool_destroy(&pool);
+    return rc;
+}
+
+#else
+
+bool fb_ifs_avx2_supported(const void *params)
+{
+    (void)params;
+    return false;
+}
+
+void fb_ifs_avx2_chains(const void *params, const void *maps, uint32_t c0, uint32_t c1, uint32_t t0, uint32_t t1,
+                        void *state, uint32_t *hits, uint64_t *sum, uint64_t counts[3])
+{
+    (void)params, (void)maps, (void)c0, (void)c1, (void)t0, (void)t1, (void)state, (void)hits, (void)sum, (void)counts;
+}
+
+fb_result fb_ifs_avx2_game(const void *params, const void *maps, int threads, uint32_t *hits, uint64_t *sum)
+{
+    (void)params, (void)maps, (void)threads, (void)hits, (void)sum;
+    return fb_fail(FB_ERR_INTERNAL, "no AVX2 on this architecture");
+}
+
+#endif
+
+uint64_t fb_ifs_scalar_game(const void *params, const void *maps_, uint64_t points, uint32_t *hits, uint64_t *sum)
+{
+    const K_IfsParams *p = params;
+    const K_IfsMap *maps = maps_;
+    float cum[K_IFS_MAX_MAPS];
+    for (uint32_t k = 0; k < p->nmaps; k++)
+        cum[k] = k + 1 < p->nmaps ? (float)((double)maps[k + 1].thr / 4294967296.0) : 2.0f;
+    uint32_t s = 2463534242u;
+    float x = 0, y = 0, c = 0.5f;
+    uint64_t plotted = 0;
+    for (uint64_t i = 0; i < points; i++) {
+        s ^= s << 13, s ^= s >> 17, s ^= s << 5; /* xorshift32 */
+        float r = (float)(s >> 8) * (1.0f / 16777216.0f);
+        uint32_t k = 0;
+        while (r >= cum[k]) k++;
+        const K_IfsMap *m = &maps[k];
+        float nx = m->a * x + m->b * y + m->e, ny = m->c * x + m->d * y + m->f;
+        x = nx, y = ny, c = (c + m->colour) * 0.5f;
+        if (i < p->skip) continue;
+        float px = (x - p->x0) * p->sx, py = (p->y0 - y) * p->sy;
+        if (px >= 0 && py >= 0 && px < (float)p->hist_w && py < (float)p->hist_h) {
+            size_t cell = (size_t)py * p->hist_w + (size_t)px;
+            hits[cell]++;
+            sum[cell] += (uint32_t)(c * 255.0f + 0.5f);
+            plotted++;
+        }
+    }
+    return plotted;
+}

@@ -1,0 +1,356 @@
+/*
+ * The Julia sky generator: kernels/julia.h, driven natively or by shaders/julia.comp.
+ * Channels: NAME.iter (uint), NAME.n (smooth count), NAME.inside (0/1), NAME.de (pixels), NAME.R/G/B;
+ * the layer's `channels` stores a subset, and what no stored channel needs is not computed.
+ */
+#include "gen_fbm.h"
+#include "gen_julia.h"
+
+#include "kernels/julia.h"
+#include "kernels/palette.h"
+#include "palette.h"
+#include "julia64_comp.h"
+#include "julia_comp.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- the scene keys and their parser ---------------------------------------------------------- */
+
+static const fb_keyspec julia_keys[] = {
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"julia\""},
+    {"name", FB_K_NAME, 0, 0, false, NULL, "\"sky\"",
+     "layer name; channels NAME.iter, .n, .inside, .de, .R, .G, .B (flag: --layer)"},
+    {"mapping", FB_K_ENUM, 0, 0, false, "rect|polar", "\"rect\"",
+     "starting grid: rect (eq. 7) or polar (eq. 8, seamless left/right)"},
+    {"scale", FB_K_VEC2, 0, 1e6, false, NULL, NULL, "rect: width and height of the grid (default 3 wide, square pixels)"},
+    {"radius", FB_K_NUM, 0, 1e6, true, NULL, "1.5", "polar: radius r of p = r v exp(i 2 pi u)"},
+    {"center", FB_K_VEC2, -1e6, 1e6, false, NULL, "[0.0, 0.0]", "centre of the starting grid (RE,IM)"},
+    {"rotation", FB_K_NUM, -360, 360, false, NULL, "0.0", "rotation of the starting grid, degrees"},
+    {"alpha", FB_K_VEC2, -1e6, 1e6, false, NULL, "[0.0, 0.0]", "allpass warp coefficient a (RE,IM); 0: plain Julia set"},
+    {"c", FB_K_VEC2, -1e6, 1e6, false, NULL, "[-0.8, 0.156]", "Julia constant c (RE,IM)"},
+    {"max-iter", FB_K_INT, 1, 1000000, false, NULL, "256", "iteration limit"},
+    {"bailout", FB_K_NUM, 2, 1e6, false, NULL, "2.0", "escape radius R (iter counts steps until |z| >= R)"},
+    {"turbulence", FB_K_NUM, 0, 10, false, NULL, "0.0", "lambda of eq. 13: z0 = A(1/p) + lambda W(p), W fBm in [0, 1]"},
+    {"turbulence-hurst", FB_K_NUM, 0, 1, false, NULL, "0.8", "Hurst exponent of W"},
+    {"turbulence-octaves", FB_K_INT, 1, 32, false, NULL, "6", "octaves of W"},
+    {"turbulence-frequency", FB_K_NUM, 0, 1e4, true, NULL, "4.0", "cycles of W's first octave across the image"},
+    {"samples", FB_K_INT, 1, 1024, false, NULL, "1", "jittered colour samples per pixel (iter, n, inside, de: centre)"},
+    {"precision", FB_K_ENUM, 0, 0, false, "float|double", "\"float\"",
+     "the grid and orbits in float, or double (escape counts as a double reference has them; Vulkan "
+     "devices need shaderFloat64)"},
+    {"channels", FB_K_NAMES, 0, 0, false, "iter|n|inside|de|R|G|B",
+     "[\"iter\", \"n\", \"inside\", \"de\", \"R\", \"G\", \"B\"]",
+     "channels to store; what none of them needs is not computed (R, G, B go together)"},
+    {"palette", FB_K_ENUM, 0, 0, false, FB_PALETTE_NAMES, "\"night\"", "named colour map"},
+    {"cosine", FB_K_NUMLIST, -10, 10, false, NULL, NULL,
+     "cosine palette a + b cos(2 pi (c t + d)): 12 numbers aR,aG,aB,bR,bG,bB,cR,cG,cB,dR,dG,dB", 12},
+    {"stops", FB_K_STOPS, 0, 1e3, false, NULL, NULL,
+     "gradient: [[t, r, g, b], ...], t rising from 0 to 1 (flag: \"t,r,g,b;t,r,g,b\")"},
+    {"period", FB_K_NUM, 0, 1e6, true, NULL, "24.0", "smooth-count units per palette sweep"},
+    {"palette-offset", FB_K_NUM, -1e6, 1e6, false, NULL, "0.0", "palette position at count 0, in sweeps"},
+    {"brightness", FB_K_NUM, 0, 1e3, false, NULL, "1.0", "linear colour scale"},
+    {"gamma", FB_K_NUM, 0, 10, true, NULL, "1.0", "exponent on the colour"},
+    {"density", FB_K_NUM, 0, 16, false, NULL, "1.5", "contrast: larger keeps only pixels near the set bright"},
+    {"density-count", FB_K_NUM, 1, 1e6, false, NULL, "48.0", "smooth count at which brightness is full"},
+    {"inside-color", FB_K_NUMLIST, 0, 1e3, false, NULL, "[0.0, 0.0, 0.0]", "colour of points inside the set (R,G,B)", 3},
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "true", "store R, G, B as half (flags: --half, --float)"},
+    {"compression", FB_K_ENUM, 0, 0, false, "zip|piz|none", NULL,
+     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+};
+
+static fb_result parse_julia(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
+{
+    /* The default grid is 3 units wide with square pixels, so it depends on the image size. */
+    if (!json_object_get(obj, "scale") && s->width > 0)
+        json_object_set_new(obj, "scale", json_pack("[ff]", 3.0, 3.0 * s->height / s->width));
+    fb_result rc = fb_schema_check(v, path, obj, julia_keys, FB_NKEYS(julia_keys), "a julia layer");
+    if (rc) return rc;
+    fb_julia_params *j = (void *)L->params;
+    j->polar = !strcmp(json_string_value(json_object_get(obj, "mapping")), "polar");
+    fb_json_vec2(obj, "scale", j->scale);
+    fb_json_vec2(obj, "center", j->center);
+    fb_json_vec2(obj, "alpha", j->alpha);
+    fb_json_vec2(obj, "c", j->c);
+    j->radius = fb_json_num(obj, "radius");
+    j->rotation = fb_json_num(obj, "rotation");
+    j->max_iter = (int)json_integer_value(json_object_get(obj, "max-iter"));
+    j->bailout = fb_json_num(obj, "bailout");
+    rc = fb_schema_palette(v, path, obj, &j->palette);
+    if (rc) return rc;
+    j->turbulence = fb_json_num(obj, "turbulence");
+    j->turb_hurst = fb_json_num(obj, "turbulence-hurst");
+    j->turb_octaves = (int)json_integer_value(json_object_get(obj, "turbulence-octaves"));
+    j->turb_frequency = fb_json_num(obj, "turbulence-frequency");
+    j->samples = (int)json_integer_value(json_object_get(obj, "samples"));
+    j->period = fb_json_num(obj, "period");
+    j->palette_offset = fb_json_num(obj, "palette-offset");
+    j->brightness = fb_json_num(obj, "brightness");
+    j->gamma = fb_json_num(obj, "gamma");
+    j->density = fb_json_num(obj, "density");
+    j->density_count = fb_json_num(obj, "density-count");
+    json_t *ic = json_object_get(obj, "inside-color");
+    for (size_t i = 0; i < 3; i++) j->inside_color[i] = json_number_value(json_array_get(ic, i));
+    j->double_precision = !strcmp(json_string_value(json_object_get(obj, "precision")), "double");
+    json_t *chs = json_object_get(obj, "channels");
+    j->channels = 0;
+    for (size_t i = 0; i < json_array_size(chs); i++) {
+        int idx = 0;
+        fb_enum_index("iter|n|inside|de|R|G|B", json_string_value(json_array_get(chs, i)), &idx);
+        j->channels |= 1u << idx;
+    }
+    unsigned rgb = j->channels & 0x70u;
+    if (rgb && rgb != 0x70u) {
+        char sub[256];
+        snprintf(sub, sizeof sub, "%s.channels", path);
+        return fb_schema_error(v, sub, "R, G and B go together: list all three or none");
+    }
+    if (!(j->scale[0] > 0 && j->scale[1] > 0)) {
+        char sub[256];
+        snprintf(sub, sizeof sub, "%s.scale", path);
+        return fb_schema_error(v, sub, "both sides of the grid must be positive");
+    }
+    return FB_OK;
+}
+
+/* ---- the layer --------------------------------------------------------------------------------- */
+
+typedef struct julia_push {
+    K_JuliaParams p;
+    uint32_t y0;
+    uint32_t rows;
+} julia_push;
+
+_Static_assert(offsetof(K_JuliaParams, width) == 0 && offsetof(K_JuliaParams, height) == 4, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, mapping) == 8 && offsetof(K_JuliaParams, max_iter) == 12, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, c_re) == 16 && offsetof(K_JuliaParams, c_im) == 20, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, a_re) == 24 && offsetof(K_JuliaParams, a_im) == 28, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, scale_u) == 32 && offsetof(K_JuliaParams, scale_v) == 36, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, radius) == 40, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, center_re) == 44 && offsetof(K_JuliaParams, center_im) == 48, "std430");
+_Static_assert(offsetof(K_JuliaParams, rot_c) == 52 && offsetof(K_JuliaParams, rot_s) == 56, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, bailout2) == 60, "std430 offset");
+_Static_assert(offsetof(K_JuliaParams, inv_width) == 64 && offsetof(K_JuliaParams, inv_height) == 68, "std430");
+_Static_assert(offsetof(K_JuliaParams, lambda) == 72 && offsetof(K_JuliaParams, turb_norm) == 76, "std430 offset");
+_Static_assert(offsetof(julia_push, y0) == 80 && offsetof(julia_push, rows) == 84, "std430 offset");
+_Static_assert(sizeof(julia_push) <= FB_GEN_MAX_PUSH, "push constants");
+_Static_assert(sizeof(K_JuliaParams) <= sizeof(((fb_gen *)0)->params), "params fit");
+
+/* The read-only buffer of shaders/julia.comp: colour parameters, then the palette table. */
+typedef struct julia_palette {
+    K_SkyColour colour;
+    K_FbmParams turb;
+    float pad[3];
+    float entries[K_PALETTE_SIZE][4];
+    K_JuliaD dp; /* the double-precision shader's parameters and constants */
+} julia_palette;
+_Static_assert(sizeof(K_SkyColour) == 48 && offsetof(julia_palette, turb) == 48, "std430 offset");
+_Static_assert(sizeof(K_FbmParams) == 84 && offsetof(julia_palette, entries) == 144, "std430: vec4 array at 144");
+_Static_assert(FB_PALETTE_ENTRIES == K_PALETTE_SIZE, "palette size");
+_Static_assert(offsetof(julia_palette, dp) == 144 + 16 * K_PALETTE_SIZE && sizeof(K_JuliaD) == 29 * 8, "std430");
+
+static const K_JuliaParams *params(const fb_gen *g)
+{
+    return (const K_JuliaParams *)(const void *)g->params;
+}
+
+/* The same table lookup as shaders/julia.comp. */
+/* The palette lookup of kernels/palette.h (k_sky_rgb), the entries fetched from the table. */
+static void sky_colour(const julia_palette *pal, K_JuliaResult res, float rgb[3])
+{
+    uint32_t i0 = k_sky_i0(pal->colour, res.nsmooth), i1 = k_sky_i1(i0);
+    const float *a = pal->entries[i0], *b = pal->entries[i1];
+    k_vec3 v = k_sky_rgb(pal->colour, res.inside, res.nsmooth, (k_vec4){a[0], a[1], a[2], a[3]},
+                         (k_vec4){b[0], b[1], b[2], b[3]});
+    rgb[0] = v.x, rgb[1] = v.y, rgb[2] = v.z;
+}
+
+/* Kernel planes: iter, n, inside, de, R, G, B (bit k of the stored mask: plane k stored). */
+enum { P_ITER, P_N, P_INSIDE, P_DE, P_R, P_G, P_B, NPLANES };
+
+/* What the orbits must compute for the stored planes. */
+static uint32_t want_of(uint32_t stored)
+{
+    uint32_t smooth = (1u << P_N) | (1u << P_R) | (1u << P_G) | (1u << P_B);
+    return ((stored & smooth) ? K_JULIA_WANT_SMOOTH : 0u) | ((stored & (1u << P_DE)) ? K_JULIA_WANT_DE : 0u);
+}
+
+static void store(void *const *planes, size_t i, K_JuliaResult res)
+{
+    if (planes[P_ITER]) ((uint32_t *)planes[P_ITER])[i] = res.iter;
+    if (planes[P_N]) ((float *)planes[P_N])[i] = res.nsmooth;
+    if (planes[P_INSIDE]) ((float *)planes[P_INSIDE])[i] = (float)res.inside;
+    if (planes[P_DE]) ((float *)planes[P_DE])[i] = res.de;
+}
+
+static void store_colour(void *const *planes, size_t i, const julia_palette *pal, const float sum[3])
+{
+    float s = pal->colour.samples == 1 ? 1.0f : pal->colour.inv_samples;
+    for (int ch = 0; ch < 3; ch++) ((float *)planes[P_R + ch])[i] = pal->colour.samples == 1 ? sum[ch] : sum[ch] * s;
+}
+
+/* One pixel at a time: the shader's pairs give the same results to the bit (their point is two
+ * dependency chains per SIMD lane; scalar C ran slower with them). */
+static void julia_rows(const fb_gen *g, int y0, int n, void *const *planes)
+{
+    const K_JuliaParams *p = params(g);
+    const julia_palette *pal = g->input;
+    const uint32_t want = want_of(g->spec[4]);
+    const bool colour = planes[P_R] != NULL, dbl = g->needs_float64;
+    for (int r = 0; r < n; r++)
+        for (uint32_t x = 0; x < p->width; x++) {
+            uint32_t y = (uint32_t)(y0 + r);
+            K_JuliaResult res =
+                dbl ? k_julia_run_d(*p, pal->dp, pal->turb, x + 0.5, y + 0.5, want)
+                    : k_julia_run(*p, k_julia_start_at(*p, pal->turb, (float)x + 0.5f, (float)y + 0.5f), want);
+            size_t i = (size_t)r * p->width + x;
+            store(planes, i, res);
+            if (!colour) continue;
+            /* the average of `samples` jittered samples in linear colour (sample 0 is the centre) */
+            float sum[3], c[3];
+            sky_colour(pal, res, sum);
+            for (uint32_t k = 1; k < pal->colour.samples; k++) {
+                k_vec2 f = k_julia_sample_xy(*p, pal->colour.seed, x, y, k);
+                sky_colour(pal,
+                           dbl ? k_julia_run_d(*p, pal->dp, pal->turb, f.x, f.y, K_JULIA_WANT_SMOOTH)
+                               : k_julia_run(*p, k_julia_start_at(*p, pal->turb, f.x, f.y), K_JULIA_WANT_SMOOTH),
+                           c);
+                for (int ch = 0; ch < 3; ch++) sum[ch] += c[ch];
+            }
+            store_colour(planes, i, pal, sum);
+        }
+}
+
+static fb_result julia_init(fb_gen *g)
+{
+    const fb_scene *s = g->scene;
+    const fb_julia_params *j = fb_layer_params(g->layer);
+    K_JuliaParams *p = (K_JuliaParams *)(void *)g->params;
+    memset(p, 0, sizeof *p);
+    p->width = (uint32_t)s->width;
+    p->height = (uint32_t)s->height;
+    p->mapping = j->polar ? K_JULIA_POLAR : K_JULIA_RECT;
+    p->max_iter = (uint32_t)j->max_iter;
+    p->c_re = (float)j->c[0];
+    p->c_im = (float)j->c[1];
+    p->a_re = (float)j->alpha[0];
+    p->a_im = (float)j->alpha[1];
+    p->scale_u = (float)j->scale[0];
+    p->scale_v = (float)j->scale[1];
+    p->radius = (float)j->radius;
+    p->center_re = (float)j->center[0];
+    p->center_im = (float)j->center[1];
+    double a = j->rotation * 3.14159265358979323846 / 180.0;
+    p->rot_c = (float)cos(a);
+    p->rot_s = (float)sin(a);
+    p->bailout2 = (float)(j->bailout * j->bailout);
+    p->inv_width = 1.0f / (float)s->width;
+    p->inv_height = 1.0f / (float)s->height;
+
+    julia_palette *pal = calloc(1, sizeof *pal);
+    if (!pal) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    pal->colour = (K_SkyColour){
+        .inv_period = (float)(1.0 / j->period),
+        .offset = (float)j->palette_offset,
+        .brightness = (float)j->brightness,
+        .gamma = (float)j->gamma,
+        .density = (float)j->density,
+        .inv_n_ref = (float)(1.0 / j->density_count),
+        .inside_r = (float)j->inside_color[0],
+        .inside_g = (float)j->inside_color[1],
+        .inside_b = (float)j->inside_color[2],
+        .samples = (uint32_t)j->samples,
+        .seed = s->seed,
+        .inv_samples = (float)(1.0 / j->samples),
+    };
+    fb_palette_build(&j->palette, pal->entries);
+    /* double precision: the parameters unrounded, and the constants of k_julia_sincos_d */
+    pal->dp = (K_JuliaD){
+        .c_re = j->c[0],
+        .c_im = j->c[1],
+        .a_re = j->alpha[0],
+        .a_im = j->alpha[1],
+        .scale_u = j->scale[0],
+        .scale_v = j->scale[1],
+        .radius = j->radius,
+        .center_re = j->center[0],
+        .center_im = j->center[1],
+        .rot_c = cos(a),
+        .rot_s = sin(a),
+        .bailout2 = j->bailout * j->bailout,
+    };
+    k_julia_d_constants(&pal->dp);
+    /* Turbulence W: fBm over (u, v) with the layer's own parameters; tileable for polar grids. */
+    K_FbmParams *t = &pal->turb;
+    t->seed = s->seed;
+    t->noise = K_NOISE_GRADIENT;
+    t->octaves = (uint32_t)j->turb_octaves;
+    t->gain = (float)exp2(-j->turb_hurst);
+    t->lacunarity = 2.0f;
+    t->rot_c = 0.8f; /* the paper's rotation (0.8, 0.6) between octaves */
+    t->rot_s = 0.6f;
+    t->flags = j->polar ? K_FBM_TILEABLE : 0u;
+    t->freq_x = (float)j->turb_frequency;
+    t->freq_y = (float)(j->polar ? j->turb_frequency : j->turb_frequency * s->height / s->width);
+    fb_fbm_params_frame(t, s->width, s->height);
+    double gsum = 0, amp = 1;
+    for (int i = 0; i < j->turb_octaves; i++, amp *= t->gain) gsum += amp;
+    p->lambda = (float)j->turbulence;
+    p->turb_norm = (float)(1.0 / gsum);
+    g->owned = pal;
+    g->input = pal;
+    g->input_size = sizeof *pal;
+
+    static const char *const suffix[NPLANES] = {"iter", "n", "inside", "de", "R", "G", "B"};
+    exrio_type colour = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
+    const exrio_type types[NPLANES] = {EXRIO_UINT, EXRIO_FLOAT, EXRIO_HALF, EXRIO_FLOAT, colour, colour, colour};
+    uint32_t stored = (uint32_t)j->channels & ((1u << NPLANES) - 1);
+    g->nkernel = NPLANES;
+    g->nchannels = 0;
+    for (int k = 0; k < NPLANES; k++) {
+        if (!(stored & (1u << k))) continue;
+        int c = g->nchannels++;
+        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[k]);
+        g->channel_types[c] = types[k];
+        g->kernel_of[c] = k;
+    }
+    /* the preview: colour if stored, else the first float channel (n, inside, de), else iter */
+    g->preview_rgb = -1;
+    g->preview_channel = 0;
+    for (int c = g->nchannels - 1; c >= 0; c--) {
+        if (g->kernel_of[c] == P_R) g->preview_rgb = c;
+        if (g->kernel_of[c] != P_ITER && g->kernel_of[c] != P_R && g->kernel_of[c] != P_G && g->kernel_of[c] != P_B)
+            g->preview_channel = c;
+    }
+    g->native_rows = julia_rows;
+    g->needs_float64 = j->double_precision;
+    g->spv = j->double_precision ? julia64_comp : julia_comp;
+    g->spv_size = j->double_precision ? sizeof julia64_comp : sizeof julia_comp;
+    g->params_size = sizeof(K_JuliaParams);
+    g->push_size = sizeof(julia_push);
+    g->spec[0] = p->mapping;
+    g->spec[1] = p->lambda != 0.0f;
+    g->spec[2] = (uint32_t)j->samples;
+    g->spec[3] = (pal->colour.gamma != 1.0f ? 1u : 0u) | (pal->colour.density > 0.0f ? 2u : 0u);
+    g->spec[4] = stored;
+    g->nspec = 5;
+    g->per_invocation = 2;
+    return FB_OK;
+}
+
+const fb_gen_class fb_gen_julia = {
+    .name = "julia",
+    .synopsis = "julia [options] -o OUT.exr",
+    .summary = "a warped Julia set (night skies), one layer",
+    .what = "a julia layer",
+    .keys = julia_keys,
+    .nkeys = FB_NKEYS(julia_keys),
+    .params_size = sizeof(fb_julia_params),
+    .parse = parse_julia,
+    .init = julia_init,
+    .bench = fb_julia_bench,
+};
+_Static_assert(sizeof(fb_julia_params) <= FB_LAYER_PARAMS_MAX, "FB_LAYER_PARAMS_MAX is too small");

@@ -1,0 +1,336 @@
+/*
+ * Delaunay refinement of survey points (see terrain.h and SPEC.md section 4).
+ */
+#include "terrain.h"
+
+#include "predicates.h"
+
+#include "kernels/hash.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define STREAM_SITE_X 0x51u
+#define STREAM_SITE_Y 0x52u
+#define STREAM_GAUSS  0x53u
+
+void fb_terrain_free(fb_terrain *t)
+{
+    if (!t) return;
+    fb_dt_free(&t->dt);
+    free(t->z);
+    memset(t, 0, sizeof *t);
+}
+
+static bool reserve_z(fb_terrain *t, size_t need)
+{
+    if (need <= t->capz) return true;
+    size_t c = t->capz ? t->capz : 64;
+    while (c < need) c *= 2;
+    double *z = realloc(t->z, c * sizeof *z);
+    if (!z) return false;
+    t->z = z;
+    t->capz = c;
+    return true;
+}
+
+fb_result fb_terrain_build(fb_terrain *t, const double *xyz, size_t n, const char *who, fb_terrain_stats *st)
+{
+    memset(t, 0, sizeof *t);
+    double t0 = fb_now();
+    double *xy = malloc((n ? n : 1) * 2 * sizeof *xy);
+    uint32_t *perm = malloc((n ? n : 1) * sizeof *perm);
+    if (!xy || !perm) {
+        free(xy), free(perm);
+        return fb_fail(FB_ERR_NOMEM, "%s: out of memory for %zu points", who, n);
+    }
+    for (size_t i = 0; i < n; i++) xy[2 * i] = xyz[3 * i], xy[2 * i + 1] = xyz[3 * i + 1];
+    fb_result rc = fb_dt_build(&t->dt, xy, n, perm, who);
+    free(xy);
+    if (rc) {
+        free(perm);
+        return rc;
+    }
+    if (!reserve_z(t, t->dt.capv)) {
+        free(perm);
+        fb_terrain_free(t);
+        return fb_fail(FB_ERR_NOMEM, "%s: out of memory", who);
+    }
+    t->ninput = t->dt.nv;
+    t->bbox[0] = t->bbox[2] = INFINITY, t->bbox[1] = t->bbox[3] = -INFINITY;
+    for (uint32_t v = 0; v < t->dt.nv; v++) {
+        t->z[v] = xyz[3 * (size_t)perm[v] + 2];
+        const double *p = t->dt.xy + 2 * (size_t)v;
+        t->bbox[0] = fmin(t->bbox[0], p[0]), t->bbox[1] = fmax(t->bbox[1], p[0]);
+        t->bbox[2] = fmin(t->bbox[2], p[1]), t->bbox[3] = fmax(t->bbox[3], p[1]);
+    }
+    free(perm);
+    if (st) {
+        st->input = t->dt.nv;
+        st->duplicates = t->dt.duplicates;
+        st->build_seconds = fb_now() - t0;
+    }
+    return FB_OK;
+}
+
+double fb_terrain_sigma2_estimate(const fb_terrain *t, double hurst)
+{
+    const fb_dt *d = &t->dt;
+    double sum = 0;
+    uint64_t n = 0;
+    for (uint32_t tr = 0; tr < d->nt; tr++) {
+        if (fb_dt_is_ghost(d, tr)) continue;
+        const uint32_t *v = d->tv + 3 * (size_t)tr;
+        for (int i = 0; i < 3; i++) {
+            uint32_t a = v[(i + 1) % 3], b = v[(i + 2) % 3], nb = d->tn[3 * (size_t)tr + i];
+            if (a >= t->ninput || b >= t->ninput) continue;
+            if (!fb_dt_is_ghost(d, nb) && nb < tr) continue; /* each edge once */
+            double dist =
+                hypot(d->xy[2 * (size_t)a] - d->xy[2 * (size_t)b], d->xy[2 * (size_t)a + 1] - d->xy[2 * (size_t)b + 1]);
+            double dz = t->z[a] - t->z[b];
+            sum += dz * dz / pow(dist, 2 * hurst);
+            n++;
+        }
+    }
+    return n ? sum / (double)n : 0.0;
+}
+
+double fb_terrain_gauss(uint32_t seed, uint64_t index)
+{
+    uint32_t lo = (uint32_t)index, hi = (uint32_t)(index >> 32);
+    uint32_t h1 = k_hash3(seed ^ k_hash(hi), STREAM_GAUSS, 2 * lo);
+    uint32_t h2 = k_hash3(seed ^ k_hash(hi), STREAM_GAUSS, 2 * lo + 1);
+    double u1 = ((double)h1 + 0.5) * 0x1p-32, u2 = (double)h2 * 0x1p-32;
+    return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
+}
+
+/* The variance of z_abc - z_* over the finite triangles of a list. */
+static double diff_variance(const fb_terrain *t, const uint32_t *tris, size_t n)
+{
+    double sum = 0;
+    size_t m = 0;
+    for (size_t k = 0; k < n; k++) {
+        const uint32_t *v = t->dt.tv + 3 * (size_t)tris[k];
+        double za = t->z[v[0]], zb = t->z[v[1]], zc = t->z[v[2]], mean = (za + zb + zc) / 3;
+        sum += (mean - za) * (mean - za) + (mean - zb) * (mean - zb) + (mean - zc) * (mean - zc);
+        m += 3;
+    }
+    return m ? sum / (double)m : 0.0;
+}
+
+/* Per stage: over the whole mesh. */
+static double stage_variance(const fb_terrain *t)
+{
+    const fb_dt *d = &t->dt;
+    double sum = 0;
+    uint64_t m = 0;
+    for (uint32_t tr = 0; tr < d->nt; tr++) {
+        if (fb_dt_is_ghost(d, tr)) continue;
+        sum += diff_variance(t, &tr, 1) * 3;
+        m += 3;
+    }
+    return m ? sum / (double)m : 0.0;
+}
+
+/* Local: over the triangle, its finite neighbours and theirs (at most 10 triangles). */
+static double local_variance(const fb_terrain *t, uint32_t tr)
+{
+    const fb_dt *d = &t->dt;
+    uint32_t list[16];
+    size_t n = 0, head = 0;
+    list[n++] = tr;
+    for (int ring = 0; ring < 2; ring++) {
+        size_t end = n;
+        for (; head < end; head++)
+            for (int i = 0; i < 3; i++) {
+                uint32_t nb = d->tn[3 * (size_t)list[head] + i];
+                if (fb_dt_is_ghost(d, nb)) continue;
+                bool seen = false;
+                for (size_t k = 0; k < n && !seen; k++) seen = list[k] == nb;
+                if (!seen && n < 16) list[n++] = nb;
+            }
+    }
+    return diff_variance(t, list, n);
+}
+
+/* A hint grid for locating random sites: each cell remembers the last vertex inserted in it. */
+typedef struct hint_grid {
+    uint32_t *cell;
+    uint32_t side;
+    double x0, y0, sx, sy;
+} hint_grid;
+
+static uint32_t grid_index(const hint_grid *g, double x, double y)
+{
+    double fx = (x - g->x0) * g->sx, fy = (y - g->y0) * g->sy;
+    uint32_t ix = fx <= 0 ? 0 : fx >= g->side - 1 ? g->side - 1 : (uint32_t)fx;
+    uint32_t iy = fy <= 0 ? 0 : fy >= g->side - 1 ? g->side - 1 : (uint32_t)fy;
+    return iy * g->side + ix;
+}
+
+static bool grid_rebuild(hint_grid *g, const fb_terrain *t)
+{
+    uint32_t side = (uint32_t)ceil(sqrt(t->dt.nv / 2.0));
+    if (side < 1) side = 1;
+    if (side > 4096) side = 4096;
+    uint32_t *c = malloc((size_t)side * side * sizeof *c);
+    if (!c) return false;
+    free(g->cell);
+    g->cell = c;
+    g->side = side;
+    g->x0 = t->bbox[0], g->y0 = t->bbox[2];
+    g->sx = t->bbox[1] > t->bbox[0] ? side / (t->bbox[1] - t->bbox[0]) : 0;
+    g->sy = t->bbox[3] > t->bbox[2] ? side / (t->bbox[3] - t->bbox[2]) : 0;
+    for (size_t i = 0; i < (size_t)side * side; i++) c[i] = DT_NONE;
+    for (uint32_t v = 0; v < t->dt.nv; v++) c[grid_index(g, t->dt.xy[2 * (size_t)v], t->dt.xy[2 * (size_t)v + 1])] = v;
+    /* Empty cells borrow a neighbour's vertex (along the row, then from the nearest filled row), so
+     * that no walk starts far away. */
+    for (uint32_t y = 0; y < side; y++) {
+        uint32_t *row = c + (size_t)y * side, last = DT_NONE;
+        for (uint32_t x = 0; x < side; x++) row[x] = row[x] == DT_NONE ? last : (last = row[x]);
+        last = DT_NONE;
+        for (uint32_t x = side; x-- > 0;) row[x] = row[x] == DT_NONE ? last : (last = row[x]);
+    }
+    for (uint32_t y = 1; y < side; y++)
+        if (c[(size_t)y * side] == DT_NONE) memcpy(c + (size_t)y * side, c + (size_t)(y - 1) * side, side * sizeof *c);
+    for (uint32_t y = side - 1; y-- > 0;)
+        if (c[(size_t)y * side] == DT_NONE) memcpy(c + (size_t)y * side, c + (size_t)(y + 1) * side, side * sizeof *c);
+    return true;
+}
+
+static const fb_terrain_center *nearest_center(const fb_terrain_opts *o, const double *p)
+{
+    const fb_terrain_center *best = NULL;
+    double bd = INFINITY;
+    for (int i = 0; i < o->ncenters; i++) {
+        double dx = p[0] - o->centers[i].x, dy = p[1] - o->centers[i].y, dd = dx * dx + dy * dy;
+        if (dd < bd) bd = dd, best = &o->centers[i];
+    }
+    return best;
+}
+
+fb_result fb_terrain_refine(fb_terrain *t, const fb_terrain_opts *o, const char *who, fb_terrain_stats *st)
+{
+    double t0 = fb_now();
+    fb_dt *d = &t->dt;
+    fb_terrain_stats local_st = {0};
+    if (!st) st = &local_st;
+    /* sigma^2 per centre (or the one global value), estimated where not given */
+    double sigma2 = o->sigma >= 0 ? o->sigma * o->sigma : fb_terrain_sigma2_estimate(t, o->hurst);
+    st->sigma = sqrt(sigma2);
+    double *csig2 = NULL;
+    if (o->ncenters) {
+        csig2 = malloc((size_t)o->ncenters * sizeof *csig2);
+        if (!csig2) return fb_fail(FB_ERR_NOMEM, "%s: out of memory", who);
+        for (int i = 0; i < o->ncenters; i++) {
+            const fb_terrain_center *c = &o->centers[i];
+            csig2[i] = c->sigma >= 0   ? c->sigma * c->sigma
+                       : o->sigma >= 0 ? sigma2
+                                       : fb_terrain_sigma2_estimate(t, c->hurst);
+        }
+    }
+    /* Refuse what would turn the mesh into NaN or infinities: a variance that overflowed (heights or
+     * distances too large for their squares), given or estimated. */
+    bool finite = isfinite(sigma2);
+    for (int i = 0; i < o->ncenters && csig2; i++) finite = finite && isfinite(csig2[i]);
+    if (!finite) {
+        free(csig2);
+        return fb_fail(FB_ERR_INPUT,
+                       "%s: the variance of the height increments is not a finite number (sigma^2 = %g): the "
+                       "points' heights or distances are too large",
+                       who, sigma2);
+    }
+    hint_grid g = {0};
+    if (!o->sweep && !grid_rebuild(&g, t)) {
+        free(csig2);
+        return fb_fail(FB_ERR_NOMEM, "%s: out of memory", who);
+    }
+    fb_result rc = FB_OK;
+    double V = stage_variance(t);
+    uint32_t stage_nv = d->nv;
+    st->stages = 1;
+    uint64_t draws = 0, cursor = 0, attempts = 0;
+    const uint64_t max_attempts = o->insert * 64 + 4096;
+    for (uint64_t i = 0; i < o->insert;) {
+        if (++attempts > max_attempts) {
+            rc = fb_fail(FB_ERR_INPUT, "%s: could not place new points (the hull has no room left at double precision)",
+                         who);
+            break;
+        }
+        uint32_t tr;
+        if (o->sweep) {
+            for (;; cursor++) {
+                tr = (uint32_t)(cursor % d->nt);
+                if (!fb_dt_is_ghost(d, tr)) break;
+            }
+            cursor++;
+        } else {
+            uint64_t k = draws++;
+            uint32_t s = o->seed ^ k_hash((uint32_t)(k >> 32));
+            double q[2] = {t->bbox[0] + (t->bbox[1] - t->bbox[0]) * (k_hash3(s, STREAM_SITE_X, (uint32_t)k) * 0x1p-32),
+                           t->bbox[2] + (t->bbox[3] - t->bbox[2]) * (k_hash3(s, STREAM_SITE_Y, (uint32_t)k) * 0x1p-32)};
+            uint32_t hv = g.cell[grid_index(&g, q[0], q[1])]; /* never empty: see grid_rebuild */
+            tr = fb_dt_locate(d, q, d->vt[hv]);
+            if (fb_dt_is_ghost(d, tr)) {
+                st->rejected++;
+                continue;
+            }
+        }
+        const uint32_t *v = d->tv + 3 * (size_t)tr;
+        const double *a = d->xy + 2 * (size_t)v[0], *b = d->xy + 2 * (size_t)v[1], *c = d->xy + 2 * (size_t)v[2];
+        double p[2] = {(a[0] + b[0] + c[0]) / 3, (a[1] + b[1] + c[1]) / 3};
+        if (d->nv >= 2 * (uint64_t)stage_nv && !o->local_variance) {
+            V = stage_variance(t);
+            stage_nv = d->nv;
+            st->stages++;
+        }
+        double var_abc = o->local_variance ? local_variance(t, tr) : V;
+        double H = o->hurst, s2 = sigma2;
+        if (o->ncenters) {
+            const fb_terrain_center *cc = nearest_center(o, p);
+            H = cc->hurst, s2 = csig2[cc - o->centers];
+        }
+        double var = 0;
+        for (int k = 0; k < 3; k++) {
+            const double *x = d->xy + 2 * (size_t)v[k];
+            double dx = p[0] - x[0], dy = p[1] - x[1];
+            var += pow(dx * dx + dy * dy, H) * s2 - var_abc; /* |p - x|^(2H) sigma^2 */
+        }
+        var /= 9;
+        if (var < 0) {
+            st->clamped++;
+            var = 0;
+        }
+        double z = (t->z[v[0]] + t->z[v[1]] + t->z[v[2]]) / 3 + sqrt(var) * fb_terrain_gauss(o->seed, i);
+        if (!reserve_z(t, (size_t)d->nv + 1)) {
+            rc = fb_fail(FB_ERR_NOMEM, "%s: out of memory after %llu inserted points", who, (unsigned long long)i);
+            break;
+        }
+        uint32_t nvx;
+        int r = fb_dt_insert(d, p[0], p[1], tr, &nvx);
+        if (r < 0) {
+            rc = fb_fail(FB_ERR_NOMEM, "%s: out of memory after %llu inserted points", who, (unsigned long long)i);
+            break;
+        }
+        if (r > 0) { /* the barycentre rounded onto a vertex: a triangle too small for doubles */
+            st->rejected++;
+            continue;
+        }
+        t->z[nvx] = z;
+        i++;
+        st->inserted = i;
+        if (!o->sweep) {
+            if (d->nv > 4ull * g.side * g.side && g.side < 4096 && !grid_rebuild(&g, t)) {
+                rc = fb_fail(FB_ERR_NOMEM, "%s: out of memory", who);
+                break;
+            }
+            g.cell[grid_index(&g, p[0], p[1])] = nvx;
+        }
+        if (o->progress && (i & 0xffff) == 0) o->progress(o->user, i, o->insert);
+    }
+    free(g.cell);
+    free(csig2);
+    st->refine_seconds = fb_now() - t0;
+    return rc;
+}
