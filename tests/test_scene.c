@@ -15,6 +15,7 @@
 #include "testhelp.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 /* A layer's parameters as its generator's type. */
@@ -203,8 +204,56 @@ static void test_sets(void)
     fb_scene_fini(&s);
 }
 
+static char g_last_error[1024];
+
+static void sink(int level, const char *msg, void *user)
+{
+    (void)user;
+    if (level == FB_LOG_ERROR) snprintf(g_last_error, sizeof g_last_error, "%s", msg);
+}
+
+/* The registry: every generator is found by its name, its table starts and ends like the others,
+ * its flags are distinct, every default is a valid value of its own key, and its parameters fit. */
+static void test_registry(void)
+{
+    int n = 0;
+    fb_vctx v = {.origin = "registry", .text = ""};
+    for (int i = 0; fb_gen_list[i]; i++, n++) {
+        const fb_gen_class *c = fb_gen_list[i];
+        CHECKF(fb_gen_find(c->name) == c, "%s: found by name", c->name);
+        CHECKF(c->parse && c->init && c->keys && c->nkeys >= 4 && c->what, "%s: complete", c->name);
+        CHECKF(c->params_size > 0 && c->params_size <= FB_LAYER_PARAMS_MAX, "%s: parameters fit", c->name);
+        CHECKF(!strcmp(c->keys[0].key, "type") && !strcmp(c->keys[1].key, "name") &&
+                   !strcmp(c->keys[c->nkeys - 2].key, "half") && !strcmp(c->keys[c->nkeys - 1].key, "compression"),
+               "%s: type, name first; half, compression last", c->name);
+        for (int k = 0; k < c->nkeys; k++) {
+            const fb_keyspec *a = &c->keys[k];
+            const char *fa = a->flag ? a->flag : !strcmp(a->key, "name") ? "layer" : a->key;
+            for (int m = k + 1; m < c->nkeys; m++) {
+                const fb_keyspec *b = &c->keys[m];
+                const char *fb = b->flag ? b->flag : !strcmp(b->key, "name") ? "layer" : b->key;
+                CHECKF(strcmp(a->key, b->key) && strcmp(fa, fb), "%s: keys %s and %s are distinct, as flags too",
+                       c->name, a->key, b->key);
+            }
+            if (!a->def) continue;
+            json_t *d = json_loads(a->def, JSON_DECODE_ANY, NULL);
+            CHECKF(d && fb_schema_check_value(&v, a->key, a, d) == FB_OK, "%s.%s: default %s is valid", c->name, a->key,
+                   a->def);
+            json_decref(d);
+        }
+    }
+    CHECK(n >= 7 && fb_gen_find("nope") == NULL);
+    /* an unknown type lists every generator */
+    fb_scene s;
+    fb_log_set_sink(sink, NULL);
+    CHECK(fb_scene_parse("{\"layers\": [{\"type\": \"nope\"}]}", "t.json", &s) == FB_ERR_INPUT);
+    for (int i = 0; fb_gen_list[i]; i++)
+        CHECKF(strstr(g_last_error, fb_gen_list[i]->name), "%s listed", fb_gen_list[i]->name);
+}
+
 int main(void)
 {
+    test_registry();
     test_sets();
     test_julia_keys();
     test_keys();

@@ -1,0 +1,77 @@
+/*
+ * The checker generator: the example of docs/architecture.md, "Adding a generator". Its keys, its
+ * parser, its layer driver and its class; the math is kernels/checker.h.
+ */
+#include "gen_checker.h"
+
+#include "kernels/checker.h"
+#include "checker_comp.h"
+
+#include <stdio.h>
+#include <string.h>
+
+static const fb_keyspec checker_keys[] = {
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"checker\""},
+    {"name", FB_K_NAME, 0, 0, false, NULL, "\"checker\"", "layer name; the channel is NAME.Y (flag: --layer)"},
+    {"cells", FB_K_INT, 1, 65536, false, NULL, "8", "squares across each side of the image"},
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store as half instead of float (flags: --half, --float)"},
+    {"compression", FB_K_ENUM, 0, 0, false, "zip|piz|none", NULL,
+     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+};
+
+static fb_result parse_checker(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
+{
+    fb_result rc = fb_schema_check(v, path, obj, checker_keys, FB_NKEYS(checker_keys), "a checker layer");
+    if (rc) return rc;
+    fb_checker_params *c = (void *)L->params;
+    c->cells = (int)json_integer_value(json_object_get(obj, "cells"));
+    if (c->cells > s->width || c->cells > s->height) {
+        char sub[256];
+        snprintf(sub, sizeof sub, "%s.cells", path);
+        return fb_schema_error(v, sub, "%d squares do not fit a %d x %d image", c->cells, s->width, s->height);
+    }
+    return FB_OK;
+}
+
+typedef struct {
+    K_CheckerParams p;
+    uint32_t y0, rows;
+} checker_push;
+
+static void checker_rows(const fb_gen *g, int y0, int n, void *const *planes)
+{
+    const K_CheckerParams *p = (const void *)g->params;
+    float *out = planes[0];
+    for (int r = 0; r < n; r++)
+        for (uint32_t x = 0; x < p->width; x++)
+            out[(size_t)r * p->width + x] = k_checker_pixel(*p, x, (uint32_t)(y0 + r));
+}
+
+static fb_result checker_init(fb_gen *g)
+{
+    const fb_checker_params *c = fb_layer_params(g->layer);
+    K_CheckerParams *p = (void *)g->params;
+    *p = (K_CheckerParams){(uint32_t)g->scene->width, (uint32_t)g->scene->height, (uint32_t)c->cells, 0};
+    g->nchannels = 1;
+    snprintf(g->channel_names[0], sizeof g->channel_names[0], "%s.Y", g->layer->name);
+    g->channel_types[0] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
+    g->native_rows = checker_rows;
+    g->spv = checker_comp;
+    g->spv_size = sizeof checker_comp;
+    g->params_size = sizeof(K_CheckerParams);
+    g->push_size = sizeof(checker_push);
+    return FB_OK;
+}
+
+const fb_gen_class fb_gen_checker = {
+    .name = "checker",
+    .synopsis = "checker [options] -o OUT.exr",
+    .summary = "a checkerboard (the example generator of docs/architecture.md)",
+    .what = "a checker layer",
+    .keys = checker_keys,
+    .nkeys = FB_NKEYS(checker_keys),
+    .params_size = sizeof(fb_checker_params),
+    .parse = parse_checker,
+    .init = checker_init,
+};
+_Static_assert(sizeof(fb_checker_params) <= FB_LAYER_PARAMS_MAX, "FB_LAYER_PARAMS_MAX is too small");

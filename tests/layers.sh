@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# scripts/check-layers.sh: passes on the tree, and fails, naming the file, on each kind of include
+# against the order of folders (planted in a scratch copy of host/).
+set -u
+src=$(cd "$(dirname "$0")/.." && pwd)
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+pass=0 fail=0
+check() { if eval "$2"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL: $1" >&2; fi; }
+check "the tree keeps the order" "bash '$src/scripts/check-layers.sh' '$src/host' 2> '$tmp/err'"
+# plant: FILE, the include, the words the message must have
+plant() {
+    rm -rf "$tmp/host"
+    cp -r "$src/host" "$tmp/host"
+    printf '#include "%s"\n' "$2" >> "$tmp/host/$1"
+    bash "$src/scripts/check-layers.sh" "$tmp/host" 2> "$tmp/err"
+    local rc=$?
+    check "$1 including $2 fails" "[ $rc -eq 1 ] && grep -q 'host/$1: #include \"$2\"' '$tmp/err' && grep -q '$3' '$tmp/err'"
+}
+plant io/exrio.c scene.h "host/core) goes against"         # io may not include core (a cycle with bake.c)
+plant base/log.c exrio.h "host/io) goes against"           # base includes nothing above it
+plant core/bake.c gen_ifs.h "host/gen/ifs) goes against"   # core knows no generator
+plant gen/fbm/layer.c gen_ifs.h "host/gen/ifs) goes against" # a generator another it does not link
+plant geom/delaunay.c vkc.h "host/io) goes against"        # geom and io are side by side
+plant core/scene.c ../io/exrio.h "not a header of host/ by its name" # no paths around the rule
+plant gen/julia/layer.c cli.h "not a header of host/ by its name"    # no header of that name
+echo "$pass passed, $fail failed"
+[ "$fail" -eq 0 ]
