@@ -4,7 +4,7 @@
  *     fbm(x) = sum_{i=0}^{n-1} G^i * noise(R^i (L^i x) + o_i),   G = 2^-H
  *
  * The parameter block is shared with the shader's push constants (std430: scalars only, so the C
- * and GLSL offsets agree; host/gen/fbm.c asserts every offset).
+ * and GLSL offsets agree; host/gen/fbm/layer.c asserts every offset).
  */
 #ifndef FB_KERNELS_FBM_H
 #define FB_KERNELS_FBM_H

@@ -1,6 +1,6 @@
 // The chaos game: one invocation per chain, `nsteps` steps per dispatch, every plotted point
 // splatted into integer histograms with atomics (order-independent sums). The math is
-// kernels/ifs.h; host/gen/ifs.c runs the same loop natively. Included by ifs.comp (32-bit atomics:
+// kernels/ifs.h; host/gen/ifs/layer.c runs the same loop natively. Included by ifs.comp (32-bit atomics:
 // a hit and its colour are two adds) and ifs64.comp (FB_IFS_INT64: one 64-bit add per point).
 #define K_GLSL 1
 #include "../kernels/common.h"

@@ -115,7 +115,7 @@ static void test_canonical(void)
 }
 
 /* Every julia key reaches what it names: the kernel block, the colour and turbulence parameters at
- * the head of the input buffer (K_SkyColour at 0, K_FbmParams at 48: asserted in gen/julia.c), the
+ * the head of the input buffer (K_SkyColour at 0, K_FbmParams at 48: asserted in host/gen/julia/layer.c), the
  * palette table, the specialization constants and the channel types. */
 static void test_julia_keys(void)
 {

@@ -6,9 +6,44 @@
 #include "gen_ifs.h"
 #include "ifs_avx2.h"
 
+#include "kernels/ifs.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* The peer: the textbook chaos game on one core, as one would write it first. One chain of `points`
+ * steps, xorshift32, the first `skip` points discarded. Adds to hits[] and sum[]; returns the points
+ * plotted inside the frame. */
+static uint64_t scalar_game(const void *params, const void *maps_, uint64_t points, uint32_t *hits, uint64_t *sum)
+{
+    const K_IfsParams *p = params;
+    const K_IfsMap *maps = maps_;
+    float cum[K_IFS_MAX_MAPS];
+    for (uint32_t k = 0; k < p->nmaps; k++)
+        cum[k] = k + 1 < p->nmaps ? (float)((double)maps[k + 1].thr / 4294967296.0) : 2.0f;
+    uint32_t s = 2463534242u;
+    float x = 0, y = 0, c = 0.5f;
+    uint64_t plotted = 0;
+    for (uint64_t i = 0; i < points; i++) {
+        s ^= s << 13, s ^= s >> 17, s ^= s << 5; /* xorshift32 */
+        float r = (float)(s >> 8) * (1.0f / 16777216.0f);
+        uint32_t k = 0;
+        while (r >= cum[k]) k++;
+        const K_IfsMap *m = &maps[k];
+        float nx = m->a * x + m->b * y + m->e, ny = m->c * x + m->d * y + m->f;
+        x = nx, y = ny, c = (c + m->colour) * 0.5f;
+        if (i < p->skip) continue;
+        float px = (x - p->x0) * p->sx, py = (p->y0 - y) * p->sy;
+        if (px >= 0 && py >= 0 && px < (float)p->hist_w && py < (float)p->hist_h) {
+            size_t cell = (size_t)py * p->hist_w + (size_t)px;
+            hits[cell]++;
+            sum[cell] += (uint32_t)(c * 255.0f + 0.5f);
+            plotted++;
+        }
+    }
+    return plotted;
+}
 
 static void report(const fb_bench *b, const char *backend, const char *mode, const char *device, int threads,
                    double mpts, double gpu_mpts)
@@ -96,7 +131,7 @@ static fb_result run(const fb_bench *b, const fb_scene *s)
             memset(hits, 0, cells * 4);
             memset(sum, 0, cells * 8);
             double t0 = fb_now();
-            fb_ifs_scalar_game(g.params, g.input, n, hits, sum);
+            scalar_game(g.params, g.input, n, hits, sum);
             report(b, "native", "scalar-1-thread", "textbook C loop", 1, (double)n / (fb_now() - t0) * 1e-6, 0);
         }
         free(hits);

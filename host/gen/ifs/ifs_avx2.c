@@ -1,14 +1,12 @@
 /*
- * The hand-vectorised chaos game, the native backend's fast path (gen/ifs.c, in step windows) and
- * the benchmark's reference, and the textbook scalar loop the benchmark also compares with.
+ * The hand-vectorised chaos game, the native backend's fast path (layer.c, in step windows) and
+ * the benchmark's reference.
  *
  * fb_ifs_avx2_game: a hand-vectorised AVX2 chaos game. Eight chains per vector, two vectors in
  * flight per thread to hide latency, the map coefficients held in registers and picked with
  * permutes (no memory gathers), and a private histogram per thread (plain adds, merged at the end).
  * It follows kernels/ifs.h operation for operation (same hash, same thresholds, same rounding), so
  * its histogram equals the kernel's bit for bit (tests/test_avx2.c).
- *
- * fb_ifs_scalar_game: the textbook loop. One chain, a xorshift generator, one core.
  */
 #include "ifs_avx2.h"
 
@@ -260,33 +258,3 @@ fb_result fb_ifs_avx2_game(const void *params, const void *maps, int threads, ui
 }
 
 #endif
-
-uint64_t fb_ifs_scalar_game(const void *params, const void *maps_, uint64_t points, uint32_t *hits, uint64_t *sum)
-{
-    const K_IfsParams *p = params;
-    const K_IfsMap *maps = maps_;
-    float cum[K_IFS_MAX_MAPS];
-    for (uint32_t k = 0; k < p->nmaps; k++)
-        cum[k] = k + 1 < p->nmaps ? (float)((double)maps[k + 1].thr / 4294967296.0) : 2.0f;
-    uint32_t s = 2463534242u;
-    float x = 0, y = 0, c = 0.5f;
-    uint64_t plotted = 0;
-    for (uint64_t i = 0; i < points; i++) {
-        s ^= s << 13, s ^= s >> 17, s ^= s << 5; /* xorshift32 */
-        float r = (float)(s >> 8) * (1.0f / 16777216.0f);
-        uint32_t k = 0;
-        while (r >= cum[k]) k++;
-        const K_IfsMap *m = &maps[k];
-        float nx = m->a * x + m->b * y + m->e, ny = m->c * x + m->d * y + m->f;
-        x = nx, y = ny, c = (c + m->colour) * 0.5f;
-        if (i < p->skip) continue;
-        float px = (x - p->x0) * p->sx, py = (p->y0 - y) * p->sy;
-        if (px >= 0 && py >= 0 && px < (float)p->hist_w && py < (float)p->hist_h) {
-            size_t cell = (size_t)py * p->hist_w + (size_t)px;
-            hits[cell]++;
-            sum[cell] += (uint32_t)(c * 255.0f + 0.5f);
-            plotted++;
-        }
-    }
-    return plotted;
-}

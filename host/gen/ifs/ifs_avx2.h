@@ -1,5 +1,5 @@
-/* The hand-vectorised chaos game (the native fast path and the benchmark's reference) and the
- * textbook loop (see ifs_avx2.c). `params` is a K_IfsParams, `maps` its
+/* The hand-vectorised chaos game: the native fast path and the benchmark's reference (see
+ * ifs_avx2.c). `params` is a K_IfsParams, `maps` its
  * K_IfsMap table. */
 #ifndef FB_IFS_AVX2_H
 #define FB_IFS_AVX2_H
@@ -24,9 +24,5 @@ fb_result fb_ifs_avx2_game(const void *params, const void *maps, int threads, ui
  * sums of one window of every step, bit for bit. Needs fb_ifs_avx2_supported. */
 void fb_ifs_avx2_chains(const void *params, const void *maps, uint32_t c0, uint32_t c1, uint32_t t0, uint32_t t1,
                         void *state, uint32_t *hits, uint64_t *sum, uint64_t counts[3]);
-
-/* The textbook chaos game on one core: one chain of `points` steps, xorshift32, the first `skip`
- * points discarded. Adds to hits[] and sum[]; returns the points plotted inside the frame. */
-uint64_t fb_ifs_scalar_game(const void *params, const void *maps, uint64_t points, uint32_t *hits, uint64_t *sum);
 
 #endif

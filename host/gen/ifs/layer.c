@@ -169,8 +169,8 @@ static fb_result parse_ifs(const fb_vctx *v, const char *path, json_t *obj, cons
     if (cond && f->has_cond) return fb_schema_error(v, sub, "the population preset has its own condensation set");
     if (cond && json_is_object(cond)) {
         f->has_cond = f->cond_lsys = true;
-        rc = fb_lsystem_parse_def(v, sub, cond, cond_lsystem_keys, FB_NKEYS(cond_lsystem_keys), "an L-system condensation set",
-                            &f->cond_sys);
+        rc = fb_lsystem_parse_def(v, sub, cond, cond_lsystem_keys, FB_NKEYS(cond_lsystem_keys),
+                                  "an L-system condensation set", &f->cond_sys);
         if (rc) return rc;
         f->cond_heading = fb_json_num(cond, "heading");
         f->cond_height = fb_json_num(cond, "height");
@@ -207,8 +207,9 @@ static fb_result parse_ifs(const fb_vctx *v, const char *path, json_t *obj, cons
     uint64_t cells = (uint64_t)s->width * s->height * (uint64_t)(f->oversample * f->oversample);
     if (cells > (1ull << 28)) {
         snprintf(sub, sizeof sub, "%s.oversample", path);
-        return fb_schema_error(v, sub, "the histogram would have %llu cells (size x oversample^2); at most 2^28 are supported",
-                    (unsigned long long)cells);
+        return fb_schema_error(v, sub,
+                               "the histogram would have %llu cells (size x oversample^2); at most 2^28 are supported",
+                               (unsigned long long)cells);
     }
     return FB_OK;
 }
