@@ -40,6 +40,8 @@ static int finish(fb_result rc)
     return fb_result_exit_code(rc);
 }
 
+_Static_assert(EXRIO_ZIP_LEVEL_MAX == 12, "merge's --zip-level message says 1..12");
+
 static int usage_error(const char *fmt, const char *arg)
 {
     fprintf(stderr, "fractalbake: ");
@@ -72,7 +74,8 @@ static const char *const k_usage =
     "  --preview FILE.png    also write a PNG preview (grey, colour or hillshade, as the layer suits)\n"
     "  --preview-layer L     the layer it shows, or `over`: every layer composited back to front by\n"
     "                        its coverage A (the default for scenes of several layers)\n"
-    "  --backend B           vulkan | native (default: vulkan if a device exists, else native)\n"
+    "  --backend B           auto | vulkan | native (default auto: a GPU when there is one; on lavapipe,\n"
+    "                        each layer where it is faster (see `fractalbake devices`); else native)\n"
     "  --device D            Vulkan device index or name substring (see `fractalbake devices`)\n"
     "  --threads N           native threads, EXR compression threads and lavapipe's own compute\n"
     "                        threads (LP_NUM_THREADS) (default: all cores)\n"
@@ -81,6 +84,7 @@ static const char *const k_usage =
     "                        `fractalbake merge` joins region files into the whole image\n"
     "  --points-part K/N     bake the K-th of N shares of every chaos game's points (ifs layers; the\n"
     "                        other layers whole); `fractalbake merge` adds the N parts' hits exactly\n"
+    "  --zip-level N         deflate level of ZIP compression, 1 (fastest) to 12 (smallest) (default 1)\n"
     "  --dry-run             print the predicted peak memory per layer, bake nothing, write nothing\n"
     "  --max-memory SIZE     stop before allocating when the predicted peak is larger (8G, 512M, 50%;\n"
     "                        default 80% of this machine's memory)\n"
@@ -175,8 +179,10 @@ static int common_option(int argc, char **argv, int *i, common_opts *o)
             o->backend = FB_BACKEND_VULKAN;
         else if (!strcmp(val, "native"))
             o->backend = FB_BACKEND_NATIVE;
+        else if (!strcmp(val, "auto"))
+            o->backend = FB_BACKEND_AUTO;
         else {
-            fb_fail(FB_ERR_USAGE, "--backend: expected vulkan or native, found \"%s\"", val);
+            fb_fail(FB_ERR_USAGE, "--backend: expected auto, vulkan or native, found \"%s\"", val);
             return -1;
         }
     } else if (!strcmp(a, "--threads")) {
@@ -209,6 +215,14 @@ static int common_option(int argc, char **argv, int *i, common_opts *o)
             fb_fail(FB_ERR_USAGE, "--max-memory: expected a size such as 8G, 512M or 50%%, found \"%s\"", val);
             return -1;
         }
+    } else if (!strcmp(a, "--zip-level")) {
+        NEED_VALUE();
+        int level;
+        if (!parse_int_arg(val, 1, EXRIO_ZIP_LEVEL_MAX, &level)) {
+            fb_fail(FB_ERR_USAGE, "--zip-level: expected an integer in 1..%d, found \"%s\"", EXRIO_ZIP_LEVEL_MAX, val);
+            return -1;
+        }
+        exrio_set_zip_level(level);
     } else if (!strcmp(a, "--dry-run")) {
         o->dry_run = true;
     } else if (!strcmp(a, "--quiet")) {
@@ -305,9 +319,9 @@ static fb_result bake_scene(fb_scene *scene, const common_opts *o)
     if (!rc && o->dry_run) {
         print_plan(&plan, o->json);
     } else if (!rc && !o->quiet)
-        fprintf(stderr, "fractalbake: wrote %s (%d x %d%s, %d layer%s) in %.2f s on %s\n", o->out,
+        fprintf(stderr, "fractalbake: wrote %s (%d x %d%s, %d layer%s) in %.2f s %s\n", o->out,
                 o->region[2] ? o->region[2] : scene->width, o->region[2] ? o->region[3] : scene->height,
-                o->region[2] ? " region" : "", scene->nlayers, scene->nlayers == 1 ? "" : "s", st.seconds, e.device);
+                o->region[2] ? " region" : "", scene->nlayers, scene->nlayers == 1 ? "" : "s", st.seconds, st.ran_on);
     fb_engine_close(&e);
     return rc;
 }
@@ -550,6 +564,12 @@ static int cmd_merge(int argc, char **argv)
             else if (!parse_int_arg(val, 1, 1024, &threads))
                 bad = usage_error("--threads: expected an integer in 1..1024, found \"%s\"", val);
             i++;
+        } else if (!strcmp(a, "--zip-level")) {
+            int level = 0;
+            if (!val || !parse_int_arg(val, 1, EXRIO_ZIP_LEVEL_MAX, &level))
+                bad = usage_error("--zip-level: expected an integer in 1..12, found \"%s\"", val ? val : "");
+            exrio_set_zip_level(level);
+            i++;
         } else if (!strcmp(a, "--max-memory")) {
             uint64_t m = 0;
             if (!val || !fb_parse_memory(val, &m))
@@ -560,7 +580,8 @@ static int cmd_merge(int argc, char **argv)
         } else if (!strcmp(a, "--quiet")) {
             quiet = true;
         } else if (!strcmp(a, "--help")) {
-            printf("usage: fractalbake merge PART.exr... -o OUT.exr [--threads N] [--max-memory SIZE] [--quiet]\n"
+            printf("usage: fractalbake merge PART.exr... -o OUT.exr [--threads N] [--zip-level N] [--max-memory SIZE] "
+                   "[--quiet]\n"
                    "Joins the region files of `fractalbake render --region X,Y,W,H` into the whole image: regions\n"
                    "of one bake (same size, channels and scene) that cover it with no overlap. Or adds the N points\n"
                    "parts of `render --points-part K/N` (chaos games split by points) into the whole game.\n");
@@ -621,6 +642,17 @@ static int cmd_devices(int argc, char **argv)
         printf("%-3d %-3s %-34s %-10s %-10.0f %-8u %s\n", i, infos[i].chosen ? "*" : "", infos[i].name, infos[i].type,
                (double)infos[i].memory / (1024.0 * 1024.0), infos[i].subgroup_size, infos[i].driver);
     printf("(memory in MiB; * marks the device fractalbake chooses%s)\n", sel ? " for --device" : "");
+    for (int i = 0; i < n; i++) {
+        if (!infos[i].chosen) continue;
+        if (!strcmp(infos[i].type, "cpu"))
+            printf("--backend auto (the default): %s is a CPU implementation of Vulkan, so each layer runs where it\n"
+                   "is faster on this machine: the native C path (fBm with its AVX2 loop, Julia sets below about 8\n"
+                   "million samples or with turbulence, the chaos game, L-systems, terrain, constraints), the\n"
+                   "device for the rest. --backend vulkan runs every layer on it.\n",
+                   infos[i].name);
+        else
+            printf("--backend auto (the default): every layer runs on %s.\n", infos[i].name);
+    }
     free(infos);
     return 0;
 }

@@ -18,6 +18,7 @@
 
 typedef struct layer_run {
     fb_gen gen;
+    fb_engine e; /* the bake's engine as this layer uses it: its kind is the layer's backend */
     /* vulkan */
     vkc_pipeline *pipe;
     vkc_job *job[SLOTS];
@@ -102,7 +103,7 @@ static void run_fini(fb_engine *e, layer_run *lr)
 
 static fb_result run_submit(fb_engine *e, layer_run *lr, int slot, int y0, int n)
 {
-    if (lr->gen.prepare || lr->gen.host_op) return FB_OK; /* its strips come from the host */
+    if (e->kind != FB_BACKEND_VULKAN || lr->gen.prepare || lr->gen.host_op) return FB_OK; /* host strips */
     uint8_t push[FB_GEN_MAX_PUSH];
     uint32_t groups[3];
     fb_gen_push(&lr->gen, y0, n, push);
@@ -290,8 +291,8 @@ static fb_result plan_memory(const fb_engine *e, const fb_bake_desc *d, const la
     int largest = 0;
     for (int i = 0; i < s->nlayers; i++) {
         const fb_gen *g = &runs[i].gen;
-        uint64_t hold = 0, peak = g->memory ? g->memory(g, e, &hold) : 0;
-        bool gpu = e->kind == FB_BACKEND_VULKAN && !g->prepare && !g->host_op;
+        uint64_t hold = 0, peak = g->memory ? g->memory(g, &runs[i].e, &hold) : 0;
+        bool gpu = runs[i].e.kind == FB_BACKEND_VULKAN && !g->prepare && !g->host_op;
         uint64_t planes = 0;
         for (int c = 0; c < fb_gen_nplanes(g); c++) planes += fb_gen_plane_stored(g, c);
         uint64_t strips = (gpu ? SLOTS : 1) * planes * (uint64_t)s->width * (uint64_t)strip * 4 +
@@ -306,6 +307,11 @@ static fb_result plan_memory(const fb_engine *e, const fb_bake_desc *d, const la
     /* the raw rows of every batch in flight, and their compressed chunks (a quarter of that, on
      * average over what the generators make) */
     if (d->out) plan->writer = (uint64_t)(2 * e->threads + 3) * 64 * (uint64_t)rw * 4 * (uint64_t)nch * 5 / 4;
+    /* and each compression thread's deflate state with its two chunk buffers (16 rows) */
+    bool zip = s->compression == EXRIO_ZIP;
+    for (int i = 0; i < s->nlayers; i++) zip = zip || (s->multipart && s->layers[i].compression == EXRIO_ZIP);
+    if (d->out && zip)
+        plan->writer += (uint64_t)e->threads * (exrio_zip_state_bytes() + 2 * 16 * (uint64_t)rw * 4 * (uint64_t)nch);
     if (d->preview) {
         int rh = d->region[2] > 0 ? d->region[3] : s->height; /* the preview shows the region */
         int side = rw > rh ? rw : rh, scale = (side + 2047) / 2048;
@@ -329,6 +335,32 @@ static fb_result plan_memory(const fb_engine *e, const fb_bake_desc *d, const la
     return FB_OK;
 }
 
+/* "on llvmpipe (...)", or per layer: "with sky on llvmpipe (...), terrain and plants on native C". */
+static void ran_on(const fb_engine *e, const layer_run *runs, const fb_scene *s, char *out, size_t size)
+{
+    snprintf(out, size, "on %s", e->device);
+    if (!e->per_layer) return;
+    snprintf(out, size, "with");
+    for (int kind = FB_BACKEND_VULKAN, groups = 0; kind <= FB_BACKEND_NATIVE; kind++) {
+        int n = 0, total = 0;
+        for (int i = 0; i < s->nlayers; i++) total += runs[i].e.kind == (fb_backend)kind;
+        for (int i = 0; i < s->nlayers; i++) {
+            if (runs[i].e.kind != (fb_backend)kind) continue;
+            n++;
+            snprintf(out + strlen(out), size - strlen(out), "%s%s",
+                     n == 1       ? (groups ? ", " : " ")
+                     : n == total ? " and "
+                                  : ", ",
+                     s->layers[i].name);
+        }
+        if (n) {
+            snprintf(out + strlen(out), size - strlen(out), " on %s",
+                     kind == FB_BACKEND_VULKAN ? e->device : "native C");
+            groups++;
+        }
+    }
+}
+
 static int auto_strip_rows(const fb_scene *s)
 {
     /* About 4 MiB per channel buffer: well inside lavapipe's 128 MiB maxStorageBufferRange and small
@@ -342,6 +374,7 @@ static int auto_strip_rows(const fb_scene *s)
 
 fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
 {
+    if (stats) stats->ran_on[0] = 0;
     const fb_scene *s = d->scene;
     fb_result rc = FB_OK;
     layer_run *runs = calloc((size_t)s->nlayers, sizeof *runs);
@@ -387,6 +420,9 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         fb_log_context("layer %s", s->layers[i].name);
         rc = fb_gen_init(&runs[i].gen, s, &s->layers[i]);
         runs[i].gen.scalar = e->scalar;
+        runs[i].e = *e;
+        if (e->per_layer) /* auto on a CPU device: each layer where it runs faster (engine.h) */
+            runs[i].e.kind = runs[i].gen.lavapipe_faster ? FB_BACKEND_VULKAN : FB_BACKEND_NATIVE;
         for (int c = 0; c < runs[i].gen.nchannels && !rc; c++)
             channels[nch++] =
                 (exrio_channel){runs[i].gen.channel_names[c], runs[i].gen.channel_types[c], s->multipart ? i : 0};
@@ -397,7 +433,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     if (!rc && d->dry_run) goto out;
     for (int i = 0; i < s->nlayers && !rc; i++) {
         fb_log_context("layer %s", s->layers[i].name);
-        rc = run_init(e, &runs[i], strip);
+        rc = run_init(&runs[i].e, &runs[i], strip);
     }
     /* Layers that use others (op inputs, a macro shape) find them among every layer's generator. */
     int offset[FB_MAX_LAYERS];
@@ -410,25 +446,35 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         int i = s->order[j];
         if (!runs[i].gen.prepare) continue;
         fb_log_context("layer %s", s->layers[i].name);
-        rc = runs[i].gen.prepare(&runs[i].gen, e, d->progress);
+        rc = runs[i].gen.prepare(&runs[i].gen, &runs[i].e, d->progress);
         if (runs[i].gen.prepare_gpu_seconds > 0) gpu += runs[i].gen.prepare_gpu_seconds;
     }
     if (rc) goto out;
 
+    /* the backend of the file: one name, or "auto" when the layers ran on different ones (listed) */
+    char backend[16], per_layer[FB_MAX_LAYERS * 80] = "";
+    int nvk = 0;
+    for (int i = 0; i < s->nlayers; i++) nvk += runs[i].e.kind == FB_BACKEND_VULKAN;
+    snprintf(backend, sizeof backend, "%s",
+             nvk == s->nlayers ? "vulkan"
+             : nvk == 0        ? "native"
+                               : fb_backend_name(FB_BACKEND_AUTO));
+    for (int i = 0; i < s->nlayers && nvk > 0 && nvk < s->nlayers; i++) /* only where they differ */
+        snprintf(per_layer + strlen(per_layer), sizeof per_layer - strlen(per_layer), "%s%s=%s", i ? ";" : "",
+                 s->layers[i].name, fb_backend_name(runs[i].e.kind));
+    if (stats) ran_on(e, runs, s, stats->ran_on, sizeof stats->ran_on);
     if (d->out) {
         char seed[16], reg[64];
         snprintf(seed, sizeof seed, "%u", s->seed);
         snprintf(reg, sizeof reg, "%d,%d,%d,%d", rx, ry, rw, rh);
         bool partial = d->region[2] > 0;
-        exrio_attr attrs[8] = {
-            {"fractalbake/scene", s->json},
-            {"fractalbake/seed", seed},
-            {"fractalbake/backend", fb_backend_name(e->kind)},
-            {"fractalbake/device", e->device},
-            {"fractalbake/version", FB_VERSION},
+        exrio_attr attrs[10] = {
+            {"fractalbake/scene", s->json},    {"fractalbake/seed", seed},          {"fractalbake/backend", backend},
+            {"fractalbake/device", nvk ? e->device : "native C"}, {"fractalbake/version", FB_VERSION},
         };
         int nattrs = 5;
         if (partial) attrs[nattrs++] = (exrio_attr){"fractalbake/region", reg};
+        if (per_layer[0]) attrs[nattrs++] = (exrio_attr){"fractalbake/layer-backends", per_layer};
         /* a points part: which, and each chaos-game layer's points outside the frame (merge needs
          * them for the density) */
         char part[32], outside[FB_MAX_LAYERS * 90] = "";
@@ -472,7 +518,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     bool gpu_path = e->kind == FB_BACKEND_VULKAN;
     for (int i = 0; i < s->nlayers && gpu_path && !rc; i++) {
         fb_log_context("layer %s, rows %d-%d", s->layers[i].name, ry, ry + (strip < rh ? strip : rh) - 1);
-        rc = run_submit(e, &runs[i], 0, ry, strip < rh ? strip : rh);
+        rc = run_submit(&runs[i].e, &runs[i], 0, ry, strip < rh ? strip : rh);
     }
     for (int k = 0; k < nstrips && !rc; k++) {
         int y0 = ry + k * strip, n = y0 + strip <= ry + rh ? strip : ry + rh - y0;
@@ -481,14 +527,14 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
             int y1 = y0 + strip, n1 = y1 + strip <= ry + rh ? strip : ry + rh - y1;
             for (int i = 0; i < s->nlayers && !rc; i++) {
                 fb_log_context("layer %s, rows %d-%d", s->layers[i].name, y1, y1 + n1 - 1);
-                rc = run_submit(e, &runs[i], (k + 1) % SLOTS, y1, n1);
+                rc = run_submit(&runs[i].e, &runs[i], (k + 1) % SLOTS, y1, n1);
             }
         }
         const void *planes[FB_MAX_LAYERS * FB_GEN_MAX_CHANNELS];
         int at = 0;
         for (int i = 0; i < s->nlayers && !rc; i++) {
             fb_log_context("layer %s, rows %d-%d", s->layers[i].name, y0, y0 + n - 1);
-            if (!runs[i].gen.host_op) rc = run_collect(e, &runs[i], k % SLOTS, y0, n, planes + at, &gpu);
+            if (!runs[i].gen.host_op) rc = run_collect(&runs[i].e, &runs[i], k % SLOTS, y0, n, planes + at, &gpu);
             at += runs[i].gen.nchannels;
         }
         for (int j = 0; j < s->nlayers && !rc; j++) { /* op layers, after the layers they use */
@@ -522,7 +568,7 @@ out:
     rc = fb_outputs_end(rc); /* every output renamed into place now, or none */
     for (int k = 0; k < pv.n; k++) fb_preview_destroy(&pv.p[k]);
     free(pv.conv);
-    for (int i = 0; i < s->nlayers; i++) run_fini(e, &runs[i]);
+    for (int i = 0; i < s->nlayers; i++) run_fini(&runs[i].e, &runs[i]);
     free(runs);
     if (stats) {
         stats->seconds = fb_now() - t0;

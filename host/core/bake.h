@@ -48,6 +48,9 @@ typedef struct fb_bake_desc {
 } fb_bake_desc;
 
 typedef struct fb_bake_stats {
+    /* where the layers ran: "on llvmpipe (...)", "on native C", or per layer ("with sky on llvmpipe
+     * (...), terrain and plants on native C") when --backend auto chose per layer */
+    char ran_on[512];
     double seconds;     /* wall time of the whole bake */
     double gpu_seconds; /* sum of dispatch timestamps (vulkan), else -1 */
     uint64_t pixels;

@@ -29,7 +29,13 @@ fb_result fb_engine_open(const fb_engine_desc *d, fb_engine *e)
         if (rc == FB_OK) {
             e->kind = FB_BACKEND_VULKAN;
             snprintf(e->device, sizeof e->device, "%s", vkc_info(e->vk)->name);
-            return FB_OK;
+            /* auto on a CPU implementation (lavapipe): the native path where it is faster */
+            e->per_layer = d->backend == FB_BACKEND_AUTO && !strcmp(vkc_info(e->vk)->type, "cpu");
+            e->scalar = d->scalar;
+            /* the host's own work (chaos-game reductions, rasterised meshes, native layers) on every core */
+            rc = fb_pool_create(e->threads, &e->pool);
+            if (rc) vkc_destroy(&e->vk);
+            return rc;
         }
         /* Only a missing loader or device falls back, and only when vulkan was not asked for. */
         if (d->backend == FB_BACKEND_VULKAN || rc != FB_ERR_NODEVICE) return rc;

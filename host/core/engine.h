@@ -17,11 +17,15 @@ typedef struct fb_engine {
     fb_pool *pool;
     int threads;
     bool scalar; /* native: portable kernels only (the benchmark's scalar reference) */
+    /* --backend auto found only a CPU implementation of Vulkan (lavapipe): each layer runs on the
+     * backend that is faster for it (fb_gen.lavapipe_faster; measured in bench/RESULTS.md), the
+     * same bits as that backend alone. */
+    bool per_layer;
     char device[256];
 } fb_engine;
 
 typedef struct fb_engine_desc {
-    fb_backend backend; /* AUTO: vulkan if a device exists, else native with a warning */
+    fb_backend backend; /* AUTO: a GPU if one exists; on lavapipe, per layer (per_layer); no device: native */
     const char *device;
     int threads; /* native workers and EXR compression threads; 0: one per core */
     bool validation;

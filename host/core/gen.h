@@ -84,6 +84,10 @@ struct fb_gen {
     bool needs_float64; /* vulkan: the shader uses doubles (the device must have shaderFloat64) */
 
     bool scalar; /* native: the portable kernel only, no hand-vectorised path (benchmark reference) */
+    /* Set by init: on a CPU implementation of Vulkan (lavapipe) this layer's shader is faster than its
+     * native path (Julia; fBm outside its AVX2 case), so --backend auto runs it there; otherwise the
+     * native path wins on such a device (bench/RESULTS.md). A GPU runs every layer. */
+    bool lavapipe_faster;
     _Alignas(16) unsigned char params[256]; /* generator-private, e.g. K_FbmParams */
     void *owned;                            /* generator-owned memory (freed by fb_gen_fini) */
     void (*fini)(fb_gen *g);                /* frees what `owned` points to, before owned itself */

@@ -23,7 +23,7 @@
 static const fb_keyspec scene_keys[] = {
     {"size", FB_K_SIZE, 1, FB_MAX_DIM, false, NULL, "[1024, 1024]", "image size in pixels (flag: --size WxH)"},
     {"seed", FB_K_INT, 0, 4294967295.0, false, NULL, "1", "random seed"},
-    {"compression", FB_K_ENUM, 0, 0, false, "zip|piz|none", "\"zip\"", "EXR compression"},
+    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, "\"zip\"", "EXR compression"},
     {"parts", FB_K_ENUM, 0, 0, false, "single|per-layer", "\"single\"",
      "one EXR part with every layer, or one part per layer (multi-part; each may have its own compression)"},
     {"layers", FB_K_LAYERS, 1, FB_MAX_LAYERS, false, NULL, NULL, "the layers, each a generator"},

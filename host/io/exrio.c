@@ -6,6 +6,7 @@
 #include "output.h"
 #include "textin.h"
 
+#include <libdeflate.h>
 #include <openexr.h>
 
 #include <errno.h>
@@ -78,6 +79,7 @@ typedef struct wpart {
     int nch;
     int *file_order; /* file_order[i]: index into the caller's channel list of the part's i-th channel */
     FILE *spool;
+    bool zip; /* ZIP chunks: OpenEXRCore packs them, libdeflate compresses them (deflate_chunk) */
 } wpart;
 
 struct exrio_writer {
@@ -91,6 +93,7 @@ struct exrio_writer {
     wpart parts[EXRIO_MAX_PARTS];
     int batch_rows;
     size_t plane_bytes_per_row;
+    int zip_level;
 
     batch *filling; /* the batch receiving rows */
     int next_row;
@@ -126,13 +129,75 @@ static void set_error(exrio_writer *w, fb_result rc, const char *msg)
     snprintf(w->error_msg, sizeof w->error_msg, "%s", msg);
 }
 
+static int g_zip_level; /* --zip-level; 0: EXRIO_ZIP_LEVEL */
+
+void exrio_set_zip_level(int level)
+{
+    g_zip_level = level;
+}
+
+uint64_t exrio_zip_state_bytes(void)
+{
+    int level = g_zip_level > 0 ? g_zip_level : EXRIO_ZIP_LEVEL;
+    return level <= 1 ? (uint64_t)200 << 10 : level <= 9 ? (uint64_t)656 << 10 : (uint64_t)8800 << 10;
+}
+
+/* OpenEXRCore packs a ZIP chunk and this compresses it: the pipeline's own step is a no-op. */
+static exr_result_t pack_only(exr_encode_pipeline_t *enc)
+{
+    enc->compressed_bytes = enc->packed_bytes;
+    return EXR_ERR_SUCCESS;
+}
+
+/* A ZIP chunk as the format defines it (and OpenEXR writes it): the bytes split into even and odd
+ * halves, then each byte replaced by its difference from the previous one plus 128 (mod 256), then
+ * a zlib stream; a chunk that would not shrink is stored raw. libdeflate writes the zlib stream
+ * several times faster than zlib at the same ratio (OpenEXR moved to it in 3.2 for this reason).
+ * *out receives malloc'd bytes, *size their count. */
+static fb_result deflate_chunk(struct libdeflate_compressor *dc, uint8_t **scratch, size_t *scratch_size,
+                               const uint8_t *packed, size_t n, void **out, uint64_t *size)
+{
+    if (*scratch_size < n) {
+        uint8_t *s = realloc(*scratch, n);
+        if (!s) return FB_ERR_NOMEM;
+        *scratch = s, *scratch_size = n;
+    }
+    uint8_t *t1 = *scratch, *t2 = *scratch + (n + 1) / 2;
+    for (size_t i = 0; i < n; i += 2) {
+        *t1++ = packed[i];
+        if (i + 1 < n) *t2++ = packed[i + 1];
+    }
+    uint8_t *t = *scratch;
+    for (size_t i = n; i-- > 1;) t[i] = (uint8_t)(t[i] - t[i - 1] + 128);
+    size_t bound = libdeflate_zlib_compress_bound(dc, n);
+    uint8_t *z = malloc(bound ? bound : 1);
+    if (!z) return FB_ERR_NOMEM;
+    size_t zn = n ? libdeflate_zlib_compress(dc, *scratch, n, z, bound) : 0;
+    if (zn == 0 || zn >= n) { /* stored raw: the size equal to the packed size tells readers so */
+        memcpy(z, packed, n);
+        zn = n;
+    }
+    *out = zn < bound ? realloc(z, zn ? zn : 1) : z;
+    if (!*out) *out = z;
+    *size = zn;
+    return FB_OK;
+}
+
 /* Packs and compresses every chunk of a batch (no lock held: OpenEXRCore allows concurrent encoding
  * of different chunks; we clear yield/write so that nothing is written from here). */
 static fb_result encode_batch(exrio_writer *w, batch *b, char *msg, size_t msgsz)
 {
     fb_result rc = FB_OK;
+    struct libdeflate_compressor *dc = NULL;
+    uint8_t *scratch = NULL;
+    size_t scratch_size = 0;
     for (int p = 0; p < w->nparts && !rc; p++) {
         const wpart *wp = &w->parts[p];
+        if (wp->zip && !dc && !(dc = libdeflate_alloc_compressor(w->zip_level))) {
+            snprintf(msg, msgsz, "out of memory starting the ZIP compressor");
+            rc = FB_ERR_NOMEM;
+            break;
+        }
         exr_encode_pipeline_t enc = {0};
         bool init = false;
         for (int k = 0; k < b->nchunks[p]; k++) {
@@ -158,8 +223,18 @@ static fb_result encode_batch(exrio_writer *w, batch *b, char *msg, size_t msgsz
             if (er != EXR_ERR_SUCCESS) goto exr_fail;
             enc.yield_until_ready_fn = NULL;
             enc.write_fn = NULL;
+            if (wp->zip) enc.compress_fn = pack_only;
             er = exr_encoding_run(w->ctx, p, &enc);
             if (er != EXR_ERR_SUCCESS) goto exr_fail;
+            if (wp->zip) {
+                rc = deflate_chunk(dc, &scratch, &scratch_size, enc.packed_buffer, enc.packed_bytes,
+                                   &b->chunk_data[p][k], &b->chunk_size[p][k]);
+                if (rc) {
+                    snprintf(msg, msgsz, "out of memory compressing rows %d..%d", y, y + cinfo.height - 1);
+                    break;
+                }
+                continue;
+            }
             b->chunk_size[p][k] = enc.compressed_bytes;
             b->chunk_data[p][k] = malloc(enc.compressed_bytes ? enc.compressed_bytes : 1);
             if (!b->chunk_data[p][k]) {
@@ -181,6 +256,8 @@ static fb_result encode_batch(exrio_writer *w, batch *b, char *msg, size_t msgsz
         }
         if (init) exr_encoding_destroy(w->ctx, &enc);
     }
+    libdeflate_free_compressor(dc);
+    free(scratch);
     free(b->rows); /* the raw rows are no longer needed: keep only compressed data in memory */
     b->rows = NULL;
     return rc;
@@ -329,6 +406,7 @@ fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
         exr_compression_t ct = comp == EXRIO_ZIP   ? EXR_COMPRESSION_ZIP
                                : comp == EXRIO_PIZ ? EXR_COMPRESSION_PIZ
                                                    : EXR_COMPRESSION_NONE;
+        w->parts[p].zip = ct == EXR_COMPRESSION_ZIP;
         er = exr_add_part(w->ctx, d->part_names ? d->part_names[p] : "fractalbake", EXR_STORAGE_SCANLINE, &part);
         if (er == EXR_ERR_SUCCESS) er = exr_initialize_required_attr_simple(w->ctx, part, d->width, d->height, ct);
         if (er == EXR_ERR_SUCCESS && d->full_width > 0) {
@@ -396,6 +474,8 @@ fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
 
     int nbatches = (d->height + w->batch_rows - 1) / w->batch_rows;
     w->order = calloc((size_t)nbatches + 1, sizeof *w->order);
+    int level = d->zip_level > 0 ? d->zip_level : g_zip_level;
+    w->zip_level = level > 0 && level <= EXRIO_ZIP_LEVEL_MAX ? level : EXRIO_ZIP_LEVEL;
     w->nthreads = d->threads > 0 ? d->threads : fb_cpu_count();
     w->max_in_flight = 2 * w->nthreads + 2;
     w->threads = calloc((size_t)w->nthreads, sizeof *w->threads);

@@ -15,7 +15,11 @@
 #include <stdbool.h>
 
 typedef enum exrio_type { EXRIO_UINT = 0, EXRIO_HALF = 1, EXRIO_FLOAT = 2 } exrio_type;
+/* The compressions fractalbake writes. OpenEXRCore 3.1 (Debian 12) cannot write DWAA or DWAB, and
+ * its B44 files end in a partial block row that the OpenEXR 3.1 C++ library decodes as garbage (a
+ * 203 x 97 sky: its last row), so neither is offered (docs/usage.md, "Compression"). */
 typedef enum exrio_compression { EXRIO_NONE = 0, EXRIO_ZIP = 1, EXRIO_PIZ = 2 } exrio_compression;
+#define EXRIO_COMPRESSION_NAMES "zip|piz|none" /* as the scenes' compression keys take them */
 
 /* "none", "zip", "piz" -> enum; -1 when unknown. */
 int exrio_compression_parse(const char *s);
@@ -56,8 +60,20 @@ typedef struct exrio_writer_desc {
     int nchannels;
     const exrio_attr *attrs;
     int nattrs;
-    int threads; /* compression workers; 0: one per core */
+    int threads;   /* compression workers; 0: one per core */
+    int zip_level; /* ZIP: the deflate level, 1 (fastest) to 12 (smallest); 0: EXRIO_ZIP_LEVEL */
 } exrio_writer_desc;
+
+/* The default deflate level of ZIP chunks (libdeflate's scale; chosen by measurement, bench/RESULTS.md). */
+#define EXRIO_ZIP_LEVEL     1
+#define EXRIO_ZIP_LEVEL_MAX 12
+
+/* The level of every writer whose desc gives none, for the whole process (--zip-level); 0: the default. */
+void exrio_set_zip_level(int level);
+
+/* The memory of one compression thread's deflate state at the process's level (measured with
+ * libdeflate 1.14: 0.2 MiB at level 1, 0.65 MiB at 2 to 9, 8.6 MiB at 10 to 12). */
+uint64_t exrio_zip_state_bytes(void);
 
 typedef struct exrio_writer exrio_writer;
 

@@ -47,7 +47,7 @@ static const fb_keyspec constrain_keys[] = {
     {"plot", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
      "1D: also draw d (blue), D (black) and the constraints (red) to this PNG"},
     {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store the channels as half (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, "zip|piz|none", NULL,
+    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
 };
 
@@ -64,13 +64,14 @@ static fb_result parse_constrain(const fb_vctx *v, const char *path, json_t *obj
     }
     if (prof && s->height != 1) {
         snprintf(sub, sizeof sub, "%s.profile", path);
-        return fb_schema_error(v, sub, "a CSV profile is a 1D macro: the scene's height must be 1 (it is %d)", s->height);
+        return fb_schema_error(v, sub, "a CSV profile is a 1D macro: the scene's height must be 1 (it is %d)",
+                               s->height);
     }
     for (int k = 0; k < 2; k++)
         if (json_object_get(obj, k ? "plot" : "csv") && s->height != 1) {
             snprintf(sub, sizeof sub, "%s.%s", path, k ? "plot" : "csv");
             return fb_schema_error(v, sub, "%s output is for 1D profiles: the scene's height must be 1 (it is %d)",
-                        k ? "plot" : "CSV", s->height);
+                                   k ? "plot" : "CSV", s->height);
         }
     snprintf(c->macro, sizeof c->macro, "%s", macro ? json_string_value(macro) : prof ? "" : "boss");
     fb_json_string(obj, "profile", c->profile, sizeof c->profile);
@@ -118,7 +119,8 @@ static fb_result parse_constrain(const fb_vctx *v, const char *path, json_t *obj
         long long x = json_integer_value(json_array_get(p, 0)), y = json_integer_value(json_array_get(p, 1));
         if (x < 0 || y < 0 || x >= s->width || y >= s->height) {
             snprintf(sub, sizeof sub, "%s.points[%zu]", path, i);
-            return fb_schema_error(v, sub, "pixel (%lld, %lld) is outside the %d x %d image", x, y, s->width, s->height);
+            return fb_schema_error(v, sub, "pixel (%lld, %lld) is outside the %d x %d image", x, y, s->width,
+                                   s->height);
         }
     }
     for (size_t i = 0; c->regions_inline && i < json_array_size(regs); i++) {
@@ -128,9 +130,11 @@ static fb_result parse_constrain(const fb_vctx *v, const char *path, json_t *obj
         double val = json_number_value(json_array_get(p, 3));
         snprintf(sub, sizeof sub, "%s.regions[%zu]", path, i);
         if (x < 0 || y < 0 || x >= s->width || y >= s->height)
-            return fb_schema_error(v, sub, "pixel (%lld, %lld) is outside the %d x %d image", x, y, s->width, s->height);
+            return fb_schema_error(v, sub, "pixel (%lld, %lld) is outside the %d x %d image", x, y, s->width,
+                                   s->height);
         if (is_h ? !(val > 0 && val < 1) : !(val > 0))
-            return fb_schema_error(v, sub, "%s = %g is out of range (%s)", is_h ? "H" : "T", val, is_h ? "0 < H < 1" : "T > 0");
+            return fb_schema_error(v, sub, "%s = %g is out of range (%s)", is_h ? "H" : "T", val,
+                                   is_h ? "0 < H < 1" : "T > 0");
     }
     return FB_OK;
 }
@@ -504,7 +508,9 @@ static void constrain_rows(const fb_gen *g, int y0, int n, void *const *planes)
     memcpy(planes[3], s->out.T + at, len * 4);
     memcpy(planes[4], s->out.H + at, len * 4);
     if (g->nchannels > 5)
-        for (size_t i = 0; i < len; i++) ((float *)planes[5])[i] = s->out.D[at + i] >= ((const fb_constrain_params *)fb_layer_params(g->layer))->water;
+        for (size_t i = 0; i < len; i++)
+            ((float *)planes[5])[i] =
+                s->out.D[at + i] >= ((const fb_constrain_params *)fb_layer_params(g->layer))->water;
 }
 
 /* The model's arrays (host/constrain.c): the grid of N x N nodes (N = 2^k + 1 >= the longer side, 4

@@ -32,7 +32,7 @@ static const fb_keyspec fbm_keys[] = {
     {"warp", FB_K_NUM, 0, 100, false, NULL, "0.0", "domain-warp strength, in first-octave cells"},
     {"tileable", FB_K_BOOL, 0, 0, false, NULL, "false", "periodic in x and y: the image wraps without a seam"},
     {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store as half instead of float (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, "zip|piz|none", NULL,
+    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
 };
 
@@ -72,8 +72,8 @@ static fb_result parse_fbm(const fb_vctx *v, const char *path, json_t *obj, cons
     if (f->tileable && f->noise == K_NOISE_SIMPLEX) {
         snprintf(sub, sizeof sub, "%s.tileable", path);
         return fb_schema_error(v, sub,
-                    "simplex noise lives on a skewed lattice that does not tile a rectangle; use gradient, "
-                    "value, cellular, cellular-f2 or sine noise for tileable fBm");
+                               "simplex noise lives on a skewed lattice that does not tile a rectangle; use gradient, "
+                               "value, cellular, cellular-f2 or sine noise for tileable fBm");
     }
     return FB_OK;
 }
@@ -203,6 +203,7 @@ static fb_result fbm_init(fb_gen *g)
     snprintf(g->channel_names[0], sizeof g->channel_names[0], "%s.Y", g->layer->name);
     g->channel_types[0] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
     g->native_rows = fbm_rows;
+    g->lavapipe_faster = !fb_fbm_avx2_supported(params(g)); /* the AVX2 loop beats lavapipe 1.6x; C does not */
     g->spv = fbm_comp;
     g->spv_size = sizeof fbm_comp;
     g->params_size = sizeof(K_FbmParams);

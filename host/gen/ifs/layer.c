@@ -66,7 +66,7 @@ static const fb_keyspec ifs_keys[] = {
     {"highlight-power", FB_K_NUM, -1, 100, false, NULL, "1.0",
      "over-bright pixels: < 0 clip per channel, 0 keep hue, larger fade to white"},
     {"half", FB_K_BOOL, 0, 0, false, NULL, "true", "store R, G, B, A as half (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, "zip|piz|none", NULL,
+    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
 };
 

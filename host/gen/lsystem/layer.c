@@ -33,7 +33,8 @@ static const fb_keyspec lsystem_keys[] = {
      "rule", NULL, fb_lsystem_check_rule},
     {"iterations", FB_K_INT, 0, 64, false, NULL, NULL, "parallel rewriting steps"},
     {"angle", FB_K_NUM, -360, 360, false, NULL, NULL, "degrees turned by + and -"},
-    {"heading", FB_K_NUM, -360, 360, false, NULL, "90.0", "initial heading, degrees counter-clockwise from +x (90: up)"},
+    {"heading", FB_K_NUM, -360, 360, false, NULL, "90.0",
+     "initial heading, degrees counter-clockwise from +x (90: up)"},
     {"step", FB_K_NUM, 0, 1e6, true, NULL, "1.0", "length of F and f, turtle units"},
     {"width", FB_K_NUM, 0, 100, false, NULL, "0.6", "branch width at the base (bracket depth 0), in steps"},
     {"taper", FB_K_NUM, 0, 1, true, NULL, "0.65", "width factor per bracket depth"},
@@ -47,7 +48,7 @@ static const fb_keyspec lsystem_keys[] = {
     {"stops", FB_K_STOPS, 0, 1e3, false, NULL, NULL,
      "gradient: [[t, r, g, b], ...], t rising from 0 to 1 (flag: \"t,r,g,b;t,r,g,b\")"},
     {"half", FB_K_BOOL, 0, 0, false, NULL, "true", "store A, R, G, B as half (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, "zip|piz|none", NULL,
+    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
 };
 
@@ -60,7 +61,7 @@ bool fb_lsystem_check_rule(const char *text, char *msg, size_t size)
 }
 
 fb_result fb_lsystem_parse_def(const fb_vctx *v, const char *path, json_t *obj, const fb_keyspec *keys, int nkeys,
-                                const char *what, fb_lsys *ls)
+                               const char *what, fb_lsys *ls)
 {
     char sub[256], msg[256];
     json_t *preset = json_object_get(obj, "preset");
@@ -126,7 +127,8 @@ fb_result fb_lsystem_parse_def(const fb_vctx *v, const char *path, json_t *obj, 
 static fb_result parse_lsystem(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
 {
     fb_lsystem_params *f = (void *)L->params;
-    fb_result rc = fb_lsystem_parse_def(v, path, obj, lsystem_keys, FB_NKEYS(lsystem_keys), "an lsystem layer", &f->sys);
+    fb_result rc =
+        fb_lsystem_parse_def(v, path, obj, lsystem_keys, FB_NKEYS(lsystem_keys), "an lsystem layer", &f->sys);
     if (rc) return rc;
     f->heading = fb_json_num(obj, "heading");
     f->step = fb_json_num(obj, "step");

@@ -27,7 +27,7 @@ static const fb_keyspec op_keys[] = {
     {"level", FB_K_NUM, -1e15, 1e15, false, NULL, NULL, "threshold: 1 at and above the level, 0 below"},
     {"width", FB_K_NUM, 0, 1e15, false, NULL, NULL, "threshold: a smooth step this wide around the level (default 0)"},
     {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store Y as half (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, "zip|piz|none", NULL,
+    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
 };
 

@@ -26,14 +26,14 @@
 
 static const fb_keyspec terrain_keys[] = {
     {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"terrain\""},
-    {"name", FB_K_NAME, 0, 0, false, NULL, "\"terrain\"", "layer name; channels NAME.Y (height) and NAME.A (in the hull)"},
+    {"name", FB_K_NAME, 0, 0, false, NULL, "\"terrain\"",
+     "layer name; channels NAME.Y (height) and NAME.A (in the hull)"},
     {"points", FB_K_POINTS, -1e15, 1e15, false, NULL, NULL,
      "survey points: an XYZ / CSV file (x y z per line) or a list [[x, y, z], ...]"},
     {"from-heightfield", FB_K_STRING, 0, 0, false, NULL, NULL, "instead of points: IN.exr[:layer.channel] sampled"},
     {"sample", FB_K_INT, 1, 65536, false, NULL, NULL, "with from-heightfield: every N-th pixel (default 16)"},
     {"insert", FB_K_INT, 0, 1e8, false, NULL, "40000", "points inserted by random midpoint displacement"},
-    {"hurst", FB_K_NUM, 0, 1, true, NULL, "0.85", "Hurst exponent H in (0, 1); D = 3 - H", 0, NULL,
-     "dimension"},
+    {"hurst", FB_K_NUM, 0, 1, true, NULL, "0.85", "Hurst exponent H in (0, 1); D = 3 - H", 0, NULL, "dimension"},
     {"dimension", FB_K_NUM, 2, 3, true, NULL, NULL, "fractal dimension D in (2, 3), instead of hurst"},
     {"sigma", FB_K_NUM, 0, 1e15, false, NULL, NULL,
      "standard deviation of height increments at unit distance (default: estimated from the points)"},
@@ -46,7 +46,7 @@ static const fb_keyspec terrain_keys[] = {
      "area rasterised: \"auto\" (the points' bounding box) or [xmin, xmax, ymin, ymax]"},
     {"mesh", FB_K_OUTPUT, 0, 0, false, NULL, NULL, "also write the refined mesh: OUT.ply (binary) or OUT.obj"},
     {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store Y as half (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, "zip|piz|none", NULL,
+    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
 };
 
@@ -61,8 +61,9 @@ static fb_result parse_terrain(const fb_vctx *v, const char *path, json_t *obj, 
     bool hf = json_object_get(obj, "from-heightfield") != NULL;
     if (!pts == !hf) {
         snprintf(sub, sizeof sub, "%s.points", path);
-        return fb_schema_error(v, sub, "give the survey points (points) or a height field to sample (from-heightfield)%s",
-                    pts ? ", not both" : "");
+        return fb_schema_error(v, sub,
+                               "give the survey points (points) or a height field to sample (from-heightfield)%s",
+                               pts ? ", not both" : "");
     }
     if (json_object_get(obj, "sample") && !hf) {
         snprintf(sub, sizeof sub, "%s.sample", path);
@@ -74,7 +75,8 @@ static fb_result parse_terrain(const fb_vctx *v, const char *path, json_t *obj, 
     }
     if (json_object_get(obj, "centers") && (h_given || d_given)) {
         snprintf(sub, sizeof sub, "%s.%s", path, h_given ? "hurst" : "dimension");
-        return fb_schema_error(v, sub, "the centres file gives each region its own D; drop %s", h_given ? "hurst" : "dimension");
+        return fb_schema_error(v, sub, "the centres file gives each region its own D; drop %s",
+                               h_given ? "hurst" : "dimension");
     }
     t->points_inline = json_is_array(pts);
     fb_json_string(obj, "points", t->points, sizeof t->points);
@@ -84,7 +86,8 @@ static fb_result parse_terrain(const fb_vctx *v, const char *path, json_t *obj, 
     t->hurst = d_given ? 3 - fb_json_num(obj, "dimension") : fb_json_num(obj, "hurst");
     if (!(t->hurst > 0 && t->hurst < 1)) {
         snprintf(sub, sizeof sub, "%s.%s", path, d_given ? "dimension" : "hurst");
-        return fb_schema_error(v, sub, "%s must lie strictly inside %s", d_given ? "D" : "H", d_given ? "(2, 3)" : "(0, 1)");
+        return fb_schema_error(v, sub, "%s must lie strictly inside %s", d_given ? "D" : "H",
+                               d_given ? "(2, 3)" : "(0, 1)");
     }
     t->sigma = json_object_get(obj, "sigma") ? fb_json_num(obj, "sigma") : -1;
     t->sweep = !strcmp(json_string_value(json_object_get(obj, "order")), "sweep");

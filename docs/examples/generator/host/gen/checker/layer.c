@@ -15,7 +15,7 @@ static const fb_keyspec checker_keys[] = {
     {"name", FB_K_NAME, 0, 0, false, NULL, "\"checker\"", "layer name; the channel is NAME.Y (flag: --layer)"},
     {"cells", FB_K_INT, 1, 65536, false, NULL, "8", "squares across each side of the image"},
     {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store as half instead of float (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, "zip|piz|none", NULL,
+    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
 };
 
