@@ -73,6 +73,10 @@ void fb_bench_report(const fb_bench *b, const fb_bench_case *bc, const char *dev
  * thread. */
 fb_result fb_bench_layer(const fb_bench *b, const fb_bench_case *bc, fb_scene *s, double tref);
 
+/* The whole bake as a user's default gets it: --backend auto, ZIP, the file written ("auto",
+ * "end-to-end-zip"). Nothing unless both backends are benchmarked. */
+fb_result fb_bench_auto_zip(const fb_bench *b, const fb_bench_case *bc, fb_scene *s);
+
 /* The layer alone (no file) on each backend, under another mode name. */
 fb_result fb_bench_variant(const fb_bench *b, const fb_bench_case *bc, fb_scene *s, const char *mode);
 

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# --backend auto (the default): on a CPU implementation of Vulkan (lavapipe) each layer runs where it
+# is faster, the same bits as that backend alone; the file, the bake's line and `devices` say where.
+# On a GPU every layer runs on it. Usage: backend.sh PATH/TO/fractalbake
+. "$(dirname "$0")/lib.sh"
+cli_init "$@"
+require_vulkan
+check "devices explains auto" grep -q -- "--backend auto (the default)" <("$FB" devices)
+cpu=0
+"$FB" devices | grep -q '^0 *\* .* cpu ' && cpu=1
+# a scene of every kind of choice: a Julia set of 8.4 million samples (lavapipe's), simplex fBm
+# (no AVX2 loop: lavapipe's), gradient fBm (the AVX2 loop: native) and a chaos game (native)
+cat > mix.json << 'JSON'
+{"size": [2048, 1024], "compression": "none",
+ "layers": [{"type": "julia", "name": "sky", "samples": 4, "channels": ["iter"]},
+            {"type": "fbm", "name": "rock", "noise": "simplex"},
+            {"type": "fbm", "name": "ground"},
+            {"type": "ifs", "name": "fern", "points": 2000000}]}
+JSON
+"$FB" render mix.json -o auto.exr 2> auto.txt
+check "auto bakes" test -s auto.exr
+if [ $cpu -eq 1 ]; then
+  check "the line says where each layer ran" grep -q "with sky and rock on llvmpipe.*, ground and fern on native C" auto.txt
+  check "the file: backend auto" grep -q 'fractalbake/backend (type string): "auto"' <(exrheader auto.exr)
+  check "the file: each layer's backend" grep -q '"sky=vulkan;rock=vulkan;ground=native;fern=native"' <(exrheader auto.exr)
+  # the same bits as each backend alone, layer by layer
+  "$FB" render mix.json --backend vulkan --quiet -o vk.exr
+  "$FB" render mix.json --backend native --quiet -o nat.exr
+  check "sky is lavapipe's, bit for bit" "$FB" compare vk.exr auto.exr --layer sky > /dev/null
+  check "rock is lavapipe's, bit for bit" "$FB" compare vk.exr auto.exr --layer rock > /dev/null
+  check "ground is native's, bit for bit" "$FB" compare nat.exr auto.exr --layer ground > /dev/null
+  check "fern is native's, bit for bit" "$FB" compare nat.exr auto.exr --layer fern > /dev/null
+  check "--backend vulkan: every layer on the device" grep -q 'fractalbake/backend (type string): "vulkan"' <(exrheader vk.exr)
+  check "--from an auto file reproduces it byte for byte" "$FB" render --from auto.exr --quiet -o again.exr
+  check "(the same bytes)" cmp -s auto.exr again.exr
+  # all native: the file is the native backend's, byte for byte
+  "$FB" render --set size=256x128 --set layers.plants.points=300000 --quiet -o d-auto.exr
+  "$FB" render --set size=256x128 --set layers.plants.points=300000 --backend native --quiet -o d-native.exr
+  check "the default scene on lavapipe: the native file, byte for byte" cmp -s d-auto.exr d-native.exr
+else
+  check "a GPU runs every layer" grep -q 'fractalbake/backend (type string): "vulkan"' <(exrheader auto.exr)
+fi
+expect_fail 2 "--backend: expected auto, vulkan or native" o.exr -- fbm --size 8x8 --backend gpu -o o.exr
+cli_finish
