@@ -52,6 +52,20 @@ AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t 
     __m256 A = _mm256_loadu_ps(coef[0]), B = _mm256_loadu_ps(coef[1]), C = _mm256_loadu_ps(coef[2]);
     __m256 D = _mm256_loadu_ps(coef[3]), E = _mm256_loadu_ps(coef[4]), F = _mm256_loadu_ps(coef[5]);
     __m256 COL = _mm256_loadu_ps(coef[6]);
+    /* condensation (cmaps > 0): the chain also walks C's IFS, maps nmaps.. of the table */
+    const bool cond = p->cmaps > 0;
+    float ccoef[7][8] = {{0}};
+    int cthr[8];
+    for (uint32_t k = 0; k < 8; k++) {
+        const K_IfsMap *m = &maps[p->nmaps + (k < p->cmaps ? k : 0)];
+        const float v[7] = {m->a, m->b, m->c, m->d, m->e, m->f, m->colour};
+        for (int i = 0; i < 7 && cond; i++) ccoef[i][k] = v[i];
+        cthr[k] = cond ? (int)((k < p->cmaps ? m->thr : 0xffffffffu) ^ 0x80000000u) : 0;
+    }
+    __m256 CA = _mm256_loadu_ps(ccoef[0]), CB = _mm256_loadu_ps(ccoef[1]), CC = _mm256_loadu_ps(ccoef[2]);
+    __m256 CD = _mm256_loadu_ps(ccoef[3]), CE = _mm256_loadu_ps(ccoef[4]), CF = _mm256_loadu_ps(ccoef[5]);
+    __m256 CCOL = _mm256_loadu_ps(ccoef[6]);
+    const __m256i w0thr = _mm256_set1_epi32(thr[0]); /* r < maps[0].thr: w0, onto C's point */
     const __m256i sign = _mm256_set1_epi32((int)0x80000000u);
     const __m256 x0 = _mm256_set1_ps(p->x0), y0 = _mm256_set1_ps(p->y0), sx = _mm256_set1_ps(p->sx),
                  sy = _mm256_set1_ps(p->sy), zero = _mm256_setzero_ps(), half = _mm256_set1_ps(0.5f);
@@ -59,21 +73,23 @@ AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t 
     const __m256 lim = _mm256_set1_ps(p->limit), absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
     uint32_t c = c0;
     for (; c + 8 * G <= c1; c += 8 * G) {
-        __m256 x[G], y[G], col[G];
+        __m256 x[G], y[G], col[G], qx[G], qy[G], qc[G];
         __m256i left[G], chainh[G];
         uint32_t total = 0;
         for (int g = 0; g < G; g++) {
-            float xs[8], ys[8], cs[8];
+            float xs[8], ys[8], cs[8], cxs[8], cys[8], ccs[8];
             int ls[8], hs[8];
             for (int l = 0; l < 8; l++) {
                 uint32_t i = c + 8 * (uint32_t)g + (uint32_t)l;
                 K_IfsChain s = t0 == 0 ? k_ifs_init(*p, i) : state[i];
                 xs[l] = s.x, ys[l] = s.y, cs[l] = s.c, ls[l] = (int)s.left;
+                cxs[l] = s.cx, cys[l] = s.cy, ccs[l] = s.cc;
                 hs[l] = (int)k_hash(i ^ k_hash(p->seed ^ 0x9e3779b9u));
                 uint32_t ti = k_ifs_total(*p, i);
                 total = ti > total ? ti : total;
             }
             x[g] = _mm256_loadu_ps(xs), y[g] = _mm256_loadu_ps(ys), col[g] = _mm256_loadu_ps(cs);
+            qx[g] = _mm256_loadu_ps(cxs), qy[g] = _mm256_loadu_ps(cys), qc[g] = _mm256_loadu_ps(ccs);
             left[g] = _mm256_loadu_si256((const __m256i *)ls);
             chainh[g] = _mm256_loadu_si256((const __m256i *)hs);
         }
@@ -91,22 +107,46 @@ AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t 
                 __m256 e = _mm256_permutevar8x32_ps(E, idx), f = _mm256_permutevar8x32_ps(F, idx);
                 __m256 nx = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(a, x[g]), _mm256_mul_ps(b, y[g])), e);
                 __m256 ny = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(cc, x[g]), _mm256_mul_ps(d, y[g])), f);
-                col[g] = _mm256_mul_ps(_mm256_add_ps(col[g], _mm256_permutevar8x32_ps(COL, idx)), half);
-                x[g] = nx, y[g] = ny;
+                __m256 ncol = _mm256_mul_ps(_mm256_add_ps(col[g], _mm256_permutevar8x32_ps(COL, idx)), half);
                 __m256 bad = _mm256_or_ps(_mm256_cmp_ps(_mm256_and_ps(nx, absmask), lim, _CMP_NLE_UQ),
                                           _mm256_cmp_ps(_mm256_and_ps(ny, absmask), lim, _CMP_NLE_UQ));
+                if (cond) { /* kernels/ifs.h k_ifs_step: C's walk, then w0 takes its point */
+                    __m256i rc = hash8(_mm256_xor_si256(r, _mm256_set1_epi32(0x5bd1e995)));
+                    __m256i rcs = _mm256_xor_si256(rc, sign), ci = _mm256_setzero_si256();
+                    for (uint32_t k = 1; k < p->cmaps; k++)
+                        ci = _mm256_sub_epi32(ci, _mm256_or_si256(_mm256_cmpgt_epi32(rcs, _mm256_set1_epi32(cthr[k])),
+                                                                  _mm256_cmpeq_epi32(rcs, _mm256_set1_epi32(cthr[k]))));
+                    __m256 ca = _mm256_permutevar8x32_ps(CA, ci), cb = _mm256_permutevar8x32_ps(CB, ci);
+                    __m256 ccc = _mm256_permutevar8x32_ps(CC, ci), cd = _mm256_permutevar8x32_ps(CD, ci);
+                    __m256 ce = _mm256_permutevar8x32_ps(CE, ci), cf = _mm256_permutevar8x32_ps(CF, ci);
+                    __m256 ncx = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ca, qx[g]), _mm256_mul_ps(cb, qy[g])), ce);
+                    __m256 ncy = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ccc, qx[g]), _mm256_mul_ps(cd, qy[g])), cf);
+                    qc[g] = _mm256_mul_ps(_mm256_add_ps(qc[g], _mm256_permutevar8x32_ps(CCOL, ci)), half);
+                    qx[g] = ncx, qy[g] = ncy;
+                    __m256 cbad = _mm256_or_ps(_mm256_cmp_ps(_mm256_and_ps(ncx, absmask), lim, _CMP_NLE_UQ),
+                                               _mm256_cmp_ps(_mm256_and_ps(ncy, absmask), lim, _CMP_NLE_UQ));
+                    __m256 w0 = _mm256_castsi256_ps(_mm256_cmpgt_epi32(w0thr, rs)); /* r < thr0, unsigned */
+                    nx = _mm256_blendv_ps(nx, ncx, w0);
+                    ny = _mm256_blendv_ps(ny, ncy, w0);
+                    ncol = _mm256_blendv_ps(ncol, qc[g], w0);
+                    bad = _mm256_or_ps(cbad, _mm256_andnot_ps(w0, bad));
+                }
+                x[g] = nx, y[g] = ny, col[g] = ncol;
                 if (__builtin_expect(_mm256_movemask_ps(bad) != 0, 0)) { /* restarts: the kernel's own code */
-                    float xs[8], ys[8], cs[8];
+                    float xs[8], ys[8], cs[8], cxs[8], cys[8], ccs[8];
                     int ls[8];
                     _mm256_storeu_ps(xs, x[g]), _mm256_storeu_ps(ys, y[g]), _mm256_storeu_ps(cs, col[g]);
+                    _mm256_storeu_ps(cxs, qx[g]), _mm256_storeu_ps(cys, qy[g]), _mm256_storeu_ps(ccs, qc[g]);
                     _mm256_storeu_si256((__m256i *)ls, left[g]);
                     int mask = _mm256_movemask_ps(bad);
                     for (int l = 0; l < 8; l++) {
                         if (!(mask >> l & 1)) continue;
                         K_IfsChain s = k_ifs_restart(*p, (K_IfsChain){0}, c + 8 * (uint32_t)g + (uint32_t)l, t);
                         xs[l] = s.x, ys[l] = s.y, cs[l] = s.c, ls[l] = (int)s.left + 1; /* no plot this step */
+                        cxs[l] = s.cx, cys[l] = s.cy, ccs[l] = s.cc;
                     }
                     x[g] = _mm256_loadu_ps(xs), y[g] = _mm256_loadu_ps(ys), col[g] = _mm256_loadu_ps(cs);
+                    qx[g] = _mm256_loadu_ps(cxs), qy[g] = _mm256_loadu_ps(cys), qc[g] = _mm256_loadu_ps(ccs);
                     left[g] = _mm256_loadu_si256((const __m256i *)ls);
                 }
                 /* plot where left == 0, else count one transient step down */
@@ -146,14 +186,16 @@ AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t 
             }
         }
         for (int g = 0; g < G && state; g++) { /* the window ends: where each chain stands */
-            float xs[8], ys[8], cs[8];
+            float xs[8], ys[8], cs[8], cxs[8], cys[8], ccs[8];
             int ls[8];
             _mm256_storeu_ps(xs, x[g]), _mm256_storeu_ps(ys, y[g]), _mm256_storeu_ps(cs, col[g]);
+            _mm256_storeu_ps(cxs, qx[g]), _mm256_storeu_ps(cys, qy[g]), _mm256_storeu_ps(ccs, qc[g]);
             _mm256_storeu_si256((__m256i *)ls, left[g]);
             for (int l = 0; l < 8; l++) {
                 K_IfsChain *st = &state[c + 8 * (uint32_t)g + (uint32_t)l];
                 st->x = xs[l], st->y = ys[l], st->c = cs[l], st->left = (uint32_t)ls[l];
-                st->status = K_IFS_SKIP; /* the loop reads none of the rest (no condensation here) */
+                st->cx = cxs[l], st->cy = cys[l], st->cc = ccs[l];
+                st->status = K_IFS_SKIP; /* the loop reads none of the rest */
             }
         }
     }
@@ -207,7 +249,7 @@ bool fb_ifs_avx2_supported(const void *params)
 {
     const K_IfsParams *p = params;
     __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") && p->nmaps <= 8 && p->cmaps == 0 && p->csegs == 0;
+    return __builtin_cpu_supports("avx2") && p->nmaps <= 8 && p->cmaps <= 8 && p->csegs == 0;
 }
 
 fb_result fb_ifs_avx2_game(const void *params, const void *maps, int threads, uint32_t *hits, uint64_t *sum)

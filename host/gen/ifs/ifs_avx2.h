@@ -9,8 +9,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-/* True when this CPU has AVX2 and the run is one the loop implements (at most 8 maps, no
- * condensation). */
+/* True when this CPU has AVX2 and the run is one the loop implements (at most 8 maps, and a
+ * condensation set that is an IFS of at most 8 maps if any: not an L-system drawing). */
 bool fb_ifs_avx2_supported(const void *params);
 
 /* The whole run of `params` (every chain, every step) on `threads` threads into hits[] and colour
