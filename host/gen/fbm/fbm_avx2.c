@@ -20,6 +20,8 @@ AVX2 static inline __m256i wrap8(__m256 i)
     __m256 small = _mm256_cmp_ps(_mm256_and_ps(i, absmask), _mm256_set1_ps(16777216.0f), _CMP_LT_OQ);
     __m256i mask = _mm256_set1_epi32(4095);
     __m256i a = _mm256_and_si256(_mm256_cvttps_epi32(i), mask);
+    /* every lane's lattice index is exact (an image's coarse octaves): the integer path alone */
+    if (__builtin_expect(_mm256_movemask_ps(small) == 0xff, 1)) return a;
     __m256 fp = _mm256_set1_ps(4096.0f);
     __m256 r = _mm256_sub_ps(i, _mm256_mul_ps(fp, _mm256_floor_ps(_mm256_mul_ps(i, _mm256_set1_ps(1.0f / 4096.0f)))));
     r = _mm256_min_ps(_mm256_max_ps(r, _mm256_setzero_ps()), _mm256_set1_ps(4095.0f));
@@ -33,14 +35,11 @@ AVX2 static inline __m256 grad8(__m256i h, __m256 x, __m256 y)
     __m256 lt4 = _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(4), b));
     __m256 u = _mm256_blendv_ps(y, x, lt4);
     __m256 v = _mm256_blendv_ps(x, y, lt4);
-    __m256 neg = _mm256_castsi256_ps(_mm256_set1_epi32((int)0x80000000u));
-    __m256 b1 =
-        _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(b, _mm256_set1_epi32(1)), _mm256_set1_epi32(1)));
-    __m256 b2 =
-        _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(b, _mm256_set1_epi32(2)), _mm256_set1_epi32(2)));
-    __m256 su = _mm256_xor_ps(u, _mm256_and_ps(b1, neg));
+    /* bit 0 of b is the sign of u, bit 1 that of 2v: shifted into the sign bit (a negation is a
+     * sign flip, exact) */
+    __m256 su = _mm256_xor_ps(u, _mm256_castsi256_ps(_mm256_slli_epi32(b, 31)));
     __m256 v2 = _mm256_mul_ps(_mm256_set1_ps(2.0f), v);
-    __m256 sv = _mm256_xor_ps(v2, _mm256_and_ps(b2, neg));
+    __m256 sv = _mm256_xor_ps(v2, _mm256_castsi256_ps(_mm256_slli_epi32(_mm256_srli_epi32(b, 1), 31)));
     return _mm256_add_ps(su, sv);
 }
 
@@ -86,6 +85,18 @@ AVX2 static inline __m256 gradient8(uint32_t seed, __m256 x, __m256 y)
 AVX2 static void rows_avx2(const K_FbmParams *p, int y0, int n, float *out)
 {
     uint32_t seed = k_hash3(p->seed, 0u, 0x0fb0u);
+    /* the per-octave constants, once: each octave's noise seed, amplitude and offset */
+    uint32_t oct_seed[32];
+    float oct_amp[32], oct_ox[32], oct_oy[32], amp = 1.0f;
+    const uint32_t octaves = p->octaves < 32 ? p->octaves : 32;
+    for (uint32_t i = 0; i < octaves; i++) {
+        uint32_t h = k_hash(seed + i * 0x9e3779b9u), ho = k_hash(h ^ 0x5bd1e995u);
+        oct_seed[i] = h, oct_amp[i] = amp;
+        oct_ox[i] = (float)(ho & 0xffffu) * (64.0f / 65536.0f);
+        oct_oy[i] = (float)(ho >> 16) * (64.0f / 65536.0f);
+        amp *= p->gain;
+    }
+    const __m256 L = _mm256_set1_ps(p->lacunarity), c = _mm256_set1_ps(p->rot_c), s = _mm256_set1_ps(p->rot_s);
     for (int r = 0; r < n; r++) {
         float v = 1.0f - ((float)(y0 + r) + 0.5f) * p->inv_height;
         float *row = out + (size_t)r * p->width;
@@ -98,17 +109,12 @@ AVX2 static void rows_avx2(const K_FbmParams *p, int y0, int n, float *out)
             __m256 x = _mm256_add_ps(_mm256_mul_ps(u, _mm256_set1_ps(p->freq_x)), _mm256_set1_ps(p->offset_x));
             __m256 y = _mm256_set1_ps(v * p->freq_y + p->offset_y);
             __m256 sum = _mm256_setzero_ps();
-            float amp = 1.0f;
-            for (uint32_t i = 0; i < p->octaves; i++) {
-                uint32_t h = k_hash(seed + i * 0x9e3779b9u);
-                sum = _mm256_add_ps(sum, _mm256_mul_ps(_mm256_set1_ps(amp), gradient8(h, x, y)));
-                amp *= p->gain;
-                __m256 L = _mm256_set1_ps(p->lacunarity), c = _mm256_set1_ps(p->rot_c), s = _mm256_set1_ps(p->rot_s);
+            for (uint32_t i = 0; i < octaves; i++) {
+                sum = _mm256_add_ps(sum, _mm256_mul_ps(_mm256_set1_ps(oct_amp[i]), gradient8(oct_seed[i], x, y)));
                 __m256 nx = _mm256_mul_ps(L, _mm256_sub_ps(_mm256_mul_ps(c, x), _mm256_mul_ps(s, y)));
                 __m256 ny = _mm256_mul_ps(L, _mm256_add_ps(_mm256_mul_ps(s, x), _mm256_mul_ps(c, y)));
-                uint32_t ho = k_hash(h ^ 0x5bd1e995u);
-                x = _mm256_add_ps(nx, _mm256_set1_ps((float)(ho & 0xffffu) * (64.0f / 65536.0f)));
-                y = _mm256_add_ps(ny, _mm256_set1_ps((float)(ho >> 16) * (64.0f / 65536.0f)));
+                x = _mm256_add_ps(nx, _mm256_set1_ps(oct_ox[i]));
+                y = _mm256_add_ps(ny, _mm256_set1_ps(oct_oy[i]));
             }
             _mm256_storeu_ps(row + x0, sum);
         }
