@@ -34,6 +34,56 @@ typedef struct avx2_job {
 
 #define G 2 /* vectors of 8 chains in flight */
 
+/* Up to 8 maps held in registers (coefficients a..f and colour per lane index) with their
+ * thresholds in signed order, for picking and applying a map per lane without memory gathers. */
+typedef struct maps8 {
+    __m256 a, b, c, d, e, f, col;
+    int thr[8];
+    uint32_t n;
+} maps8;
+
+AVX2 static void maps8_load(maps8 *m, const K_IfsMap *maps, uint32_t n)
+{
+    float coef[7][8] = {{0}};
+    for (uint32_t k = 0; k < 8; k++) {
+        const K_IfsMap *q = &maps[k < n ? k : 0];
+        const float v[7] = {q->a, q->b, q->c, q->d, q->e, q->f, q->colour};
+        for (int i = 0; i < 7; i++) coef[i][k] = v[i];
+        m->thr[k] = (int)((k < n ? q->thr : 0xffffffffu) ^ 0x80000000u); /* signed order = unsigned order */
+    }
+    m->a = _mm256_loadu_ps(coef[0]), m->b = _mm256_loadu_ps(coef[1]), m->c = _mm256_loadu_ps(coef[2]);
+    m->d = _mm256_loadu_ps(coef[3]), m->e = _mm256_loadu_ps(coef[4]), m->f = _mm256_loadu_ps(coef[5]);
+    m->col = _mm256_loadu_ps(coef[6]);
+    m->n = n;
+}
+
+/* k_ifs_pick for 8 lanes (rs: the random numbers in signed order): the count of thresholds
+ * after the first that are <= r. */
+AVX2 static inline __m256i maps8_pick(const maps8 *m, __m256i rs)
+{
+    __m256i idx = _mm256_setzero_si256();
+    for (uint32_t k = 1; k < m->n; k++) /* minus one per threshold <= r */
+        idx = _mm256_sub_epi32(idx, _mm256_or_si256(_mm256_cmpgt_epi32(rs, _mm256_set1_epi32(m->thr[k])),
+                                                    _mm256_cmpeq_epi32(rs, _mm256_set1_epi32(m->thr[k]))));
+    return idx;
+}
+
+/* k_ifs_apply for 8 lanes: map idx of each lane applied to (x, y), the colour moved halfway to
+ * the map's, in the kernel's order of operations; returns the lanes that escaped (k_ifs_escaped). */
+AVX2 static inline __m256 maps8_apply(const maps8 *m, __m256i idx, __m256 *x, __m256 *y, __m256 *col, __m256 lim)
+{
+    const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+    __m256 a = _mm256_permutevar8x32_ps(m->a, idx), b = _mm256_permutevar8x32_ps(m->b, idx);
+    __m256 c = _mm256_permutevar8x32_ps(m->c, idx), d = _mm256_permutevar8x32_ps(m->d, idx);
+    __m256 e = _mm256_permutevar8x32_ps(m->e, idx), f = _mm256_permutevar8x32_ps(m->f, idx);
+    __m256 nx = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(a, *x), _mm256_mul_ps(b, *y)), e);
+    __m256 ny = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(c, *x), _mm256_mul_ps(d, *y)), f);
+    *col = _mm256_mul_ps(_mm256_add_ps(*col, _mm256_permutevar8x32_ps(m->col, idx)), _mm256_set1_ps(0.5f));
+    *x = nx, *y = ny;
+    return _mm256_or_ps(_mm256_cmp_ps(_mm256_and_ps(nx, absmask), lim, _CMP_NLE_UQ),
+                        _mm256_cmp_ps(_mm256_and_ps(ny, absmask), lim, _CMP_NLE_UQ));
+}
+
 /* Steps [t0, t1) of chains [c0, c1) (groups of 8 * G chains vectorised, the rest scalar) into
  * histogram h; adds the points outside the frame, discarded and restarted to n[0..2]. A chain starts
  * at t0 == 0 and otherwise from state[chain], where its state after the window is stored (state may
@@ -41,36 +91,16 @@ typedef struct avx2_job {
 AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t c0, uint32_t c1, uint32_t t0,
                            uint32_t t1, K_IfsChain *state, avx2_hist *h, uint64_t n[3])
 {
-    float coef[7][8] = {{0}};
-    int thr[8];
-    for (uint32_t k = 0; k < 8; k++) {
-        const K_IfsMap *m = &maps[k < p->nmaps ? k : 0];
-        const float v[7] = {m->a, m->b, m->c, m->d, m->e, m->f, m->colour};
-        for (int i = 0; i < 7; i++) coef[i][k] = v[i];
-        thr[k] = (int)((k < p->nmaps ? m->thr : 0xffffffffu) ^ 0x80000000u); /* signed order = unsigned order */
-    }
-    __m256 A = _mm256_loadu_ps(coef[0]), B = _mm256_loadu_ps(coef[1]), C = _mm256_loadu_ps(coef[2]);
-    __m256 D = _mm256_loadu_ps(coef[3]), E = _mm256_loadu_ps(coef[4]), F = _mm256_loadu_ps(coef[5]);
-    __m256 COL = _mm256_loadu_ps(coef[6]);
-    /* condensation (cmaps > 0): the chain also walks C's IFS, maps nmaps.. of the table */
+    maps8 M, CM; /* the maps, and condensation (cmaps > 0): C's IFS, maps nmaps.. of the table */
+    maps8_load(&M, maps, p->nmaps);
     const bool cond = p->cmaps > 0;
-    float ccoef[7][8] = {{0}};
-    int cthr[8];
-    for (uint32_t k = 0; k < 8; k++) {
-        const K_IfsMap *m = &maps[p->nmaps + (k < p->cmaps ? k : 0)];
-        const float v[7] = {m->a, m->b, m->c, m->d, m->e, m->f, m->colour};
-        for (int i = 0; i < 7 && cond; i++) ccoef[i][k] = v[i];
-        cthr[k] = cond ? (int)((k < p->cmaps ? m->thr : 0xffffffffu) ^ 0x80000000u) : 0;
-    }
-    __m256 CA = _mm256_loadu_ps(ccoef[0]), CB = _mm256_loadu_ps(ccoef[1]), CC = _mm256_loadu_ps(ccoef[2]);
-    __m256 CD = _mm256_loadu_ps(ccoef[3]), CE = _mm256_loadu_ps(ccoef[4]), CF = _mm256_loadu_ps(ccoef[5]);
-    __m256 CCOL = _mm256_loadu_ps(ccoef[6]);
-    const __m256i w0thr = _mm256_set1_epi32(thr[0]); /* r < maps[0].thr: w0, onto C's point */
+    if (cond) maps8_load(&CM, maps + p->nmaps, p->cmaps);
+    const __m256i w0thr = _mm256_set1_epi32(M.thr[0]); /* r < maps[0].thr: w0, onto C's point */
     const __m256i sign = _mm256_set1_epi32((int)0x80000000u);
     const __m256 x0 = _mm256_set1_ps(p->x0), y0 = _mm256_set1_ps(p->y0), sx = _mm256_set1_ps(p->sx),
                  sy = _mm256_set1_ps(p->sy), zero = _mm256_setzero_ps(), half = _mm256_set1_ps(0.5f);
     const __m256 hw = _mm256_set1_ps((float)p->hist_w), hh = _mm256_set1_ps((float)p->hist_h);
-    const __m256 lim = _mm256_set1_ps(p->limit), absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+    const __m256 lim = _mm256_set1_ps(p->limit);
     uint32_t c = c0;
     for (; c + 8 * G <= c1; c += 8 * G) {
         __m256 x[G], y[G], col[G], qx[G], qy[G], qc[G];
@@ -98,33 +128,14 @@ AVX2 static void game_avx2(const K_IfsParams *p, const K_IfsMap *maps, uint32_t 
             for (int g = 0; g < G; g++) {
                 /* r = k_hash3(seed, chain, t) = hash(t ^ hash(chain ^ hash(seed ^ k))) */
                 __m256i r = hash8(_mm256_xor_si256(_mm256_set1_epi32((int)t), chainh[g]));
-                __m256i rs = _mm256_xor_si256(r, sign), idx = _mm256_setzero_si256();
-                for (uint32_t k = 1; k < p->nmaps; k++) /* minus one per threshold <= r */
-                    idx = _mm256_sub_epi32(idx, _mm256_or_si256(_mm256_cmpgt_epi32(rs, _mm256_set1_epi32(thr[k])),
-                                                                _mm256_cmpeq_epi32(rs, _mm256_set1_epi32(thr[k]))));
-                __m256 a = _mm256_permutevar8x32_ps(A, idx), b = _mm256_permutevar8x32_ps(B, idx);
-                __m256 cc = _mm256_permutevar8x32_ps(C, idx), d = _mm256_permutevar8x32_ps(D, idx);
-                __m256 e = _mm256_permutevar8x32_ps(E, idx), f = _mm256_permutevar8x32_ps(F, idx);
-                __m256 nx = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(a, x[g]), _mm256_mul_ps(b, y[g])), e);
-                __m256 ny = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(cc, x[g]), _mm256_mul_ps(d, y[g])), f);
-                __m256 ncol = _mm256_mul_ps(_mm256_add_ps(col[g], _mm256_permutevar8x32_ps(COL, idx)), half);
-                __m256 bad = _mm256_or_ps(_mm256_cmp_ps(_mm256_and_ps(nx, absmask), lim, _CMP_NLE_UQ),
-                                          _mm256_cmp_ps(_mm256_and_ps(ny, absmask), lim, _CMP_NLE_UQ));
+                __m256i rs = _mm256_xor_si256(r, sign);
+                __m256 nx = x[g], ny = y[g], ncol = col[g];
+                __m256 bad = maps8_apply(&M, maps8_pick(&M, rs), &nx, &ny, &ncol, lim);
                 if (cond) { /* kernels/ifs.h k_ifs_step: C's walk, then w0 takes its point */
                     __m256i rc = hash8(_mm256_xor_si256(r, _mm256_set1_epi32(0x5bd1e995)));
-                    __m256i rcs = _mm256_xor_si256(rc, sign), ci = _mm256_setzero_si256();
-                    for (uint32_t k = 1; k < p->cmaps; k++)
-                        ci = _mm256_sub_epi32(ci, _mm256_or_si256(_mm256_cmpgt_epi32(rcs, _mm256_set1_epi32(cthr[k])),
-                                                                  _mm256_cmpeq_epi32(rcs, _mm256_set1_epi32(cthr[k]))));
-                    __m256 ca = _mm256_permutevar8x32_ps(CA, ci), cb = _mm256_permutevar8x32_ps(CB, ci);
-                    __m256 ccc = _mm256_permutevar8x32_ps(CC, ci), cd = _mm256_permutevar8x32_ps(CD, ci);
-                    __m256 ce = _mm256_permutevar8x32_ps(CE, ci), cf = _mm256_permutevar8x32_ps(CF, ci);
-                    __m256 ncx = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ca, qx[g]), _mm256_mul_ps(cb, qy[g])), ce);
-                    __m256 ncy = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ccc, qx[g]), _mm256_mul_ps(cd, qy[g])), cf);
-                    qc[g] = _mm256_mul_ps(_mm256_add_ps(qc[g], _mm256_permutevar8x32_ps(CCOL, ci)), half);
-                    qx[g] = ncx, qy[g] = ncy;
-                    __m256 cbad = _mm256_or_ps(_mm256_cmp_ps(_mm256_and_ps(ncx, absmask), lim, _CMP_NLE_UQ),
-                                               _mm256_cmp_ps(_mm256_and_ps(ncy, absmask), lim, _CMP_NLE_UQ));
+                    __m256 cbad =
+                        maps8_apply(&CM, maps8_pick(&CM, _mm256_xor_si256(rc, sign)), &qx[g], &qy[g], &qc[g], lim);
+                    __m256 ncx = qx[g], ncy = qy[g];
                     __m256 w0 = _mm256_castsi256_ps(_mm256_cmpgt_epi32(w0thr, rs)); /* r < thr0, unsigned */
                     nx = _mm256_blendv_ps(nx, ncx, w0);
                     ny = _mm256_blendv_ps(ny, ncy, w0);
