@@ -87,6 +87,10 @@ fb_result fb_memory_check(uint64_t bytes, const char *who);
 /* "12.3 MiB" / "1.25 GiB" */
 void fb_format_bytes(uint64_t bytes, char *out, size_t size);
 
+/* The candidate nearest to a misspelt word by edit distance (at most 1 edit for words of up to 4
+ * letters, 2 beyond), for "did you mean" hints; NULL when none is that near. */
+const char *fb_closest(const char *word, const char *const *cands, int n);
+
 /* malloc for arrays of hundreds of MiB: 2 MiB-aligned and marked for transparent huge pages, so the
  * first touch costs a fault per 2 MiB instead of per 4 KiB (the kernel may decline). Free with free(). */
 void *fb_malloc_large(size_t size);

@@ -200,3 +200,30 @@ fb_result fb_memory_check(uint64_t bytes, const char *who)
     fb_format_bytes(fb_memory_limit(), lim, sizeof lim);
     return fb_fail(FB_ERR_INPUT, "%s needs about %s, more than --max-memory %s", who, need, lim);
 }
+
+const char *fb_closest(const char *word, const char *const *cands, int n)
+{
+    size_t lw = strlen(word);
+    if (lw == 0 || lw > 63) return NULL;
+    const char *best = NULL;
+    size_t best_d = lw <= 4 ? 1 : 2; /* at most one edit for short words, two for the rest */
+    for (int c = 0; c < n; c++) {
+        size_t lc = strlen(cands[c]);
+        if (lc > 63 || (lc > lw ? lc - lw : lw - lc) > best_d) continue;
+        size_t row[64], prev_diag, tmp; /* Levenshtein distance, one row */
+        for (size_t j = 0; j <= lc; j++) row[j] = j;
+        for (size_t i = 1; i <= lw; i++) {
+            prev_diag = row[0];
+            row[0] = i;
+            for (size_t j = 1; j <= lc; j++) {
+                tmp = row[j];
+                size_t sub = prev_diag + (word[i - 1] != cands[c][j - 1]);
+                size_t del = row[j] + 1, ins = row[j - 1] + 1;
+                row[j] = sub < del ? (sub < ins ? sub : ins) : (del < ins ? del : ins);
+                prev_diag = tmp;
+            }
+        }
+        if (row[lc] > 0 && row[lc] <= best_d && (!best || row[lc] < best_d)) best = cands[c], best_d = row[lc];
+    }
+    return best;
+}

@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/random.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -300,4 +301,17 @@ void fb_outputs_unlink_all(void)
 {
     for (int i = 0; i < g_count; i++)
         if (g_out[i].live) unlink(g_out[i].tmp);
+}
+
+fb_result fb_output_format(const char *flag, const char *path, const char *ext)
+{
+    static const char *const images[] = {".exr", ".png", ".jpg",  ".jpeg", ".tif", ".tiff", ".bmp",
+                                         ".gif", ".hdr", ".webp", ".tga",  ".ppm", ".dpx"};
+    const char *slash = strrchr(path, '/'), *dot = strrchr(path, '.');
+    if (!dot || (slash && dot < slash) || !strcasecmp(dot, ext)) return FB_OK;
+    for (size_t i = 0; i < sizeof images / sizeof images[0]; i++)
+        if (!strcasecmp(dot, images[i]))
+            return fb_fail(FB_ERR_USAGE, "%s %s: this writes %s (%s), not %s: name the file %s", flag, path,
+                           !strcmp(ext, ".exr") ? "OpenEXR" : "PNG", ext, dot, ext);
+    return FB_OK;
 }

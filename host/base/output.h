@@ -60,4 +60,9 @@ void fb_output_discard(const char *path);
 /* For a signal handler: removes every temporary file of the transaction. Async-signal-safe. */
 void fb_outputs_unlink_all(void);
 
+/* A file named for one image format (".png") where another is written (ext, ".exr") is refused:
+ * FB_ERR_USAGE naming the flag. Names without an image extension (a mesh, /dev/null, "out") are
+ * left to the other checks. */
+fb_result fb_output_format(const char *flag, const char *path, const char *ext);
+
 #endif

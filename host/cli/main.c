@@ -148,6 +148,23 @@ static bool parse_points_part(const char *s, int pp[2])
            pp[0] <= pp[1];
 }
 
+/* The common options (without dashes), for "did you mean" hints. */
+static const char *const k_common_flags[] = {
+    "output",  "preview",    "preview-layer", "backend",    "device", "threads", "strip-rows", "region", "points-part",
+    "dry-run", "max-memory", "zip-level",     "validation", "quiet",  "json",    "help",       "version"};
+
+/* "; did you mean --octaves?" for an unknown flag of `cmd` (kind: a generator's flags too), or "". */
+static void flag_hint(const char *flag, const char *kind, const char *const *extra, int nextra, char *out, size_t size)
+{
+    const char *cands[256];
+    int n = 0;
+    for (size_t i = 0; i < sizeof k_common_flags / sizeof k_common_flags[0]; i++) cands[n++] = k_common_flags[i];
+    for (int i = 0; i < nextra && n < 256; i++) cands[n++] = extra[i];
+    if (kind) n += fb_scene_flags(kind, cands + n, 256 - n);
+    const char *near = !strncmp(flag, "--", 2) ? fb_closest(flag + 2, cands, n) : NULL;
+    snprintf(out, size, near ? "; did you mean --%s?" : "", near);
+}
+
 /* Consumes a common option at argv[*i]; returns 1 if consumed, 0 if not common, -1 on error (logged). */
 static int common_option(int argc, char **argv, int *i, common_opts *o)
 {
@@ -164,9 +181,11 @@ static int common_option(int argc, char **argv, int *i, common_opts *o)
     if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
         NEED_VALUE();
         o->out = val;
+        if (fb_output_format(a, val, ".exr")) return -1;
     } else if (!strcmp(a, "--preview")) {
         NEED_VALUE();
         o->preview = val;
+        if (fb_output_format(a, val, ".png")) return -1;
     } else if (!strcmp(a, "--preview-layer")) {
         NEED_VALUE();
         o->preview_layer = val;
@@ -340,6 +359,14 @@ static int cmd_generator(const char *kind, int argc, char **argv)
             return finish(FB_ERR_USAGE);
         }
         if (c > 0) continue;
+        if (!strncmp(argv[i], "--", 2) && fb_scene_flag_arity(kind, argv[i] + 2) < 0 && strcmp(argv[i], "--half")) {
+            char hint[96];
+            flag_hint(argv[i], kind, NULL, 0, hint, sizeof hint);
+            fb_fail(FB_ERR_USAGE, "%s: unknown flag for `fractalbake %s`%s (see fractalbake %s --help)", argv[i], kind,
+                    hint, kind);
+            free(gen_args);
+            return finish(FB_ERR_USAGE);
+        }
         gen_args[ngen++] = argv[i];
         if (strncmp(argv[i], "--", 2) == 0 && fb_scene_flag_arity(kind, argv[i] + 2) == 1 && i + 1 < argc)
             gen_args[ngen++] = argv[++i];
@@ -423,7 +450,11 @@ static int cmd_render(int argc, char **argv)
                 from = val;
             i++;
         } else if (a[0] == '-') {
-            bad = usage_error("%s: unknown flag for `fractalbake render`", a);
+            static const char *const render_flags[] = {"set", "from"};
+            char hint[96];
+            flag_hint(a, NULL, render_flags, 2, hint, sizeof hint);
+            fb_fail(FB_ERR_USAGE, "%s: unknown flag for `fractalbake render`%s", a, hint);
+            bad = finish(FB_ERR_USAGE);
         } else if (scene_path) {
             bad = usage_error("%s: only one scene file may be given", a);
         } else {
@@ -513,6 +544,8 @@ static int cmd_compare(int argc, char **argv)
         } else if (!strcmp(a, "--layer") || !strcmp(a, "--diff") || !strcmp(a, "--diff-png")) {
             if (!val) return usage_error("%s: missing value", a);
             *(!strcmp(a, "--layer") ? &d.layer : !strcmp(a, "--diff") ? &d.diff : &d.diff_png) = val;
+            if (strcmp(a, "--layer") && fb_output_format(a, val, !strcmp(a, "--diff") ? ".exr" : ".png"))
+                return finish(FB_ERR_USAGE);
             i++;
         } else if (!strcmp(a, "--ignore-missing")) {
             d.ignore_missing = true;
@@ -560,7 +593,7 @@ static int cmd_merge(int argc, char **argv)
             if (!val)
                 bad = usage_error("%s: missing value", a);
             else if (strcmp(a, "--threads"))
-                out = val;
+                bad = fb_output_format(a, out = val, ".exr") ? finish(FB_ERR_USAGE) : 0;
             else if (!parse_int_arg(val, 1, 1024, &threads))
                 bad = usage_error("--threads: expected an integer in 1..1024, found \"%s\"", val);
             i++;
@@ -623,9 +656,16 @@ static int cmd_devices(int argc, char **argv)
 {
     const char *sel = NULL;
     for (int i = 0; i < argc; i++) {
-        if (!strcmp(argv[i], "--device") && i + 1 < argc)
+        if (!strcmp(argv[i], "--device") && i + 1 < argc) {
             sel = argv[++i];
-        else
+        } else if (!strcmp(argv[i], "--help")) {
+            printf("usage: fractalbake devices [--device D]\n"
+                   "Lists the Vulkan devices (index, name, type, memory, subgroup size, driver), marks the one\n"
+                   "fractalbake chooses (with --device D: the one D names), and says what --backend auto does.\n");
+            return 0;
+        } else if (!strcmp(argv[i], "--quiet")) {
+            /* nothing to leave out: the list is the output */
+        } else
             return usage_error("%s: unknown argument for `fractalbake devices` (only --device D)", argv[i]);
     }
     vkc_device_info *infos = NULL;
@@ -677,9 +717,39 @@ static void install_signal_handlers(void)
 
 static int run_command(int argc, char **argv);
 
+/* The habits of other command lines, spelled the one way the commands read: --flag=value becomes
+ * --flag value (the value may hold '='s: --set=layers.sky.c=0,1), -q is --quiet, `help CMD` is
+ * CMD --help. A new argv; the strings are argv's own or the split copies (kept for the process). */
+static char **normalise_args(int *argc, char **argv)
+{
+    char **out = calloc((size_t)*argc * 2 + 2, sizeof *out);
+    if (!out) return argv;
+    int n = 0;
+    for (int i = 0; i < *argc; i++) {
+        const char *a = argv[i], *eq = strchr(a, '=');
+        if (i == 1 && !strcmp(a, "help") && *argc > 2) { /* help CMD */
+            out[n++] = argv[2];
+            out[n++] = "--help";
+            i = 2;
+            continue;
+        }
+        if (i > 0 && !strcmp(a, "-q")) {
+            out[n++] = "--quiet";
+        } else if (i > 0 && !strncmp(a, "--", 2) && eq && eq > a + 2 && (out[n] = strndup(a, (size_t)(eq - a)))) {
+            n++;
+            out[n++] = (char *)eq + 1;
+        } else {
+            out[n++] = argv[i];
+        }
+    }
+    *argc = n;
+    return out;
+}
+
 int main(int argc, char **argv)
 {
     fb_log_set_sink(sink, NULL);
+    argv = normalise_args(&argc, argv);
     install_signal_handlers();
     /* bench bakes to a scratch file again and again: each of its bakes is a transaction of its own */
     if (argc >= 2 && !strcmp(argv[1], "bench")) return run_command(argc, argv);

@@ -7,6 +7,7 @@
 #include "tonemap.h"
 
 #include "exrio.h"
+#include "output.h"
 #include "gen_ifs.h"
 #include "scene.h"
 
@@ -70,6 +71,7 @@ fb_result fb_tonemap_main(int argc, char **argv, bool *quiet)
         if (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--layer")) {
             if (!v) rc = fb_fail(FB_ERR_USAGE, "%s: missing value", a);
             *(!strcmp(a, "--layer") ? &layer : &out) = v;
+            if (v && strcmp(a, "--layer")) rc = fb_output_format(a, v, ".exr");
             i++;
         } else if (!strcmp(a, "--quiet")) {
             *quiet = true;

@@ -522,12 +522,17 @@ fb_result fb_schema_check(const fb_vctx *v, const char *path, json_t *obj, const
         snprintf(sub, sizeof sub, "%s%s%s", path, path[0] ? "." : "", key);
         const fb_keyspec *k = find_key(keys, n, key);
         if (!k) {
-            char known[512] = "";
-            for (int i = 0; i < n; i++)
+            char known[512] = "", hint[96] = "";
+            const char *names[96];
+            for (int i = 0; i < n; i++) {
                 snprintf(known + strlen(known), sizeof known - strlen(known), "%s%s", i ? ", " : "", keys[i].key);
+                if (i < 96) names[i] = keys[i].key;
+            }
+            const char *near = fb_closest(key, names, n < 96 ? n : 96);
+            if (near) snprintf(hint, sizeof hint, "did you mean \"%s\"? ", near);
             if (!v->origin && !strchr(path, '.')) /* a flag (not a key inside a flag's JSON value) */
                 return fb_fail(FB_ERR_USAGE, "--%s: unknown flag for %s", key, what);
-            return fb_schema_error(v, sub, "unknown key for %s (known keys: %s)", what, known);
+            return fb_schema_error(v, sub, "unknown key for %s; %s(known keys: %s)", what, hint, known);
         }
         fb_result rc = fb_schema_check_value(v, sub, k, val);
         if (rc) return rc;
@@ -1023,6 +1028,19 @@ static const fb_keyspec *flag_spec(const char *kind, const char *flag, bool *sce
         if (!cls->keys[i].flag && !strcmp(cls->keys[i].key, flag)) return &cls->keys[i];
     *scene_level = true;
     return find_key(scene_keys, FB_NKEYS(scene_keys), flag);
+}
+
+int fb_scene_flags(const char *kind, const char **out, int max)
+{
+    int n = 0;
+    const fb_gen_class *cls = kind_class(kind);
+    for (int i = 0; cls && i < cls->nkeys && n < max; i++)
+        if (cls->keys[i].type != FB_K_TYPE && strcmp(cls->keys[i].key, "compression"))
+            out[n++] = flag_of(&cls->keys[i]);
+    for (int i = 0; i < FB_NKEYS(scene_keys) && n < max; i++)
+        if (scene_keys[i].type != FB_K_LAYERS) out[n++] = scene_keys[i].key;
+    if (n < max) out[n++] = "float";
+    return n;
 }
 
 int fb_scene_flag_arity(const char *kind, const char *flag)

@@ -103,6 +103,9 @@ fb_result fb_scene_from_flags(const char *kind, int argc, char **argv, char **js
  * `kind` or of the scene. */
 int fb_scene_flag_arity(const char *kind, const char *flag);
 
+/* The flags of generator `kind` and of the scene, without dashes (for "did you mean" hints). */
+int fb_scene_flags(const char *kind, const char **out, int max);
+
 /* Prints the keys of a generator with their types, ranges and defaults (for --help). */
 void fb_scene_print_keys(const char *kind, void (*print)(const char *line, void *user), void *user);
 

@@ -20,6 +20,18 @@ fi
 grep -q -E "\*|no Vulkan device" dev.txt && ok || bad "devices marks no chosen device"
 "$FB" --version | grep -q "fractalbake 0" && ok || bad "--version"
 "$FB" fbm --help | grep -q -- "--octaves" && ok || bad "fbm --help lists no --octaves"
+# other command lines' habits: --flag=value, -q, help CMD, --help everywhere
+"$FB" fbm --size=24x16 --octaves=3 --backend=native -q --output=eq.exr 2> eq.txt
+check "--flag=value and -q: baked" test -s eq.exr
+check "-q: nothing on stderr" test ! -s eq.txt
+"$FB" fbm --size 24x16 --octaves 3 --backend native --quiet -o sp.exr
+check "--flag=value: the same file as --flag value" cmp -s eq.exr sp.exr
+check "help fbm is fbm --help" cmp -s <("$FB" help fbm) <("$FB" fbm --help)
+for c in render fbm julia ifs lsystem terrain constrain compare merge tonemap devices bench; do
+  "$FB" $c --help > h.txt 2>&1
+  rc=$?
+  check "$c --help exits 0 with a usage line" test $rc -eq 0 -a -n "$(grep -i usage h.txt)"
+done
 # the terrain benchmark's JSON lines (rates are measured, not asserted: only their form and sign)
 "$FB" bench --generator terrain --json > bt.json && ok || bad "bench --generator terrain failed"
 grep -q '"generator": "delaunay", "backend": "native".*"unit": "Minserts/s", "rate": [0-9]*\.[0-9]*[1-9]' bt.json && ok || bad "bench: no delaunay line: $(cat bt.json)"

@@ -50,8 +50,9 @@ check "the link's target is untouched" test "$(cat victim.txt)" = precious -a -L
 check "/dev/null is still a device" test -c /dev/null
 
 # ---- 4. all outputs of a run commit together ----
-expect_fail 2 "x.exr: named as the output and as the preview" x.exr -- fbm $N --size 16x16 -o x.exr --preview x.exr
-expect_fail 2 "named as the output and as the preview" x.exr -- fbm $N --size 16x16 -o x.exr --preview ./x.exr
+expect_fail 2 "x: named as the output and as the preview" x -- fbm $N --size 16x16 -o x --preview x
+expect_fail 2 "named as the output and as the preview" x -- fbm $N --size 16x16 -o x --preview ./x
+expect_fail 2 "x.exr: this writes PNG" x.exr -- fbm $N --size 16x16 -o x.exr --preview x.exr
 mkdir -p sub
 expect_fail 2 "m.ply: named as the preview and as the mesh" x.exr -- terrain $N --points pts.csv --size 16x16 --mesh m.ply --preview sub/../m.ply -o x.exr
 "$FB" fbm $N --size 16x16 -o c1.exr && "$FB" fbm $N --size 16x16 --seed 2 -o c2.exr
