@@ -720,10 +720,26 @@ static int run_command(int argc, char **argv);
 /* The habits of other command lines, spelled the one way the commands read: --flag=value becomes
  * --flag value (the value may hold '='s: --set=layers.sky.c=0,1), -q is --quiet, `help CMD` is
  * CMD --help. A new argv; the strings are argv's own or the split copies (kept for the process). */
+static char **g_args;  /* the normalised argv, freed when main returns */
+static char **g_split; /* the "--flag" halves it allocated */
+static int g_nsplit;
+
+static void free_args(void)
+{
+    for (int i = 0; i < g_nsplit; i++) free(g_split[i]);
+    free(g_split);
+    free(g_args);
+}
+
 static char **normalise_args(int *argc, char **argv)
 {
-    char **out = calloc((size_t)*argc * 2 + 2, sizeof *out);
-    if (!out) return argv;
+    char **out = g_args = calloc((size_t)*argc * 2 + 2, sizeof *out);
+    g_split = calloc((size_t)*argc + 1, sizeof *g_split);
+    if (!out || !g_split) {
+        free(out), free(g_split);
+        g_args = g_split = NULL;
+        return argv;
+    }
     int n = 0;
     for (int i = 0; i < *argc; i++) {
         const char *a = argv[i], *eq = strchr(a, '=');
@@ -736,7 +752,7 @@ static char **normalise_args(int *argc, char **argv)
         if (i > 0 && !strcmp(a, "-q")) {
             out[n++] = "--quiet";
         } else if (i > 0 && !strncmp(a, "--", 2) && eq && eq > a + 2 && (out[n] = strndup(a, (size_t)(eq - a)))) {
-            n++;
+            g_split[g_nsplit++] = out[n++];
             out[n++] = (char *)eq + 1;
         } else {
             out[n++] = argv[i];
@@ -752,7 +768,11 @@ int main(int argc, char **argv)
     argv = normalise_args(&argc, argv);
     install_signal_handlers();
     /* bench bakes to a scratch file again and again: each of its bakes is a transaction of its own */
-    if (argc >= 2 && !strcmp(argv[1], "bench")) return run_command(argc, argv);
+    if (argc >= 2 && !strcmp(argv[1], "bench")) {
+        int code = run_command(argc, argv);
+        free_args();
+        return code;
+    }
     /* Every file the command writes is renamed into place here, together, or none is (output.h).
      * A comparison beyond threshold (1) still writes its diff pictures. */
     fb_outputs_begin();
@@ -760,6 +780,7 @@ int main(int argc, char **argv)
     g_first_error[0] = 0;
     fb_result rc = fb_outputs_end(code == 0 || code == 1 ? FB_OK : FB_ERR_INTERNAL);
     if (rc && (code == 0 || code == 1)) code = finish(rc);
+    free_args();
     return code;
 }
 
