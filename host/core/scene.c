@@ -1283,30 +1283,50 @@ out:
     return rc;
 }
 
+/* A number as a user writes it: integers in full (4294967295, not 4.29497e+09), else the shortest
+ * text that reads back as the same double (0.1, 1.01). */
+static void fmt_num(double x, char *out, size_t size)
+{
+    if (x == floor(x) && fabs(x) < 1e15) {
+        snprintf(out, size, "%.0f", x);
+        return;
+    }
+    for (int digits = 1; digits <= 17; digits++) {
+        snprintf(out, size, "%.*g", digits, x);
+        if (strtod(out, NULL) == x) return;
+    }
+}
+
 void fb_scene_print_keys(const char *kind, void (*print)(const char *line, void *user), void *user)
 {
     const fb_gen_class *cls = kind_class(kind);
     char line[512];
     if (!cls) return;
-    const fb_keyspec *keys = cls->keys;
-    int n = cls->nkeys;
+    int width = 0; /* the flag column: as wide as the longest flag */
     for (int pass = 0; pass < 2; pass++) {
-        const fb_keyspec *ks = pass ? scene_keys : keys;
-        int nk = pass ? FB_NKEYS(scene_keys) : n;
+        const fb_keyspec *ks = pass ? scene_keys : cls->keys;
+        int nk = pass ? FB_NKEYS(scene_keys) : cls->nkeys;
+        for (int i = 0; i < nk; i++)
+            if ((int)strlen(flag_of(&ks[i])) > width) width = (int)strlen(flag_of(&ks[i]));
+    }
+    for (int pass = 0; pass < 2; pass++) {
+        const fb_keyspec *ks = pass ? scene_keys : cls->keys;
+        int nk = pass ? FB_NKEYS(scene_keys) : cls->nkeys;
         for (int i = 0; i < nk; i++) {
             const fb_keyspec *k = &ks[i];
             if (k->type == FB_K_TYPE || k->type == FB_K_LAYERS) continue;
             if (!pass && !strcmp(k->key, "compression")) continue; /* the flag sets the scene's (listed below) */
-            char range[96] = "";
+            char range[96] = "", lo[32], hi[32];
+            fmt_num(k->lo, lo, sizeof lo);
+            fmt_num(k->hi, hi, sizeof hi);
             if (k->type == FB_K_INT || k->type == FB_K_NUM)
-                snprintf(range, sizeof range, " %s%g..%g%s", k->lo_open ? "(" : "[", k->lo, k->hi, "]");
+                snprintf(range, sizeof range, " %s%s..%s]", k->lo_open ? "(" : "[", lo, hi);
             else if (k->type == FB_K_ENUM)
                 snprintf(range, sizeof range, " %s", k->enums);
             else if (k->type == FB_K_NAMES)
                 snprintf(range, sizeof range, " (comma list of %s)", k->enums);
-            const char *flag = flag_of(k);
-            snprintf(line, sizeof line, "  --%-12s %s%s%s%s", flag, k->help, range, k->def ? "; default " : "",
-                     k->def ? k->def : "");
+            snprintf(line, sizeof line, "  --%-*s  %s%s%s%s", width, flag_of(k), k->help, range,
+                     k->def ? "; default " : "", k->def ? k->def : "");
             print(line, user);
         }
     }

@@ -27,6 +27,11 @@ check "-q: nothing on stderr" test ! -s eq.txt
 "$FB" fbm --size 24x16 --octaves 3 --backend native --quiet -o sp.exr
 check "--flag=value: the same file as --flag value" cmp -s eq.exr sp.exr
 check "help fbm is fbm --help" cmp -s <("$FB" help fbm) <("$FB" fbm --help)
+"$FB" fbm --help > fh.txt
+check "--help: ranges as users write them" grep -q -- "--seed .*\[0\.\.4294967295\]" fh.txt
+check "--help: no exponent where an integer is meant" grep -q "(0\.\.1000000\]" fh.txt
+check "--help: the help texts start in one column" test "$(grep '^  --' fh.txt | sed 's/^  --[a-z-]* *//; s/.*//' | wc -l)" -gt 10 -a \
+  "$(grep '^  --' fh.txt | awk '{ match($0, /^  --[a-z-]+ +/); print RLENGTH }' | sort -u | wc -l)" -eq 1
 for c in render fbm julia ifs lsystem terrain constrain compare merge tonemap devices bench; do
   "$FB" $c --help > h.txt 2>&1
   rc=$?
