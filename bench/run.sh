@@ -3,7 +3,8 @@
 # bench/results.jsonl. Usage: bench/run.sh [--size WxH]
 # The Delaunay peer (CGAL's Delaunay_triangulation_2, bench/cgal_delaunay.cpp) is built and run
 # beside fractalbake's own when libcgal-dev can be installed, and the chaos-game peer (libflam3 rendering
-# the fern, bench/flam3_fern.c) when libflam3-dev can; fractalbake never links either.
+# the fern, bench/flam3_fern.c) when libflam3-dev can; fractalbake never links either. The fBm peer
+# (bench/fbm_peer.c, a minimal AVX2 gradient fBm at 4096 x 4096) always runs.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh
@@ -19,8 +20,11 @@ if dpkg-query -W -f='${Status}' libflam3-dev 2>/dev/null | grep -q "install ok i
   { [ "$(id -u)" -eq 0 ] && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends libflam3-dev pkg-config > /dev/null 2>&1; }; then
   gcc -O3 -march=native -o build/flam3_fern bench/flam3_fern.c $(pkg-config --cflags --libs flam3) && flam3=build/flam3_fern
 fi
+# the fBm peer (bench/fbm_peer.c): plain C and pthreads, always built
+gcc -O3 -mavx2 -o build/fbm_peer bench/fbm_peer.c -lpthread -lm
 {
   ./build/fractalbake bench --json "$@"
+  ./build/fbm_peer --json "$@"
   if [ -n "$peer" ]; then "$peer" --json; fi
   if [ -n "$flam3" ]; then "$flam3" --json "$@"; fi
 } | while read -r line; do

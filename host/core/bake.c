@@ -125,14 +125,12 @@ static fb_result run_collect(fb_engine *e, layer_run *lr, int slot, int y0, int 
             planes[c] = vkc_buffer_data(lr->buf[slot][fb_gen_plane_of(&lr->gen, c)]);
         return FB_OK;
     }
-    int threads = e->pool ? fb_pool_threads(e->pool) : 1;
+    /* every engine has a pool (engine.c): native layers and the host side of the others use it */
+    int threads = fb_pool_threads(e->pool);
     int per = (n + 4 * threads - 1) / (4 * threads);
     if (per < 1) per = 1;
     native_task nt = {.gen = &lr->gen, .y0 = y0, .n = n, .rows_per_task = per, .planes = lr->planes};
-    if (e->pool)
-        fb_pool_run(e->pool, (n + per - 1) / per, native_task_fn, &nt);
-    else /* a host-side layer (tone mapping) on the vulkan backend */
-        for (int t = 0; t < (n + per - 1) / per; t++) native_task_fn(&nt, t);
+    fb_pool_run(e->pool, (n + per - 1) / per, native_task_fn, &nt);
     for (int c = 0; c < lr->gen.nchannels; c++) planes[c] = lr->planes[fb_gen_plane_of(&lr->gen, c)];
     return FB_OK;
 }
@@ -469,8 +467,9 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         snprintf(reg, sizeof reg, "%d,%d,%d,%d", rx, ry, rw, rh);
         bool partial = d->region[2] > 0;
         exrio_attr attrs[10] = {
-            {"fractalbake/scene", s->json},    {"fractalbake/seed", seed},          {"fractalbake/backend", backend},
-            {"fractalbake/device", nvk ? e->device : "native C"}, {"fractalbake/version", FB_VERSION},
+            {"fractalbake/scene", s->json},      {"fractalbake/seed", seed},
+            {"fractalbake/backend", backend},    {"fractalbake/device", nvk ? e->device : "native C"},
+            {"fractalbake/version", FB_VERSION},
         };
         int nattrs = 5;
         if (partial) attrs[nattrs++] = (exrio_attr){"fractalbake/region", reg};

@@ -185,15 +185,19 @@ static fb_result deflate_chunk(struct libdeflate_compressor *dc, uint8_t **scrat
 
 /* Packs and compresses every chunk of a batch (no lock held: OpenEXRCore allows concurrent encoding
  * of different chunks; we clear yield/write so that nothing is written from here). */
-static fb_result encode_batch(exrio_writer *w, batch *b, char *msg, size_t msgsz)
+/* A compression thread's ZIP state, made at its first ZIP chunk and kept for its life. */
+typedef struct zip_state {
+    struct libdeflate_compressor *dc;
+    uint8_t *scratch;
+    size_t scratch_size;
+} zip_state;
+
+static fb_result encode_batch(exrio_writer *w, batch *b, zip_state *z, char *msg, size_t msgsz)
 {
     fb_result rc = FB_OK;
-    struct libdeflate_compressor *dc = NULL;
-    uint8_t *scratch = NULL;
-    size_t scratch_size = 0;
     for (int p = 0; p < w->nparts && !rc; p++) {
         const wpart *wp = &w->parts[p];
-        if (wp->zip && !dc && !(dc = libdeflate_alloc_compressor(w->zip_level))) {
+        if (wp->zip && !z->dc && !(z->dc = libdeflate_alloc_compressor(w->zip_level))) {
             snprintf(msg, msgsz, "out of memory starting the ZIP compressor");
             rc = FB_ERR_NOMEM;
             break;
@@ -227,7 +231,7 @@ static fb_result encode_batch(exrio_writer *w, batch *b, char *msg, size_t msgsz
             er = exr_encoding_run(w->ctx, p, &enc);
             if (er != EXR_ERR_SUCCESS) goto exr_fail;
             if (wp->zip) {
-                rc = deflate_chunk(dc, &scratch, &scratch_size, enc.packed_buffer, enc.packed_bytes,
+                rc = deflate_chunk(z->dc, &z->scratch, &z->scratch_size, enc.packed_buffer, enc.packed_bytes,
                                    &b->chunk_data[p][k], &b->chunk_size[p][k]);
                 if (rc) {
                     snprintf(msg, msgsz, "out of memory compressing rows %d..%d", y, y + cinfo.height - 1);
@@ -256,8 +260,6 @@ static fb_result encode_batch(exrio_writer *w, batch *b, char *msg, size_t msgsz
         }
         if (init) exr_encoding_destroy(w->ctx, &enc);
     }
-    libdeflate_free_compressor(dc);
-    free(scratch);
     free(b->rows); /* the raw rows are no longer needed: keep only compressed data in memory */
     b->rows = NULL;
     return rc;
@@ -297,6 +299,7 @@ static void commit_ready(exrio_writer *w)
 static void *worker_main(void *arg)
 {
     exrio_writer *w = arg;
+    zip_state z = {0};
     pthread_mutex_lock(&w->mu);
     for (;;) {
         while (!w->queue_head && !w->stopping) pthread_cond_wait(&w->cv, &w->mu);
@@ -307,13 +310,15 @@ static void *worker_main(void *arg)
         bool skip = w->error != FB_OK;
         pthread_mutex_unlock(&w->mu);
         char msg[600] = "";
-        fb_result rc = skip ? FB_OK : encode_batch(w, b, msg, sizeof msg);
+        fb_result rc = skip ? FB_OK : encode_batch(w, b, &z, msg, sizeof msg);
         pthread_mutex_lock(&w->mu);
         if (rc) set_error(w, rc, msg);
         b->done = true;
         commit_ready(w);
     }
     pthread_mutex_unlock(&w->mu);
+    libdeflate_free_compressor(z.dc);
+    free(z.scratch);
     return NULL;
 }
 
