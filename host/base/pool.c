@@ -94,10 +94,14 @@ int fb_pool_threads(const fb_pool *p)
     return p->nworkers + 1;
 }
 
-void fb_pool_run(fb_pool *p, int ntasks, fb_task_fn fn, void *ctx)
+void fb_pool_start(fb_pool *p, int ntasks, fb_task_fn fn, void *ctx)
 {
     if (ntasks <= 0) return;
     pthread_mutex_lock(&p->mu);
+    if (NEVER(p->finished < p->ntasks)) { /* a job still running: finish it first */
+        drain(p);
+        while (p->finished < p->ntasks) pthread_cond_wait(&p->done_cv, &p->mu);
+    }
     p->fn = fn;
     p->ctx = ctx;
     p->ntasks = ntasks;
@@ -105,7 +109,19 @@ void fb_pool_run(fb_pool *p, int ntasks, fb_task_fn fn, void *ctx)
     p->finished = 0;
     p->generation++;
     pthread_cond_broadcast(&p->work_cv);
+    pthread_mutex_unlock(&p->mu);
+}
+
+void fb_pool_wait(fb_pool *p)
+{
+    pthread_mutex_lock(&p->mu);
     drain(p);
     while (p->finished < p->ntasks) pthread_cond_wait(&p->done_cv, &p->mu);
     pthread_mutex_unlock(&p->mu);
+}
+
+void fb_pool_run(fb_pool *p, int ntasks, fb_task_fn fn, void *ctx)
+{
+    fb_pool_start(p, ntasks, fn, ctx);
+    fb_pool_wait(p);
 }

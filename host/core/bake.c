@@ -14,7 +14,7 @@
 
 /* ---- one layer's strip producer ------------------------------------------------------------- */
 
-#define SLOTS 2 /* strips in flight per layer on the GPU: one computing while one is consumed */
+#define SLOTS 2 /* strips in flight per layer: one computing (GPU or pool) while one is consumed */
 
 typedef struct layer_run {
     fb_gen gen;
@@ -23,9 +23,21 @@ typedef struct layer_run {
     vkc_pipeline *pipe;
     vkc_job *job[SLOTS];
     vkc_buffer *buf[SLOTS][FB_GEN_MAX_CHANNELS + 1]; /* the outputs, then the input (shared) */
-    /* native */
-    void *planes[FB_GEN_MAX_CHANNELS];
+    /* native (an op layer uses slot 0 only) */
+    void *planes[SLOTS][FB_GEN_MAX_CHANNELS];
 } layer_run;
+
+/* The strips a layer's rows come from: the GPU, the host's pool, or (an op layer) the main thread
+ * from other layers' strips. */
+static bool run_on_gpu(const fb_engine *e, const layer_run *lr)
+{
+    return e->kind == FB_BACKEND_VULKAN && !lr->gen.prepare && !lr->gen.host_op;
+}
+
+static bool run_on_pool(const fb_engine *e, const layer_run *lr)
+{
+    return !run_on_gpu(e, lr) && !lr->gen.host_op;
+}
 
 typedef struct native_task {
     const fb_gen *gen;
@@ -51,7 +63,7 @@ static fb_result run_init(fb_engine *e, layer_run *lr, int strip_rows)
     size_t bytes = (size_t)s->width * (size_t)strip_rows * 4;
     fb_result rc = FB_OK;
     const int np = fb_gen_nplanes(&lr->gen);
-    if (e->kind == FB_BACKEND_VULKAN && !lr->gen.prepare && !lr->gen.host_op) {
+    if (run_on_gpu(e, lr)) {
         if (lr->gen.needs_float64 && !vkc_info(e->vk)->float64)
             return fb_fail(FB_ERR_INPUT,
                            "layer %s: precision \"double\" needs a Vulkan device with shaderFloat64, and %s has none "
@@ -80,9 +92,10 @@ static fb_result run_init(fb_engine *e, layer_run *lr, int strip_rows)
         }
         return rc;
     }
-    for (int c = 0; c < np; c++)
-        if (fb_gen_plane_stored(&lr->gen, c) && !(lr->planes[c] = malloc(bytes)))
-            return fb_fail(FB_ERR_NOMEM, "out of memory for a strip of rows");
+    for (int k = 0; k < (run_on_pool(e, lr) ? SLOTS : 1); k++)
+        for (int c = 0; c < np; c++)
+            if (fb_gen_plane_stored(&lr->gen, c) && !(lr->planes[k][c] = malloc(bytes)))
+                return fb_fail(FB_ERR_NOMEM, "out of memory for a strip of rows");
     return FB_OK;
 }
 
@@ -97,13 +110,14 @@ static void run_fini(fb_engine *e, layer_run *lr)
     }
     fb_gen_fini(&lr->gen);
     if (e->vk) vkc_pipeline_destroy(e->vk, &lr->pipe);
-    for (int c = 0; c < FB_GEN_MAX_CHANNELS; c++) free(lr->planes[c]);
+    for (int k = 0; k < SLOTS; k++)
+        for (int c = 0; c < FB_GEN_MAX_CHANNELS; c++) free(lr->planes[k][c]);
     memset(lr->planes, 0, sizeof lr->planes);
 }
 
 static fb_result run_submit(fb_engine *e, layer_run *lr, int slot, int y0, int n)
 {
-    if (e->kind != FB_BACKEND_VULKAN || lr->gen.prepare || lr->gen.host_op) return FB_OK; /* host strips */
+    if (!run_on_gpu(e, lr)) return FB_OK; /* host strips: strip_start */
     uint8_t push[FB_GEN_MAX_PUSH];
     uint32_t groups[3];
     fb_gen_push(&lr->gen, y0, n, push);
@@ -112,11 +126,11 @@ static fb_result run_submit(fb_engine *e, layer_run *lr, int slot, int y0, int n
                           (uint32_t)fb_gen_nplanes(&lr->gen) + (lr->gen.input ? 1u : 0u), push, groups);
 }
 
-/* Makes the strip [y0, y0+n) available in planes[]: waits for the GPU job, or computes it natively. */
-static fb_result run_collect(fb_engine *e, layer_run *lr, int slot, int y0, int n, const void **planes,
-                             double *gpu_seconds)
+/* Makes the strip [y0, y0+n) available in planes[]: waits for the GPU job, or points at the strip
+ * the pool computed (strip_start, then fb_pool_wait). */
+static fb_result run_collect(fb_engine *e, layer_run *lr, int slot, const void **planes, double *gpu_seconds)
 {
-    if (e->kind == FB_BACKEND_VULKAN && !lr->gen.prepare) {
+    if (run_on_gpu(e, lr)) {
         double t = -1;
         fb_result rc = vkc_job_wait(e->vk, lr->job[slot], &t);
         if (rc) return rc;
@@ -125,14 +139,45 @@ static fb_result run_collect(fb_engine *e, layer_run *lr, int slot, int y0, int 
             planes[c] = vkc_buffer_data(lr->buf[slot][fb_gen_plane_of(&lr->gen, c)]);
         return FB_OK;
     }
-    /* every engine has a pool (engine.c): native layers and the host side of the others use it */
+    for (int c = 0; c < lr->gen.nchannels; c++) planes[c] = lr->planes[slot][fb_gen_plane_of(&lr->gen, c)];
+    return FB_OK;
+}
+
+/* One strip of every layer computed on the host's pool, as one pool job: its tasks are each
+ * layer's row blocks in turn. */
+typedef struct strip_job {
+    native_task t[FB_MAX_LAYERS];
+    int first[FB_MAX_LAYERS + 1]; /* t[i]'s first task */
+    int n;
+} strip_job;
+
+static void strip_task(void *ctx, int task)
+{
+    strip_job *j = ctx;
+    int i = 0;
+    while (task >= j->first[i + 1]) i++;
+    native_task_fn(&j->t[i], task - j->first[i]);
+}
+
+/* Starts the pool on rows [y0, y0+n) of every layer it computes, into their planes of `slot`, and
+ * returns at once: the caller writes the strip before while the workers compute this one, then
+ * fb_pool_wait. Every engine has a pool (engine.c): native layers and the host side of the others
+ * use it. */
+static void strip_start(fb_engine *e, layer_run *runs, int nlayers, strip_job *j, int slot, int y0, int n)
+{
     int threads = fb_pool_threads(e->pool);
     int per = (n + 4 * threads - 1) / (4 * threads);
     if (per < 1) per = 1;
-    native_task nt = {.gen = &lr->gen, .y0 = y0, .n = n, .rows_per_task = per, .planes = lr->planes};
-    fb_pool_run(e->pool, (n + per - 1) / per, native_task_fn, &nt);
-    for (int c = 0; c < lr->gen.nchannels; c++) planes[c] = lr->planes[fb_gen_plane_of(&lr->gen, c)];
-    return FB_OK;
+    j->n = 0;
+    j->first[0] = 0;
+    for (int i = 0; i < nlayers; i++) {
+        if (!run_on_pool(&runs[i].e, &runs[i])) continue;
+        j->t[j->n] =
+            (native_task){.gen = &runs[i].gen, .y0 = y0, .n = n, .rows_per_task = per, .planes = runs[i].planes[slot]};
+        j->first[j->n + 1] = j->first[j->n] + (n + per - 1) / per;
+        j->n++;
+    }
+    fb_pool_start(e->pool, j->first[j->n], strip_task, j);
 }
 
 /* ---- the PNG preview ------------------------------------------------------------------------ */
@@ -290,10 +335,10 @@ static fb_result plan_memory(const fb_engine *e, const fb_bake_desc *d, const la
     for (int i = 0; i < s->nlayers; i++) {
         const fb_gen *g = &runs[i].gen;
         uint64_t hold = 0, peak = g->memory ? g->memory(g, &runs[i].e, &hold) : 0;
-        bool gpu = runs[i].e.kind == FB_BACKEND_VULKAN && !g->prepare && !g->host_op;
+        bool gpu = run_on_gpu(&runs[i].e, &runs[i]);
         uint64_t planes = 0;
         for (int c = 0; c < fb_gen_nplanes(g); c++) planes += fb_gen_plane_stored(g, c);
-        uint64_t strips = (gpu ? SLOTS : 1) * planes * (uint64_t)s->width * (uint64_t)strip * 4 +
+        uint64_t strips = (g->host_op ? 1 : SLOTS) * planes * (uint64_t)s->width * (uint64_t)strip * 4 +
                           (gpu && g->input ? g->input_size : 0);
         hold_sum += hold;
         strips_sum += strips;
@@ -305,11 +350,12 @@ static fb_result plan_memory(const fb_engine *e, const fb_bake_desc *d, const la
     /* the raw rows of every batch in flight, and their compressed chunks (a quarter of that, on
      * average over what the generators make) */
     if (d->out) plan->writer = (uint64_t)(2 * e->threads + 3) * 64 * (uint64_t)rw * 4 * (uint64_t)nch * 5 / 4;
-    /* and each compression thread's deflate state with its two chunk buffers (16 rows) */
+    /* and each compression thread's deflate state with its three chunk buffers (16 rows: split,
+     * predicted, deflated) */
     bool zip = s->compression == EXRIO_ZIP;
     for (int i = 0; i < s->nlayers; i++) zip = zip || (s->multipart && s->layers[i].compression == EXRIO_ZIP);
     if (d->out && zip)
-        plan->writer += (uint64_t)e->threads * (exrio_zip_state_bytes() + 2 * 16 * (uint64_t)rw * 4 * (uint64_t)nch);
+        plan->writer += (uint64_t)e->threads * (exrio_zip_state_bytes() + 3 * 16 * (uint64_t)rw * 4 * (uint64_t)nch);
     if (d->preview) {
         int rh = d->region[2] > 0 ? d->region[3] : s->height; /* the preview shows the region */
         int side = rw > rh ? rw : rh, scale = (side + 2047) / 2048;
@@ -515,32 +561,37 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     fb_progress_init(&prog, d->progress, "bake", "pix");
     int nstrips = (rh + strip - 1) / strip;
     bool gpu_path = e->kind == FB_BACKEND_VULKAN;
+    strip_job job;
     for (int i = 0; i < s->nlayers && gpu_path && !rc; i++) {
         fb_log_context("layer %s, rows %d-%d", s->layers[i].name, ry, ry + (strip < rh ? strip : rh) - 1);
         rc = run_submit(&runs[i].e, &runs[i], 0, ry, strip < rh ? strip : rh);
     }
+    if (!rc) strip_start(e, runs, s->nlayers, &job, 0, ry, strip < rh ? strip : rh);
     for (int k = 0; k < nstrips && !rc; k++) {
         int y0 = ry + k * strip, n = y0 + strip <= ry + rh ? strip : ry + rh - y0;
-        /* Queue the next strip before consuming this one, so the device works while we write. */
-        if (gpu_path && k + 1 < nstrips) {
+        /* Start the next strip before consuming this one, so the device and the pool work while
+         * this one is checked, previewed and handed to the writer. */
+        fb_pool_wait(e->pool); /* this strip's host rows */
+        if (k + 1 < nstrips) {
             int y1 = y0 + strip, n1 = y1 + strip <= ry + rh ? strip : ry + rh - y1;
-            for (int i = 0; i < s->nlayers && !rc; i++) {
+            for (int i = 0; i < s->nlayers && gpu_path && !rc; i++) {
                 fb_log_context("layer %s, rows %d-%d", s->layers[i].name, y1, y1 + n1 - 1);
                 rc = run_submit(&runs[i].e, &runs[i], (k + 1) % SLOTS, y1, n1);
             }
+            if (!rc) strip_start(e, runs, s->nlayers, &job, (k + 1) % SLOTS, y1, n1);
         }
         const void *planes[FB_MAX_LAYERS * FB_GEN_MAX_CHANNELS];
         int at = 0;
         for (int i = 0; i < s->nlayers && !rc; i++) {
             fb_log_context("layer %s, rows %d-%d", s->layers[i].name, y0, y0 + n - 1);
-            if (!runs[i].gen.host_op) rc = run_collect(&runs[i].e, &runs[i], k % SLOTS, y0, n, planes + at, &gpu);
+            if (!runs[i].gen.host_op) rc = run_collect(&runs[i].e, &runs[i], k % SLOTS, planes + at, &gpu);
             at += runs[i].gen.nchannels;
         }
         for (int j = 0; j < s->nlayers && !rc; j++) { /* op layers, after the layers they use */
             layer_run *lr = &runs[s->order[j]];
             if (!lr->gen.host_op) continue;
-            lr->gen.host_rows(&lr->gen, (size_t)n * s->width, planes, lr->planes[0]);
-            planes[offset[s->order[j]]] = lr->planes[0];
+            lr->gen.host_rows(&lr->gen, (size_t)n * s->width, planes, lr->planes[0][0]);
+            planes[offset[s->order[j]]] = lr->planes[0][0];
         }
         if (rc) break;
         for (int c = 0; c < at; c++) planes[c] = (const uint8_t *)planes[c] + (size_t)rx * 4; /* the region's columns */
@@ -563,6 +614,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
             d->report(runs[i].gen.layer->name, runs[i].gen.summary, runs[i].gen.summary_json, d->user);
 out:
     fb_log_context(NULL);
+    fb_pool_wait(e->pool); /* a strip still computing when an error stopped the loop */
     exrio_writer_abort(&w);
     rc = fb_outputs_end(rc); /* every output renamed into place now, or none */
     for (int k = 0; k < pv.n; k++) fb_preview_destroy(&pv.p[k]);

@@ -48,7 +48,7 @@ cat > ops.json << 'JSON'
 {"size": [8192, 4096], "layers": [{"type": "fbm", "name": "height", "octaves": 6},
  {"type": "op", "name": "snow", "op": "threshold", "inputs": ["height"], "level": 0.2, "width": 0.1}]}
 JSON
-predicted_vs_measured "op, native" render ops.json $N
+predicted_vs_measured "op, native, zip level 12" render ops.json $N --zip-level 12
 if have_vulkan; then
   V="--backend vulkan"
   predicted_vs_measured "fbm, vulkan" fbm $V --size 8192x4096
