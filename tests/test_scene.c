@@ -10,12 +10,14 @@
 #include "gen_ifs.h"
 #include "gen_julia.h"
 #include "gen_terrain.h"
+#include "jsonout.h"
 #include "scene.h"
 
 #include "testhelp.h"
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* A layer's parameters as its generator's type. */
@@ -58,7 +60,9 @@ static void test_keys(void)
     CHECK(s.width == 1024 && s.height == 1024 && s.seed == 1 && s.compression == EXRIO_ZIP);
     CHECK(p.octaves == 8 && p.gain == 0.5f && p.lacunarity == 2.0f && p.noise == K_NOISE_GRADIENT && p.flags == 0);
     CHECK(g.channel_types[0] == EXRIO_FLOAT && !strcmp(g.channel_names[0], "fbm.Y"));
-    CHECK(strstr(s.json, "\"octaves\": 8") && strstr(s.json, "\"hurst\": 1.0") && strstr(s.json, "\"seed\": 1"));
+    CHECK(strstr(s.json, "\"octaves\":8,") && strstr(s.json, "\"hurst\":1.0,") && strstr(s.json, "\"seed\":1,"));
+    /* compact, numbers in their shortest round-trip form (0.08, not 0.080000000000000002) */
+    CHECK(!strchr(s.json, '\n') && !strstr(s.json, ": ") && strstr(s.json, "\"rotation\":36.87,"));
     fb_scene_fini(&s);
 
     /* gain given directly; tileable and billow */
@@ -251,8 +255,46 @@ static void test_registry(void)
         CHECKF(strstr(g_last_error, fb_gen_list[i]->name), "%s listed", fb_gen_list[i]->name);
 }
 
+/* fb_json_number: the shortest text that strtod reads back as the same double, a real kept real */
+static void json_numbers(void)
+{
+    static const struct {
+        double v;
+        const char *want;
+    } cases[] = {{0.1, "0.1"},
+                 {-0.3, "-0.3"},
+                 {1.0, "1.0"},
+                 {-0.0, "-0.0"},
+                 {36.87, "36.87"},
+                 {1e300, "1e+300"},
+                 {5e-324, "5e-324"},
+                 {0.2f, "0.20000000298023224"},
+                 {123456789.0, "123456789.0"},
+                 {2.5e-7, "2.5e-07"},
+                 {NAN, "null"},
+                 {INFINITY, "null"}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char out[40];
+        fb_json_number(cases[i].v, out);
+        CHECKF(!strcmp(out, cases[i].want), "%.17g: \"%s\", wanted \"%s\"", cases[i].v, out, cases[i].want);
+        if (isfinite(cases[i].v)) CHECK(strtod(out, NULL) == cases[i].v);
+    }
+    json_t *j = json_loads(
+        "{\"b\": [1, 2.5, \"x\\\"y\"], \"a\": {\"c\": null, \"d\": true}, \"e\": -0.29999999999999999}", 0, NULL);
+    char *t = fb_json_dumps(j, 0);
+    CHECKF(t && !strcmp(t, "{\"a\":{\"c\":null,\"d\":true},\"b\":[1,2.5,\"x\\\"y\"],\"e\":-0.3}"), "%s", t);
+    free(t);
+    t = fb_json_dumps(j, 2);
+    CHECKF(t && !strcmp(t, "{\n  \"a\": {\n    \"c\": null,\n    \"d\": true\n  },\n  \"b\": [\n    1,\n    2.5,\n    "
+                           "\"x\\\"y\"\n  ],\n  \"e\": -0.3\n}"),
+           "%s", t);
+    free(t);
+    json_decref(j);
+}
+
 int main(void)
 {
+    json_numbers();
     test_registry();
     test_sets();
     test_julia_keys();

@@ -13,6 +13,9 @@
 
 #define FB_VERSION "0.1.0"
 
+/* The largest image side anything reads or writes. */
+#define FB_MAX_DIM 65536
+
 typedef int32_t fb_result;
 
 enum {
@@ -86,6 +89,10 @@ fb_result fb_memory_check(uint64_t bytes, const char *who);
 
 /* "12.3 MiB" / "1.25 GiB" */
 void fb_format_bytes(uint64_t bytes, char *out, size_t size);
+
+/* The shortest %g text of v that strtod reads back as the same double ("0.3", not
+ * "0.29999999999999999"); "inf", "-inf" or "nan" for those. */
+void fb_format_shortest(double v, char *out, size_t size);
 
 /* The candidate nearest to a misspelt word by edit distance (at most 1 edit for words of up to 4
  * letters, 2 beyond), for "did you mean" hints; NULL when none is that near. */

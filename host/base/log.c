@@ -227,3 +227,11 @@ const char *fb_closest(const char *word, const char *const *cands, int n)
     }
     return best;
 }
+
+void fb_format_shortest(double v, char *out, size_t size)
+{
+    for (int p = 1; p <= 17; p++) {
+        snprintf(out, size, "%.*g", p, v);
+        if (strtod(out, NULL) == v) return;
+    }
+}

@@ -7,24 +7,53 @@
 #include <stdarg.h>
 #include <stdbool.h>
 
+#define FB_LIMIT_RULES 32
+
+/* A threshold: one value for every channel, and values for some channels or layers ("sky.R=1e-3"
+ * names a channel, "sky=1e-3" every channel of a layer; the channel's own value wins, then its
+ * layer's, then the value for all). */
+typedef struct fb_limit {
+    const char *flag; /* as the user wrote it, for messages */
+    bool set, has_all;
+    double all;
+    int n;
+    char name[FB_LIMIT_RULES][128];
+    double v[FB_LIMIT_RULES];
+} fb_limit;
+
+/* Parses "1e-4", "sky.R=1e-3,terrain=1e-5" or both ("1e-4,sky=0.01") into *l (added to what it holds:
+ * a flag may be given twice). Values must be finite and >= 0. A usage error names the flag. */
+fb_result fb_limit_parse(const char *flag, const char *text, fb_limit *l);
+
+/* The limit for `channel`: its own rule, its layer's, or the value for all; false when none. */
+bool fb_limit_get(const fb_limit *l, const char *channel, double *v);
+
+typedef enum fb_verdict { FB_VERDICT_PASS, FB_VERDICT_WARN, FB_VERDICT_FAIL } fb_verdict;
+
 typedef struct fb_compare_desc {
     const char *a, *b;
     const char *layer; /* restrict to channels "layer.*" */
-    bool has_max_abs, has_rmse, has_psnr, has_fail_percent;
-    double max_abs, rmse, psnr, fail_percent;
+    /* idiff's vocabulary: a pixel fails beyond `fail` (--max-abs); the channel fails when more than
+     * `failpercent` percent of its pixels do (default 0), or any pixel is beyond `hardfail`; the same
+     * with warn for a warning. Then the statistics: RMSE at most, PSNR and SSIM at least. */
+    fb_limit fail, failpercent, hardfail, warn, warnpercent, hardwarn, rmse, psnr, ssim;
     bool ignore_missing;
     const char *diff;     /* write |A - B| per common channel here */
-    const char *diff_png; /* and a picture: red where any channel is beyond --max-abs, A's grey elsewhere */
+    const char *diff_png; /* and a picture: red where a channel fails, A's grey elsewhere; or `heat` */
+    bool heat;            /* the picture as a heat map of max |A - B| over the channels, log scale */
+    bool json;            /* the report as one JSON object instead of lines */
     void (*print)(const char *line, void *user);
     void *user;
 } fb_compare_desc;
 
-/* Compares two EXR files channel by channel. *pass is false when a threshold is exceeded (with no
- * threshold: when any pixel differs), when the sizes differ, or when a channel is missing from one
- * file (unless ignore_missing). An error reading either file is a failed result, not *pass. */
-fb_result fb_compare(const fb_compare_desc *d, bool *pass);
+/* Compares two images (EXR or PNG) channel by channel and prints the report (lines, or one JSON
+ * object), ending with the verdict. A comparison that cannot be made (different sizes or regions,
+ * channels missing from one file unless ignore_missing) is FB_VERDICT_FAIL with its reason. An
+ * error reading either file, or a threshold naming no channel, is a failed result. */
+fb_result fb_compare(const fb_compare_desc *d, fb_verdict *verdict);
 
-/* Prints size, compression, layers and channels with types, attributes and the stored scene. */
-fb_result fb_info(const char *path, void (*print)(const char *line, void *user), void *user);
+/* Prints size, compression, layers (parts) and channels with types, attributes with their values
+ * and the stored scene; or, with json, one JSON object of the same. */
+fb_result fb_info(const char *path, bool json, void (*print)(const char *line, void *user), void *user);
 
 #endif

@@ -14,6 +14,7 @@
 #include "vkc.h"
 
 #include <errno.h>
+#include <stddef.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -53,6 +54,12 @@ static int usage_error(const char *fmt, const char *arg)
 static void print_line(const char *line, void *user)
 {
     fprintf(user ? (FILE *)user : stdout, "%s\n", line);
+}
+
+/* compare --quiet: the verdict line alone */
+static void print_result_only(const char *line, void *user)
+{
+    if (!strncmp(line, "result: ", 8)) print_line(line, user);
 }
 
 static const char *const k_usage =
@@ -515,31 +522,38 @@ static int cmd_render(int argc, char **argv)
     return finish(rc);
 }
 
-static bool parse_double_arg(const char *s, double *out)
-{
-    char *end;
-    errno = 0;
-    *out = strtod(s, &end);
-    return *s && !*end && errno == 0 && *out == *out && *out > -1e300 && *out < 1e300;
-}
-
 static int cmd_compare(int argc, char **argv)
 {
     fb_compare_desc d = {.print = print_line};
     const char *files[2];
     int nfiles = 0;
+    bool quiet = false;
     for (int i = 0; i < argc; i++) {
         const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
-        double *dst = NULL;
-        bool *has = NULL;
-        if (!strcmp(a, "--max-abs")) dst = &d.max_abs, has = &d.has_max_abs;
-        if (!strcmp(a, "--rmse")) dst = &d.rmse, has = &d.has_rmse;
-        if (!strcmp(a, "--psnr")) dst = &d.psnr, has = &d.has_psnr;
-        if (!strcmp(a, "--fail-percent")) dst = &d.fail_percent, has = &d.has_fail_percent;
-        if (dst) {
+        /* idiff's names beside ours: --fail is --max-abs, --failpercent --fail-percent */
+        static const struct {
+            const char *flag;
+            size_t off;
+        } limits[] = {
+            {"--max-abs", offsetof(fb_compare_desc, fail)},
+            {"--fail", offsetof(fb_compare_desc, fail)},
+            {"--fail-percent", offsetof(fb_compare_desc, failpercent)},
+            {"--failpercent", offsetof(fb_compare_desc, failpercent)},
+            {"--hardfail", offsetof(fb_compare_desc, hardfail)},
+            {"--warn", offsetof(fb_compare_desc, warn)},
+            {"--warn-percent", offsetof(fb_compare_desc, warnpercent)},
+            {"--warnpercent", offsetof(fb_compare_desc, warnpercent)},
+            {"--hardwarn", offsetof(fb_compare_desc, hardwarn)},
+            {"--rmse", offsetof(fb_compare_desc, rmse)},
+            {"--psnr", offsetof(fb_compare_desc, psnr)},
+            {"--ssim", offsetof(fb_compare_desc, ssim)},
+        };
+        fb_limit *lim = NULL;
+        for (size_t k = 0; k < sizeof limits / sizeof limits[0] && !lim; k++)
+            if (!strcmp(a, limits[k].flag)) lim = (fb_limit *)((char *)&d + limits[k].off);
+        if (lim) {
             if (!val) return usage_error("%s: missing value", a);
-            if (!parse_double_arg(val, dst) || *dst < 0) return usage_error("%s: expected a finite number >= 0", a);
-            *has = true;
+            if (fb_limit_parse(a, val, lim)) return finish(FB_ERR_USAGE);
             i++;
         } else if (!strcmp(a, "--layer") || !strcmp(a, "--diff") || !strcmp(a, "--diff-png")) {
             if (!val) return usage_error("%s: missing value", a);
@@ -549,35 +563,62 @@ static int cmd_compare(int argc, char **argv)
             i++;
         } else if (!strcmp(a, "--ignore-missing")) {
             d.ignore_missing = true;
+        } else if (!strcmp(a, "--heat")) {
+            d.heat = true;
+        } else if (!strcmp(a, "--json")) {
+            d.json = true;
+        } else if (!strcmp(a, "--quiet")) {
+            quiet = true;
         } else if (!strcmp(a, "--help")) {
-            printf("usage: fractalbake compare A.exr B.exr [--layer L] [--max-abs E] [--rmse E] [--psnr DB]\n"
-                   "                          [--fail-percent P] [--ignore-missing] [--diff OUT.exr] [--diff-png "
-                   "OUT.png]\n"
-                   "Per channel: max abs error and where, RMSE, PSNR, percent of pixels beyond --max-abs.\n"
-                   "With no threshold every pixel must be equal. --fail-percent P fails only when more than P%%\n"
-                   "of the pixels exceed --max-abs. Exit 0 within thresholds, 1 beyond, 2 on error.\n"
-                   "--diff writes |A - B| per channel; --diff-png a picture: red where any channel is beyond\n"
-                   "--max-abs (0 without it), over A's first channel in dim grey.\n");
+            printf("usage: fractalbake compare A B [thresholds] [--layer L] [--ignore-missing] [--diff OUT.exr]\n"
+                   "                          [--diff-png OUT.png [--heat]] [--json] [--quiet]\n"
+                   "A and B are EXR or PNG files (a PNG's channels are Y, Y A, R G B or R G B A, 0..1).\n"
+                   "Per channel: the largest |A - B| and where, RMSE, PSNR (peak: A's range), the share of pixels\n"
+                   "beyond the fail threshold, and with --ssim the mean SSIM (Wang et al. 2004, L: A's range).\n"
+                   "\n"
+                   "thresholds (idiff's names; each takes a value for every channel, CHANNEL=VALUE or\n"
+                   "LAYER=VALUE rules, or both: --max-abs 1e-4,sky.R=1e-3,terrain=1e-6):\n"
+                   "  --max-abs E, --fail E      a pixel fails when |A - B| > E (default 0: every pixel equal)\n"
+                   "  --fail-percent P           the channel fails when more than P%% of its pixels fail (default 0)\n"
+                   "  --hardfail E               ... or when any pixel's |A - B| > E, whatever P\n"
+                   "  --warn E, --warn-percent P, --hardwarn E   the same for a warning\n"
+                   "  --rmse E, --psnr DB, --ssim S              fail beyond an RMSE, below a PSNR or an SSIM\n"
+                   "  (--failpercent and --warnpercent are accepted too)\n"
+                   "\n"
+                   "--diff writes |A - B| per channel; --diff-png a picture: red where a channel fails, over A's\n"
+                   "first channel in dim grey; with --heat a heat map of the largest |A - B| over the channels,\n"
+                   "log scale (black 1e-8, blue 1e-6, red 1e-4, yellow 0.01, white 1). --json: the report as one\n"
+                   "JSON object. --quiet: only the result line.\n"
+                   "\n"
+                   "exit: 0 pass or warn (the result line says WARN; --json: \"result\": \"warn\"), 1 fail (also\n"
+                   "different sizes or channel sets, with the reason), 2 bad usage or input, 3 runtime failure.\n"
+                   "idiff returns 1 for a warning and 2 for a failure: fractalbake keeps 2 for bad input, as\n"
+                   "every fractalbake command does, and lets a warning pass.\n");
             return 0;
         } else if (a[0] == '-' && a[1]) {
-            return usage_error("%s: unknown flag for `fractalbake compare`", a);
+            static const char *const flags[] = {"max-abs", "fail",           "fail-percent", "failpercent", "hardfail",
+                                                "warn",    "warn-percent",   "warnpercent",  "hardwarn",    "rmse",
+                                                "psnr",    "ssim",           "layer",        "diff",        "diff-png",
+                                                "heat",    "ignore-missing", "json",         "quiet",       "help"};
+            const char *near = !strncmp(a, "--", 2) ? fb_closest(a + 2, flags, sizeof flags / sizeof flags[0]) : NULL;
+            char hint[96] = "";
+            if (near) snprintf(hint, sizeof hint, "; did you mean --%s?", near);
+            fb_fail(FB_ERR_USAGE, "%s: unknown flag for `fractalbake compare`%s", a, hint);
+            return finish(FB_ERR_USAGE);
         } else if (nfiles < 2) {
             files[nfiles++] = a;
         } else {
             return usage_error("%s: compare takes exactly two files", a);
         }
     }
-    if (nfiles != 2) return usage_error("%s", "compare: expected two EXR files: fractalbake compare A.exr B.exr");
+    if (nfiles != 2) return usage_error("%s", "compare: expected two images: fractalbake compare A.exr B.exr");
     d.a = files[0];
     d.b = files[1];
-    bool pass = false;
-    fb_result rc = fb_compare(&d, &pass);
-    if (rc) {
-        finish(rc);
-        return 2; /* compare: any error is exit 2, distinct from "beyond threshold" */
-    }
-    printf("%s\n", pass ? "result: within thresholds" : "result: BEYOND thresholds");
-    return pass ? 0 : 1;
+    if (quiet && !d.json) d.print = print_result_only;
+    fb_verdict v = FB_VERDICT_PASS;
+    fb_result rc = fb_compare(&d, &v);
+    if (rc) return finish(rc);
+    return v == FB_VERDICT_FAIL ? 1 : 0;
 }
 
 static int cmd_merge(int argc, char **argv)
@@ -642,14 +683,29 @@ static int cmd_merge(int argc, char **argv)
 
 static int cmd_info(int argc, char **argv)
 {
-    if (argc != 1 || argv[0][0] == '-') {
-        if (argc == 1 && !strcmp(argv[0], "--help")) {
-            printf("usage: fractalbake info FILE.exr\n");
+    const char *path = NULL;
+    bool json = false;
+    for (int i = 0; i < argc; i++) {
+        if (!strcmp(argv[i], "--help")) {
+            printf("usage: fractalbake info FILE.exr [--json]\n"
+                   "Size, compression, layers and channels with their types, every attribute with its value,\n"
+                   "and the stored scene (what `render --from FILE.exr` bakes). --json: all of it as one JSON\n"
+                   "object.\n");
             return 0;
+        } else if (!strcmp(argv[i], "--json")) {
+            json = true;
+        } else if (!strcmp(argv[i], "--quiet")) {
+            /* nothing to leave out: the description is the output */
+        } else if (argv[i][0] == '-' && argv[i][1]) {
+            return usage_error("%s: unknown flag for `fractalbake info` (only --json)", argv[i]);
+        } else if (path) {
+            return usage_error("%s: info takes one EXR file", argv[i]);
+        } else {
+            path = argv[i];
         }
-        return usage_error("%s", "info: expected one EXR file: fractalbake info FILE.exr");
     }
-    return finish(fb_info(argv[0], print_line, stdout));
+    if (!path) return usage_error("%s", "info: expected one EXR file: fractalbake info FILE.exr");
+    return finish(fb_info(path, json, print_line, stdout));
 }
 
 static int cmd_devices(int argc, char **argv)

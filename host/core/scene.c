@@ -6,6 +6,7 @@
 #include "scene.h"
 
 #include "gen.h"
+#include "jsonout.h"
 #include "schema.h"
 #include "textin.h"
 
@@ -869,7 +870,7 @@ fb_result fb_scene_parse_sets(const char *text, const char *origin, const char *
             kind_class(json_string_value(json_object_get(json_array_get(json_object_get(root, "layers"), 0), "type")));
     if (!rc) rc = parse_root(&v, root, out);
     if (!rc) {
-        out->json = json_dumps(root, JSON_SORT_KEYS | JSON_INDENT(2) | JSON_REAL_PRECISION(17));
+        out->json = fb_json_dumps(root, 0); /* compact, shortest numbers: stored in every file */
         if (!out->json) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     }
     free(paths);
@@ -1291,10 +1292,7 @@ static void fmt_num(double x, char *out, size_t size)
         snprintf(out, size, "%.0f", x);
         return;
     }
-    for (int digits = 1; digits <= 17; digits++) {
-        snprintf(out, size, "%.*g", digits, x);
-        if (strtod(out, NULL) == x) return;
-    }
+    fb_format_shortest(x, out, size);
 }
 
 void fb_scene_print_keys(const char *kind, void (*print)(const char *line, void *user), void *user)

@@ -13,7 +13,6 @@
 #include <stdbool.h>
 
 #define FB_MAX_LAYERS 16
-#define FB_MAX_DIM    65536
 #define FB_MAX_PIXELS (1ull << 31)
 
 /* A reference to another layer's channel ("terrain.Y", or "terrain": its Y) or a constant. */

@@ -970,6 +970,141 @@ void exrio_attr_at(const exrio_reader *r, int i, const char **name, const char *
     }
 }
 
+static void put_numbers(char *out, size_t size, const double *v, int n)
+{
+    out[0] = 0;
+    for (int i = 0; i < n; i++) {
+        char num[40];
+        fb_format_shortest(v[i], num, sizeof num);
+        snprintf(out + strlen(out), size - strlen(out), "%s%s", i ? "," : "", num);
+    }
+}
+
+void exrio_attr_text(const exrio_reader *r, int i, char *out, size_t size)
+{
+    const exr_attribute_t *a = NULL;
+    snprintf(out, size, "?");
+    if (exr_get_attribute_by_index(r->ctx, 0, EXR_ATTR_LIST_FILE_ORDER, i, &a) != EXR_ERR_SUCCESS || !a) return;
+    double v[16];
+    switch (a->type) {
+    case EXR_ATTR_STRING:
+        snprintf(out, size, "%.*s", a->string->length, a->string->str ? a->string->str : "");
+        break;
+    case EXR_ATTR_STRING_VECTOR:
+        out[0] = 0;
+        for (int k = 0; k < a->stringvector->n_strings; k++)
+            snprintf(out + strlen(out), size - strlen(out), "%s\"%.*s\"", k ? ", " : "",
+                     a->stringvector->strings[k].length, a->stringvector->strings[k].str);
+        break;
+    case EXR_ATTR_INT:
+        snprintf(out, size, "%d", a->i);
+        break;
+    case EXR_ATTR_FLOAT:
+        fb_format_shortest(a->f, out, size);
+        break;
+    case EXR_ATTR_DOUBLE:
+        fb_format_shortest(a->d, out, size);
+        break;
+    case EXR_ATTR_BOX2I:
+        snprintf(out, size, "%d,%d,%d,%d", a->box2i->min.x, a->box2i->min.y, a->box2i->max.x, a->box2i->max.y);
+        break;
+    case EXR_ATTR_BOX2F:
+        v[0] = a->box2f->min.x, v[1] = a->box2f->min.y, v[2] = a->box2f->max.x, v[3] = a->box2f->max.y;
+        put_numbers(out, size, v, 4);
+        break;
+    case EXR_ATTR_V2I:
+        snprintf(out, size, "%d,%d", a->v2i->x, a->v2i->y);
+        break;
+    case EXR_ATTR_V3I:
+        snprintf(out, size, "%d,%d,%d", a->v3i->x, a->v3i->y, a->v3i->z);
+        break;
+    case EXR_ATTR_V2F:
+        v[0] = a->v2f->x, v[1] = a->v2f->y;
+        put_numbers(out, size, v, 2);
+        break;
+    case EXR_ATTR_V2D:
+        put_numbers(out, size, (double[]){a->v2d->x, a->v2d->y}, 2);
+        break;
+    case EXR_ATTR_V3F:
+        v[0] = a->v3f->x, v[1] = a->v3f->y, v[2] = a->v3f->z;
+        put_numbers(out, size, v, 3);
+        break;
+    case EXR_ATTR_V3D:
+        put_numbers(out, size, (double[]){a->v3d->x, a->v3d->y, a->v3d->z}, 3);
+        break;
+    case EXR_ATTR_M33F:
+        for (int k = 0; k < 9; k++) v[k] = a->m33f->m[k];
+        put_numbers(out, size, v, 9);
+        break;
+    case EXR_ATTR_M33D:
+        put_numbers(out, size, a->m33d->m, 9);
+        break;
+    case EXR_ATTR_M44F:
+        for (int k = 0; k < 16; k++) v[k] = a->m44f->m[k];
+        put_numbers(out, size, v, 16);
+        break;
+    case EXR_ATTR_M44D:
+        put_numbers(out, size, a->m44d->m, 16);
+        break;
+    case EXR_ATTR_FLOAT_VECTOR:
+        out[0] = 0;
+        for (int k = 0; k < a->floatvector->length; k++) {
+            char num[40];
+            fb_format_shortest(a->floatvector->arr[k], num, sizeof num);
+            snprintf(out + strlen(out), size - strlen(out), "%s%s", k ? "," : "", num);
+        }
+        break;
+    case EXR_ATTR_RATIONAL:
+        snprintf(out, size, "%d/%u", a->rational->num, a->rational->denom);
+        break;
+    case EXR_ATTR_CHROMATICITIES:
+        v[0] = a->chromaticities->red_x, v[1] = a->chromaticities->red_y, v[2] = a->chromaticities->green_x;
+        v[3] = a->chromaticities->green_y, v[4] = a->chromaticities->blue_x, v[5] = a->chromaticities->blue_y;
+        v[6] = a->chromaticities->white_x, v[7] = a->chromaticities->white_y;
+        put_numbers(out, size, v, 8);
+        break;
+    case EXR_ATTR_COMPRESSION: {
+        static const char *names[] = {"none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa", "dwab"};
+        snprintf(out, size, "%s", a->uc < sizeof names / sizeof names[0] ? names[a->uc] : "unknown");
+        break;
+    }
+    case EXR_ATTR_LINEORDER: {
+        static const char *names[] = {"increasing y", "decreasing y", "random y"};
+        snprintf(out, size, "%s", a->uc < 3 ? names[a->uc] : "unknown");
+        break;
+    }
+    case EXR_ATTR_ENVMAP:
+        snprintf(out, size, "%s", a->uc == 0 ? "latlong" : a->uc == 1 ? "cube" : "unknown");
+        break;
+    case EXR_ATTR_CHLIST:
+        out[0] = 0;
+        for (int k = 0; k < a->chlist->num_channels; k++) {
+            const exr_attr_chlist_entry_t *e = &a->chlist->entries[k];
+            snprintf(out + strlen(out), size - strlen(out), "%s%.*s %s", k ? ", " : "", e->name.length, e->name.str,
+                     e->pixel_type == EXR_PIXEL_UINT   ? "uint"
+                     : e->pixel_type == EXR_PIXEL_HALF ? "half"
+                                                       : "float");
+        }
+        break;
+    case EXR_ATTR_TILEDESC:
+        snprintf(out, size, "%u x %u", a->tiledesc->x_size, a->tiledesc->y_size);
+        break;
+    case EXR_ATTR_TIMECODE:
+        snprintf(out, size, "time %u, user %u", a->timecode->time_and_flags, a->timecode->user_data);
+        break;
+    case EXR_ATTR_KEYCODE:
+        snprintf(out, size, "film %d, prefix %d, count %d", a->keycode->film_mfc_code, a->keycode->prefix,
+                 a->keycode->count);
+        break;
+    case EXR_ATTR_PREVIEW:
+        snprintf(out, size, "a %u x %u preview image", a->preview->width, a->preview->height);
+        break;
+    default:
+        snprintf(out, size, "(%d bytes of %s data)", a->opaque ? a->opaque->size : 0, a->type_name);
+        break;
+    }
+}
+
 fb_result exrio_read_rows(exrio_reader *r, int y0, int nrows, void *const *planes)
 {
     if (y0 < 0 || nrows < 0 || y0 + nrows > r->height)

@@ -126,6 +126,11 @@ const char *exrio_attr_string(const exrio_reader *r, const char *name);
 int exrio_attr_count(const exrio_reader *r);
 void exrio_attr_at(const exrio_reader *r, int i, const char **name, const char **type);
 
+/* The value of attribute i of exrio_attr_count as text (numbers in their shortest form, boxes as
+ * "xmin,ymin,xmax,ymax", vectors and matrices comma-separated, a channel list by name and type,
+ * enumerations by name; a preview or opaque data by its size). */
+void exrio_attr_text(const exrio_reader *r, int i, char *out, size_t size);
+
 /* Reads rows [y0, y0 + nrows) of the channels whose planes[c] is not NULL; UINT channels as
  * uint32, the others as float. */
 fb_result exrio_read_rows(exrio_reader *r, int y0, int nrows, void *const *planes);

@@ -19,6 +19,25 @@ if head -c 8 a.png | od -An -c | grep -q 'P   N   G'; then ok; else bad "preview
 grep -q 'layer fbm .*Y (float)' info.txt && ok || bad "info lacks the fbm layer: $(cat info.txt)"
 grep -q '"octaves": 6' info.txt && ok || bad "info lacks the stored scene"
 grep -q '"seed": 5' info.txt && ok || bad "stored scene lacks the seed"
+grep -q '^  dataWindow  *box2i  *0,0,' info.txt && ok || bad "info does not print attribute values: $(grep dataWindow info.txt)"
+grep -q '^  fractalbake/seed  *string  *5$' info.txt && ok || bad "info does not print the seed attribute's value"
+"$FB" info a.exr --json > info.json
+python3 -c "
+import json; r = json.load(open('info.json'))
+assert r['layers'][0]['layer'] == 'fbm' and r['layers'][0]['channels'][0]['type'] == 'float', r['layers']
+assert r['attributes']['fractalbake/seed']['value'] == '5' and r['scene']['layers'][0]['octaves'] == 6
+assert r['attributes']['compression']['value'] == 'zip'" && ok || bad "info --json: $(cat info.json)"
+# the stored scene: compact, numbers in their shortest form that reads back the same
+exrheader a.exr | grep -q 'fractalbake/scene (type string): "{"compression":"zip","layers":\[{"billow":false,"frequency":4.0,' && ok ||
+  bad "the stored scene is not compact: $(exrheader a.exr | grep -A2 fractalbake/scene | head -3)"
+# a foreign multi-part file: each part's channels under its part's full name
+if command -v oiiotool > /dev/null; then
+  oiiotool --create 16x8 3 -o p1.exr && oiiotool --create 16x8 4 --ch R,G,B,A -o p2.exr &&
+    oiiotool p1.exr p2.exr --siappend -o mp.exr
+  "$FB" info mp.exr > mp.txt
+  grep -q "^  layer subimage00 B (float), G (float), R (float)$" mp.txt && grep -q "^  layer subimage01 A (float)" mp.txt && ok ||
+    bad "info of a foreign multi-part file: $(cat mp.txt)"
+fi
 
 # the default scene, with every format
 for c in zip piz none; do
@@ -78,12 +97,12 @@ grep -q "at pixel (" cmp.txt && ok || bad "compare does not name the pixel"
 "$FB" fbm $S --seed 5 --octaves 6 --layer other -o c.exr --quiet
 "$FB" compare a.exr c.exr > cmp.txt; [ $? -eq 1 ] && ok || bad "missing channels should fail"
 grep -q "fbm.Y: only in a.exr" cmp.txt && grep -q "other.Y: only in c.exr" cmp.txt && ok || bad "missing channels not reported"
-"$FB" compare a.exr c.exr --ignore-missing > /dev/null && ok || bad "--ignore-missing should pass"
+"$FB" compare a.exr c.exr --ignore-missing > cmp.txt; [ $? -eq 1 ] && grep -q "result: FAIL: no channel in common" cmp.txt && ok || bad "--ignore-missing with nothing in common should fail, saying why"
 "$FB" compare a.exr missing.exr > /dev/null 2>&1; [ $? -eq 2 ] && ok || bad "a missing file should exit 2"
 "$FB" compare a.exr > /dev/null 2>&1; [ $? -eq 2 ] && ok || bad "one file should exit 2"
 "$FB" compare a.exr b.exr --max-abs nan > /dev/null 2>&1; [ $? -eq 2 ] && ok || bad "--max-abs nan should exit 2"
 "$FB" fbm --size 97x64 --quiet -o w.exr
-"$FB" compare a.exr w.exr > cmp.txt; [ $? -eq 1 ] && grep -q "size differs" cmp.txt && ok || bad "size mismatch not reported"
+"$FB" compare a.exr w.exr > cmp.txt; [ $? -eq 1 ] && grep -q "result: FAIL: the sizes differ" cmp.txt && ok || bad "size mismatch not reported"
 
 # a perturbed pixel, written by the test itself through a scene with a different seed in one spot
 # is not possible, so perturb the file: flip one float in an uncompressed file and find it by name

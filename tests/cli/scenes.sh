@@ -25,7 +25,7 @@ expect_fail 2 'no layer named "moon" (layers: sky, terrain, plants' o.exr -- ren
 [ -e o.png ] && bad "a failed preview left o.png" || ok
 # --set: overrides reach the stored scene and the pixels; bad overrides name the --set
 "$FB" render $S3 --set seed=9 --set layers.sky.c=-0.7,0.27 -o set.exr && ok || bad "--set failed"
-"$FB" info set.exr | tr -d ' \n' | grep -q '"c":\[-0.69999999999999996,0.27000000000000002\]' && ok || bad "--set c not stored"
+"$FB" info set.exr | tr -d ' \n' | grep -q '"c":\[-0.7,0.27\]' && ok || bad "--set c not stored (in shortest form)"
 "$FB" info set.exr | grep -q '"seed": 9' && ok || bad "--set seed not stored"
 "$FB" compare c.exr set.exr --layer sky > /dev/null; [ $? -eq 1 ] && ok || bad "--set c changed no pixel"
 expect_fail 2 "\-\-set layers.sky.foo=1: unknown key for a julia layer" o.exr -- render $S3 --set layers.sky.foo=1 -o o.exr
@@ -87,7 +87,7 @@ for be in vulkan native; do
 done
 # the backends give the same bits here, so parts from both merge to the same file
 "$FB" merge pp1_vulkan.exr pp2_native.exr pp3_vulkan.exr -o ppx.exr --quiet && "$FB" compare ppw_vulkan.exr ppx.exr > /dev/null && ok || bad "parts from two backends do not merge"
-"$FB" info pp1_vulkan.exr | grep -q "fractalbake/points-part string *1/3" && ok || bad "the part is not recorded"
+"$FB" info pp1_vulkan.exr | grep -q "fractalbake/points-part *string *1/3" && ok || bad "the part is not recorded"
 "$FB" render --from pp2_vulkan.exr -o pp2b.exr --quiet && cmp -s pp2_vulkan.exr pp2b.exr && ok || bad "--from a points part did not reproduce it"
 expect_fail 2 "points part 2/3 is missing" o.exr -- merge pp1_vulkan.exr pp3_vulkan.exr -o o.exr
 expect_fail 2 "points part 1/3 is given twice" o.exr -- merge pp1_vulkan.exr pp1_vulkan.exr pp3_vulkan.exr -o o.exr

@@ -1,0 +1,31 @@
+/*
+ * PNG files beside the previews: reading any PNG as float channels (for `compare`), and writing
+ * 16-bit grey images (heightmaps). Writing goes through the output transaction (output.h).
+ */
+#ifndef FB_PNGIO_H
+#define FB_PNGIO_H
+
+#include "fb.h"
+
+#include <stdint.h>
+
+/* A decoded PNG: 1 to 4 channels named Y, Y A, R G B or R G B A, each a plane of width * height
+ * floats, the stored value divided by the largest one of the bit depth (so 0..1, no gamma
+ * applied). */
+typedef struct fb_png {
+    int width, height, channels, depth; /* depth: 1, 2, 4, 8 or 16 bits per sample, as stored */
+    const char *names[4];
+    float *plane[4];
+} fb_png;
+
+/* Reads the PNG at path. Bad input (not a PNG, truncated, too large for --max-memory) is
+ * FB_ERR_INPUT with a message naming the file. */
+fb_result fb_png_read(const char *path, fb_png *out);
+void fb_png_fini(fb_png *png);
+
+/* Writes a 16-bit grey PNG of width x height samples (row by row), with tEXt chunks key=value
+ * (nkv pairs, may be 0), through the output transaction; `what` names it in messages. */
+fb_result fb_png_write_grey16(const char *path, const char *what, int width, int height, const uint16_t *pix,
+                              const char *const (*kv)[2], int nkv);
+
+#endif
