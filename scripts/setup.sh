@@ -6,7 +6,7 @@ cd "$(dirname "$0")/.."
 
 PKGS="build-essential cmake pkg-config libvulkan-dev mesa-vulkan-drivers vulkan-tools glslang-tools spirv-tools
 vulkan-validationlayers libopenexr-dev openexr libjansson-dev libpng-dev time
-libqhull-dev clang python3 libdeflate-dev openimageio-tools"
+libqhull-dev clang python3 libdeflate-dev openimageio-tools libtiff-dev libgeotiff-dev geotiff-bin libtiff-tools"
 missing=()
 for p in $PKGS; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -22,7 +22,8 @@ enum { FREE = 0, RESERVED = 1, TAKEN = 2 };
 typedef struct entry {
     volatile sig_atomic_t live; /* the temporary file exists: the signal handler removes it */
     int state;
-    int fd; /* RESERVED: the open temporary file, until taken */
+    int fd;     /* RESERVED: the open temporary file, until taken */
+    int keepfd; /* "-" (standard output): the anonymous temporary file, copied out at the commit */
     char what[32];
     char path[PATH_MAX]; /* as the user gave it */
     char key[PATH_MAX];  /* the folder resolved, then the name: two spellings of one file compare equal */
@@ -31,6 +32,12 @@ typedef struct entry {
 
 static entry g_out[FB_MAX_OUTPUTS];
 static volatile sig_atomic_t g_count; /* entries in use are below it */
+/* what the last commit put in place (fb_outputs_written) */
+static struct {
+    char path[PATH_MAX], what[32];
+    uint64_t bytes;
+} g_done[FB_MAX_OUTPUTS];
+static int g_ndone;
 static int g_depth;
 static pthread_mutex_t g_mu = PTHREAD_MUTEX_INITIALIZER;
 
@@ -78,7 +85,8 @@ static entry *find(const char *key)
 static void drop(entry *e)
 {
     if (e->fd >= 0) close(e->fd);
-    e->fd = -1;
+    if (e->keepfd >= 0) close(e->keepfd);
+    e->fd = e->keepfd = -1;
     if (e->live) unlink(e->tmp);
     e->live = 0;
     e->state = FREE;
@@ -88,6 +96,10 @@ static void drop(entry *e)
  * folder does not resolve (errno says why). */
 static bool key_of(const char *path, char *key)
 {
+    if (!strcmp(path, "-")) { /* standard output */
+        strcpy(key, "-");
+        return true;
+    }
     char dir[PATH_MAX], real[PATH_MAX];
     const char *base;
     split(path, dir, sizeof dir, &base);
@@ -96,12 +108,76 @@ static bool key_of(const char *path, char *key)
     return true;
 }
 
+static entry *free_entry(void)
+{
+    for (int i = 0; i < g_count; i++)
+        if (g_out[i].state == FREE && !g_out[i].live) return &g_out[i];
+    return g_count < FB_MAX_OUTPUTS ? &g_out[g_count] : NULL;
+}
+
+/* "-": standard output. The data goes to an anonymous temporary file (gone when closed: nothing for
+ * a signal to leave behind) and is copied to standard output at the commit, so that a failed run
+ * writes nothing there either. Refused when standard output is a terminal. Called locked. */
+static fb_result reserve_stdout(const char *what, entry **out)
+{
+    if (find("-"))
+        return fb_fail(FB_ERR_USAGE, "-: standard output named for two outputs (the %s and the %s)", find("-")->what,
+                       what);
+    if (isatty(STDOUT_FILENO))
+        return fb_fail(FB_ERR_USAGE, "-: the %s would go to a terminal: redirect standard output to a file or a pipe",
+                       what);
+    entry *e = free_entry();
+    if (!e) return fb_fail(FB_ERR_USAGE, "-: more than %d outputs", FB_MAX_OUTPUTS);
+    const char *tmpdir = getenv("TMPDIR");
+    int fd = open(tmpdir && *tmpdir ? tmpdir : "/tmp", O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
+    if (fd < 0) {
+        char tmp[PATH_MAX];
+        snprintf(tmp, sizeof tmp, "%s/fractalbake-stdout.XXXXXX", tmpdir && *tmpdir ? tmpdir : "/tmp");
+        if ((fd = mkstemp(tmp)) >= 0) unlink(tmp);
+    }
+    int keep = fd >= 0 ? dup(fd) : -1;
+    if (keep < 0) {
+        int err = errno;
+        if (fd >= 0) close(fd);
+        return fb_fail(FB_ERR_IO, "-: cannot create a temporary file for the %s: %s", what, strerror(err));
+    }
+    *e = (entry){.live = 0, .state = RESERVED, .fd = fd, .keepfd = keep};
+    snprintf(e->what, sizeof e->what, "%s", what);
+    snprintf(e->path, sizeof e->path, "-");
+    snprintf(e->key, sizeof e->key, "-");
+    if (e == &g_out[g_count]) g_count = g_count + 1;
+    *out = e;
+    return FB_OK;
+}
+
+/* Copies the standard-output entry's file to standard output. */
+static fb_result copy_to_stdout(entry *e)
+{
+    char buf[1 << 16];
+    off_t at = 0;
+    for (;;) {
+        ssize_t n = pread(e->keepfd, buf, sizeof buf, at);
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) return fb_fail(FB_ERR_IO, "-: cannot read back the %s: %s", e->what, strerror(errno));
+        if (n == 0) return FB_OK;
+        for (ssize_t done = 0; done < n;) {
+            ssize_t w = write(STDOUT_FILENO, buf + done, (size_t)(n - done));
+            if (w < 0 && errno == EINTR) continue;
+            if (w <= 0)
+                return fb_fail(FB_ERR_IO, "-: cannot write the %s to standard output: %s", e->what, strerror(errno));
+            done += w;
+        }
+        at += n;
+    }
+}
+
 /* Resolves path to its key; checks the target; creates the temporary file. Called locked. */
 static fb_result reserve_locked(const char *path, const char *what, entry **out)
 {
     char dir[PATH_MAX], key[PATH_MAX];
     const char *base;
     if (!path || !*path) return fb_fail(FB_ERR_USAGE, "%s: an empty file name", what);
+    if (!strcmp(path, "-")) return reserve_stdout(what, out);
     if (strlen(path) >= PATH_MAX - 64) return fb_fail(FB_ERR_USAGE, "%s: path too long for the %s", path, what);
     split(path, dir, sizeof dir, &base);
     if (!*base || !strcmp(base, ".") || !strcmp(base, ".."))
@@ -116,13 +192,8 @@ static fb_result reserve_locked(const char *path, const char *what, entry **out)
     if (lstat(path, &st) == 0 && !S_ISREG(st.st_mode))
         return fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", path,
                        kind_of(st.st_mode), what);
-    entry *e = NULL;
-    for (int i = 0; i < g_count && !e; i++)
-        if (g_out[i].state == FREE && !g_out[i].live) e = &g_out[i];
-    if (!e) {
-        if (g_count == FB_MAX_OUTPUTS) return fb_fail(FB_ERR_USAGE, "%s: more than %d outputs", path, FB_MAX_OUTPUTS);
-        e = &g_out[g_count];
-    }
+    entry *e = free_entry();
+    if (!e) return fb_fail(FB_ERR_USAGE, "%s: more than %d outputs", path, FB_MAX_OUTPUTS);
     int fd = -1;
     for (int tries = 0; tries < 16 && fd < 0; tries++) {
         char tmp[PATH_MAX];
@@ -139,6 +210,7 @@ static fb_result reserve_locked(const char *path, const char *what, entry **out)
                        "%s: cannot create the %s: %s", path, what, strerror(err));
     }
     e->fd = fd;
+    e->keepfd = -1;
     e->state = RESERVED;
     snprintf(e->what, sizeof e->what, "%s", what);
     snprintf(e->path, sizeof e->path, "%s", path);
@@ -152,7 +224,7 @@ static fb_result reserve_locked(const char *path, const char *what, entry **out)
 void fb_outputs_begin(void)
 {
     pthread_mutex_lock(&g_mu);
-    g_depth++;
+    if (g_depth++ == 0) g_ndone = 0;
     pthread_mutex_unlock(&g_mu);
 }
 
@@ -176,18 +248,27 @@ fb_result fb_outputs_end(fb_result rc)
         /* Checked again just before the renames: a target that became a non-regular file since. */
         struct stat st;
         for (int i = 0; i < g_count && !rc; i++)
-            if (g_out[i].state == TAKEN && lstat(g_out[i].path, &st) == 0 && !S_ISREG(st.st_mode))
+            if (g_out[i].state == TAKEN && g_out[i].keepfd < 0 && lstat(g_out[i].path, &st) == 0 &&
+                !S_ISREG(st.st_mode))
                 rc = fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", g_out[i].path,
                              kind_of(st.st_mode), g_out[i].what);
         for (int i = 0; i < g_count && !rc; i++) {
             entry *e = &g_out[i];
             if (e->state != TAKEN) continue;
-            if (rename(e->tmp, e->path) != 0) {
+            struct stat fs;
+            uint64_t bytes = e->keepfd >= 0 ? (fstat(e->keepfd, &fs) == 0 ? (uint64_t)fs.st_size : 0)
+                                            : (lstat(e->tmp, &fs) == 0 ? (uint64_t)fs.st_size : 0);
+            if (e->keepfd >= 0) {
+                if ((rc = copy_to_stdout(e))) break;
+            } else if (rename(e->tmp, e->path) != 0) {
                 rc = fb_fail(FB_ERR_IO, "%s: cannot move the %s into place: %s", e->path, e->what, strerror(errno));
                 break;
             }
             e->live = 0; /* renamed: the handler must not remove it any more */
             e->state = FREE;
+            snprintf(g_done[g_ndone].path, sizeof g_done[0].path, "%s", e->path);
+            snprintf(g_done[g_ndone].what, sizeof g_done[0].what, "%s", e->what);
+            g_done[g_ndone++].bytes = bytes;
         }
         abort_locked(); /* after a failed rename: the rest are removed */
     }
@@ -275,7 +356,9 @@ fb_result fb_output_done(const char *path, fb_result rc)
         rc = fb_fail(FB_ERR_INTERNAL, "%s: finished but never opened as an output", path);
     } else if (g_depth == 0) {
         struct stat st;
-        if (lstat(e->path, &st) == 0 && !S_ISREG(st.st_mode))
+        if (e->keepfd >= 0)
+            rc = copy_to_stdout(e);
+        else if (lstat(e->path, &st) == 0 && !S_ISREG(st.st_mode))
             rc = fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", e->path,
                          kind_of(st.st_mode), e->what);
         else if (rename(e->tmp, e->path) != 0)
@@ -314,4 +397,17 @@ fb_result fb_output_format(const char *flag, const char *path, const char *ext)
             return fb_fail(FB_ERR_USAGE, "%s %s: this writes %s (%s), not %s: name the file %s", flag, path,
                            !strcmp(ext, ".exr") ? "OpenEXR" : "PNG", ext, dot, ext);
     return FB_OK;
+}
+
+int fb_outputs_written(const char **paths, const char **whats, uint64_t *bytes, int max)
+{
+    int n = 0;
+    pthread_mutex_lock(&g_mu);
+    for (; n < g_ndone && n < max; n++) {
+        paths[n] = g_done[n].path;
+        whats[n] = g_done[n].what;
+        bytes[n] = g_done[n].bytes;
+    }
+    pthread_mutex_unlock(&g_mu);
+    return n;
 }

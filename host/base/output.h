@@ -11,6 +11,10 @@
  * Only regular files are replaced: a target that exists and is anything else (a directory, a device
  * node, a symbolic link, a FIFO) is refused before anything is computed, as is one path named twice.
  *
+ * The path "-" is standard output: its data goes to an anonymous temporary file and is copied to
+ * standard output at the commit (so a failed run writes nothing there either); it is refused when
+ * standard output is a terminal.
+ *
  * Transactions nest: fb_outputs_begin() / fb_outputs_end() pairs may be called inside one another
  * (main() around a command, fb_bake() around a bake); only the outermost end commits, and any
  * failed end aborts everything. The registry is process-wide and thread-safe.
@@ -21,6 +25,7 @@
 #include "fb.h"
 
 #include <stdbool.h>
+#include <stdint.h>
 
 #define FB_MAX_OUTPUTS 64
 
@@ -56,6 +61,10 @@ fb_result fb_output_spool(const char *path, void **file);
 
 /* Drops one output from the transaction: its temporary file is removed. Safe on unknown paths. */
 void fb_output_discard(const char *path);
+
+/* After the outermost fb_outputs_end succeeded, until the next outermost begin: the outputs it put
+ * in place, in order, with what they are and their sizes in bytes. Returns how many (at most max). */
+int fb_outputs_written(const char **paths, const char **whats, uint64_t *bytes, int max);
 
 /* For a signal handler: removes every temporary file of the transaction. Async-signal-safe. */
 void fb_outputs_unlink_all(void);

@@ -3,58 +3,144 @@
 #include "fb.h"
 
 #include <stdio.h>
+#include <string.h>
+#include <time.h>
 #include <unistd.h>
 
-void fb_progress_init(fb_progress *p, bool enabled, const char *label, const char *unit)
+void fb_format_rate(double r, const char *unit, char *out, int size)
 {
-    p->tty = isatty(STDERR_FILENO);
-    p->enabled = enabled;
-    p->drawn = false;
-    p->start = fb_now();
-    p->last = 0;
-    p->label = label;
-    p->unit = unit;
+    const char *pre = r >= 1e9 ? "G" : r >= 1e6 ? "M" : r >= 1e3 ? "k" : "";
+    double v = r >= 1e9 ? r * 1e-9 : r >= 1e6 ? r * 1e-6 : r >= 1e3 ? r * 1e-3 : r;
+    snprintf(out, (size_t)size, "%.3g %s%s/s", v, pre, unit);
 }
 
-void fb_progress_update(fb_progress *p, uint64_t done, uint64_t total)
+static void format_time(double s, char *out, size_t size)
 {
-    if (!p->enabled || total == 0) return;
+    if (s >= 7200)
+        snprintf(out, size, "%.1f h", s / 3600);
+    else if (s >= 120)
+        snprintf(out, size, "%.0f min", s / 60);
+    else
+        snprintf(out, size, "%.0f s", s);
+}
+
+static void draw(fb_progress *p, bool final)
+{
+    uint64_t done = atomic_load(&p->done), total = atomic_load(&p->total);
     double now = fb_now(), el = now - p->start;
-    /* A log (stderr not a terminal) gets a line after 10 s and then every minute: a long run is never
-     * silent, a short one leaves the log clean. */
-    if (p->tty ? el < 1.0 || now - p->last < 0.1 : el < 10.0 || (p->last > 0 && now - p->last < 60.0)) return;
-    p->last = now;
+    if (total == 0) return;
     double f = (double)done / (double)total;
+    if (f > 1) f = 1;
+    char rate[48] = "", left[32] = "?", detail[96];
+    double r = el > 0 ? (double)done / el : 0, shown = p->scale > 0 ? p->scale : 1.0;
+    if (!p->steps) fb_format_rate(r * shown, p->unit, rate, sizeof rate);
+    if (r > 0) format_time((double)(total - (done < total ? done : total)) / r, left, sizeof left);
+    pthread_mutex_lock(&p->mu);
+    snprintf(detail, sizeof detail, "%s", p->detail);
+    pthread_mutex_unlock(&p->mu);
     if (!p->tty) {
-        double rate = (double)done / el, eta = rate > 0 ? (double)(total - done) / rate : 0;
-        fprintf(stderr, "fractalbake: %s: %.1f%% (%.4g of %.4g %s, %.4g M%s/s, %.0f s so far, about %.3g %s left)\n",
-                p->label, 100 * f, (double)done, (double)total, p->unit, rate * 1e-6, p->unit, el,
-                eta > 7200  ? eta / 3600
-                : eta > 120 ? eta / 60
-                            : eta,
-                eta > 7200  ? "h"
-                : eta > 120 ? "min"
-                            : "s");
+        if (p->steps)
+            fprintf(stderr, "fractalbake: %s: %llu of %llu%s%s, %.0f s so far, about %s left\n", p->label,
+                    (unsigned long long)done, (unsigned long long)total, detail[0] ? ": " : "", detail, el, left);
+        else
+            fprintf(stderr, "fractalbake: %s: %.1f%% (%.4g of %.4g %s, %s, %.0f s so far, about %s left)\n", p->label,
+                    100 * f, (double)done * shown, (double)total * shown, p->unit, rate, el, left);
         fflush(stderr);
         return;
     }
+    (void) final;
     int w = 30, fill = (int)(f * w);
     char bar[64];
     for (int i = 0; i < w; i++) bar[i] = i < fill ? '#' : '.';
     bar[w] = 0;
-    double rate = el > 0 ? (double)done / el : 0;
-    double eta = rate > 0 ? (double)(total - done) / rate : 0;
-    fprintf(stderr, "\r%s [%s] %3d%%  %.1f M%s/s  eta %.0fs  ", p->label, bar, (int)(100 * f), rate * 1e-6, p->unit,
-            eta);
+    if (p->steps)
+        fprintf(stderr, "\r%s [%s] %llu of %llu  %s left  %-40.40s", p->label, bar, (unsigned long long)done,
+                (unsigned long long)total, left, detail);
+    else
+        fprintf(stderr, "\r%s [%s] %3d%%  %s  %s left   ", p->label, bar, (int)(100 * f), rate, left);
     fflush(stderr);
     p->drawn = true;
 }
 
+static void *ticker(void *arg)
+{
+    fb_progress *p = arg;
+    while (!atomic_load(&p->stop)) {
+        struct timespec ts = {0, 50 * 1000 * 1000};
+        nanosleep(&ts, NULL);
+        double now = fb_now(), el = now - p->start;
+        if (p->tty) {
+            /* five times a second once the work has lasted half a second */
+            if (el >= 0.5 && now - p->last_line >= 0.2) {
+                p->last_line = now;
+                draw(p, false);
+            }
+        } else if (el >= 10.0 && (p->last_line == 0 || now - p->last_line >= 60.0)) {
+            p->last_line = now;
+            draw(p, false);
+        }
+    }
+    return NULL;
+}
+
+static void start(fb_progress *p, bool enabled, const char *label, const char *unit, bool steps)
+{
+    memset(p, 0, sizeof *p);
+    p->tty = isatty(STDERR_FILENO);
+    p->enabled = enabled;
+    p->steps = steps;
+    p->start = fb_now();
+    p->label = label;
+    p->unit = unit;
+    pthread_mutex_init(&p->mu, NULL);
+    if (enabled) p->running = pthread_create(&p->thread, NULL, ticker, p) == 0;
+}
+
+void fb_progress_init(fb_progress *p, bool enabled, const char *label, const char *unit)
+{
+    start(p, enabled, label, unit, false);
+}
+
+void fb_progress_init_steps(fb_progress *p, bool enabled, const char *label)
+{
+    start(p, enabled, label, "", true);
+}
+
+void fb_progress_update(fb_progress *p, uint64_t done, uint64_t total)
+{
+    atomic_store(&p->total, total);
+    atomic_store(&p->done, done);
+}
+
+void fb_progress_set_scale(fb_progress *p, double per)
+{
+    p->scale = per > 0 ? 1.0 / per : 1.0;
+}
+
+void fb_progress_add(fb_progress *p, uint64_t n)
+{
+    atomic_fetch_add(&p->done, n);
+}
+
+void fb_progress_detail(fb_progress *p, const char *text)
+{
+    pthread_mutex_lock(&p->mu);
+    snprintf(p->detail, sizeof p->detail, "%s", text);
+    pthread_mutex_unlock(&p->mu);
+}
+
 void fb_progress_finish(fb_progress *p)
 {
+    if (p->running) {
+        atomic_store(&p->stop, true);
+        pthread_join(p->thread, NULL);
+        p->running = false;
+    }
     if (p->drawn && p->tty) {
-        fprintf(stderr, "\r%*s\r", 100, "");
+        fprintf(stderr, "\r%*s\r", 110, "");
         fflush(stderr);
     }
     p->drawn = false;
+    pthread_mutex_destroy(&p->mu);
+    p->enabled = false;
 }

@@ -7,10 +7,24 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 fb_result fb_input_open(const char *path, const char *what, FILE **out)
 {
     *out = NULL;
+    if (!strcmp(path, "-")) { /* standard input, once: a second reader would find it empty */
+        static bool taken;
+        if (taken) return fb_fail(FB_ERR_USAGE, "-: standard input named twice (for the %s too)", what);
+        int fd = dup(STDIN_FILENO);
+        FILE *f = fd >= 0 ? fdopen(fd, "rb") : NULL;
+        if (!f) {
+            if (fd >= 0) close(fd);
+            return fb_fail(FB_ERR_INPUT, "-: cannot read the %s from standard input: %s", what, strerror(errno));
+        }
+        taken = true;
+        *out = f;
+        return FB_OK;
+    }
     FILE *f = fopen(path, "rb");
     if (!f) return fb_fail(FB_ERR_INPUT, "%s: cannot open %s: %s", path, what, strerror(errno));
     struct stat st;

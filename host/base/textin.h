@@ -18,7 +18,8 @@
 #include <stdbool.h>
 #include <stdio.h>
 
-/* fopen(path, "rb") for an input, refusing a directory; failures logged as FB_ERR_INPUT. */
+/* fopen(path, "rb") for an input, refusing a directory; failures logged as FB_ERR_INPUT. "-" is
+ * standard input, which one run reads once (a second "-" is FB_ERR_USAGE). */
 fb_result fb_input_open(const char *path, const char *what, FILE **out);
 
 typedef struct fb_lines {

@@ -7,19 +7,34 @@
 
 #include "benchkit.h"
 #include "gen.h"
+#include "progress.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
+static fb_progress g_prog; /* which generator of how many, on stderr */
+
+/* A result line on a terminal where the progress bar is drawn: the bar's line cleared first (the
+ * progress thread draws it again). */
+static void clear_bar(void)
+{
+    if (g_prog.drawn && g_prog.tty && isatty(STDOUT_FILENO)) {
+        fprintf(stderr, "\r%*s\r", 110, "");
+        fflush(stderr);
+    }
+}
+
 static void print_heading(const fb_bench *b, const char *text)
 {
+    clear_bar();
     if (!b->json) printf("%s\n", text);
 }
 
 static void print_row(const fb_bench *b, const fb_bench_row *r)
 {
+    clear_bar();
     if (b->json) {
         printf("{\"generator\": \"%s\", \"backend\": \"%s\", \"device\": \"%s\", \"mode\": \"%s\", \"unit\": \"%s\", "
                "\"rate\": %.3f",
@@ -52,6 +67,7 @@ fb_result fb_bench_main(int argc, char **argv)
                   .heading = print_heading,
                   .row = print_row};
     const fb_gen_class *only = NULL;
+    bool quiet = false;
     char names[256] = "", words[256] = ""; /* "fbm|julia|ifs", "fbm, julia or ifs" */
     int nb = 0, k = 0;
     for (int i = 0; fb_gen_list[i]; i++) nb += fb_gen_list[i]->bench != NULL;
@@ -69,6 +85,8 @@ fb_result fb_bench_main(int argc, char **argv)
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--json")) {
             b.json = true;
+        } else if (!strcmp(a, "--quiet")) {
+            quiet = true;
         } else if (!strcmp(a, "--size") && v) {
             if (sscanf(v, "%dx%d", &b.width, &b.height) != 2 || b.width < 64 || b.height < 64 || b.width > 16384 ||
                 b.height > 16384)
@@ -99,8 +117,10 @@ fb_result fb_bench_main(int argc, char **argv)
             if (b.threads < 1) return fb_fail(FB_ERR_USAGE, "--threads: expected a positive integer, found \"%s\"", v);
             i++;
         } else if (!strcmp(a, "--help")) {
-            printf("usage: fractalbake bench [--json] [--size WxH] [--generator %s] [--points N] "
-                   "[--backend vulkan|native] [--device D] [--threads N]\n",
+            printf("usage: fractalbake bench [--json] [--quiet] [--size WxH] [--generator %s] [--points N] "
+                   "[--backend vulkan|native] [--device D] [--threads N]\n"
+                   "Throughput of every generator on each backend, a line per measurement (--json: a JSON object\n"
+                   "per line); progress on stderr unless --quiet.\n",
                    names);
             return FB_OK;
         } else {
@@ -113,8 +133,16 @@ fb_result fb_bench_main(int argc, char **argv)
     snprintf(out, sizeof out, "%s/bench.exr", dir);
     b.out = out;
     fb_result rc = FB_OK;
+    int total = only ? 1 : nb, done = 0;
+    fb_progress_init_steps(&g_prog, !quiet, "bench");
     for (int i = 0; fb_gen_list[i] && !rc; i++)
-        if (fb_gen_list[i]->bench && (!only || only == fb_gen_list[i])) rc = fb_gen_list[i]->bench(&b);
+        if (fb_gen_list[i]->bench && (!only || only == fb_gen_list[i])) {
+            fb_progress_update(&g_prog, (uint64_t)done, (uint64_t)total);
+            fb_progress_detail(&g_prog, fb_gen_list[i]->name);
+            rc = fb_gen_list[i]->bench(&b);
+            done++;
+        }
+    fb_progress_finish(&g_prog);
     unlink(out);
     rmdir(dir);
     return rc;

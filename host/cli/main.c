@@ -8,10 +8,14 @@
 #include "compare.h"
 #include "exrio.h"
 #include "gen_ifs.h"
+#include "heightmap.h"
 #include "merge.h"
 #include "output.h"
 #include "scene.h"
 #include "vkc.h"
+#include "jsonout.h"
+
+#include <jansson.h>
 
 #include <errno.h>
 #include <stddef.h>
@@ -24,6 +28,18 @@
 /* The first error is the one line the user sees; warnings are shown as they come. */
 static char g_first_error[2048];
 static bool g_quiet_warnings;
+
+/* --json: the command's summary, printed on standard output by main() once its outputs are in
+ * place, with what was written ("outputs": path, what, bytes) added. */
+static json_t *g_summary;
+
+static json_t *summary_start(const char *command)
+{
+    json_decref(g_summary);
+    g_summary = json_object();
+    json_object_set_new(g_summary, "command", json_string(command));
+    return g_summary;
+}
 
 static void sink(int level, const char *msg, void *user)
 {
@@ -79,8 +95,9 @@ static const char *const k_usage =
     "common options:\n"
     "  -o, --output FILE     output EXR (written to a temporary file, renamed when complete)\n"
     "  --preview FILE.png    also write a PNG preview (grey, colour or hillshade, as the layer suits)\n"
-    "  --preview-layer L     the layer it shows, or `over`: every layer composited back to front by\n"
-    "                        its coverage A (the default for scenes of several layers)\n"
+    "  --preview-layer L     the layer it shows; `all`: a contact sheet, a labelled tile per layer; or\n"
+    "                        `over`: every layer composited back to front by its coverage A (the\n"
+    "                        default for scenes of several layers)\n"
     "  --backend B           auto | vulkan | native (default auto: a GPU when there is one; on lavapipe,\n"
     "                        each layer where it is faster (see `fractalbake devices`); else native)\n"
     "  --device D            Vulkan device index or name substring (see `fractalbake devices`)\n"
@@ -96,8 +113,9 @@ static const char *const k_usage =
     "  --max-memory SIZE     stop before allocating when the predicted peak is larger (8G, 512M, 50%;\n"
     "                        default 80% of this machine's memory)\n"
     "  --validation          enable VK_LAYER_KHRONOS_validation (also FB_VK_VALIDATION=1)\n"
-    "  --quiet               no progress bar, no warnings, no summaries\n"
-    "  --json                layer summaries (terrain: points, time per stage) as JSON lines on stdout\n"
+    "  -q, --quiet           no progress bar, no warnings, no summary line\n"
+    "  --json                one JSON object on stdout when done: what was written (paths, sizes),\n"
+    "                        the time, each layer's backend and summary (terrain: points, stages)\n"
     "  --help, --version\n"
     "\n"
     "exit codes: 0 success, 1 comparison beyond threshold, 2 bad usage or input, 3 runtime failure\n";
@@ -269,11 +287,14 @@ static int common_option(int argc, char **argv, int *i, common_opts *o)
 static void report(const char *layer, const char *summary, const char *json, void *user)
 {
     const common_opts *o = user;
-    (void)layer;
-    if (o->json)
-        printf("%s\n", json);
-    else if (!o->quiet)
+    if (o->json) { /* into the layer's entry of the summary */
+        json_t *layers = json_object_get(g_summary, "layers"), *l;
+        size_t i;
+        json_array_foreach(layers, i, l) if (!strcmp(json_string_value(json_object_get(l, "name")), layer))
+            json_object_set_new(l, "summary", json_loads(json, 0, NULL));
+    } else if (!o->quiet) {
         fprintf(stderr, "fractalbake: %s\n", summary);
+    }
 }
 
 /* --dry-run: the predicted peak memory, per layer and in all, on stdout. */
@@ -308,8 +329,24 @@ static void print_plan(const fb_bake_plan *p, bool json)
     printf("%-26s %12s  (--max-memory %s)\n", "predicted peak", a, b);
 }
 
-static fb_result bake_scene(fb_scene *scene, const common_opts *o)
+static const char *heightmap_format_name(int f)
 {
+    return f == FB_HEIGHTMAP_PNG16   ? "16-bit grey PNG"
+           : f == FB_HEIGHTMAP_RAW16 ? "16-bit little-endian raw"
+                                     : "float GeoTIFF";
+}
+
+static fb_result bake_scene(const char *command, fb_scene *scene, const common_opts *o)
+{
+    if (o->json && !o->dry_run && o->out && !strcmp(o->out, "-"))
+        return fb_fail(FB_ERR_USAGE, "--json: standard output holds the EXR (-o -): one or the other");
+    if (o->json && !o->dry_run) {
+        json_t *sum = summary_start(command), *layers = json_array();
+        for (int i = 0; i < scene->nlayers; i++)
+            json_array_append_new(
+                layers, json_pack("{ssss}", "name", scene->layers[i].name, "type", scene->layers[i].cls->name));
+        json_object_set_new(sum, "layers", layers);
+    }
     if (o->points_part[1] > 0) {
         bool chaos = false;
         for (int i = 0; i < scene->nlayers; i++) chaos = chaos || scene->layers[i].cls == &fb_gen_ifs;
@@ -344,10 +381,52 @@ static fb_result bake_scene(fb_scene *scene, const common_opts *o)
                  &st);
     if (!rc && o->dry_run) {
         print_plan(&plan, o->json);
-    } else if (!rc && !o->quiet)
-        fprintf(stderr, "fractalbake: wrote %s (%d x %d%s, %d layer%s) in %.2f s %s\n", o->out,
-                o->region[2] ? o->region[2] : scene->width, o->region[2] ? o->region[3] : scene->height,
-                o->region[2] ? " region" : "", scene->nlayers, scene->nlayers == 1 ? "" : "s", st.seconds, st.ran_on);
+    } else if (!rc && o->json) {
+        json_object_set_new(g_summary, "size", json_pack("[ii]", scene->width, scene->height));
+        if (o->region[2])
+            json_object_set_new(g_summary, "region",
+                                json_pack("[iiii]", o->region[0], o->region[1], o->region[2], o->region[3]));
+        json_object_set_new(g_summary, "seconds", json_real(st.seconds));
+        json_object_set_new(g_summary, "device", json_string(e.device));
+        if (st.preview[0]) json_object_set_new(g_summary, "preview", json_string(st.preview));
+        json_t *hms = json_array();
+        for (int i = 0; i < st.nheightmaps; i++) {
+            const fb_bake_heightmap *h = &st.heightmaps[i];
+            json_t *j =
+                json_pack("{ssssss}", "layer", h->layer, "path", h->path, "format", heightmap_format_name(h->format));
+            if (h->format != FB_HEIGHTMAP_GEOTIFF) {
+                json_object_set_new(j, "height_at_0", json_real(h->lo));
+                json_object_set_new(j, "height_at_65535", json_real(h->hi));
+            }
+            json_array_append_new(hms, j);
+        }
+        if (st.nheightmaps)
+            json_object_set_new(g_summary, "heightmaps", hms);
+        else
+            json_decref(hms);
+        json_t *layers = json_object_get(g_summary, "layers");
+        for (int i = 0; i < scene->nlayers; i++)
+            json_object_set_new(json_array_get(layers, (size_t)i), "backend",
+                                json_string(fb_backend_name(st.layer_backend[i])));
+    } else if (!rc && !o->quiet) {
+        fprintf(stderr, "fractalbake: wrote %s (%d x %d%s, %d layer%s) in %.2f s %s\n",
+                strcmp(o->out, "-") ? o->out : "standard output", o->region[2] ? o->region[2] : scene->width,
+                o->region[2] ? o->region[3] : scene->height, o->region[2] ? " region" : "", scene->nlayers,
+                scene->nlayers == 1 ? "" : "s", st.seconds, st.ran_on);
+        if (st.preview[0]) fprintf(stderr, "fractalbake: preview %s: %s\n", o->preview, st.preview);
+        for (int i = 0; i < st.nheightmaps; i++) {
+            const fb_bake_heightmap *h = &st.heightmaps[i];
+            char lo[40], hi[40];
+            fb_format_shortest(h->lo, lo, sizeof lo);
+            fb_format_shortest(h->hi, hi, sizeof hi);
+            if (h->format == FB_HEIGHTMAP_GEOTIFF)
+                fprintf(stderr, "fractalbake: heightmap %s: layer %s's heights as float, with its geotransform\n",
+                        h->path, h->layer);
+            else
+                fprintf(stderr, "fractalbake: heightmap %s: layer %s's heights %s (0) to %s (65535), %s\n", h->path,
+                        h->layer, lo, hi, heightmap_format_name(h->format));
+        }
+    }
     fb_engine_close(&e);
     return rc;
 }
@@ -394,7 +473,7 @@ static int cmd_generator(const char *kind, int argc, char **argv)
     if (!rc) rc = fb_scene_parse(json, NULL, &scene);
     if (!rc && !o.out && !o.dry_run)
         rc = fb_fail(FB_ERR_USAGE, "-o: missing output file (fractalbake %s ... -o OUT.exr)", kind);
-    if (!rc) rc = bake_scene(&scene, &o);
+    if (!rc) rc = bake_scene(kind, &scene, &o);
     fb_scene_fini(&scene);
     free(json);
     free(gen_args);
@@ -456,7 +535,7 @@ static int cmd_render(int argc, char **argv)
             else
                 from = val;
             i++;
-        } else if (a[0] == '-') {
+        } else if (a[0] == '-' && a[1]) { /* "-": the scene from standard input */
             static const char *const render_flags[] = {"set", "from"};
             char hint[96];
             flag_hint(a, NULL, render_flags, 2, hint, sizeof hint);
@@ -516,7 +595,7 @@ static int cmd_render(int argc, char **argv)
     } else {
         rc = fb_scene_parse_sets(fb_scene_default_json(), "(default scene)", sets, nsets, &scene);
     }
-    if (!rc) rc = bake_scene(&scene, &o);
+    if (!rc) rc = bake_scene("render", &scene, &o);
     fb_scene_fini(&scene);
     free(sets);
     return finish(rc);
@@ -626,7 +705,7 @@ static int cmd_merge(int argc, char **argv)
     const char *out = NULL;
     const char **parts = calloc((size_t)argc + 1, sizeof *parts);
     int n = 0, threads = 0, bad = 0;
-    bool quiet = false;
+    bool quiet = false, json = false;
     if (!parts) return finish(fb_fail(FB_ERR_NOMEM, "out of memory"));
     for (int i = 0; i < argc && !bad; i++) {
         const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
@@ -653,9 +732,11 @@ static int cmd_merge(int argc, char **argv)
             i++;
         } else if (!strcmp(a, "--quiet")) {
             quiet = true;
+        } else if (!strcmp(a, "--json")) {
+            json = true;
         } else if (!strcmp(a, "--help")) {
             printf("usage: fractalbake merge PART.exr... -o OUT.exr [--threads N] [--zip-level N] [--max-memory SIZE] "
-                   "[--quiet]\n"
+                   "[--quiet] [--json]\n"
                    "Joins the region files of `fractalbake render --region X,Y,W,H` into the whole image: regions\n"
                    "of one bake (same size, channels and scene) that cover it with no overlap. Or adds the N points\n"
                    "parts of `render --points-part K/N` (chaos games split by points) into the whole game.\n");
@@ -673,10 +754,22 @@ static int cmd_merge(int argc, char **argv)
         free(parts);
         return bad;
     }
+    if (json && !strcmp(out, "-"))
+        bad = usage_error("%s", "--json: standard output holds the EXR (-o -): one or the other");
+    if (bad) {
+        free(parts);
+        return bad;
+    }
     double t0 = fb_now();
     fb_result rc = fb_merge(parts, n, out, threads);
-    if (!rc && !quiet)
+    if (!rc && json) {
+        json_t *sum = summary_start("merge"), *in = json_array();
+        for (int i = 0; i < n; i++) json_array_append_new(in, json_string(parts[i]));
+        json_object_set_new(sum, "parts", in);
+        json_object_set_new(sum, "seconds", json_real(fb_now() - t0));
+    } else if (!rc && !quiet) {
         fprintf(stderr, "fractalbake: merged %d part%s into %s in %.2f s\n", n, n == 1 ? "" : "s", out, fb_now() - t0);
+    }
     free(parts);
     return finish(rc);
 }
@@ -711,28 +804,67 @@ static int cmd_info(int argc, char **argv)
 static int cmd_devices(int argc, char **argv)
 {
     const char *sel = NULL;
+    bool json = false;
     for (int i = 0; i < argc; i++) {
         if (!strcmp(argv[i], "--device") && i + 1 < argc) {
             sel = argv[++i];
+        } else if (!strcmp(argv[i], "--json")) {
+            json = true;
         } else if (!strcmp(argv[i], "--help")) {
-            printf("usage: fractalbake devices [--device D]\n"
+            printf("usage: fractalbake devices [--device D] [--json]\n"
                    "Lists the Vulkan devices (index, name, type, memory, subgroup size, driver), marks the one\n"
-                   "fractalbake chooses (with --device D: the one D names), and says what --backend auto does.\n");
+                   "fractalbake chooses (with --device D: the one D names), and says what --backend auto does.\n"
+                   "--json: the same as one JSON object.\n");
             return 0;
         } else if (!strcmp(argv[i], "--quiet")) {
             /* nothing to leave out: the list is the output */
         } else
-            return usage_error("%s: unknown argument for `fractalbake devices` (only --device D)", argv[i]);
+            return usage_error("%s: unknown argument for `fractalbake devices` (only --device D, --json)", argv[i]);
     }
     vkc_device_info *infos = NULL;
     int n = 0;
     fb_result rc = vkc_enumerate(sel, &infos, &n);
     if (rc == FB_ERR_NODEVICE) {
-        printf("no Vulkan device: %s\nfractalbake will use the native backend (%d threads).\n", g_first_error,
-               fb_cpu_count());
+        if (json) {
+            json_t *o = json_pack("{s[]sssisssi}", "devices", "reason", g_first_error, "native_threads", fb_cpu_count(),
+                                  "auto", "native", "chosen", -1);
+            char *t = fb_json_dumps(o, 0);
+            printf("%s\n", t ? t : "{}");
+            free(t);
+            json_decref(o);
+        } else {
+            printf("no Vulkan device: %s\nfractalbake will use the native backend (%d threads).\n", g_first_error,
+                   fb_cpu_count());
+        }
+        g_first_error[0] = 0;
         return 0;
     }
     if (rc) return finish(rc);
+    if (json) {
+        json_t *o = json_object(), *list = json_array();
+        int chosen = -1;
+        for (int i = 0; i < n; i++) {
+            json_array_append_new(list,
+                                  json_pack("{sisssssIsiss}", "index", i, "name", infos[i].name, "type", infos[i].type,
+                                            "memory_bytes", (json_int_t)infos[i].memory, "subgroup_size",
+                                            (int)infos[i].subgroup_size, "driver", infos[i].driver));
+            if (infos[i].chosen) chosen = i;
+        }
+        json_object_set_new(o, "devices", list);
+        json_object_set_new(o, "chosen", json_integer(chosen));
+        json_object_set_new(o, "native_threads", json_integer(fb_cpu_count()));
+        /* what --backend auto does with the chosen device */
+        json_object_set_new(o, "auto",
+                            json_string(chosen < 0                           ? "native"
+                                        : !strcmp(infos[chosen].type, "cpu") ? "per layer"
+                                                                             : "device"));
+        char *t = fb_json_dumps(o, 0);
+        printf("%s\n", t ? t : "{}");
+        free(t);
+        json_decref(o);
+        free(infos);
+        return 0;
+    }
     printf("%-3s %-3s %-34s %-10s %-10s %-8s %s\n", "#", "use", "name", "type", "memory", "subgroup", "driver");
     for (int i = 0; i < n; i++)
         printf("%-3d %-3s %-34s %-10s %-10.0f %-8u %s\n", i, infos[i].chosen ? "*" : "", infos[i].name, infos[i].type,
@@ -836,6 +968,20 @@ int main(int argc, char **argv)
     g_first_error[0] = 0;
     fb_result rc = fb_outputs_end(code == 0 || code == 1 ? FB_OK : FB_ERR_INTERNAL);
     if (rc && (code == 0 || code == 1)) code = finish(rc);
+    if (g_summary && code == 0) { /* --json: the summary, now that the outputs are in place */
+        const char *paths[FB_MAX_OUTPUTS], *whats[FB_MAX_OUTPUTS];
+        uint64_t bytes[FB_MAX_OUTPUTS];
+        int n = fb_outputs_written(paths, whats, bytes, FB_MAX_OUTPUTS);
+        json_t *outs = json_array();
+        for (int i = 0; i < n; i++)
+            json_array_append_new(
+                outs, json_pack("{sssssI}", "path", paths[i], "what", whats[i], "bytes", (json_int_t)bytes[i]));
+        json_object_set_new(g_summary, "outputs", outs);
+        char *text = fb_json_dumps(g_summary, 0);
+        if (text) printf("%s\n", text);
+        free(text);
+    }
+    json_decref(g_summary);
     free_args();
     return code;
 }
@@ -859,8 +1005,14 @@ static int run_command(int argc, char **argv)
     const fb_gen_class *gen = fb_gen_find(cmd);
     if (gen && gen->synopsis) return cmd_generator(gen->name, argc - 2, argv + 2);
     if (!strcmp(cmd, "tonemap")) {
-        bool quiet = false;
-        fb_result rc = fb_tonemap_main(argc - 2, argv + 2, &quiet);
+        bool quiet = false, json = false, help = false;
+        for (int i = 2; i < argc; i++) help = help || !strcmp(argv[i], "--help");
+        double t0 = fb_now();
+        fb_result rc = fb_tonemap_main(argc - 2, argv + 2, &quiet, &json);
+        if (!rc && json && !help)
+            json_object_set_new(summary_start("tonemap"), "seconds", json_real(fb_now() - t0));
+        else if (!rc && !quiet && !help)
+            fprintf(stderr, "fractalbake: tone-mapped in %.2f s\n", fb_now() - t0);
         return finish(rc);
     }
     if (!strcmp(cmd, "compare")) return cmd_compare(argc - 2, argv + 2);

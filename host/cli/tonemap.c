@@ -60,7 +60,7 @@ static fb_result apply_flags(json_t *lj, int argc, char **argv)
     return FB_OK;
 }
 
-fb_result fb_tonemap_main(int argc, char **argv, bool *quiet)
+fb_result fb_tonemap_main(int argc, char **argv, bool *quiet, bool *json)
 {
     const char *in = NULL, *out = NULL, *layer = NULL;
     char **flags = calloc((size_t)argc + 1, sizeof *flags);
@@ -75,12 +75,15 @@ fb_result fb_tonemap_main(int argc, char **argv, bool *quiet)
             i++;
         } else if (!strcmp(a, "--quiet")) {
             *quiet = true;
+        } else if (!strcmp(a, "--json")) {
+            *json = true;
         } else if (!strcmp(a, "--help")) {
             printf("usage: fractalbake tonemap IN.exr -o OUT.exr [--layer NAME] [--brightness B] [--gamma G]\n"
                    "          [--gamma-threshold T] [--vibrancy V] [--highlight-power P] [--palette NAME |\n"
                    "          --cosine ... | --stops ...]\n"
                    "Recomputes R, G, B, A of an ifs layer from its stored density and colour channels with new\n"
-                   "tone parameters (the others keep their stored values). No chaos game is run.\n");
+                   "tone parameters (the others keep their stored values). No chaos game is run.\n"
+                   "--quiet: no summary line; --json: a JSON summary on standard output.\n");
             free(flags);
             return FB_OK;
         } else if (!strncmp(a, "--", 2)) {

@@ -6,7 +6,7 @@
 
 #include <stdbool.h>
 
-/* Runs the command; *quiet is set when --quiet was given. */
-fb_result fb_tonemap_main(int argc, char **argv, bool *quiet);
+/* Runs the command; *quiet and *json are set when --quiet and --json were given. */
+fb_result fb_tonemap_main(int argc, char **argv, bool *quiet, bool *json);
 
 #endif

@@ -5,6 +5,7 @@
 
 #include "output.h"
 #include "preview.h"
+#include "heightmap.h"
 #include "progress.h"
 
 #include <math.h>
@@ -43,6 +44,8 @@ typedef struct native_task {
     const fb_gen *gen;
     int y0, n, rows_per_task;
     void *const *planes;
+    fb_progress *prog; /* pixels done, counted per layer: each task adds its rows x `cols` */
+    int cols;
 } native_task;
 
 static void native_task_fn(void *ctx, int t)
@@ -55,6 +58,7 @@ static void native_task_fn(void *ctx, int t)
     for (int k = 0; k < fb_gen_nplanes(nt->gen); k++)
         planes[k] = nt->planes[k] ? (uint8_t *)nt->planes[k] + (size_t)r0 * row_bytes : NULL;
     nt->gen->native_rows(nt->gen, nt->y0 + r0, r1 - r0, planes);
+    if (nt->prog) fb_progress_add(nt->prog, (uint64_t)(r1 - r0) * (uint64_t)nt->cols);
 }
 
 static fb_result run_init(fb_engine *e, layer_run *lr, int strip_rows)
@@ -163,7 +167,8 @@ static void strip_task(void *ctx, int task)
  * returns at once: the caller writes the strip before while the workers compute this one, then
  * fb_pool_wait. Every engine has a pool (engine.c): native layers and the host side of the others
  * use it. */
-static void strip_start(fb_engine *e, layer_run *runs, int nlayers, strip_job *j, int slot, int y0, int n)
+static void strip_start(fb_engine *e, layer_run *runs, int nlayers, strip_job *j, int slot, int y0, int n,
+                        fb_progress *prog, int cols)
 {
     int threads = fb_pool_threads(e->pool);
     int per = (n + 4 * threads - 1) / (4 * threads);
@@ -172,8 +177,13 @@ static void strip_start(fb_engine *e, layer_run *runs, int nlayers, strip_job *j
     j->first[0] = 0;
     for (int i = 0; i < nlayers; i++) {
         if (!run_on_pool(&runs[i].e, &runs[i])) continue;
-        j->t[j->n] =
-            (native_task){.gen = &runs[i].gen, .y0 = y0, .n = n, .rows_per_task = per, .planes = runs[i].planes[slot]};
+        j->t[j->n] = (native_task){.gen = &runs[i].gen,
+                                   .y0 = y0,
+                                   .n = n,
+                                   .rows_per_task = per,
+                                   .planes = runs[i].planes[slot],
+                                   .prog = prog,
+                                   .cols = cols};
         j->first[j->n + 1] = j->first[j->n] + (n + per - 1) / per;
         j->n++;
     }
@@ -184,8 +194,10 @@ static void strip_start(fb_engine *e, layer_run *runs, int nlayers, strip_job *j
 
 /* One layer's preview: its colour (3 channels from `first`) or scalar channel, and its coverage. */
 typedef struct previews {
-    int n;     /* 1: one layer shown alone; more: the over composite of every layer */
+    int n;     /* 1: one layer shown alone; more: the over composite of every layer, or the sheet */
     bool over; /* composite (also with a single layer, when asked for by name "over") */
+    bool all;  /* a contact sheet: every layer a tile of its own, labelled */
+    char labels[FB_MAX_LAYERS][96];
     fb_preview *p[FB_MAX_LAYERS];
     int layer[FB_MAX_LAYERS], first[FB_MAX_LAYERS], alpha[FB_MAX_LAYERS]; /* channel indices; alpha -1: none */
     int offset[FB_MAX_LAYERS]; /* the layer's first plane among all planes of a strip */
@@ -204,33 +216,38 @@ static int alpha_channel(const fb_gen *g)
 }
 
 static fb_result previews_create(const fb_scene *s, const layer_run *runs, const char *which, const int region[4],
-                                 previews *pv)
+                                 previews *pv, char *note, size_t note_size)
 {
     int only = 0;
+    pv->all = which && !strcmp(which, "all");
     pv->over = which ? !strcmp(which, "over") : s->nlayers > 1;
-    if (which && !pv->over) {
+    if (which && !pv->over && !pv->all) {
         only = -1;
         for (int i = 0; i < s->nlayers; i++)
             if (!strcmp(s->layers[i].name, which)) only = i;
         if (only < 0) {
             char names[FB_MAX_LAYERS * 66];
             fb_scene_layer_names(s, names, sizeof names);
-            return fb_fail(FB_ERR_USAGE, "--preview-layer: no layer named \"%s\" (layers: %s; or \"over\")", which,
-                           names);
+            return fb_fail(FB_ERR_USAGE, "--preview-layer: no layer named \"%s\" (layers: %s; or \"over\" or \"all\")",
+                           which, names);
         }
     }
     int at = 0;
     for (int i = 0; i < s->nlayers; i++) {
         const fb_gen *g = &runs[i].gen;
         /* op layers are data (masks, sums): shown by name, left out of the composite */
-        bool shown = pv->over ? !g->host_op || (i == s->nlayers - 1 && pv->n == 0) : i == only;
+        bool shown = pv->all ? true : pv->over ? !g->host_op || (i == s->nlayers - 1 && pv->n == 0) : i == only;
         if (shown) {
-            int k = pv->n++;
+            int k = pv->n++, cols = 1;
+            while (cols * cols < s->nlayers) cols++;
             pv->layer[k] = i;
             pv->offset[k] = at;
             pv->first[k] = g->preview_rgb >= 0 ? g->preview_rgb : g->preview_channel;
             pv->alpha[k] = pv->over ? alpha_channel(g) : -1;
-            fb_result rc = fb_preview_create_alpha(region[2], region[3], 2048, g->preview_rgb >= 0 ? 3 : 1,
+            snprintf(pv->labels[k], sizeof pv->labels[k], "%s (%s)", s->layers[i].name, s->layers[i].cls->name);
+            /* a sheet's tiles share about 2048 pixels across */
+            int side = pv->all ? (2048 / cols > 256 ? 2048 / cols : 256) : 2048;
+            fb_result rc = fb_preview_create_alpha(region[2], region[3], side, g->preview_rgb >= 0 ? 3 : 1,
                                                    pv->alpha[k] >= 0, &pv->p[k]);
             if (rc) return rc;
             fb_preview_set_row_stride(pv->p[k], s->width);
@@ -242,6 +259,40 @@ static fb_result previews_create(const fb_scene *s, const layer_run *runs, const
     }
     pv->width = region[2];
     pv->stride = s->width;
+    /* One line for the user: what the picture shows, and what it leaves out. */
+    char list[FB_MAX_LAYERS * 70] = "", left[FB_MAX_LAYERS * 70] = "", hid[FB_MAX_LAYERS * 140] = "";
+    for (int k = 0; k < pv->n; k++)
+        snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s",
+                 !k              ? ""
+                 : k < pv->n - 1 ? ", "
+                                 : " and ",
+                 s->layers[pv->layer[k]].name);
+    if (pv->all) {
+        snprintf(note, note_size, "a contact sheet of every layer (%s)", list);
+    } else if (!pv->over) {
+        snprintf(note, note_size, "layer %s alone", list);
+    } else {
+        for (int i = 0; i < s->nlayers; i++) {
+            bool drawn = false;
+            for (int k = 0; k < pv->n; k++) drawn = drawn || pv->layer[k] == i;
+            if (!drawn)
+                snprintf(left + strlen(left), sizeof left - strlen(left), "%s%s", left[0] ? ", " : "",
+                         s->layers[i].name);
+        }
+        for (int k = pv->n - 1; k > 0; k--) /* the frontmost opaque layer hides every layer behind it */
+            if (pv->alpha[k] < 0) {
+                char behind[FB_MAX_LAYERS * 70] = "";
+                for (int j = 0; j < k; j++)
+                    snprintf(behind + strlen(behind), sizeof behind - strlen(behind), "%s%s", j ? ", " : "",
+                             s->layers[pv->layer[j]].name);
+                snprintf(hid, sizeof hid, "; %s has no coverage (A) and hides %s", s->layers[pv->layer[k]].name,
+                         behind);
+                break;
+            }
+        snprintf(note, note_size, "%s composited back to front by their coverage%s%s%s%s", list, hid,
+                 left[0] ? "; op layers not drawn: " : "", left,
+                 pv->n > 1 || left[0] ? " (--preview-layer NAME shows one, all a sheet of every layer)" : "");
+    }
     return FB_OK;
 }
 
@@ -271,6 +322,11 @@ static fb_result previews_add(previews *pv, const layer_run *runs, int y0, int n
 
 static fb_result previews_write(const previews *pv, const char *path)
 {
+    if (pv->all) {
+        const char *labels[FB_MAX_LAYERS];
+        for (int k = 0; k < pv->n; k++) labels[k] = pv->labels[k];
+        return fb_preview_write_sheet((const fb_preview *const *)pv->p, labels, pv->n, path);
+    }
     if (pv->over) return fb_preview_write_over((const fb_preview *const *)pv->p, pv->n, path);
     return fb_preview_write_png(pv->p[0], path, "preview");
 }
@@ -335,6 +391,11 @@ static fb_result plan_memory(const fb_engine *e, const fb_bake_desc *d, const la
     for (int i = 0; i < s->nlayers; i++) {
         const fb_gen *g = &runs[i].gen;
         uint64_t hold = 0, peak = g->memory ? g->memory(g, &runs[i].e, &hold) : 0;
+        if (s->layers[i].heightmap[0]) { /* its heights, kept for the heightmap written at the end */
+            int rh = d->region[2] > 0 ? d->region[3] : s->height;
+            uint64_t hm = (uint64_t)rw * rh * 4;
+            hold += hm, peak += hm;
+        }
         bool gpu = run_on_gpu(&runs[i].e, &runs[i]);
         uint64_t planes = 0;
         for (int c = 0; c < fb_gen_nplanes(g); c++) planes += fb_gen_plane_stored(g, c);
@@ -405,20 +466,103 @@ static void ran_on(const fb_engine *e, const layer_run *runs, const fb_scene *s,
     }
 }
 
-static int auto_strip_rows(const fb_scene *s)
+static int auto_strip_rows(const fb_scene *s, int height)
 {
     /* About 4 MiB per channel buffer: well inside lavapipe's 128 MiB maxStorageBufferRange and small
      * enough that the writer's queue keeps memory bounded at any image size. */
     long rows = (1L << 20) / s->width;
     if (rows >= 64) rows -= rows % 64;
+    /* and at least 32 strips (of 16 rows or more): a strip is what a GPU layer's progress can see */
+    long part = (height + 31) / 32;
+    part = part < 16 ? 16 : (part + 15) / 16 * 16;
+    if (rows > part) rows = part;
     if (rows < 1) rows = 1;
-    if (rows > s->height) rows = s->height;
+    if (rows > height) rows = height;
     return (int)rows;
+}
+
+/* ---- heightmaps: a layer's Y channel kept whole, written at the end ----------------------------- */
+
+typedef struct heightmaps {
+    float *z[FB_MAX_LAYERS];  /* region width x height, or NULL */
+    int plane[FB_MAX_LAYERS]; /* the Y channel among all planes of a strip */
+} heightmaps;
+
+static fb_result heightmaps_create(const fb_scene *s, const layer_run *runs, const int *offset, int rw, int rh,
+                                   heightmaps *hm)
+{
+    for (int i = 0; i < s->nlayers; i++) {
+        if (!s->layers[i].heightmap[0]) continue;
+        int c = fb_gen_channel_of(&runs[i].gen, "Y", s->layers[i].name, "heightmap");
+        if (!ALWAYS(c >= 0)) return FB_ERR_INTERNAL;
+        hm->plane[i] = offset[i] + c;
+        if (!(hm->z[i] = fb_malloc_large((size_t)rw * rh * sizeof(float))))
+            return fb_fail(FB_ERR_NOMEM, "layer %s: out of memory for its heightmap", s->layers[i].name);
+    }
+    return FB_OK;
+}
+
+static void heightmaps_add(const fb_scene *s, heightmaps *hm, const void *const *planes, int y0, int n, int rw)
+{
+    for (int i = 0; i < s->nlayers; i++)
+        if (hm->z[i])
+            for (int r = 0; r < n; r++)
+                memcpy(hm->z[i] + (size_t)(y0 + r) * rw, (const float *)planes[hm->plane[i]] + (size_t)r * s->width,
+                       (size_t)rw * sizeof(float));
+}
+
+static fb_result heightmaps_write(const fb_scene *s, const layer_run *runs, heightmaps *hm, const int region[4],
+                                  fb_bake_stats *stats)
+{
+    fb_result rc = FB_OK;
+    for (int i = 0; i < s->nlayers && !rc; i++) {
+        const fb_layer *L = &s->layers[i];
+        if (!hm->z[i]) continue;
+        size_t n = (size_t)region[2] * region[3];
+        double lo = L->heightmap_range[0], hi = L->heightmap_range[1];
+        if (!L->heightmap_range_set) {
+            lo = INFINITY, hi = -INFINITY;
+            for (size_t k = 0; k < n; k++)
+                lo = hm->z[i][k] < lo ? hm->z[i][k] : lo, hi = hm->z[i][k] > hi ? hm->z[i][k] : hi;
+            if (!(hi > lo)) hi = lo + 1; /* a flat image: every height stored as 0 */
+        }
+        const fb_gen *g = &runs[i].gen;
+        double world[4] = {0, 1, 0, 1};
+        if (g->has_world) { /* the region's part of the layer's frame */
+            double sx = (g->world[1] - g->world[0]) / s->width, sy = (g->world[3] - g->world[2]) / s->height;
+            world[0] = g->world[0] + region[0] * sx, world[1] = world[0] + region[2] * sx;
+            world[3] = g->world[3] - region[1] * sy, world[2] = world[3] - region[3] * sy;
+        }
+        fb_log_context("layer %s", L->name);
+        rc = fb_heightmap_write(&(fb_heightmap_desc){.path = L->heightmap,
+                                                     .width = region[2],
+                                                     .height = region[3],
+                                                     .z = hm->z[i],
+                                                     .lo = lo,
+                                                     .hi = hi,
+                                                     .world = world,
+                                                     .epsg = g->epsg});
+        if (!rc && stats && stats->nheightmaps < FB_MAX_LAYERS) {
+            fb_bake_heightmap *h = &stats->heightmaps[stats->nheightmaps++];
+            h->layer = L->name, h->path = L->heightmap, h->lo = lo, h->hi = hi;
+            fb_heightmap_format f = FB_HEIGHTMAP_PNG16;
+            fb_heightmap_format_of(L->heightmap, &f);
+            h->format = (int)f;
+        }
+    }
+    return rc;
+}
+
+static void heightmaps_free(const fb_scene *s, heightmaps *hm)
+{
+    for (int i = 0; i < s->nlayers; i++) free(hm->z[i]);
+    memset(hm, 0, sizeof *hm);
 }
 
 fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
 {
-    if (stats) stats->ran_on[0] = 0;
+    if (stats) stats->ran_on[0] = stats->preview[0] = 0, stats->nheightmaps = 0;
+    heightmaps hm = {0};
     const fb_scene *s = d->scene;
     fb_result rc = FB_OK;
     layer_run *runs = calloc((size_t)s->nlayers, sizeof *runs);
@@ -449,7 +593,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         }
     }
     int region[4] = {rx, ry, rw, rh};
-    int strip = d->strip_rows > 0 ? d->strip_rows : auto_strip_rows(s);
+    int strip = d->strip_rows > 0 ? d->strip_rows : auto_strip_rows(s, rh);
     if (strip > rh) strip = rh;
     if (e->kind == FB_BACKEND_VULKAN && (uint64_t)strip * s->width * 4 > vkc_info(e->vk)->max_storage_buffer_range) {
         strip = (int)(vkc_info(e->vk)->max_storage_buffer_range / ((uint64_t)s->width * 4));
@@ -485,6 +629,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     for (int i = 0, at = 0; i < s->nlayers; at += runs[i].gen.nchannels, i++) offset[i] = at, gens[i] = &runs[i].gen;
     for (int i = 0; i < s->nlayers && !rc; i++)
         if (runs[i].gen.resolve) rc = runs[i].gen.resolve(&runs[i].gen, gens, offset);
+    if (!rc) rc = heightmaps_create(s, runs, offset, rw, rh, &hm);
     /* Layers computed as a whole (the chaos game) run before the first strip. */
     for (int j = 0; j < s->nlayers && !rc; j++) { /* in dependency order: a macro's source first */
         int i = s->order[j];
@@ -506,7 +651,10 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     for (int i = 0; i < s->nlayers && nvk > 0 && nvk < s->nlayers; i++) /* only where they differ */
         snprintf(per_layer + strlen(per_layer), sizeof per_layer - strlen(per_layer), "%s%s=%s", i ? ";" : "",
                  s->layers[i].name, fb_backend_name(runs[i].e.kind));
-    if (stats) ran_on(e, runs, s, stats->ran_on, sizeof stats->ran_on);
+    if (stats) {
+        ran_on(e, runs, s, stats->ran_on, sizeof stats->ran_on);
+        for (int i = 0; i < s->nlayers; i++) stats->layer_backend[i] = runs[i].e.kind;
+    }
     if (d->out) {
         char seed[16], reg[64];
         snprintf(seed, sizeof seed, "%u", s->seed);
@@ -555,10 +703,14 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
                                  &w);
         if (rc) goto out;
     }
-    if (d->preview && (rc = previews_create(s, runs, d->preview_layer, region, &pv))) goto out;
+    if (d->preview && (rc = previews_create(s, runs, d->preview_layer, region, &pv, stats ? stats->preview : NULL,
+                                            stats ? sizeof stats->preview : 0)))
+        goto out;
 
     fb_progress prog;
     fb_progress_init(&prog, d->progress, "bake", "pix");
+    fb_progress_update(&prog, 0, (uint64_t)rh * rw * (uint64_t)s->nlayers); /* pixels of each layer */
+    fb_progress_set_scale(&prog, s->nlayers);
     int nstrips = (rh + strip - 1) / strip;
     bool gpu_path = e->kind == FB_BACKEND_VULKAN;
     strip_job job;
@@ -566,7 +718,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         fb_log_context("layer %s, rows %d-%d", s->layers[i].name, ry, ry + (strip < rh ? strip : rh) - 1);
         rc = run_submit(&runs[i].e, &runs[i], 0, ry, strip < rh ? strip : rh);
     }
-    if (!rc) strip_start(e, runs, s->nlayers, &job, 0, ry, strip < rh ? strip : rh);
+    if (!rc) strip_start(e, runs, s->nlayers, &job, 0, ry, strip < rh ? strip : rh, &prog, rw);
     for (int k = 0; k < nstrips && !rc; k++) {
         int y0 = ry + k * strip, n = y0 + strip <= ry + rh ? strip : ry + rh - y0;
         /* Start the next strip before consuming this one, so the device and the pool work while
@@ -578,13 +730,14 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
                 fb_log_context("layer %s, rows %d-%d", s->layers[i].name, y1, y1 + n1 - 1);
                 rc = run_submit(&runs[i].e, &runs[i], (k + 1) % SLOTS, y1, n1);
             }
-            if (!rc) strip_start(e, runs, s->nlayers, &job, (k + 1) % SLOTS, y1, n1);
+            if (!rc) strip_start(e, runs, s->nlayers, &job, (k + 1) % SLOTS, y1, n1, &prog, rw);
         }
         const void *planes[FB_MAX_LAYERS * FB_GEN_MAX_CHANNELS];
         int at = 0;
         for (int i = 0; i < s->nlayers && !rc; i++) {
             fb_log_context("layer %s, rows %d-%d", s->layers[i].name, y0, y0 + n - 1);
             if (!runs[i].gen.host_op) rc = run_collect(&runs[i].e, &runs[i], k % SLOTS, planes + at, &gpu);
+            if (!rc && run_on_gpu(&runs[i].e, &runs[i])) fb_progress_add(&prog, (uint64_t)n * rw);
             at += runs[i].gen.nchannels;
         }
         for (int j = 0; j < s->nlayers && !rc; j++) { /* op layers, after the layers they use */
@@ -592,15 +745,16 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
             if (!lr->gen.host_op) continue;
             lr->gen.host_rows(&lr->gen, (size_t)n * s->width, planes, lr->planes[0][0]);
             planes[offset[s->order[j]]] = lr->planes[0][0];
+            fb_progress_add(&prog, (uint64_t)n * rw);
         }
         if (rc) break;
         for (int c = 0; c < at; c++) planes[c] = (const uint8_t *)planes[c] + (size_t)rx * 4; /* the region's columns */
         rc = check_finite(runs, s->nlayers, planes, y0, n, rx, rw, s->width);
+        if (!rc) heightmaps_add(s, &hm, planes, y0 - ry, n, rw);
         if (!rc && d->preview) rc = previews_add(&pv, runs, y0 - ry, n, planes);
         fb_log_context("rows %d-%d", y0, y0 + n - 1);
         if (!rc && w) rc = exrio_writer_rows(w, y0 - ry, n, planes);
         fb_log_context(NULL);
-        fb_progress_update(&prog, (uint64_t)(y0 - ry + n) * rw, (uint64_t)rh * rw);
     }
     fb_progress_finish(&prog);
     /* Checked before the file is renamed into place: a validated run that broke a rule is a failure. */
@@ -609,6 +763,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
                      vkc_validation_messages(e->vk));
     if (!rc && w) rc = exrio_writer_finish(&w);
     if (!rc && d->preview) rc = previews_write(&pv, d->preview);
+    if (!rc) rc = heightmaps_write(s, runs, &hm, region, stats);
     for (int i = 0; i < s->nlayers && !rc && d->report; i++)
         if (runs[i].gen.summary[0])
             d->report(runs[i].gen.layer->name, runs[i].gen.summary, runs[i].gen.summary_json, d->user);
@@ -619,6 +774,7 @@ out:
     rc = fb_outputs_end(rc); /* every output renamed into place now, or none */
     for (int k = 0; k < pv.n; k++) fb_preview_destroy(&pv.p[k]);
     free(pv.conv);
+    heightmaps_free(s, &hm);
     for (int i = 0; i < s->nlayers; i++) run_fini(&runs[i].e, &runs[i]);
     free(runs);
     if (stats) {

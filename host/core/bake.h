@@ -47,10 +47,21 @@ typedef struct fb_bake_desc {
     void *user;
 } fb_bake_desc;
 
+/* A heightmap a bake wrote: its layer, file, format and the heights stored as 0 and 65535. */
+typedef struct fb_bake_heightmap {
+    const char *layer, *path; /* the scene's strings */
+    int format;               /* fb_heightmap_format */
+    double lo, hi;
+} fb_bake_heightmap;
+
 typedef struct fb_bake_stats {
     /* where the layers ran: "on llvmpipe (...)", "on native C", or per layer ("with sky on llvmpipe
      * (...), terrain and plants on native C") when --backend auto chose per layer */
     char ran_on[512];
+    fb_backend layer_backend[FB_MAX_LAYERS]; /* where each layer ran: FB_BACKEND_VULKAN or _NATIVE */
+    char preview[1024];                      /* what the preview shows ("" without one) */
+    fb_bake_heightmap heightmaps[FB_MAX_LAYERS];
+    int nheightmaps;
     double seconds;     /* wall time of the whole bake */
     double gpu_seconds; /* sum of dispatch timestamps (vulkan), else -1 */
     uint64_t pixels;

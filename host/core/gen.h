@@ -62,6 +62,9 @@ struct fb_gen {
      * (output.h), which renames them with the EXR when the whole run succeeds. */
     double preview_shade[2]; /* > 0: the preview shows preview_channel as a hillshade (world units per
                                 pixel in x and y) */
+    bool has_world;          /* set by prepare: the image covers world[] = xmin, xmax, ymin, ymax (y up) */
+    double world[4];
+    int epsg;                /* ... in this projected CRS (EPSG code; 0: not stated) */
     char summary[512];       /* set by prepare: one human line about the layer's computation, or "" */
     char summary_json[1024]; /* the same as a JSON object, or "" */
 

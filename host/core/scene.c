@@ -6,6 +6,7 @@
 #include "scene.h"
 
 #include "gen.h"
+#include "heightmap.h"
 #include "jsonout.h"
 #include "schema.h"
 #include "textin.h"
@@ -672,6 +673,42 @@ static fb_result resolve_refs(const fb_vctx *v, fb_scene *s)
     return FB_OK;
 }
 
+/* The keys every height-producing generator shares (heightmap, heightmap-range), read into L; their
+ * types were checked against the generator's table. A GeoTIFF needs world coordinates, which only a
+ * generator with a "crs" key has (terrain). */
+static fb_result parse_heightmap(const fb_vctx *v, const char *path, const json_t *lj, fb_layer *L)
+{
+    char sub[96];
+    const char *hm = json_string_value(json_object_get(lj, "heightmap"));
+    if (hm) {
+        fb_heightmap_format f;
+        snprintf(sub, sizeof sub, "%s.heightmap", path);
+        if (strlen(hm) >= sizeof L->heightmap - 1)
+            return fb_schema_error(v, sub, "file name longer than %zu characters", sizeof L->heightmap - 2);
+        if (!fb_heightmap_format_of(hm, &f))
+            return fb_schema_error(v, sub,
+                                   "\"%s\": the format comes from the extension: .png (16-bit grey), .r16 "
+                                   "(16-bit raw)%s",
+                                   hm, find_key(L->cls->keys, L->cls->nkeys, "crs") ? " or .tif (GeoTIFF)" : "");
+        if (f == FB_HEIGHTMAP_GEOTIFF && !find_key(L->cls->keys, L->cls->nkeys, "crs"))
+            return fb_schema_error(v, sub,
+                                   "\"%s\": a GeoTIFF needs world coordinates, which %s has not (a terrain "
+                                   "layer has): write .png or .r16",
+                                   hm, L->cls->what);
+        snprintf(L->heightmap, sizeof L->heightmap, "%s", hm);
+    }
+    if (json_object_get(lj, "heightmap-range")) {
+        fb_json_vec2(lj, "heightmap-range", L->heightmap_range);
+        L->heightmap_range_set = true;
+        snprintf(sub, sizeof sub, "%s.heightmap-range", path);
+        if (!(L->heightmap_range[0] < L->heightmap_range[1]))
+            return fb_schema_error(v, sub, "expected LO,HI with LO < HI, found %g,%g", L->heightmap_range[0],
+                                   L->heightmap_range[1]);
+        if (!hm) return fb_schema_error(v, sub, "a range for a heightmap, and no \"heightmap\" is written");
+    }
+    return FB_OK;
+}
+
 static fb_result parse_root(const fb_vctx *v, json_t *root, fb_scene *s)
 {
     char path[64];
@@ -712,6 +749,7 @@ static fb_result parse_root(const fb_vctx *v, json_t *root, fb_scene *s)
         if (rc) return rc;
         snprintf(L->name, sizeof L->name, "%s", json_string_value(json_object_get(lj, "name")));
         L->half = fb_json_bool(lj, "half");
+        if ((rc = parse_heightmap(v, path, lj, L))) return rc;
         const json_t *lc = json_object_get(lj, "compression");
         L->compression = lc ? (exrio_compression)exrio_compression_parse(json_string_value(lc)) : s->compression;
         if (lc && !s->multipart) {
@@ -922,7 +960,7 @@ fb_result fb_scene_load_sets(const char *path, const char *const *sets, int nset
         free(text);
         return fb_fail(FB_ERR_INPUT, "%s: scene contains a NUL byte (not a JSON text file)", path);
     }
-    fb_result rc = fb_scene_parse_sets(text, path, sets, nsets, out);
+    fb_result rc = fb_scene_parse_sets(text, strcmp(path, "-") ? path : "(stdin)", sets, nsets, out);
     free(text);
     return rc;
 }
@@ -940,6 +978,7 @@ int fb_scene_outputs(const fb_scene *s, const char **paths, const char **what, i
     for (int i = 0; i < s->nlayers; i++) {
         const fb_layer *l = &s->layers[i];
         if (l->cls && l->cls->outputs) n += l->cls->outputs(l, paths + n, what + n, max - n);
+        if (l->heightmap[0] && n < max) paths[n] = l->heightmap, what[n++] = "heightmap";
     }
     return n;
 }

@@ -38,6 +38,11 @@ typedef struct fb_layer {
     char name[64];
     bool half;                     /* store colour/height as half instead of float */
     exrio_compression compression; /* its part's, when the scene has one part per layer */
+    /* "heightmap" (fbm, terrain, constrain): its Y channel also written as OUT.png / OUT.r16 (16-bit,
+     * normalised to heightmap_range or the image's own range) or OUT.tif (a float GeoTIFF); "" none */
+    char heightmap[1024];
+    bool heightmap_range_set;
+    double heightmap_range[2];
     /* the generator's parameters (its fb_NAME_params, cls->params_size bytes), read with fb_layer_params */
     _Alignas(16) unsigned char params[FB_LAYER_PARAMS_MAX];
 } fb_layer;

@@ -789,6 +789,8 @@ fb_result exrio_open(const char *path, exrio_reader **out)
 {
     fb_result rc = FB_OK;
     FILE *probe = NULL;
+    if (!strcmp(path, "-")) /* OpenEXR reads by offsets: a pipe will not do */
+        return fb_fail(FB_ERR_USAGE, "-: an EXR cannot be read from standard input: give its file");
     if ((rc = fb_input_open(path, "EXR", &probe))) return rc;
     struct stat fst;
     uint64_t file_size = fstat(fileno(probe), &fst) == 0 && S_ISREG(fst.st_mode) ? (uint64_t)fst.st_size : UINT64_MAX;

@@ -10,6 +10,20 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* libpng reports through these, not on stderr: the message goes into the one error line. */
+static _Thread_local char t_png_msg[200];
+
+static void png_error_cb(png_structp png, png_const_charp msg)
+{
+    snprintf(t_png_msg, sizeof t_png_msg, "%s", msg ? msg : "");
+    png_longjmp(png, 1);
+}
+
+static void png_warning_cb(png_structp png, png_const_charp msg)
+{
+    (void)png, (void)msg;
+}
+
 void fb_png_fini(fb_png *png)
 {
     if (!png) return;
@@ -28,7 +42,7 @@ fb_result fb_png_read(const char *path, fb_png *out)
         fclose(f);
         return fb_fail(FB_ERR_INPUT, "%s: not a PNG file (no PNG signature)", path);
     }
-    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, NULL, png_error_cb, png_warning_cb);
     png_infop info = png ? png_create_info_struct(png) : NULL;
     uint8_t *volatile img = NULL; /* volatile: survive libpng's longjmp */
     png_bytep *volatile rows = NULL;
@@ -36,7 +50,7 @@ fb_result fb_png_read(const char *path, fb_png *out)
     if (!png || !info) {
         rc = fb_fail(FB_ERR_NOMEM, "out of memory reading %s", path);
     } else if (setjmp(png_jmpbuf(png))) {
-        rc = fb_fail(FB_ERR_INPUT, "%s: a damaged or truncated PNG file", path);
+        rc = fb_fail(FB_ERR_INPUT, "%s: a damaged or truncated PNG file (%s)", path, t_png_msg);
     } else {
         png_set_user_limits(png, FB_MAX_DIM, FB_MAX_DIM);
         png_init_io(png, f);
@@ -91,22 +105,24 @@ fb_result fb_png_read(const char *path, fb_png *out)
     return rc;
 }
 
-fb_result fb_png_write_grey16(const char *path, const char *what, int width, int height, const uint16_t *pix,
-                              const char *const (*kv)[2], int nkv)
+fb_result fb_png_write(const char *path, const char *what, int width, int height, int channels, int bits,
+                       const void *pix, const char *const (*kv)[2], int nkv)
 {
     FILE *f = NULL;
     fb_result rc = fb_output_fopen(path, what, (void **)&f);
     if (rc) return rc;
-    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+    int bpp = channels * bits / 8;
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, png_error_cb, png_warning_cb);
     png_infop info = png ? png_create_info_struct(png) : NULL;
-    uint8_t *volatile row = malloc((size_t)width * 2);
+    uint8_t *volatile row = malloc((size_t)width * bpp);
     if (!png || !info || !row) {
         rc = fb_fail(FB_ERR_NOMEM, "out of memory writing %s", path);
     } else if (setjmp(png_jmpbuf(png))) {
-        rc = fb_fail(FB_ERR_IO, "%s: cannot write %s", path, what);
+        rc = fb_fail(FB_ERR_IO, "%s: cannot write %s (%s)", path, what, t_png_msg);
     } else {
         png_init_io(png, f);
-        png_set_IHDR(png, info, (png_uint_32)width, (png_uint_32)height, 16, PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE,
+        png_set_IHDR(png, info, (png_uint_32)width, (png_uint_32)height, bits,
+                     channels == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE,
                      PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
         png_text text[8];
         int nt = nkv < 8 ? nkv : 8;
@@ -115,12 +131,15 @@ fb_result fb_png_write_grey16(const char *path, const char *what, int width, int
                 (png_text){.compression = PNG_TEXT_COMPRESSION_NONE, .key = (char *)kv[i][0], .text = (char *)kv[i][1]};
         if (nt) png_set_text(png, info, text, nt);
         png_write_info(png, info);
-        for (int y = 0; y < height; y++) { /* PNG samples are big-endian */
-            for (int x = 0; x < width; x++) {
-                uint16_t v = pix[(size_t)y * width + x];
-                row[2 * x] = (uint8_t)(v >> 8), row[2 * x + 1] = (uint8_t)v;
+        for (int y = 0; y < height; y++) {
+            if (bits == 16) { /* PNG samples are big-endian */
+                const uint16_t *src = (const uint16_t *)pix + (size_t)y * width * channels;
+                for (int x = 0; x < width * channels; x++)
+                    row[2 * x] = (uint8_t)(src[x] >> 8), row[2 * x + 1] = (uint8_t)src[x];
+                png_write_row(png, row);
+            } else {
+                png_write_row(png, (png_const_bytep)pix + (size_t)y * width * bpp);
             }
-            png_write_row(png, row);
         }
         png_write_end(png, NULL);
     }

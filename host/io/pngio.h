@@ -1,6 +1,7 @@
 /*
- * PNG files beside the previews: reading any PNG as float channels (for `compare`), and writing
- * 16-bit grey images (heightmaps). Writing goes through the output transaction (output.h).
+ * PNG files: reading any PNG as float channels (for `compare`), and writing 8- or 16-bit grey or RGB
+ * images (previews, plots, heightmaps), through the output transaction (output.h). libpng's messages
+ * go into the one error line, never to stderr.
  */
 #ifndef FB_PNGIO_H
 #define FB_PNGIO_H
@@ -23,9 +24,10 @@ typedef struct fb_png {
 fb_result fb_png_read(const char *path, fb_png *out);
 void fb_png_fini(fb_png *png);
 
-/* Writes a 16-bit grey PNG of width x height samples (row by row), with tEXt chunks key=value
- * (nkv pairs, may be 0), through the output transaction; `what` names it in messages. */
-fb_result fb_png_write_grey16(const char *path, const char *what, int width, int height, const uint16_t *pix,
-                              const char *const (*kv)[2], int nkv);
+/* Writes a PNG of width x height pixels of 1 (grey) or 3 (RGB) channels at 8 or 16 bits: pix holds
+ * the samples row by row (bytes, or uint16_t in this machine's order), with tEXt chunks key=value
+ * (nkv pairs, may be 0). Through the output transaction (output.h); `what` names it in messages. */
+fb_result fb_png_write(const char *path, const char *what, int width, int height, int channels, int bits,
+                       const void *pix, const char *const (*kv)[2], int nkv);
 
 #endif

@@ -1,8 +1,7 @@
 #include "preview.h"
 
 #include "output.h"
-
-#include <png.h>
+#include "pngio.h"
 
 #include <errno.h>
 #include <math.h>
@@ -122,58 +121,130 @@ static uint8_t srgb8(double v)
 
 static fb_result write_png(const char *path, const char *what, int pw, int ph, int nc, const uint8_t *img);
 
-fb_result fb_preview_write_png(const fb_preview *p, const char *path, const char *what)
+/* The preview as 8-bit samples, nc of them a pixel (the preview's 1 or 3; 3 with `rgb`: grey repeated). */
+static void render(const fb_preview *p, uint8_t *img, bool rgb)
 {
     size_t n = (size_t)p->pw * p->ph;
-    int nc = p->channels - (p->alpha ? 1 : 0);
-    uint8_t *volatile img = malloc(n * nc); /* volatile: survives libpng's longjmp */
-    if (!img) return fb_fail(FB_ERR_NOMEM, "out of memory");
-    if (nc == 3) {
-        for (size_t i = 0; i < n; i++)
-            for (int c = 0; c < 3; c++)
-                img[i * 3 + c] = p->count[i] ? srgb8(p->sum[i * p->channels + c] / p->count[i]) : 0;
-    } else if (p->shade_dx > 0) {
-        for (int y = 0; y < p->ph; y++)
-            for (int x = 0; x < p->pw; x++) img[(size_t)y * p->pw + x] = (uint8_t)lrint(255.0 * hillshade(p, x, y));
-    } else {
-        double lo = INFINITY, hi = -INFINITY;
+    int nc = p->channels - (p->alpha ? 1 : 0), out = rgb ? 3 : nc;
+    double lo = INFINITY, hi = -INFINITY;
+    if (nc == 1 && p->shade_dx <= 0)
         for (size_t i = 0; i < n; i++) {
             if (!p->count[i]) continue;
             double v = p->sum[i * p->channels] / p->count[i];
             lo = v < lo ? v : lo;
             hi = v > hi ? v : hi;
         }
-        double range = hi > lo ? hi - lo : 1.0;
-        for (size_t i = 0; i < n; i++)
-            img[i] = p->count[i] ? (uint8_t)lrint(255.0 * (p->sum[i * p->channels] / p->count[i] - lo) / range) : 0;
-    }
+    double range = hi > lo ? hi - lo : 1.0;
+    for (int y = 0; y < p->ph; y++)
+        for (int x = 0; x < p->pw; x++) {
+            size_t i = (size_t)y * p->pw + x;
+            if (nc == 3) {
+                for (int c = 0; c < 3; c++)
+                    img[i * 3 + c] = p->count[i] ? srgb8(p->sum[i * p->channels + c] / p->count[i]) : 0;
+                continue;
+            }
+            uint8_t g = p->shade_dx > 0 ? (uint8_t)lrint(255.0 * hillshade(p, x, y))
+                        : p->count[i]   ? (uint8_t)lrint(255.0 * (p->sum[i * p->channels] / p->count[i] - lo) / range)
+                                        : 0;
+            for (int c = 0; c < out; c++) img[i * out + c] = g;
+        }
+}
+
+fb_result fb_preview_write_png(const fb_preview *p, const char *path, const char *what)
+{
+    size_t n = (size_t)p->pw * p->ph;
+    int nc = p->channels - (p->alpha ? 1 : 0);
+    uint8_t *img = malloc(n * nc);
+    if (!img) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    render(p, img, false);
     fb_result rc = write_png(path, what, p->pw, p->ph, nc, img);
-    free((void *)img);
+    free(img);
+    return rc;
+}
+
+/* A 5 x 7 pixel font for the contact sheet's labels: capitals (lower case is drawn as upper case),
+ * digits, and the few other characters a label holds. Rows from the top, bit 4 the leftmost pixel. */
+static const struct glyph {
+    char c;
+    uint8_t rows[7];
+} k_font[] = {
+    {'A', {14, 17, 17, 31, 17, 17, 17}}, {'B', {30, 17, 17, 30, 17, 17, 30}}, {'C', {14, 17, 16, 16, 16, 17, 14}},
+    {'D', {30, 17, 17, 17, 17, 17, 30}}, {'E', {31, 16, 16, 30, 16, 16, 31}}, {'F', {31, 16, 16, 30, 16, 16, 16}},
+    {'G', {14, 17, 16, 23, 17, 17, 15}}, {'H', {17, 17, 17, 31, 17, 17, 17}}, {'I', {14, 4, 4, 4, 4, 4, 14}},
+    {'J', {7, 2, 2, 2, 2, 18, 12}},      {'K', {17, 18, 20, 24, 20, 18, 17}}, {'L', {16, 16, 16, 16, 16, 16, 31}},
+    {'M', {17, 27, 21, 21, 17, 17, 17}}, {'N', {17, 17, 25, 21, 19, 17, 17}}, {'O', {14, 17, 17, 17, 17, 17, 14}},
+    {'P', {30, 17, 17, 30, 16, 16, 16}}, {'Q', {14, 17, 17, 17, 21, 18, 13}}, {'R', {30, 17, 17, 30, 20, 18, 17}},
+    {'S', {15, 16, 16, 14, 1, 1, 30}},   {'T', {31, 4, 4, 4, 4, 4, 4}},       {'U', {17, 17, 17, 17, 17, 17, 14}},
+    {'V', {17, 17, 17, 17, 17, 10, 4}},  {'W', {17, 17, 17, 21, 21, 21, 10}}, {'X', {17, 17, 10, 4, 10, 17, 17}},
+    {'Y', {17, 17, 10, 4, 4, 4, 4}},     {'Z', {31, 1, 2, 4, 8, 16, 31}},     {'0', {14, 17, 19, 21, 25, 17, 14}},
+    {'1', {4, 12, 4, 4, 4, 4, 14}},      {'2', {14, 17, 1, 2, 4, 8, 31}},     {'3', {31, 2, 4, 2, 1, 17, 14}},
+    {'4', {2, 6, 10, 18, 31, 2, 2}},     {'5', {31, 16, 30, 1, 1, 17, 14}},   {'6', {6, 8, 16, 30, 17, 17, 14}},
+    {'7', {31, 1, 2, 4, 8, 8, 8}},       {'8', {14, 17, 17, 14, 17, 17, 14}}, {'9', {14, 17, 17, 15, 1, 2, 12}},
+    {'_', {0, 0, 0, 0, 0, 0, 31}},       {'-', {0, 0, 0, 31, 0, 0, 0}},       {' ', {0, 0, 0, 0, 0, 0, 0}},
+    {'(', {2, 4, 8, 8, 8, 4, 2}},        {')', {8, 4, 2, 2, 2, 4, 8}},        {'.', {0, 0, 0, 0, 0, 12, 12}},
+    {'?', {14, 17, 1, 2, 4, 0, 4}},
+};
+
+static const struct glyph *glyph_of(char c)
+{
+    if (c >= 'a' && c <= 'z') c = (char)(c - 'a' + 'A');
+    for (size_t i = 0; i < sizeof k_font / sizeof k_font[0]; i++)
+        if (k_font[i].c == c) return &k_font[i];
+    return glyph_of('?');
+}
+
+/* Draws text at (x0, y0) of an RGB image w pixels wide, each font pixel a scale x scale square. */
+static void draw_text(uint8_t *rgb, int w, int h, int x0, int y0, int scale, const char *text, const uint8_t colour[3])
+{
+    for (int k = 0; text[k]; k++) {
+        const struct glyph *g = glyph_of(text[k]);
+        for (int r = 0; r < 7; r++)
+            for (int c = 0; c < 5; c++) {
+                if (!(g->rows[r] >> (4 - c) & 1)) continue;
+                for (int dy = 0; dy < scale; dy++)
+                    for (int dx = 0; dx < scale; dx++) {
+                        int x = x0 + (k * 6 + c) * scale + dx, y = y0 + r * scale + dy;
+                        if (x >= 0 && x < w && y >= 0 && y < h) memcpy(rgb + ((size_t)y * w + x) * 3, colour, 3);
+                    }
+            }
+    }
+}
+
+fb_result fb_preview_write_sheet(const fb_preview *const *tiles, const char *const *labels, int n, const char *path)
+{
+    const int scale = 2, band = 7 * scale + 8, gap = 8;
+    int cols = 1;
+    while (cols * cols < n) cols++;
+    int rows = (n + cols - 1) / cols, tw = 0, th = 0;
+    for (int k = 0; k < n; k++) {
+        tw = tiles[k]->pw > tw ? tiles[k]->pw : tw;
+        th = tiles[k]->ph > th ? tiles[k]->ph : th;
+    }
+    int w = gap + cols * (tw + gap), h = gap + rows * (band + th + gap);
+    uint8_t *sheet = malloc((size_t)w * h * 3), *tile = malloc((size_t)tw * th * 3);
+    if (!sheet || !tile) {
+        free(sheet), free(tile);
+        return fb_fail(FB_ERR_NOMEM, "out of memory for the preview sheet");
+    }
+    memset(sheet, 24, (size_t)w * h * 3);
+    static const uint8_t ink[3] = {235, 235, 225};
+    for (int k = 0; k < n; k++) {
+        int x0 = gap + (k % cols) * (tw + gap), y0 = gap + (k / cols) * (band + th + gap);
+        draw_text(sheet, w, h, x0, y0 + 3, scale, labels[k], ink);
+        render(tiles[k], tile, true);
+        for (int y = 0; y < tiles[k]->ph; y++)
+            memcpy(sheet + ((size_t)(y0 + band + y) * w + x0) * 3, tile + (size_t)y * tiles[k]->pw * 3,
+                   (size_t)tiles[k]->pw * 3);
+    }
+    fb_result rc = write_png(path, "preview", w, h, 3, sheet);
+    free(sheet);
+    free(tile);
     return rc;
 }
 
 static fb_result write_png(const char *path, const char *what, int pw, int ph, int nc, const uint8_t *img)
 {
-    FILE *f = NULL;
-    fb_result rc = fb_output_fopen(path, what, (void **)&f);
-    if (rc) return rc;
-    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
-    png_infop info = png ? png_create_info_struct(png) : NULL;
-    if (!png || !info) {
-        rc = fb_fail(FB_ERR_NOMEM, "out of memory writing %s", path);
-    } else if (setjmp(png_jmpbuf(png))) {
-        rc = fb_fail(FB_ERR_IO, "%s: cannot write %s", path, what);
-    } else {
-        png_init_io(png, f);
-        png_set_IHDR(png, info, (png_uint_32)pw, (png_uint_32)ph, 8, nc == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_GRAY,
-                     PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-        png_write_info(png, info);
-        for (int y = 0; y < ph; y++) png_write_row(png, img + (size_t)y * pw * nc);
-        png_write_end(png, NULL);
-    }
-    png_destroy_write_struct(png ? &png : NULL, info ? &info : NULL);
-    if (fclose(f) != 0 && !rc) rc = fb_fail(FB_ERR_IO, "%s: cannot write %s: %s", path, what, strerror(errno));
-    return fb_output_done(path, rc); /* renamed with the run's other outputs (output.h) */
+    return fb_png_write(path, what, pw, ph, nc, 8, img, NULL, 0);
 }
 
 /* The range of channel 0 over the pixels that received a value (for grey levels). */

@@ -32,6 +32,10 @@ fb_result fb_preview_write_png(const fb_preview *p, const char *path, const char
  * the alpha, 1 without one. */
 fb_result fb_preview_write_over(const fb_preview *const *layers, int n, const char *path);
 
+/* A contact sheet: each preview a tile of its own (colour, grey or hillshade, as fb_preview_write_png
+ * draws it alone) under its label, in a grid of about as many columns as rows; an RGB PNG. */
+fb_result fb_preview_write_sheet(const fb_preview *const *tiles, const char *const *labels, int n, const char *path);
+
 /* Writes 8-bit RGB pixels (row by row) as a PNG, through the output transaction (output.h); `what`
  * names the output in messages ("plot", "diff picture"). */
 fb_result fb_png_write_rgb(const char *path, const char *what, int width, int height, const uint8_t *rgb);

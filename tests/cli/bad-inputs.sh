@@ -62,6 +62,10 @@ ln -s victim.txt alink.png
 "$FB" fbm $N --size 32x16 -o wide.exr --quiet
 "$FB" render $N --set size=512x256 --points-part 1/2 -o pp1.exr --quiet
 "$FB" render $N --set size=512x256 --points-part 2/2 -o pp2.exr --quiet
+"$FB" fbm $N --size 8x8 -o tiny.exr --quiet
+"$FB" fbm $N --size 16x16 -o small.exr --preview small.png --quiet
+head -c 100 small.png > trunc.png
+rm small.png
 printf 'not an exr at all\n' > text.exr
 : > zero.exr
 head -c 300 small.exr > trunc.exr

@@ -37,6 +37,57 @@ for c in render fbm julia ifs lsystem terrain constrain compare merge tonemap de
   rc=$?
   check "$c --help exits 0 with a usage line" test $rc -eq 0 -a -n "$(grep -i usage h.txt)"
 done
+for c in info devices; do
+  check "$c --help exits 0" "$FB" $c --help > /dev/null
+done
+# standard input and output: `render -` reads the scene, `-o -` writes the EXR, the same bytes
+printf '{"size": [40, 24], "seed": 3, "layers": [{"type": "fbm", "octaves": 4}]}' > in.json
+"$FB" render in.json --backend native -q -o file.exr
+"$FB" render - --backend native -q -o stdin.exr < in.json
+check "render - reads the scene from standard input: the same file" cmp -s file.exr stdin.exr
+"$FB" render in.json --backend native -q -o - > stdout.exr
+check "-o - writes the EXR to standard output: the same bytes" cmp -s file.exr stdout.exr
+"$FB" render - --backend native -q -o - < in.json | cat > piped.exr
+check "render - -o - through pipes: the same bytes" cmp -s file.exr piped.exr
+if command -v script > /dev/null; then
+  script -qc "'$FB' render in.json --backend native -q -o -" /dev/null > tty.txt 2>&1
+  check "-o - to a terminal is refused" grep -q "would go to a terminal" tty.txt
+fi
+# --json: one JSON object on stdout, the same keys everywhere a command writes files
+jq_() { python3 -c "import json,sys; r = json.load(open('$1')); print($2)"; }
+"$FB" fbm $S --backend native -o j.exr --preview j.png --json > j.json
+check "fbm --json: what was written, with sizes" test "$(jq_ j.json "[(o['path'], o['what'], o['bytes'] > 0) for o in r['outputs']]")" =   "[('j.exr', 'output', True), ('j.png', 'preview', True)]"
+check "fbm --json: the layer's backend, the size, the time" test "$(jq_ j.json "r['layers'][0]['backend'], r['size'], r['seconds'] > 0")" =   "native [96, 64] True"
+check "fbm --json: the EXR's size is the file's" test "$(jq_ j.json "r['outputs'][0]['bytes']")" = "$(stat -c %s j.exr)"
+"$FB" render --set size=64x32 --backend auto --json -o jr.exr > jr.json
+check "render --json: every layer's backend" test "$(jq_ jr.json "sorted((l['name'], l['backend'] in ('vulkan', 'native')) for l in r['layers'])")" =   "[('plants', True), ('sky', True), ('terrain', True)]"
+"$FB" merge j.exr -o jm.exr --json > jm.json
+check "merge --json" test "$(jq_ jm.json "r['command'], r['parts'], r['outputs'][0]['path']")" = "merge ['j.exr'] jm.exr"
+"$FB" ifs --size 32x24 --points 1e5 --backend native -q -o jt0.exr
+"$FB" tonemap jt0.exr -o jt.exr --brightness 2 --json > jt.json
+check "tonemap --json" test "$(jq_ jt.json "r['command'], r['outputs'][0]['path']")" = "tonemap jt.exr"
+"$FB" devices --json > jd.json
+check "devices --json: the devices and the chosen one" test "$(jq_ jd.json "len(r['devices']) > 0, r['chosen'] >= 0")" = "True True"
+"$FB" info j.exr --json > ji.json
+check "info --json" test "$(jq_ ji.json "r['size'], r['layers'][0]['layer']")" = "[96, 64] fbm"
+"$FB" compare j.exr j.exr --json > jc.json
+check "compare --json" test "$(jq_ jc.json "r['result']")" = pass
+for c in "info j.exr" "devices" "compare j.exr j.exr" "merge j.exr -o jq.exr" "tonemap jt0.exr -o jq2.exr"; do
+  # shellcheck disable=SC2086
+  "$FB" $c --quiet > /dev/null 2> q.txt
+  check "$c --quiet: accepted, nothing on stderr" test $? -eq 0 -a ! -s q.txt
+done
+# the progress bar on a terminal: redrawn at least 4 times a second (counted here at 2 a second, for a
+# loaded machine) with a rate and the time left
+if command -v script > /dev/null; then
+  start=$EPOCHREALTIME
+  script -qc "'$FB' julia --size 512x256 --samples 16 --max-iter 3000 --backend native --threads 1 -o pb.exr" /dev/null > pb.txt 2>&1
+  el=$(awk -v a="$start" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.2f", b - a }')
+  draws=$(tr '\r' '\n' < pb.txt | grep -c '^bake \[')
+  check "progress: $draws redraws in $el s" awk -v d="$draws" -v e="$el" 'BEGIN { exit !(e < 1.5 || d >= 2 * (e - 1)) }'
+  check "progress: a rate in pix/s and the time left" grep -q 'pix/s .* left' <(tr '\r' '\n' < pb.txt)
+  check "progress: no zero rate" test -z "$(tr '\r' '\n' < pb.txt | grep '^bake \[' | grep ' 0 pix/s')"
+fi
 # the terrain benchmark's JSON lines (rates are measured, not asserted: only their form and sign)
 "$FB" bench --generator terrain --json > bt.json && ok || bad "bench --generator terrain failed"
 grep -q '"generator": "delaunay", "backend": "native".*"unit": "Minserts/s", "rate": [0-9]*\.[0-9]*[1-9]' bt.json && ok || bad "bench: no delaunay line: $(cat bt.json)"

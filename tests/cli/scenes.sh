@@ -23,6 +23,41 @@ cmp -s over.png sky.png && bad "the over composite equals the sky alone" || ok
 "$FB" render $S3 -o c3.exr --preview ter.png --preview-layer terrain && [ "$(od -An -tu1 -j25 -N1 ter.png | tr -d ' ')" = "0" ] && ok || bad "the terrain preview is not a grey hillshade"
 expect_fail 2 'no layer named "moon" (layers: sky, terrain, plants' o.exr -- render $S3 -o o.exr --preview o.png --preview-layer moon
 [ -e o.png ] && bad "a failed preview left o.png" || ok
+# what the preview shows, in one line; --preview-layer all: a contact sheet, a labelled tile per layer
+"$FB" render ${S3% --quiet} -o c4.exr --preview over4.png 2> pv.txt
+check "the preview's line names the composited layers" grep -q "^fractalbake: preview over4.png: sky, terrain and plants composited back to front" pv.txt
+"$FB" render ${S3% --quiet} -o c5.exr --preview sheet.png --preview-layer all 2> pv.txt
+check "the sheet's line" grep -q "^fractalbake: preview sheet.png: a contact sheet of every layer (sky, terrain and plants)" pv.txt
+# three tiles of at most 1024 x 512 (the 128 x 64 region, unscaled) in two columns, each under a 22-pixel label band
+check "the sheet is an RGB PNG of two columns and two rows of tiles" test "$(png_wh sheet.png) $(od -An -tu1 -j25 -N1 sheet.png | tr -d ' ')" = "$((8 + 2 * (128 + 8))) $((8 + 2 * (22 + 64 + 8))) 2"
+python3 - << 'PY' && ok || bad "the sheet's tiles or labels are not where they belong"
+import struct, zlib
+d = open('sheet.png', 'rb').read()
+w, h = struct.unpack('>II', d[16:24])
+idat, i = b'', 8
+while i < len(d):
+    n, kind = struct.unpack('>I4s', d[i:i + 8])
+    if kind == b'IDAT': idat += d[i + 8:i + 8 + n]
+    i += 12 + n
+raw, rows, prev, p = zlib.decompress(idat), [], bytearray(w * 3), 0
+for y in range(h):  # undo the PNG filters (RGB, 8 bits)
+    f, line = raw[p], bytearray(raw[p + 1:p + 1 + w * 3]); p += 1 + w * 3
+    for x in range(w * 3):
+        a = line[x - 3] if x >= 3 else 0; b = prev[x]; c = prev[x - 3] if x >= 3 else 0
+        if f == 1: line[x] = (line[x] + a) & 255
+        elif f == 2: line[x] = (line[x] + b) & 255
+        elif f == 3: line[x] = (line[x] + (a + b) // 2) & 255
+        elif f == 4:
+            pa, pb, pc = abs(b - c), abs(a - c), abs(a + b - 2 * c)
+            line[x] = (line[x] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+    rows.append(line); prev = line
+px = lambda x, y: tuple(rows[y][3 * x:3 * x + 3])
+assert px(2, 2) == (24, 24, 24)                                  # the background
+ink = [px(x, y) for y in range(11, 25) for x in range(8, 8 + 16)]  # "SK" of the first label
+assert (235, 235, 225) in ink, ink[:8]
+assert px(8 + 136 + 64, 8 + 94 + 22 + 60) == (24, 24, 24)       # no fourth tile
+PY
+expect_fail 2 'no layer named "moon" (layers: sky, terrain, plants; or "over" or "all")' o.exr -- render $S3 -o o.exr --preview o.png --preview-layer moon
 # --set: overrides reach the stored scene and the pixels; bad overrides name the --set
 "$FB" render $S3 --set seed=9 --set layers.sky.c=-0.7,0.27 -o set.exr && ok || bad "--set failed"
 "$FB" info set.exr | tr -d ' \n' | grep -q '"c":\[-0.7,0.27\]' && ok || bad "--set c not stored (in shortest form)"

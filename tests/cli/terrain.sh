@@ -37,15 +37,59 @@ expect_fail 2 "nodir/m.ply: cannot create the mesh" o.exr -- $Tr --points pts.cs
 expect_fail 2 "nodir/o.exr: cannot create the output" tm.ply -- $Tr --points pts.csv --mesh tm.ply -o nodir/o.exr
 if "$FB" terrain --size 64x64 --points pts.csv --insert 5000 --mesh tm.ply -o tr.exr --preview tr.png --json > tr.json 2> err.txt; then ok; else bad "terrain failed: $(cat err.txt)"; fi
 valid_exr tr.exr
-grep -q '"input_points": 300, "duplicates": 0, "inserted": 5000' tr.json && ok || bad "terrain --json summary: $(cat tr.json)"
+# --json: one object; the layer's summary within it, the outputs with their sizes
+tsum() { python3 -c "import json; r = json.load(open('tr.json')); s = r['layers'][0]['summary']; print($1)"; }
+[ "$(tsum "s['input_points'], s['duplicates'], s['inserted']")" = "300 0 5000" ] && ok || bad "terrain --json summary: $(cat tr.json)"
+[ "$(tsum "[(o['path'], o['what']) for o in r['outputs']]")" = "[('tr.exr', 'output'), ('tr.png', 'preview'), ('tm.ply', 'mesh')]" ] && ok ||
+  bad "terrain --json outputs: $(tsum "r['outputs']")"
+[ "$(tsum "[o['bytes'] for o in r['outputs'] if o['path'] == 'tm.ply'][0]")" = "$(stat -c %s tm.ply)" ] && ok || bad "--json: the mesh's size"
+[ "$(tsum "r['layers'][0]['backend'], r['command']")" = "native terrain" ] && ok || bad "--json: backend and command"
 "$FB" info tr.exr | grep -q "layer terrain .*Y (float)" && ok || bad "terrain layer channels"
-# the PLY: header counts match the summary, and the size is exact (24 bytes a vertex, 13 a face)
+# the PLY: header counts match the summary, and the size is exact (44 bytes a vertex: x, y, z as
+# double, the normal and u, v as float; 13 a face)
 nv=$(grep -a -m1 "element vertex" tm.ply | awk '{print $3}')
 nf=$(grep -a -m1 "element face" tm.ply | awk '{print $3}')
 hdr=$(grep -a -b -m1 "end_header" tm.ply | cut -d: -f1)
 [ "$nv" = 5300 ] && ok || bad "PLY vertices $nv, wanted 5300"
-[ "$(stat -c %s tm.ply)" = $((hdr + 11 + 24 * nv + 13 * nf)) ] && ok || bad "PLY size does not match its header"
-grep -q "\"triangles\": $nf" tr.json && ok || bad "PLY faces $nf differ from the summary"
+[ "$(stat -c %s tm.ply)" = $((hdr + 11 + 44 * nv + 13 * nf)) ] && ok || bad "PLY size does not match its header"
+# normals and texture coordinates: on a plane z = 0.1 x + 0.2 y + 5 with sigma 0 every inserted point
+# stays on it, so every normal is the plane's, (-0.1, -0.2, 1) / |.|; u, v run 0..1 over the frame
+printf '0 0 5\n100 0 15\n0 50 15\n100 50 25\n30 20 12\n' > plane.xyz
+for fmt in ply obj; do
+  "$FB" terrain --size 32x16 --points plane.xyz --insert 500 --sigma 0 --mesh plane.$fmt -o plane.exr --quiet
+  python3 - plane.$fmt << 'PY' && ok || bad "mesh normals or texture coordinates ($fmt)"
+import math, struct, sys
+path = sys.argv[1]
+want = [c / math.sqrt(0.01 + 0.04 + 1) for c in (-0.1, -0.2, 1)]
+verts = []
+if path.endswith('.ply'):
+    d = open(path, 'rb').read()
+    head = d[:d.index(b'end_header\n') + 11].decode()
+    assert 'property float nx' in head and 'property float u' in head, head
+    nv = int(head.split('element vertex ')[1].split()[0])
+    for i in range(nv):
+        x, y, z, nx, ny, nz, u, v = struct.unpack('<3d5f', d[len(head) + 44 * i:len(head) + 44 * (i + 1)])
+        verts.append((x, y, z, (nx, ny, nz), u, v))
+else:
+    vs, vn, vt = [], [], []
+    for line in open(path):
+        w = line.split()
+        if not w: continue
+        if w[0] == 'v': vs.append(tuple(map(float, w[1:4])))
+        elif w[0] == 'vn': vn.append(tuple(map(float, w[1:4])))
+        elif w[0] == 'vt': vt.append(tuple(map(float, w[1:3])))
+        elif w[0] == 'f': assert all(len(c.split('/')) == 3 for c in w[1:]), line
+    assert len(vs) == len(vn) == len(vt) == 505, (len(vs), len(vn), len(vt))
+    verts = [(p[0], p[1], p[2], n, t[0], t[1]) for p, n, t in zip(vs, vn, vt)]
+assert len(verts) == 505
+for x, y, z, n, u, v in verts:
+    assert abs(z - (0.1 * x + 0.2 * y + 5)) < 1e-9, (x, y, z)
+    assert all(abs(a - b) < 1e-6 for a, b in zip(n, want)), (n, want)
+    assert abs(u - x / 100) < 1e-6 and abs(v - y / 50) < 1e-6, (x, y, u, v)
+assert min(t[4] for t in verts) == 0 and max(t[4] for t in verts) == 1
+PY
+done
+[ "$(tsum "s['triangles']")" = "$nf" ] && ok || bad "PLY faces $nf differ from the summary"
 # determinism: threads, strip rows, backend; the seed changes the terrain
 "$FB" $Tr --points pts.csv --insert 5000 --backend native --threads 1 --strip-rows 3 -o tn1.exr
 "$FB" $Tr --points pts.csv --insert 5000 --backend native --threads 2 --strip-rows 64 -o tn2.exr

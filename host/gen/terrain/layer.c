@@ -45,6 +45,13 @@ static const fb_keyspec terrain_keys[] = {
     {"bounds", FB_K_BOUNDS, -1e15, 1e15, false, NULL, "\"auto\"",
      "area rasterised: \"auto\" (the points' bounding box) or [xmin, xmax, ymin, ymax]"},
     {"mesh", FB_K_OUTPUT, 0, 0, false, NULL, NULL, "also write the refined mesh: OUT.ply (binary) or OUT.obj"},
+    {"heightmap", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
+     "also write the heights for engines: OUT.png (16-bit grey) or OUT.r16 (16-bit raw, little-endian), or OUT.tif "
+     "(float GeoTIFF with the geotransform)"},
+    {"heightmap-range", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL,
+     "heights stored as 0 and 65535 in a 16-bit heightmap (LO,HI; default: the image's lowest and highest)"},
+    {"crs", FB_K_STRING, 0, 0, false, NULL, NULL,
+     "the points' projected CRS, EPSG:N (a GeoTIFF heightmap records it; default: not stated)"},
     {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store Y as half (flags: --half, --float)"},
     {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
@@ -105,6 +112,25 @@ static fb_result parse_terrain(const fb_vctx *v, const char *path, json_t *obj, 
     if (too_long) {
         snprintf(sub, sizeof sub, "%s.%s", path, too_long);
         return fb_schema_error(v, sub, "file name longer than %zu characters", sizeof t->mesh - 2);
+    }
+    const char *crs = json_string_value(json_object_get(obj, "crs"));
+    if (crs) {
+        /* EPSG's geographic 2D systems (degrees: 4326 and its kind) are codes 4000 to 4999; the
+         * refinement needs x, y in the units of z (a projected system, in metres) */
+        unsigned code = 0;
+        int used = 0;
+        snprintf(sub, sizeof sub, "%s.crs", path);
+        if (sscanf(crs, "EPSG:%u%n", &code, &used) != 1 || crs[used] || code < 1024 || code > 32766)
+            return fb_schema_error(v, sub,
+                                   "expected EPSG:N, a projected coordinate system's code (EPSG:32633 for "
+                                   "UTM zone 33N), found \"%s\"",
+                                   crs);
+        if (code >= 4000 && code <= 4999)
+            return fb_schema_error(v, sub,
+                                   "%s is a geographic system (degrees): give the points in a projected one "
+                                   "(metres, like their heights), such as a UTM zone",
+                                   crs);
+        t->epsg = (int)code;
     }
     if (t->mesh[0]) {
         const char *dot = strrchr(t->mesh, '.');
@@ -314,9 +340,12 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     }
     g->preview_shade[0] = (s->bounds[1] - s->bounds[0]) / g->scene->width;
     g->preview_shade[1] = (s->bounds[3] - s->bounds[2]) / g->scene->height;
+    memcpy(g->world, s->bounds, sizeof g->world); /* the image's frame, for a GeoTIFF heightmap */
+    g->has_world = true;
+    g->epsg = P->epsg;
     double t0 = fb_now();
     if ((rc = bin_triangles(g))) return rc;
-    if (P->mesh[0] && (rc = fb_terrain_write_mesh(&s->t, P->mesh))) return rc; /* renamed with the EXR */
+    if (P->mesh[0] && (rc = fb_terrain_write_mesh(&s->t, s->bounds, P->mesh))) return rc; /* renamed with the EXR */
     double t_out = fb_now() - t0;
     const fb_terrain_stats *st = &s->st;
     snprintf(g->summary, sizeof g->summary,

@@ -190,30 +190,81 @@ static void put_u32(unsigned char *b, uint32_t v)
     for (int i = 0; i < 4; i++) b[i] = (unsigned char)(v >> (8 * i));
 }
 
-fb_result fb_terrain_write_mesh(const fb_terrain *t, const char *path)
+static void put_f32(unsigned char *b, float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, 4);
+    put_u32(b, u);
+}
+
+/* Per-vertex unit normals: the sum of the cross products of the vertex's triangles (so each weighted
+ * by its area), normalised; (0, 0, 1) for a vertex of no finite triangle. */
+static float *vertex_normals(const fb_terrain *t)
+{
+    const fb_dt *d = &t->dt;
+    double *acc = calloc((size_t)d->nv * 3, sizeof *acc);
+    float *n = malloc((size_t)d->nv * 3 * sizeof *n);
+    if (!acc || !n) {
+        free(acc), free(n);
+        return NULL;
+    }
+    for (uint32_t tr = 0; tr < d->nt; tr++) {
+        if (fb_dt_is_ghost(d, tr)) continue;
+        const uint32_t *v = d->tv + 3 * (size_t)tr;
+        double p[3][3];
+        for (int k = 0; k < 3; k++)
+            p[k][0] = d->xy[2 * (size_t)v[k]], p[k][1] = d->xy[2 * (size_t)v[k] + 1], p[k][2] = t->z[v[k]];
+        double e1[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+        double e2[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+        double c[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        if (c[2] < 0) c[0] = -c[0], c[1] = -c[1], c[2] = -c[2]; /* up, whatever the triangle's order */
+        for (int k = 0; k < 3; k++)
+            for (int j = 0; j < 3; j++) acc[3 * (size_t)v[k] + j] += c[j];
+    }
+    for (uint32_t i = 0; i < d->nv; i++) {
+        double *a = acc + 3 * (size_t)i, len = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+        for (int j = 0; j < 3; j++) n[3 * (size_t)i + j] = len > 0 ? (float)(a[j] / len) : j == 2 ? 1.0f : 0.0f;
+    }
+    free(acc);
+    return n;
+}
+
+fb_result fb_terrain_write_mesh(const fb_terrain *t, const double bounds[4], const char *path)
 {
     const fb_dt *d = &t->dt;
     const char *dot = strrchr(path, '.');
     bool ply = dot && !strcasecmp(dot, ".ply");
+    float *nrm = vertex_normals(t);
+    if (!nrm) return fb_fail(FB_ERR_NOMEM, "out of memory for the mesh's normals");
+    /* texture coordinates: the vertex's place in the image's frame, u right, v up (0 at the bottom
+     * row), so that the baked layers map onto the mesh */
+    const double u0 = bounds[0], us = 1.0 / (bounds[1] - bounds[0]), v0 = bounds[2], vs = 1.0 / (bounds[3] - bounds[2]);
     FILE *f = NULL;
     fb_result rc = fb_output_fopen(path, "mesh", (void **)&f);
-    if (rc) return rc;
+    if (rc) {
+        free(nrm);
+        return rc;
+    }
     if (ply) {
         fprintf(f,
                 "ply\nformat binary_little_endian 1.0\ncomment fractalbake terrain\nelement vertex %u\n"
-                "property double x\nproperty double y\nproperty double z\nelement face %u\n"
+                "property double x\nproperty double y\nproperty double z\nproperty float nx\nproperty float ny\n"
+                "property float nz\nproperty float u\nproperty float v\nelement face %u\n"
                 "property list uchar int vertex_indices\nend_header\n",
                 d->nv, d->nfinite);
         for (uint32_t v = 0; v < d->nv; v++) {
             double xyz[3] = {d->xy[2 * (size_t)v], d->xy[2 * (size_t)v + 1], t->z[v]};
-            unsigned char b[24];
+            unsigned char b[44];
             for (int k = 0; k < 3; k++) {
                 uint64_t u;
                 memcpy(&u, &xyz[k], 8);
                 put_u32(b + 8 * k, (uint32_t)u);
                 put_u32(b + 8 * k + 4, (uint32_t)(u >> 32));
             }
-            fwrite(b, 1, 24, f);
+            for (int k = 0; k < 3; k++) put_f32(b + 24 + 4 * k, nrm[3 * (size_t)v + k]);
+            put_f32(b + 36, (float)((xyz[0] - u0) * us));
+            put_f32(b + 40, (float)((xyz[1] - v0) * vs));
+            fwrite(b, 1, 44, f);
         }
         for (uint32_t tr = 0; tr < d->nt; tr++) {
             if (fb_dt_is_ghost(d, tr)) continue;
@@ -223,15 +274,21 @@ fb_result fb_terrain_write_mesh(const fb_terrain *t, const char *path)
             fwrite(b, 1, 13, f);
         }
     } else {
-        fprintf(f, "# fractalbake terrain: %u vertices, %u triangles\n", d->nv, d->nfinite);
-        for (uint32_t v = 0; v < d->nv; v++)
-            fprintf(f, "v %.17g %.17g %.17g\n", d->xy[2 * (size_t)v], d->xy[2 * (size_t)v + 1], t->z[v]);
+        fprintf(f, "# fractalbake terrain: %u vertices, %u triangles; normals and texture coordinates per vertex\n",
+                d->nv, d->nfinite);
+        for (uint32_t v = 0; v < d->nv; v++) {
+            double x = d->xy[2 * (size_t)v], y = d->xy[2 * (size_t)v + 1];
+            fprintf(f, "v %.17g %.17g %.17g\nvn %.9g %.9g %.9g\nvt %.9g %.9g\n", x, y, t->z[v], nrm[3 * (size_t)v],
+                    nrm[3 * (size_t)v + 1], nrm[3 * (size_t)v + 2], (x - u0) * us, (y - v0) * vs);
+        }
         for (uint32_t tr = 0; tr < d->nt; tr++) {
             if (fb_dt_is_ghost(d, tr)) continue;
             const uint32_t *v = d->tv + 3 * (size_t)tr;
-            fprintf(f, "f %u %u %u\n", v[0] + 1, v[1] + 1, v[2] + 1);
+            fprintf(f, "f %u/%u/%u %u/%u/%u %u/%u/%u\n", v[0] + 1, v[0] + 1, v[0] + 1, v[1] + 1, v[1] + 1, v[1] + 1,
+                    v[2] + 1, v[2] + 1, v[2] + 1);
         }
     }
+    free(nrm);
     bool bad = ferror(f) != 0;
     if (fclose(f) != 0) bad = true;
     if (bad) rc = fb_fail(FB_ERR_IO, "%s: cannot write the mesh: %s", path, strerror(errno));

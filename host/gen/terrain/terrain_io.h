@@ -28,9 +28,12 @@ fb_result fb_terrain_read_heightfield(const char *spec, int step, double **xyz, 
 fb_result fb_terrain_read_centers(const char *path, fb_terrain_center **out, int *n);
 
 /* Writes the finite triangles and all vertices to `path` through the output transaction (output.h:
- * renamed into place with the run's other outputs). The extension picks the format: .ply (binary
- * little endian: vertex x, y, z as double, then faces as uchar-counted int lists) or .obj. */
-fb_result fb_terrain_write_mesh(const fb_terrain *t, const char *path);
+ * renamed into place with the run's other outputs). Each vertex carries its unit normal (the
+ * area-weighted mean of its triangles', pointing up) and texture coordinates u, v: its place in the
+ * image's frame `bounds` (xmin, xmax, ymin, ymax; v = 0 at the bottom). The extension picks the
+ * format: .ply (binary little endian: x, y, z as double, nx, ny, nz, u, v as float, then faces as
+ * uchar-counted int lists) or .obj (v, vn and vt lines, faces v/vt/vn). */
+fb_result fb_terrain_write_mesh(const fb_terrain *t, const double bounds[4], const char *path);
 
 /* True when the extension of `path` is .ply or .obj (case-insensitive). */
 bool fb_terrain_mesh_format_ok(const char *path);

@@ -1,0 +1,145 @@
+#include "heightmap.h"
+
+#include "output.h"
+#include "pngio.h"
+
+#include <geotiff/geotiff.h>
+#include <geotiff/geovalues.h>
+#include <geotiff/xtiffio.h>
+
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <unistd.h>
+
+bool fb_heightmap_format_of(const char *path, fb_heightmap_format *out)
+{
+    const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
+    if (!dot || (slash && dot < slash)) return false;
+    if (!strcasecmp(dot, ".png"))
+        *out = FB_HEIGHTMAP_PNG16;
+    else if (!strcasecmp(dot, ".r16") || !strcasecmp(dot, ".raw"))
+        *out = FB_HEIGHTMAP_RAW16;
+    else if (!strcasecmp(dot, ".tif") || !strcasecmp(dot, ".tiff"))
+        *out = FB_HEIGHTMAP_GEOTIFF;
+    else
+        return false;
+    return true;
+}
+
+static fb_result write_16(const fb_heightmap_desc *d, bool png)
+{
+    size_t n = (size_t)d->width * d->height;
+    uint16_t *q = malloc(n * sizeof *q);
+    if (!q) return fb_fail(FB_ERR_NOMEM, "out of memory for the heightmap");
+    for (size_t i = 0; i < n; i++) q[i] = fb_heightmap_quantise(d->z[i], d->lo, d->hi);
+    fb_result rc;
+    if (png) {
+        char lo[40], hi[40];
+        fb_format_shortest(d->lo, lo, sizeof lo);
+        fb_format_shortest(d->hi, hi, sizeof hi);
+        const char *kv[3][2] = {{"fractalbake/height-min", lo},
+                                {"fractalbake/height-max", hi},
+                                {"Description", "heights: height-min at 0, height-max at 65535, linear between"}};
+        rc = fb_png_write(d->path, "heightmap", d->width, d->height, 1, 16, q, (const char *const(*)[2])kv, 3);
+    } else {
+        FILE *f = NULL;
+        rc = fb_output_fopen(d->path, "heightmap", (void **)&f);
+        if (!rc) {
+            bool bad = false;
+            uint8_t *row = malloc((size_t)d->width * 2);
+            if (!row) rc = fb_fail(FB_ERR_NOMEM, "out of memory for the heightmap");
+            for (int y = 0; y < d->height && !rc && !bad; y++) { /* little-endian, whatever this machine is */
+                for (int x = 0; x < d->width; x++) {
+                    uint16_t v = q[(size_t)y * d->width + x];
+                    row[2 * x] = (uint8_t)v, row[2 * x + 1] = (uint8_t)(v >> 8);
+                }
+                bad = fwrite(row, 2, (size_t)d->width, f) != (size_t)d->width;
+            }
+            free(row);
+            if (fclose(f) != 0) bad = true;
+            if (bad && !rc) rc = fb_fail(FB_ERR_IO, "%s: cannot write the heightmap: %s", d->path, strerror(errno));
+            rc = fb_output_done(d->path, rc);
+        }
+    }
+    free(q);
+    return rc;
+}
+
+/* libtiff reports through handlers: the first error goes into the one error line. */
+static _Thread_local char t_tiff_msg[256];
+
+static void tiff_error(const char *module, const char *fmt, va_list ap)
+{
+    (void)module;
+    if (!t_tiff_msg[0]) vsnprintf(t_tiff_msg, sizeof t_tiff_msg, fmt, ap);
+}
+
+static void tiff_warning(const char *module, const char *fmt, va_list ap)
+{
+    (void)module, (void)fmt, (void)ap;
+}
+
+static fb_result write_geotiff(const fb_heightmap_desc *d)
+{
+    int fd = -1;
+    fb_result rc = fb_output_open(d->path, "heightmap", &fd);
+    if (rc) return rc;
+    t_tiff_msg[0] = 0;
+    TIFFErrorHandler old_e = TIFFSetErrorHandler(tiff_error), old_w = TIFFSetWarningHandler(tiff_warning);
+    TIFF *tif = XTIFFFdOpen(fd, d->path, "w");
+    GTIF *gt = tif ? GTIFNew(tif) : NULL;
+    if (!tif || !gt) {
+        rc = fb_fail(FB_ERR_IO, "%s: cannot write the GeoTIFF: %s", d->path, t_tiff_msg);
+    } else {
+        const int rows = 16;
+        TIFFSetField(tif, TIFFTAG_IMAGEWIDTH, (uint32_t)d->width);
+        TIFFSetField(tif, TIFFTAG_IMAGELENGTH, (uint32_t)d->height);
+        TIFFSetField(tif, TIFFTAG_BITSPERSAMPLE, 32);
+        TIFFSetField(tif, TIFFTAG_SAMPLEFORMAT, SAMPLEFORMAT_IEEEFP);
+        TIFFSetField(tif, TIFFTAG_SAMPLESPERPIXEL, 1);
+        TIFFSetField(tif, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+        TIFFSetField(tif, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+        TIFFSetField(tif, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE);
+        TIFFSetField(tif, TIFFTAG_PREDICTOR, PREDICTOR_FLOATINGPOINT);
+        TIFFSetField(tif, TIFFTAG_ROWSPERSTRIP, (uint32_t)rows);
+        TIFFSetField(tif, TIFFTAG_SOFTWARE, "fractalbake " FB_VERSION);
+        /* the geotransform: pixel corner (0, 0) at (xmin, ymax), pixels (dx, dy) of the world apart */
+        const double *w = d->world;
+        double scale[3] = {(w[1] - w[0]) / d->width, (w[3] - w[2]) / d->height, 0};
+        double tie[6] = {0, 0, 0, w[0], w[3], 0};
+        TIFFSetField(tif, TIFFTAG_GEOPIXELSCALE, 3, scale);
+        TIFFSetField(tif, TIFFTAG_GEOTIEPOINTS, 6, tie);
+        GTIFKeySet(gt, GTModelTypeGeoKey, TYPE_SHORT, 1, ModelTypeProjected);
+        GTIFKeySet(gt, GTRasterTypeGeoKey, TYPE_SHORT, 1, RasterPixelIsArea);
+        GTIFKeySet(gt, ProjectedCSTypeGeoKey, TYPE_SHORT, 1, d->epsg > 0 ? d->epsg : KvUserDefined);
+        if (d->epsg <= 0) GTIFKeySet(gt, GTCitationGeoKey, TYPE_ASCII, 0, "fractalbake terrain: CRS not stated");
+        GTIFWriteKeys(gt);
+        for (int y = 0; y < d->height && !rc; y++)
+            if (TIFFWriteScanline(tif, (void *)(d->z + (size_t)y * d->width), (uint32_t)y, 0) < 0)
+                rc = fb_fail(FB_ERR_IO, "%s: cannot write the GeoTIFF: %s", d->path, t_tiff_msg);
+    }
+    if (gt) GTIFFree(gt);
+    if (tif) {
+        TIFFFlush(tif);
+        if (t_tiff_msg[0] && !rc) rc = fb_fail(FB_ERR_IO, "%s: cannot write the GeoTIFF: %s", d->path, t_tiff_msg);
+        XTIFFClose(tif); /* closes fd */
+    } else {
+        close(fd);
+    }
+    TIFFSetErrorHandler(old_e);
+    TIFFSetWarningHandler(old_w);
+    return fb_output_done(d->path, rc);
+}
+
+fb_result fb_heightmap_write(const fb_heightmap_desc *d)
+{
+    fb_heightmap_format f;
+    if (!fb_heightmap_format_of(d->path, &f))
+        return fb_fail(FB_ERR_USAGE, "%s: a heightmap is .png, .r16 or .tif", d->path);
+    if (f == FB_HEIGHTMAP_GEOTIFF) return write_geotiff(d);
+    return write_16(d, f == FB_HEIGHTMAP_PNG16);
+}

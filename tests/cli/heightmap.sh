@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# Heightmaps for engines and GIS: --heightmap OUT.png|OUT.r16 (16 bits, the range printed and, in the
+# PNG, stored), OUT.tif for a terrain (a float GeoTIFF that GIS tools read: listgeo), and their bad
+# inputs. The round trip within one 16-bit step is tests/test_heightmap.c.
+# Usage: heightmap.sh PATH/TO/fractalbake
+. "$(dirname "$0")/lib.sh"
+cli_init "$@"
+N="--backend native"
+"$FB" fbm $N --size 64x40 -o h.exr --heightmap h.png 2> err.txt
+check "the heightmap's line: its range" grep -q "^fractalbake: heightmap h.png: layer fbm's heights .* (0) to .* (65535), 16-bit grey PNG$" err.txt
+lo=$(sed -n 's/.*heights \(.*\) (0) to.*/\1/p' err.txt)
+hi=$(sed -n 's/.*(0) to \(.*\) (65535).*/\1/p' err.txt)
+python3 - "$lo" "$hi" << 'PY' && ok || bad "the PNG's text chunks do not hold the printed range $lo..$hi"
+import struct, sys, zlib
+d = open('h.png', 'rb').read()
+w, h, bits, ct = struct.unpack('>IIBB', d[16:26])
+assert (w, h, bits, ct) == (64, 40, 16, 0), (w, h, bits, ct)
+text, i = {}, 8
+while i < len(d):
+    n, kind = struct.unpack('>I4s', d[i:i + 8])
+    if kind == b'tEXt':
+        k, v = d[i + 8:i + 8 + n].split(b'\0', 1)
+        text[k.decode()] = v.decode()
+    i += 12 + n
+assert float(text['fractalbake/height-min']) == float(sys.argv[1]), text
+assert float(text['fractalbake/height-max']) == float(sys.argv[2]), text
+PY
+"$FB" fbm $N --size 64x40 -o h.exr --heightmap h.r16 --heightmap-range -1,1 --quiet
+check "RAW: 2 bytes a pixel, nothing else" test "$(stat -c %s h.r16)" = $((2 * 64 * 40))
+"$FB" constrain $N --size 65x65 -o c.exr --heightmap c.png --quiet
+check "constrain writes a heightmap" test -s c.png
+# render: a scene's layer, by its key; --json lists it with its range
+printf '{"size": [48, 32], "layers": [{"type": "fbm", "name": "ground", "heightmap": "g.r16", "heightmap-range": [-2, 2]}]}' > hm.json
+"$FB" render hm.json $N -o g.exr --json > g.json
+check "--json: the heightmap, its format and range" test "$(python3 -c "import json; h = json.load(open('g.json'))['heightmaps'][0]; print(h['layer'], h['path'], h['format'], h['height_at_0'], h['height_at_65535'])")" = \
+  "ground g.r16 16-bit little-endian raw -2.0 2.0"
+check "--json: the heightmap among the outputs" test "$(python3 -c "import json; print([o['bytes'] for o in json.load(open('g.json'))['outputs'] if o['what'] == 'heightmap'])")" = "[3072]"
+# --from does not write the stored scene's heightmap (as with every side output), --set names it back
+"$FB" render --from g.exr -o g2.exr 2> from.txt
+check "--from leaves the heightmap out, saying so" grep -q "not writing the stored scene's outputs (layers.ground.heightmap=g.r16)" from.txt
+# a terrain's GeoTIFF, read by the GeoTIFF library's own tool
+printf 'x,y,z\n500000,4600000,100\n500600,4600000,130\n500000,4600400,90\n500600,4600400,150\n500300,4600200,240\n' > utm.csv
+"$FB" terrain $N --points utm.csv --size 120x80 --insert 2000 --crs EPSG:32633 -o t.exr --heightmap t.tif --quiet
+check "GeoTIFF written" test -s t.tif
+if command -v listgeo > /dev/null; then
+  listgeo t.tif > geo.txt 2>&1
+  check "listgeo: the projected CRS" grep -q "ProjectedCSTypeGeoKey (Short,1): PCS_WGS84_UTM_zone_33N" geo.txt
+  check "listgeo: the tie point at the frame's top-left corner" grep -q "500000  *4600400" geo.txt
+  check "listgeo: 5 m pixels" grep -A1 "ModelPixelScaleTag" geo.txt | grep -q "5  *5"
+fi
+# bad inputs: one line, exit 2, nothing written
+expect_fail 2 '^fractalbake: --heightmap: "h.jpg": the format comes from the extension: .png (16-bit grey), .r16 (16-bit raw)$' o.exr -- fbm $N --size 8x8 -o o.exr --heightmap h.jpg
+expect_fail 2 'a GeoTIFF needs world coordinates, which an fbm layer has not' o.exr -- fbm $N --size 8x8 -o o.exr --heightmap h.tif
+expect_fail 2 'heightmap-range: expected LO,HI with LO < HI, found 2,1' o.exr -- fbm $N --size 8x8 -o o.exr --heightmap h.png --heightmap-range 2,1
+expect_fail 2 'heightmap-range: a range for a heightmap, and no "heightmap" is written' o.exr -- fbm $N --size 8x8 -o o.exr --heightmap-range 0,1
+expect_fail 2 'crs: EPSG:4326 is a geographic system (degrees)' o.exr -- terrain $N --points utm.csv --size 8x8 --crs EPSG:4326 -o o.exr
+expect_fail 2 'crs: expected EPSG:N' o.exr -- terrain $N --points utm.csv --size 8x8 --crs utm33 -o o.exr
+expect_fail 2 'h2.png: named as the preview and as the heightmap' o.exr -- fbm $N --size 8x8 -o o.exr --heightmap h2.png --preview h2.png
+check "no heightmap left by the failures" test ! -e h.jpg -a ! -e h2.png
+cli_finish

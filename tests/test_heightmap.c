@@ -1,0 +1,179 @@
+/*
+ * Heightmaps: the heights a bake writes as a 16-bit PNG or RAW read back within one 16-bit step of the
+ * EXR's Y channel (the range's ends exactly: the lowest height is 0, the highest 65535); an explicit
+ * range clamps beyond it; a region's heightmap is the full one's crop; a terrain's float GeoTIFF holds
+ * the EXR's heights bit for bit, with the geotransform of its frame and the CRS it was given.
+ */
+#include "bake.h"
+#include "exrio.h"
+#include "heightmap.h"
+#include "pngio.h"
+#include "scene.h"
+
+#include "testhelp.h"
+
+#include <geotiff/geotiff.h>
+#include <geotiff/geovalues.h>
+#include <geotiff/xtiffio.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The Y channel of layer `layer` in the EXR at path (w x h floats). */
+static float *read_y(const char *path, const char *channel, int *w, int *h)
+{
+    exrio_reader *r = NULL;
+    if (exrio_open(path, &r) != FB_OK) return NULL;
+    *w = exrio_width(r), *h = exrio_height(r);
+    void *planes[64] = {0};
+    int c = exrio_find_channel(r, channel);
+    float *y = c >= 0 ? malloc((size_t)*w * *h * 4) : NULL;
+    if (y) planes[c] = y;
+    if (!y || exrio_read_rows(r, 0, *h, planes) != FB_OK) free(y), y = NULL;
+    exrio_close(&r);
+    return y;
+}
+
+static uint16_t *read_r16(const char *path, size_t n)
+{
+    FILE *f = fopen(path, "rb");
+    uint8_t *b = malloc(n * 2);
+    uint16_t *q = malloc(n * 2);
+    if (!f || !b || !q || fread(b, 2, n, f) != n || fgetc(f) != EOF) {
+        if (f) fclose(f);
+        free(b), free(q);
+        return NULL;
+    }
+    fclose(f);
+    for (size_t i = 0; i < n; i++) q[i] = (uint16_t)(b[2 * i] | b[2 * i + 1] << 8); /* little-endian */
+    free(b);
+    return q;
+}
+
+static bool bake(fb_engine *e, const char *json, const char *out, const int region[4], fb_bake_stats *st)
+{
+    fb_scene s;
+    if (fb_scene_parse(json, NULL, &s) != FB_OK) return false;
+    fb_bake_desc d = {.scene = &s, .out = out};
+    if (region) memcpy(d.region, region, sizeof d.region);
+    fb_result rc = fb_bake(e, &d, st);
+    fb_scene_fini(&s);
+    return rc == FB_OK;
+}
+
+int main(void)
+{
+    fb_engine e;
+    CHECK(fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = 2}, &e) == FB_OK);
+    fb_bake_stats st;
+    char json[1024];
+
+    /* fBm, PNG, the image's own range */
+    snprintf(json, sizeof json,
+             "{\"size\": [97, 61], \"seed\": 4, \"layers\": [{\"type\": \"fbm\", \"name\": \"h\", \"heightmap\": "
+             "\"%s\"}]}",
+             th_path("h.png"));
+    REQUIRE(bake(&e, json, th_path("h.exr"), NULL, &st));
+    REQUIRE(st.nheightmaps == 1 && st.heightmaps[0].format == FB_HEIGHTMAP_PNG16);
+    int w, h;
+    float *y = read_y(th_path("h.exr"), "h.Y", &w, &h);
+    REQUIRE(y && w == 97 && h == 61);
+    double lo = INFINITY, hi = -INFINITY;
+    for (int i = 0; i < w * h; i++) lo = fmin(lo, y[i]), hi = fmax(hi, y[i]);
+    CHECKF(st.heightmaps[0].lo == lo && st.heightmaps[0].hi == hi, "range %g..%g, the image's %g..%g",
+           st.heightmaps[0].lo, st.heightmaps[0].hi, lo, hi);
+    fb_png png;
+    REQUIRE(fb_png_read(th_path("h.png"), &png) == FB_OK);
+    CHECK(png.width == 97 && png.height == 61 && png.channels == 1 && png.depth == 16);
+    double step = (hi - lo) / 65535, worst = 0;
+    int at0 = 0, at1 = 0;
+    for (int i = 0; i < w * h; i++) {
+        double q = round(png.plane[0][i] * 65535.0); /* the stored sample */
+        worst = fmax(worst, fabs(lo + q * step - y[i]));
+        at0 += q == 0 && y[i] == lo, at1 += q == 65535 && y[i] == hi;
+    }
+    CHECKF(worst <= 0.5 * step * (1 + 1e-6), "PNG: a height read back %g from the EXR's; half a step is %g", worst,
+           0.5 * step);
+    CHECK(at0 >= 1 && at1 >= 1); /* the lowest pixel stored as 0, the highest as 65535 */
+    fb_png_fini(&png);
+
+    /* RAW, an explicit range narrower than the image's: clamped at its ends, within a step inside */
+    snprintf(json, sizeof json,
+             "{\"size\": [97, 61], \"seed\": 4, \"layers\": [{\"type\": \"fbm\", \"name\": \"h\", \"heightmap\": "
+             "\"%s\", \"heightmap-range\": [-0.5, 0.25]}]}",
+             th_path("h.r16"));
+    REQUIRE(bake(&e, json, th_path("h2.exr"), NULL, &st));
+    CHECK(st.heightmaps[0].lo == -0.5 && st.heightmaps[0].hi == 0.25 && st.heightmaps[0].format == FB_HEIGHTMAP_RAW16);
+    uint16_t *q = read_r16(th_path("h.r16"), (size_t)w * h);
+    REQUIRE(q);
+    step = 0.75 / 65535, worst = 0;
+    int clamped = 0;
+    for (int i = 0; i < w * h; i++) {
+        if (y[i] < -0.5 || y[i] > 0.25) {
+            clamped += q[i] == (y[i] < -0.5 ? 0 : 65535);
+            continue;
+        }
+        worst = fmax(worst, fabs(-0.5 + q[i] * step - y[i]));
+        clamped += 1;
+    }
+    CHECKF(clamped == w * h, "%d of %d pixels stored right", clamped, w * h);
+    CHECKF(worst <= 0.5 * step * (1 + 1e-6), "RAW: %g off, half a step is %g", worst, 0.5 * step);
+
+    /* a region's heightmap (with the same explicit range) is the crop of the whole one */
+    snprintf(json, sizeof json,
+             "{\"size\": [97, 61], \"seed\": 4, \"layers\": [{\"type\": \"fbm\", \"name\": \"h\", \"heightmap\": "
+             "\"%s\", \"heightmap-range\": [-0.5, 0.25]}]}",
+             th_path("part.r16"));
+    int region[4] = {13, 7, 40, 30};
+    REQUIRE(bake(&e, json, th_path("part.exr"), region, &st));
+    uint16_t *part = read_r16(th_path("part.r16"), 40 * 30);
+    REQUIRE(part);
+    int same = 0;
+    for (int r = 0; r < 30; r++)
+        for (int x = 0; x < 40; x++) same += part[r * 40 + x] == q[(size_t)(r + 7) * w + x + 13];
+    CHECKF(same == 40 * 30, "%d of %d region pixels equal the full heightmap's", same, 40 * 30);
+    free(part), free(q), free(y);
+
+    /* a terrain's GeoTIFF: the EXR's heights exactly, its frame's geotransform, its CRS */
+    snprintf(json, sizeof json,
+             "{\"size\": [120, 80], \"layers\": [{\"type\": \"terrain\", \"points\": [[500000, 4600000, 100], "
+             "[500600, 4600000, 130], [500000, 4600400, 90], [500600, 4600400, 150], [500300, 4600200, 240]], "
+             "\"insert\": 3000, \"crs\": \"EPSG:32633\", \"heightmap\": \"%s\"}]}",
+             th_path("t.tif"));
+    REQUIRE(bake(&e, json, th_path("t.exr"), NULL, &st));
+    y = read_y(th_path("t.exr"), "terrain.Y", &w, &h);
+    REQUIRE(y);
+    TIFF *tif = XTIFFOpen(th_path("t.tif"), "r");
+    REQUIRE(tif);
+    uint32_t tw = 0, th = 0;
+    uint16_t bits = 0, fmt = 0;
+    TIFFGetField(tif, TIFFTAG_IMAGEWIDTH, &tw);
+    TIFFGetField(tif, TIFFTAG_IMAGELENGTH, &th);
+    TIFFGetField(tif, TIFFTAG_BITSPERSAMPLE, &bits);
+    TIFFGetField(tif, TIFFTAG_SAMPLEFORMAT, &fmt);
+    CHECK(tw == 120 && th == 80 && bits == 32 && fmt == SAMPLEFORMAT_IEEEFP);
+    float *row = malloc(120 * 4);
+    int exact = 0;
+    for (uint32_t r = 0; r < th && row; r++)
+        if (TIFFReadScanline(tif, row, r, 0) == 1) exact += memcmp(row, y + (size_t)r * 120, 120 * 4) == 0;
+    CHECKF(exact == 80, "%d of 80 GeoTIFF rows equal the EXR's, bit for bit", exact);
+    uint16_t count = 0;
+    double *scale = NULL, *tie = NULL;
+    CHECK(TIFFGetField(tif, TIFFTAG_GEOPIXELSCALE, &count, &scale) && count == 3);
+    if (scale)
+        CHECKF(scale[0] == 5.0 && scale[1] == 5.0, "pixel scale %g, %g (600 m / 120, 400 m / 80)", scale[0], scale[1]);
+    CHECK(TIFFGetField(tif, TIFFTAG_GEOTIEPOINTS, &count, &tie) && count == 6);
+    if (tie) CHECK(tie[0] == 0 && tie[1] == 0 && tie[3] == 500000 && tie[4] == 4600400); /* the top-left corner */
+    GTIF *gt = GTIFNew(tif);
+    uint16_t model = 0, raster = 0, pcs = 0;
+    CHECK(gt && GTIFKeyGet(gt, GTModelTypeGeoKey, &model, 0, 1) == 1 && model == ModelTypeProjected);
+    CHECK(gt && GTIFKeyGet(gt, GTRasterTypeGeoKey, &raster, 0, 1) == 1 && raster == RasterPixelIsArea);
+    CHECK(gt && GTIFKeyGet(gt, ProjectedCSTypeGeoKey, &pcs, 0, 1) == 1 && pcs == 32633);
+    if (gt) GTIFFree(gt);
+    XTIFFClose(tif);
+    free(row), free(y);
+    fb_engine_close(&e);
+    TEST_REPORT();
+}
