@@ -89,6 +89,7 @@ static const char *const k_usage =
     "  compare A.exr B.exr [thresholds]   exit 0 within thresholds, 1 beyond, 2 on error\n"
     "  merge PARTS... -o OUT.exr          join region files (--region) or points parts (--points-part)\n"
     "  info FILE.exr                      layers, channels, types, attributes and the stored scene\n"
+    "  scene default|SCENE.json           a scene with every default filled in (scene default > s.json)\n"
     "  devices                            the Vulkan devices found, and which one is chosen\n"
     "  bench [--json] [--size WxH]        throughput of every generator on each backend\n"
     "\n"
@@ -801,6 +802,67 @@ static int cmd_info(int argc, char **argv)
     return finish(fb_info(path, json, print_line, stdout));
 }
 
+/* `fractalbake scene default|FILE.json|-` [--set K=V ...] [--pretty]: the scene with every default
+ * filled in, as a bake stores it; what `render --from` and the docs' examples start from. */
+static int cmd_scene(int argc, char **argv)
+{
+    const char *which = NULL;
+    const char **sets = calloc((size_t)argc + 1, sizeof *sets);
+    int nsets = 0, bad = 0;
+    bool pretty = false;
+    if (!sets) return finish(fb_fail(FB_ERR_NOMEM, "out of memory"));
+    for (int i = 0; i < argc && !bad; i++) {
+        const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--help")) {
+            printf("usage: fractalbake scene default|SCENE.json|- [--set KEY.PATH=VALUE ...] [--pretty]\n"
+                   "Prints the scene with every default filled in, keys sorted, numbers in their shortest form:\n"
+                   "what a bake stores in its file and `render --from` bakes again. `default` is the embedded\n"
+                   "default scene, `-` a scene on standard input. One line of JSON, or indented with --pretty:\n"
+                   "  fractalbake scene default > scene.json\n");
+            free(sets);
+            return 0;
+        } else if (!strcmp(a, "--set")) {
+            if (!val)
+                bad = usage_error("%s: missing value", a);
+            else
+                sets[nsets++] = val, i++;
+        } else if (!strcmp(a, "--pretty")) {
+            pretty = true;
+        } else if (!strcmp(a, "--json") || !strcmp(a, "--quiet")) {
+            /* the output is JSON already, and nothing else */
+        } else if (a[0] == '-' && a[1]) {
+            bad = usage_error("%s: unknown flag for `fractalbake scene` (--set, --pretty)", a);
+        } else if (which) {
+            bad = usage_error("%s: scene takes one scene (default, a file or -)", a);
+        } else {
+            which = a;
+        }
+    }
+    if (!bad && !which)
+        bad = usage_error("%s", "scene: expected default, a scene file or - (fractalbake scene default > scene.json)");
+    if (bad) {
+        free(sets);
+        return bad;
+    }
+    fb_scene sc = {0};
+    fb_result rc = !strcmp(which, "default")
+                       ? fb_scene_parse_sets(fb_scene_default_json(), "(default scene)", sets, nsets, &sc)
+                       : fb_scene_load_sets(which, sets, nsets, &sc);
+    if (!rc) {
+        json_t *j = json_loads(sc.json, 0, NULL);
+        char *text = j ? fb_json_dumps(j, pretty ? 2 : 0) : NULL;
+        if (text)
+            printf("%s\n", text);
+        else
+            rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        free(text);
+        json_decref(j);
+    }
+    fb_scene_fini(&sc);
+    free(sets);
+    return finish(rc);
+}
+
 static int cmd_devices(int argc, char **argv)
 {
     const char *sel = NULL;
@@ -1019,6 +1081,7 @@ static int run_command(int argc, char **argv)
     if (!strcmp(cmd, "info")) return cmd_info(argc - 2, argv + 2);
     if (!strcmp(cmd, "merge")) return cmd_merge(argc - 2, argv + 2);
     if (!strcmp(cmd, "devices")) return cmd_devices(argc - 2, argv + 2);
+    if (!strcmp(cmd, "scene")) return cmd_scene(argc - 2, argv + 2);
     if (!strcmp(cmd, "bench")) return finish(fb_bench_main(argc - 2, argv + 2));
     return usage_error("%s: unknown command (see fractalbake --help)", cmd);
 }

@@ -37,7 +37,7 @@ for c in render fbm julia ifs lsystem terrain constrain compare merge tonemap de
   rc=$?
   check "$c --help exits 0 with a usage line" test $rc -eq 0 -a -n "$(grep -i usage h.txt)"
 done
-for c in info devices; do
+for c in info devices scene; do
   check "$c --help exits 0" "$FB" $c --help > /dev/null
 done
 # standard input and output: `render -` reads the scene, `-o -` writes the EXR, the same bytes
@@ -53,6 +53,20 @@ if command -v script > /dev/null; then
   script -qc "'$FB' render in.json --backend native -q -o -" /dev/null > tty.txt 2>&1
   check "-o - to a terminal is refused" grep -q "would go to a terminal" tty.txt
 fi
+# `cmake --install`: the one binary, which runs from anywhere (its shaders are embedded)
+if [ -f "$(dirname "$FB")/cmake_install.cmake" ]; then
+  cmake --install "$(dirname "$FB")" --prefix "$T/inst" > /dev/null
+  check "cmake --install: bin/fractalbake, which bakes" "$T/inst/bin/fractalbake" fbm --size 16x8 --backend native -q -o inst.exr
+fi
+# `scene default`: the embedded scene with its defaults, which bakes the same file as `render`
+"$FB" scene default > sd.json
+"$FB" render sd.json --set size=96x48 --backend native -q -o sd.exr
+"$FB" render --set size=96x48 --backend native -q -o sdd.exr
+check "scene default > s.json bakes what render bakes, byte for byte" cmp -s sd.exr sdd.exr
+check "scene default is one compact line" test "$(wc -l < sd.json)" = 1 -a -z "$(grep ': ' sd.json)"
+check "scene FILE --set: the override in the printed scene" grep -q '"size":\[32,16\]' <("$FB" scene in.json --set size=32x16)
+check "scene - reads standard input" cmp -s <("$FB" scene in.json) <("$FB" scene - < in.json)
+check "scene --pretty: indented" grep -q '^  "layers": \[' <("$FB" scene default --pretty)
 # --json: one JSON object on stdout, the same keys everywhere a command writes files
 jq_() { python3 -c "import json,sys; r = json.load(open('$1')); print($2)"; }
 "$FB" fbm $S --backend native -o j.exr --preview j.png --json > j.json
