@@ -90,6 +90,11 @@ assert min(t[4] for t in verts) == 0 and max(t[4] for t in verts) == 1
 PY
 done
 [ "$(tsum "s['triangles']")" = "$nf" ] && ok || bad "PLY faces $nf differ from the summary"
+# the smooth surface is the same whatever the threads and strips
+"$FB" $Tr --points pts.csv --insert 5000 --interpolation smooth --backend native --threads 1 --strip-rows 3 -o sm1.exr
+"$FB" $Tr --points pts.csv --insert 5000 --interpolation smooth --backend native -o sm2.exr
+check "smooth: the same bits for 1 thread and 3-row strips as for the defaults" "$FB" compare sm1.exr sm2.exr --quiet
+check "smooth differs from linear" test "$("$FB" compare sm2.exr tr.exr --quiet 2>/dev/null | tail -1)" != "result: PASS"
 # determinism: threads, strip rows, backend; the seed changes the terrain
 "$FB" $Tr --points pts.csv --insert 5000 --backend native --threads 1 --strip-rows 3 -o tn1.exr
 "$FB" $Tr --points pts.csv --insert 5000 --backend native --threads 2 --strip-rows 64 -o tn2.exr

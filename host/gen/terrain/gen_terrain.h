@@ -19,6 +19,7 @@ typedef struct fb_terrain_layer_params {
     bool auto_bounds;
     double bounds[4];
     char mesh[1024]; /* .ply or .obj, or "" */
+    bool smooth;     /* "interpolation": "smooth": the Clough-Tocher surface (smooth.h) */
     int epsg;        /* crs "EPSG:N": a projected CRS, recorded in a GeoTIFF heightmap; 0: not stated */
 } fb_terrain_layer_params;
 

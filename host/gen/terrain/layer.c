@@ -13,6 +13,7 @@
 #include "gen_terrain.h"
 #include "terrain.h"
 #include "progress.h"
+#include "smooth.h"
 #include "terrain_io.h"
 
 #include <jansson.h>
@@ -42,6 +43,8 @@ static const fb_keyspec terrain_keys[] = {
     {"variance", FB_K_ENUM, 0, 0, false, "stage|local", "\"stage\"",
      "var(z_abc - z_*): over the mesh per doubling (stage) or the triangle's neighbourhood (local)"},
     {"centers", FB_K_STRING, 0, 0, false, NULL, NULL, "CSV of centres x,y,D,sigma: regions of their own D and sigma"},
+    {"interpolation", FB_K_ENUM, 0, 0, false, "linear|smooth", "\"linear\"",
+     "the surface between the vertices: each triangle's plane, or a C1 surface (Clough-Tocher) without facets"},
     {"bounds", FB_K_BOUNDS, -1e15, 1e15, false, NULL, "\"auto\"",
      "area rasterised: \"auto\" (the points' bounding box) or [xmin, xmax, ymin, ymax]"},
     {"mesh", FB_K_OUTPUT, 0, 0, false, NULL, NULL, "also write the refined mesh: OUT.ply (binary) or OUT.obj"},
@@ -98,6 +101,7 @@ static fb_result parse_terrain(const fb_vctx *v, const char *path, json_t *obj, 
     }
     t->sigma = json_object_get(obj, "sigma") ? fb_json_num(obj, "sigma") : -1;
     t->sweep = !strcmp(json_string_value(json_object_get(obj, "order")), "sweep");
+    t->smooth = !strcmp(json_string_value(json_object_get(obj, "interpolation")), "smooth");
     t->local_variance = !strcmp(json_string_value(json_object_get(obj, "variance")), "local");
     fb_json_string(obj, "centers", t->centers, sizeof t->centers);
     fb_json_string(obj, "mesh", t->mesh, sizeof t->mesh);
@@ -157,6 +161,7 @@ typedef struct terrain_state {
     uint32_t nbands;
     uint32_t *band_start; /* nbands + 1 */
     uint32_t *band_tris;
+    double *grad; /* "smooth": each vertex's gradient (smooth.h), else NULL */
 } terrain_state;
 
 static terrain_state *state(const fb_gen *g)
@@ -172,6 +177,7 @@ static void terrain_fini(fb_gen *g)
     free(s->centers);
     free(s->band_start);
     free(s->band_tris);
+    free(s->grad);
     fb_terrain_free(&s->t);
 }
 
@@ -199,6 +205,15 @@ static void terrain_rows(const fb_gen *g, int y0, int n, void *const *planes)
             }
             double area = (px[1] - px[0]) * (py[2] - py[0]) - (py[1] - py[0]) * (px[2] - px[0]);
             if (area == 0) continue;
+            fb_smooth_tri ct;
+            if (s->grad) {
+                double wp[3][2], wg[3][2];
+                for (int c = 0; c < 3; c++) {
+                    wp[c][0] = d->xy[2 * (size_t)v[c]], wp[c][1] = d->xy[2 * (size_t)v[c] + 1];
+                    wg[c][0] = s->grad[2 * (size_t)v[c]], wg[c][1] = s->grad[2 * (size_t)v[c] + 1];
+                }
+                fb_smooth_setup(&ct, wp, z, wg);
+            }
             /* the slope of the triangle's plane in world units: the angle of its normal from vertical */
             double ax = d->xy[2 * (size_t)v[1]] - d->xy[2 * (size_t)v[0]],
                    ay = d->xy[2 * (size_t)v[1] + 1] - d->xy[2 * (size_t)v[0] + 1];
@@ -228,8 +243,14 @@ static void terrain_rows(const fb_gen *g, int y0, int n, void *const *planes)
                     if (w0 < tol || w1 < tol || w2 < tol) continue;
                     double sum = w0 + w1 + w2;
                     size_t i = (size_t)(y - y0) * W + x;
-                    Y[i] = (float)((w0 * z[0] + w1 * z[1] + w2 * z[2]) / sum);
                     A[i] = 1;
+                    if (s->grad) { /* the C1 surface at the pixel's centre, and its own slope */
+                        double gr[2];
+                        Y[i] = (float)fb_smooth_eval(&ct, s->bounds[0] + cx * sx, s->bounds[3] - cy * sy, gr);
+                        S[i] = (float)(atan(hypot(gr[0], gr[1])) * (180.0 / M_PI));
+                        continue;
+                    }
+                    Y[i] = (float)((w0 * z[0] + w1 * z[1] + w2 * z[2]) / sum);
                     S[i] = slope;
                 }
             }
@@ -344,6 +365,8 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     g->has_world = true;
     g->epsg = P->epsg;
     double t0 = fb_now();
+    if (P->smooth && !(s->grad = fb_smooth_gradients(&s->t)))
+        return fb_fail(FB_ERR_NOMEM, "layer %s: out of memory for the vertex gradients", g->layer->name);
     if ((rc = bin_triangles(g))) return rc;
     if (P->mesh[0] && (rc = fb_terrain_write_mesh(&s->t, s->bounds, P->mesh))) return rc; /* renamed with the EXR */
     double t_out = fb_now() - t0;
@@ -394,7 +417,7 @@ static uint64_t terrain_memory(const fb_gen *g, const struct fb_engine *e, uint6
     (void)e;
     const terrain_state *s = state(g);
     uint64_t v = (uint64_t)s->n + (uint64_t)((const fb_terrain_layer_params *)fb_layer_params(g->layer))->insert;
-    *hold = 100 * v;
+    *hold = 100 * v + (((const fb_terrain_layer_params *)fb_layer_params(g->layer))->smooth ? 16 * v : 0);
     return 24 * (uint64_t)s->n + *hold;
 }
 
