@@ -29,7 +29,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         free(planes);
         exrio_close(&r);
     }
-    fb_info(path, drop_line, NULL);
+    fb_info(path, false, drop_line, NULL);
     close(fd);
     return 0;
 }
