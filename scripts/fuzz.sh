@@ -25,7 +25,8 @@ cmake --build "$B" -j"$(nproc)" > "$B/build.log" 2>&1 || { tail -20 "$B/build.lo
 C=$B/corpus
 mkdir -p "$C"/{scene,ifs,points,lsys,exr} "$B/crashes"
 cp tests/fuzz/seeds/scene/* tests/golden/scenes/*.json docs/examples/*.json "$C/scene/"
-cp tests/fuzz/seeds/ifs/* docs/examples/*.ifs "$C/ifs/"
+cp tests/fuzz/seeds/ifs/* "$C/ifs/"
+cp docs/examples/fractint.ifs "$C/ifs/example-fractint.ifs"
 cp tests/fuzz/seeds/points/* "$C/points/"
 for f in docs/examples/*.csv docs/examples/*.xyz; do cp "$f" "$C/points/example-$(basename "$f")"; done
 cp tests/fuzz/seeds/lsys/* "$C/lsys/"
