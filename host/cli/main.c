@@ -11,6 +11,7 @@
 #include "heightmap.h"
 #include "merge.h"
 #include "output.h"
+#include "plan.h"
 #include "scene.h"
 #include "vkc.h"
 #include "jsonout.h"
@@ -87,7 +88,9 @@ static const char *const k_usage =
     "%s" /* one line per generator */
     "  tonemap IN.exr -o OUT.exr [tone]   re-run an ifs layer's tone mapping (no new chaos game)\n"
     "  compare A.exr B.exr [thresholds]   exit 0 within thresholds, 1 beyond, 2 on error\n"
-    "  merge PARTS... -o OUT.exr          join region files (--region) or points parts (--points-part)\n"
+    "  plan [SCENE.json] --tasks N        split a bake into N tasks of about equal cost (render --task)\n"
+    "  merge PARTS... -o OUT.exr          join task files (--task), region files (--region) or points\n"
+    "                                     parts (--points-part) into the whole bake\n"
     "  info FILE.exr                      layers, channels, types, attributes and the stored scene\n"
     "  scene default|SCENE.json           a scene with every default filled in (scene default > s.json)\n"
     "  devices                            the Vulkan devices found, and which one is chosen\n"
@@ -109,6 +112,10 @@ static const char *const k_usage =
     "                        `fractalbake merge` joins region files into the whole image\n"
     "  --points-part K/N     bake the K-th of N shares of every chaos game's points (ifs layers; the\n"
     "                        other layers whole); `fractalbake merge` adds the N parts' hits exactly\n"
+    "  --task K/N            bake task K (from 0, like SLURM_ARRAY_TASK_ID) of the N of `fractalbake plan`:\n"
+    "                        only its share (a band, points parts or whole layers); merge joins the N\n"
+    "  --task-startup S      the start-up of a task the plan assumes (default 0.07 s; 0: use every task\n"
+    "                        that shortens the longest); give the same to plan, every task and merge\n"
     "  --zip-level N         deflate level of ZIP compression, 1 (fastest) to 12 (smallest) (default 1)\n"
     "  --dry-run             print the predicted peak memory per layer, bake nothing, write nothing\n"
     "  --max-memory SIZE     stop before allocating when the predicted peak is larger (8G, 512M, 50%;\n"
@@ -140,8 +147,11 @@ typedef struct common_opts {
     const char *out, *preview, *preview_layer, *device;
     fb_backend backend;
     int threads, strip_rows;
-    int region[4];      /* x, y, w, h; w == 0: none */
-    int points_part[2]; /* K, N; N == 0: none */
+    int region[4];       /* x, y, w, h; w == 0: none */
+    int points_part[2];  /* K, N; N == 0: none */
+    int task[2];         /* render --task K/N (K from 0); N == 0: none */
+    double task_startup; /* --task-startup S, when task_startup_set */
+    bool task_startup_set;
     bool quiet, validation, help, json, dry_run;
     uint64_t max_memory; /* 0: the default (80% of physical memory) */
 } common_opts;
@@ -153,6 +163,16 @@ static bool parse_int_arg(const char *s, long lo, long hi, int *out)
     long v = strtol(s, &end, 10);
     if (!*s || *end || errno || v < lo || v > hi) return false;
     *out = (int)v;
+    return true;
+}
+
+/* --task-startup: seconds, finite, 0 to an hour. */
+static bool parse_seconds(const char *s, double *out)
+{
+    char *end;
+    double v = strtod(s, &end);
+    if (!*s || *end || !(v >= 0 && v <= 3600)) return false;
+    *out = v;
     return true;
 }
 
@@ -175,9 +195,10 @@ static bool parse_points_part(const char *s, int pp[2])
 }
 
 /* The common options (without dashes), for "did you mean" hints. */
-static const char *const k_common_flags[] = {
-    "output",  "preview",    "preview-layer", "backend",    "device", "threads", "strip-rows", "region", "points-part",
-    "dry-run", "max-memory", "zip-level",     "validation", "quiet",  "json",    "help",       "version"};
+static const char *const k_common_flags[] = {"output",       "preview",    "preview-layer", "backend",     "device",
+                                             "threads",      "strip-rows", "region",        "points-part", "task",
+                                             "task-startup", "dry-run",    "max-memory",    "zip-level",   "validation",
+                                             "quiet",        "json",       "help",          "version"};
 
 /* "; did you mean --octaves?" for an unknown flag of `cmd` (kind: a generator's flags too), or "". */
 static void flag_hint(const char *flag, const char *kind, const char *const *extra, int nextra, char *out, size_t size)
@@ -252,6 +273,25 @@ static int common_option(int argc, char **argv, int *i, common_opts *o)
         NEED_VALUE();
         if (!parse_points_part(val, o->points_part)) {
             fb_fail(FB_ERR_USAGE, "--points-part: expected K/N with 1 <= K <= N <= 4096, found \"%s\"", val);
+            return -1;
+        }
+    } else if (!strcmp(a, "--task")) {
+        NEED_VALUE();
+        char *end;
+        long k = strtol(val, &end, 10), n = *end == '/' ? strtol(end + 1, &end, 10) : 0;
+        if (!*val || *end || k < 0 || n < 1 || k >= n || n > FB_PLAN_MAX_TASKS) {
+            fb_fail(
+                FB_ERR_USAGE,
+                "--task: expected K/N with 0 <= K < N <= %d (K counts from 0, like SLURM_ARRAY_TASK_ID), found \"%s\"",
+                FB_PLAN_MAX_TASKS, val);
+            return -1;
+        }
+        o->task[0] = (int)k, o->task[1] = (int)n;
+    } else if (!strcmp(a, "--task-startup")) {
+        NEED_VALUE();
+        o->task_startup_set = true;
+        if (!parse_seconds(val, &o->task_startup)) {
+            fb_fail(FB_ERR_USAGE, "--task-startup: expected seconds in 0..3600, found \"%s\"", val);
             return -1;
         }
     } else if (!strcmp(a, "--max-memory")) {
@@ -358,12 +398,67 @@ static fb_result bake_scene(const char *command, fb_scene *scene, const common_o
         scene->points_part[0] = o->points_part[0];
         scene->points_part[1] = o->points_part[1];
     }
+    /* render --task K/N: the plan's share K, as a scene of its layers only */
+    const fb_scene *full = scene;
+    fb_scene *sub = NULL;
+    fb_plan *plan_n = NULL;
+    char *plan_json = NULL, task_attr[32], share[2048] = "";
+    exrio_attr task_attrs[2];
+    common_opts ot = *o;
+    if (o->task_startup_set && !o->task[1])
+        return fb_fail(FB_ERR_USAGE, "--task-startup: only with --task K/N (and fractalbake plan)");
+    if (o->task[1] > 0) {
+        const char *clash = o->region[2]        ? "--region"
+                            : o->points_part[1] ? "--points-part"
+                            : o->preview        ? "--preview"
+                            : o->dry_run        ? "--dry-run"
+                                                : NULL;
+        if (clash)
+            return fb_fail(FB_ERR_USAGE, "--task: not with %s (a task bakes the share its plan gives it)", clash);
+        if (!strcmp(o->out, "-")) return fb_fail(FB_ERR_USAGE, "--task: -o - is refused: merge reads task files");
+        fb_result rc = (plan_n = malloc(sizeof *plan_n)) && (sub = calloc(1, sizeof *sub))
+                           ? fb_plan_make(scene, o->task[1], o->task_startup_set ? o->task_startup : -1, plan_n)
+                           : fb_fail(FB_ERR_NOMEM, "out of memory");
+        if (!rc && o->task[0] >= plan_n->nactive) {
+            if (o->json)
+                json_object_set_new(g_summary, "task",
+                                    json_pack("{sisisb}", "index", o->task[0], "of", o->task[1], "idle", 1));
+            else if (!o->quiet)
+                fprintf(stderr,
+                        "fractalbake: task %d/%d has nothing to do: the plan gives this bake to tasks 0-%d "
+                        "(`fractalbake plan --tasks %d`); no file written\n",
+                        o->task[0], o->task[1], plan_n->nactive - 1, o->task[1]);
+            free(plan_n);
+            free(sub);
+            return FB_OK;
+        }
+        const fb_task *t = rc ? NULL : &plan_n->tasks[o->task[0]];
+        if (!rc) rc = fb_scene_subset(scene, t->layers, sub);
+        if (!rc && !(plan_json = fb_plan_json(scene, plan_n, false))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        if (rc) {
+            if (sub) fb_scene_fini(sub);
+            free(sub);
+            free(plan_n);
+            return rc;
+        }
+        fb_plan_describe(scene, t, share, sizeof share);
+        if (t->band) ot.region[0] = 0, ot.region[1] = t->y0, ot.region[2] = scene->width, ot.region[3] = t->y1 - t->y0;
+        if (t->points) sub->points_part[0] = t->part, sub->points_part[1] = t->nparts;
+        snprintf(task_attr, sizeof task_attr, "%d/%d", o->task[0], o->task[1]);
+        task_attrs[0] = (exrio_attr){"fractalbake/task", task_attr};
+        task_attrs[1] = (exrio_attr){"fractalbake/plan", plan_json};
+        scene = sub;
+        o = &ot;
+        if (o->json)
+            json_object_set_new(g_summary, "task",
+                                json_pack("{sisiss}", "index", o->task[0], "of", o->task[1], "share", share));
+    }
     fb_engine e;
     fb_result rc = fb_engine_open(
         &(fb_engine_desc){
             .backend = o->backend, .device = o->device, .threads = o->threads, .validation = o->validation},
         &e);
-    if (rc) return rc;
+    if (rc) goto done;
     fb_bake_stats st;
     fb_bake_plan plan;
     fb_memory_set_limit(o->max_memory);
@@ -378,7 +473,10 @@ static fb_result bake_scene(const char *command, fb_scene *scene, const common_o
                                  .plan = &plan,
                                  .dry_run = o->dry_run,
                                  .report = report,
-                                 .user = (void *)o},
+                                 .user = (void *)o,
+                                 .attrs = task_attrs,
+                                 .nattrs = o->task[1] > 0 ? 2 : 0,
+                                 .layer_backends = o->task[1] > 0},
                  &st);
     if (!rc && o->dry_run) {
         print_plan(&plan, o->json);
@@ -410,6 +508,7 @@ static fb_result bake_scene(const char *command, fb_scene *scene, const common_o
             json_object_set_new(json_array_get(layers, (size_t)i), "backend",
                                 json_string(fb_backend_name(st.layer_backend[i])));
     } else if (!rc && !o->quiet) {
+        if (o->task[1] > 0) fprintf(stderr, "fractalbake: task %d/%d: %s\n", o->task[0], o->task[1], share);
         fprintf(stderr, "fractalbake: wrote %s (%d x %d%s, %d layer%s) in %.2f s %s\n",
                 strcmp(o->out, "-") ? o->out : "standard output", o->region[2] ? o->region[2] : scene->width,
                 o->region[2] ? o->region[3] : scene->height, o->region[2] ? " region" : "", scene->nlayers,
@@ -429,6 +528,12 @@ static fb_result bake_scene(const char *command, fb_scene *scene, const common_o
         }
     }
     fb_engine_close(&e);
+done:
+    if (sub) fb_scene_fini(sub);
+    free(sub);
+    free(plan_n);
+    free(plan_json);
+    (void)full;
     return rc;
 }
 
@@ -863,6 +968,103 @@ static int cmd_scene(int argc, char **argv)
     return finish(rc);
 }
 
+/* fractalbake plan: how render --task K/N splits a bake (plan.h). */
+static int cmd_plan(int argc, char **argv)
+{
+    const char *scene_path = NULL;
+    const char **sets = calloc((size_t)argc + 1, sizeof *sets);
+    int nsets = 0, bad = 0, ntasks = 0;
+    double startup = -1;
+    bool json = false;
+    if (!sets) return finish(fb_fail(FB_ERR_NOMEM, "out of memory"));
+    for (int i = 0; i < argc && !bad; i++) {
+        const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            printf("usage: fractalbake plan [SCENE.json|-] --tasks N [--set KEY.PATH=VALUE ...] [--task-startup S]\n"
+                   "                        [--json]\n"
+                   "Splits a bake into N tasks of about equal cost: per-pixel layers (fbm, julia, op) into bands\n"
+                   "of rows, chaos games (ifs) into points parts, and layers whose cost does not shrink with a\n"
+                   "band (terrain, constrain, lsystem, a layer writing a heightmap, and the layers using them)\n"
+                   "whole, each in one task. Costs come from a model of each generator (seconds of one core).\n"
+                   "Tasks count from 0, like SLURM_ARRAY_TASK_ID; the plan uses the fewest that keep the tasks'\n"
+                   "total within 10%% of one bake, so with small bakes the last tasks may have nothing to do.\n"
+                   "--task-startup S: each task's start-up the plan assumes (default 0.07 s, measured with\n"
+                   "lavapipe; 0: every task that shortens the longest); give the same to each render --task.\n"
+                   "Each task: fractalbake render SCENE.json --task K/N -o part-K.exr; then\n"
+                   "fractalbake merge part-*.exr -o OUT.exr checks the set is complete and joins it.\n"
+                   "Without SCENE.json, the embedded default scene.\n");
+            free(sets);
+            return 0;
+        } else if (!strcmp(a, "--set") || !strcmp(a, "--tasks") || !strcmp(a, "--task-startup")) {
+            if (!val)
+                bad = usage_error("%s: missing value", a);
+            else if (!strcmp(a, "--task-startup")) {
+                if (!parse_seconds(val, &startup))
+                    bad = usage_error("--task-startup: expected seconds in 0..3600, found \"%s\"", val);
+            } else if (!strcmp(a, "--set"))
+                sets[nsets++] = val;
+            else if (!parse_int_arg(val, 1, FB_PLAN_MAX_TASKS, &ntasks))
+                bad = usage_error("--tasks: expected an integer in 1..1024, found \"%s\"", val);
+            i++;
+        } else if (!strcmp(a, "--json")) {
+            json = true;
+        } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
+            /* it prints the plan and nothing else */
+        } else if (a[0] == '-' && a[1]) {
+            bad = usage_error("%s: unknown flag for `fractalbake plan` (--tasks, --set, --task-startup, --json)", a);
+        } else if (scene_path) {
+            bad = usage_error("%s: only one scene file may be given", a);
+        } else {
+            scene_path = a;
+        }
+    }
+    if (!bad && ntasks == 0)
+        bad = usage_error("%s", "plan: --tasks N is required (fractalbake plan SCENE.json --tasks 8)");
+    if (bad) {
+        free(sets);
+        return bad;
+    }
+    fb_scene *sc = calloc(1, sizeof *sc);
+    fb_plan *p = malloc(sizeof *p);
+    fb_result rc = !sc || !p    ? fb_fail(FB_ERR_NOMEM, "out of memory")
+                   : scene_path ? fb_scene_load_sets(scene_path, sets, nsets, sc)
+                                : fb_scene_parse_sets(fb_scene_default_json(), "(default scene)", sets, nsets, sc);
+    if (!rc) rc = fb_plan_make(sc, ntasks, startup, p);
+    if (!rc && json) {
+        char *text = fb_plan_json(sc, p, true);
+        if (text)
+            printf("%s\n", text);
+        else
+            rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        free(text);
+    } else if (!rc) {
+        static const char *const split[3] = {"bands", "points parts", "whole"};
+        printf("plan: %d x %d, %d layer%s over %d task%s (numbered from 0, like SLURM_ARRAY_TASK_ID)\n", sc->width,
+               sc->height, sc->nlayers, sc->nlayers == 1 ? "" : "s", ntasks, ntasks == 1 ? "" : "s");
+        printf("\n%-20s %-10s %-13s %10s\n", "layer", "type", "split", "model s");
+        for (int i = 0; i < sc->nlayers; i++)
+            printf("%-20s %-10s %-13s %10.3f\n", sc->layers[i].name, sc->layers[i].cls->name, split[p->share[i]],
+                   p->layer_seconds[i]);
+        printf("\n%-6s %-56s %10s\n", "task", "share", "model s");
+        for (int k = 0; k < p->nactive; k++) {
+            char d[2048];
+            fb_plan_describe(sc, &p->tasks[k], d, sizeof d);
+            printf("%-6d %-56s %10.3f\n", k, d, p->tasks[k].seconds);
+        }
+        if (p->nactive < ntasks)
+            printf("%d-%-4d nothing: more tasks would not shorten the longest within 10%% of one bake's cost\n",
+                   p->nactive, ntasks - 1);
+        printf("\none bake %.2f s; the %d task%s %.2f s in all (%.2fx), the longest %.2f s (%.1fx sooner)\n", p->one,
+               p->nactive, p->nactive == 1 ? "" : "s", p->total, p->total / p->one, p->longest, p->one / p->longest);
+        printf("(model seconds of one core of the reference machine; docs/scenes.md)\n");
+    }
+    if (sc) fb_scene_fini(sc);
+    free(sc);
+    free(p);
+    free(sets);
+    return finish(rc);
+}
+
 static int cmd_devices(int argc, char **argv)
 {
     const char *sel = NULL;
@@ -1082,6 +1284,7 @@ static int run_command(int argc, char **argv)
     if (!strcmp(cmd, "merge")) return cmd_merge(argc - 2, argv + 2);
     if (!strcmp(cmd, "devices")) return cmd_devices(argc - 2, argv + 2);
     if (!strcmp(cmd, "scene")) return cmd_scene(argc - 2, argv + 2);
+    if (!strcmp(cmd, "plan")) return cmd_plan(argc - 2, argv + 2);
     if (!strcmp(cmd, "bench")) return finish(fb_bench_main(argc - 2, argv + 2));
     return usage_error("%s: unknown command (see fractalbake --help)", cmd);
 }

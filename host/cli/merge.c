@@ -10,7 +10,9 @@
 #include "merge.h"
 
 #include "exrio.h"
+#include "engine.h"
 #include "gen_ifs.h"
+#include "plan.h"
 #include "scene.h"
 
 #include <stdio.h>
@@ -117,6 +119,18 @@ static fb_result check_parts(part *p, int n, const char *const *paths, int *W, i
 
 static fb_result merge_points(part *p, int n, const char *const *paths, const char *out, int threads);
 
+/* How many of the n files carry attribute `attr`: all or none, else an error ("3 of the 4 files are
+ * WHAT"). */
+static fb_result count_kind(const part *p, int n, const char *attr, const char *what, int *count)
+{
+    *count = 0;
+    for (int i = 0; i < n; i++) *count += exrio_attr_string(p[i].r, attr) != NULL;
+    if (*count > 0 && *count < n)
+        return fb_fail(FB_ERR_INPUT, "merge: %d of the %d files are %s: merge one kind at a time", *count, n, what);
+    return FB_OK;
+}
+static fb_result merge_tasks(part *p, int n, const char *const *paths, const char *out, int threads);
+
 fb_result fb_merge(const char *const *paths, int n, const char *out, int threads)
 {
     if (n < 1) return fb_fail(FB_ERR_USAGE, "merge: no parts given");
@@ -128,13 +142,14 @@ fb_result fb_merge(const char *const *paths, int n, const char *out, int threads
     int W = 0, H = 0, nch = 0;
     if (!p) return fb_fail(FB_ERR_NOMEM, "out of memory");
     for (int i = 0; i < n && !rc; i++) rc = exrio_open(paths[i], &p[i].r);
-    int points = 0;
-    for (int i = 0; i < n && !rc; i++) points += exrio_attr_string(p[i].r, "fractalbake/points-part") != NULL;
-    if (!rc && points > 0 && points < n)
-        rc = fb_fail(FB_ERR_INPUT,
-                     "merge: %d of the %d files are points parts (--points-part), the others regions: "
-                     "merge one kind at a time",
-                     points, n);
+    int tasks = 0, points = 0;
+    if (!rc) rc = count_kind(p, n, "fractalbake/task", "task files (render --task), the others not", &tasks);
+    if (!rc && tasks) {
+        rc = merge_tasks(p, n, paths, out, threads);
+        goto out;
+    }
+    if (!rc)
+        rc = count_kind(p, n, "fractalbake/points-part", "points parts (--points-part), the others regions", &points);
     if (!rc && points) {
         rc = merge_points(p, n, paths, out, threads);
         goto out;
@@ -212,6 +227,55 @@ typedef struct chaos_layer {
     uint64_t outside;
 } chaos_layer;
 
+static const char *const k_sum_suffix[3] = {"count", "colour_sum_lo", "colour_sum_hi"};
+
+/* A chaos layer's strip rows and its image of hits and colour sums. */
+static fb_result chaos_alloc(chaos_layer *c, int W, int H)
+{
+    for (int j = 0; j < 3; j++) c->rows[j] = malloc((size_t)W * MERGE_STRIP * 4);
+    c->hits = calloc((size_t)W * H, sizeof *c->hits);
+    c->sums = calloc((size_t)W * H, sizeof *c->sums);
+    return c->hits && c->sums && c->rows[0] && c->rows[1] && c->rows[2] ? FB_OK
+                                                                        : fb_fail(FB_ERR_NOMEM, "out of memory");
+}
+
+/* Adds one points part's hits, colour sums and outside count to each of the ncl chaos layers. */
+static fb_result chaos_add(chaos_layer *cl, int ncl, const fb_scene *sc, exrio_reader *r, const char *path, int W,
+                           int H)
+{
+    void *in[FB_MERGE_MAX_CHANNELS] = {0};
+    if (exrio_nchannels(r) > FB_MERGE_MAX_CHANNELS)
+        return fb_fail(FB_ERR_INPUT, "%s: more than %d channels", path, FB_MERGE_MAX_CHANNELS);
+    for (int k = 0; k < ncl; k++) {
+        uint64_t o = 0;
+        const char *name = sc->layers[cl[k].layer].name;
+        if (!outside_of(exrio_attr_string(r, "fractalbake/ifs-outside"), name, &o))
+            return fb_fail(FB_ERR_INPUT, "%s: no outside count for layer %s (attribute fractalbake/ifs-outside)", path,
+                           name);
+        cl[k].outside += o;
+        for (int j = 0; j < 3; j++) { /* the channels' indices in this file */
+            char cn[96];
+            snprintf(cn, sizeof cn, "%s.%s", name, k_sum_suffix[j]);
+            if ((cl[k].idx[j] = exrio_find_channel(r, cn)) < 0)
+                return fb_fail(FB_ERR_INPUT, "%s: no channel %s (not a points part of this scene)", path, cn);
+            in[cl[k].idx[j]] = cl[k].rows[j];
+        }
+    }
+    for (int y0 = 0; y0 < H && ncl > 0; y0 += MERGE_STRIP) {
+        int rowsn = y0 + MERGE_STRIP <= H ? MERGE_STRIP : H - y0;
+        fb_result rc = exrio_read_rows(r, y0, rowsn, in);
+        if (rc) return rc;
+        for (int k = 0; k < ncl; k++) {
+            chaos_layer *c = &cl[k];
+            for (size_t q = 0; q < (size_t)rowsn * W; q++) {
+                c->hits[(size_t)y0 * W + q] += c->rows[0][q];
+                c->sums[(size_t)y0 * W + q] += (uint64_t)c->rows[2][q] << 32 | c->rows[1][q];
+            }
+        }
+    }
+    return FB_OK;
+}
+
 static fb_result merge_points(part *p, int n, const char *const *paths, const char *out, int threads)
 {
     fb_result rc = FB_OK;
@@ -271,46 +335,10 @@ static fb_result merge_points(part *p, int n, const char *const *paths, const ch
     for (int l = 0; l < sc.nlayers && !rc; l++) {
         if (sc.layers[l].cls != &fb_gen_ifs) continue;
         chaos_layer *c = &cl[ncl++];
-        const char *name = sc.layers[l].name;
-        static const char *const suffix[3] = {"count", "colour_sum_lo", "colour_sum_hi"};
         c->layer = l;
-        for (int j = 0; j < 3 && !rc; j++) {
-            char cn[96];
-            snprintf(cn, sizeof cn, "%s.%s", name, suffix[j]);
-            if ((c->idx[j] = exrio_find_channel(p[0].r, cn)) < 0)
-                rc = fb_fail(FB_ERR_INPUT, "%s: no channel %s (not a points part of this scene)", paths[0], cn);
-            c->rows[j] = malloc((size_t)W * MERGE_STRIP * 4);
-        }
-        c->hits = calloc(npx, sizeof *c->hits);
-        c->sums = calloc(npx, sizeof *c->sums);
-        if (!rc && (!c->hits || !c->sums || !c->rows[0] || !c->rows[1] || !c->rows[2]))
-            rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        rc = chaos_alloc(c, W, H);
     }
-    for (int i = 0; i < n && !rc; i++) {
-        for (int k = 0; k < ncl && !rc; k++) {
-            uint64_t o = 0;
-            const char *name = sc.layers[cl[k].layer].name;
-            if (!outside_of(exrio_attr_string(p[i].r, "fractalbake/ifs-outside"), name, &o))
-                rc = fb_fail(FB_ERR_INPUT, "%s: no outside count for layer %s (attribute fractalbake/ifs-outside)",
-                             paths[i], name);
-            cl[k].outside += o;
-        }
-        for (int y0 = 0; y0 < H && !rc && ncl > 0; y0 += MERGE_STRIP) {
-            int rowsn = y0 + MERGE_STRIP <= H ? MERGE_STRIP : H - y0;
-            memset(in, 0, (size_t)nch * sizeof *in);
-            for (int k = 0; k < ncl; k++)
-                for (int j = 0; j < 3; j++) in[cl[k].idx[j]] = cl[k].rows[j];
-            rc = exrio_read_rows(p[i].r, y0, rowsn, in);
-            for (int k = 0; k < ncl && !rc; k++) {
-                chaos_layer *c = &cl[k];
-                for (size_t q = 0; q < (size_t)rowsn * W; q++) {
-                    c->hits[(size_t)y0 * W + q] += c->rows[0][q];
-                    c->sums[(size_t)y0 * W + q] += (uint64_t)c->rows[2][q] << 32 | c->rows[1][q];
-                }
-            }
-        }
-    }
-    if (in) memset(in, 0, (size_t)nch * sizeof *in); /* it pointed at the layers' rows, not its own */
+    for (int i = 0; i < n && !rc; i++) rc = chaos_add(cl, ncl, &sc, p[i].r, paths[i], W, H);
     for (int k = 0; k < ncl && !rc; k++) {
         chaos_layer *c = &cl[k];
         for (int j = 0; j < 3; j++) free(c->rows[j]), c->rows[j] = NULL;
@@ -381,5 +409,274 @@ static fb_result merge_points(part *p, int n, const char *const *paths, const ch
     free(in);
     free(cmp);
     fb_scene_fini(&sc);
+    return rc;
+}
+
+/* ---- task files: render --task K/N ---------------------------------------------------------- */
+
+/* The scene layer that channel c of file r belongs to: its part's name in a multi-part file, else
+ * the longest layer name that prefixes "NAME."; -1 if none. */
+static int layer_of_channel(const fb_scene *sc, const exrio_reader *r, int c)
+{
+    if (exrio_nparts(r) > 1) {
+        const char *pn = exrio_part_name(r, exrio_channel_part(r, c));
+        for (int i = 0; i < sc->nlayers; i++)
+            if (pn && !strcmp(sc->layers[i].name, pn)) return i;
+        return -1;
+    }
+    const char *name = exrio_channel_name(r, c);
+    int best = -1;
+    size_t best_len = 0;
+    for (int i = 0; i < sc->nlayers; i++) {
+        size_t len = strlen(sc->layers[i].name);
+        if (len > best_len && !strncmp(name, sc->layers[i].name, len) && name[len] == '.') best = i, best_len = len;
+    }
+    return best;
+}
+
+/* The backend layer `name` ran on, from a task file's "fractalbake/layer-backends" ("a=vulkan;b=native"). */
+static const char *backend_of(const char *list, const char *name, char *out, size_t size)
+{
+    size_t len = strlen(name);
+    for (const char *q = list; q && *q; q = strchr(q, ';') ? strchr(q, ';') + 1 : NULL)
+        if (!strncmp(q, name, len) && q[len] == '=') {
+            const char *v = q + len + 1, *e = strchr(v, ';');
+            size_t n = e ? (size_t)(e - v) : strlen(v);
+            snprintf(out, size, "%.*s", (int)(n < size ? n : size - 1), v);
+            return out;
+        }
+    return NULL;
+}
+
+static fb_result merge_tasks(part *p, int n, const char *const *paths, const char *out, int threads)
+{
+    fb_result rc = FB_OK;
+    const char *scene_json = exrio_attr_string(p[0].r, "fractalbake/scene");
+    const char *plan_text = exrio_attr_string(p[0].r, "fractalbake/plan");
+    if (!scene_json || !plan_text)
+        return fb_fail(FB_ERR_INPUT, "%s: a task file without its scene or plan (attributes fractalbake/scene, /plan)",
+                       paths[0]);
+    for (int i = 1; i < n; i++) {
+        const char *sj = exrio_attr_string(p[i].r, "fractalbake/scene"),
+                   *pj = exrio_attr_string(p[i].r, "fractalbake/plan");
+        if (!sj || strcmp(sj, scene_json))
+            return fb_fail(FB_ERR_INPUT, "%s: baked from another scene than %s (attribute fractalbake/scene)", paths[i],
+                           paths[0]);
+        if (!pj || strcmp(pj, plan_text))
+            return fb_fail(FB_ERR_INPUT, "%s: a task of another plan than %s (attribute fractalbake/plan: another N?)",
+                           paths[i], paths[0]);
+    }
+    fb_scene *sc = calloc(1, sizeof *sc);
+    fb_plan *plan = malloc(sizeof *plan);
+    int *file_of = calloc(FB_PLAN_MAX_TASKS, sizeof *file_of);
+    chaos_layer *cl = calloc(FB_MAX_LAYERS, sizeof *cl);
+    int(*map)[FB_MERGE_MAX_CHANNELS] = calloc((size_t)n, sizeof *map); /* file channel -> output channel, or -1 */
+    exrio_channel ch[FB_MERGE_MAX_CHANNELS];
+    int nout = 0, ncl = 0;
+    void *outp[FB_MERGE_MAX_CHANNELS] = {0};
+    exrio_writer *w = NULL;
+    if (!sc || !plan || !file_of || !cl || !map) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (!rc) rc = fb_scene_parse(scene_json, paths[0], sc);
+    if (!rc) rc = fb_plan_parse(plan_text, sc, plan);
+    int W = sc ? sc->width : 0, H = sc ? sc->height : 0;
+    /* which file is which task; the set complete */
+    for (int k = 0; k < FB_PLAN_MAX_TASKS && file_of; k++) file_of[k] = -1;
+    for (int i = 0; i < n && !rc; i++) {
+        int k = -1, nn = 0;
+        const char *t = exrio_attr_string(p[i].r, "fractalbake/task");
+        if (sscanf(t, "%d/%d", &k, &nn) != 2 || nn != plan->ntasks || k < 0 || k >= plan->nactive)
+            rc = fb_fail(FB_ERR_INPUT, "%s: task \"%s\" is not one of the plan's %d tasks with work", paths[i], t,
+                         plan->nactive);
+        else if (file_of[k] >= 0)
+            rc = fb_fail(FB_ERR_INPUT, "%s and %s are both task %d/%d", paths[file_of[k]], paths[i], k, nn);
+        else
+            file_of[k] = i;
+    }
+    if (!rc) {
+        char missing[2048] = "";
+        int nmiss = 0;
+        for (int k = 0; k < plan->nactive; k++) {
+            if (file_of[k] >= 0) continue;
+            char d[1024];
+            fb_plan_describe(sc, &plan->tasks[k], d, sizeof d);
+            if (nmiss++ < 8)
+                snprintf(missing + strlen(missing), sizeof missing - strlen(missing), "%stask %d (%s)",
+                         nmiss > 1 ? ", " : "", k, d);
+        }
+        if (nmiss)
+            rc = fb_fail(FB_ERR_INPUT, "merge: %d of the plan's %d tasks %s missing: %s%s", nmiss, plan->nactive,
+                         nmiss == 1 ? "is" : "are", missing, nmiss > 8 ? ", ..." : "");
+    }
+    /* each file's window is its task's share */
+    for (int k = 0; k < plan->nactive && !rc && sc; k++) {
+        const fb_task *t = &plan->tasks[k];
+        int i = file_of[k], x0, y0, fw, fh;
+        exrio_window(p[i].r, &x0, &y0, &fw, &fh);
+        int ey0 = t->band ? t->y0 : 0, eh = t->band ? t->y1 - t->y0 : H;
+        if (fw != W || fh != H || x0 != 0 || y0 != ey0 || exrio_width(p[i].r) != W || exrio_height(p[i].r) != eh)
+            rc = fb_fail(FB_ERR_INPUT,
+                         "%s: task %d's file holds rows %d-%d of a %d x %d image, but its plan gives it %d-%d",
+                         paths[i], k, y0, y0 + exrio_height(p[i].r) - 1, fw, fh, ey0, ey0 + eh - 1);
+        p[i].y0 = y0, p[i].h = exrio_height(p[i].r), p[i].w = W;
+    }
+    /* the output's channels, layer by layer: a chaos game split by points from its generator, the
+     * others as the files hold them (every band the same) */
+    for (int i = 0; i < n && map; i++)
+        for (int c = 0; c < FB_MERGE_MAX_CHANNELS; c++) map[i][c] = -1;
+    for (int l = 0; l < (sc ? sc->nlayers : 0) && !rc; l++) {
+        if (plan->share[l] == FB_SHARE_POINTS) {
+            chaos_layer *c = &cl[ncl];
+            ncl++;
+            c->layer = l;
+            rc = fb_gen_init(&c->gen, sc, &sc->layers[l]);
+            for (int j = 0; j < c->gen.nchannels && !rc; j++) {
+                if (nout == FB_MERGE_MAX_CHANNELS)
+                    rc = fb_fail(FB_ERR_INPUT, "merge handles at most %d channels", nout);
+                else
+                    ch[nout++] =
+                        (exrio_channel){c->gen.channel_names[j], c->gen.channel_types[j], sc->multipart ? l : 0};
+            }
+            continue;
+        }
+        bool first = true;
+        int at = nout;
+        for (int k = 0; k < plan->nactive && !rc; k++) {
+            if (!(plan->tasks[k].layers >> l & 1)) continue;
+            const exrio_reader *r = p[file_of[k]].r;
+            int count = 0;
+            for (int c = 0; c < exrio_nchannels(r) && !rc && exrio_nchannels(r) <= FB_MERGE_MAX_CHANNELS; c++) {
+                if (layer_of_channel(sc, r, c) != l) continue;
+                int o = -1;
+                if (first) {
+                    if (nout == FB_MERGE_MAX_CHANNELS) {
+                        rc = fb_fail(FB_ERR_INPUT, "merge handles at most %d channels", nout);
+                        break;
+                    }
+                    o = nout;
+                    ch[nout++] =
+                        (exrio_channel){exrio_channel_name(r, c), exrio_channel_type(r, c), sc->multipart ? l : 0};
+                } else {
+                    for (int q = at; q < nout; q++)
+                        if (!strcmp(ch[q].name, exrio_channel_name(r, c)) && ch[q].type == exrio_channel_type(r, c))
+                            o = q;
+                    if (o < 0)
+                        rc = fb_fail(FB_ERR_INPUT, "%s: channel %s is not in the other bands of layer %s",
+                                     paths[file_of[k]], exrio_channel_name(r, c), sc->layers[l].name);
+                }
+                map[file_of[k]][c] = o;
+                count++;
+            }
+            if (!rc && exrio_nchannels(r) > FB_MERGE_MAX_CHANNELS)
+                rc = fb_fail(FB_ERR_INPUT, "%s: more than %d channels", paths[file_of[k]], FB_MERGE_MAX_CHANNELS);
+            if (!rc && (count == 0 || (!first && count != nout - at)))
+                rc = fb_fail(FB_ERR_INPUT, "%s: task %d's file lacks channels of layer %s", paths[file_of[k]], k,
+                             sc->layers[l].name);
+            first = false;
+        }
+    }
+    /* the chaos games split by points: every part's hits added */
+    size_t npx = (size_t)W * H;
+    if (!rc && ncl) {
+        char who[4200];
+        snprintf(who, sizeof who, "merging the points parts of %s (%d x %d, %d chaos-game layers)", paths[0], W, H,
+                 ncl);
+        rc = fb_memory_check((uint64_t)npx * 16 * (uint64_t)ncl, who);
+    }
+    for (int k = 0; k < ncl && !rc; k++) rc = chaos_alloc(&cl[k], W, H);
+    for (int t = 0; t < plan->nactive && !rc && ncl; t++)
+        if (plan->tasks[t].points) rc = chaos_add(cl, ncl, sc, p[file_of[t]].r, paths[file_of[t]], W, H);
+    for (int k = 0; k < ncl && !rc; k++) rc = fb_gen_ifs_from_sums(&cl[k].gen, cl[k].hits, cl[k].sums, cl[k].outside);
+    /* the attributes a one-command bake writes: its backend composed from the layers' */
+    char backend[16], per_layer[FB_MAX_LAYERS * 80] = "", device[1024] = "native C", seed[16];
+    int nvk = 0;
+    for (int l = 0; l < (sc ? sc->nlayers : 0) && !rc; l++) {
+        char b[32] = "";
+        int holder = -1;
+        for (int k = 0; k < plan->nactive && holder < 0; k++)
+            if (plan->tasks[k].layers >> l & 1) holder = file_of[k];
+        if (holder < 0) {
+            rc = fb_fail(FB_ERR_INPUT, "%s: the stored plan gives layer %s to no task", paths[0], sc->layers[l].name);
+            break;
+        }
+        if (!backend_of(exrio_attr_string(p[holder].r, "fractalbake/layer-backends"), sc->layers[l].name, b, sizeof b))
+            rc = fb_fail(FB_ERR_INPUT, "%s: no backend for layer %s (attribute fractalbake/layer-backends)",
+                         paths[holder], sc->layers[l].name);
+        bool vk = !strcmp(b, fb_backend_name(FB_BACKEND_VULKAN));
+        nvk += vk;
+        if (vk) snprintf(device, sizeof device, "%s", exrio_attr_string(p[holder].r, "fractalbake/device"));
+        snprintf(per_layer + strlen(per_layer), sizeof per_layer - strlen(per_layer), "%s%s=%s", l ? ";" : "",
+                 sc->layers[l].name, b);
+    }
+    if (!rc) {
+        snprintf(backend, sizeof backend, "%s",
+                 nvk == sc->nlayers ? "vulkan"
+                 : nvk == 0         ? "native"
+                                    : fb_backend_name(FB_BACKEND_AUTO));
+        snprintf(seed, sizeof seed, "%u", sc->seed);
+        exrio_attr attrs[6] = {{"fractalbake/scene", scene_json},
+                               {"fractalbake/seed", seed},
+                               {"fractalbake/backend", backend},
+                               {"fractalbake/device", device},
+                               {"fractalbake/version", exrio_attr_string(p[0].r, "fractalbake/version")}};
+        int nattrs = attrs[4].value ? 5 : 4;
+        if (nvk > 0 && nvk < sc->nlayers) attrs[nattrs++] = (exrio_attr){"fractalbake/layer-backends", per_layer};
+        const char *part_names[FB_MAX_LAYERS];
+        exrio_compression part_comp[FB_MAX_LAYERS];
+        for (int l = 0; l < sc->nlayers; l++)
+            part_names[l] = sc->layers[l].name, part_comp[l] = sc->layers[l].compression;
+        for (int o = 0; o < nout && !rc; o++)
+            if (!(outp[o] = malloc((size_t)W * MERGE_STRIP * 4))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        if (!rc)
+            rc = exrio_writer_create(&(exrio_writer_desc){.path = out,
+                                                          .width = W,
+                                                          .height = H,
+                                                          .nparts = sc->multipart ? sc->nlayers : 1,
+                                                          .part_names = sc->multipart ? part_names : NULL,
+                                                          .part_compression = sc->multipart ? part_comp : NULL,
+                                                          .compression = sc->compression,
+                                                          .channels = ch,
+                                                          .nchannels = nout,
+                                                          .attrs = attrs,
+                                                          .nattrs = nattrs,
+                                                          .threads = threads},
+                                     &w);
+    }
+    /* strip by strip: each file's rows in place, the chaos games' from their sums */
+    for (int y0 = 0; y0 < H && !rc; y0 += MERGE_STRIP) {
+        int rowsn = y0 + MERGE_STRIP <= H ? MERGE_STRIP : H - y0;
+        for (int i = 0; i < n && !rc; i++) {
+            int from = y0 > p[i].y0 ? y0 : p[i].y0;
+            int to = y0 + rowsn < p[i].y0 + p[i].h ? y0 + rowsn : p[i].y0 + p[i].h;
+            if (from >= to) continue;
+            void *own[FB_MERGE_MAX_CHANNELS] = {0};
+            bool any = false;
+            for (int c = 0; c < exrio_nchannels(p[i].r); c++)
+                if (map[i][c] >= 0) own[c] = (uint8_t *)outp[map[i][c]] + (size_t)(from - y0) * W * 4, any = true;
+            if (any) rc = exrio_read_rows(p[i].r, from - p[i].y0, to - from, own);
+        }
+        for (int k = 0; k < ncl && !rc; k++) {
+            void *planes[FB_GEN_MAX_CHANNELS] = {0};
+            for (int j = 0; j < cl[k].gen.nchannels; j++)
+                for (int o = 0; o < nout; o++)
+                    if (!strcmp(ch[o].name, cl[k].gen.channel_names[j])) planes[j] = outp[o];
+            cl[k].gen.native_rows(&cl[k].gen, y0, rowsn, planes);
+        }
+        if (!rc) rc = exrio_writer_rows(w, y0, rowsn, (const void *const *)outp);
+    }
+    if (!rc) rc = exrio_writer_finish(&w);
+    exrio_writer_abort(&w);
+    for (int k = 0; k < ncl; k++) {
+        fb_gen_fini(&cl[k].gen);
+        free(cl[k].hits);
+        free(cl[k].sums);
+        for (int j = 0; j < 3; j++) free(cl[k].rows[j]);
+    }
+    for (int o = 0; o < FB_MERGE_MAX_CHANNELS; o++) free(outp[o]);
+    if (sc) fb_scene_fini(sc);
+    free(sc);
+    free(plan);
+    free(file_of);
+    free(cl);
+    free(map);
     return rc;
 }

@@ -648,7 +648,8 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
              nvk == s->nlayers ? "vulkan"
              : nvk == 0        ? "native"
                                : fb_backend_name(FB_BACKEND_AUTO));
-    for (int i = 0; i < s->nlayers && nvk > 0 && nvk < s->nlayers; i++) /* only where they differ */
+    bool list = d->layer_backends || (nvk > 0 && nvk < s->nlayers); /* only where they differ, unless asked */
+    for (int i = 0; i < s->nlayers && list; i++)
         snprintf(per_layer + strlen(per_layer), sizeof per_layer - strlen(per_layer), "%s%s=%s", i ? ";" : "",
                  s->layers[i].name, fb_backend_name(runs[i].e.kind));
     if (stats) {
@@ -660,7 +661,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         snprintf(seed, sizeof seed, "%u", s->seed);
         snprintf(reg, sizeof reg, "%d,%d,%d,%d", rx, ry, rw, rh);
         bool partial = d->region[2] > 0;
-        exrio_attr attrs[10] = {
+        exrio_attr attrs[16] = {
             {"fractalbake/scene", s->json},      {"fractalbake/seed", seed},
             {"fractalbake/backend", backend},    {"fractalbake/device", nvk ? e->device : "native C"},
             {"fractalbake/version", FB_VERSION},
@@ -668,6 +669,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         int nattrs = 5;
         if (partial) attrs[nattrs++] = (exrio_attr){"fractalbake/region", reg};
         if (per_layer[0]) attrs[nattrs++] = (exrio_attr){"fractalbake/layer-backends", per_layer};
+        for (int a = 0; a < d->nattrs && nattrs < 16; a++) attrs[nattrs++] = d->attrs[a];
         /* a points part: which, and each chaos-game layer's points outside the frame (merge needs
          * them for the density) */
         char part[32], outside[FB_MAX_LAYERS * 90] = "";

@@ -45,6 +45,11 @@ typedef struct fb_bake_desc {
      * a human line and a JSON object. NULL: no reports. */
     void (*report)(const char *layer, const char *summary, const char *json, void *user);
     void *user;
+    /* More string attributes for the file (a task's: render --task), after the usual ones; and
+     * whether to list every layer's backend (fractalbake/layer-backends) even when they agree. */
+    const exrio_attr *attrs;
+    int nattrs;
+    bool layer_backends;
 } fb_bake_desc;
 
 /* A heightmap a bake wrote: its layer, file, format and the heights stored as 0 and 65535. */

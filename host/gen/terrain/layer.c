@@ -392,10 +392,16 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
 
 static fb_result inline_points(fb_gen *g, terrain_state *s)
 {
-    /* The layer's "points" array, from the canonical scene. */
+    /* The layer's "points" array, from the canonical scene: found by the layer's name, since a task's
+     * scene (render --task) holds some of the stored scene's layers only. */
     json_t *root = json_loads(g->scene->json, 0, NULL);
-    const json_t *pts = json_object_get(
-        json_array_get(json_object_get(root, "layers"), (size_t)(g->layer - g->scene->layers)), "points");
+    const json_t *pts = NULL, *lj;
+    size_t k;
+    json_array_foreach(json_object_get(root, "layers"), k,
+                       lj) if (!strcmp(json_string_value(json_object_get(lj, "name"))
+                                           ? json_string_value(json_object_get(lj, "name"))
+                                           : "",
+                                       g->layer->name)) pts = json_object_get(lj, "points");
     size_t n = json_array_size(pts);
     s->xyz = malloc((n ? n : 1) * 3 * sizeof *s->xyz);
     if (!root || !s->xyz) {
