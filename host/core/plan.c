@@ -27,7 +27,7 @@
 #define C_TERRAIN_INS  4.0e-6 /* a terrain insertion (refinement and Delaunay) */
 #define C_TERRAIN_PX   4.8e-8 /* a terrain pixel (rasterising, slope, channels) */
 #define C_WHOLE_PX     6.0e-8 /* a constrain or L-system pixel */
-#define PREPASS_WIDTH  128    /* the Julia pre-pass's width */
+#define PREPASS_WIDTH  64     /* the Julia pre-pass's width */
 #define BUDGET         1.10   /* a split may cost this much of one bake, start-ups included */
 
 static double num(const json_t *o, const char *key, double dflt)
@@ -44,16 +44,19 @@ static fb_result julia_rows(const fb_scene *s, int layer, double *rows)
     int h = (int)((double)s->height * w / s->width + 0.5);
     if (h < 1) h = 1;
     if (h > s->height) h = s->height;
-    char size[64], chan[200], samples[200];
+    char size[64], chan[200], samples[200], turb[200];
     snprintf(size, sizeof size, "size=%dx%d", w, h);
     snprintf(chan, sizeof chan, "layers.%s.channels=[\"iter\"]", s->layers[layer].name);
     snprintf(samples, sizeof samples, "layers.%s.samples=1", s->layers[layer].name);
-    const char *sets[3] = {size, chan, samples};
+    /* the turbulence moves the starting grid a little: a row's iterations hardly change without it,
+     * and it would be most of the pre-pass's time (each idle task of a plan runs it too) */
+    snprintf(turb, sizeof turb, "layers.%s.turbulence=0", s->layers[layer].name);
+    const char *sets[4] = {size, chan, samples, turb};
     fb_scene *small = calloc(1, sizeof *small);
     fb_gen g = {0};
     uint32_t *it = malloc((size_t)w * h * sizeof *it);
     fb_result rc = !small || !it ? fb_fail(FB_ERR_NOMEM, "out of memory") : FB_OK;
-    if (!rc) rc = fb_scene_parse_sets(s->json, "the scene", sets, 3, small);
+    if (!rc) rc = fb_scene_parse_sets(s->json, "the scene", sets, 4, small);
     if (!rc) rc = fb_gen_init(&g, small, &small->layers[layer]);
     if (!rc && (!g.native_rows || fb_gen_nplanes(&g) > FB_GEN_MAX_CHANNELS))
         rc = fb_fail(FB_ERR_INTERNAL, "the Julia pre-pass has no native kernel");

@@ -3,7 +3,7 @@
  *
  * Each layer's cost comes from a per-generator model in seconds of one core of the reference machine
  * (docs/scenes.md, "Splitting a bake"): pixels x octaves for fBm, iterations for Julia (counted by a
- * pre-pass at 128 pixels wide), points for the chaos game, insertions and pixels for terrain. Layers
+ * pre-pass at 64 pixels wide), points for the chaos game, insertions and pixels for terrain. Layers
  * are grouped into units: the layers that refer to each other are one unit. A unit of per-pixel
  * layers (fbm, julia, op) is cut into horizontal bands; a lone chaos-game layer (ifs) into points
  * parts; any other unit (terrain, constrain, lsystem, a layer that writes a heightmap, or one that

@@ -7,7 +7,9 @@
 #include <geotiff/geovalues.h>
 #include <geotiff/xtiffio.h>
 
+#include <dlfcn.h>
 #include <errno.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -83,8 +85,53 @@ static void tiff_warning(const char *module, const char *fmt, va_list ap)
     (void)module, (void)fmt, (void)ap;
 }
 
+/* libgeotiff and libtiff are loaded when a GeoTIFF is first written, not linked: they pull in some
+ * 30 more libraries (PROJ, curl, GnuTLS, Kerberos...), about 10 ms at every start of the program,
+ * and a split bake (render --task) starts it once per task. */
+#define TIFF_API(X)                                                                                                    \
+    X(TIFFSetErrorHandler)                                                                                             \
+    X(TIFFSetWarningHandler)                                                                                           \
+    X(TIFFSetField) X(TIFFWriteScanline) X(TIFFFlush) X(XTIFFFdOpen) X(XTIFFClose) X(GTIFNew) X(GTIFKeySet)            \
+        X(GTIFWriteKeys) X(GTIFFree)
+static struct {
+#define X(f) __typeof__(&f) f;
+    TIFF_API(X)
+#undef X
+} g_tiff;
+static char g_tiff_error[300];
+static pthread_once_t g_tiff_once = PTHREAD_ONCE_INIT;
+
+static void tiff_load(void)
+{
+    static const char *const names[] = {"libgeotiff.so.5", "libgeotiff.so"};
+    void *h = NULL;
+    for (size_t i = 0; i < sizeof names / sizeof names[0] && !h; i++) h = dlopen(names[i], RTLD_NOW | RTLD_LOCAL);
+    if (!h) {
+        snprintf(g_tiff_error, sizeof g_tiff_error, "cannot load libgeotiff (Debian: libgeotiff5): %s", dlerror());
+        return;
+    }
+#define X(f)                                                                                                           \
+    if (!(*(void **)&g_tiff.f = dlsym(h, #f)) && !g_tiff_error[0])                                                     \
+        snprintf(g_tiff_error, sizeof g_tiff_error, "libgeotiff has no %s", #f);
+    TIFF_API(X)
+#undef X
+}
+
 static fb_result write_geotiff(const fb_heightmap_desc *d)
 {
+    pthread_once(&g_tiff_once, tiff_load);
+    if (g_tiff_error[0]) return fb_fail(FB_ERR_IO, "%s: cannot write the GeoTIFF: %s", d->path, g_tiff_error);
+#define TIFFSetErrorHandler   g_tiff.TIFFSetErrorHandler
+#define TIFFSetWarningHandler g_tiff.TIFFSetWarningHandler
+#define TIFFSetField          g_tiff.TIFFSetField
+#define TIFFWriteScanline     g_tiff.TIFFWriteScanline
+#define TIFFFlush             g_tiff.TIFFFlush
+#define XTIFFFdOpen           g_tiff.XTIFFFdOpen
+#define XTIFFClose            g_tiff.XTIFFClose
+#define GTIFNew               g_tiff.GTIFNew
+#define GTIFKeySet            g_tiff.GTIFKeySet
+#define GTIFWriteKeys         g_tiff.GTIFWriteKeys
+#define GTIFFree              g_tiff.GTIFFree
     int fd = -1;
     fb_result rc = fb_output_open(d->path, "heightmap", &fd);
     if (rc) return rc;
@@ -133,6 +180,17 @@ static fb_result write_geotiff(const fb_heightmap_desc *d)
     TIFFSetErrorHandler(old_e);
     TIFFSetWarningHandler(old_w);
     return fb_output_done(d->path, rc);
+#undef TIFFSetErrorHandler
+#undef TIFFSetWarningHandler
+#undef TIFFSetField
+#undef TIFFWriteScanline
+#undef TIFFFlush
+#undef XTIFFFdOpen
+#undef XTIFFClose
+#undef GTIFNew
+#undef GTIFKeySet
+#undef GTIFWriteKeys
+#undef GTIFFree
 }
 
 fb_result fb_heightmap_write(const fb_heightmap_desc *d)
