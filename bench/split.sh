@@ -18,6 +18,8 @@ scene=()
 [ -n "${SCENE:-}" ] && scene=("$(realpath "$SCENE")")
 work=$(mktemp -d "${TMPDIR:-/tmp}/fb-split-XXXXXX")
 trap 'rm -rf "$work"' EXIT
+cp "$FB" "$work/fractalbake" # the binary measured, whatever happens to the build meanwhile
+FB=$work/fractalbake
 cd "$work"
 export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-$work}
 
@@ -31,7 +33,7 @@ read -r one one_wall < <(cpu "$FB" render "${scene[@]}" --set "size=$size" -o on
 echo "scene: ${SCENE:-the default scene} at $size; one bake: $one s CPU, $one_wall s wall"
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'); $(date -u +%F)"
 echo
-echo "| N | tasks with work | tasks' CPU s | / one bake | merge CPU s | (tasks + merge) / one | longest task wall s | model: longest s | same bytes |"
+echo "| N | tasks with work | tasks' CPU s | / one bake | merge CPU s | (tasks + merge) / one | longest task wall s | model: longest task, CPU s | same bytes |"
 echo "|---|---|---|---|---|---|---|---|---|"
 for n in "${tasks[@]}"; do
   rm -f part-*.exr merged.exr
@@ -41,12 +43,11 @@ for n in "${tasks[@]}"; do
   total=0 longest=0
   for ((k = 0; k < n; k++)); do
     read -r c w < <(cpu "$FB" render "${scene[@]}" --set "size=$size" --task "$k/$n" -o "part-$k.exr" --quiet)
-    total=$(echo "$total + $c" | bc -l)
-    longest=$(echo "if ($w > $longest) $w else $longest" | bc -l)
+    read -r total longest < <(awk -v t="$total" -v c="$c" -v l="$longest" -v w="$w" 'BEGIN { print t + c, (w > l ? w : l) }')
   done
   read -r m _ < <(cpu "$FB" merge part-*.exr -o merged.exr --quiet)
   same=no
   cmp -s one.exr merged.exr && same=yes
-  printf "| %d | %d | %.2f | %.3f | %.2f | %.3f | %.2f | %s | %s |\n" "$n" "$active" "$total" "$(echo "$total / $one" | bc -l)" \
-    "$m" "$(echo "($total + $m) / $one" | bc -l)" "$longest" "$longest_model" "$same"
+  awk -v n="$n" -v a="$active" -v t="$total" -v o="$one" -v m="$m" -v l="$longest" -v lm="$longest_model" -v s="$same" \
+    'BEGIN { printf "| %d | %d | %.2f | %.3f | %.2f | %.3f | %.2f | %s | %s |\n", n, a, t, t / o, m, (t + m) / o, l, lm, s }'
 done

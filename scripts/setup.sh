@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # Installs what fractalbake needs on Debian 12 (when missing) and builds it into build/.
+# ./scripts/setup.sh --test also installs the tests' own packages.
 # Safe to run again: it installs nothing that is present and rebuilds only what changed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -7,6 +8,8 @@ cd "$(dirname "$0")/.."
 PKGS="build-essential cmake pkg-config libvulkan-dev mesa-vulkan-drivers vulkan-tools glslang-tools spirv-tools
 vulkan-validationlayers libopenexr-dev openexr libjansson-dev libpng-dev time
 libqhull-dev clang python3 libdeflate-dev openimageio-tools libtiff-dev libgeotiff-dev geotiff-bin libtiff-tools"
+# --test: also what only the tests use (a real one-node Slurm for tests/cli/slurm.sh)
+[ "${1:-}" = --test ] && PKGS="$PKGS slurm-wlm"
 missing=()
 for p in $PKGS; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

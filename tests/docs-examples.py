@@ -29,6 +29,7 @@ NOT_RUN = [
     (r'scripts/try-generator\.sh', 'the CTest entry `recipe` runs it'),
     (r'scripts/golden\.sh', 'the CTest entry `golden` runs it (and `update` rewrites the references)'),
     (r'^sbatch ', 'needs a Slurm cluster'),
+    (r'slurm-bake\.sh', 'needs a Slurm cluster; the CTest entry `cli-slurm` runs it on one it starts'),
 ]
 
 

@@ -1,25 +1,70 @@
 #!/usr/bin/env bash
-# Bake one scene over many machines with a Slurm job array, then merge the bands.
+# Bake one scene over a Slurm cluster: the tasks of `fractalbake plan` as a job array, then a merge
+# job that depends on the array, checks that every task's file is there and joins them.
 #
-#   sbatch --array=0-15 docs/examples/slurm-bake.sh scene.json 32768x16384 out/sky
-#   # when the array is done (or: sbatch --dependency=afterok:JOBID --wrap "...merge...")
-#   fractalbake merge out/sky.part*.exr -o out/sky.exr
+#   docs/examples/slurm-bake.sh [--wait] SCENE.json OUT.exr TASKS [SBATCH OPTIONS...]
 #
-# Each task renders the horizontal band SLURM_ARRAY_TASK_ID of SLURM_ARRAY_TASK_COUNT bands. The
-# bands' pixels are those of a single-machine bake, so the merged file equals it byte for byte
-# (same fractalbake build and device type on every node; across devices, within the tolerances
-# of docs/usage.md). Bands split by rows cost no repeated work; columns would.
-#SBATCH --job-name=fractalbake
-#SBATCH --cpus-per-task=8
-#SBATCH --mem=4G
+#   docs/examples/slurm-bake.sh docs/examples/scene.json out/sky.exr 16 --partition=batch --mem=4G
+#
+# Run it where you run sbatch; it submits the jobs itself and prints their ids. Only `fractalbake`
+# (from `cmake --install`, shaders embedded) and Slurm's commands must be on PATH, on every node;
+# the scene's input files and OUT's folder must be on a file system every node sees.
+#  - The plan says how many of the TASKS have work (fewer when more would cost more than they
+#    save); only those are submitted, as array 0..M-1. Each array task bakes `render --task K/N`
+#    with K from its place in the array (any --array form works when you submit the body yourself:
+#    K = (SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN) / SLURM_ARRAY_TASK_STEP).
+#  - Threads: the cpus Slurm gives a task (SLURM_CPUS_PER_TASK, else the node's); ask for more
+#    with --cpus-per-task=C among the SBATCH OPTIONS. Nothing is hard-coded, so a job never waits
+#    for cpus a node lacks.
+#  - The merge job runs after the whole array ends (afterany, not afterok: after a failed task an
+#    afterok job never runs and never ends). `fractalbake merge` then names the tasks whose files
+#    are missing and the job fails, its message in slurm-JOBID.out; --wait makes this script wait
+#    for it and exit with its status.
+#  - The task files are kept in OUT.parts/ (delete them once OUT is written).
 set -euo pipefail
-scene=$1 size=$2 prefix=$3 # size: the scene's size, WxH (or give --set size=WxH to all: the same)
-task=${SLURM_ARRAY_TASK_ID:?run under sbatch --array}
-count=${SLURM_ARRAY_TASK_COUNT:?}
-width=${size%x*} height=${size#*x}
-y0=$((height * task / count))
-y1=$((height * (task + 1) / count))
-mkdir -p "$(dirname "$prefix")"
-export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp}
-fractalbake render "$scene" --set "size=$size" --region "0,$y0,$width,$((y1 - y0))" --threads "${SLURM_CPUS_PER_TASK:-1}" \
-  --quiet -o "$prefix.part$(printf %04d "$task").exr"
+self=$(realpath "$0")
+threads() { echo "${SLURM_CPUS_PER_TASK:-${SLURM_CPUS_ON_NODE:-1}}"; }
+
+case "${1:-}" in
+--task) # the body of an array task: --task SCENE PARTS N
+  scene=$2 parts=$3 n=$4
+  id=${SLURM_ARRAY_TASK_ID:?not an array task}
+  k=$(((id - ${SLURM_ARRAY_TASK_MIN:-0}) / ${SLURM_ARRAY_TASK_STEP:-1}))
+  export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-${TMPDIR:-/tmp}}
+  exec fractalbake render "$scene" --task "$k/$n" --threads "$(threads)" --quiet -o "$parts/task-$(printf %04d "$k").exr"
+  ;;
+--merge) # the body of the merge job: --merge PARTS OUT
+  parts=$2 out=$3
+  exec fractalbake merge "$parts"/task-*.exr -o "$out" --threads "$(threads)"
+  ;;
+esac
+
+wait_merge=
+if [ "${1:-}" = --wait ]; then
+  wait_merge=--wait
+  shift
+fi
+if [ $# -lt 3 ]; then
+  echo "usage: slurm-bake.sh [--wait] SCENE.json OUT.exr TASKS [SBATCH OPTIONS...]" >&2
+  exit 2
+fi
+scene=$(realpath "$1") out=$(realpath -m "$2") n=$3
+shift 3
+parts=${out%.exr}.parts
+active=$(fractalbake plan "$scene" --tasks "$n" --json | sed -n 's/^ *"active": \([0-9]*\),*$/\1/p')
+[ -n "$active" ] || {
+  echo "slurm-bake.sh: fractalbake plan failed" >&2
+  exit 1
+}
+mkdir -p "$parts"
+rm -f "$parts"/task-*.exr
+array=$(sbatch --parsable --job-name=fractalbake --array="0-$((active - 1))" --output="$parts/slurm-%A_%a.out" "$@" \
+  "$self" --task "$scene" "$parts" "$n")
+array=${array%%;*}
+merge=$(sbatch --parsable $wait_merge --job-name=fractalbake-merge --dependency="afterany:$array" \
+  --output="$parts/slurm-merge-%j.out" "$@" "$self" --merge "$parts" "$out") && status=0 || status=$?
+echo "slurm-bake.sh: $active of $n tasks as array job $array; merge job ${merge%%;*} writes $out"
+if [ -n "$wait_merge" ] && [ $status -ne 0 ]; then
+  echo "slurm-bake.sh: the merge failed: $(tail -1 "$parts"/slurm-merge-*.out)" >&2
+fi
+exit $status

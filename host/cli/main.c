@@ -587,15 +587,34 @@ static int cmd_generator(const char *kind, int argc, char **argv)
 }
 
 /* The scene stored in a file baked by fractalbake, and the backend that baked it. */
-static fb_result stored_scene(const char *path, char **json, fb_backend *backend, int region[4], int points_part[2])
+/* The scene stored in a file fractalbake wrote, its backend, and what part of a bake the file is: a
+ * region, a points part, or task[0]/task[1] of a plan with *startup (render --task). */
+static fb_result stored_scene(const char *path, char **json, fb_backend *backend, int region[4], int points_part[2],
+                              int task[2], double *startup)
 {
     exrio_reader *r = NULL;
     fb_result rc = exrio_open(path, &r);
     if (rc) return rc;
+    const char *tk = exrio_attr_string(r, "fractalbake/task"), *plan = exrio_attr_string(r, "fractalbake/plan");
+    if (tk) {
+        json_t *pj = plan ? json_loads(plan, 0, NULL) : NULL;
+        char *end;
+        long k = strtol(tk, &end, 10), n = *end == '/' ? strtol(end + 1, &end, 10) : 0;
+        if (*end || k < 0 || n < 1 || k >= n || n > FB_PLAN_MAX_TASKS ||
+            !json_is_number(json_object_get(pj, "startup")))
+            rc =
+                fb_fail(FB_ERR_INPUT, "%s: malformed attributes fractalbake/task \"%s\" or fractalbake/plan", path, tk);
+        else
+            task[0] = (int)k, task[1] = (int)n, *startup = json_number_value(json_object_get(pj, "startup"));
+        json_decref(pj);
+        exrio_close(&r);
+        if (rc) return rc;
+        if ((rc = exrio_open(path, &r))) return rc;
+    }
     const char *text = exrio_attr_string(r, "fractalbake/scene");
     const char *be = exrio_attr_string(r, "fractalbake/backend");
-    const char *reg = exrio_attr_string(r, "fractalbake/region");
-    const char *pp = exrio_attr_string(r, "fractalbake/points-part");
+    const char *reg = tk ? NULL : exrio_attr_string(r, "fractalbake/region"); /* a task's come from its plan */
+    const char *pp = tk ? NULL : exrio_attr_string(r, "fractalbake/points-part");
     if (pp && !parse_points_part(pp, points_part))
         rc = fb_fail(FB_ERR_INPUT, "%s: malformed attribute fractalbake/points-part \"%s\"", path, pp);
     if (reg && !parse_region(reg, region))
@@ -678,11 +697,14 @@ static int cmd_render(int argc, char **argv)
     } else if (from) {
         char *json = NULL, origin[1100];
         fb_backend stored = FB_BACKEND_AUTO;
-        int region[4] = {0}, part[2] = {0};
-        rc = stored_scene(from, &json, &stored, region, part);
-        if (!rc && o.region[2] == 0 && o.points_part[1] == 0) {
+        int region[4] = {0}, part[2] = {0}, task[2] = {0};
+        double startup = 0;
+        rc = stored_scene(from, &json, &stored, region, part, task, &startup);
+        if (!rc && o.region[2] == 0 && o.points_part[1] == 0 && o.task[1] == 0) {
             memcpy(o.region, region, sizeof region);
             memcpy(o.points_part, part, sizeof part);
+            memcpy(o.task, task, sizeof task);
+            if (task[1]) o.task_startup = startup, o.task_startup_set = true;
         }
         snprintf(origin, sizeof origin, "%s (stored scene)", from);
         /* A file from elsewhere must not choose what this run writes: its layers' output paths go,

@@ -373,9 +373,10 @@ void fb_plan_describe(const fb_scene *s, const fb_task *t, char *out, size_t siz
     names_of(s, t->layers & ~t->points, a, sizeof a);
     names_of(s, t->points, b, sizeof b);
     if (t->points)
-        snprintf(out, size, "%s%spoints part %d/%d of %s", a, a[0] ? "; " : "", t->part, t->nparts, b);
+        snprintf(out, size, "%s%s%spoints part %d/%d of %s", a[0] ? "whole " : "", a, a[0] ? "; " : "", t->part,
+                 t->nparts, b);
     else
-        snprintf(out, size, "%s, whole", a);
+        snprintf(out, size, "whole %s", a);
 }
 
 static json_t *names_json(const fb_scene *s, uint32_t mask)

@@ -61,7 +61,8 @@ char *fb_plan_json(const fb_scene *s, const fb_plan *p, bool pretty);
 /* Reads fb_plan_json's text for scene s. */
 fb_result fb_plan_parse(const char *text, const fb_scene *s, fb_plan *p);
 
-/* "rows 0-127 of sky, ops" or "terrain; plants (points part 1/2)": task t's share, for messages. */
+/* "rows 0-127 of sky, ops", "whole terrain" or "whole terrain; points part 1/2 of plants": task t's
+ * share, for messages. */
 void fb_plan_describe(const fb_scene *s, const fb_task *t, char *out, size_t size);
 
 /* The scene of the layers in `mask` only, in the same order, their references renumbered; every

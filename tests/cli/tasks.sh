@@ -124,6 +124,9 @@ expect_fail 2 "baked from another scene than t/p0.exr" o.exr -- merge t/p0.exr s
 "$FB" render $D --region 0,0,256,64 -o region.exr --quiet
 expect_fail 2 "1 of the 2 files are task files (render --task), the others not: merge one kind at a time" o.exr -- merge t/p0.exr region.exr -o o.exr
 
+# --from a task's file bakes that task again (its plan's start-up too): the same bytes
+"$FB" render --from t/p1.exr -o again.exr --quiet && cmp -s t/p1.exr again.exr && ok || bad "render --from a task file is not that task"
+
 # ---- bad flags: one line, exit 2, no file ----
 expect_fail 2 "--task: expected K/N with 0 <= K < N <= 1024 (K counts from 0, like SLURM_ARRAY_TASK_ID), found \"3/3\"" o.exr -- render --task 3/3 -o o.exr
 expect_fail 2 "--task: expected K/N" o.exr -- render --task 1/0 -o o.exr
