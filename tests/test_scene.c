@@ -9,6 +9,7 @@
 #include "gen_fbm.h"
 #include "gen_ifs.h"
 #include "gen_julia.h"
+#include "gen_op.h"
 #include "gen_terrain.h"
 #include "jsonout.h"
 #include "scene.h"
@@ -197,14 +198,20 @@ static void test_sets(void)
     const char *bad[] = {"layers.fbm.octaves=many"};
     CHECK(fb_scene_parse_sets(base, "t", bad, 1, &s) != FB_OK);
 
+    /* the showcase: the fBm detail behind a polar, warped, turbulent Julia sky; a terrain from inline
+     * points, smooth, lit and coloured; the masks; the plant population in front */
     CHECK(fb_scene_parse(fb_scene_default_json(), "(default)", &s) == FB_OK);
-    CHECK(s.nlayers == 3 && !strcmp(s.layers[0].name, "sky") && !strcmp(s.layers[1].name, "terrain") &&
-          !strcmp(s.layers[2].name, "plants"));
-    CHECK(s.layers[0].cls == &fb_gen_julia && P(fb_julia_params, s.layers[0])->polar &&
-          P(fb_julia_params, s.layers[0])->turbulence > 0 &&
-          (P(fb_julia_params, s.layers[0])->alpha[0] != 0 || P(fb_julia_params, s.layers[0])->alpha[1] != 0));
-    CHECK(s.layers[1].cls == &fb_gen_terrain && P(fb_terrain_layer_params, s.layers[1])->points_inline);
-    CHECK(s.layers[2].cls == &fb_gen_ifs && P(fb_ifs_params, s.layers[2])->has_cond);
+    static const char *const names[7] = {"detail", "sky", "terrain", "ground", "snow", "gentle", "plants"};
+    CHECK(s.nlayers == 7);
+    for (int i = 0; i < 7 && i < s.nlayers; i++) CHECKF(!strcmp(s.layers[i].name, names[i]), "layer %d", i);
+    CHECK(s.layers[0].cls == &fb_gen_fbm && s.layers[3].cls == &fb_gen_op && s.layers[4].cls == &fb_gen_op &&
+          s.layers[5].cls == &fb_gen_op);
+    CHECK(s.layers[1].cls == &fb_gen_julia && P(fb_julia_params, s.layers[1])->polar &&
+          P(fb_julia_params, s.layers[1])->turbulence > 0 &&
+          (P(fb_julia_params, s.layers[1])->alpha[0] != 0 || P(fb_julia_params, s.layers[1])->alpha[1] != 0));
+    CHECK(s.layers[2].cls == &fb_gen_terrain && P(fb_terrain_layer_params, s.layers[2])->points_inline &&
+          P(fb_terrain_layer_params, s.layers[2])->smooth && P(fb_terrain_layer_params, s.layers[2])->colour);
+    CHECK(s.layers[6].cls == &fb_gen_ifs && P(fb_ifs_params, s.layers[6])->has_cond);
     fb_scene_fini(&s);
 }
 

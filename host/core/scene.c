@@ -574,7 +574,9 @@ void fb_json_vec2(const json_t *obj, const char *key, double out[2])
 /* The colour map keys shared by julia and ifs layers: palette, cosine, stops. */
 fb_result fb_schema_palette(const fb_vctx *v, const char *path, const json_t *obj, fb_palette_spec *pal)
 {
-    fb_enum_index(FB_PALETTE_NAMES, json_string_value(json_object_get(obj, "palette")), &pal->named);
+    const char *named = json_string_value(json_object_get(obj, "palette")); /* optional where it has no default */
+    pal->named = 0;
+    if (named) fb_enum_index(FB_PALETTE_NAMES, named, &pal->named);
     json_t *cos_j = json_object_get(obj, "cosine"), *stops_j = json_object_get(obj, "stops");
     if (cos_j && stops_j) {
         char sub[256];
@@ -1017,36 +1019,56 @@ void fb_scene_fini(fb_scene *s)
     memset(s, 0, sizeof *s);
 }
 
-/* The showcase: a polar night sky (a warped Julia galaxy with turbulence), a terrain refined from a
- * small built-in survey (48 points over 1000 x 190 units, the hull's top edge a ridge, so the
- * terrain sits below the sky in the frame), and the paper's plant population in front. */
+/* The showcase, a night landscape: a polar Julia sky (seamless left to right) whose spirals read as
+ * galaxies over a dark horizon glow; a terrain refined from a small built-in survey (48 points over
+ * 1000 x 190 units, the hull's top edge a ridge) with a smooth surface, lit by a low moon and
+ * coloured by height; plants of the paper's population as silhouettes in front. The data layers
+ * behind them: fBm detail, the ground (terrain + detail), a snow mask by height and a gentle-slope
+ * mask (op layers, not drawn in the preview). It bakes in about a second at 1024 x 512. */
 const char *fb_scene_default_json(void)
 {
     return "{\n"
            "  \"size\": [1024, 512],\n"
            "  \"seed\": 7,\n"
            "  \"layers\": [\n"
-           "    {\"type\": \"julia\", \"name\": \"sky\", \"mapping\": \"polar\", \"alpha\": [-0.3, 0], \"turbulence\": "
-           "0.2,\n"
-           "     \"palette\": \"nebula\", \"density\": 2.5, \"samples\": 4},\n"
-           "    {\"type\": \"terrain\", \"name\": \"terrain\", \"insert\": 20000, \"hurst\": 0.85, \"bounds\": [0, "
-           "1000, 0, 500],\n"
-           "     \"points\": [\n"
-           "      [0, 115, 29.1], [125, 143.7, 69.8], [250, 168, 96], [375, 184.3, 112.6], [500, 190, 85.3],\n"
-           "      [625, 184.3, 82], [750, 168, 74.9], [875, 143.7, 38.7], [1000, 115, 7.1], [0, 0, 26.8],\n"
-           "      [125, 0, 34.7], [250, 0, 50.3], [375, 0, 48.2], [500, 0, 46.2], [625, 0, 49.9],\n"
-           "      [750, 0, 50.5], [875, 0, 24.9], [1000, 0, 11.7], [613.1, 132.6, 113.9], [771.6, 146, 98.1],\n"
-           "      [720.7, 150.8, 109.8], [66.7, 61.5, 44.3], [907.9, 85.5, 29.8], [868.8, 24.2, 41.2],\n"
-           "      [471.5, 51.8, 75.5], [540.3, 107.2, 114.7], [52.1, 33.2, 33.7], [297.1, 152.3, 128.5],\n"
-           "      [744.5, 33.8, 79.1], [773.4, 30, 77.3], [608.1, 31, 75.4], [41.6, 101.3, 33.2],\n"
-           "      [232.7, 41.3, 66.2], [943.8, 104.4, 18.7], [306.2, 160.5, 114.1], [536.1, 124.9, 112.5],\n"
-           "      [228.4, 145.8, 106.5], [675.4, 163.6, 105.6], [862.2, 47.8, 42.4], [372.3, 37.2, 66.2],\n"
-           "      [174, 18.7, 57.4], [317.3, 105.3, 125.6], [43.1, 81.3, 33.5], [350.9, 60.2, 91.1],\n"
-           "      [793, 77.5, 99.7], [330.5, 86.8, 121.1], [688.3, 19, 71.5], [937.1, 12.5, 13]\n"
+           "    {\"type\": \"fbm\", \"name\": \"detail\", \"octaves\": 8, \"frequency\": 24},\n"
+           "    {\"type\": \"julia\", \"name\": \"sky\", \"mapping\": \"polar\", \"alpha\": [-0.3, 0], \"c\""
+           ": [-0.76, 0.2], \"radius\": 1.2, \"turbulence\": 0.1, \"samples\": 4, \"stops\": [[0, 0.0, 0.0, 0.01], "
+           "[0.25, 0.05, 0"
+           ".02, 0.15], [0.5, 0.35, 0.12, 0.45], [0.75, 0.45, 0.6, 1.0], [1, 1, 1, 1]], \"density\": 6, \"br"
+           "ightness\": 0.6},\n"
+           "    {\"type\": \"terrain\", \"name\": \"terrain\", \"insert\": 30000, \"hurst\": 0.85, \"interpo"
+           "lation\": \"smooth\", \"bounds\": [0, 1000, 0, 500], \"stops\": [[0, 0.01, 0.015, 0.03], [0.5, 0"
+           ".05, 0.06, 0.1], [0.85, 0.22, 0.25, 0.33], [1, 0.5, 0.52, 0.6]], \"light\": [200, 30], \"ambient"
+           "\": 0.1, \"points\": [\n"
+           "      [0, 115, 87.3], [125, 143.7, 209.4], [250, 168, 288], [375, 184.3, 337.8], [500, 190, 255."
+           "9],\n"
+           "      [625, 184.3, 246], [750, 168, 224.7], [875, 143.7, 116.1], [1000, 115, 21.3], [0, 0, 80.4]"
+           ",\n"
+           "      [125, 0, 104.1], [250, 0, 150.9], [375, 0, 144.6], [500, 0, 138.6], [625, 0, 149.7],\n"
+           "      [750, 0, 151.5], [875, 0, 74.7], [1000, 0, 35.1], [613.1, 132.6, 341.7], [771.6, 146, 294."
+           "3],\n"
+           "      [720.7, 150.8, 329.4], [66.7, 61.5, 132.9], [907.9, 85.5, 89.4], [868.8, 24.2, 123.6], [47"
+           "1.5, 51.8, 226.5],\n"
+           "      [540.3, 107.2, 344.1], [52.1, 33.2, 101.1], [297.1, 152.3, 385.5], [744.5, 33.8, 237.3], ["
+           "773.4, 30, 231.9],\n"
+           "      [608.1, 31, 226.2], [41.6, 101.3, 99.6], [232.7, 41.3, 198.6], [943.8, 104.4, 56.1], [306."
+           "2, 160.5, 342.3],\n"
+           "      [536.1, 124.9, 337.5], [228.4, 145.8, 319.5], [675.4, 163.6, 316.8], [862.2, 47.8, 127.2],"
+           " [372.3, 37.2, 198.6],\n"
+           "      [174, 18.7, 172.2], [317.3, 105.3, 376.8], [43.1, 81.3, 100.5], [350.9, 60.2, 273.3], [793"
+           ", 77.5, 299.1],\n"
+           "      [330.5, 86.8, 363.3], [688.3, 19, 214.5], [937.1, 12.5, 39]\n"
            "     ]},\n"
+           "    {\"type\": \"op\", \"name\": \"ground\", \"op\": \"add\", \"inputs\": [\"terrain.Y\", \"deta"
+           "il\"], \"weights\": [1, 6]},\n"
+           "    {\"type\": \"op\", \"name\": \"snow\", \"op\": \"threshold\", \"inputs\": [\"ground\"], \"le"
+           "vel\": 300, \"width\": 40},\n"
+           "    {\"type\": \"op\", \"name\": \"gentle\", \"op\": \"threshold\", \"inputs\": [\"terrain.slope"
+           "\"], \"level\": 25, \"width\": 10},\n"
            "    {\"type\": \"ifs\", \"name\": \"plants\", \"preset\": \"population\", \"points\": 60000000, "
-           "\"brightness\": 6,\n"
-           "     \"bounds\": [-0.08, 1.06, -0.03, 0.54]}\n"
+           "\"brightness\": 6, \"bounds\": [-0.08, 1.06, -0.03, 0.54], \"stops\": [[0, 0.0, 0.0, 0.0], [1, 0"
+           ".04, 0.06, 0.04]]}\n"
            "  ]\n"
            "}\n";
 }

@@ -74,7 +74,7 @@ check "fbm --json: what was written, with sizes" test "$(jq_ j.json "[(o['path']
 check "fbm --json: the layer's backend, the size, the time" test "$(jq_ j.json "r['layers'][0]['backend'], r['size'], r['seconds'] > 0")" =   "native [96, 64] True"
 check "fbm --json: the EXR's size is the file's" test "$(jq_ j.json "r['outputs'][0]['bytes']")" = "$(stat -c %s j.exr)"
 "$FB" render --set size=64x32 --backend auto --json -o jr.exr > jr.json
-check "render --json: every layer's backend" test "$(jq_ jr.json "sorted((l['name'], l['backend'] in ('vulkan', 'native')) for l in r['layers'])")" =   "[('plants', True), ('sky', True), ('terrain', True)]"
+check "render --json: every layer's backend" test "$(jq_ jr.json "sorted((l['name'], l['backend'] in ('vulkan', 'native')) for l in r['layers'])")" =   "[('detail', True), ('gentle', True), ('ground', True), ('plants', True), ('sky', True), ('snow', True), ('terrain', True)]"
 "$FB" merge j.exr -o jm.exr --json > jm.json
 check "merge --json" test "$(jq_ jm.json "r['command'], r['parts'], r['outputs'][0]['path']")" = "merge ['j.exr'] jm.exr"
 "$FB" ifs --size 32x24 --points 1e5 --backend native -q -o jt0.exr

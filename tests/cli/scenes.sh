@@ -17,7 +17,16 @@ grep -q "layer terrain .*Y (float)" def.txt && ok || bad "default scene: no terr
 grep -q "layer plants .*A (half)" def.txt && ok || bad "default scene: no plants.A"
 [ "$(png_wh def.png)" = "1024 512" ] && [ "$(od -An -tu1 -j25 -N1 def.png | tr -d ' ')" = "2" ] && ok || bad "the default preview is not a 1024 x 512 RGB PNG"
 # the over composite differs from the sky alone; a layer by name; an unknown layer is refused
-S3="--set size=128x64 --set layers.plants.points=200000 --set layers.terrain.insert=2000 --quiet"
+# the checks below use the default's sky, terrain (uncoloured) and plants: three layers
+"$FB" scene default | python3 -c "
+import json, sys
+s = json.load(sys.stdin)
+s['layers'] = [l for l in s['layers'] if l['name'] in ('sky', 'terrain', 'plants')]
+for k in ('stops', 'light', 'ambient'): s['layers'][1].pop(k)
+print(json.dumps(s))" > three.json
+S3="three.json --set size=128x64 --set layers.plants.points=200000 --set layers.terrain.insert=2000 --quiet"
+"$FB" render --set size=128x64 --set layers.terrain.insert=2000 -o lit.exr --preview lit.png --preview-layer terrain --quiet
+check "the default's terrain previews in colour (lit, coloured by height)" test "$(od -An -tu1 -j25 -N1 lit.png | tr -d ' ')" = 2
 "$FB" render $S3 -o c.exr --preview over.png && "$FB" render $S3 -o c2.exr --preview sky.png --preview-layer sky && ok || bad "previews failed"
 cmp -s over.png sky.png && bad "the over composite equals the sky alone" || ok
 "$FB" render $S3 -o c3.exr --preview ter.png --preview-layer terrain && [ "$(od -An -tu1 -j25 -N1 ter.png | tr -d ' ')" = "0" ] && ok || bad "the terrain preview is not a grey hillshade"
