@@ -444,11 +444,6 @@ static fb_result bake_scene(const char *command, fb_scene *scene, const common_o
         fb_plan_describe(scene, t, share, sizeof share);
         if (t->band) ot.region[0] = 0, ot.region[1] = t->y0, ot.region[2] = scene->width, ot.region[3] = t->y1 - t->y0;
         if (t->points) sub->points_part[0] = t->part, sub->points_part[1] = t->nparts;
-        /* A task's file is an intermediate that merge reads once: stored uncompressed, so that the
-         * split compresses the image once, in merge, as one bake does (the stored scene keeps the
-         * scene's compression, which the merged file gets) */
-        sub->compression = EXRIO_NONE;
-        for (int i = 0; i < sub->nlayers; i++) sub->layers[i].compression = EXRIO_NONE;
         snprintf(task_attr, sizeof task_attr, "%d/%d", o->task[0], o->task[1]);
         task_attrs[0] = (exrio_attr){"fractalbake/task", task_attr};
         task_attrs[1] = (exrio_attr){"fractalbake/plan", plan_json};

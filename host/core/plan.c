@@ -488,6 +488,25 @@ fb_result fb_plan_parse(const char *text, const fb_scene *s, fb_plan *p)
         seen |= t->layers;
     }
     ok = ok && seen == (uint32_t)((1ull << s->nlayers) - 1);
+    /* the bands tile the rows in order, all of the same layers; the points parts are 1..n once each */
+    int y = 0, nb = 0, np = 0;
+    uint32_t band_layers = 0, parts_seen[FB_PLAN_MAX_TASKS / 32 + 1] = {0};
+    for (int k = 0; ok && k < p->nactive; k++) {
+        const fb_task *t = &p->tasks[k];
+        if (t->band) {
+            ok = t->y0 == y && (nb == 0 || t->layers == band_layers) && !t->points;
+            y = t->y1, band_layers = t->layers, nb++;
+        }
+        if (t->points) {
+            ok = ok && t->nparts == p->nparts && t->nparts <= FB_PLAN_MAX_TASKS &&
+                 !(parts_seen[t->part / 32] >> (t->part % 32) & 1);
+            if (ok) parts_seen[t->part / 32] |= 1u << (t->part % 32);
+            np++;
+        }
+        for (int j = 0; ok && j < k; j++) /* a layer is whole in one task only, or in all bands / parts */
+            ok = !(p->tasks[j].layers & t->layers & ~(t->band ? band_layers : t->points));
+    }
+    ok = ok && (nb == 0 || y == s->height) && nb == p->nbands && np == p->nparts && p->nparts <= FB_PLAN_MAX_TASKS;
     json_decref(o);
     return ok ? FB_OK : fb_fail(FB_ERR_INPUT, "the stored plan (attribute fractalbake/plan) does not parse");
 }
