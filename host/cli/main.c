@@ -399,7 +399,6 @@ static fb_result bake_scene(const char *command, fb_scene *scene, const common_o
         scene->points_part[1] = o->points_part[1];
     }
     /* render --task K/N: the plan's share K, as a scene of its layers only */
-    const fb_scene *full = scene;
     fb_scene *sub = NULL;
     fb_plan *plan_n = NULL;
     char *plan_json = NULL, task_attr[32], share[2048] = "";
@@ -533,7 +532,6 @@ done:
     free(sub);
     free(plan_n);
     free(plan_json);
-    (void)full;
     return rc;
 }
 

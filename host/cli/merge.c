@@ -227,6 +227,33 @@ typedef struct chaos_layer {
     uint64_t outside;
 } chaos_layer;
 
+/* Rows [y0, y0 + n) of a chaos layer's channels from its summed game, into the output planes of
+ * the same names (ch[0..nout)); every channel of the layer must be among them. */
+static fb_result chaos_rows(const chaos_layer *c, const exrio_channel *ch, void *const *outp, int nout, int y0, int n,
+                            const char *path)
+{
+    void *planes[FB_GEN_MAX_CHANNELS] = {0};
+    for (int j = 0; j < c->gen.nchannels; j++) {
+        for (int o = 0; o < nout; o++)
+            if (!strcmp(ch[o].name, c->gen.channel_names[j])) planes[j] = outp[o];
+        if (!planes[j])
+            return fb_fail(FB_ERR_INPUT, "%s: layer %s lacks some of its channels", path, c->gen.layer->name);
+    }
+    c->gen.native_rows(&c->gen, y0, n, planes);
+    return FB_OK;
+}
+
+/* Frees the ncl chaos layers' generators and sums. */
+static void chaos_free(chaos_layer *cl, int ncl)
+{
+    for (int k = 0; k < ncl; k++) {
+        fb_gen_fini(&cl[k].gen);
+        free(cl[k].hits);
+        free(cl[k].sums);
+        for (int j = 0; j < 3; j++) free(cl[k].rows[j]);
+    }
+}
+
 static const char *const k_sum_suffix[3] = {"count", "colour_sum_lo", "colour_sum_hi"};
 
 /* A chaos layer's strip rows and its image of hits and colour sums. */
@@ -375,32 +402,14 @@ static fb_result merge_points(part *p, int n, const char *const *paths, const ch
                     rc = fb_fail(FB_ERR_INPUT, "%s: channel %s differs from %s's near row %d: not parts of one bake",
                                  paths[i], ch[o].name, paths[0], y0);
         }
-        for (int k = 0; k < ncl && !rc; k++) {
-            void *planes[FB_GEN_MAX_CHANNELS] = {0};
-            for (int o = 0; o < nout; o++)
-                if (src[o] == -1 - k)
-                    for (int j = 0; j < cl[k].gen.nchannels; j++)
-                        if (!strcmp(cl[k].gen.channel_names[j], ch[o].name)) planes[j] = outp[o];
-            bool all = true;
-            for (int j = 0; j < cl[k].gen.nchannels; j++) all = all && planes[j];
-            if (!all) {
-                rc = fb_fail(FB_ERR_INPUT, "%s: layer %s lacks some of its channels", paths[0], cl[k].gen.layer->name);
-                break;
-            }
-            cl[k].gen.native_rows(&cl[k].gen, y0, rowsn, planes);
-        }
+        for (int k = 0; k < ncl && !rc; k++) rc = chaos_rows(&cl[k], ch, outp, nout, y0, rowsn, paths[0]);
         for (int o = 0; o < nout && !rc; o++)
             if (src[o] >= 0) memcpy(outp[o], in[src[o]], bytes);
         if (!rc) rc = exrio_writer_rows(w, y0, rowsn, (const void *const *)outp);
     }
     if (!rc) rc = exrio_writer_finish(&w);
     exrio_writer_abort(&w);
-    for (int k = 0; k < ncl; k++) {
-        fb_gen_fini(&cl[k].gen);
-        free(cl[k].hits);
-        free(cl[k].sums);
-        for (int j = 0; j < 3; j++) free(cl[k].rows[j]);
-    }
+    chaos_free(cl, ncl);
     for (int c = 0; c < nch && in; c++) free(in[c]), free(cmp[c]);
     for (int o = 0; o < FB_MERGE_MAX_CHANNELS; o++) free(outp[o]);
     free(cl);
@@ -654,23 +663,12 @@ static fb_result merge_tasks(part *p, int n, const char *const *paths, const cha
                 if (map[i][c] >= 0) own[c] = (uint8_t *)outp[map[i][c]] + (size_t)(from - y0) * W * 4, any = true;
             if (any) rc = exrio_read_rows(p[i].r, from - p[i].y0, to - from, own);
         }
-        for (int k = 0; k < ncl && !rc; k++) {
-            void *planes[FB_GEN_MAX_CHANNELS] = {0};
-            for (int j = 0; j < cl[k].gen.nchannels; j++)
-                for (int o = 0; o < nout; o++)
-                    if (!strcmp(ch[o].name, cl[k].gen.channel_names[j])) planes[j] = outp[o];
-            cl[k].gen.native_rows(&cl[k].gen, y0, rowsn, planes);
-        }
+        for (int k = 0; k < ncl && !rc; k++) rc = chaos_rows(&cl[k], ch, outp, nout, y0, rowsn, paths[0]);
         if (!rc) rc = exrio_writer_rows(w, y0, rowsn, (const void *const *)outp);
     }
     if (!rc) rc = exrio_writer_finish(&w);
     exrio_writer_abort(&w);
-    for (int k = 0; k < ncl; k++) {
-        fb_gen_fini(&cl[k].gen);
-        free(cl[k].hits);
-        free(cl[k].sums);
-        for (int j = 0; j < 3; j++) free(cl[k].rows[j]);
-    }
+    chaos_free(cl, ncl);
     for (int o = 0; o < FB_MERGE_MAX_CHANNELS; o++) free(outp[o]);
     if (sc) fb_scene_fini(sc);
     free(sc);

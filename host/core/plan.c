@@ -78,8 +78,7 @@ static fb_result julia_rows(const fb_scene *s, int layer, double *rows)
     return rc;
 }
 
-/* Layer i's share kind by its generator alone, and its cost: per row into rows[] (banded layers),
- * else the total. */
+/* Layer i's cost in *total; for a per-pixel layer also per row, into rows[]. */
 static fb_result layer_cost(const fb_scene *s, const json_t *lj, int i, double *rows, double *total)
 {
     const fb_layer *L = &s->layers[i];
@@ -226,14 +225,10 @@ fb_result fb_plan_make(const fb_scene *s, int ntasks, double startup, fb_plan *p
         for (int k = 0; k < nr; k++)
             if (slots[k].ref->layer >= 0) parent[find(parent, i)] = find(parent, slots[k].ref->layer);
     }
+    /* each layer's kind by its generator alone */
     fb_share kind[FB_MAX_LAYERS];
-    double band_total = 0;
     for (int i = 0; i < s->nlayers && !rc; i++) {
         const char *t = s->layers[i].cls->name;
-        double total;
-        for (int y = 0; y < s->height; y++) rows[y] = 0;
-        rc = layer_cost(s, json_array_get(jl, (size_t)i), i, rows, &total);
-        p->layer_seconds[i] = total;
         kind[i] = s->layers[i].heightmap[0]                                      ? FB_SHARE_WHOLE
                   : !strcmp(t, "fbm") || !strcmp(t, "julia") || !strcmp(t, "op") ? FB_SHARE_BAND
                   : !strcmp(t, "ifs")                                            ? FB_SHARE_POINTS
@@ -249,7 +244,6 @@ fb_result fb_plan_make(const fb_scene *s, int ntasks, double startup, fb_plan *p
         if (u < 0) u = nunits++, units[u] = (unit){0};
         unit_of[i] = u;
         units[u].layers |= 1u << i;
-        units[u].seconds += p->layer_seconds[i];
         units[u].has_ifs |= !strcmp(s->layers[i].cls->name, "ifs");
     }
     fb_share ushare[FB_MAX_LAYERS];
@@ -266,22 +260,21 @@ fb_result fb_plan_make(const fb_scene *s, int ntasks, double startup, fb_plan *p
     for (int u = 0; u < nunits; u++)
         can_split_points = can_split_points && !(ushare[u] == FB_SHARE_WHOLE && units[u].has_ifs);
     uint32_t band_mask = 0, points_mask = 0;
-    double points_total = 0;
     for (int u = 0; u < nunits; u++) {
         if (ushare[u] == FB_SHARE_BAND) band_mask |= units[u].layers;
-        if (ushare[u] == FB_SHARE_POINTS && can_split_points)
-            points_mask |= units[u].layers, points_total += units[u].seconds;
+        if (ushare[u] == FB_SHARE_POINTS && can_split_points) points_mask |= units[u].layers;
     }
-    /* the banded layers' cost per row, cumulated */
+    /* each layer's cost, once; the banded layers' per row, cumulated */
     for (int i = 0; i < s->nlayers && !rc; i++) {
-        if (!(band_mask >> i & 1)) continue;
-        double total;
         for (int y = 0; y < s->height; y++) rows[y] = 0;
-        rc = layer_cost(s, json_array_get(jl, (size_t)i), i, rows, &total);
-        for (int y = 0; y < s->height; y++) band_rows[y + 1] += rows[y];
+        rc = layer_cost(s, json_array_get(jl, (size_t)i), i, rows, &p->layer_seconds[i]);
+        units[unit_of[i]].seconds += p->layer_seconds[i];
+        for (int y = 0; y < s->height && band_mask >> i & 1; y++) band_rows[y + 1] += rows[y];
     }
     for (int y = 0; y < s->height; y++) band_rows[y + 1] += band_rows[y];
-    band_total = band_rows[s->height];
+    double band_total = band_rows[s->height], points_total = 0;
+    for (int u = 0; u < nunits; u++)
+        if (units[u].layers & points_mask) points_total += units[u].seconds;
     /* the whole units (banded ones too, for splits with no band), largest first */
     unit wu[FB_MAX_LAYERS];
     int nwu = 0, nwhole_only = 0;

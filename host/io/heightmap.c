@@ -89,13 +89,20 @@ static void tiff_warning(const char *module, const char *fmt, va_list ap)
  * 30 more libraries (PROJ, curl, GnuTLS, Kerberos...), about 10 ms at every start of the program,
  * and a split bake (render --task) starts it once per task. */
 #define TIFF_API(X)                                                                                                    \
-    X(TIFFSetErrorHandler)                                                                                             \
-    X(TIFFSetWarningHandler)                                                                                           \
-    X(TIFFSetField) X(TIFFWriteScanline) X(TIFFFlush) X(XTIFFFdOpen) X(XTIFFClose) X(GTIFNew) X(GTIFKeySet)            \
-        X(GTIFWriteKeys) X(GTIFFree)
+    X(TIFFSetErrorHandler);                                                                                            \
+    X(TIFFSetWarningHandler);                                                                                          \
+    X(TIFFSetField);                                                                                                   \
+    X(TIFFWriteScanline);                                                                                              \
+    X(TIFFFlush);                                                                                                      \
+    X(XTIFFFdOpen);                                                                                                    \
+    X(XTIFFClose);                                                                                                     \
+    X(GTIFNew);                                                                                                        \
+    X(GTIFKeySet);                                                                                                     \
+    X(GTIFWriteKeys);                                                                                                  \
+    X(GTIFFree)
 static struct {
-#define X(f) __typeof__(&f) f;
-    TIFF_API(X)
+#define X(f) __typeof__(&f) f
+    TIFF_API(X);
 #undef X
 } g_tiff;
 static char g_tiff_error[300];
@@ -112,8 +119,8 @@ static void tiff_load(void)
     }
 #define X(f)                                                                                                           \
     if (!(*(void **)&g_tiff.f = dlsym(h, #f)) && !g_tiff_error[0])                                                     \
-        snprintf(g_tiff_error, sizeof g_tiff_error, "libgeotiff has no %s", #f);
-    TIFF_API(X)
+    snprintf(g_tiff_error, sizeof g_tiff_error, "libgeotiff has no %s", #f)
+    TIFF_API(X);
 #undef X
 }
 
@@ -121,76 +128,54 @@ static fb_result write_geotiff(const fb_heightmap_desc *d)
 {
     pthread_once(&g_tiff_once, tiff_load);
     if (g_tiff_error[0]) return fb_fail(FB_ERR_IO, "%s: cannot write the GeoTIFF: %s", d->path, g_tiff_error);
-#define TIFFSetErrorHandler   g_tiff.TIFFSetErrorHandler
-#define TIFFSetWarningHandler g_tiff.TIFFSetWarningHandler
-#define TIFFSetField          g_tiff.TIFFSetField
-#define TIFFWriteScanline     g_tiff.TIFFWriteScanline
-#define TIFFFlush             g_tiff.TIFFFlush
-#define XTIFFFdOpen           g_tiff.XTIFFFdOpen
-#define XTIFFClose            g_tiff.XTIFFClose
-#define GTIFNew               g_tiff.GTIFNew
-#define GTIFKeySet            g_tiff.GTIFKeySet
-#define GTIFWriteKeys         g_tiff.GTIFWriteKeys
-#define GTIFFree              g_tiff.GTIFFree
     int fd = -1;
     fb_result rc = fb_output_open(d->path, "heightmap", &fd);
     if (rc) return rc;
     t_tiff_msg[0] = 0;
-    TIFFErrorHandler old_e = TIFFSetErrorHandler(tiff_error), old_w = TIFFSetWarningHandler(tiff_warning);
-    TIFF *tif = XTIFFFdOpen(fd, d->path, "w");
-    GTIF *gt = tif ? GTIFNew(tif) : NULL;
+    TIFFErrorHandler old_e = g_tiff.TIFFSetErrorHandler(tiff_error), old_w = g_tiff.TIFFSetWarningHandler(tiff_warning);
+    TIFF *tif = g_tiff.XTIFFFdOpen(fd, d->path, "w");
+    GTIF *gt = tif ? g_tiff.GTIFNew(tif) : NULL;
     if (!tif || !gt) {
         rc = fb_fail(FB_ERR_IO, "%s: cannot write the GeoTIFF: %s", d->path, t_tiff_msg);
     } else {
         const int rows = 16;
-        TIFFSetField(tif, TIFFTAG_IMAGEWIDTH, (uint32_t)d->width);
-        TIFFSetField(tif, TIFFTAG_IMAGELENGTH, (uint32_t)d->height);
-        TIFFSetField(tif, TIFFTAG_BITSPERSAMPLE, 32);
-        TIFFSetField(tif, TIFFTAG_SAMPLEFORMAT, SAMPLEFORMAT_IEEEFP);
-        TIFFSetField(tif, TIFFTAG_SAMPLESPERPIXEL, 1);
-        TIFFSetField(tif, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
-        TIFFSetField(tif, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
-        TIFFSetField(tif, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE);
-        TIFFSetField(tif, TIFFTAG_PREDICTOR, PREDICTOR_FLOATINGPOINT);
-        TIFFSetField(tif, TIFFTAG_ROWSPERSTRIP, (uint32_t)rows);
-        TIFFSetField(tif, TIFFTAG_SOFTWARE, "fractalbake " FB_VERSION);
+        g_tiff.TIFFSetField(tif, TIFFTAG_IMAGEWIDTH, (uint32_t)d->width);
+        g_tiff.TIFFSetField(tif, TIFFTAG_IMAGELENGTH, (uint32_t)d->height);
+        g_tiff.TIFFSetField(tif, TIFFTAG_BITSPERSAMPLE, 32);
+        g_tiff.TIFFSetField(tif, TIFFTAG_SAMPLEFORMAT, SAMPLEFORMAT_IEEEFP);
+        g_tiff.TIFFSetField(tif, TIFFTAG_SAMPLESPERPIXEL, 1);
+        g_tiff.TIFFSetField(tif, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+        g_tiff.TIFFSetField(tif, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+        g_tiff.TIFFSetField(tif, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE);
+        g_tiff.TIFFSetField(tif, TIFFTAG_PREDICTOR, PREDICTOR_FLOATINGPOINT);
+        g_tiff.TIFFSetField(tif, TIFFTAG_ROWSPERSTRIP, (uint32_t)rows);
+        g_tiff.TIFFSetField(tif, TIFFTAG_SOFTWARE, "fractalbake " FB_VERSION);
         /* the geotransform: pixel corner (0, 0) at (xmin, ymax), pixels (dx, dy) of the world apart */
         const double *w = d->world;
         double scale[3] = {(w[1] - w[0]) / d->width, (w[3] - w[2]) / d->height, 0};
         double tie[6] = {0, 0, 0, w[0], w[3], 0};
-        TIFFSetField(tif, TIFFTAG_GEOPIXELSCALE, 3, scale);
-        TIFFSetField(tif, TIFFTAG_GEOTIEPOINTS, 6, tie);
-        GTIFKeySet(gt, GTModelTypeGeoKey, TYPE_SHORT, 1, ModelTypeProjected);
-        GTIFKeySet(gt, GTRasterTypeGeoKey, TYPE_SHORT, 1, RasterPixelIsArea);
-        GTIFKeySet(gt, ProjectedCSTypeGeoKey, TYPE_SHORT, 1, d->epsg > 0 ? d->epsg : KvUserDefined);
-        if (d->epsg <= 0) GTIFKeySet(gt, GTCitationGeoKey, TYPE_ASCII, 0, "fractalbake terrain: CRS not stated");
-        GTIFWriteKeys(gt);
+        g_tiff.TIFFSetField(tif, TIFFTAG_GEOPIXELSCALE, 3, scale);
+        g_tiff.TIFFSetField(tif, TIFFTAG_GEOTIEPOINTS, 6, tie);
+        g_tiff.GTIFKeySet(gt, GTModelTypeGeoKey, TYPE_SHORT, 1, ModelTypeProjected);
+        g_tiff.GTIFKeySet(gt, GTRasterTypeGeoKey, TYPE_SHORT, 1, RasterPixelIsArea);
+        g_tiff.GTIFKeySet(gt, ProjectedCSTypeGeoKey, TYPE_SHORT, 1, d->epsg > 0 ? d->epsg : KvUserDefined);
+        if (d->epsg <= 0) g_tiff.GTIFKeySet(gt, GTCitationGeoKey, TYPE_ASCII, 0, "fractalbake terrain: CRS not stated");
+        g_tiff.GTIFWriteKeys(gt);
         for (int y = 0; y < d->height && !rc; y++)
-            if (TIFFWriteScanline(tif, (void *)(d->z + (size_t)y * d->width), (uint32_t)y, 0) < 0)
+            if (g_tiff.TIFFWriteScanline(tif, (void *)(d->z + (size_t)y * d->width), (uint32_t)y, 0) < 0)
                 rc = fb_fail(FB_ERR_IO, "%s: cannot write the GeoTIFF: %s", d->path, t_tiff_msg);
     }
-    if (gt) GTIFFree(gt);
+    if (gt) g_tiff.GTIFFree(gt);
     if (tif) {
-        TIFFFlush(tif);
+        g_tiff.TIFFFlush(tif);
         if (t_tiff_msg[0] && !rc) rc = fb_fail(FB_ERR_IO, "%s: cannot write the GeoTIFF: %s", d->path, t_tiff_msg);
-        XTIFFClose(tif); /* closes fd */
+        g_tiff.XTIFFClose(tif); /* closes fd */
     } else {
         close(fd);
     }
-    TIFFSetErrorHandler(old_e);
-    TIFFSetWarningHandler(old_w);
+    g_tiff.TIFFSetErrorHandler(old_e);
+    g_tiff.TIFFSetWarningHandler(old_w);
     return fb_output_done(d->path, rc);
-#undef TIFFSetErrorHandler
-#undef TIFFSetWarningHandler
-#undef TIFFSetField
-#undef TIFFWriteScanline
-#undef TIFFFlush
-#undef XTIFFFdOpen
-#undef XTIFFClose
-#undef GTIFNew
-#undef GTIFKeySet
-#undef GTIFWriteKeys
-#undef GTIFFree
 }
 
 fb_result fb_heightmap_write(const fb_heightmap_desc *d)
