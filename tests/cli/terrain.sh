@@ -104,7 +104,7 @@ cmp -s tn1.exr tn2.exr && ok || bad "terrain depends on threads or strip rows"
 "$FB" $Tr --points pts.csv --insert 5000 --seed 2 -o ts2.exr
 "$FB" compare tn1.exr ts2.exr > /dev/null; [ $? -eq 1 ] && ok || bad "terrain ignores the seed"
 # every refinement flag changes the terrain
-for f in "--order sweep" "--variance local" "--hurst 0.5" "--dimension 2.5" "--sigma 3" "--insert 4000" "--bounds 10,90,10,90"; do
+for f in "--order sweep" "--variance local" "--variance additions" "--hurst 0.5" "--dimension 2.5" "--sigma 3" "--insert 4000" "--bounds 10,90,10,90"; do
   "$FB" $Tr --points pts.csv --insert 5000 $f -o tf.exr
   "$FB" compare tn1.exr tf.exr > /dev/null; [ $? -eq 1 ] && ok || bad "terrain $f changed nothing"
 done
@@ -116,6 +116,17 @@ expect_fail 2 "no channel fbm.X" o.exr -- $Tr --from-heightfield hf.exr:fbm.X -o
 # centres: regions of their own D
 printf 'x,y,D,sigma\n25,50,2.1,\n75,50,2.7,0.5\n' > centers.csv
 "$FB" $Tr --points pts.csv --centers centers.csv --insert 3000 -o tc.exr && ok || bad "terrain with centres failed"
+"$FB" $Tr --points pts.csv --centers centers.csv --insert 3000 --variance additions -o tca.exr && ok ||
+  bad "terrain additions with centres failed"
+"$FB" compare tc.exr tca.exr > /dev/null; [ $? -eq 1 ] && ok || bad "additions with centres changed nothing"
+# --variance additions on the docs' survey: no variance clamped (the stage variance clamps most of them),
+# the same bits for any thread count
+"$FB" terrain --points "$ROOT/docs/examples/survey.csv" --insert 20000 --size 128x100 --variance additions --threads 1 \
+  -o sa1.exr --json > sa.json && ok || bad "additions on the survey failed"
+"$FB" terrain --points "$ROOT/docs/examples/survey.csv" --insert 20000 --size 128x100 --variance additions --threads 2 \
+  --strip-rows 16 -o sa2.exr && cmp -s sa1.exr sa2.exr && ok || bad "additions depends on the thread count"
+[ "$(python3 -c "import json; s = json.load(open('sa.json'))['layers'][0]['summary']; print(s['clamped_variances'], s['inserted'])")" = "0 20000" ] &&
+  ok || bad "additions clamped variances: $(cat sa.json)"
 "$FB" terrain --help | grep -q -- "--from-heightfield" && ok || bad "terrain --help lists no --from-heightfield"
 
 cli_finish

@@ -16,6 +16,7 @@ typedef struct fb_terrain_layer_params {
     double hurst;               /* H (from hurst or 3 - dimension) */
     double sigma;               /* < 0: estimated from the data */
     bool sweep, local_variance; /* --order sweep, --variance local */
+    bool additions;             /* --variance additions */
     char centers[1024];         /* CSV of centres, or "" */
     bool auto_bounds;
     double bounds[4];

@@ -40,8 +40,10 @@ static const fb_keyspec terrain_keys[] = {
      "standard deviation of height increments at unit distance (default: estimated from the points)"},
     {"order", FB_K_ENUM, 0, 0, false, "random|sweep", "\"random\"",
      "insertion triangles: random (by area) or an ordered sweep"},
-    {"variance", FB_K_ENUM, 0, 0, false, "stage|local", "\"stage\"",
-     "var(z_abc - z_*): over the mesh per doubling (stage) or the triangle's neighbourhood (local)"},
+    {"variance", FB_K_ENUM, 0, 0, false, "stage|local|additions", "\"stage\"",
+     "the displacements: the paper's, var(z_abc - z_*) over the mesh per doubling (stage) or the triangle's "
+     "neighbourhood (local); or additions, an fBm field of exactly the asked H added to the survey's interpolated "
+     "residual"},
     {"centers", FB_K_STRING, 0, 0, false, NULL, NULL, "CSV of centres x,y,D,sigma: regions of their own D and sigma"},
     {"interpolation", FB_K_ENUM, 0, 0, false, "linear|smooth", "\"linear\"",
      "the surface between the vertices: each triangle's plane, or a C1 surface (Clough-Tocher) without facets"},
@@ -115,6 +117,7 @@ static fb_result parse_terrain(const fb_vctx *v, const char *path, json_t *obj, 
     t->sweep = !strcmp(json_string_value(json_object_get(obj, "order")), "sweep");
     t->smooth = !strcmp(json_string_value(json_object_get(obj, "interpolation")), "smooth");
     t->local_variance = !strcmp(json_string_value(json_object_get(obj, "variance")), "local");
+    t->additions = !strcmp(json_string_value(json_object_get(obj, "variance")), "additions");
     t->colour = json_object_get(obj, "palette") || json_object_get(obj, "cosine") || json_object_get(obj, "stops");
     static const char *const needs_palette[3] = {"light", "ambient", "colour-range"};
     for (int k = 0; k < 3; k++)
@@ -408,6 +411,7 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
         .sigma = P->sigma,
         .sweep = P->sweep,
         .local_variance = P->local_variance,
+        .additions = P->additions,
         .seed = g->scene->seed,
         .centers = s->centers,
         .ncenters = s->ncenters,

@@ -14,6 +14,7 @@
 #define STREAM_SITE_X 0x51u
 #define STREAM_SITE_Y 0x52u
 #define STREAM_GAUSS  0x53u
+#define STREAM_ADD    0x54u
 
 void fb_terrain_free(fb_terrain *t)
 {
@@ -96,13 +97,18 @@ double fb_terrain_sigma2_estimate(const fb_terrain *t, double hurst)
     return n ? sum / (double)n : 0.0;
 }
 
-double fb_terrain_gauss(uint32_t seed, uint64_t index)
+static double gauss_stream(uint32_t seed, uint32_t stream, uint64_t index)
 {
     uint32_t lo = (uint32_t)index, hi = (uint32_t)(index >> 32);
-    uint32_t h1 = k_hash3(seed ^ k_hash(hi), STREAM_GAUSS, 2 * lo);
-    uint32_t h2 = k_hash3(seed ^ k_hash(hi), STREAM_GAUSS, 2 * lo + 1);
+    uint32_t h1 = k_hash3(seed ^ k_hash(hi), stream, 2 * lo);
+    uint32_t h2 = k_hash3(seed ^ k_hash(hi), stream, 2 * lo + 1);
     double u1 = ((double)h1 + 0.5) * 0x1p-32, u2 = (double)h2 * 0x1p-32;
     return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
+}
+
+double fb_terrain_gauss(uint32_t seed, uint64_t index)
+{
+    return gauss_stream(seed, STREAM_GAUSS, index);
 }
 
 /* The variance of z_abc - z_* over the finite triangles of a list. */
@@ -199,6 +205,130 @@ static bool grid_rebuild(hint_grid *g, const fb_terrain *t)
     return true;
 }
 
+/* The area of the finite triangles: the hull's, which refinement does not change. */
+static double mesh_area(const fb_terrain *t)
+{
+    const fb_dt *d = &t->dt;
+    double sum = 0;
+    for (uint32_t tr = 0; tr < d->nt; tr++) {
+        if (fb_dt_is_ghost(d, tr)) continue;
+        const uint32_t *v = d->tv + 3 * (size_t)tr;
+        const double *a = d->xy + 2 * (size_t)v[0], *b = d->xy + 2 * (size_t)v[1], *c = d->xy + 2 * (size_t)v[2];
+        sum += fabs((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])) / 2;
+    }
+    return sum;
+}
+
+/* ---- additions: a continuous fBm field plus the survey's residual, refined -------------------------
+ *
+ * F(p) = sum_i a_i cos(k_i . p + phi_i): random waves whose wavenumbers |k_i| are spread evenly in
+ * log |k| (one stratum per wave, jittered) from KMIN_LAG / D (D the data's bounding-box diagonal)
+ * to 4 waves per final vertex spacing h, directions stratified over a half turn within each octave,
+ * phases uniform. With a_i^2 = w |k_i|^(-2H) L / M (L = ln(kmax / kmin), M waves) the structure
+ * function is E (F(p) - F(q))^2 = sum a_i^2 (1 - J0(|k_i| l)) -> w l^(2H) I(H), l = |p - q|, with
+ * I(H) = int_0^inf u^(-2H-1) (1 - J0(u)) du = 2^(-2H-1) Gamma(1 - H) / (H Gamma(1 + H)); so
+ * w = sigma^2 / I(H) gives sigma^2 l^(2H). The scales finer than 1 / kmax are independent from one
+ * vertex to the next: each inserted vertex adds one Gaussian of their variance, w kmax^(-2H) / (4H).
+ *
+ * A vertex's height is F plus the residual r = z - F: the input vertices' residual is their height
+ * minus F there (so they keep their heights exactly), and an inserted vertex takes the mean residual
+ * of its triangle's vertices. The survey fixes the large scales; F brings every scale below them
+ * with the asked H, the earlier vertices' as well as the new one's. */
+#define KMIN_LAG         1e-4
+#define WAVES_PER_OCTAVE 12
+
+typedef struct fbm_field {
+    double *k;   /* kx, ky, phase per wave */
+    double *amp; /* per wave, per centre (or the one global H and sigma) */
+    double *nugget_sd;
+    int nwaves;
+    double origin[2]; /* the data's lower-left corner: phases stay small for large coordinates */
+} fbm_field;
+
+static double fbm_integral(double H)
+{
+    return pow(2, -2 * H - 1) * tgamma(1 - H) / (H * tgamma(1 + H));
+}
+
+static void fbm_field_free(fbm_field *f)
+{
+    free(f->k), free(f->amp), free(f->nugget_sd);
+    memset(f, 0, sizeof *f);
+}
+
+/* hs: (H, sigma^2) pairs, n of them (the centres, or the one global pair). */
+static bool fbm_field_init(fbm_field *f, uint32_t seed, const double *bbox, double hfinal, const double *hs, int n)
+{
+    memset(f, 0, sizeof *f);
+    double diag = hypot(bbox[1] - bbox[0], bbox[3] - bbox[2]);
+    f->origin[0] = bbox[0], f->origin[1] = bbox[2];
+    double kmin = KMIN_LAG / diag, kmax = 8 * M_PI / hfinal, L = log(kmax / kmin);
+    int octaves = (int)ceil(L / log(2.0));
+    int M = octaves * WAVES_PER_OCTAVE;
+    f->k = malloc((size_t)M * 3 * sizeof *f->k);
+    f->amp = malloc((size_t)M * n * sizeof *f->amp);
+    f->nugget_sd = malloc((size_t)n * sizeof *f->nugget_sd);
+    if (!f->k || !f->amp || !f->nugget_sd) {
+        fbm_field_free(f);
+        return false;
+    }
+    f->nwaves = M;
+    for (int i = 0; i < M; i++) {
+        uint32_t s = seed ^ k_hash(0xadd17105u + (uint32_t)i);
+        double u0 = k_hash3(s, STREAM_ADD, 0) * 0x1p-32, u1 = k_hash3(s, STREAM_ADD, 1) * 0x1p-32;
+        double u2 = k_hash3(s, STREAM_ADD, 2) * 0x1p-32;
+        double lk = log(kmin) + (i + u0) * L / M, kk = exp(lk);
+        double th = M_PI * ((i % WAVES_PER_OCTAVE) + u1) / WAVES_PER_OCTAVE;
+        f->k[3 * i] = kk * cos(th), f->k[3 * i + 1] = kk * sin(th), f->k[3 * i + 2] = 2 * M_PI * u2;
+        for (int c = 0; c < n; c++) {
+            double H = hs[2 * c], w = hs[2 * c + 1] / fbm_integral(H);
+            f->amp[(size_t)c * M + i] = sqrt(w * exp(-2 * H * lk) * L / M);
+        }
+    }
+    for (int c = 0; c < n; c++) {
+        double H = hs[2 * c], w = hs[2 * c + 1] / fbm_integral(H);
+        f->nugget_sd[c] = sqrt(w * pow(kmax, -2 * H) / (4 * H));
+    }
+    return true;
+}
+
+/* cos x in plain arithmetic, the same bits on every machine and twice as fast as libm here for the
+ * fine waves' large arguments: x reduced to r in [-pi, pi] (an error of about |x| 1e-16, the size of
+ * x's own rounding; 7e-12 at |x| = 1e5), then cos r = 2 cos^2(r / 2) - 1 with the Taylor series of
+ * cos to degree 22 on [-pi/2, pi/2] (truncation 2e-17). */
+static inline double cos_poly(double x)
+{
+    const double inv2pi = 0.15915494309189535, pi2_hi = 6.283185307179586, pi2_lo = 2.4492935982947064e-16;
+    const double magic = 0x1.8p52; /* adding and subtracting it rounds to an integer (|x| < 2^50) */
+    double n = (x * inv2pi + magic) - magic, r = (x - n * pi2_hi) - n * pi2_lo, h = 0.25 * r * r; /* (r / 2)^2 */
+    double c = -1.0 / 1124000727777607680000.0;                                                   /* -1 / 22! */
+    static const double inv_fact[10] = {-1.0 / 2,
+                                        1.0 / 24,
+                                        -1.0 / 720,
+                                        1.0 / 40320,
+                                        -1.0 / 3628800,
+                                        1.0 / 479001600,
+                                        -1.0 / 87178291200,
+                                        1.0 / 20922789888000,
+                                        -1.0 / 6402373705728000,
+                                        1.0 / 2432902008176640000.0};
+    for (int k = 9; k >= 0; k--) c = c * h + inv_fact[k];
+    c = c * h + 1;
+    return 2 * c * c - 1;
+}
+
+static double fbm_at(const fbm_field *f, int c, const double *p)
+{
+    const double *a = f->amp + (size_t)c * f->nwaves;
+    double sum = 0, x = p[0] - f->origin[0], y = p[1] - f->origin[1];
+    double acc[4] = {0, 0, 0, 0}; /* four partial sums (nwaves is a multiple of 4): independent chains */
+    for (int i = 0; i < f->nwaves; i += 4)
+        for (int j = 0; j < 4; j++)
+            acc[j] += a[i + j] * cos_poly(f->k[3 * (i + j)] * x + f->k[3 * (i + j) + 1] * y + f->k[3 * (i + j) + 2]);
+    sum = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+    return sum;
+}
+
 static const fb_terrain_center *nearest_center(const fb_terrain_opts *o, const double *p)
 {
     const fb_terrain_center *best = NULL;
@@ -208,6 +338,51 @@ static const fb_terrain_center *nearest_center(const fb_terrain_opts *o, const d
         if (dd < bd) bd = dd, best = &o->centers[i];
     }
     return best;
+}
+
+/* The field F for the asked H and sigma (or each centre's) over t's hull, refined to nv_final vertices. */
+static bool field_make(const fb_terrain *t, const fb_terrain_opts *o, double sigma2, const double *csig2,
+                       uint64_t nv_final, fbm_field *f)
+{
+    double hfinal = sqrt(mesh_area(t) / (double)nv_final);
+    int n = o->ncenters ? o->ncenters : 1;
+    double *hs = malloc((size_t)n * 2 * sizeof *hs);
+    if (!hs) return false;
+    for (int c = 0; c < n; c++) {
+        hs[2 * c] = o->ncenters ? o->centers[c].hurst : o->hurst;
+        hs[2 * c + 1] = o->ncenters ? csig2[c] : sigma2;
+    }
+    bool ok = fbm_field_init(f, o->seed, t->bbox, hfinal, hs, n);
+    free(hs);
+    return ok;
+}
+
+fb_result fb_terrain_field(const fb_terrain *t, const fb_terrain_opts *o, double sigma2, uint64_t nv_final,
+                           const double *xy, size_t n, double *z)
+{
+    fbm_field f;
+    if (!field_make(t, o, sigma2, NULL, nv_final, &f)) return fb_fail(FB_ERR_NOMEM, "terrain field: out of memory");
+    for (size_t i = 0; i < n; i++) z[i] = fbm_at(&f, 0, xy + 2 * i);
+    fbm_field_free(&f);
+    return FB_OK;
+}
+
+/* The field, and the input vertices' residuals: their heights minus F. */
+static fb_result additions_init(const fb_terrain *t, const fb_terrain_opts *o, double sigma2, const double *csig2,
+                                fbm_field *f, double **resid, const char *who)
+{
+    const fb_dt *d = &t->dt;
+    *resid = malloc(((size_t)d->nv + o->insert) * sizeof **resid);
+    if (!*resid || !field_make(t, o, sigma2, csig2, (uint64_t)d->nv + o->insert, f)) {
+        free(*resid), *resid = NULL;
+        return fb_fail(FB_ERR_NOMEM, "%s: out of memory", who);
+    }
+    for (uint32_t v = 0; v < d->nv; v++) {
+        const double *p = d->xy + 2 * (size_t)v;
+        int c = o->ncenters ? (int)(nearest_center(o, p) - o->centers) : 0;
+        (*resid)[v] = t->z[v] - fbm_at(f, c, p);
+    }
+    return FB_OK;
 }
 
 fb_result fb_terrain_refine(fb_terrain *t, const fb_terrain_opts *o, const char *who, fb_terrain_stats *st)
@@ -247,9 +422,17 @@ fb_result fb_terrain_refine(fb_terrain *t, const fb_terrain_opts *o, const char 
         return fb_fail(FB_ERR_NOMEM, "%s: out of memory", who);
     }
     fb_result rc = FB_OK;
-    double V = stage_variance(t);
+    double V = o->additions ? 0 : stage_variance(t);
     uint32_t stage_nv = d->nv;
-    st->stages = 1;
+    st->stages = o->additions ? 0 : 1;
+    /* additions: the field F and each vertex's residual */
+    fbm_field field = {0};
+    double *resid = NULL;
+    if (o->additions && (rc = additions_init(t, o, sigma2, csig2, &field, &resid, who))) {
+        free(g.cell);
+        free(csig2);
+        return rc;
+    }
     uint64_t draws = 0, cursor = 0, attempts = 0;
     const uint64_t max_attempts = o->insert * 64 + 4096;
     for (uint64_t i = 0; i < o->insert;) {
@@ -280,29 +463,37 @@ fb_result fb_terrain_refine(fb_terrain *t, const fb_terrain_opts *o, const char 
         const uint32_t *v = d->tv + 3 * (size_t)tr;
         const double *a = d->xy + 2 * (size_t)v[0], *b = d->xy + 2 * (size_t)v[1], *c = d->xy + 2 * (size_t)v[2];
         double p[2] = {(a[0] + b[0] + c[0]) / 3, (a[1] + b[1] + c[1]) / 3};
-        if (d->nv >= 2 * (uint64_t)stage_nv && !o->local_variance) {
+        if (d->nv >= 2 * (uint64_t)stage_nv && !o->local_variance && !o->additions) {
             V = stage_variance(t);
             stage_nv = d->nv;
             st->stages++;
         }
-        double var_abc = o->local_variance ? local_variance(t, tr) : V;
         double H = o->hurst, s2 = sigma2;
+        uint32_t ci = 0;
         if (o->ncenters) {
             const fb_terrain_center *cc = nearest_center(o, p);
-            H = cc->hurst, s2 = csig2[cc - o->centers];
+            ci = (uint32_t)(cc - o->centers);
+            H = cc->hurst, s2 = csig2[ci];
         }
-        double var = 0;
-        for (int k = 0; k < 3; k++) {
-            const double *x = d->xy + 2 * (size_t)v[k];
-            double dx = p[0] - x[0], dy = p[1] - x[1];
-            var += pow(dx * dx + dy * dy, H) * s2 - var_abc; /* |p - x|^(2H) sigma^2 */
+        double z = (t->z[v[0]] + t->z[v[1]] + t->z[v[2]]) / 3, res = 0;
+        if (o->additions) {
+            res = (resid[v[0]] + resid[v[1]] + resid[v[2]]) / 3;
+            int c = o->ncenters ? (int)ci : 0;
+            z = res + fbm_at(&field, c, p) + field.nugget_sd[c] * fb_terrain_gauss(o->seed, i);
+        } else { /* equations IV to VI */
+            double var_abc = o->local_variance ? local_variance(t, tr) : V, var = 0;
+            for (int k = 0; k < 3; k++) {
+                const double *x = d->xy + 2 * (size_t)v[k];
+                double dx = p[0] - x[0], dy = p[1] - x[1];
+                var += pow(dx * dx + dy * dy, H) * s2 - var_abc; /* |p - x|^(2H) sigma^2 */
+            }
+            var /= 9;
+            if (var < 0) {
+                st->clamped++;
+                var = 0;
+            }
+            z += sqrt(var) * fb_terrain_gauss(o->seed, i);
         }
-        var /= 9;
-        if (var < 0) {
-            st->clamped++;
-            var = 0;
-        }
-        double z = (t->z[v[0]] + t->z[v[1]] + t->z[v[2]]) / 3 + sqrt(var) * fb_terrain_gauss(o->seed, i);
         if (!reserve_z(t, (size_t)d->nv + 1)) {
             rc = fb_fail(FB_ERR_NOMEM, "%s: out of memory after %llu inserted points", who, (unsigned long long)i);
             break;
@@ -318,6 +509,7 @@ fb_result fb_terrain_refine(fb_terrain *t, const fb_terrain_opts *o, const char 
             continue;
         }
         t->z[nvx] = z;
+        if (resid) resid[nvx] = res;
         i++;
         st->inserted = i;
         if (!o->sweep) {
@@ -331,6 +523,8 @@ fb_result fb_terrain_refine(fb_terrain *t, const fb_terrain_opts *o, const char 
     }
     free(g.cell);
     free(csig2);
+    free(resid);
+    fbm_field_free(&field);
     st->refine_seconds = fb_now() - t0;
     return rc;
 }
