@@ -15,5 +15,7 @@ export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp}
 "$fb" render $ex/constrain-2d.json -o "$tmp/c2.exr" --quiet --set layers.0.points=[[1,1]] --preview $img/constrain-2d-free.png
 "$fb" render $ex/constrain-lake.json -o "$tmp/d.exr" --quiet --preview $img/constrain-lake.png --preview-layer over
 "$fb" render $ex/constrain-region.json -o "$tmp/e.exr" --quiet --preview $img/constrain-region.png
+"$fb" render $ex/constrain-region.json -o "$tmp/e2.exr" --quiet --set layers.0.soften=0.3 --preview $img/constrain-region-soft.png
+"$fb" render $ex/constrain-region.json -o "$tmp/e3.exr" --quiet --set layers.0.interpolation=linear --preview $img/constrain-region-linear.png
 "$fb" render $ex/constrain-eroded-boss.json -o "$tmp/f.exr" --quiet --preview $img/constrain-eroded-boss.png
 echo "wrote $img/constrain-*.png and $ex/constrain-1d.csv"

@@ -17,7 +17,7 @@ if "$FB" $C --points cpts.csv --regions cregs.csv --water 5 -o con.exr --preview
 "$FB" $C --T 0.05 -o con_t.exr && "$FB" compare con.exr con_t.exr --layer terrain > /dev/null; [ $? -eq 1 ] && ok || bad "--T changed nothing"
 # every model key reaches the computation: each one changes the result
 "$FB" $C --points cpts.csv --regions cregs.csv -o cbase.exr
-for f in "--macro cone" "--macro-height 5" "--hurst 0.6" "--sigma 2" "--delta 0.5" "--buffering naive" "--domain 2" "--falloff 0.5" "--seed 9"; do
+for f in "--macro cone" "--macro-height 5" "--hurst 0.6" "--sigma 2" "--delta 0.5" "--buffering naive" "--domain 2" "--falloff 0.5" "--seed 9" "--interpolation linear" "--soften 0.3"; do
   "$FB" $C --points cpts.csv --regions cregs.csv $f -o cf.exr
   "$FB" compare cbase.exr cf.exr > /dev/null; [ $? -eq 1 ] && ok || bad "constrain $f changed nothing"
 done

@@ -272,6 +272,130 @@ static void step_task(void *ctx, int task)
     }
 }
 
+/* ---- the cubic recursion (the default): creases-free levels ---------------------------------------
+ *
+ * Averaging 2 or 4 parents makes the coarse field piecewise linear, so every node of a coarse level
+ * stays a kink: for H > 1/2 the rows and columns of the coarse levels show as creases (second
+ * differences across them 1.16 times the median at H 0.8, 1.29 at H 0.95, rising with the level).
+ * Here each level is made by the 4-point interpolatory stencil (-1, 9, 9, -1) / 16 (Dubuc 1986; Dyn,
+ * Levin and Gregory 1987), whose limit is C1: first along the coarse rows (new nodes at odd
+ * multiples of h), then along every column (the new rows). Near the grid's edges the cubic through
+ * the 4 nearest nodes on one side, (5, 15, -5, 1) / 16, and with fewer than 4 nodes the mean of 2.
+ * A node's displacement has the variance that makes its increment from its parents that of fBm:
+ * sigma^2 (h / span)^(2H) K(H), K = -1/2 sum_ij w_i w_j |t_i - t_j|^(2H) over the node (weight 1, at
+ * t = 0) and its stencil (weights -w at t in units of h). For the mean of 2, K = 1 - 2^(2H - 2):
+ * the paper's A_n. */
+enum { ST_SYM, ST_LEFT, ST_RIGHT, ST_LINEAR, ST_KINDS };
+static const double st_t[ST_KINDS][4] = {{-3, -1, 1, 3}, {-1, 1, 3, 0}, {-3, -1, 1, 0}, {-1, 1, 0, 0}};
+static const double st_w[ST_KINDS][4] = {
+    {-1.0 / 16, 9.0 / 16, 9.0 / 16, -1.0 / 16},
+    {3.0 / 8, 6.0 / 8, -1.0 / 8, 0},
+    {-1.0 / 8, 6.0 / 8, 3.0 / 8, 0},
+    {0.5, 0.5, 0, 0},
+};
+
+static double stencil_k(int kind, double H)
+{
+    double t[5] = {0}, w[5] = {1};
+    for (int i = 0; i < 4; i++) t[i + 1] = st_t[kind][i], w[i + 1] = -st_w[kind][i];
+    double sum = 0;
+    for (int i = 0; i < 5; i++)
+        for (int j = 0; j < 5; j++)
+            if (i != j && w[i] != 0 && w[j] != 0) sum += w[i] * w[j] * pow(fabs(t[i] - t[j]), 2 * H);
+    return -0.5 * sum;
+}
+
+/* The stencil for the node at i (between i - h and i + h) on a line of n nodes. */
+static int stencil_kind(int i, int h, int n)
+{
+    bool left = i - 3 * h >= 0, right = i + 3 * h <= n - 1;
+    return left && right ? ST_SYM : !left && right ? ST_LEFT : left && !right ? ST_RIGHT : ST_LINEAR;
+}
+
+/* The interpolated value at i on a line (stride between nodes), and its stencil kind. */
+static double stencil_at(const float *line, size_t stride, int i, int h, int n, int *kind)
+{
+    int k = *kind = stencil_kind(i, h, n);
+    double v = 0;
+    for (int j = 0; j < (k == ST_LINEAR ? 2 : k == ST_SYM ? 4 : 3); j++)
+        v += st_w[k][j] * line[(size_t)(i + (int)st_t[k][j] * h) * stride];
+    return v;
+}
+
+typedef struct cubic_job {
+    grid *g;
+    int s, h;
+    bool ypass;            /* the new rows, along the columns; else the coarse rows, along them */
+    double base[ST_KINDS]; /* sd at the base H per stencil kind */
+    int ntasks;
+} cubic_job;
+
+static inline double cubic_sd(const cubic_job *j, int x, int y, int kind)
+{
+    const fb_constrain_desc *d = j->g->d;
+    float H = x < d->width && y < d->height ? j->g->Hf[(size_t)y * d->width + x] : j->g->H0;
+    if (H == j->g->H0) return j->base[kind];
+    return d->sigma * sqrt(stencil_k(kind, H) * pow(j->h / j->g->span, 2 * (double)H));
+}
+
+static void cubic_task(void *ctx, int task)
+{
+    const cubic_job *j = ctx;
+    grid *g = j->g;
+    const int N = g->N, s = j->s, h = j->h;
+    int y0 = j->ypass ? h : 0, rows = j->ypass ? (N - 1) / s : (g->two_d ? (N - 1) / s + 1 : 1);
+    int r0 = rows * task / j->ntasks, r1 = rows * (task + 1) / j->ntasks;
+    const double *ws = st_w[ST_SYM];
+    for (int k = r0; k < r1; k++) {
+        int y = y0 + k * s, kind;
+        float *row = g->P + (size_t)y * N;
+        uint32_t at = (uint32_t)((size_t)y * N);
+        if (!j->ypass) { /* along the row: the symmetric stencil inside, stencil_at near the ends */
+            for (int x = h; x < N; x += s) {
+                double v;
+                if (x >= 3 * h && x + 3 * h <= N - 1) {
+                    v = ws[0] * row[x - 3 * h] + ws[1] * row[x - h] + ws[2] * row[x + h] + ws[3] * row[x + 3 * h];
+                    kind = ST_SYM;
+                } else {
+                    v = stencil_at(row, 1, x, h, N, &kind);
+                }
+                row[x] = (float)(v + cubic_sd(j, x, y, kind) * normal_of(g->key, at + (uint32_t)x));
+            }
+        } else { /* along the columns: one stencil for the whole row */
+            kind = stencil_kind(y, h, N);
+            int n = kind == ST_LINEAR ? 2 : kind == ST_SYM ? 4 : 3;
+            const float *src[4] = {NULL, NULL, NULL, NULL};
+            double w[4] = {0, 0, 0, 0};
+            for (int i = 0; i < n; i++) src[i] = g->P + (size_t)(y + (int)st_t[kind][i] * h) * N, w[i] = st_w[kind][i];
+            if (kind == ST_SYM)
+                for (int x = 0; x < N; x += h) {
+                    double v = w[0] * src[0][x] + w[1] * src[1][x] + w[2] * src[2][x] + w[3] * src[3][x];
+                    row[x] = (float)(v + cubic_sd(j, x, y, kind) * normal_of(g->key, at + (uint32_t)x));
+                }
+            else
+                for (int x = 0; x < N; x += h) {
+                    double v = 0;
+                    for (int i = 0; i < n; i++) v += w[i] * src[i][x];
+                    row[x] = (float)(v + cubic_sd(j, x, y, kind) * normal_of(g->key, at + (uint32_t)x));
+                }
+        }
+    }
+}
+
+/* The constraints made by a cubic pass are set to 0 before anything is interpolated from them: the
+ * row pass makes the nodes on rows that are multiples of s at odd multiples of h; the column pass
+ * the rows at odd multiples of h. */
+static void pin_cubic(grid *g, int s, int h, bool ypass)
+{
+    const fb_constrain_desc *d = g->d;
+    for (int i = 0; i < d->npoints; i++) {
+        int px = d->points[i].x, py = g->two_d ? d->points[i].y : 0;
+        if (px % h || py % h) continue;
+        bool made = ypass ? (py / h) % 2 == 1 : py % s == 0 && (px / h) % 2 == 1;
+        if (made) g->P[(size_t)py * (g->two_d ? g->N : 0) + px] = 0.0f;
+    }
+}
+
 /* The discrete constraints made at this half-step are set to 0, before anything is interpolated
  * from them: with spacing h, the diamond step makes the nodes at odd multiples of h in both axes
  * (centre), the square step those odd in one axis only (and the 1D step the odd ones). */
@@ -335,6 +459,15 @@ static void final_task(void *ctx, int task)
     const final_job *j = ctx;
     const fb_constrain_desc *d = j->g->d;
     const double lim = sqrt(6.0) * d->sigma, Z = 1.0 / (lim + d->delta);
+    /* soften: within |P| < eps, |D - d| = sqrt(T) g(|P|), g(a) = sqrt(-2 ln(1 - Z a)), becomes
+     * sqrt(T) (A a + B a^3), the odd cubic with g's value and slope at eps: C1 across the zero line
+     * (g' is infinite at 0), monotone, 0 at P = 0, and equation 10 itself for |P| >= eps. */
+    const double eps = d->soften * d->sigma;
+    double A = 0, B = 0;
+    if (eps > 0) {
+        double g = sqrt(-2.0 * log(1.0 - Z * eps)), g1 = Z / ((1.0 - Z * eps) * g);
+        A = (3 * g - g1 * eps) / (2 * eps), B = (g1 * eps - g) / (2 * eps * eps * eps);
+    }
     int y0 = (int)((int64_t)d->height * task / j->ntasks), y1 = (int)((int64_t)d->height * (task + 1) / j->ntasks);
     for (int y = y0; y < y1; y++) {
         const float *prow = j->g->P + (size_t)y * (j->g->two_d ? j->g->N : 0);
@@ -349,8 +482,13 @@ static void final_task(void *ctx, int task)
                 j->out->D[at] = dm;
                 continue;
             }
-            double zpd = 1.0 - Z * fabs(p); /* Z P_d with P_d = 1/Z - |P| (equation 9) */
-            double amp = sqrt(-2.0 * j->Tf[at] * log(zpd));
+            double amp;
+            if (fabs(p) < eps) /* the softened zero line: sqrt(T) (A |P| + B |P|^3) */
+                amp = sqrt((double)j->Tf[at]) * (A + B * p * p) * fabs(p);
+            else {
+                double zpd = 1.0 - Z * fabs(p); /* Z P_d with P_d = 1/Z - |P| (equation 9) */
+                amp = sqrt(-2.0 * j->Tf[at] * log(zpd));
+            }
             j->out->D[at] = (float)(p < 0 ? (double)dm - amp : (double)dm + amp);
         }
     }
@@ -397,6 +535,20 @@ fb_result fb_constrain_run(const fb_constrain_desc *d, bool want_p, fb_constrain
     }
     for (int s = N - 1; s >= 2 && !rc; s /= 2) {
         int h = s / 2;
+        if (!d->linear) {
+            cubic_job cj = {&g, s, h, false, {0}, two_d ? ntasks : 1};
+            for (int k = 0; k < ST_KINDS; k++)
+                cj.base[k] = d->sigma * sqrt(stencil_k(k, g.H0) * pow(h / g.span, 2 * (double)g.H0));
+            run_tasks(pool, cj.ntasks, cubic_task, &cj);
+            if (live) pin_cubic(&g, s, h, false);
+            if (two_d) {
+                cj.ypass = true;
+                run_tasks(pool, cj.ntasks, cubic_task, &cj);
+                if (live) pin_cubic(&g, s, h, true);
+            }
+            if (regional) buffer_level(&g, h);
+            continue;
+        }
         if (!two_d) {
             double base_sd = scale_of(&g, g.H0, h);
             for (int x = h; x < N; x += s)

@@ -14,11 +14,13 @@ typedef struct fb_constrain_params {
     double macro_height; /* built-in shapes */
     char profile[1024];  /* 1D: a CSV profile instead of macro, or "" */
     double T, hurst, sigma, delta;
+    double soften; /* "soften": the zero lines' blend width, in sigma (0: equation 10 as it is) */
     bool points_inline, regions_inline;
     char points[1024], regions[1024]; /* files, or "" */
     int domain;
     double falloff;
     int buffering; /* fb_buffering */
+    bool linear;   /* "interpolation": "linear" */
     bool has_water;
     double water;
     char csv[1024];  /* 1D: write x, d, D here, or "" */

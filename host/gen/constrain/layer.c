@@ -34,6 +34,9 @@ static const fb_keyspec constrain_keys[] = {
     {"hurst", FB_K_NUM, 0, 1, true, NULL, "0.8", "roughness degree H in (0, 1) (large: smoother)"},
     {"sigma", FB_K_NUM, 0, 1e6, true, NULL, "1.0", "standard deviation of P_fbm's first level"},
     {"delta", FB_K_NUM, 0, 1e6, true, NULL, "0.01", "delta of Z = 1 / (sqrt(6) sigma + delta)"},
+    {"soften", FB_K_NUM, 0, 2.4, false, NULL, "0",
+     "soften the crease of equation 10 along P's zero lines: D - d follows an odd cubic for |P| < soften sigma "
+     "(0: the paper)"},
     {"points", FB_K_CPOINTS, 0, 0, false, NULL, NULL,
      "discrete constraints D = d: a file of x,y per line or [[x, y], ...] (pixels from the top left)"},
     {"regions", FB_K_CREGIONS, 0, 0, false, NULL, NULL,
@@ -42,6 +45,9 @@ static const fb_keyspec constrain_keys[] = {
     {"falloff", FB_K_NUM, 0, 1e6, false, NULL, "0.01", "f_d of eq. 14: fall-off with the squared distance"},
     {"buffering", FB_K_ENUM, 0, 0, false, "regional|none|naive", "\"regional\"",
      "discrete constraints: regional buffering, none (zeroed when made), naive (zeroed after)"},
+    {"interpolation", FB_K_ENUM, 0, 0, false, "cubic|linear", "\"cubic\"",
+     "P_fbm's levels: 4-point cubic stencils (no creases along the coarse levels' rows and columns) or the "
+     "paper's midpoint / diamond-square means"},
     {"water", FB_K_NUM, -1e15, 1e15, false, NULL, NULL, "a water level: channel NAME.A is 1 where D >= water"},
     {"csv", FB_K_OUTPUT, 0, 0, false, NULL, NULL, "1D: also write x, d, D per line to this CSV file"},
     {"plot", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
@@ -105,11 +111,13 @@ static fb_result parse_constrain(const fb_vctx *v, const char *path, json_t *obj
     c->hurst = fb_json_num(obj, "hurst");
     c->sigma = fb_json_num(obj, "sigma");
     c->delta = fb_json_num(obj, "delta");
+    c->soften = json_object_get(obj, "soften") ? fb_json_num(obj, "soften") : 0;
     c->domain = (int)json_integer_value(json_object_get(obj, "domain"));
     c->falloff = fb_json_num(obj, "falloff");
     int b = 0;
     fb_enum_index("regional|none|naive", json_string_value(json_object_get(obj, "buffering")), &b);
     c->buffering = b;
+    c->linear = !strcmp(json_string_value(json_object_get(obj, "interpolation")), "linear");
     c->has_water = json_object_get(obj, "water") != NULL;
     c->water = c->has_water ? fb_json_num(obj, "water") : 0;
     const json_t *pts = json_object_get(obj, "points"), *regs = json_object_get(obj, "regions");
@@ -445,6 +453,7 @@ static fb_result constrain_prepare(fb_gen *g, struct fb_engine *e, bool progress
                            .T = P->T,
                            .sigma = P->sigma,
                            .delta = P->delta,
+                           .soften = P->soften,
                            .macro = s->macro,
                            .points = s->points,
                            .npoints = s->npoints,
@@ -452,7 +461,8 @@ static fb_result constrain_prepare(fb_gen *g, struct fb_engine *e, bool progress
                            .nregions = s->nregions,
                            .domain = P->domain,
                            .falloff = P->falloff,
-                           .buffering = (fb_buffering)P->buffering};
+                           .buffering = (fb_buffering)P->buffering,
+                           .linear = P->linear};
     double t0 = fb_now();
     fb_result rc = FB_OK;
     if (s->macro_src) { /* the source layer's channel, row band by row band on the host */
