@@ -42,7 +42,7 @@ fb_result fb_constrain_bench(fb_bench *b)
     fb_result rc = FB_OK;
     int threads = b->threads > 0 ? b->threads : fb_cpu_count();
     fb_bench_heading(b, "FBM constraint model %d x %d, 100 discrete and 20 continuous constraints; median of 3", W, H);
-    for (int linear = 0; linear < 2 && !rc; linear++) { /* the default cubic stencils, then the paper's averages */
+    for (int linear = 0; linear < 2 && !rc; linear++) { /* the default smooth stencils, then the paper's averages */
         d.linear = linear;
         double w[3];
         for (int i = 0; i < 3 && !rc; i++) {

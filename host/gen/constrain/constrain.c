@@ -15,6 +15,7 @@
 #include "kernels/hash.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -179,6 +180,7 @@ typedef struct grid {
     uint32_t key;    /* normal_key(seed) */
     float H0;        /* the base H, rounded as the field is */
     size_t *cnodes;  /* the discrete constraints' node indices, sorted */
+    double *ktab;    /* K per stencil kind over H (smooth_sd), when some region sets H; else NULL */
     int ncnodes;
     double span; /* N - 1 */
 } grid;
@@ -214,6 +216,125 @@ static double displacement(const grid *g, int x, int y, double r, double base_sd
     return sd * normal_of(g->key, (uint32_t)((size_t)y * g->N + x));
 }
 
+/* ---- the smooth recursion (the default): no creases where levels meet ------------------------------
+ *
+ * Averaging 2 or 4 parents makes the coarse field piecewise linear, so every node of a coarse level
+ * stays a kink: for H > 1/2 the rows and columns where coarse levels meet show as creases, their
+ * second differences rising with the level (1D, H 0.9: 1.77 times the finest nodes' after 10
+ * levels). The smooth recursion predicts a node from more parents, with weights whose limit is
+ * smooth:
+ * - 1D: the 6-point stencil of Deslauriers and Dubuc (1989), (3, -25, 150, 150, -25, 3) / 256, C2
+ *   (1.00 in the measure above; the 4-point (-1, 9, 9, -1) / 16 of Dyn, Levin and Gregory, C1,
+ *   leaves 1.09). Near the ends the 4-point, the quadratic (3, 6, -1) / 8, the mean of 2.
+ * - 2D: the diamond-square order, each step by the tensor product of the 4-point weights: the centre
+ *   of a coarse cell from the 16 coarse nodes at offsets (a, b) h, a, b in {-3, -1, 1, 3}; an edge
+ *   midpoint from the 16 nodes of the lattice rotated by 45 degrees, at offsets ((a + b) / 2,
+ *   (a - b) / 2) h. Both steps treat x and y alike, so rows and columns are alike. Within 3 h of the
+ *   grid's edge, the paper's means.
+ * A node's displacement has the variance that makes its increment from its stencil that of fBm:
+ * sigma^2 (h / span)^(2H) K(H), K = -1/2 sum_ij w_i w_j |p_i - p_j|^(2H) over the node (weight 1, at
+ * 0) and its stencil's points (weights -w, positions in units of h). For the mean of 2 in 1D,
+ * K = 1 - 2^(2H - 2): the paper's A_n. Nodes whose H is not the base H look K up in a table over H
+ * (257 entries, linear in between). */
+enum { ST_SYM6, ST_SYM4, ST_LEFT, ST_RIGHT, ST_LINEAR, ST_DIAMOND, ST_SQUARE, ST_KINDS };
+static const int st_n[5] = {6, 4, 3, 3, 2};
+static const double st_t[5][6] = {
+    {-5, -3, -1, 1, 3, 5}, {-3, -1, 1, 3}, {-1, 1, 3}, {-3, -1, 1}, {-1, 1},
+};
+static const double st_w[5][6] = {
+    {3.0 / 256, -25.0 / 256, 150.0 / 256, 150.0 / 256, -25.0 / 256, 3.0 / 256},
+    {-1.0 / 16, 9.0 / 16, 9.0 / 16, -1.0 / 16},
+    {3.0 / 8, 6.0 / 8, -1.0 / 8},
+    {-1.0 / 8, 6.0 / 8, 3.0 / 8},
+    {0.5, 0.5},
+};
+static const int o4[4] = {-3, -1, 1, 3};
+static const double w4[4] = {-1.0 / 16, 9.0 / 16, 9.0 / 16, -1.0 / 16};
+
+/* A stencil's points (x, y) in units of h and weights; n points. */
+static int stencil_points(int kind, double *px, double *py, double *w)
+{
+    if (kind < ST_DIAMOND) {
+        for (int i = 0; i < st_n[kind]; i++) px[i] = st_t[kind][i], py[i] = 0, w[i] = st_w[kind][i];
+        return st_n[kind];
+    }
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++) {
+            int a = o4[i], b = o4[j], k = 4 * i + j;
+            px[k] = kind == ST_DIAMOND ? a : (a + b) / 2, py[k] = kind == ST_DIAMOND ? b : (a - b) / 2;
+            w[k] = w4[i] * w4[j];
+        }
+    return 16;
+}
+
+static double stencil_k(int kind, double H)
+{
+    double px[17] = {0}, py[17] = {0}, w[17] = {1};
+    int n = stencil_points(kind, px + 1, py + 1, w + 1);
+    for (int i = 1; i <= n; i++) w[i] = -w[i];
+    double sum = 0;
+    for (int i = 0; i <= n; i++)
+        for (int j = i + 1; j <= n; j++) sum += 2 * w[i] * w[j] * pow(hypot(px[i] - px[j], py[i] - py[j]), 2 * H);
+    return -0.5 * sum;
+}
+
+#define KTAB 256
+/* K over H = 0, 1/256, ..., 1 for every kind (only when some region sets H). */
+static double *ktable_make(void)
+{
+    double *t = malloc((size_t)ST_KINDS * (KTAB + 1) * sizeof *t);
+    if (!t) return NULL;
+    for (int k = 0; k < ST_KINDS; k++)
+        for (int i = 0; i <= KTAB; i++) t[k * (KTAB + 1) + i] = stencil_k(k, (double)i / KTAB);
+    return t;
+}
+
+/* The displacement's standard deviation at node (x, y) of a smooth step. */
+static double smooth_sd(const grid *g, const double *base, int h, int x, int y, int kind)
+{
+    const fb_constrain_desc *d = g->d;
+    float H = x < d->width && y < d->height ? g->Hf[(size_t)y * d->width + x] : g->H0;
+    if (H == g->H0) return base[kind];
+    double f = H * KTAB;
+    int i = (int)f;
+    if (i >= KTAB) i = KTAB - 1;
+    const double *t = g->ktab + kind * (KTAB + 1);
+    double K = t[i] + (f - i) * (t[i + 1] - t[i]);
+    return d->sigma * sqrt(K * pow(h / g->span, 2 * (double)H));
+}
+
+/* The stencil for the node at i (between i - h and i + h) on a line of n nodes. */
+static int stencil_kind(int i, int h, int n)
+{
+    bool left = i - 3 * h >= 0, right = i + 3 * h <= n - 1;
+    if (i - 5 * h >= 0 && i + 5 * h <= n - 1) return ST_SYM6;
+    return left && right ? ST_SYM4 : !left && right ? ST_LEFT : left && !right ? ST_RIGHT : ST_LINEAR;
+}
+
+/* One level of the smooth 1D recursion. */
+static void smooth_1d(grid *g, int s, int h, const double *base)
+{
+    float *P = g->P;
+    const int N = g->N;
+    const double *ws = st_w[ST_SYM6];
+    for (int x = h; x < N; x += s) {
+        double v = 0;
+        int kind = stencil_kind(x, h, N);
+        if (kind == ST_SYM6)
+            v = ws[0] * P[x - 5 * h] + ws[1] * P[x - 3 * h] + ws[2] * P[x - h] + ws[3] * P[x + h] +
+                ws[4] * P[x + 3 * h] + ws[5] * P[x + 5 * h];
+        else
+            for (int j = 0; j < st_n[kind]; j++) v += st_w[kind][j] * P[x + (int)st_t[kind][j] * h];
+        P[x] = (float)(v + smooth_sd(g, base, h, x, 0, kind) * normal_of(g->key, (uint32_t)x));
+    }
+}
+
+/* The 4-point weights along x of row `row` at x + o4[i] h, for i = 0..3 */
+static inline double row4(const float *row, int x, int h)
+{
+    return w4[0] * row[x - 3 * h] + w4[1] * row[x - h] + w4[2] * row[x + h] + w4[3] * row[x + 3 * h];
+}
+
 /* One half-step of the 2D recursion over a share of its rows (nodes of a step are independent). */
 typedef struct step_job {
     grid *g;
@@ -221,6 +342,8 @@ typedef struct step_job {
     bool square;
     double base_sd;
     int ntasks;
+    bool smooth;               /* the 16-point stencils away from the edges */
+    const double *smooth_base; /* their sd at the base H, per kind */
 } step_job;
 
 static void step_task(void *ctx, int task)
@@ -236,14 +359,27 @@ static void step_task(void *ctx, int task)
             int y = h + k * s;
             const float *up = P + (size_t)(y - h) * N, *dn = P + (size_t)(y + h) * N;
             float *row = P + (size_t)y * N;
+            bool rows_in = j->smooth && y >= 3 * h && y + 3 * h <= N - 1;
             for (int x = h; x < N; x += s) {
+                if (rows_in && x >= 3 * h && x + 3 * h <= N - 1) { /* the 16 nodes around */
+                    double v = 0;
+                    for (int b = 0; b < 4; b++) v += w4[b] * row4(P + (size_t)(y + o4[b] * h) * N, x, h);
+                    row[x] = (float)(v + smooth_sd(g, j->smooth_base, h, x, y, ST_DIAMOND) *
+                                             normal_of(g->key, (uint32_t)((size_t)y * N + x)));
+                    continue;
+                }
                 double a = (double)up[x - h] + up[x + h] + dn[x - h] + dn[x + h];
                 row[x] = (float)(0.25 * a + displacement(g, x, y, r, j->base_sd));
             }
         }
         return;
     }
-    /* square: edge midpoints from their axis neighbours; rows 0, h, 2h, ... */
+    /* square: edge midpoints from their axis neighbours; rows 0, h, 2h, ... The smooth stencil's 16
+     * lattice nodes, as offsets from the node: ((a + b) / 2, (a - b) / 2) h. */
+    ptrdiff_t off[4][4];
+    for (int a = 0; a < 4; a++)
+        for (int b = 0; b < 4; b++)
+            off[a][b] = (ptrdiff_t)((o4[a] - o4[b]) / 2) * h * N + (ptrdiff_t)((o4[a] + o4[b]) / 2) * h;
     int rows = (N - 1) / h + 1, r0 = rows * task / j->ntasks, r1 = rows * (task + 1) / j->ntasks;
     for (int k = r0; k < r1; k++) {
         int y = k * h;
@@ -255,8 +391,20 @@ static void step_task(void *ctx, int task)
             row[0] = (float)(a / (1 + !!up + !!dn) + displacement(g, 0, y, r, j->base_sd));
             x = s;
         }
+        bool rows_in = j->smooth && y >= 3 * h && y + 3 * h <= N - 1;
         if (up && dn) /* interior rows: 4 neighbours but at the right edge */
             for (; x < N - 1; x += s) {
+                if (rows_in && x >= 3 * h && x + 3 * h <= N - 1) { /* the 16 lattice nodes around */
+                    const float *c = row + x;
+                    double v = 0;
+                    for (int a = 0; a < 4; a++) {
+                        const ptrdiff_t *o = off[a];
+                        v += w4[a] * (w4[0] * c[o[0]] + w4[1] * c[o[1]] + w4[2] * c[o[2]] + w4[3] * c[o[3]]);
+                    }
+                    row[x] = (float)(v + smooth_sd(g, j->smooth_base, h, x, y, ST_SQUARE) *
+                                             normal_of(g->key, (uint32_t)((size_t)y * N + x)));
+                    continue;
+                }
                 double a = (double)row[x - h] + row[x + h] + up[x] + dn[x];
                 row[x] = (float)(0.25 * a + displacement(g, x, y, r, j->base_sd));
             }
@@ -269,130 +417,6 @@ static void step_task(void *ctx, int task)
             if (dn) a += dn[x], m++;
             row[x] = (float)(a / m + displacement(g, x, y, r, j->base_sd));
         }
-    }
-}
-
-/* ---- the cubic recursion (the default): creases-free levels ---------------------------------------
- *
- * Averaging 2 or 4 parents makes the coarse field piecewise linear, so every node of a coarse level
- * stays a kink: for H > 1/2 the rows and columns of the coarse levels show as creases (second
- * differences across them 1.16 times the median at H 0.8, 1.29 at H 0.95, rising with the level).
- * Here each level is made by the 4-point interpolatory stencil (-1, 9, 9, -1) / 16 (Dubuc 1986; Dyn,
- * Levin and Gregory 1987), whose limit is C1: first along the coarse rows (new nodes at odd
- * multiples of h), then along every column (the new rows). Near the grid's edges the cubic through
- * the 4 nearest nodes on one side, (5, 15, -5, 1) / 16, and with fewer than 4 nodes the mean of 2.
- * A node's displacement has the variance that makes its increment from its parents that of fBm:
- * sigma^2 (h / span)^(2H) K(H), K = -1/2 sum_ij w_i w_j |t_i - t_j|^(2H) over the node (weight 1, at
- * t = 0) and its stencil (weights -w at t in units of h). For the mean of 2, K = 1 - 2^(2H - 2):
- * the paper's A_n. */
-enum { ST_SYM, ST_LEFT, ST_RIGHT, ST_LINEAR, ST_KINDS };
-static const double st_t[ST_KINDS][4] = {{-3, -1, 1, 3}, {-1, 1, 3, 0}, {-3, -1, 1, 0}, {-1, 1, 0, 0}};
-static const double st_w[ST_KINDS][4] = {
-    {-1.0 / 16, 9.0 / 16, 9.0 / 16, -1.0 / 16},
-    {3.0 / 8, 6.0 / 8, -1.0 / 8, 0},
-    {-1.0 / 8, 6.0 / 8, 3.0 / 8, 0},
-    {0.5, 0.5, 0, 0},
-};
-
-static double stencil_k(int kind, double H)
-{
-    double t[5] = {0}, w[5] = {1};
-    for (int i = 0; i < 4; i++) t[i + 1] = st_t[kind][i], w[i + 1] = -st_w[kind][i];
-    double sum = 0;
-    for (int i = 0; i < 5; i++)
-        for (int j = 0; j < 5; j++)
-            if (i != j && w[i] != 0 && w[j] != 0) sum += w[i] * w[j] * pow(fabs(t[i] - t[j]), 2 * H);
-    return -0.5 * sum;
-}
-
-/* The stencil for the node at i (between i - h and i + h) on a line of n nodes. */
-static int stencil_kind(int i, int h, int n)
-{
-    bool left = i - 3 * h >= 0, right = i + 3 * h <= n - 1;
-    return left && right ? ST_SYM : !left && right ? ST_LEFT : left && !right ? ST_RIGHT : ST_LINEAR;
-}
-
-/* The interpolated value at i on a line (stride between nodes), and its stencil kind. */
-static double stencil_at(const float *line, size_t stride, int i, int h, int n, int *kind)
-{
-    int k = *kind = stencil_kind(i, h, n);
-    double v = 0;
-    for (int j = 0; j < (k == ST_LINEAR ? 2 : k == ST_SYM ? 4 : 3); j++)
-        v += st_w[k][j] * line[(size_t)(i + (int)st_t[k][j] * h) * stride];
-    return v;
-}
-
-typedef struct cubic_job {
-    grid *g;
-    int s, h;
-    bool ypass;            /* the new rows, along the columns; else the coarse rows, along them */
-    double base[ST_KINDS]; /* sd at the base H per stencil kind */
-    int ntasks;
-} cubic_job;
-
-static inline double cubic_sd(const cubic_job *j, int x, int y, int kind)
-{
-    const fb_constrain_desc *d = j->g->d;
-    float H = x < d->width && y < d->height ? j->g->Hf[(size_t)y * d->width + x] : j->g->H0;
-    if (H == j->g->H0) return j->base[kind];
-    return d->sigma * sqrt(stencil_k(kind, H) * pow(j->h / j->g->span, 2 * (double)H));
-}
-
-static void cubic_task(void *ctx, int task)
-{
-    const cubic_job *j = ctx;
-    grid *g = j->g;
-    const int N = g->N, s = j->s, h = j->h;
-    int y0 = j->ypass ? h : 0, rows = j->ypass ? (N - 1) / s : (g->two_d ? (N - 1) / s + 1 : 1);
-    int r0 = rows * task / j->ntasks, r1 = rows * (task + 1) / j->ntasks;
-    const double *ws = st_w[ST_SYM];
-    for (int k = r0; k < r1; k++) {
-        int y = y0 + k * s, kind;
-        float *row = g->P + (size_t)y * N;
-        uint32_t at = (uint32_t)((size_t)y * N);
-        if (!j->ypass) { /* along the row: the symmetric stencil inside, stencil_at near the ends */
-            for (int x = h; x < N; x += s) {
-                double v;
-                if (x >= 3 * h && x + 3 * h <= N - 1) {
-                    v = ws[0] * row[x - 3 * h] + ws[1] * row[x - h] + ws[2] * row[x + h] + ws[3] * row[x + 3 * h];
-                    kind = ST_SYM;
-                } else {
-                    v = stencil_at(row, 1, x, h, N, &kind);
-                }
-                row[x] = (float)(v + cubic_sd(j, x, y, kind) * normal_of(g->key, at + (uint32_t)x));
-            }
-        } else { /* along the columns: one stencil for the whole row */
-            kind = stencil_kind(y, h, N);
-            int n = kind == ST_LINEAR ? 2 : kind == ST_SYM ? 4 : 3;
-            const float *src[4] = {NULL, NULL, NULL, NULL};
-            double w[4] = {0, 0, 0, 0};
-            for (int i = 0; i < n; i++) src[i] = g->P + (size_t)(y + (int)st_t[kind][i] * h) * N, w[i] = st_w[kind][i];
-            if (kind == ST_SYM)
-                for (int x = 0; x < N; x += h) {
-                    double v = w[0] * src[0][x] + w[1] * src[1][x] + w[2] * src[2][x] + w[3] * src[3][x];
-                    row[x] = (float)(v + cubic_sd(j, x, y, kind) * normal_of(g->key, at + (uint32_t)x));
-                }
-            else
-                for (int x = 0; x < N; x += h) {
-                    double v = 0;
-                    for (int i = 0; i < n; i++) v += w[i] * src[i][x];
-                    row[x] = (float)(v + cubic_sd(j, x, y, kind) * normal_of(g->key, at + (uint32_t)x));
-                }
-        }
-    }
-}
-
-/* The constraints made by a cubic pass are set to 0 before anything is interpolated from them: the
- * row pass makes the nodes on rows that are multiples of s at odd multiples of h; the column pass
- * the rows at odd multiples of h. */
-static void pin_cubic(grid *g, int s, int h, bool ypass)
-{
-    const fb_constrain_desc *d = g->d;
-    for (int i = 0; i < d->npoints; i++) {
-        int px = d->points[i].x, py = g->two_d ? d->points[i].y : 0;
-        if (px % h || py % h) continue;
-        bool made = ypass ? (py / h) % 2 == 1 : py % s == 0 && (px / h) % 2 == 1;
-        if (made) g->P[(size_t)py * (g->two_d ? g->N : 0) + px] = 0.0f;
     }
 }
 
@@ -517,6 +541,12 @@ fb_result fb_constrain_run(const fb_constrain_desc *d, bool want_p, fb_constrain
     float *Hf = fb_malloc_large(npx * sizeof *Hf), *Tf = fb_malloc_large(npx * sizeof *Tf);
     g.P = fb_malloc_large(nodes * sizeof *g.P);
     g.cnodes = malloc(((size_t)d->npoints + 1) * sizeof *g.cnodes);
+    bool h_varies = false;
+    for (int i = 0; i < d->nregions; i++) h_varies = h_varies || d->regions[i].is_h;
+    if (h_varies && !d->linear && !(g.ktab = ktable_make())) {
+        free(g.cnodes);
+        g.cnodes = NULL; /* reported as out of memory below */
+    }
     fb_result rc = Hf && Tf && g.P && g.cnodes ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory for a %d-node grid", N);
     if (!rc) rc = field(d, true, Hf, pool, ntasks);
     if (!rc) rc = field(d, false, Tf, pool, ntasks);
@@ -535,17 +565,12 @@ fb_result fb_constrain_run(const fb_constrain_desc *d, bool want_p, fb_constrain
     }
     for (int s = N - 1; s >= 2 && !rc; s /= 2) {
         int h = s / 2;
-        if (!d->linear) {
-            cubic_job cj = {&g, s, h, false, {0}, two_d ? ntasks : 1};
-            for (int k = 0; k < ST_KINDS; k++)
-                cj.base[k] = d->sigma * sqrt(stencil_k(k, g.H0) * pow(h / g.span, 2 * (double)g.H0));
-            run_tasks(pool, cj.ntasks, cubic_task, &cj);
-            if (live) pin_cubic(&g, s, h, false);
-            if (two_d) {
-                cj.ypass = true;
-                run_tasks(pool, cj.ntasks, cubic_task, &cj);
-                if (live) pin_cubic(&g, s, h, true);
-            }
+        double sbase[ST_KINDS] = {0};
+        for (int k = 0; k < ST_KINDS && !d->linear; k++)
+            sbase[k] = d->sigma * sqrt(stencil_k(k, g.H0) * pow(h / g.span, 2 * (double)g.H0));
+        if (!two_d && !d->linear) {
+            smooth_1d(&g, s, h, sbase);
+            if (live) pin_step(&g, h, false);
             if (regional) buffer_level(&g, h);
             continue;
         }
@@ -557,10 +582,10 @@ fb_result fb_constrain_run(const fb_constrain_desc *d, bool want_p, fb_constrain
             if (regional) buffer_level(&g, h);
             continue;
         }
-        step_job dj = {&g, s, h, false, scale_of(&g, g.H0, h * 1.4142135623730951), ntasks};
+        step_job dj = {&g, s, h, false, scale_of(&g, g.H0, h * 1.4142135623730951), ntasks, !d->linear, sbase};
         run_tasks(pool, ntasks, step_task, &dj);
         if (live) pin_step(&g, h, true);
-        step_job sj = {&g, s, h, true, scale_of(&g, g.H0, h), ntasks};
+        step_job sj = {&g, s, h, true, scale_of(&g, g.H0, h), ntasks, !d->linear, sbase};
         run_tasks(pool, ntasks, step_task, &sj);
         if (live) pin_step(&g, h, false);
         if (regional) buffer_level(&g, h); /* the grid is regular again, of spacing h */
@@ -587,6 +612,7 @@ fb_result fb_constrain_run(const fb_constrain_desc *d, bool want_p, fb_constrain
     free(Hf);
     free(g.P);
     free(g.cnodes);
+    free(g.ktab);
     fb_pool_destroy(&pool);
     return rc;
 }

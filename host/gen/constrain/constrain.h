@@ -45,7 +45,7 @@ typedef struct fb_constrain_desc {
     double falloff; /* f_d of equation 14, per pixel^2 */
     fb_buffering buffering;
     double soften; /* > 0: D - d as an odd cubic of P for |P| < soften sigma, C1 with equation 10 (0: the paper) */
-    bool linear;   /* the paper's midpoint / diamond-square averages instead of the 4-point cubic stencils */
+    bool linear;   /* the paper's midpoint / diamond-square averages instead of the smooth stencils */
     int threads;   /* 0: one per core (the result does not depend on it) */
 } fb_constrain_desc;
 

@@ -45,8 +45,8 @@ static const fb_keyspec constrain_keys[] = {
     {"falloff", FB_K_NUM, 0, 1e6, false, NULL, "0.01", "f_d of eq. 14: fall-off with the squared distance"},
     {"buffering", FB_K_ENUM, 0, 0, false, "regional|none|naive", "\"regional\"",
      "discrete constraints: regional buffering, none (zeroed when made), naive (zeroed after)"},
-    {"interpolation", FB_K_ENUM, 0, 0, false, "cubic|linear", "\"cubic\"",
-     "P_fbm's levels: 4-point cubic stencils (no creases along the coarse levels' rows and columns) or the "
+    {"interpolation", FB_K_ENUM, 0, 0, false, "smooth|linear", "\"smooth\"",
+     "P_fbm's levels: smooth stencils of 16 parents (no creases along the coarse levels' rows and columns) or the "
      "paper's midpoint / diamond-square means"},
     {"water", FB_K_NUM, -1e15, 1e15, false, NULL, NULL, "a water level: channel NAME.A is 1 where D >= water"},
     {"csv", FB_K_OUTPUT, 0, 0, false, NULL, NULL, "1D: also write x, d, D per line to this CSV file"},
