@@ -3,10 +3,12 @@
  *
  * Grid: (2^k + 1) nodes per side covering the image (node (x, y) is pixel (x, y)); 1D profiles use
  * one row. Node generation order: the corners (ends), then for each step s = 2^k, ..., 2 with
- * h = s / 2: in 2D the diamond step (square centres from their 4 corners) and the square step (edge
- * midpoints from their 3 or 4 axis neighbours); in 1D the midpoints. The displacement of a node whose
- * parents are at distance r (pixels) has variance sigma^2 (1 - 2^(2H-2)) (r / (N - 1))^(2H), which is
- * the paper's A_n in 1D (r = 2^-n of the span) and the same law of distance in 2D; H is the node's.
+ * h = s / 2: in 2D the diamond step (square centres) and the square step (edge midpoints); in 1D the
+ * midpoints. With `linear` (the paper's reading) a node is the mean of its 4 corners, 3 or 4 axis
+ * neighbours, or 2 ends, and its displacement, parents r pixels away, has variance
+ * sigma^2 (1 - 2^(2H-2)) (r / (N - 1))^(2H): the paper's A_n in 1D (r = 2^-n of the span) and the
+ * same law of distance in 2D. By default the smooth stencils (16 parents; 6 in 1D; see "the smooth
+ * recursion" below) with the variance that fBm gives their prediction error. H is the node's.
  */
 #include "constrain.h"
 
