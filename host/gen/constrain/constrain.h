@@ -1,10 +1,11 @@
 /*
  * The FBM constraint model (SPEC.md section 5): a macro shape d plus fBm detail whose strength is
- * controlled pointwise. P_fbm comes from random midpoint displacement (1D) or diamond-square (2D), smooth stencils by
- * default, on a (2^k + 1) grid covering the image, clamped to [-sqrt(6) sigma, sqrt(6) sigma]; then Z P_d = 1 - Z
- * |P_fbm| with Z = 1 / (sqrt(6) sigma + delta), and D = d -/+ sqrt(-2 T ln(Z P_d)) (equations 5 to 10). Discrete
- * constraints pin D = d exactly; continuous constraints set T or H near points with the fall-off of equation 14,
- * overlapping domains averaged by equation 15. docs/constrain.md states the readings chosen where the paper is
+ * controlled pointwise. P_fbm comes from random midpoint displacement (1D) or diamond-square (2D),
+ * smooth stencils by default, on a (2^k + 1) grid covering the image, clamped to
+ * [-sqrt(6) sigma, sqrt(6) sigma]; then Z P_d = 1 - Z |P_fbm| with Z = 1 / (sqrt(6) sigma + delta),
+ * and D = d -/+ sqrt(-2 T ln(Z P_d)) (equations 5 to 10). Discrete constraints pin D = d exactly;
+ * continuous constraints set T or H near points with the fall-off of equation 14, overlapping
+ * domains averaged by equation 15. docs/constrain.md states the readings chosen where the paper is
  * ambiguous.
  */
 #ifndef FB_CONSTRAIN_H
