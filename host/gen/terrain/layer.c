@@ -42,7 +42,7 @@ static const fb_keyspec terrain_keys[] = {
      "insertion triangles: random (by area) or an ordered sweep"},
     {"variance", FB_K_ENUM, 0, 0, false, "stage|local|additions", "\"stage\"",
      "the displacements: the paper's, var(z_abc - z_*) over the mesh per doubling (stage) or the triangle's "
-     "neighbourhood (local); or additions, an fBm field of exactly the asked H added to the survey's interpolated "
+     "neighbourhood (local); or additions, an fBm field of the asked H added to the survey's interpolated "
      "residual"},
     {"centers", FB_K_STRING, 0, 0, false, NULL, NULL, "CSV of centres x,y,D,sigma: regions of their own D and sigma"},
     {"interpolation", FB_K_ENUM, 0, 0, false, "linear|smooth", "\"linear\"",
