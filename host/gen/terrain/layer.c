@@ -497,7 +497,9 @@ static fb_result inline_points(fb_gen *g, terrain_state *s)
 
 /* The refined mesh: per vertex its position, height and links (32 bytes), two triangles of
  * corners and neighbours (2 x 28), the triangles' band lists and the refinement's hint grid (about
- * 12 more); the input points (24 bytes each) are freed once triangulated. */
+ * 12 more); the input points (24 bytes each) are freed once triangulated. Additions' residuals (8
+ * bytes a vertex) are freed before the band lists are made, so they do not raise the peak (measured:
+ * 306 and 308 MiB for 3 * 10^6 insertions, stage and additions). */
 static uint64_t terrain_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
 {
     (void)e;
