@@ -43,6 +43,7 @@ LO=0.9 HI=2 predicted_vs_measured "julia, native, zip level 1 (a bound)" julia $
 predicted_vs_measured "ifs, native" render square.json $N
 LO=0.9 HI=2 predicted_vs_measured "lsystem, native (a bound)" lsystem $N --preset tree --size 8192x8192
 predicted_vs_measured "terrain, native" terrain $N --points pts.csv --insert 3000000 --size 1024x1024
+predicted_vs_measured "terrain, native, additions" terrain $N --points pts.csv --insert 1000000 --size 1024x1024 --variance additions
 predicted_vs_measured "constrain, native" constrain $N --size 4097x4097
 cat > ops.json << 'JSON'
 {"size": [8192, 4096], "layers": [{"type": "fbm", "name": "height", "octaves": 6},
