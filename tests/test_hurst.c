@@ -26,19 +26,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static uint64_t rng = 0x2545f4914f6cdd1dull;
-static uint64_t next(void)
-{
-    rng ^= rng << 13;
-    rng ^= rng >> 7;
-    rng ^= rng << 17;
-    return rng;
-}
-static double unif(void)
-{
-    return (double)(next() >> 11) * 0x1p-53;
-}
-
 static int cmpd(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
@@ -89,8 +76,8 @@ static pairs draw_pairs(const fb_terrain *t, double lo, double hi, size_t want)
     for (uint32_t v = 0; v < d->nv; v++) list[fill[CELL(d->xy[2 * v], d->xy[2 * v + 1])]++] = v;
     pairs P = {malloc(want * sizeof *P.a), malloc(want * sizeof *P.b), malloc(want * sizeof *P.lag), 0};
     for (size_t k = 0; k < 4 * want && P.n < want; k++) {
-        uint32_t a = (uint32_t)(next() % d->nv);
-        double r = lo * pow(hi / lo, unif()), th = 6.283185307179586 * unif();
+        uint32_t a = (uint32_t)(th_next() % d->nv);
+        double r = lo * pow(hi / lo, th_unif()), th = 6.283185307179586 * th_unif();
         double qx = d->xy[2 * a] + r * cos(th), qy = d->xy[2 * a + 1] + r * sin(th);
         if (qx < x0 || qy < y0 || qx > t->bbox[1] || qy > t->bbox[3]) continue;
         int cx = (int)((qx - x0) / cs), cy = (int)((qy - y0) / cs);
@@ -180,6 +167,7 @@ static const double square[3 * NP] = {0, 0, 0, 1000, 0, 0, 0, 1000, 0, 1000, 100
 
 int main(void)
 {
+    th_rng = 0x2545f4914f6cdd1dull;
     const double Hs[] = {0.3, 0.5, 0.7, 0.85, 0.9};
     const int seeds = 6;
     const uint64_t insert = 200000;

@@ -17,19 +17,6 @@
 #include <libqhull_r/qhull_ra.h>
 #endif
 
-static uint64_t rng = 88172645463325252ull;
-static uint64_t next(void)
-{
-    rng ^= rng << 13;
-    rng ^= rng >> 7;
-    rng ^= rng << 17;
-    return rng;
-}
-static double unif(void)
-{
-    return (double)(next() >> 11) * 0x1p-53;
-}
-
 /* ---- predicates against exact integer determinants ------------------------------------------------ */
 
 static int sgn128(__int128 v)
@@ -49,7 +36,7 @@ static void test_predicates(void)
          * evaluation loses the low bits (offset 2^40 makes the products exceed 2^53) */
         const int64_t off = (int64_t)1 << 40;
         int64_t ix[4], iy[4];
-        for (int i = 0; i < 4; i++) ix[i] = off + (int64_t)(next() % 5), iy[i] = off + (int64_t)(next() % 5);
+        for (int i = 0; i < 4; i++) ix[i] = off + (int64_t)(th_next() % 5), iy[i] = off + (int64_t)(th_next() % 5);
         double p[4][2];
         for (int i = 0; i < 4; i++) p[i][0] = (double)ix[i], p[i][1] = (double)iy[i];
         __int128 ax = ix[0] - ix[3], ay = iy[0] - iy[3], bx = ix[1] - ix[3], by = iy[1] - iy[3], cx = ix[2] - ix[3],
@@ -98,15 +85,15 @@ static void test_inputs(void)
 {
     const size_t n = 100000;
     double *xy = malloc(2 * n * sizeof *xy);
-    for (size_t i = 0; i < n; i++) xy[2 * i] = unif(), xy[2 * i + 1] = unif();
+    for (size_t i = 0; i < n; i++) xy[2 * i] = th_unif(), xy[2 * i + 1] = th_unif();
     check_build("random", xy, n, 0);
     /* grid: every cell's four corners are cocircular */
     for (size_t i = 0; i < n; i++) xy[2 * i] = (double)(i % 316), xy[2 * i + 1] = (double)(i / 316);
     check_build("grid", xy, n, 0);
     /* clustered: 20 tight clusters, some points repeated exactly */
     for (size_t i = 0; i < n; i++) {
-        int c = (int)(next() % 20);
-        xy[2 * i] = c * 17.0 + 1e-6 * unif(), xy[2 * i + 1] = (c % 7) * 3.0 + 1e-6 * unif();
+        int c = (int)(th_next() % 20);
+        xy[2 * i] = c * 17.0 + 1e-6 * th_unif(), xy[2 * i + 1] = (c % 7) * 3.0 + 1e-6 * th_unif();
     }
     for (size_t i = 0; i < 100; i++) xy[2 * (n - 1 - i)] = xy[2 * i], xy[2 * (n - 1 - i) + 1] = xy[2 * i + 1];
     check_build("clustered", xy, n, 100);
@@ -138,7 +125,7 @@ static void test_global_empty_circle(void)
 {
     const size_t n = 400;
     double xy[2 * 400];
-    for (size_t i = 0; i < n; i++) xy[2 * i] = unif(), xy[2 * i + 1] = unif();
+    for (size_t i = 0; i < n; i++) xy[2 * i] = th_unif(), xy[2 * i + 1] = th_unif();
     fb_dt d;
     CHECK(fb_dt_build(&d, xy, n, NULL, "small") == FB_OK);
     uint64_t inside = 0, tris = 0;
@@ -177,7 +164,7 @@ static void test_qhull(void)
     const size_t n = 5000;
     double *xy = malloc(2 * n * sizeof *xy);
     uint32_t *perm = malloc(n * sizeof *perm);
-    for (size_t i = 0; i < n; i++) xy[2 * i] = unif() * 100, xy[2 * i + 1] = unif() * 100;
+    for (size_t i = 0; i < n; i++) xy[2 * i] = th_unif() * 100, xy[2 * i + 1] = th_unif() * 100;
     fb_dt d;
     CHECK(fb_dt_build(&d, xy, n, perm, "qhull") == FB_OK);
     uint32_t *ours = malloc(3 * (size_t)d.nfinite * sizeof *ours), no = 0;
@@ -225,7 +212,7 @@ static double variogram_slope(const fb_terrain *t, double lo, double hi, double 
     double sum[64] = {0}, cnt[64] = {0};
     uint32_t nv = t->dt.nv;
     for (long k = 0; k < 2000000; k++) {
-        uint32_t a = (uint32_t)(next() % nv), b = (uint32_t)(next() % nv);
+        uint32_t a = (uint32_t)(th_next() % nv), b = (uint32_t)(th_next() % nv);
         const double *p = t->dt.xy + 2 * (size_t)a, *q = t->dt.xy + 2 * (size_t)b;
         if (x1 > x0 && (p[0] < x0 || p[0] >= x1 || q[0] < x0 || q[0] >= x1)) continue;
         double dd = hypot(p[0] - q[0], p[1] - q[1]);
@@ -259,7 +246,7 @@ static void test_refine_properties(void)
     const size_t n = 1000;
     double *xyz = malloc(3 * n * sizeof *xyz);
     for (size_t i = 0; i < n; i++) {
-        double x = unif() * 1000, y = unif() * 1000;
+        double x = th_unif() * 1000, y = th_unif() * 1000;
         xyz[3 * i] = x, xyz[3 * i + 1] = y, xyz[3 * i + 2] = 100 * sin(x / 90) * cos(y / 70) + 0.01 * i;
     }
     fb_terrain t1, t2;

@@ -7,11 +7,27 @@
 #ifndef FB_TESTHELP_H
 #define FB_TESTHELP_H
 
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <unistd.h>
 
 static int th_passed, th_failed;
+
+/* xorshift64 for tests that draw their own inputs: th_next() 64 random bits, th_unif() in [0, 1).
+ * Reseed by assigning th_rng (never 0). */
+static uint64_t th_rng = 88172645463325252ull;
+static inline uint64_t th_next(void)
+{
+    th_rng ^= th_rng << 13;
+    th_rng ^= th_rng >> 7;
+    th_rng ^= th_rng << 17;
+    return th_rng;
+}
+static inline double th_unif(void)
+{
+    return (double)(th_next() >> 11) * 0x1p-53;
+}
 
 #define CHECK(cond)                                                                                                    \
     do {                                                                                                               \
