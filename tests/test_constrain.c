@@ -225,12 +225,6 @@ static double d2_line(const float *z, int W, int y, int x0, int x1, bool cols)
     return s / (x1 - x0);
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 /* No crease from a region: on a flat macro shape with a region of its own H and T (the docs'
  * constrain-region example, scaled), the second differences across the row and the column through
  * the region's centre stay within 1.2 times the median of the 16 lines around them. Each line's
@@ -259,7 +253,7 @@ static void test_no_crease(void)
         double near[16];
         for (int y = c - 8; y <= c + 8; y++)
             if (y != c) near[n++] = v[cols][y];
-        qsort(near, (size_t)n, sizeof *near, cmp_double);
+        qsort(near, (size_t)n, sizeof *near, th_cmp_double);
         double at = v[cols][c] / ((near[n / 2 - 1] + near[n / 2]) / 2);
         CHECKF(at <= 1.2, "the %s through the region's centre: second differences %.2f times its neighbours' median",
                cols ? "column" : "row", at);
@@ -305,7 +299,7 @@ static void level_lines(double H, bool linear, double worst[2][2], double *aniso
         for (int cols = 0; cols < 2; cols++) {
             double sorted[255];
             memcpy(sorted, v[w][cols] + 1, sizeof sorted);
-            qsort(sorted, 255, sizeof *sorted, cmp_double);
+            qsort(sorted, 255, sizeof *sorted, th_cmp_double);
             double med = sorted[127];
             worst[w][cols] = 0;
             for (int j = 1; j <= 7; j++) {
@@ -372,7 +366,7 @@ static void test_soften(void)
                 all[n++] = d2;
                 if ((o[k].P[i] > 0) != (o[k].P[i + N] > 0)) zsum += d2, nz++;
             }
-        qsort(all, n, sizeof *all, cmp_double);
+        qsort(all, n, sizeof *all, th_cmp_double);
         ratio[k] = zsum / (double)nz / all[n / 2];
         free(all);
     }
@@ -417,12 +411,6 @@ static void test_threads(void)
     free(m);
 }
 
-static int cmp_d(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 /* The node deviates are standard normal: Kolmogorov-Smirnov distance to Phi(z) = erfc(-z/sqrt 2)/2
  * below the 0.1% critical value 1.95/sqrt(n), mean and variance within 5 standard errors, and the
  * share beyond 3 sigma (0.0027) within 5 of its standard errors. */
@@ -439,7 +427,7 @@ static void test_normal(void)
     m /= n;
     for (int i = 0; i < n; i++) v += (z[i] - m) * (z[i] - m);
     v /= n - 1;
-    qsort(z, n, sizeof *z, cmp_d);
+    qsort(z, n, sizeof *z, th_cmp_double);
     for (int i = 0; i < n; i++) {
         double F = 0.5 * erfc(-z[i] / sqrt(2.0)), lo = fabs(F - (double)i / n), hi = fabs(F - (double)(i + 1) / n);
         ks = fmax(ks, fmax(lo, hi));

@@ -26,12 +26,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static int cmpd(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 /* The median length of the mesh's finite edges. */
 static double median_spacing(const fb_terrain *t)
 {
@@ -48,7 +42,7 @@ static double median_spacing(const fb_terrain *t)
             len[n++] = hypot(p[0] - q[0], p[1] - q[1]);
         }
     }
-    qsort(len, n, sizeof *len, cmpd);
+    qsort(len, n, sizeof *len, th_cmp_double);
     double m = len[n / 2];
     free(len);
     return m;

@@ -29,6 +29,13 @@ static inline double th_unif(void)
     return (double)(th_next() >> 11) * 0x1p-53;
 }
 
+/* qsort's comparison of doubles, ascending. */
+static inline int th_cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
 #define CHECK(cond)                                                                                                    \
     do {                                                                                                               \
         if (cond) {                                                                                                    \

@@ -565,11 +565,12 @@ fb_result fb_constrain_run(const fb_constrain_desc *d, bool want_p, fb_constrain
         }
         if (regional) buffer_level(&g, N - 1);
     }
+    double k0[ST_KINDS] = {0}; /* each smooth stencil's K at the base H */
+    for (int k = 0; k < ST_KINDS && !d->linear; k++) k0[k] = stencil_k(k, g.H0);
     for (int s = N - 1; s >= 2 && !rc; s /= 2) {
         int h = s / 2;
-        double sbase[ST_KINDS] = {0};
-        for (int k = 0; k < ST_KINDS && !d->linear; k++)
-            sbase[k] = d->sigma * sqrt(stencil_k(k, g.H0) * pow(h / g.span, 2 * (double)g.H0));
+        double sbase[ST_KINDS];
+        for (int k = 0; k < ST_KINDS; k++) sbase[k] = d->sigma * sqrt(k0[k] * pow(h / g.span, 2 * (double)g.H0));
         if (!two_d && !d->linear) {
             smooth_1d(&g, s, h, sbase);
             if (live) pin_step(&g, h, false);

@@ -97,18 +97,13 @@ double fb_terrain_sigma2_estimate(const fb_terrain *t, double hurst)
     return n ? sum / (double)n : 0.0;
 }
 
-static double gauss_stream(uint32_t seed, uint32_t stream, uint64_t index)
-{
-    uint32_t lo = (uint32_t)index, hi = (uint32_t)(index >> 32);
-    uint32_t h1 = k_hash3(seed ^ k_hash(hi), stream, 2 * lo);
-    uint32_t h2 = k_hash3(seed ^ k_hash(hi), stream, 2 * lo + 1);
-    double u1 = ((double)h1 + 0.5) * 0x1p-32, u2 = (double)h2 * 0x1p-32;
-    return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
-}
-
 double fb_terrain_gauss(uint32_t seed, uint64_t index)
 {
-    return gauss_stream(seed, STREAM_GAUSS, index);
+    uint32_t lo = (uint32_t)index, hi = (uint32_t)(index >> 32);
+    uint32_t h1 = k_hash3(seed ^ k_hash(hi), STREAM_GAUSS, 2 * lo);
+    uint32_t h2 = k_hash3(seed ^ k_hash(hi), STREAM_GAUSS, 2 * lo + 1);
+    double u1 = ((double)h1 + 0.5) * 0x1p-32, u2 = (double)h2 * 0x1p-32;
+    return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
 }
 
 /* The variance of z_abc - z_* over the finite triangles of a list. */
@@ -320,13 +315,12 @@ static inline double cos_poly(double x)
 static double fbm_at(const fbm_field *f, int c, const double *p)
 {
     const double *a = f->amp + (size_t)c * f->nwaves;
-    double sum = 0, x = p[0] - f->origin[0], y = p[1] - f->origin[1];
+    double x = p[0] - f->origin[0], y = p[1] - f->origin[1];
     double acc[4] = {0, 0, 0, 0}; /* four partial sums (nwaves is a multiple of 4): independent chains */
     for (int i = 0; i < f->nwaves; i += 4)
         for (int j = 0; j < 4; j++)
             acc[j] += a[i + j] * cos_poly(f->k[3 * (i + j)] * x + f->k[3 * (i + j) + 1] * y + f->k[3 * (i + j) + 2]);
-    sum = (acc[0] + acc[1]) + (acc[2] + acc[3]);
-    return sum;
+    return (acc[0] + acc[1]) + (acc[2] + acc[3]);
 }
 
 static const fb_terrain_center *nearest_center(const fb_terrain_opts *o, const double *p)
@@ -360,8 +354,11 @@ static bool field_make(const fb_terrain *t, const fb_terrain_opts *o, double sig
 fb_result fb_terrain_field(const fb_terrain *t, const fb_terrain_opts *o, double sigma2, uint64_t nv_final,
                            const double *xy, size_t n, double *z)
 {
+    fb_terrain_opts global = *o; /* the one H and sigma: centres ignored */
+    global.ncenters = 0;
     fbm_field f;
-    if (!field_make(t, o, sigma2, NULL, nv_final, &f)) return fb_fail(FB_ERR_NOMEM, "terrain field: out of memory");
+    if (!field_make(t, &global, sigma2, NULL, nv_final, &f))
+        return fb_fail(FB_ERR_NOMEM, "terrain field: out of memory");
     for (size_t i = 0; i < n; i++) z[i] = fbm_at(&f, 0, xy + 2 * i);
     fbm_field_free(&f);
     return FB_OK;

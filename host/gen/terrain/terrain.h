@@ -3,8 +3,8 @@
  * triangulated, then new points are inserted one by one at the barycentre of a triangle with the
  * height z_abc + d, d one Gaussian draw whose variance follows equations IV to VI so that height
  * increments grow like dist^(2H); or, with `additions`, the height of an fBm field of the asked H
- * plus the survey's residual interpolated (terrain.c). Everything here runs on the CPU, sequentially, from the
- * counter-based RNG: the same input and seed give the same mesh bit for bit.
+ * plus the survey's residual interpolated (terrain.c). Everything here runs on the CPU,
+ * sequentially, from the counter-based RNG: the same input and seed give the same mesh bit for bit.
  */
 #ifndef FB_TERRAIN_H
 #define FB_TERRAIN_H
@@ -31,7 +31,7 @@ typedef struct fb_terrain_opts {
     double sigma;        /* < 0: estimated from the data */
     bool sweep;          /* ordered sweep over triangle slots instead of random sites */
     bool local_variance; /* var(z_abc - z_*) over the triangle's neighbourhood instead of per stage */
-    bool additions;      /* successive random additions instead of equations IV to VI (see terrain.c) */
+    bool additions;      /* an fBm field plus the survey's residual instead of equations IV to VI (terrain.c) */
     uint32_t seed;
     const fb_terrain_center *centers; /* NULL or ncenters entries; replace hurst and sigma */
     int ncenters;
@@ -74,7 +74,7 @@ double fb_terrain_gauss(uint32_t seed, uint64_t index);
 
 /* The fBm field F that --variance additions adds (terrain.c), without the scales finer than the last
  * vertex spacing, at n points xy: F for the hull and bounding box of t refined to nv_final
- * vertices, with o's seed and H and the given sigma^2 (no centres). Exposed for tests. */
+ * vertices, with o's seed and H and the given sigma^2 (o's centres are ignored). Exposed for tests. */
 fb_result fb_terrain_field(const fb_terrain *t, const fb_terrain_opts *o, double sigma2, uint64_t nv_final,
                            const double *xy, size_t n, double *z);
 
