@@ -233,7 +233,7 @@ static void test_registry(void)
         const fb_gen_class *c = fb_gen_list[i];
         CHECKF(fb_gen_find(c->name) == c, "%s: found by name", c->name);
         CHECKF(c->parse && c->init && c->keys && c->nkeys >= 4 && c->what, "%s: complete", c->name);
-        CHECKF(c->params_size > 0 && c->params_size <= FB_LAYER_PARAMS_MAX, "%s: parameters fit", c->name);
+        CHECKF(c->params_size > 0, "%s: has parameters", c->name);
         CHECKF(!strcmp(c->keys[0].key, "type") && !strcmp(c->keys[1].key, "name") &&
                    !strcmp(c->keys[c->nkeys - 2].key, "half") && !strcmp(c->keys[c->nkeys - 1].key, "compression"),
                "%s: type, name first; half, compression last", c->name);

@@ -7,7 +7,6 @@
 #include "tonemap.h"
 #include "compare.h"
 #include "exrio.h"
-#include "gen_ifs.h"
 #include "heightmap.h"
 #include "merge.h"
 #include "output.h"
@@ -86,7 +85,7 @@ static const char *const k_usage =
     "  render [SCENE.json] [-o OUT.exr]   bake every layer of a scene (no scene: the embedded default);\n"
     "         [--from OLD.exr] [--set K=V]  or the scene stored in a file; override keys\n"
     "%s" /* one line per generator */
-    "  tonemap IN.exr -o OUT.exr [tone]   re-run an ifs layer's tone mapping (no new chaos game)\n"
+    "  tonemap IN.exr -o OUT.exr [tone]   re-run a chaos game's tone mapping (no new game)\n"
     "  compare A.exr B.exr [thresholds]   exit 0 within thresholds, 1 beyond, 2 on error\n"
     "  plan [SCENE.json] --tasks N        split a bake into N tasks of about equal cost (render --task)\n"
     "  merge PARTS... -o OUT.exr          join task files (--task), region files (--region) or points\n"
@@ -110,8 +109,8 @@ static const char *const k_usage =
     "  --strip-rows N        rows computed per strip (the result does not depend on it)\n"
     "  --region X,Y,W,H      bake only these pixels (the same as in the full bake) into a region file;\n"
     "                        `fractalbake merge` joins region files into the whole image\n"
-    "  --points-part K/N     bake the K-th of N shares of every chaos game's points (ifs layers; the\n"
-    "                        other layers whole); `fractalbake merge` adds the N parts' hits exactly\n"
+    "  --points-part K/N     bake the K-th of N shares of every chaos game's points (the other\n"
+    "                        layers whole); `fractalbake merge` adds the N parts' hits exactly\n"
     "  --task K/N            bake task K (from 0, like SLURM_ARRAY_TASK_ID) of the N of `fractalbake plan`:\n"
     "                        only its share (a band, points parts or whole layers); merge joins the N\n"
     "  --task-startup S      the start-up of a task the plan assumes (default 0.07 s; 0: use every task\n"
@@ -390,9 +389,9 @@ static fb_result bake_scene(const char *command, fb_scene *scene, const common_o
     }
     if (o->points_part[1] > 0) {
         bool chaos = false;
-        for (int i = 0; i < scene->nlayers; i++) chaos = chaos || scene->layers[i].cls == &fb_gen_ifs;
+        for (int i = 0; i < scene->nlayers; i++) chaos = chaos || scene->layers[i].cls->share == FB_SHARE_POINTS;
         if (!chaos)
-            return fb_fail(FB_ERR_USAGE, "--points-part: the scene has no chaos-game (ifs) layer to split by points");
+            return fb_fail(FB_ERR_USAGE, "--points-part: the scene has no chaos-game layer to split by points");
         if (o->region[2] > 0)
             return fb_fail(FB_ERR_USAGE, "--points-part: not with --region (split a bake by pixels or by points)");
         scene->points_part[0] = o->points_part[0];
@@ -1000,19 +999,26 @@ static int cmd_plan(int argc, char **argv)
     for (int i = 0; i < argc && !bad; i++) {
         const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            char by_share[3][256];
+            for (int k = 0; k < 3; k++) by_share[k][0] = 0;
+            for (const fb_gen_class *const *c = fb_gen_list; *c; c++) {
+                char *o = by_share[(*c)->share];
+                snprintf(o + strlen(o), 256 - strlen(o), "%s%s", *o ? ", " : "", (*c)->name);
+            }
             printf("usage: fractalbake plan [SCENE.json|-] --tasks N [--set KEY.PATH=VALUE ...] [--task-startup S]\n"
                    "                        [--json]\n"
-                   "Splits a bake into N tasks of about equal cost: per-pixel layers (fbm, julia, op) into bands\n"
-                   "of rows, chaos games (ifs) into points parts, and layers whose cost does not shrink with a\n"
-                   "band (terrain, constrain, lsystem, a layer writing a heightmap, and the layers using them)\n"
-                   "whole, each in one task. Costs come from a model of each generator (seconds of one core).\n"
+                   "Splits a bake into N tasks of about equal cost: per-pixel layers (%s) into bands of rows,\n"
+                   "chaos games (%s) into points parts, and layers whose cost does not shrink with a band\n"
+                   "(%s, a layer writing a heightmap, and the layers using them) whole, each in one task.\n"
+                   "Costs come from a model of each generator (seconds of one core).\n"
                    "Tasks count from 0, like SLURM_ARRAY_TASK_ID; the plan uses the fewest that keep the tasks'\n"
                    "total within 10%% of one bake, so with small bakes the last tasks may have nothing to do.\n"
                    "--task-startup S: each task's start-up the plan assumes (default 0.07 s, measured with\n"
                    "lavapipe; 0: every task that shortens the longest); give the same to each render --task.\n"
                    "Each task: fractalbake render SCENE.json --task K/N -o part-K.exr; then\n"
                    "fractalbake merge part-*.exr -o OUT.exr checks the set is complete and joins it.\n"
-                   "Without SCENE.json, the embedded default scene.\n");
+                   "Without SCENE.json, the embedded default scene.\n",
+                   by_share[FB_SHARE_BAND], by_share[FB_SHARE_POINTS], by_share[FB_SHARE_WHOLE]);
             free(sets);
             return 0;
         } else if (!strcmp(a, "--set") || !strcmp(a, "--tasks") || !strcmp(a, "--task-startup")) {
@@ -1058,12 +1064,11 @@ static int cmd_plan(int argc, char **argv)
             rc = fb_fail(FB_ERR_NOMEM, "out of memory");
         free(text);
     } else if (!rc) {
-        static const char *const split[3] = {"bands", "points parts", "whole"};
         printf("plan: %d x %d, %d layer%s over %d task%s (numbered from 0, like SLURM_ARRAY_TASK_ID)\n", sc->width,
                sc->height, sc->nlayers, sc->nlayers == 1 ? "" : "s", ntasks, ntasks == 1 ? "" : "s");
         printf("\n%-20s %-10s %-13s %10s\n", "layer", "type", "split", "model s");
         for (int i = 0; i < sc->nlayers; i++)
-            printf("%-20s %-10s %-13s %10.3f\n", sc->layers[i].name, sc->layers[i].cls->name, split[p->share[i]],
+            printf("%-20s %-10s %-13s %10.3f\n", sc->layers[i].name, sc->layers[i].cls->name, fb_plan_share_name(p->share[i]),
                    p->layer_seconds[i]);
         printf("\n%-6s %-56s %10s\n", "task", "share", "model s");
         for (int k = 0; k < p->nactive; k++) {

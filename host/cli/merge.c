@@ -11,7 +11,6 @@
 
 #include "exrio.h"
 #include "engine.h"
-#include "gen_ifs.h"
 #include "plan.h"
 #include "scene.h"
 
@@ -218,14 +217,42 @@ static bool outside_of(const char *attr, const char *name, uint64_t *out)
     return false;
 }
 
+/* A layer split by points (its class's fb_points_ops): its sums added over the parts. */
 typedef struct chaos_layer {
     fb_gen gen;
-    int layer;             /* its index in the scene */
-    int idx[3];            /* the parts' count, colour_sum_lo and colour_sum_hi channels */
-    uint32_t *rows[3];     /* a strip of each */
-    uint64_t *hits, *sums; /* added over the parts */
+    const fb_points_ops *ops;
+    int layer;                             /* its index in the scene */
+    int nch;                               /* the parts' channels of its sums: 1 each, 2 for a wide one */
+    int idx[2 * FB_POINTS_MAX_SUMS];       /* their indices in the part being read */
+    uint32_t *rows[2 * FB_POINTS_MAX_SUMS]; /* a strip of each */
+    uint64_t *sum[FB_POINTS_MAX_SUMS];     /* added over the parts */
     uint64_t outside;
 } chaos_layer;
+
+/* Bytes per pixel of a chaos layer's sums. */
+static uint64_t chaos_bytes(const fb_layer *L)
+{
+    return 8u * (uint64_t)L->cls->points->nsums;
+}
+
+/* Whether channel `name` is one of a chaos layer's sums that the whole game's layer does not store
+ * (a points part's colour sums). */
+static bool chaos_sum_only(const chaos_layer *c, const char *name)
+{
+    const char *lname = c->gen.layer->name;
+    size_t len = strlen(lname);
+    if (strncmp(name, lname, len) || name[len] != '.') return false;
+    for (int j = 0; j < c->gen.nchannels; j++)
+        if (!strcmp(c->gen.channel_names[j], name)) return false;
+    for (int k = 0; k < c->ops->nsums; k++) {
+        size_t sl = strlen(c->ops->sums[k].suffix);
+        const char *q = name + len + 1;
+        if (!strncmp(q, c->ops->sums[k].suffix, sl) &&
+            (c->ops->sums[k].wide ? !strcmp(q + sl, "_lo") || !strcmp(q + sl, "_hi") : !q[sl]))
+            return true;
+    }
+    return false;
+}
 
 /* Rows [y0, y0 + n) of a chaos layer's channels from its summed game, into the output planes of
  * the same names (ch[0..nout)); every channel of the layer must be among them. */
@@ -248,22 +275,25 @@ static void chaos_free(chaos_layer *cl, int ncl)
 {
     for (int k = 0; k < ncl; k++) {
         fb_gen_fini(&cl[k].gen);
-        free(cl[k].hits);
-        free(cl[k].sums);
-        for (int j = 0; j < 3; j++) free(cl[k].rows[j]);
+        for (int j = 0; j < FB_POINTS_MAX_SUMS; j++) free(cl[k].sum[j]);
+        for (int j = 0; j < 2 * FB_POINTS_MAX_SUMS; j++) free(cl[k].rows[j]);
     }
 }
 
-static const char *const k_sum_suffix[3] = {"count", "colour_sum_lo", "colour_sum_hi"};
-
-/* A chaos layer's strip rows and its image of hits and colour sums. */
-static fb_result chaos_alloc(chaos_layer *c, int W, int H)
+/* A chaos layer's strip rows and its image of sums. */
+static fb_result chaos_alloc(chaos_layer *c, const fb_layer *L, int W, int H)
 {
-    for (int j = 0; j < 3; j++) c->rows[j] = malloc((size_t)W * MERGE_STRIP * 4);
-    c->hits = calloc((size_t)W * H, sizeof *c->hits);
-    c->sums = calloc((size_t)W * H, sizeof *c->sums);
-    return c->hits && c->sums && c->rows[0] && c->rows[1] && c->rows[2] ? FB_OK
-                                                                        : fb_fail(FB_ERR_NOMEM, "out of memory");
+    c->ops = L->cls->points;
+    c->nch = 0;
+    if (!ALWAYS(c->ops && c->ops->from_sums && c->ops->nsums <= FB_POINTS_MAX_SUMS))
+        return fb_fail(FB_ERR_INTERNAL, "generator %s splits by points but has no sums to merge", L->cls->name);
+    bool ok = true;
+    for (int k = 0; k < c->ops->nsums; k++) {
+        ok = ok && (c->sum[k] = calloc((size_t)W * H, sizeof *c->sum[k]));
+        for (int h = 0; h < (c->ops->sums[k].wide ? 2 : 1); h++)
+            ok = ok && (c->rows[c->nch++] = malloc((size_t)W * MERGE_STRIP * 4));
+    }
+    return ok ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory");
 }
 
 /* Adds one points part's hits, colour sums and outside count to each of the ncl chaos layers. */
@@ -280,13 +310,17 @@ static fb_result chaos_add(chaos_layer *cl, int ncl, const fb_scene *sc, exrio_r
             return fb_fail(FB_ERR_INPUT, "%s: no outside count for layer %s (attribute fractalbake/ifs-outside)", path,
                            name);
         cl[k].outside += o;
-        for (int j = 0; j < 3; j++) { /* the channels' indices in this file */
-            char cn[96];
-            snprintf(cn, sizeof cn, "%s.%s", name, k_sum_suffix[j]);
-            if ((cl[k].idx[j] = exrio_find_channel(r, cn)) < 0)
-                return fb_fail(FB_ERR_INPUT, "%s: no channel %s (not a points part of this scene)", path, cn);
-            in[cl[k].idx[j]] = cl[k].rows[j];
-        }
+        for (int s = 0, j = 0; s < cl[k].ops->nsums; s++) /* the channels' indices in this file */
+            for (int h = 0; h < (cl[k].ops->sums[s].wide ? 2 : 1); h++, j++) {
+                char cn[96];
+                snprintf(cn, sizeof cn, "%s.%s%s", name, cl[k].ops->sums[s].suffix,
+                         !cl[k].ops->sums[s].wide ? ""
+                         : h             ? "_hi"
+                                         : "_lo");
+                if ((cl[k].idx[j] = exrio_find_channel(r, cn)) < 0)
+                    return fb_fail(FB_ERR_INPUT, "%s: no channel %s (not a points part of this scene)", path, cn);
+                in[cl[k].idx[j]] = cl[k].rows[j];
+            }
     }
     for (int y0 = 0; y0 < H && ncl > 0; y0 += MERGE_STRIP) {
         int rowsn = y0 + MERGE_STRIP <= H ? MERGE_STRIP : H - y0;
@@ -294,9 +328,10 @@ static fb_result chaos_add(chaos_layer *cl, int ncl, const fb_scene *sc, exrio_r
         if (rc) return rc;
         for (int k = 0; k < ncl; k++) {
             chaos_layer *c = &cl[k];
-            for (size_t q = 0; q < (size_t)rowsn * W; q++) {
-                c->hits[(size_t)y0 * W + q] += c->rows[0][q];
-                c->sums[(size_t)y0 * W + q] += (uint64_t)c->rows[2][q] << 32 | c->rows[1][q];
+            for (int s = 0, j = 0; s < c->ops->nsums; s++) {
+                uint64_t *sum = c->sum[s] + (size_t)y0 * W;
+                const uint32_t *lo = c->rows[j++], *hi = c->ops->sums[s].wide ? c->rows[j++] : NULL;
+                for (size_t q = 0; q < (size_t)rowsn * W; q++) sum[q] += (hi ? (uint64_t)hi[q] << 32 : 0) | lo[q];
             }
         }
     }
@@ -354,30 +389,32 @@ static fb_result merge_points(part *p, int n, const char *const *paths, const ch
     if (!rc && !(cl = calloc((size_t)sc.nlayers, sizeof *cl))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     /* the chaos-game layers: their hits and colour sums, added over the parts (each part read once) */
     size_t npx = (size_t)W * H;
-    int nifs = 0;
-    for (int l = 0; l < sc.nlayers; l++) nifs += sc.layers[l].cls == &fb_gen_ifs;
+    int nchaos = 0;
+    uint64_t bytes_px = 0;
+    for (int l = 0; l < sc.nlayers; l++)
+        if (sc.layers[l].cls->share == FB_SHARE_POINTS) nchaos++, bytes_px += chaos_bytes(&sc.layers[l]);
     char who[4200];
-    snprintf(who, sizeof who, "merging the points parts of %s (%d x %d, %d chaos-game layers)", paths[0], W, H, nifs);
-    if (!rc) rc = fb_memory_check((uint64_t)npx * 16 * (uint64_t)nifs, who);
+    snprintf(who, sizeof who, "merging the points parts of %s (%d x %d, %d chaos-game layers)", paths[0], W, H, nchaos);
+    if (!rc) rc = fb_memory_check((uint64_t)npx * bytes_px, who);
     for (int l = 0; l < sc.nlayers && !rc; l++) {
-        if (sc.layers[l].cls != &fb_gen_ifs) continue;
+        if (sc.layers[l].cls->share != FB_SHARE_POINTS) continue;
         chaos_layer *c = &cl[ncl++];
         c->layer = l;
-        rc = chaos_alloc(c, W, H);
+        rc = chaos_alloc(c, &sc.layers[l], W, H);
     }
     for (int i = 0; i < n && !rc; i++) rc = chaos_add(cl, ncl, &sc, p[i].r, paths[i], W, H);
     for (int k = 0; k < ncl && !rc; k++) {
         chaos_layer *c = &cl[k];
-        for (int j = 0; j < 3; j++) free(c->rows[j]), c->rows[j] = NULL;
-        rc = fb_gen_init(&c->gen, &sc, &sc.layers[c->layer]); /* the whole game's layer: 7 channels */
-        if (!rc) rc = fb_gen_ifs_from_sums(&c->gen, c->hits, c->sums, c->outside);
+        for (int j = 0; j < c->nch; j++) free(c->rows[j]), c->rows[j] = NULL;
+        rc = fb_gen_init(&c->gen, &sc, &sc.layers[c->layer]); /* the whole game's layer */
+        if (!rc) rc = c->ops->from_sums(&c->gen, (const uint64_t *const *)c->sum, c->outside);
     }
     /* the output: every channel but the colour sums; chaos layers' from their generator */
     for (int c = 0; c < nch && !rc; c++) {
         const char *name = exrio_channel_name(p[0].r, c);
-        size_t len = strlen(name);
-        if (len > 14 && (!strcmp(name + len - 14, ".colour_sum_lo") || !strcmp(name + len - 14, ".colour_sum_hi")))
-            continue;
+        bool sum_only = false;
+        for (int k = 0; k < ncl; k++) sum_only = sum_only || chaos_sum_only(&cl[k], name);
+        if (sum_only) continue;
         src[nout] = c;
         for (int k = 0; k < ncl; k++)
             for (int j = 0; j < cl[k].gen.nchannels; j++)
@@ -587,14 +624,17 @@ static fb_result merge_tasks(part *p, int n, const char *const *paths, const cha
     size_t npx = (size_t)W * H;
     if (!rc && ncl) {
         char who[4200];
+        uint64_t bytes_px = 0;
+        for (int k = 0; k < ncl; k++) bytes_px += chaos_bytes(&sc->layers[cl[k].layer]);
         snprintf(who, sizeof who, "merging the points parts of %s (%d x %d, %d chaos-game layers)", paths[0], W, H,
                  ncl);
-        rc = fb_memory_check((uint64_t)npx * 16 * (uint64_t)ncl, who);
+        rc = fb_memory_check((uint64_t)npx * bytes_px, who);
     }
-    for (int k = 0; k < ncl && !rc; k++) rc = chaos_alloc(&cl[k], W, H);
+    for (int k = 0; k < ncl && !rc; k++) rc = chaos_alloc(&cl[k], &sc->layers[cl[k].layer], W, H);
     for (int t = 0; t < plan->nactive && !rc && ncl; t++)
         if (plan->tasks[t].points) rc = chaos_add(cl, ncl, sc, p[file_of[t]].r, paths[file_of[t]], W, H);
-    for (int k = 0; k < ncl && !rc; k++) rc = fb_gen_ifs_from_sums(&cl[k].gen, cl[k].hits, cl[k].sums, cl[k].outside);
+    for (int k = 0; k < ncl && !rc; k++)
+        rc = cl[k].ops->from_sums(&cl[k].gen, (const uint64_t *const *)cl[k].sum, cl[k].outside);
     /* the attributes a one-command bake writes: its backend composed from the layers' */
     char backend[16], per_layer[FB_MAX_LAYERS * 80] = "", device[1024] = "native C", seed[16];
     int nvk = 0;

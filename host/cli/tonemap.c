@@ -1,14 +1,15 @@
 /*
- * fractalbake tonemap: re-runs the tone mapping of an ifs layer from the density and colour
- * channels a bake stored, with new tone parameters, without iterating the chaos game again. The
- * output is the input file with that layer's R, G, B, A recomputed and the scene updated; with the
- * parameters unchanged it reproduces the bake bit for bit (tests/cli.sh).
+ * fractalbake tonemap: re-runs the tone mapping of a layer whose class can re-tone it (gen.h:
+ * fb_tone_ops; an ifs layer from the density and colour channels a bake stored) with new tone
+ * parameters, without computing the layer again. The output is the input file with that layer's
+ * tone-mapped channels recomputed and the scene updated; with the parameters unchanged it
+ * reproduces the bake bit for bit (tests/cli/ifs.sh).
  */
 #include "tonemap.h"
 
 #include "exrio.h"
 #include "output.h"
-#include "gen_ifs.h"
+#include "gen.h"
 #include "scene.h"
 
 #include <jansson.h>
@@ -16,23 +17,48 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* The flags that only change the tone mapping. */
-static const char *const k_tone_keys[] = {"brightness",      "gamma",   "gamma-threshold", "vibrancy",
-                                          "highlight-power", "palette", "cosine",          "stops"};
-
-static bool tone_key(const char *k)
+/* Whether `k` is one of class c's tone keys. */
+static bool tone_key(const fb_gen_class *c, const char *k)
 {
-    for (size_t i = 0; i < sizeof k_tone_keys / sizeof k_tone_keys[0]; i++)
-        if (!strcmp(k, k_tone_keys[i])) return true;
+    for (const char *const *t = c->tone->keys; *t; t++)
+        if (!strcmp(k, *t)) return true;
     return false;
 }
 
-/* Merges the tone flags (already validated as ifs flags) into layer object `lj`; a new colour map
- * replaces the old one of whatever kind. */
-static fb_result apply_flags(json_t *lj, int argc, char **argv)
+/* "--brightness, --gamma, ...": class c's tone flags, for messages and help. */
+static void tone_flags(const fb_gen_class *c, char *out, size_t size)
+{
+    out[0] = 0;
+    for (const char *const *t = c->tone->keys; *t; t++)
+        snprintf(out + strlen(out), size - strlen(out), "%s--%s", t == c->tone->keys ? "" : ", ", *t);
+}
+
+/* The classes that can be re-toned, "ifs, ..." (for messages), and how many. */
+static int tone_classes(char *out, size_t size)
+{
+    int n = 0;
+    out[0] = 0;
+    for (const fb_gen_class *const *c = fb_gen_list; *c; c++)
+        if ((*c)->tone) snprintf(out + strlen(out), size - strlen(out), "%s%s", n++ ? ", " : "", (*c)->name);
+    return n;
+}
+
+/* How many values flag `flag` takes for some re-tonable class (fb_scene_flag_arity), -1 for none. */
+static int tone_flag_arity(const char *flag)
+{
+    for (const fb_gen_class *const *c = fb_gen_list; *c; c++) {
+        int a = (*c)->tone ? fb_scene_flag_arity((*c)->name, flag) : -1;
+        if (a >= 0) return a;
+    }
+    return -1;
+}
+
+/* Merges the tone flags into layer object `lj` of class c (they are validated as c's flags here); a
+ * new colour map replaces the old one of whatever kind. */
+static fb_result apply_flags(const fb_gen_class *c, json_t *lj, int argc, char **argv)
 {
     char *flags_json = NULL;
-    fb_result rc = fb_scene_from_flags("ifs", argc, argv, &flags_json);
+    fb_result rc = fb_scene_from_flags(c->name, argc, argv, &flags_json);
     if (rc) return rc;
     json_t *root = json_loads(flags_json, 0, NULL);
     free(flags_json);
@@ -42,11 +68,10 @@ static fb_result apply_flags(json_t *lj, int argc, char **argv)
     json_object_foreach(given, key, val)
     {
         if (!strcmp(key, "type")) continue;
-        if (!tone_key(key)) { /* the message first: `key` belongs to root */
-            rc = fb_fail(FB_ERR_USAGE,
-                         "--%s: not a tone-mapping flag (tonemap takes --brightness, --gamma, --gamma-threshold, "
-                         "--vibrancy, --highlight-power, --palette, --cosine, --stops)",
-                         key);
+        if (!tone_key(c, key)) { /* the message first: `key` belongs to root */
+            char list[512];
+            tone_flags(c, list, sizeof list);
+            rc = fb_fail(FB_ERR_USAGE, "--%s: not a tone-mapping flag of %s (tonemap takes %s)", key, c->what, list);
             json_decref(root);
             return rc;
         }
@@ -78,16 +103,21 @@ fb_result fb_tonemap_main(int argc, char **argv, bool *quiet, bool *json)
         } else if (!strcmp(a, "--json")) {
             *json = true;
         } else if (!strcmp(a, "--help")) {
+            char classes[256];
+            tone_classes(classes, sizeof classes);
             printf("usage: fractalbake tonemap IN.exr -o OUT.exr [--layer NAME] [--brightness B] [--gamma G]\n"
                    "          [--gamma-threshold T] [--vibrancy V] [--highlight-power P] [--palette NAME |\n"
                    "          --cosine ... | --stops ...]\n"
-                   "Recomputes R, G, B, A of an ifs layer from its stored density and colour channels with new\n"
-                   "tone parameters (the others keep their stored values). No chaos game is run.\n"
-                   "--quiet: no summary line; --json: a JSON summary on standard output.\n");
+                   "Recomputes the tone-mapped channels of a layer that stores what its tone map reads (%s\n"
+                   "layers: R, G, B, A from the density and colour channels) with new tone parameters; the\n"
+                   "other channels keep their stored values and the layer is not computed again.\n"
+                   "--layer NAME: which layer (default: the first that can be re-toned).\n"
+                   "--quiet: no summary line; --json: a JSON summary on standard output.\n",
+                   classes);
             free(flags);
             return FB_OK;
         } else if (!strncmp(a, "--", 2)) {
-            int arity = fb_scene_flag_arity("ifs", a + 2);
+            int arity = tone_flag_arity(a + 2);
             if (arity < 0) {
                 rc = fb_fail(FB_ERR_USAGE, "%s: unknown flag for `fractalbake tonemap`", a);
                 break;
@@ -108,7 +138,7 @@ fb_result fb_tonemap_main(int argc, char **argv, bool *quiet, bool *json)
     exrio_writer *w = NULL;
     json_t *root = NULL;
     fb_scene scene = {0};
-    float *density = NULL, *strip = NULL;
+    float *strip = NULL;
     void **planes = NULL;
     exrio_channel *chans = NULL;
     char *text = NULL;
@@ -117,63 +147,36 @@ fb_result fb_tonemap_main(int argc, char **argv, bool *quiet, bool *json)
     if (!rc && !stored) rc = fb_fail(FB_ERR_INPUT, "%s: no fractalbake scene in the header", in);
     if (!rc && !(root = json_loads(stored, 0, NULL)))
         rc = fb_fail(FB_ERR_INPUT, "%s: the stored scene is not valid JSON", in);
-    /* the layer: named, or the first ifs layer */
+    /* the layer: named, or the first that can be re-toned */
     json_t *lj = NULL;
     size_t li = 0;
+    const fb_gen_class *cls = NULL;
     json_t *layers = root ? json_object_get(root, "layers") : NULL;
     for (size_t i = 0; !rc && i < json_array_size(layers) && !lj; i++) {
         json_t *l = json_array_get(layers, i);
         const char *t = json_string_value(json_object_get(l, "type")),
                    *n = json_string_value(json_object_get(l, "name"));
-        if (t && !strcmp(t, "ifs") && (!layer || (n && !strcmp(n, layer)))) lj = l, li = i;
+        const fb_gen_class *c = t ? fb_gen_find(t) : NULL;
+        if (c && c->tone && (!layer || (n && !strcmp(n, layer)))) lj = l, li = i, cls = c;
     }
-    if (!rc && !lj)
-        rc = fb_fail(FB_ERR_INPUT, "%s: no ifs layer%s%s in the stored scene", in, layer ? " named " : "",
-                     layer ? layer : "");
-    if (!rc) rc = apply_flags(lj, nflags, flags);
+    if (!rc && !lj) {
+        char classes[256];
+        tone_classes(classes, sizeof classes);
+        rc = fb_fail(FB_ERR_INPUT, "%s: no layer%s%s in the stored scene that tonemap can re-tone (%s layers)", in,
+                     layer ? " named " : "", layer ? layer : "", classes);
+    }
+    if (!rc) rc = apply_flags(cls, lj, nflags, flags);
     if (!rc && !(text = json_dumps(root, JSON_SORT_KEYS | JSON_REAL_PRECISION(17))))
         rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     if (!rc) rc = fb_scene_parse(text, NULL, &scene);
 
     int width = r ? exrio_width(r) : 0, height = r ? exrio_height(r) : 0, nch = r ? exrio_nchannels(r) : 0;
     const fb_layer *L = rc ? NULL : &scene.layers[li];
-    char name[6][96];
-    int idx[6];
-    static const char *const suffix[6] = {"density", "colour", "R", "G", "B", "A"};
-    for (int k = 0; k < 6 && !rc; k++) {
-        snprintf(name[k], sizeof name[k], "%s.%s", L->name, suffix[k]);
-        if ((idx[k] = exrio_find_channel(r, name[k])) < 0)
-            rc = fb_fail(FB_ERR_INPUT, "%s: channel %s is missing", in, name[k]);
-    }
     if (!rc && (scene.width != width || scene.height != height))
         rc = fb_fail(FB_ERR_INPUT, "%s: the stored scene's size does not match the image", in);
-    /* pass 1: the reference density over the whole image */
-    size_t n = (size_t)width * height;
-    char who[4200];
-    snprintf(who, sizeof who, "tonemap %s (%d x %d)", in, width, height);
-    if (!rc) rc = fb_memory_check((uint64_t)n * 4, who);
-    if (!rc && !(density = malloc(n * 4))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
-    if (!rc) {
-        void **one = calloc((size_t)nch, sizeof *one);
-        if (!one) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
-        for (int y = 0; y < height && !rc; y += 256) {
-            int rows = y + 256 <= height ? 256 : height - y;
-            one[idx[0]] = density + (size_t)y * width;
-            rc = exrio_read_rows(r, y, rows, one);
-        }
-        free(one);
-    }
-    fb_ifs_tone tone = {0};
-    if (!rc) {
-        const fb_ifs_params *f = fb_layer_params(L);
-        tone = (fb_ifs_tone){.brightness = f->brightness,
-                             .gamma = f->gamma,
-                             .threshold = f->gamma_threshold,
-                             .vibrancy = f->vibrancy,
-                             .highlight = f->highlight_power,
-                             .dref = fb_ifs_density_ref(density, n)};
-        fb_palette_build(&f->palette, tone.palette);
-    }
+    /* pass 1: what the tone map reads of the whole image */
+    void *tone = NULL;
+    if (!rc) rc = cls->tone->begin(L, r, in, &tone);
     /* pass 2: every channel, strip by strip, the layer's colour recomputed */
     const int rows = 64;
     if (!rc) {
@@ -209,17 +212,16 @@ fb_result fb_tonemap_main(int argc, char **argv, bool *quiet, bool *json)
         int m = y + rows <= height ? rows : height - y;
         rc = exrio_read_rows(r, y, m, planes);
         if (rc) break;
-        fb_ifs_tonemap_row(&tone, planes[idx[0]], planes[idx[1]], (size_t)m * width, planes[idx[2]], planes[idx[3]],
-                           planes[idx[4]], planes[idx[5]]);
+        cls->tone->rows(tone, m, planes);
         rc = exrio_writer_rows(w, y, m, (const void *const *)planes);
     }
     if (!rc) rc = exrio_writer_finish(&w);
     exrio_writer_abort(&w);
+    if (cls && tone) cls->tone->end(tone);
     exrio_close(&r);
     json_decref(root);
     fb_scene_fini(&scene);
     free(text);
-    free(density);
     free(strip);
     free(planes);
     free(chans);

@@ -358,7 +358,7 @@ static fb_result check_finite(const layer_run *runs, int nlayers, const void *co
                         return fb_fail(FB_ERR_INPUT,
                                        "layer %s: the %s gives %s at pixel (%d, %d) of %s: its inputs, weights or "
                                        "ranges are too large for a float (at most 3.4e38)",
-                                       g->layer->name, "op", isnan(v) ? "NaN" : "an infinity", x0 + x, y0 + r,
+                                       g->layer->name, g->layer->cls->name, isnan(v) ? "NaN" : "an infinity", x0 + x, y0 + r,
                                        g->channel_names[c]);
                     return fb_fail(FB_ERR_INTERNAL,
                                    "layer %s: channel %s holds %s at pixel (%d, %d): an internal error, please "

@@ -96,6 +96,44 @@ struct fb_gen {
     void (*fini)(fb_gen *g);                /* frees what `owned` points to, before owned itself */
 };
 
+/* How a layer's work may be shared between the tasks of a split bake (core/plan.c). */
+typedef enum fb_share {
+    FB_SHARE_WHOLE = 0,  /* computed by one task: its cost does not shrink with a band (the default) */
+    FB_SHARE_BAND = 1,   /* a function of the pixel: cut into row bands */
+    FB_SHARE_POINTS = 2, /* a chaos game: split into points parts (render --points-part), summed by merge */
+} fb_share;
+
+/* Merging points parts (fractalbake merge): a chaos game split by points (FB_SHARE_POINTS) stores in
+ * each part its per-pixel sums, which add over the parts, and the points that fell outside the frame
+ * (fb_gen.points_outside). Sum k is the uint channel LAYER.SUFFIX, or, wide, the pair LAYER.SUFFIX_lo
+ * and LAYER.SUFFIX_hi of one 64-bit sum. */
+#define FB_POINTS_MAX_SUMS 8
+typedef struct fb_points_ops {
+    int nsums;
+    struct {
+        const char *suffix;
+        bool wide;
+    } sums[FB_POINTS_MAX_SUMS];
+    /* Sets up g (initialised for the whole game's layer) from the sums over every part (sums[k]: width
+     * x height values) and the outside count, in place of its chaos game; its native_rows then gives
+     * the channels the whole game would have. */
+    fb_result (*from_sums)(fb_gen *g, const uint64_t *const *sums, uint64_t outside);
+} fb_points_ops;
+
+/* Re-toning (fractalbake tonemap): a layer whose colour channels are a function of channels it also
+ * stores (the chaos game's density and colour), recomputed with new tone keys without computing the
+ * layer again. */
+typedef struct fb_tone_ops {
+    const char *const *keys; /* its scene keys that change only the tone mapping, NULL-terminated */
+    /* Reads what the tone map needs of the whole image from `r` (a file holding the layer) for layer
+     * L (its new parameters) into a new *state. */
+    fb_result (*begin)(const fb_layer *L, exrio_reader *r, const char *path, void **state);
+    /* Recomputes the layer's tone-mapped channels in the strip planes[c] (every channel c of r, m *
+     * width values each). */
+    void (*rows)(const void *state, int m, void *const *planes);
+    void (*end)(void *state); /* null-safe */
+} fb_tone_ops;
+
 /* A generator: everything the scene engine, the bake and the commands know of one layer kind. Each
  * lives in its folder host/gen/NAME/ (layer.c defines it); host/gen/list.c names them all. */
 struct fb_bench;
@@ -116,6 +154,17 @@ typedef struct fb_gen_class {
     int (*outputs)(const fb_layer *L, const char **paths, const char **what, int max);
     /* Sets up a layer's generator: channels, kernel, push constants, prepare (fb_gen_init calls it). */
     fb_result (*init)(fb_gen *g);
+    /* Planning a split bake (core/plan.c). `share`: how its layers may be shared between tasks (a
+     * layer that writes a heightmap is computed whole whatever its class says). `cost`: the layer's
+     * cost in seconds of one core of the reference machine (docs/scenes.md), written channels
+     * included, into *total; a banded class also fills rows[0 .. s->height) (zeroed by the caller)
+     * with each row's share. `part_pixel_seconds`: a points-split class's image cost per pixel,
+     * which every points part pays whatever its share of the points. */
+    fb_share share;
+    fb_result (*cost)(const fb_scene *s, int layer, double *rows, double *total);
+    double part_pixel_seconds;
+    const fb_points_ops *points; /* FB_SHARE_POINTS: how merge adds the parts */
+    const fb_tone_ops *tone;     /* NULL: tonemap does not apply */
     /* Its benchmarks (cli/bench.c runs them; NULL: none). */
     fb_result (*bench)(struct fb_bench *b);
 } fb_gen_class;

@@ -15,100 +15,22 @@
 
 /* Seconds of one core of the reference machine (a 2-core AMD EPYC Zen 4, Mesa 22.3 lavapipe; the
  * calibration is in docs/scenes.md) for each unit of work, written EXR channels included. */
-#define C_STARTUP      FB_PLAN_STARTUP
-#define C_JULIA_ITER   1.9e-9 /* a Julia iteration of one sample */
-#define C_JULIA_SAMPLE 8.0e-8 /* a Julia sample: the warp, palette and 7 channels */
-#define C_JULIA_TURB   7.7e-8 /* an octave of a Julia sample's turbulence */
-#define C_FBM_OCTAVE   3.0e-9 /* an fBm octave of one pixel */
-#define C_FBM_PIXEL    9.0e-9 /* an fBm pixel: its frame and its channel */
-#define C_OP_PIXEL     4.0e-9 /* an op layer's pixel */
-#define C_IFS_POINT    5.0e-9 /* a chaos-game step */
-#define C_IFS_PIXEL    1.0e-7 /* a chaos game's pixel: its histogram, density and channels */
-#define C_TERRAIN_INS  4.0e-6 /* a terrain insertion (refinement and Delaunay) */
-#define C_TERRAIN_PX   4.8e-8 /* a terrain pixel (rasterising, slope, channels) */
-#define C_WHOLE_PX     6.0e-8 /* a constrain or L-system pixel */
-#define PREPASS_WIDTH  64     /* the Julia pre-pass's width */
-#define BUDGET         1.10   /* a split may cost this much of one bake, start-ups included */
+#define C_STARTUP FB_PLAN_STARTUP
+#define BUDGET    1.10 /* a split may cost this much of one bake, start-ups included */
 
-static double num(const json_t *o, const char *key, double dflt)
-{
-    const json_t *v = json_object_get(o, key);
-    return json_is_number(v) ? json_number_value(v) : dflt;
-}
-
-/* The iterations of each row of a Julia layer, from a pre-pass at PREPASS_WIDTH pixels wide: rows[y]
- * for the scene's rows, per pixel and sample. */
-static fb_result julia_rows(const fb_scene *s, int layer, double *rows)
-{
-    int w = s->width < PREPASS_WIDTH ? s->width : PREPASS_WIDTH;
-    int h = (int)((double)s->height * w / s->width + 0.5);
-    if (h < 1) h = 1;
-    if (h > s->height) h = s->height;
-    char size[64], chan[200], samples[200], turb[200];
-    snprintf(size, sizeof size, "size=%dx%d", w, h);
-    snprintf(chan, sizeof chan, "layers.%s.channels=[\"iter\"]", s->layers[layer].name);
-    snprintf(samples, sizeof samples, "layers.%s.samples=1", s->layers[layer].name);
-    /* the turbulence moves the starting grid a little: a row's iterations hardly change without it,
-     * and it would be most of the pre-pass's time (each idle task of a plan runs it too) */
-    snprintf(turb, sizeof turb, "layers.%s.turbulence=0", s->layers[layer].name);
-    const char *sets[4] = {size, chan, samples, turb};
-    fb_scene *small = calloc(1, sizeof *small);
-    fb_gen g = {0};
-    uint32_t *it = malloc((size_t)w * h * sizeof *it);
-    fb_result rc = !small || !it ? fb_fail(FB_ERR_NOMEM, "out of memory") : FB_OK;
-    if (!rc) rc = fb_scene_parse_sets(s->json, "the scene", sets, 4, small);
-    if (!rc) rc = fb_gen_init(&g, small, &small->layers[layer]);
-    if (!rc && (!g.native_rows || fb_gen_nplanes(&g) > FB_GEN_MAX_CHANNELS))
-        rc = fb_fail(FB_ERR_INTERNAL, "the Julia pre-pass has no native kernel");
-    if (!rc) {
-        void *planes[FB_GEN_MAX_CHANNELS] = {0};
-        planes[fb_gen_plane_of(&g, 0)] = it;
-        g.native_rows(&g, 0, h, planes);
-        for (int y = 0; y < s->height; y++) {
-            int ys = (int)((int64_t)y * h / s->height);
-            double sum = 0;
-            for (int x = 0; x < w; x++) sum += it[(size_t)ys * w + x];
-            rows[y] = sum / w;
-        }
-    }
-    fb_gen_fini(&g);
-    if (small) fb_scene_fini(small);
-    free(small);
-    free(it);
-    return rc;
-}
-
-/* Layer i's cost in *total; for a per-pixel layer also per row, into rows[]. */
-static fb_result layer_cost(const fb_scene *s, const json_t *lj, int i, double *rows, double *total)
+/* Layer i's cost in *total, from its class (gen.h: cost); a banded layer's also per row, into
+ * rows[] (zeroed here). */
+static fb_result layer_cost(const fb_scene *s, int i, double *rows, double *total)
 {
     const fb_layer *L = &s->layers[i];
-    const char *t = L->cls->name;
-    double W = s->width, px = (double)s->width * s->height;
+    for (int y = 0; y < s->height; y++) rows[y] = 0;
     *total = 0;
-    if (!strcmp(t, "julia")) {
-        fb_result rc = julia_rows(s, i, rows);
-        if (rc) return rc;
-        double samples = num(lj, "samples", 1);
-        double turb = num(lj, "turbulence", 0) != 0 ? num(lj, "turbulence-octaves", 0) * C_JULIA_TURB : 0;
-        for (int y = 0; y < s->height; y++) {
-            rows[y] = W * samples * (rows[y] * C_JULIA_ITER + C_JULIA_SAMPLE + turb);
-            *total += rows[y];
-        }
-        return FB_OK;
-    }
-    double row = 0;
-    if (!strcmp(t, "fbm"))
-        row = W * (num(lj, "octaves", 8) * C_FBM_OCTAVE + C_FBM_PIXEL);
-    else if (!strcmp(t, "op"))
-        row = W * C_OP_PIXEL;
-    else if (!strcmp(t, "ifs"))
-        *total = num(lj, "points", 0) * C_IFS_POINT + px * C_IFS_PIXEL;
-    else if (!strcmp(t, "terrain"))
-        *total = num(lj, "insert", 0) * C_TERRAIN_INS + px * C_TERRAIN_PX;
-    else
-        *total = px * C_WHOLE_PX;
-    for (int y = 0; y < s->height && row > 0; y++) rows[y] = row, *total += row;
-    return FB_OK;
+    if (!L->cls->cost)
+        return fb_fail(FB_ERR_INTERNAL, "generator %s has no cost model for the plan", L->cls->name);
+    fb_result rc = L->cls->cost(s, i, rows, total);
+    if (!rc && !(*total >= 0 && isfinite(*total)))
+        rc = fb_fail(FB_ERR_INTERNAL, "generator %s: the cost of layer %s is %g", L->cls->name, L->name, *total);
+    return rc;
 }
 
 /* ---- units ----------------------------------------------------------------------------------- */
@@ -122,7 +44,7 @@ static int find(int *parent, int i)
 typedef struct unit {
     uint32_t layers;
     double seconds;
-    bool has_ifs;
+    bool has_points; /* a layer of a points-split class */
 } unit;
 
 /* A candidate split: b bands, pp points parts, and the whole-image tasks' layers and loads (the
@@ -148,7 +70,7 @@ static void one_task(const fb_plan *p, const fb_scene *s, layout *l)
 /* The layout for target tau (see fb_plan_make); false when it needs more than ntasks tasks. wu[0 ..
  * nwhole) are the whole units (the banded units follow them, unused here). */
 static bool lay_out(const fb_scene *s, double startup, double tau, int ntasks, double band_total, uint32_t band_mask,
-                    double points_total, uint32_t points_mask, double pixels, const unit *wu, int nwhole, layout *l)
+                    double points_total, uint32_t points_mask, double pixels, double part_pixel, const unit *wu, int nwhole, layout *l)
 {
     memset(l, 0, offsetof(layout, bins));
     if (band_mask) {
@@ -158,7 +80,7 @@ static bool lay_out(const fb_scene *s, double startup, double tau, int ntasks, d
     unit items[FB_MAX_LAYERS + 1];
     int n = 0;
     for (int u = 0; u < nwhole; u++) items[n++] = wu[u];
-    double part_px = pixels * C_IFS_PIXEL;
+    double part_px = pixels * part_pixel;
     if (points_mask) {
         if (points_total <= tau) {
             items[n++] = (unit){points_mask, points_total, true};
@@ -207,14 +129,8 @@ fb_result fb_plan_make(const fb_scene *s, int ntasks, double startup, fb_plan *p
     memset(p, 0, sizeof *p);
     p->ntasks = ntasks;
     p->startup = startup >= 0 ? startup : C_STARTUP;
-    json_error_t err;
-    json_t *root = json_loads(s->json, 0, &err);
-    const json_t *jl = json_object_get(root, "layers");
     double *rows = calloc((size_t)s->height, sizeof *rows), *band_rows = calloc((size_t)s->height + 1, sizeof *rows);
-    fb_result rc = !root || !json_is_array(jl) || json_array_size(jl) != (size_t)s->nlayers
-                       ? fb_fail(FB_ERR_INTERNAL, "the scene's stored text does not parse")
-                   : !rows || !band_rows ? fb_fail(FB_ERR_NOMEM, "out of memory")
-                                         : FB_OK;
+    fb_result rc = !rows || !band_rows ? fb_fail(FB_ERR_NOMEM, "out of memory") : FB_OK;
     /* the units: layers joined by their references */
     int parent[FB_MAX_LAYERS];
     for (int i = 0; i < s->nlayers; i++) parent[i] = i;
@@ -227,13 +143,7 @@ fb_result fb_plan_make(const fb_scene *s, int ntasks, double startup, fb_plan *p
     }
     /* each layer's kind by its generator alone */
     fb_share kind[FB_MAX_LAYERS];
-    for (int i = 0; i < s->nlayers && !rc; i++) {
-        const char *t = s->layers[i].cls->name;
-        kind[i] = s->layers[i].heightmap[0]                                      ? FB_SHARE_WHOLE
-                  : !strcmp(t, "fbm") || !strcmp(t, "julia") || !strcmp(t, "op") ? FB_SHARE_BAND
-                  : !strcmp(t, "ifs")                                            ? FB_SHARE_POINTS
-                                                                                 : FB_SHARE_WHOLE;
-    }
+    for (int i = 0; i < s->nlayers && !rc; i++) kind[i] = s->layers[i].heightmap[0] ? FB_SHARE_WHOLE : s->layers[i].cls->share;
     /* a unit is banded when all its layers are; split by points when it is one chaos game alone */
     unit units[FB_MAX_LAYERS];
     int nunits = 0, unit_of[FB_MAX_LAYERS];
@@ -244,7 +154,7 @@ fb_result fb_plan_make(const fb_scene *s, int ntasks, double startup, fb_plan *p
         if (u < 0) u = nunits++, units[u] = (unit){0};
         unit_of[i] = u;
         units[u].layers |= 1u << i;
-        units[u].has_ifs |= !strcmp(s->layers[i].cls->name, "ifs");
+        units[u].has_points |= s->layers[i].cls->share == FB_SHARE_POINTS;
     }
     fb_share ushare[FB_MAX_LAYERS];
     for (int u = 0; u < nunits; u++) {
@@ -252,22 +162,24 @@ fb_result fb_plan_make(const fb_scene *s, int ntasks, double startup, fb_plan *p
         int n = 0;
         for (int i = 0; i < s->nlayers; i++)
             if (units[u].layers >> i & 1) all_band = all_band && kind[i] == FB_SHARE_BAND, n++;
-        ushare[u] = all_band ? FB_SHARE_BAND : n == 1 && units[u].has_ifs ? FB_SHARE_POINTS : FB_SHARE_WHOLE;
+        ushare[u] = all_band ? FB_SHARE_BAND : n == 1 && units[u].has_points ? FB_SHARE_POINTS : FB_SHARE_WHOLE;
     }
     /* a chaos game inside a whole unit (an op using it) keeps every game whole: a task's points part
      * would apply to it too */
     bool can_split_points = true;
     for (int u = 0; u < nunits; u++)
-        can_split_points = can_split_points && !(ushare[u] == FB_SHARE_WHOLE && units[u].has_ifs);
+        can_split_points = can_split_points && !(ushare[u] == FB_SHARE_WHOLE && units[u].has_points);
     uint32_t band_mask = 0, points_mask = 0;
     for (int u = 0; u < nunits; u++) {
         if (ushare[u] == FB_SHARE_BAND) band_mask |= units[u].layers;
         if (ushare[u] == FB_SHARE_POINTS && can_split_points) points_mask |= units[u].layers;
     }
     /* each layer's cost, once; the banded layers' per row, cumulated */
+    double part_pixel = 0; /* what each points part pays per pixel: its costliest image */
     for (int i = 0; i < s->nlayers && !rc; i++) {
-        for (int y = 0; y < s->height; y++) rows[y] = 0;
-        rc = layer_cost(s, json_array_get(jl, (size_t)i), i, rows, &p->layer_seconds[i]);
+        rc = layer_cost(s, i, rows, &p->layer_seconds[i]);
+        if (points_mask >> i & 1 && s->layers[i].cls->part_pixel_seconds > part_pixel)
+            part_pixel = s->layers[i].cls->part_pixel_seconds;
         units[unit_of[i]].seconds += p->layer_seconds[i];
         for (int y = 0; y < s->height && band_mask >> i & 1; y++) band_rows[y + 1] += rows[y];
     }
@@ -299,7 +211,7 @@ fb_result fb_plan_make(const fb_scene *s, int ntasks, double startup, fb_plan *p
     for (int u = 0; u < nwhole_only; u++) tau_min = wu[u].seconds > tau_min ? wu[u].seconds : tau_min;
     if (tau_min < one / ntasks / 2) tau_min = one / ntasks / 2;
     for (double tau = tau_min; tau <= one * 1.0001 && !rc; tau *= 1.01) {
-        if (!lay_out(s, p->startup, tau, ntasks, band_total, band_mask, points_total, points_mask, pixels, wu,
+        if (!lay_out(s, p->startup, tau, ntasks, band_total, band_mask, points_total, points_mask, pixels, part_pixel, wu,
                      nwhole_only, &cur))
             continue;
         bool fits = cur.total <= BUDGET * one + 1e-9;
@@ -341,7 +253,6 @@ fb_result fb_plan_make(const fb_scene *s, int ntasks, double startup, fb_plan *p
     }
     free(rows);
     free(band_rows);
-    json_decref(root);
     return rc;
 }
 
@@ -380,9 +291,13 @@ static json_t *names_json(const fb_scene *s, uint32_t mask)
     return a;
 }
 
+const char *fb_plan_share_name(fb_share share)
+{
+    return share == FB_SHARE_BAND ? "bands" : share == FB_SHARE_POINTS ? "points parts" : "whole";
+}
+
 char *fb_plan_json(const fb_scene *s, const fb_plan *p, bool pretty)
 {
-    static const char *const share[3] = {"bands", "points parts", "whole"};
     json_t *o = json_object(), *layers = json_array(), *tasks = json_array();
     json_object_set_new(o, "tasks", json_integer(p->ntasks));
     json_object_set_new(o, "active", json_integer(p->nactive));
@@ -393,7 +308,7 @@ char *fb_plan_json(const fb_scene *s, const fb_plan *p, bool pretty)
     json_object_set_new(o, "size", json_pack("[ii]", s->width, s->height));
     for (int i = 0; i < s->nlayers; i++)
         json_array_append_new(layers, json_pack("{sssssssf}", "name", s->layers[i].name, "type", s->layers[i].cls->name,
-                                                "split", share[p->share[i]], "seconds", p->layer_seconds[i]));
+                                                "split", fb_plan_share_name(p->share[i]), "seconds", p->layer_seconds[i]));
     json_object_set_new(o, "layers", layers);
     for (int k = 0; k < p->nactive; k++) {
         const fb_task *t = &p->tasks[k];
@@ -509,7 +424,7 @@ fb_result fb_plan_parse(const char *text, const fb_scene *s, fb_plan *p)
 fb_result fb_scene_subset(const fb_scene *s, uint32_t mask, fb_scene *out)
 {
     int map[FB_MAX_LAYERS], n = 0;
-    memset(out, 0, offsetof(fb_scene, layers));
+    memset(out, 0, sizeof *out);
     out->width = s->width, out->height = s->height, out->seed = s->seed;
     out->compression = s->compression, out->multipart = s->multipart;
     for (int i = 0; i < s->nlayers; i++) map[i] = mask >> i & 1 ? n++ : -1;
@@ -517,14 +432,23 @@ fb_result fb_scene_subset(const fb_scene *s, uint32_t mask, fb_scene *out)
         if (map[i] < 0) continue;
         fb_layer *L = &out->layers[map[i]];
         memcpy(L, &s->layers[i], sizeof *L);
+        /* its own parameters: the references in them are renumbered below */
+        L->params = malloc(L->cls->params_size ? L->cls->params_size : 1);
+        if (!L->params) {
+            fb_scene_fini(out);
+            return fb_fail(FB_ERR_NOMEM, "out of memory");
+        }
+        memcpy(L->params, s->layers[i].params, L->cls->params_size);
         fb_ref_slot slots[FB_MAX_REFS];
         int nr = L->cls->refs ? L->cls->refs(L, slots) : 0;
         for (int k = 0; k < nr; k++) {
             fb_ref *r = slots[k].ref;
             if (r->layer < 0) continue;
-            if (map[r->layer] < 0)
+            if (map[r->layer] < 0) {
+                fb_scene_fini(out);
                 return fb_fail(FB_ERR_INTERNAL, "layer %s uses %s, which the task does not compute", L->name,
                                s->layers[r->layer].name);
+            }
             r->layer = map[r->layer];
         }
     }

@@ -18,11 +18,11 @@
 #ifndef FB_PLAN_H
 #define FB_PLAN_H
 
+#include "gen.h"
 #include "scene.h"
 
 #define FB_PLAN_MAX_TASKS 1024
 
-typedef enum fb_share { FB_SHARE_BAND = 0, FB_SHARE_POINTS = 1, FB_SHARE_WHOLE = 2 } fb_share;
 
 typedef struct fb_task {
     bool band;        /* rows [y0, y1) of the banded layers; else whole-image layers and points parts */
@@ -57,6 +57,9 @@ fb_result fb_plan_make(const fb_scene *s, int ntasks, double startup, fb_plan *p
 /* The plan as JSON text (malloc'd; compact unless pretty): what render --task stores in each task's
  * file and merge reads back with fb_plan_parse. */
 char *fb_plan_json(const fb_scene *s, const fb_plan *p, bool pretty);
+
+/* "bands", "points parts" or "whole": how a layer is shared, for tables. */
+const char *fb_plan_share_name(fb_share share);
 
 /* Reads fb_plan_json's text for scene s. */
 fb_result fb_plan_parse(const char *text, const fb_scene *s, fb_plan *p);

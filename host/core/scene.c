@@ -745,8 +745,8 @@ static fb_result parse_root(const fb_vctx *v, json_t *root, fb_scene *s)
             fb_gen_names(avail, sizeof avail);
             return fb_schema_error(v, sub, "unknown generator %s (available: %s)", shown, avail);
         }
-        if (!ALWAYS(L->cls->params_size <= sizeof L->params))
-            return fb_fail(FB_ERR_INTERNAL, "generator %s: parameters too large", t);
+        L->params = calloc(1, L->cls->params_size ? L->cls->params_size : 1);
+        if (!L->params) return fb_fail(FB_ERR_NOMEM, "out of memory");
         rc = L->cls->parse(v, path, lj, s, L);
         if (rc) return rc;
         snprintf(L->name, sizeof L->name, "%s", json_string_value(json_object_get(lj, "name")));
@@ -915,6 +915,7 @@ fb_result fb_scene_parse_sets(const char *text, const char *origin, const char *
     }
     free(paths);
     json_decref(root);
+    if (rc) fb_scene_fini(out);
     return rc;
 }
 
@@ -1015,6 +1016,7 @@ fb_result fb_scene_drop_outputs(const char *text, char **out, char *dropped, siz
 void fb_scene_fini(fb_scene *s)
 {
     if (!s) return;
+    for (int i = 0; i < FB_MAX_LAYERS; i++) free(s->layers[i].params);
     free(s->json);
     memset(s, 0, sizeof *s);
 }

@@ -30,9 +30,6 @@ typedef struct fb_ref_slot {
     const char *expected; /* what else the key may name, for the message when no layer has the name (or NULL) */
 } fb_ref_slot;
 
-/* The largest generator's parameters (each generator asserts that its own fit). */
-#define FB_LAYER_PARAMS_MAX 49152
-
 typedef struct fb_layer {
     const struct fb_gen_class *cls; /* its generator */
     char name[64];
@@ -43,8 +40,9 @@ typedef struct fb_layer {
     char heightmap[1024];
     bool heightmap_range_set;
     double heightmap_range[2];
-    /* the generator's parameters (its fb_NAME_params, cls->params_size bytes), read with fb_layer_params */
-    _Alignas(16) unsigned char params[FB_LAYER_PARAMS_MAX];
+    /* the generator's parameters (its fb_NAME_params, cls->params_size bytes, zeroed before its parse;
+     * owned by the scene: fb_scene_fini frees them), read with fb_layer_params */
+    void *params;
 } fb_layer;
 
 static inline const void *fb_layer_params(const fb_layer *L)

@@ -136,7 +136,7 @@ done
 expect_fail 2 "points part 2/3 is missing" o.exr -- merge pp1_vulkan.exr pp3_vulkan.exr -o o.exr
 expect_fail 2 "points part 1/3 is given twice" o.exr -- merge pp1_vulkan.exr pp1_vulkan.exr pp3_vulkan.exr -o o.exr
 expect_fail 2 "merge one kind at a time" o.exr -- merge pp1_vulkan.exr pa_vulkan.exr -o o.exr
-expect_fail 2 "no chaos-game (ifs) layer" o.exr -- render mixed.json --points-part 1/2 -o o.exr
+expect_fail 2 "no chaos-game layer" o.exr -- render mixed.json --points-part 1/2 -o o.exr
 expect_fail 2 "not with --region" o.exr -- render pp.json --points-part 1/2 --region 0,0,10,10 -o o.exr
 expect_fail 2 "points-part: expected K/N" o.exr -- render pp.json --points-part 3/2 -o o.exr
 

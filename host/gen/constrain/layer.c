@@ -609,6 +609,13 @@ static int constrain_outputs(const fb_layer *L, const char **paths, const char *
     return n;
 }
 
+/* The plan's cost model: seconds of one core of the reference machine (docs/scenes.md). */
+static fb_result constrain_cost(const fb_scene *s, int layer, double *rows, double *total)
+{
+    *total = (double)s->width * s->height * 6.0e-8 /* a pixel */;
+    return FB_OK;
+}
+
 const fb_gen_class fb_gen_constrain = {
     .name = "constrain",
     .synopsis = "constrain [options] -o OUT.exr",
@@ -621,6 +628,7 @@ const fb_gen_class fb_gen_constrain = {
     .refs = constrain_refs,
     .outputs = constrain_outputs,
     .init = constrain_init,
+    .share = FB_SHARE_WHOLE,
+    .cost = constrain_cost,
     .bench = fb_constrain_bench,
 };
-_Static_assert(sizeof(fb_constrain_params) <= FB_LAYER_PARAMS_MAX, "FB_LAYER_PARAMS_MAX is too small");

@@ -218,6 +218,16 @@ static fb_result fbm_init(fb_gen *g)
     return FB_OK;
 }
 
+/* The plan's cost model: seconds of one core of the reference machine (docs/scenes.md). */
+static fb_result fbm_cost(const fb_scene *s, int layer, double *rows, double *total)
+{
+    const fb_fbm_params *f = fb_layer_params(&s->layers[layer]);
+    double row = (double)s->width * (f->octaves * 3.0e-9 /* an octave of one pixel */ + 9.0e-9 /* its frame and channel */);
+    *total = 0;
+    for (int y = 0; y < s->height; y++) rows[y] = row, *total += row;
+    return FB_OK;
+}
+
 const fb_gen_class fb_gen_fbm = {
     .name = "fbm",
     .synopsis = "fbm [options] -o OUT.exr",
@@ -228,6 +238,7 @@ const fb_gen_class fb_gen_fbm = {
     .params_size = sizeof(fb_fbm_params),
     .parse = parse_fbm,
     .init = fbm_init,
+    .share = FB_SHARE_BAND,
+    .cost = fbm_cost,
     .bench = fb_fbm_bench,
 };
-_Static_assert(sizeof(fb_fbm_params) <= FB_LAYER_PARAMS_MAX, "FB_LAYER_PARAMS_MAX is too small");

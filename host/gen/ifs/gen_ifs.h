@@ -45,4 +45,8 @@ const struct fb_ifs_stats *fb_gen_ifs_stats(const fb_gen *g);
  * the channels the whole game would have. */
 fb_result fb_gen_ifs_from_sums(fb_gen *g, const uint64_t *hits, const uint64_t *sums, uint64_t outside);
 
+/* The class's hooks for tonemap and merge (tone.c). */
+extern const fb_tone_ops fb_ifs_tone_ops;
+extern const fb_points_ops fb_ifs_points_ops;
+
 #endif

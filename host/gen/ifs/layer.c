@@ -912,6 +912,16 @@ static fb_result ifs_init(fb_gen *g)
     return FB_OK;
 }
 
+/* The plan's cost model: seconds of one core of the reference machine (docs/scenes.md). */
+#define IFS_POINT_SECONDS 5.0e-9 /* a chaos-game step */
+#define IFS_PIXEL_SECONDS 1.0e-7 /* a pixel: its histogram, density and channels */
+static fb_result ifs_cost(const fb_scene *s, int layer, double *rows, double *total)
+{
+    const fb_ifs_params *f = fb_layer_params(&s->layers[layer]);
+    *total = f->points * IFS_POINT_SECONDS + (double)s->width * s->height * IFS_PIXEL_SECONDS;
+    return FB_OK;
+}
+
 const fb_gen_class fb_gen_ifs = {
     .name = "ifs",
     .synopsis = "ifs [options] -o OUT.exr",
@@ -922,6 +932,10 @@ const fb_gen_class fb_gen_ifs = {
     .params_size = sizeof(fb_ifs_params),
     .parse = parse_ifs,
     .init = ifs_init,
+    .share = FB_SHARE_POINTS,
+    .cost = ifs_cost,
+    .part_pixel_seconds = IFS_PIXEL_SECONDS,
+    .points = &fb_ifs_points_ops,
+    .tone = &fb_ifs_tone_ops,
     .bench = fb_ifs_bench,
 };
-_Static_assert(sizeof(fb_ifs_params) <= FB_LAYER_PARAMS_MAX, "FB_LAYER_PARAMS_MAX is too small");

@@ -348,6 +348,58 @@ static fb_result julia_init(fb_gen *g)
     return FB_OK;
 }
 
+/* ---- planning -------------------------------------------------------------------------------- */
+
+/* Seconds of one core of the reference machine (docs/scenes.md, "Splitting a bake"). */
+#define C_JULIA_ITER   1.9e-9 /* a Julia iteration of one sample */
+#define C_JULIA_SAMPLE 8.0e-8 /* a Julia sample: the warp, palette and 7 channels */
+#define C_JULIA_TURB   7.7e-8 /* an octave of a Julia sample's turbulence */
+#define PREPASS_WIDTH  64     /* the pre-pass's width */
+
+/* The iterations of each row, per pixel and sample, from a pre-pass at PREPASS_WIDTH pixels wide
+ * without turbulence (it moves the starting grid a little: a row's iterations hardly change, and it
+ * would be most of the pre-pass's time, which each idle task of a plan pays too), one sample, and
+ * only the iteration count computed; then the model's seconds per row. */
+static fb_result julia_cost(const fb_scene *s, int layer, double *rows, double *total)
+{
+    const fb_layer *L = &s->layers[layer];
+    const fb_julia_params *j = fb_layer_params(L);
+    int w = s->width < PREPASS_WIDTH ? s->width : PREPASS_WIDTH;
+    int h = (int)((double)s->height * w / s->width + 0.5);
+    if (h < 1) h = 1;
+    if (h > s->height) h = s->height;
+    fb_julia_params small_params = *j;
+    small_params.channels = 1u; /* iter */
+    small_params.samples = 1;
+    small_params.turbulence = 0;
+    fb_layer small_layer = *L;
+    small_layer.params = &small_params;
+    fb_scene small = *s; /* shares s's storage: only read here */
+    small.width = w, small.height = h;
+    fb_gen g = {0};
+    uint32_t *it = malloc((size_t)w * h * sizeof *it);
+    fb_result rc = it ? fb_gen_init(&g, &small, &small_layer) : fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (!rc && (!g.native_rows || fb_gen_nplanes(&g) > FB_GEN_MAX_CHANNELS))
+        rc = fb_fail(FB_ERR_INTERNAL, "the Julia pre-pass has no native kernel");
+    if (!rc) {
+        void *planes[FB_GEN_MAX_CHANNELS] = {0};
+        planes[fb_gen_plane_of(&g, 0)] = it;
+        g.native_rows(&g, 0, h, planes);
+        double turb = j->turbulence != 0 ? j->turb_octaves * C_JULIA_TURB : 0;
+        *total = 0;
+        for (int y = 0; y < s->height; y++) {
+            int ys = (int)((int64_t)y * h / s->height);
+            double sum = 0;
+            for (int x = 0; x < w; x++) sum += it[(size_t)ys * w + x];
+            rows[y] = (double)s->width * j->samples * (sum / w * C_JULIA_ITER + C_JULIA_SAMPLE + turb);
+            *total += rows[y];
+        }
+    }
+    fb_gen_fini(&g);
+    free(it);
+    return rc;
+}
+
 const fb_gen_class fb_gen_julia = {
     .name = "julia",
     .synopsis = "julia [options] -o OUT.exr",
@@ -358,6 +410,7 @@ const fb_gen_class fb_gen_julia = {
     .params_size = sizeof(fb_julia_params),
     .parse = parse_julia,
     .init = julia_init,
+    .share = FB_SHARE_BAND,
+    .cost = julia_cost,
     .bench = fb_julia_bench,
 };
-_Static_assert(sizeof(fb_julia_params) <= FB_LAYER_PARAMS_MAX, "FB_LAYER_PARAMS_MAX is too small");

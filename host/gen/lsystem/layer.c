@@ -403,6 +403,13 @@ static fb_result lsystem_init(fb_gen *g)
     return FB_OK;
 }
 
+/* The plan's cost model: seconds of one core of the reference machine (docs/scenes.md). */
+static fb_result lsystem_cost(const fb_scene *s, int layer, double *rows, double *total)
+{
+    *total = (double)s->width * s->height * 6.0e-8 /* a pixel */;
+    return FB_OK;
+}
+
 const fb_gen_class fb_gen_lsystem = {
     .name = "lsystem",
     .synopsis = "lsystem [options] -o OUT.exr",
@@ -413,5 +420,6 @@ const fb_gen_class fb_gen_lsystem = {
     .params_size = sizeof(fb_lsystem_params),
     .parse = parse_lsystem,
     .init = lsystem_init,
+    .share = FB_SHARE_WHOLE,
+    .cost = lsystem_cost,
 };
-_Static_assert(sizeof(fb_lsystem_params) <= FB_LAYER_PARAMS_MAX, "FB_LAYER_PARAMS_MAX is too small");

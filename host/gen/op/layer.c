@@ -215,6 +215,15 @@ static int op_refs(fb_layer *L, fb_ref_slot *out)
     return n;
 }
 
+/* The plan's cost model: seconds of one core of the reference machine (docs/scenes.md). */
+static fb_result op_cost(const fb_scene *s, int layer, double *rows, double *total)
+{
+    double row = (double)s->width * (4.0e-9 /* a pixel */);
+    *total = 0;
+    for (int y = 0; y < s->height; y++) rows[y] = row, *total += row;
+    return FB_OK;
+}
+
 const fb_gen_class fb_gen_op = {
     .name = "op",
     .synopsis = NULL,
@@ -226,5 +235,6 @@ const fb_gen_class fb_gen_op = {
     .parse = parse_op,
     .refs = op_refs,
     .init = op_init,
+    .share = FB_SHARE_BAND,
+    .cost = op_cost,
 };
-_Static_assert(sizeof(fb_op_params) <= FB_LAYER_PARAMS_MAX, "FB_LAYER_PARAMS_MAX is too small");

@@ -555,6 +555,15 @@ static int terrain_outputs(const fb_layer *L, const char **paths, const char **w
     return 1;
 }
 
+/* The plan's cost model: seconds of one core of the reference machine (docs/scenes.md). */
+static fb_result terrain_cost(const fb_scene *s, int layer, double *rows, double *total)
+{
+    const fb_terrain_layer_params *t = fb_layer_params(&s->layers[layer]);
+    *total = (double)t->insert * 4.0e-6 /* an insertion: refinement and Delaunay */ +
+             (double)s->width * s->height * 4.8e-8 /* a pixel: rasterising, slope, channels */;
+    return FB_OK;
+}
+
 const fb_gen_class fb_gen_terrain = {
     .name = "terrain",
     .synopsis = "terrain --points F.xyz -o OUT.exr",
@@ -566,6 +575,7 @@ const fb_gen_class fb_gen_terrain = {
     .parse = parse_terrain,
     .outputs = terrain_outputs,
     .init = terrain_init,
+    .share = FB_SHARE_WHOLE,
+    .cost = terrain_cost,
     .bench = fb_terrain_bench,
 };
-_Static_assert(sizeof(fb_terrain_layer_params) <= FB_LAYER_PARAMS_MAX, "FB_LAYER_PARAMS_MAX is too small");

@@ -74,4 +74,3 @@ const fb_gen_class fb_gen_checker = {
     .parse = parse_checker,
     .init = checker_init,
 };
-_Static_assert(sizeof(fb_checker_params) <= FB_LAYER_PARAMS_MAX, "FB_LAYER_PARAMS_MAX is too small");
