@@ -221,11 +221,11 @@ static bool outside_of(const char *attr, const char *name, uint64_t *out)
 typedef struct chaos_layer {
     fb_gen gen;
     const fb_points_ops *ops;
-    int layer;                             /* its index in the scene */
-    int nch;                               /* the parts' channels of its sums: 1 each, 2 for a wide one */
-    int idx[2 * FB_POINTS_MAX_SUMS];       /* their indices in the part being read */
+    int layer;                              /* its index in the scene */
+    int nch;                                /* the parts' channels of its sums: 1 each, 2 for a wide one */
+    int idx[2 * FB_POINTS_MAX_SUMS];        /* their indices in the part being read */
     uint32_t *rows[2 * FB_POINTS_MAX_SUMS]; /* a strip of each */
-    uint64_t *sum[FB_POINTS_MAX_SUMS];     /* added over the parts */
+    uint64_t *sum[FB_POINTS_MAX_SUMS];      /* added over the parts */
     uint64_t outside;
 } chaos_layer;
 
@@ -315,8 +315,8 @@ static fb_result chaos_add(chaos_layer *cl, int ncl, const fb_scene *sc, exrio_r
                 char cn[96];
                 snprintf(cn, sizeof cn, "%s.%s%s", name, cl[k].ops->sums[s].suffix,
                          !cl[k].ops->sums[s].wide ? ""
-                         : h             ? "_hi"
-                                         : "_lo");
+                         : h                      ? "_hi"
+                                                  : "_lo");
                 if ((cl[k].idx[j] = exrio_find_channel(r, cn)) < 0)
                     return fb_fail(FB_ERR_INPUT, "%s: no channel %s (not a points part of this scene)", path, cn);
                 in[cl[k].idx[j]] = cl[k].rows[j];

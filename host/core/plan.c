@@ -25,8 +25,7 @@ static fb_result layer_cost(const fb_scene *s, int i, double *rows, double *tota
     const fb_layer *L = &s->layers[i];
     for (int y = 0; y < s->height; y++) rows[y] = 0;
     *total = 0;
-    if (!L->cls->cost)
-        return fb_fail(FB_ERR_INTERNAL, "generator %s has no cost model for the plan", L->cls->name);
+    if (!L->cls->cost) return fb_fail(FB_ERR_INTERNAL, "generator %s has no cost model for the plan", L->cls->name);
     fb_result rc = L->cls->cost(s, i, rows, total);
     if (!rc && !(*total >= 0 && isfinite(*total)))
         rc = fb_fail(FB_ERR_INTERNAL, "generator %s: the cost of layer %s is %g", L->cls->name, L->name, *total);
@@ -70,7 +69,8 @@ static void one_task(const fb_plan *p, const fb_scene *s, layout *l)
 /* The layout for target tau (see fb_plan_make); false when it needs more than ntasks tasks. wu[0 ..
  * nwhole) are the whole units (the banded units follow them, unused here). */
 static bool lay_out(const fb_scene *s, double startup, double tau, int ntasks, double band_total, uint32_t band_mask,
-                    double points_total, uint32_t points_mask, double pixels, double part_pixel, const unit *wu, int nwhole, layout *l)
+                    double points_total, uint32_t points_mask, double pixels, double part_pixel, const unit *wu,
+                    int nwhole, layout *l)
 {
     memset(l, 0, offsetof(layout, bins));
     if (band_mask) {
@@ -143,7 +143,8 @@ fb_result fb_plan_make(const fb_scene *s, int ntasks, double startup, fb_plan *p
     }
     /* each layer's kind by its generator alone */
     fb_share kind[FB_MAX_LAYERS];
-    for (int i = 0; i < s->nlayers && !rc; i++) kind[i] = s->layers[i].heightmap[0] ? FB_SHARE_WHOLE : s->layers[i].cls->share;
+    for (int i = 0; i < s->nlayers && !rc; i++)
+        kind[i] = s->layers[i].heightmap[0] ? FB_SHARE_WHOLE : s->layers[i].cls->share;
     /* a unit is banded when all its layers are; split by points when it is one chaos game alone */
     unit units[FB_MAX_LAYERS];
     int nunits = 0, unit_of[FB_MAX_LAYERS];
@@ -211,8 +212,8 @@ fb_result fb_plan_make(const fb_scene *s, int ntasks, double startup, fb_plan *p
     for (int u = 0; u < nwhole_only; u++) tau_min = wu[u].seconds > tau_min ? wu[u].seconds : tau_min;
     if (tau_min < one / ntasks / 2) tau_min = one / ntasks / 2;
     for (double tau = tau_min; tau <= one * 1.0001 && !rc; tau *= 1.01) {
-        if (!lay_out(s, p->startup, tau, ntasks, band_total, band_mask, points_total, points_mask, pixels, part_pixel, wu,
-                     nwhole_only, &cur))
+        if (!lay_out(s, p->startup, tau, ntasks, band_total, band_mask, points_total, points_mask, pixels, part_pixel,
+                     wu, nwhole_only, &cur))
             continue;
         bool fits = cur.total <= BUDGET * one + 1e-9;
         if (fits && (cur.longest < best.longest - 1e-9 || (cur.longest <= best.longest + 1e-9 && cur.m < best.m)))
@@ -307,8 +308,9 @@ char *fb_plan_json(const fb_scene *s, const fb_plan *p, bool pretty)
     json_object_set_new(o, "points_parts", json_integer(p->nparts));
     json_object_set_new(o, "size", json_pack("[ii]", s->width, s->height));
     for (int i = 0; i < s->nlayers; i++)
-        json_array_append_new(layers, json_pack("{sssssssf}", "name", s->layers[i].name, "type", s->layers[i].cls->name,
-                                                "split", fb_plan_share_name(p->share[i]), "seconds", p->layer_seconds[i]));
+        json_array_append_new(layers,
+                              json_pack("{sssssssf}", "name", s->layers[i].name, "type", s->layers[i].cls->name,
+                                        "split", fb_plan_share_name(p->share[i]), "seconds", p->layer_seconds[i]));
     json_object_set_new(o, "layers", layers);
     for (int k = 0; k < p->nactive; k++) {
         const fb_task *t = &p->tasks[k];

@@ -233,35 +233,6 @@ static fb_result check_number(const fb_vctx *v, const char *path, const fb_keysp
     return FB_OK;
 }
 
-/* [[a, b, c, d, e, f(, p)], ...]: 1..64 maps of 6 or 7 finite numbers, p >= 0. */
-static fb_result check_maps(const fb_vctx *v, const char *path, const fb_keyspec *k, const json_t *j)
-{
-    char shown[64], sub[256];
-    fb_json_show(j, shown, sizeof shown);
-    size_t n = json_is_array(j) ? json_array_size(j) : 0;
-    if (n < 1 || n > (size_t)k->count)
-        return fb_schema_error(v, path, "expected a list of 1 to %d maps [a, b, c, d, e, f, p], found %s", k->count,
-                               shown);
-    for (size_t i = 0; i < n; i++) {
-        const json_t *m = json_array_get(j, i);
-        size_t len = json_is_array(m) ? json_array_size(m) : 0;
-        snprintf(sub, sizeof sub, "%s[%zu]", path, i);
-        fb_json_show(m, shown, sizeof shown);
-        if (len != 6 && len != 7)
-            return fb_schema_error(v, sub, "expected a map [a, b, c, d, e, f] or [a, b, c, d, e, f, p], found %s",
-                                   shown);
-        for (size_t c = 0; c < len; c++) {
-            const json_t *e = json_array_get(m, c);
-            double x = json_is_number(e) ? json_number_value(e) : NAN;
-            if (!isfinite(x) || x < k->lo || x > k->hi)
-                return fb_schema_error(v, sub, "coefficient %c is not a finite number in %g..%g (found %s)",
-                                       "abcdefp"[c], k -> lo, k -> hi, shown);
-            if (c == 6 && x < 0) return fb_schema_error(v, sub, "probability %g is negative", x);
-        }
-    }
-    return FB_OK;
-}
-
 fb_result fb_schema_check_value(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j)
 {
     char shown[64];
@@ -364,35 +335,6 @@ fb_result fb_schema_check_value(const fb_vctx *v, const char *path, const fb_key
             if (rc) return rc;
         }
         return FB_OK;
-    case FB_K_CPOINTS:
-    case FB_K_CREGIONS: {
-        bool reg = k->type == FB_K_CREGIONS;
-        if (json_is_string(j) && *json_string_value(j) && strlen(json_string_value(j)) < 1024) return FB_OK;
-        size_t n = json_is_array(j) ? json_array_size(j) : 0;
-        if (!n)
-            return fb_schema_error(v, path, "expected a file name or a list %s, found %s",
-                                   reg ? "[[x, y, \"T\" or \"H\", value], ...]" : "[[x, y], ...]", shown);
-        for (size_t i = 0; i < n; i++) {
-            const json_t *pt = json_array_get(j, i);
-            bool good = json_is_array(pt) && json_array_size(pt) == (reg ? 4u : 2u);
-            for (size_t c = 0; good && c < 2; c++) good = json_is_integer(json_array_get(pt, c));
-            if (good && reg) {
-                const char *kind = json_string_value(json_array_get(pt, 2));
-                const json_t *val = json_array_get(pt, 3);
-                good = kind && (!strcmp(kind, "T") || !strcmp(kind, "H")) && json_is_number(val) &&
-                       isfinite(json_number_value(val));
-            }
-            if (!good) {
-                char sub[256];
-                snprintf(sub, sizeof sub, "%s[%zu]", path, i);
-                fb_json_show(pt, shown, sizeof shown);
-                return fb_schema_error(
-                    v, sub, "expected %s, found %s",
-                    reg ? "[x, y, \"T\" or \"H\", value] with integer pixel x, y" : "[x, y] integer pixels", shown);
-            }
-        }
-        return FB_OK;
-    }
     case FB_K_REF: {
         if (json_is_number(j)) {
             if (!isfinite(json_number_value(j)))
@@ -409,42 +351,6 @@ fb_result fb_schema_check_value(const fb_vctx *v, const char *path, const fb_key
         if (!json_is_string(j) || !*json_string_value(j) || strlen(json_string_value(j)) >= 4096)
             return fb_schema_error(v, path, "expected a non-empty string, found %s", shown);
         return FB_OK;
-    case FB_K_IFSREF:
-        if (json_is_object(j)) return FB_OK; /* an L-system: checked by parse_ifs */
-        if (json_is_string(j)) {
-            if (!fb_enum_index(k->enums, json_string_value(j), &idx))
-                return fb_schema_error(v, path,
-                                       "expected an IFS preset name (%s), a map list or an L-system {\"preset\": ...}, "
-                                       "found %s",
-                                       k->enums, shown);
-            return FB_OK;
-        }
-        return check_maps(v, path, k, j);
-    case FB_K_MAPS:
-        return check_maps(v, path, k, j);
-    case FB_K_POINTS: {
-        if (json_is_string(j) && *json_string_value(j) && strlen(json_string_value(j)) < 1024) return FB_OK;
-        size_t n = json_is_array(j) ? json_array_size(j) : 0;
-        if (!n)
-            return fb_schema_error(v, path, "expected a file name or a list of points [[x, y, z], ...], found %s",
-                                   shown);
-        for (size_t i = 0; i < n; i++) {
-            const json_t *pt = json_array_get(j, i);
-            bool good = json_is_array(pt) && json_array_size(pt) == 3;
-            for (size_t c = 0; good && c < 3; c++) {
-                const json_t *e = json_array_get(pt, c);
-                double x = json_is_number(e) ? json_number_value(e) : NAN;
-                good = isfinite(x) && x >= k->lo && x <= k->hi;
-            }
-            if (!good) {
-                char sub[256];
-                snprintf(sub, sizeof sub, "%s[%zu]", path, i);
-                fb_json_show(pt, shown, sizeof shown);
-                return fb_schema_error(v, sub, "expected a point [x, y, z] of finite numbers, found %s", shown);
-            }
-        }
-        return FB_OK;
-    }
     case FB_K_BOUNDS: {
         if (json_is_string(j) && !strcmp(json_string_value(j), "auto")) return FB_OK;
         bool good = json_is_array(j) && json_array_size(j) == 4;
@@ -504,6 +410,10 @@ fb_result fb_schema_check_value(const fb_vctx *v, const char *path, const fb_key
         }
         return FB_OK;
     }
+    case FB_K_CUSTOM:
+        if (!ALWAYS(k->value && k->value->check))
+            return fb_fail(FB_ERR_INTERNAL, "key %s: a value type without a check", k->key);
+        return k->value->check(v, path, k, j);
     case FB_K_LAYERS:
         if (!json_is_array(j) || json_array_size(j) < 1 || json_array_size(j) > FB_MAX_LAYERS)
             return fb_schema_error(v, path, "expected an array of 1 to %d layers, found %s", FB_MAX_LAYERS, shown);
@@ -1021,58 +931,15 @@ void fb_scene_fini(fb_scene *s)
     memset(s, 0, sizeof *s);
 }
 
-/* The showcase, a night landscape: a polar Julia sky (seamless left to right) whose spirals read as
- * galaxies over a dark horizon glow; a terrain refined from a small built-in survey (48 points over
- * 1000 x 190 units, the hull's top edge a ridge) with a smooth surface, lit by a low moon and
- * coloured by height; plants of the paper's population as silhouettes in front. The data layers
- * behind them: fBm detail, the ground (terrain + detail), a snow mask by height and a gentle-slope
- * mask (op layers, not drawn in the preview). It bakes in about a second at 1024 x 512. */
+/* The showcase, a night landscape (docs/scenes.md): a polar Julia sky whose spirals read as galaxies,
+ * a terrain refined from a small built-in survey, lit by a low moon and coloured by height, plants
+ * as silhouettes, and data layers behind them. The text is docs/examples/gallery-night.json, embedded
+ * at build time (cmake/embed.cmake), so the file and the default cannot differ. */
+#include "default_scene.h"
+
 const char *fb_scene_default_json(void)
 {
-    return "{\n"
-           "  \"size\": [1024, 512],\n"
-           "  \"seed\": 7,\n"
-           "  \"layers\": [\n"
-           "    {\"type\": \"fbm\", \"name\": \"detail\", \"octaves\": 8, \"frequency\": 24},\n"
-           "    {\"type\": \"julia\", \"name\": \"sky\", \"mapping\": \"polar\", \"alpha\": [-0.3, 0], \"c\""
-           ": [-0.76, 0.2], \"radius\": 1.2, \"turbulence\": 0.1, \"samples\": 4, \"stops\": [[0, 0.0, 0.0, 0.01], "
-           "[0.25, 0.05, 0"
-           ".02, 0.15], [0.5, 0.35, 0.12, 0.45], [0.75, 0.45, 0.6, 1.0], [1, 1, 1, 1]], \"density\": 6, \"br"
-           "ightness\": 0.6},\n"
-           "    {\"type\": \"terrain\", \"name\": \"terrain\", \"insert\": 30000, \"hurst\": 0.85, \"interpo"
-           "lation\": \"smooth\", \"bounds\": [0, 1000, 0, 500], \"stops\": [[0, 0.01, 0.015, 0.03], [0.5, 0"
-           ".05, 0.06, 0.1], [0.85, 0.22, 0.25, 0.33], [1, 0.5, 0.52, 0.6]], \"light\": [200, 30], \"ambient"
-           "\": 0.1, \"points\": [\n"
-           "      [0, 115, 87.3], [125, 143.7, 209.4], [250, 168, 288], [375, 184.3, 337.8], [500, 190, 255."
-           "9],\n"
-           "      [625, 184.3, 246], [750, 168, 224.7], [875, 143.7, 116.1], [1000, 115, 21.3], [0, 0, 80.4]"
-           ",\n"
-           "      [125, 0, 104.1], [250, 0, 150.9], [375, 0, 144.6], [500, 0, 138.6], [625, 0, 149.7],\n"
-           "      [750, 0, 151.5], [875, 0, 74.7], [1000, 0, 35.1], [613.1, 132.6, 341.7], [771.6, 146, 294."
-           "3],\n"
-           "      [720.7, 150.8, 329.4], [66.7, 61.5, 132.9], [907.9, 85.5, 89.4], [868.8, 24.2, 123.6], [47"
-           "1.5, 51.8, 226.5],\n"
-           "      [540.3, 107.2, 344.1], [52.1, 33.2, 101.1], [297.1, 152.3, 385.5], [744.5, 33.8, 237.3], ["
-           "773.4, 30, 231.9],\n"
-           "      [608.1, 31, 226.2], [41.6, 101.3, 99.6], [232.7, 41.3, 198.6], [943.8, 104.4, 56.1], [306."
-           "2, 160.5, 342.3],\n"
-           "      [536.1, 124.9, 337.5], [228.4, 145.8, 319.5], [675.4, 163.6, 316.8], [862.2, 47.8, 127.2],"
-           " [372.3, 37.2, 198.6],\n"
-           "      [174, 18.7, 172.2], [317.3, 105.3, 376.8], [43.1, 81.3, 100.5], [350.9, 60.2, 273.3], [793"
-           ", 77.5, 299.1],\n"
-           "      [330.5, 86.8, 363.3], [688.3, 19, 214.5], [937.1, 12.5, 39]\n"
-           "     ]},\n"
-           "    {\"type\": \"op\", \"name\": \"ground\", \"op\": \"add\", \"inputs\": [\"terrain.Y\", \"deta"
-           "il\"], \"weights\": [1, 6]},\n"
-           "    {\"type\": \"op\", \"name\": \"snow\", \"op\": \"threshold\", \"inputs\": [\"ground\"], \"le"
-           "vel\": 300, \"width\": 40},\n"
-           "    {\"type\": \"op\", \"name\": \"gentle\", \"op\": \"threshold\", \"inputs\": [\"terrain.slope"
-           "\"], \"level\": 25, \"width\": 10},\n"
-           "    {\"type\": \"ifs\", \"name\": \"plants\", \"preset\": \"population\", \"points\": 60000000, "
-           "\"brightness\": 6, \"bounds\": [-0.08, 1.06, -0.03, 0.54], \"stops\": [[0, 0.0, 0.0, 0.0], [1, 0"
-           ".04, 0.06, 0.04]]}\n"
-           "  ]\n"
-           "}\n";
+    return fb_default_scene_text;
 }
 
 /* ---- command-line flags --------------------------------------------------------------------- */
@@ -1211,40 +1078,9 @@ static json_t *flag_value(const fb_keyspec *k, const char *flag, const char *s)
         }
         return arr;
     }
-    case FB_K_MAPS:
-    case FB_K_IFSREF: {
-        /* "a,b,c,d,e,f[,p];..." or, for a condensation set, a preset name */
-        if (k->type == FB_K_IFSREF && !strncmp(s, "lsystem:", 8)) return json_pack("{ss}", "preset", s + 8);
-        if (k->type == FB_K_IFSREF && *s == '{') {
-            json_t *obj = json_loads(s, JSON_REJECT_DUPLICATES, NULL);
-            if (json_is_object(obj)) return obj;
-            json_decref(obj);
-            fb_fail(FB_ERR_USAGE, "--%s: expected a JSON object such as {\"preset\": \"tree\"}, found \"%s\"", flag, s);
-            return NULL;
-        }
-        if (k->type == FB_K_IFSREF && (isalpha((unsigned char)*s))) return json_string(s);
-        json_t *arr = json_array();
-        const char *q = s;
-        while (*q) {
-            json_t *m = json_array();
-            for (int c = 0; c < 7; c++) {
-                char *e;
-                double x = strtod(q, &e);
-                if (e == q || !isfinite(x) || (*e != ',' && *e != ';' && *e != 0) || (c == 6 && *e == ',')) {
-                    json_decref(m);
-                    json_decref(arr);
-                    fb_fail(FB_ERR_USAGE, "--%s: expected maps a,b,c,d,e,f[,p];..., found \"%s\"", flag, s);
-                    return NULL;
-                }
-                json_array_append_new(m, json_real(x));
-                q = *e == ',' ? e + 1 : e;
-                if (*e != ',') break;
-            }
-            json_array_append_new(arr, m);
-            if (*q == ';') q++;
-        }
-        return arr;
-    }
+    case FB_K_CUSTOM:
+        if (k->value && k->value->from_flag) return k->value->from_flag(k, flag, s);
+        return json_string(s);
     case FB_K_NAMES: { /* "iter,n,R,G,B": the names are checked with the scene */
         json_t *arr = json_array();
         for (const char *q = s;;) {

@@ -29,27 +29,36 @@ typedef enum fb_ktype {
     FB_K_TYPE,
     FB_K_NUMLIST,
     FB_K_STOPS,
-    FB_K_STRING,   /* any non-empty string (a file path, an entry name) */
-    FB_K_OUTPUT,   /* a file this layer writes besides the EXR: never taken from a stored scene (--from) */
-    FB_K_MAPS,     /* affine maps: 1..count lists [a, b, c, d, e, f(, p)] in lo..hi, p >= 0 */
-    FB_K_BOUNDS,   /* "auto" or [xmin, xmax, ymin, ymax] */
-    FB_K_FRACS,    /* 1..count numbers in [lo, hi] */
-    FB_K_NAMES,    /* 1..32 distinct names from `enums` (flag: a comma list) */
-    FB_K_IFSREF,   /* a name from `enums`, a map list (as FB_K_MAPS), or an object the parser checks */
-    FB_K_POINTS,   /* a file path, or an inline list [[x, y, z], ...] */
-    FB_K_RULES,    /* up to count strings, each accepted by `check` (flag: repeatable) */
-    FB_K_REF,      /* another layer's channel "layer.channel" (or "layer": its Y), or a number */
-    FB_K_REFS,     /* 1..count of FB_K_REF */
-    FB_K_CPOINTS,  /* a file, or [[x, y], ...] integer pixels */
-    FB_K_CREGIONS, /* a file, or [[x, y, "T" or "H", value], ...] */
+    FB_K_STRING, /* any non-empty string (a file path, an entry name) */
+    FB_K_OUTPUT, /* a file this layer writes besides the EXR: never taken from a stored scene (--from) */
+    FB_K_BOUNDS, /* "auto" or [xmin, xmax, ymin, ymax] */
+    FB_K_FRACS,  /* 1..count numbers in [lo, hi] */
+    FB_K_NAMES,  /* 1..32 distinct names from `enums` (flag: a comma list) */
+    FB_K_RULES,  /* up to count strings, each accepted by `check` (flag: repeatable) */
+    FB_K_REF,    /* another layer's channel "layer.channel" (or "layer": its Y), or a number */
+    FB_K_REFS,   /* 1..count of FB_K_REF */
+    FB_K_CUSTOM, /* a shape of the generator's own: keyspec.value says how to check and read it */
 } fb_ktype;
+
+struct fb_keyspec;
+struct fb_vctx;
+
+/* A value type of a generator's own (FB_K_CUSTOM): an IFS's affine maps, survey points, constraint
+ * points. The generator defines it in its folder; the engine calls it for checks and flags. */
+typedef struct fb_kvalue {
+    /* Checks value j of key k at `path` (report with fb_schema_error). */
+    fb_result (*check)(const struct fb_vctx *v, const char *path, const struct fb_keyspec *k, json_t *j);
+    /* The JSON value a flag's text stands for; on bad text logs one line naming --flag (fb_fail with
+     * FB_ERR_USAGE) and returns NULL. NULL: the text is the value, a string. */
+    json_t *(*from_flag)(const struct fb_keyspec *k, const char *flag, const char *text);
+} fb_kvalue;
 
 typedef struct fb_keyspec {
     const char *key;
     fb_ktype type;
     double lo, hi;
     bool lo_open;      /* lo < x rather than lo <= x */
-    const char *enums; /* "a|b|c" for FB_K_ENUM, FB_K_NAMES, FB_K_IFSREF */
+    const char *enums; /* "a|b|c" for FB_K_ENUM, FB_K_NAMES, and value types naming presets */
     const char *def;   /* the default as JSON text; NULL: none (optional key, or required) */
     const char *help;
     int count;          /* FB_K_NUMLIST: how many numbers; MAPS, FRACS, RULES, REFS: at most how many */
@@ -57,6 +66,7 @@ typedef struct fb_keyspec {
     const char *unless; /* "a|b": the default is not filled in when one of these keys is given */
     /* FB_K_RULES: checks one element; false with a message in msg */
     bool (*check)(const char *text, char *msg, size_t size);
+    const fb_kvalue *value; /* FB_K_CUSTOM: its type */
 } fb_keyspec;
 
 #define FB_NKEYS(a) ((int)(sizeof(a) / sizeof((a)[0])))

@@ -23,6 +23,51 @@
 
 /* ---- the scene keys and their parser ---------------------------------------------------------- */
 
+/* Constraint points (reg false: a file, or [[x, y], ...] integer pixels) or regions (a file, or [[x, y,
+ * "T" or "H", value], ...]). */
+static fb_result check_constraints(const fb_vctx *v, const char *path, json_t *j, bool reg)
+{
+    char shown[64];
+    fb_json_show(j, shown, sizeof shown);
+    if (json_is_string(j) && *json_string_value(j) && strlen(json_string_value(j)) < 1024) return FB_OK;
+    size_t n = json_is_array(j) ? json_array_size(j) : 0;
+    if (!n)
+        return fb_schema_error(v, path, "expected a file name or a list %s, found %s",
+                               reg ? "[[x, y, \"T\" or \"H\", value], ...]" : "[[x, y], ...]", shown);
+    for (size_t i = 0; i < n; i++) {
+        const json_t *pt = json_array_get(j, i);
+        bool good = json_is_array(pt) && json_array_size(pt) == (reg ? 4u : 2u);
+        for (size_t c = 0; good && c < 2; c++) good = json_is_integer(json_array_get(pt, c));
+        if (good && reg) {
+            const char *kind = json_string_value(json_array_get(pt, 2));
+            const json_t *val = json_array_get(pt, 3);
+            good = kind && (!strcmp(kind, "T") || !strcmp(kind, "H")) && json_is_number(val) &&
+                   isfinite(json_number_value(val));
+        }
+        if (!good) {
+            char sub[256];
+            snprintf(sub, sizeof sub, "%s[%zu]", path, i);
+            fb_json_show(pt, shown, sizeof shown);
+            return fb_schema_error(
+                v, sub, "expected %s, found %s",
+                reg ? "[x, y, \"T\" or \"H\", value] with integer pixel x, y" : "[x, y] integer pixels", shown);
+        }
+    }
+    return FB_OK;
+}
+
+static fb_result check_cpoints(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j)
+{
+    return check_constraints(v, path, j, false);
+}
+
+static fb_result check_cregions(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j)
+{
+    return check_constraints(v, path, j, true);
+}
+
+static const fb_kvalue cpoints_value = {.check = check_cpoints}, cregions_value = {.check = check_cregions};
+
 static const fb_keyspec constrain_keys[] = {
     {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"constrain\""},
     {"name", FB_K_NAME, 0, 0, false, NULL, "\"terrain\"", "layer name; channels NAME.Y, .macro, .detail, .T, .H"},
@@ -37,10 +82,12 @@ static const fb_keyspec constrain_keys[] = {
     {"soften", FB_K_NUM, 0, 2.4, false, NULL, "0",
      "soften the crease of equation 10 along P's zero lines: D - d follows an odd cubic for |P| < soften sigma "
      "(0: the paper)"},
-    {"points", FB_K_CPOINTS, 0, 0, false, NULL, NULL,
-     "discrete constraints D = d: a file of x,y per line or [[x, y], ...] (pixels from the top left)"},
-    {"regions", FB_K_CREGIONS, 0, 0, false, NULL, NULL,
-     "continuous constraints: a file of x,y,T|H,value per line or [[x, y, \"H\", 0.95], ...]"},
+    {"points", FB_K_CUSTOM, 0, 0, false, NULL, NULL,
+     "discrete constraints D = d: a file of x,y per line or [[x, y], ...] (pixels from the top left)",
+     .value = &cpoints_value},
+    {"regions", FB_K_CUSTOM, 0, 0, false, NULL, NULL,
+     "continuous constraints: a file of x,y,T|H,value per line or [[x, y, \"H\", 0.95], ...]",
+     .value = &cregions_value},
     {"domain", FB_K_INT, 0, 16, false, NULL, "4", "a region reaches pixels within 2^domain (L1 distance, eq. 13)"},
     {"falloff", FB_K_NUM, 0, 1e6, false, NULL, "0.01", "f_d of eq. 14: fall-off with the squared distance"},
     {"buffering", FB_K_ENUM, 0, 0, false, "regional|none|naive", "\"regional\"",

@@ -222,7 +222,8 @@ static fb_result fbm_init(fb_gen *g)
 static fb_result fbm_cost(const fb_scene *s, int layer, double *rows, double *total)
 {
     const fb_fbm_params *f = fb_layer_params(&s->layers[layer]);
-    double row = (double)s->width * (f->octaves * 3.0e-9 /* an octave of one pixel */ + 9.0e-9 /* its frame and channel */);
+    double row =
+        (double)s->width * (f->octaves * 3.0e-9 /* an octave of one pixel */ + 9.0e-9 /* its frame and channel */);
     *total = 0;
     for (int y = 0; y < s->height; y++) rows[y] = row, *total += row;
     return FB_OK;

@@ -45,6 +45,9 @@ const struct fb_ifs_stats *fb_gen_ifs_stats(const fb_gen *g);
  * the channels the whole game would have. */
 fb_result fb_gen_ifs_from_sums(fb_gen *g, const uint64_t *hits, const uint64_t *sums, uint64_t outside);
 
+/* Its value types (values.c): affine maps, and a condensation set. */
+extern const fb_kvalue fb_ifs_maps_value, fb_ifs_condensation_value;
+
 /* The class's hooks for tonemap and merge (tone.c). */
 extern const fb_tone_ops fb_ifs_tone_ops;
 extern const fb_points_ops fb_ifs_points_ops;

@@ -32,18 +32,18 @@ static const fb_keyspec ifs_keys[] = {
     {"name", FB_K_NAME, 0, 0, false, NULL, "\"plants\"",
      "layer name; channels NAME.count, .density, .colour, .R, .G, .B, .A (flag: --layer)"},
     {"preset", FB_K_ENUM, 0, 0, false, FB_IFS_PRESETS, NULL, "built-in IFS (default fern when no maps or file)"},
-    {"maps", FB_K_MAPS, -1e6, 1e6, false, NULL, NULL,
+    {"maps", FB_K_CUSTOM, -1e6, 1e6, false, NULL, NULL,
      "affine maps [[a, b, c, d, e, f, p], ...]: x' = a x + b y + e, y' = c x + d y + f (flag: \"a,b,c,d,e,f,p;...\")",
-     FB_IFS_MAX_MAPS},
+     FB_IFS_MAX_MAPS, .value = &fb_ifs_maps_value},
     {"file", FB_K_STRING, 0, 0, false, NULL, NULL, "a Fractint .ifs file (its maps are stored in the scene)"},
     {"entry", FB_K_STRING, 0, 0, false, NULL, NULL, "the entry of the .ifs file (flag: --name; default the first)", 0,
      "name"},
     {"colors", FB_K_FRACS, 0, 1, false, NULL, NULL, "colour coordinate of each map, in [0, 1] (default spread evenly)",
      FB_IFS_MAX_MAPS},
-    {"condensation", FB_K_IFSREF, -1e6, 1e6, false, "fern|sierpinski|maple|tree|spiral", NULL,
+    {"condensation", FB_K_CUSTOM, -1e6, 1e6, false, "fern|sierpinski|maple|tree|spiral", NULL,
      "condensation set C: an IFS preset name or map list, or an L-system {\"preset\": \"tree\", ...} (flag: "
      "lsystem:tree); w0 sends any point onto C",
-     FB_IFS_MAX_MAPS},
+     FB_IFS_MAX_MAPS, .value = &fb_ifs_condensation_value},
     {"condensation-probability", FB_K_NUM, 0, 1, true, NULL, "0.5", "probability of the condensation map w0"},
     {"points", FB_K_INT, 0, 1e14, false, NULL, "0",
      "chaos-game steps in all (0: 64 per histogram cell); at about 1e8 a second, 1e14 takes days: "
@@ -84,7 +84,7 @@ static const fb_keyspec cond_lsystem_keys[] = {
     {"max-symbols", FB_K_INT, 1, 2147483648.0, false, NULL, "268435456", "longest string allowed while rewriting"},
 };
 
-/* A validated map list (FB_K_MAPS) into an fb_ifs; a missing probability is -1. */
+/* A validated map list (fb_ifs_maps_value) into an fb_ifs; a missing probability is -1. */
 static void maps_of(const json_t *j, fb_ifs *out)
 {
     memset(out, 0, sizeof *out);

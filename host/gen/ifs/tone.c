@@ -10,9 +10,8 @@
 #include <string.h>
 
 /* The keys that only change the tone mapping. */
-static const char *const k_tone_keys[] = {"brightness",      "gamma",   "gamma-threshold", "vibrancy",
-                                          "highlight-power", "palette", "cosine",          "stops",
-                                          NULL};
+static const char *const k_tone_keys[] = {"brightness", "gamma",  "gamma-threshold", "vibrancy", "highlight-power",
+                                          "palette",    "cosine", "stops",           NULL};
 
 typedef struct ifs_retone {
     fb_ifs_tone tone;

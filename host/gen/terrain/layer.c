@@ -25,12 +25,41 @@
 
 /* ---- the scene keys and their parser ---------------------------------------------------------- */
 
+/* Survey points: a file path, or an inline list [[x, y, z], ...] of finite numbers in lo..hi. */
+static fb_result check_points(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j)
+{
+    char shown[64];
+    fb_json_show(j, shown, sizeof shown);
+    if (json_is_string(j) && *json_string_value(j) && strlen(json_string_value(j)) < 1024) return FB_OK;
+    size_t n = json_is_array(j) ? json_array_size(j) : 0;
+    if (!n)
+        return fb_schema_error(v, path, "expected a file name or a list of points [[x, y, z], ...], found %s", shown);
+    for (size_t i = 0; i < n; i++) {
+        const json_t *pt = json_array_get(j, i);
+        bool good = json_is_array(pt) && json_array_size(pt) == 3;
+        for (size_t c = 0; good && c < 3; c++) {
+            const json_t *e = json_array_get(pt, c);
+            double x = json_is_number(e) ? json_number_value(e) : NAN;
+            good = isfinite(x) && x >= k->lo && x <= k->hi;
+        }
+        if (!good) {
+            char sub[256];
+            snprintf(sub, sizeof sub, "%s[%zu]", path, i);
+            fb_json_show(pt, shown, sizeof shown);
+            return fb_schema_error(v, sub, "expected a point [x, y, z] of finite numbers, found %s", shown);
+        }
+    }
+    return FB_OK;
+}
+
+static const fb_kvalue points_value = {.check = check_points};
+
 static const fb_keyspec terrain_keys[] = {
     {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"terrain\""},
     {"name", FB_K_NAME, 0, 0, false, NULL, "\"terrain\"",
      "layer name; channels NAME.Y (height) and NAME.A (in the hull)"},
-    {"points", FB_K_POINTS, -1e15, 1e15, false, NULL, NULL,
-     "survey points: an XYZ / CSV file (x y z per line) or a list [[x, y, z], ...]"},
+    {"points", FB_K_CUSTOM, -1e15, 1e15, false, NULL, NULL,
+     "survey points: an XYZ / CSV file (x y z per line) or a list [[x, y, z], ...]", .value = &points_value},
     {"from-heightfield", FB_K_STRING, 0, 0, false, NULL, NULL, "instead of points: IN.exr[:layer.channel] sampled"},
     {"sample", FB_K_INT, 1, 65536, false, NULL, NULL, "with from-heightfield: every N-th pixel (default 16)"},
     {"insert", FB_K_INT, 0, 1e8, false, NULL, "40000", "points inserted by random midpoint displacement"},
