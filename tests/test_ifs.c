@@ -491,7 +491,7 @@ static void test_tone(void)
     CHECK(fabsf(a1 - 0.1f) < 1e-5f && fabsf(a2 - 0.05f) < 1e-5f);
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
     fb_log_set_sink(sink, NULL);
     test_restart();
@@ -501,7 +501,7 @@ int main(void)
 
     fb_engine engines[4];
     bool have_gpu;
-    int n = th_open_engines(engines, &have_gpu);
+    int n = th_open_engines(argc, argv, engines, &have_gpu);
 
     const double fern_b[4] = {-2.75, 2.75, -0.25, 10.25}, tri_b[4] = {-0.05, 1.05, -0.05, 0.9};
     for (int i = 0; i < n; i += (have_gpu ? 3 : 4)) {

@@ -12,7 +12,7 @@
 #include <string.h>
 
 /* Values from an independent Python implementation of lowbias32 and the (seed, stream, index)
- * chaining (see docs/kernels.md): not produced by this code. */
+ * chaining (written for these tests, not kept in the repository): not produced by this code. */
 static void test_hash_pinned(void)
 {
     CHECK(k_hash(0u) == 0x0u);

@@ -444,7 +444,7 @@ static void test_engines(fb_engine *engines, int n)
     planes_free(&first);
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
     fb_log_set_sink(sink, NULL);
     test_derive();
@@ -457,7 +457,7 @@ int main(void)
 
     fb_engine engines[4];
     bool have_gpu;
-    int n = th_open_engines(engines, &have_gpu);
+    int n = th_open_engines(argc, argv, engines, &have_gpu);
     test_engines(engines, n);
     if (have_gpu) CHECKF(vkc_validation_messages(engines[n - 1].vk) == 0, "validation layer messages");
     for (int i = 0; i < n; i++) fb_engine_close(&engines[i]);

@@ -33,7 +33,7 @@ enum {
 /* A short name for a result code ("bad input", "vulkan error", ...). */
 const char *fb_result_string(fb_result r);
 
-/* The process exit code DESIGN.md assigns to a result: 0, 2 (usage, input) or 3 (runtime). */
+/* The process exit code of a result (docs/usage.md): 0, 2 (usage, input) or 3 (runtime). */
 int fb_result_exit_code(fb_result r);
 
 /* Log levels. Errors are the one line a user sees when a command fails. */

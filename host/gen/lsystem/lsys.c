@@ -90,7 +90,7 @@ bool fb_lsys_parse_rule(const char *text, fb_lsys_rule *out, char *msg, size_t n
     return true;
 }
 
-/* 0 when s is balanced, else a description of the first problem in msg. */
+/* True when s is balanced, else false with a description of the first problem in msg. */
 static bool balanced(const char *s, const char *what, char *msg, size_t n)
 {
     long depth = 0;
