@@ -91,4 +91,23 @@ msg=$($fb checker --size 64x32 --cells 100 -o bad.exr 2>&1)
 rc=$?
 set -e
 check "its own check: --cells 100 on 64 x 32 exits 2 naming the flag" "[ $rc -eq 2 ] && grep -q -- '--cells: 100 squares do not fit a 64 x 32 image' <<< \"\$msg\" && [ ! -e bad.exr ]"
+# the conformance test of every generator, which now includes the checker with no edit of its own
+if python3 "$src/tests/conformance.py" "$fb" > conformance.log 2>&1; then
+    echo "ok: the conformance test passes with the checker ($(tail -1 conformance.log))"
+else
+    grep FAIL conformance.log >&2
+    echo "FAIL: the conformance test" >&2
+    fail=1
+fi
+check "the conformance test covered the checker" "python3 -c \"import json,sys; assert any(c['name'] == 'checker' for c in json.load(sys.stdin))\" < <($fb generators --json)"
+check "plan splits the checker into bands" "$fb plan <(echo '{\"size\": [2048, 1024], \"layers\": [{\"type\": \"checker\"}]}') --tasks 4 --task-startup 0 --json | python3 -c \"import json,sys; l = json.load(sys.stdin)['layers'][0]; assert l['split'] == 'bands' and l['seconds'] > 0, l\""
+if $fb devices > /dev/null 2>&1; then
+    if python3 "$src/tests/conformance.py" "$fb" --gpu > conformance-gpu.log 2>&1; then
+        echo "ok: the conformance test on Vulkan ($(tail -1 conformance-gpu.log))"
+    else
+        grep FAIL conformance-gpu.log >&2
+        echo "FAIL: the conformance test on Vulkan" >&2
+        fail=1
+    fi
+fi
 exit $fail

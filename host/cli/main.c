@@ -7,6 +7,7 @@
 #include "tonemap.h"
 #include "compare.h"
 #include "exrio.h"
+#include "generators.h"
 #include "heightmap.h"
 #include "merge.h"
 #include "output.h"
@@ -91,6 +92,7 @@ static const char *const k_usage =
     "  merge PARTS... -o OUT.exr          join task files (--task), region files (--region) or points\n"
     "                                     parts (--points-part) into the whole bake\n"
     "  info FILE.exr                      layers, channels, types, attributes and the stored scene\n"
+    "  generators [--json]                the generators, their keys and how a plan shares them\n"
     "  scene default|SCENE.json           a scene with every default filled in (scene default > s.json)\n"
     "  devices                            the Vulkan devices found, and which one is chosen\n"
     "  bench [--json] [--size WxH]        throughput of every generator on each backend\n"
@@ -1310,6 +1312,7 @@ static int run_command(int argc, char **argv)
     if (!strcmp(cmd, "devices")) return cmd_devices(argc - 2, argv + 2);
     if (!strcmp(cmd, "scene")) return cmd_scene(argc - 2, argv + 2);
     if (!strcmp(cmd, "plan")) return cmd_plan(argc - 2, argv + 2);
+    if (!strcmp(cmd, "generators")) return finish(fb_generators_main(argc - 2, argv + 2));
     if (!strcmp(cmd, "bench")) return finish(fb_bench_main(argc - 2, argv + 2));
     return usage_error("%s: unknown command (see fractalbake --help)", cmd);
 }

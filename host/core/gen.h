@@ -164,6 +164,14 @@ typedef struct fb_gen_class {
     fb_result (*cost)(const fb_scene *s, int layer, double *rows, double *total);
     double part_pixel_seconds;
     const fb_points_ops *points; /* FB_SHARE_POINTS: how merge adds the parts */
+    /* For `fractalbake generators` and the conformance test (tests/cli/conformance.sh): a small scene's
+     * "layers" that bake it (JSON; NULL: [{"type": NAME}]), and how far its Vulkan result may be from
+     * its native one (the largest |difference|, and the share of pixels in percent allowed beyond
+     * it; both 0: the same bits). */
+    const char *example;
+    struct {
+        double max_abs, fail_percent;
+    } tolerance;
     const fb_tone_ops *tone;     /* NULL: tonemap does not apply */
     /* Its benchmarks (cli/bench.c runs them; NULL: none). */
     fb_result (*bench)(struct fb_bench *b);

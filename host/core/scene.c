@@ -51,6 +51,23 @@ static const char *flag_of(const fb_keyspec *k)
     return k->flag ? k->flag : !strcmp(k->key, "name") ? "layer" : k->key;
 }
 
+const char *fb_key_flag(const fb_keyspec *k)
+{
+    return flag_of(k);
+}
+
+const char *fb_ktype_name(const fb_keyspec *k)
+{
+    static const char *const names[] = {
+        [FB_K_INT] = "int",       [FB_K_NUM] = "number",      [FB_K_BOOL] = "bool",       [FB_K_ENUM] = "enum",
+        [FB_K_NAME] = "name",     [FB_K_VEC2] = "vec2",       [FB_K_SIZE] = "size",       [FB_K_LAYERS] = "layers",
+        [FB_K_TYPE] = "type",     [FB_K_NUMLIST] = "numbers", [FB_K_STOPS] = "stops",     [FB_K_STRING] = "string",
+        [FB_K_OUTPUT] = "output", [FB_K_BOUNDS] = "bounds",   [FB_K_FRACS] = "fractions", [FB_K_NAMES] = "names",
+        [FB_K_RULES] = "rules",   [FB_K_REF] = "ref",         [FB_K_REFS] = "refs",       [FB_K_CUSTOM] = "custom",
+    };
+    return k->type >= 0 && k->type <= FB_K_CUSTOM && names[k->type] ? names[k->type] : "?";
+}
+
 /* ---- locating a key path in the source text ------------------------------------------------- */
 
 typedef struct cursor {

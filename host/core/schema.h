@@ -87,6 +87,12 @@ typedef struct fb_vctx {
 fb_result fb_schema_error(const fb_vctx *v, const char *path, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 
+/* "int", "number", "maps"...: a key's type, for listings (fractalbake generators). */
+const char *fb_ktype_name(const fb_keyspec *k);
+
+/* The command-line flag of key k, without the dashes ("layer" for "name"). */
+const char *fb_key_flag(const fb_keyspec *k);
+
 /* Checks every key of `obj` against `keys` and fills in the defaults. `what` names the object in
  * messages ("an fbm layer"). */
 fb_result fb_schema_check(const fb_vctx *v, const char *path, json_t *obj, const fb_keyspec *keys, int n,

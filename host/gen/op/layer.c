@@ -237,4 +237,7 @@ const fb_gen_class fb_gen_op = {
     .init = op_init,
     .share = FB_SHARE_BAND,
     .cost = op_cost,
+    .example = "[{\"type\": \"fbm\", \"name\": \"a\"}, {\"type\": \"op\", \"name\": \"b\", \"op\": \"add\", "
+               "\"inputs\": [\"a\", 1]}]",
+    .tolerance = {1e-5, 0}, /* its fBm input's */
 };

@@ -606,5 +606,7 @@ const fb_gen_class fb_gen_terrain = {
     .init = terrain_init,
     .share = FB_SHARE_WHOLE,
     .cost = terrain_cost,
+    .example = "[{\"type\": \"terrain\", \"insert\": 500, \"points\": [[0, 0, 0], [100, 0, 10], [0, 50, 20], "
+               "[100, 50, 40], [50, 25, 80]]}]",
     .bench = fb_terrain_bench,
 };

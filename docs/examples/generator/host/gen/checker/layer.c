@@ -63,6 +63,14 @@ static fb_result checker_init(fb_gen *g)
     return FB_OK;
 }
 
+/* The plan's cost: seconds of one core per row (a checker pixel costs about as much as an op's). */
+static fb_result checker_cost(const fb_scene *s, int layer, double *rows, double *total)
+{
+    *total = 0;
+    for (int y = 0; y < s->height; y++) rows[y] = s->width * 4e-9, *total += rows[y];
+    return FB_OK;
+}
+
 const fb_gen_class fb_gen_checker = {
     .name = "checker",
     .synopsis = "checker [options] -o OUT.exr",
@@ -73,4 +81,6 @@ const fb_gen_class fb_gen_checker = {
     .params_size = sizeof(fb_checker_params),
     .parse = parse_checker,
     .init = checker_init,
+    .share = FB_SHARE_BAND, /* a function of the pixel: a plan cuts it into bands */
+    .cost = checker_cost,
 };
