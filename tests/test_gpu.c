@@ -5,6 +5,7 @@
  * (not run) only when there is no Vulkan device.
  */
 #include "bake.h"
+#include "env.h"
 #include "exrio.h"
 
 #include "testhelp.h"
@@ -179,7 +180,10 @@ static void test_julia_double(fb_engine *gpu, fb_engine *cpu)
 int main(void)
 {
     fb_engine gpu, cpu;
-    fb_result rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .validation = true}, &gpu);
+    fb_env env0; /* the pipeline cache's folder, as the command line has it */
+    fb_env_read(&env0);
+    fb_result rc = fb_engine_open(
+        &(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .validation = true, .vk_options = env0.vk}, &gpu);
     if (rc == FB_ERR_NODEVICE) TEST_SKIP("no Vulkan device");
     CHECK(rc == FB_OK);
     if (rc) TEST_REPORT();
@@ -279,10 +283,11 @@ int main(void)
 
     /* The staging path (device-local memory copied to a host-cached buffer, as on discrete GPUs)
      * gives the same bits as direct mapping, with the validation layer watching. */
-    setenv("FB_VK_STAGING", "1", 1);
+    fb_env env = env0;
+    env.vk.staging = true;
     fb_engine staged;
-    CHECK(fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .validation = true}, &staged) == FB_OK);
-    unsetenv("FB_VK_STAGING");
+    CHECK(fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .validation = true, .vk_options = env.vk},
+                         &staged) == FB_OK);
     float *d1 = bake_read(&gpu, json, 40, "direct"), *d2 = bake_read(&staged, json, 40, "staged");
     CHECK(d1 && d2 && !memcmp(d1, d2, 301 * 150 * 4));
     CHECKF(vkc_validation_messages(staged.vk) == 0, "%u validation messages (staging)",

@@ -8,6 +8,7 @@
 #define FB_TESTENGINES_H
 
 #include "bake.h"
+#include "env.h"
 
 #include "testhelp.h"
 
@@ -29,8 +30,11 @@ static int th_open_engines(int argc, char **argv, fb_engine engines[4], bool *ha
             FB_OK)
             n++;
     CHECK(n == 3);
-    *have_gpu = gpu && fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .validation = true},
-                                      &engines[n]) == FB_OK;
+    fb_env env; /* the pipeline cache's folder, as the command line has it */
+    fb_env_read(&env);
+    *have_gpu =
+        gpu && fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .validation = true, .vk_options = env.vk},
+                              &engines[n]) == FB_OK;
     if (*have_gpu) {
         n++;
     } else if (gpu) {

@@ -4,6 +4,7 @@
  * (bench/run.sh appends those to bench/results.jsonl).
  */
 #include "bench.h"
+#include "env.h"
 
 #include "benchkit.h"
 #include "gen.h"
@@ -57,9 +58,10 @@ static void print_row(const fb_bench *b, const fb_bench_row *r)
     fflush(stdout);
 }
 
-fb_result fb_bench_main(int argc, char **argv)
+fb_result fb_bench_main(int argc, char **argv, const fb_env *env)
 {
-    fb_bench b = {.width = 4096,
+    fb_bench b = {.vk_options = env->vk,
+                  .width = 4096,
                   .height = 4096,
                   .vulkan = true,
                   .native = true,

@@ -4,6 +4,8 @@
 
 #include "fb.h"
 
-fb_result fb_bench_main(int argc, char **argv);
+struct fb_env;
+/* Runs `fractalbake bench`; env: the environment's Vulkan options (env.h). */
+fb_result fb_bench_main(int argc, char **argv, const struct fb_env *env);
 
 #endif

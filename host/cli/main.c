@@ -6,6 +6,7 @@
 #include "bench.h"
 #include "tonemap.h"
 #include "compare.h"
+#include "env.h"
 #include "exrio.h"
 #include "generators.h"
 #include "heightmap.h"
@@ -33,6 +34,8 @@ static bool g_quiet_warnings;
 /* --json: the command's summary, printed on standard output by main() once its outputs are in
  * place, with what was written ("outputs": path, what, bytes) added. */
 static json_t *g_summary;
+/* The environment, read once when the program starts (env.h), for every engine a command opens. */
+static fb_env g_env;
 
 static json_t *summary_start(const char *command)
 {
@@ -392,8 +395,7 @@ static fb_result bake_scene(const char *command, fb_scene *scene, const common_o
     if (o->points_part[1] > 0) {
         bool chaos = false;
         for (int i = 0; i < scene->nlayers; i++) chaos = chaos || scene->layers[i].cls->share == FB_SHARE_POINTS;
-        if (!chaos)
-            return fb_fail(FB_ERR_USAGE, "--points-part: the scene has no chaos-game layer to split by points");
+        if (!chaos) return fb_fail(FB_ERR_USAGE, "--points-part: the scene has no chaos-game layer to split by points");
         if (o->region[2] > 0)
             return fb_fail(FB_ERR_USAGE, "--points-part: not with --region (split a bake by pixels or by points)");
         scene->points_part[0] = o->points_part[0];
@@ -454,10 +456,12 @@ static fb_result bake_scene(const char *command, fb_scene *scene, const common_o
                                 json_pack("{sisiss}", "index", o->task[0], "of", o->task[1], "share", share));
     }
     fb_engine e;
-    fb_result rc = fb_engine_open(
-        &(fb_engine_desc){
-            .backend = o->backend, .device = o->device, .threads = o->threads, .validation = o->validation},
-        &e);
+    fb_result rc = fb_engine_open(&(fb_engine_desc){.backend = o->backend,
+                                                    .device = o->device,
+                                                    .threads = o->threads,
+                                                    .validation = o->validation,
+                                                    .vk_options = g_env.vk},
+                                  &e);
     if (rc) goto done;
     fb_bake_stats st;
     fb_bake_plan plan;
@@ -1070,8 +1074,8 @@ static int cmd_plan(int argc, char **argv)
                sc->height, sc->nlayers, sc->nlayers == 1 ? "" : "s", ntasks, ntasks == 1 ? "" : "s");
         printf("\n%-20s %-10s %-13s %10s\n", "layer", "type", "split", "model s");
         for (int i = 0; i < sc->nlayers; i++)
-            printf("%-20s %-10s %-13s %10.3f\n", sc->layers[i].name, sc->layers[i].cls->name, fb_plan_share_name(p->share[i]),
-                   p->layer_seconds[i]);
+            printf("%-20s %-10s %-13s %10.3f\n", sc->layers[i].name, sc->layers[i].cls->name,
+                   fb_plan_share_name(p->share[i]), p->layer_seconds[i]);
         printf("\n%-6s %-56s %10s\n", "task", "share", "model s");
         for (int k = 0; k < p->nactive; k++) {
             char d[2048];
@@ -1244,6 +1248,7 @@ static char **normalise_args(int *argc, char **argv)
 int main(int argc, char **argv)
 {
     fb_log_set_sink(sink, NULL);
+    fb_env_read(&g_env);
     argv = normalise_args(&argc, argv);
     install_signal_handlers();
     /* bench bakes to a scratch file again and again: each of its bakes is a transaction of its own */
@@ -1313,6 +1318,6 @@ static int run_command(int argc, char **argv)
     if (!strcmp(cmd, "scene")) return cmd_scene(argc - 2, argv + 2);
     if (!strcmp(cmd, "plan")) return cmd_plan(argc - 2, argv + 2);
     if (!strcmp(cmd, "generators")) return finish(fb_generators_main(argc - 2, argv + 2));
-    if (!strcmp(cmd, "bench")) return finish(fb_bench_main(argc - 2, argv + 2));
+    if (!strcmp(cmd, "bench")) return finish(fb_bench_main(argc - 2, argv + 2, &g_env));
     return usage_error("%s: unknown command (see fractalbake --help)", cmd);
 }

@@ -51,8 +51,10 @@ fb_result fb_bench_timed(fb_engine *e, const fb_scene *s, const char *out, doubl
 
 fb_result fb_bench_open_vulkan(const fb_bench *b, fb_engine *e, bool *have)
 {
-    fb_result rc =
-        fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .device = b->device, .threads = b->threads}, e);
+    fb_result rc = fb_engine_open(
+        &(fb_engine_desc){
+            .backend = FB_BACKEND_VULKAN, .device = b->device, .threads = b->threads, .vk_options = b->vk_options},
+        e);
     *have = rc == FB_OK;
     if (rc == FB_ERR_NODEVICE && b->native) {
         fb_log(FB_LOG_WARN, "no Vulkan device: benchmarking the native backend only");
@@ -98,8 +100,10 @@ fb_result fb_bench_auto_zip(const fb_bench *b, const fb_bench_case *bc, fb_scene
 {
     if (!b->vulkan || !b->native) return FB_OK; /* auto is the choice between the two */
     fb_engine e;
-    fb_result rc =
-        fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_AUTO, .device = b->device, .threads = b->threads}, &e);
+    fb_result rc = fb_engine_open(
+        &(fb_engine_desc){
+            .backend = FB_BACKEND_AUTO, .device = b->device, .threads = b->threads, .vk_options = b->vk_options},
+        &e);
     if (rc) return rc;
     exrio_compression keep = s->compression;
     s->compression = EXRIO_ZIP;

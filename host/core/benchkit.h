@@ -35,7 +35,8 @@ typedef struct fb_bench {
     int threads;       /* 0: one per core */
     bool vulkan, native;
     const char *device;
-    const char *out; /* a scratch EXR path for the end-to-end runs */
+    vkc_desc vk_options; /* the Vulkan engines' other options (from the command line's environment) */
+    const char *out;     /* a scratch EXR path for the end-to-end runs */
     bool json;
     /* the sink: a heading line for people (not in JSON), and each row */
     void (*heading)(const struct fb_bench *b, const char *text);

@@ -24,7 +24,9 @@ fb_result fb_engine_open(const fb_engine_desc *d, fb_engine *e)
             snprintf(n, sizeof n, "%d", d->threads);
             setenv("LP_NUM_THREADS", n, 1);
         }
-        vkc_desc vd = {.device = d->device, .validation = d->validation};
+        vkc_desc vd = d->vk_options;
+        vd.device = d->device;
+        vd.validation = d->validation || d->vk_options.validation;
         fb_result rc = vkc_create(&vd, &e->vk);
         if (rc == FB_OK) {
             e->kind = FB_BACKEND_VULKAN;

@@ -29,7 +29,8 @@ typedef struct fb_engine_desc {
     const char *device;
     int threads; /* native workers and EXR compression threads; 0: one per core */
     bool validation;
-    bool scalar; /* native: no hand-vectorised paths */
+    bool scalar;         /* native: no hand-vectorised paths */
+    vkc_desc vk_options; /* the Vulkan context's other options (its device and validation: the fields above) */
 } fb_engine_desc;
 
 fb_result fb_engine_open(const fb_engine_desc *desc, fb_engine *out);

@@ -32,10 +32,17 @@ typedef struct vkc_device_info {
     bool chosen;
 } vkc_device_info;
 
+/* What a context is made with (zero: the defaults). The command line fills it from its flags and the
+ * environment (host/cli/env.c: FB_VK_VALIDATION, FB_VK_STAGING, FB_VK_NO_INT64, FB_VK_NO_FLOAT64,
+ * FB_NO_PIPELINE_CACHE, XDG_CACHE_HOME); nothing here reads the environment. */
 typedef struct vkc_desc {
     const char *device; /* NULL: best by type; all digits: an index; else a name substring */
-    bool validation;    /* enable VK_LAYER_KHRONOS_validation (also: FB_VK_VALIDATION=1) */
+    bool validation;    /* enable VK_LAYER_KHRONOS_validation */
     bool no_pipeline_cache;
+    const char *cache_dir; /* the pipeline cache's folder (made when missing); NULL: none on disk */
+    bool staging;          /* device-local memory and staging copies even where memory is shared */
+    bool no_int64;         /* as if the device had no 64-bit buffer atomics */
+    bool no_float64;       /* as if the device had no shaderFloat64 */
 } vkc_desc;
 
 /* Lists the Vulkan devices and marks the one `device_sel` (as in vkc_desc.device) would choose.

@@ -1,0 +1,28 @@
+/* The environment, read once: see env.h. */
+#include "env.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static bool env_true(const char *name)
+{
+    const char *v = getenv(name);
+    return v && *v && strcmp(v, "0") != 0;
+}
+
+void fb_env_read(fb_env *env)
+{
+    memset(env, 0, sizeof *env);
+    env->vk.validation = env_true("FB_VK_VALIDATION");
+    env->vk.staging = env_true("FB_VK_STAGING");
+    env->vk.no_int64 = env_true("FB_VK_NO_INT64");
+    env->vk.no_float64 = env_true("FB_VK_NO_FLOAT64");
+    env->vk.no_pipeline_cache = env_true("FB_NO_PIPELINE_CACHE");
+    const char *base = getenv("XDG_CACHE_HOME");
+    if (base && *base)
+        snprintf(env->cache_dir, sizeof env->cache_dir, "%s/fractalbake", base);
+    else if ((base = getenv("HOME")) && *base)
+        snprintf(env->cache_dir, sizeof env->cache_dir, "%s/.cache/fractalbake", base);
+    env->vk.cache_dir = env->cache_dir[0] ? env->cache_dir : NULL;
+}

@@ -1,0 +1,25 @@
+/*
+ * The environment, read in this one place (the command line's) and passed down in descriptors:
+ * nothing below host/cli reads an environment variable.
+ *   FB_VK_VALIDATION=1     the Vulkan validation layer on every context (the test suite sets it)
+ *   FB_VK_STAGING=1        device-local memory and staging copies even on lavapipe (a GPU's path)
+ *   FB_VK_NO_INT64=1       as if the device had no 64-bit buffer atomics
+ *   FB_VK_NO_FLOAT64=1     as if the device had no shaderFloat64
+ *   FB_NO_PIPELINE_CACHE=1 no pipeline cache on disk
+ *   XDG_CACHE_HOME, HOME   the pipeline cache's folder: $XDG_CACHE_HOME/fractalbake, else
+ *                          $HOME/.cache/fractalbake
+ */
+#ifndef FB_ENV_H
+#define FB_ENV_H
+
+#include "vkc.h"
+
+typedef struct fb_env {
+    vkc_desc vk;          /* validation, staging, no_int64, no_float64, no_pipeline_cache, cache_dir */
+    char cache_dir[1024]; /* vk.cache_dir points here ("" and NULL: none) */
+} fb_env;
+
+/* Reads the variables above into *env. */
+void fb_env_read(fb_env *env);
+
+#endif

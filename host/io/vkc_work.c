@@ -1,0 +1,477 @@
+/*
+ * The Vulkan context's work: compute pipelines (kept and reused), storage buffers (mapped directly
+ * or staged), and jobs (a recorded dispatch with timestamps). See vkc.h for the model.
+ */
+#include "vkc_private.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+
+void vkc_pipeline_free(vkc_context *ctx, vkc_pipeline *p)
+{
+    if (p->pipeline) ctx->vk.vkDestroyPipeline(ctx->device, p->pipeline, NULL);
+    if (p->layout) ctx->vk.vkDestroyPipelineLayout(ctx->device, p->layout, NULL);
+    if (p->dsl) ctx->vk.vkDestroyDescriptorSetLayout(ctx->device, p->dsl, NULL);
+    memset(p, 0, sizeof *p);
+    free(p);
+}
+
+/* ---- pipelines ------------------------------------------------------------------------------ */
+
+fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, vkc_pipeline **out)
+{
+    fb_result rc = FB_OK;
+    VkShaderModule module = VK_NULL_HANDLE;
+    if (desc->buffers > 8 || desc->push_size > 128 || desc->push_size % 4 != 0)
+        return fb_fail(FB_ERR_INTERNAL, "vulkan: pipeline %s: bad description", desc->name);
+    uint32_t nspec = desc->nspec < 8 ? desc->nspec : 8;
+    for (vkc_pipeline *q = ctx->pipes; q; q = q->next)
+        if (q->spv == desc->spv && q->spv_size == desc->spv_size && q->push_size == desc->push_size &&
+            q->buffers == desc->buffers && q->nspec == nspec && !memcmp(q->spec, desc->spec, 4 * nspec)) {
+            *out = q;
+            return FB_OK;
+        }
+    vkc_pipeline *p = calloc(1, sizeof *p);
+    if (!p) return fb_fail(FB_ERR_NOMEM, "out of memory creating pipeline %s", desc->name);
+    p->push_size = desc->push_size;
+    p->buffers = desc->buffers;
+    p->spv = desc->spv;
+    p->spv_size = desc->spv_size;
+    p->nspec = nspec;
+    if (nspec) memcpy(p->spec, desc->spec, 4 * nspec);
+
+    VkDescriptorSetLayoutBinding bindings[8];
+    for (uint32_t i = 0; i < desc->buffers; i++)
+        bindings[i] = (VkDescriptorSetLayoutBinding){
+            .binding = i,
+            .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+            .descriptorCount = 1,
+            .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT,
+        };
+    VkDescriptorSetLayoutCreateInfo dslci = {
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
+        .bindingCount = desc->buffers,
+        .pBindings = bindings,
+    };
+    VKC_CHECK(ctx->vk.vkCreateDescriptorSetLayout(ctx->device, &dslci, NULL, &p->dsl), fail);
+    VkPushConstantRange range = {.stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .offset = 0, .size = desc->push_size};
+    VkPipelineLayoutCreateInfo plci = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO,
+        .setLayoutCount = 1,
+        .pSetLayouts = &p->dsl,
+        .pushConstantRangeCount = desc->push_size ? 1 : 0,
+        .pPushConstantRanges = &range,
+    };
+    VKC_CHECK(ctx->vk.vkCreatePipelineLayout(ctx->device, &plci, NULL, &p->layout), fail);
+    VkShaderModuleCreateInfo smci = {
+        .sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO,
+        .codeSize = desc->spv_size,
+        .pCode = desc->spv,
+    };
+    VKC_CHECK(ctx->vk.vkCreateShaderModule(ctx->device, &smci, NULL, &module), fail);
+    /* Specialization lets the device compiler fold uniform choices (noise kind, style flags) away:
+     * on lavapipe every branch it cannot prove uniform costs both sides. */
+    VkSpecializationMapEntry entries[8];
+    for (uint32_t i = 0; i < nspec; i++)
+        entries[i] = (VkSpecializationMapEntry){.constantID = i, .offset = 4 * i, .size = 4};
+    VkSpecializationInfo spec = {
+        .mapEntryCount = nspec,
+        .pMapEntries = entries,
+        .dataSize = 4 * nspec,
+        .pData = desc->spec,
+    };
+    VkComputePipelineCreateInfo cpci = {
+        .sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO,
+        .stage =
+            {
+                .sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO,
+                .stage = VK_SHADER_STAGE_COMPUTE_BIT,
+                .module = module,
+                .pName = "main",
+                .pSpecializationInfo = nspec ? &spec : NULL,
+            },
+        .layout = p->layout,
+    };
+    VKC_CHECK(ctx->vk.vkCreateComputePipelines(ctx->device, ctx->cache, 1, &cpci, NULL, &p->pipeline), fail);
+    ctx->vk.vkDestroyShaderModule(ctx->device, module, NULL);
+    p->next = ctx->pipes;
+    ctx->pipes = p;
+    *out = p;
+    return FB_OK;
+fail:
+    if (module) ctx->vk.vkDestroyShaderModule(ctx->device, module, NULL);
+    vkc_pipeline_free(ctx, p);
+    return rc;
+}
+
+/* The context keeps the pipeline for reuse; it is freed with the context. */
+void vkc_pipeline_destroy(vkc_context *ctx, vkc_pipeline **pp)
+{
+    (void)ctx;
+    if (pp) *pp = NULL;
+}
+
+/* ---- buffers -------------------------------------------------------------------------------- */
+
+struct vkc_buffer {
+    uint64_t size;
+    VkBuffer buf; /* the storage buffer the shader writes */
+    VkDeviceMemory mem;
+    VkBuffer staging; /* host-readable copy, when `buf` is not mapped directly */
+    VkDeviceMemory staging_mem;
+    void *map;
+    bool coherent;
+    bool upload_pending; /* staging holds host data to copy into `buf` before the next dispatch */
+};
+
+/* The first memory type allowed by `bits` that has all of `want`. */
+static int find_memory(const vkc_context *ctx, uint32_t bits, VkMemoryPropertyFlags want)
+{
+    for (uint32_t i = 0; i < ctx->mem.memoryTypeCount; i++)
+        if ((bits & (1u << i)) && (ctx->mem.memoryTypes[i].propertyFlags & want) == want) return (int)i;
+    return -1;
+}
+
+static fb_result make_buffer(vkc_context *ctx, uint64_t size, VkBufferUsageFlags usage,
+                             const VkMemoryPropertyFlags *prefs, int nprefs, VkBuffer *buf, VkDeviceMemory *mem,
+                             VkMemoryPropertyFlags *got)
+{
+    fb_result rc = FB_OK;
+    VkBufferCreateInfo bci = {
+        .sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO,
+        .size = size,
+        .usage = usage,
+        .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
+    };
+    VKC_CHECK(ctx->vk.vkCreateBuffer(ctx->device, &bci, NULL, buf), fail);
+    VkMemoryRequirements req;
+    ctx->vk.vkGetBufferMemoryRequirements(ctx->device, *buf, &req);
+    int type = -1;
+    for (int i = 0; i < nprefs && type < 0; i++) type = find_memory(ctx, req.memoryTypeBits, prefs[i]);
+    if (type < 0) {
+        rc = fb_fail(FB_ERR_VULKAN, "vulkan: no suitable memory type for a %llu-byte buffer", (unsigned long long)size);
+        goto fail;
+    }
+    VkMemoryAllocateInfo mai = {
+        .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO,
+        .allocationSize = req.size,
+        .memoryTypeIndex = (uint32_t)type,
+    };
+    VKC_CHECK(ctx->vk.vkAllocateMemory(ctx->device, &mai, NULL, mem), fail);
+    VKC_CHECK(ctx->vk.vkBindBufferMemory(ctx->device, *buf, *mem, 0), fail);
+    *got = ctx->mem.memoryTypes[type].propertyFlags;
+    return FB_OK;
+fail:
+    return rc;
+}
+
+static void advise_huge(void *p, uint64_t size);
+
+fb_result vkc_buffer_create(vkc_context *ctx, uint64_t size, vkc_buffer **out)
+{
+    fb_result rc = FB_OK;
+    if (size == 0 || size > ctx->info.max_storage_buffer_range)
+        return fb_fail(FB_ERR_INTERNAL,
+                       "vulkan: a %llu-byte storage buffer exceeds the device's maxStorageBufferRange (%llu)",
+                       (unsigned long long)size, (unsigned long long)ctx->info.max_storage_buffer_range);
+    vkc_buffer *b = calloc(1, sizeof *b);
+    if (!b) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    b->size = size;
+    VkMemoryPropertyFlags got = 0;
+    const VkBufferUsageFlags storage =
+        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    if (ctx->direct_map) {
+        const VkMemoryPropertyFlags prefs[] = {
+            VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT | VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT |
+                VK_MEMORY_PROPERTY_HOST_CACHED_BIT,
+            VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT | VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
+            VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
+        };
+        rc = make_buffer(ctx, size, storage, prefs, 3, &b->buf, &b->mem, &got);
+        if (rc) goto fail;
+        VKC_CHECK(ctx->vk.vkMapMemory(ctx->device, b->mem, 0, VK_WHOLE_SIZE, 0, &b->map), fail);
+        advise_huge(b->map, size);
+    } else {
+        const VkMemoryPropertyFlags dev_prefs[] = {VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0};
+        rc = make_buffer(ctx, size, storage, dev_prefs, 2, &b->buf, &b->mem, &got);
+        if (rc) goto fail;
+        const VkMemoryPropertyFlags host_prefs[] = {
+            VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_CACHED_BIT,
+            VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+        };
+        rc =
+            make_buffer(ctx, size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, host_prefs, 2, &b->staging, &b->staging_mem, &got);
+        if (rc) goto fail;
+        VKC_CHECK(ctx->vk.vkMapMemory(ctx->device, b->staging_mem, 0, VK_WHOLE_SIZE, 0, &b->map), fail);
+    }
+    b->coherent = (got & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT) != 0;
+    *out = b;
+    return FB_OK;
+fail:
+    vkc_buffer_destroy(ctx, &b);
+    return rc;
+}
+
+/* On a CPU device the buffer is host memory: ask for transparent huge pages on large ones, before
+ * they are first touched. Random access over a 64 MiB histogram otherwise misses the TLB on nearly
+ * every point. Only a hint: ignored where THP is off or the memory is not anonymous. */
+static void advise_huge(void *p, uint64_t size)
+{
+#ifdef MADV_HUGEPAGE
+    const uintptr_t huge = 2u << 20;
+    if (size < 4 * huge) return;
+    uintptr_t a = ((uintptr_t)p + huge - 1) & ~(huge - 1), e = ((uintptr_t)p + size) & ~(huge - 1);
+    if (e > a) madvise((void *)a, e - a, MADV_HUGEPAGE);
+#else
+    (void)p, (void)size;
+#endif
+}
+
+void vkc_buffer_destroy(vkc_context *ctx, vkc_buffer **pb)
+{
+    if (!pb || !*pb) return;
+    vkc_buffer *b = *pb;
+    if (b->staging) ctx->vk.vkDestroyBuffer(ctx->device, b->staging, NULL);
+    if (b->staging_mem) ctx->vk.vkFreeMemory(ctx->device, b->staging_mem, NULL);
+    if (b->buf) ctx->vk.vkDestroyBuffer(ctx->device, b->buf, NULL);
+    if (b->mem) ctx->vk.vkFreeMemory(ctx->device, b->mem, NULL); /* freeing unmaps implicitly */
+    memset(b, 0, sizeof *b);
+    free(b);
+    *pb = NULL;
+}
+
+fb_result vkc_buffer_upload(vkc_context *ctx, vkc_buffer *b, const void *data, uint64_t size)
+{
+    fb_result rc = FB_OK;
+    if (NEVER(size > b->size)) return fb_fail(FB_ERR_INTERNAL, "vulkan: upload larger than its buffer");
+    memcpy(b->map, data, size);
+    if (!b->coherent) {
+        VkMappedMemoryRange r = {
+            .sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE,
+            .memory = b->staging ? b->staging_mem : b->mem,
+            .size = VK_WHOLE_SIZE,
+        };
+        VKC_CHECK(ctx->vk.vkFlushMappedMemoryRanges(ctx->device, 1, &r), out);
+    }
+    b->upload_pending = b->staging != VK_NULL_HANDLE;
+out:
+    return rc;
+}
+
+const void *vkc_buffer_data(const vkc_buffer *b)
+{
+    return b->map;
+}
+
+uint64_t vkc_buffer_size(const vkc_buffer *b)
+{
+    return b->size;
+}
+
+/* ---- jobs ----------------------------------------------------------------------------------- */
+
+struct vkc_job {
+    vkc_pipeline *pipe;
+    VkCommandBuffer cmd;
+    VkFence fence;
+    VkDescriptorPool dpool;
+    VkDescriptorSet set;
+    VkQueryPool queries;
+    bool in_flight;
+    vkc_buffer *bufs[8];
+    uint32_t nbufs;
+};
+
+fb_result vkc_job_create(vkc_context *ctx, vkc_pipeline *pipe, vkc_job **out)
+{
+    fb_result rc = FB_OK;
+    vkc_job *job = calloc(1, sizeof *job);
+    if (!job) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    job->pipe = pipe;
+    VkCommandBufferAllocateInfo cbai = {
+        .sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO,
+        .commandPool = ctx->pool,
+        .level = VK_COMMAND_BUFFER_LEVEL_PRIMARY,
+        .commandBufferCount = 1,
+    };
+    VKC_CHECK(ctx->vk.vkAllocateCommandBuffers(ctx->device, &cbai, &job->cmd), fail);
+    VkFenceCreateInfo fci = {.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    VKC_CHECK(ctx->vk.vkCreateFence(ctx->device, &fci, NULL, &job->fence), fail);
+    if (pipe->buffers) {
+        VkDescriptorPoolSize ps = {.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .descriptorCount = pipe->buffers};
+        VkDescriptorPoolCreateInfo dpci = {
+            .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO,
+            .maxSets = 1,
+            .poolSizeCount = 1,
+            .pPoolSizes = &ps,
+        };
+        VKC_CHECK(ctx->vk.vkCreateDescriptorPool(ctx->device, &dpci, NULL, &job->dpool), fail);
+        VkDescriptorSetAllocateInfo dsai = {
+            .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
+            .descriptorPool = job->dpool,
+            .descriptorSetCount = 1,
+            .pSetLayouts = &pipe->dsl,
+        };
+        VKC_CHECK(ctx->vk.vkAllocateDescriptorSets(ctx->device, &dsai, &job->set), fail);
+    }
+    if (ctx->timestamps) {
+        VkQueryPoolCreateInfo qpci = {
+            .sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO,
+            .queryType = VK_QUERY_TYPE_TIMESTAMP,
+            .queryCount = 2,
+        };
+        VKC_CHECK(ctx->vk.vkCreateQueryPool(ctx->device, &qpci, NULL, &job->queries), fail);
+    }
+    *out = job;
+    return FB_OK;
+fail:
+    vkc_job_destroy(ctx, &job);
+    return rc;
+}
+
+void vkc_job_destroy(vkc_context *ctx, vkc_job **pjob)
+{
+    if (!pjob || !*pjob) return;
+    vkc_job *job = *pjob;
+    if (job->in_flight) ctx->vk.vkWaitForFences(ctx->device, 1, &job->fence, VK_TRUE, UINT64_MAX);
+    if (job->queries) ctx->vk.vkDestroyQueryPool(ctx->device, job->queries, NULL);
+    if (job->dpool) ctx->vk.vkDestroyDescriptorPool(ctx->device, job->dpool, NULL);
+    if (job->fence) ctx->vk.vkDestroyFence(ctx->device, job->fence, NULL);
+    if (job->cmd) ctx->vk.vkFreeCommandBuffers(ctx->device, ctx->pool, 1, &job->cmd);
+    memset(job, 0, sizeof *job);
+    free(job);
+    *pjob = NULL;
+}
+
+fb_result vkc_job_submit(vkc_context *ctx, vkc_job *job, vkc_buffer *const *bufs, uint32_t nbufs, const void *push,
+                         const uint32_t groups[3])
+{
+    fb_result rc = FB_OK;
+    vkc_pipeline *p = job->pipe;
+    if (NEVER(job->in_flight) || NEVER(nbufs != p->buffers))
+        return fb_fail(FB_ERR_INTERNAL, "vulkan: job submitted while in flight or with wrong buffer count");
+
+    VkDescriptorBufferInfo infos[8];
+    VkWriteDescriptorSet writes[8];
+    for (uint32_t i = 0; i < nbufs; i++) {
+        infos[i] = (VkDescriptorBufferInfo){.buffer = bufs[i]->buf, .offset = 0, .range = VK_WHOLE_SIZE};
+        writes[i] = (VkWriteDescriptorSet){
+            .sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
+            .dstSet = job->set,
+            .dstBinding = i,
+            .descriptorCount = 1,
+            .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+            .pBufferInfo = &infos[i],
+        };
+        job->bufs[i] = bufs[i];
+    }
+    job->nbufs = nbufs;
+    /* Legal here: the set is not in use by any pending command buffer (the job is not in flight). */
+    if (nbufs) ctx->vk.vkUpdateDescriptorSets(ctx->device, nbufs, writes, 0, NULL);
+
+    VKC_CHECK(ctx->vk.vkResetCommandBuffer(job->cmd, 0), out);
+    VkCommandBufferBeginInfo cbbi = {
+        .sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,
+        .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT,
+    };
+    VKC_CHECK(ctx->vk.vkBeginCommandBuffer(job->cmd, &cbbi), out);
+    if (job->queries) {
+        ctx->vk.vkCmdResetQueryPool(job->cmd, job->queries, 0, 2);
+        ctx->vk.vkCmdWriteTimestamp(job->cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, job->queries, 0);
+    }
+    /* Host data for staged input buffers goes to the device buffer first. */
+    bool uploads = false;
+    for (uint32_t i = 0; i < nbufs; i++) {
+        if (!bufs[i]->upload_pending) continue;
+        VkBufferCopy region = {.size = bufs[i]->size};
+        ctx->vk.vkCmdCopyBuffer(job->cmd, bufs[i]->staging, bufs[i]->buf, 1, &region);
+        bufs[i]->upload_pending = false;
+        uploads = true;
+    }
+    if (uploads) {
+        VkMemoryBarrier ub = {
+            .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER,
+            .srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT,
+            .dstAccessMask = VK_ACCESS_SHADER_READ_BIT,
+        };
+        ctx->vk.vkCmdPipelineBarrier(job->cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0,
+                                     1, &ub, 0, NULL, 0, NULL);
+    }
+    ctx->vk.vkCmdBindPipeline(job->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
+    if (nbufs)
+        ctx->vk.vkCmdBindDescriptorSets(job->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->layout, 0, 1, &job->set, 0, NULL);
+    if (p->push_size)
+        ctx->vk.vkCmdPushConstants(job->cmd, p->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, p->push_size, push);
+    ctx->vk.vkCmdDispatch(job->cmd, groups[0], groups[1], groups[2]);
+    if (job->queries) ctx->vk.vkCmdWriteTimestamp(job->cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, job->queries, 1);
+
+    bool staged = false;
+    for (uint32_t i = 0; i < nbufs; i++) staged = staged || bufs[i]->staging;
+    if (staged) {
+        VkMemoryBarrier mb = {
+            .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER,
+            .srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT,
+            .dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT,
+        };
+        ctx->vk.vkCmdPipelineBarrier(job->cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0,
+                                     1, &mb, 0, NULL, 0, NULL);
+        for (uint32_t i = 0; i < nbufs; i++) {
+            if (!bufs[i]->staging) continue;
+            VkBufferCopy region = {.size = bufs[i]->size};
+            ctx->vk.vkCmdCopyBuffer(job->cmd, bufs[i]->buf, bufs[i]->staging, 1, &region);
+        }
+    }
+    /* Make shader (or copy) writes available to host reads after the fence: "a fence signal
+     * operation does not make writes available to the host" without a host-access barrier. */
+    VkMemoryBarrier hb = {
+        .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER,
+        .srcAccessMask = staged ? VK_ACCESS_TRANSFER_WRITE_BIT : VK_ACCESS_SHADER_WRITE_BIT,
+        .dstAccessMask = VK_ACCESS_HOST_READ_BIT,
+    };
+    ctx->vk.vkCmdPipelineBarrier(job->cmd,
+                                 staged ? VK_PIPELINE_STAGE_TRANSFER_BIT : VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                                 VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &hb, 0, NULL, 0, NULL);
+    VKC_CHECK(ctx->vk.vkEndCommandBuffer(job->cmd), out);
+
+    VKC_CHECK(ctx->vk.vkResetFences(ctx->device, 1, &job->fence), out);
+    VkSubmitInfo si = {
+        .sType = VK_STRUCTURE_TYPE_SUBMIT_INFO,
+        .commandBufferCount = 1,
+        .pCommandBuffers = &job->cmd,
+    };
+    VKC_CHECK(ctx->vk.vkQueueSubmit(ctx->queue, 1, &si, job->fence), out);
+    job->in_flight = true;
+out:
+    return rc;
+}
+
+fb_result vkc_job_wait(vkc_context *ctx, vkc_job *job, double *gpu_seconds)
+{
+    fb_result rc = FB_OK;
+    if (gpu_seconds) *gpu_seconds = -1.0;
+    if (!job->in_flight) return FB_OK;
+    VKC_CHECK(ctx->vk.vkWaitForFences(ctx->device, 1, &job->fence, VK_TRUE, UINT64_MAX), out);
+    job->in_flight = false;
+    for (uint32_t i = 0; i < job->nbufs; i++) {
+        vkc_buffer *b = job->bufs[i];
+        if (b->coherent) continue;
+        VkMappedMemoryRange r = {
+            .sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE,
+            .memory = b->staging ? b->staging_mem : b->mem,
+            .offset = 0,
+            .size = VK_WHOLE_SIZE,
+        };
+        VKC_CHECK(ctx->vk.vkInvalidateMappedMemoryRanges(ctx->device, 1, &r), out);
+    }
+    if (gpu_seconds && job->queries) {
+        uint64_t ts[2];
+        VKC_CHECK(ctx->vk.vkGetQueryPoolResults(ctx->device, job->queries, 0, 2, sizeof ts, ts, sizeof ts[0],
+                                                VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT),
+                  out);
+        *gpu_seconds = (double)(ts[1] - ts[0]) * (double)ctx->timestamp_period * 1e-9;
+    }
+out:
+    return rc;
+}
