@@ -150,7 +150,7 @@ static void print_usage(FILE *f)
 typedef struct common_opts {
     const char *out, *preview, *preview_layer, *device;
     fb_backend backend;
-    int threads, strip_rows;
+    int threads, strip_rows, zip_level;
     int region[4];       /* x, y, w, h; w == 0: none */
     int points_part[2];  /* K, N; N == 0: none */
     int task[2];         /* render --task K/N (K from 0); N == 0: none */
@@ -311,7 +311,7 @@ static int common_option(int argc, char **argv, int *i, common_opts *o)
             fb_fail(FB_ERR_USAGE, "--zip-level: expected an integer in 1..%d, found \"%s\"", EXRIO_ZIP_LEVEL_MAX, val);
             return -1;
         }
-        exrio_set_zip_level(level);
+        o->zip_level = level;
     } else if (!strcmp(a, "--dry-run")) {
         o->dry_run = true;
     } else if (!strcmp(a, "--quiet")) {
@@ -472,6 +472,7 @@ static fb_result bake_scene(const char *command, fb_scene *scene, const common_o
                                  .preview = o->preview,
                                  .preview_layer = o->preview_layer,
                                  .strip_rows = o->strip_rows,
+                                 .zip_level = o->zip_level,
                                  .region = {o->region[0], o->region[1], o->region[2], o->region[3]},
                                  .progress = !o->quiet,
                                  .plan = &plan,
@@ -835,7 +836,7 @@ static int cmd_merge(int argc, char **argv)
 {
     const char *out = NULL;
     const char **parts = calloc((size_t)argc + 1, sizeof *parts);
-    int n = 0, threads = 0, bad = 0;
+    int n = 0, threads = 0, zip_level = 0, bad = 0;
     bool quiet = false, json = false;
     if (!parts) return finish(fb_fail(FB_ERR_NOMEM, "out of memory"));
     for (int i = 0; i < argc && !bad; i++) {
@@ -852,7 +853,7 @@ static int cmd_merge(int argc, char **argv)
             int level = 0;
             if (!val || !parse_int_arg(val, 1, EXRIO_ZIP_LEVEL_MAX, &level))
                 bad = usage_error("--zip-level: expected an integer in 1..12, found \"%s\"", val ? val : "");
-            exrio_set_zip_level(level);
+            zip_level = level;
             i++;
         } else if (!strcmp(a, "--max-memory")) {
             uint64_t m = 0;
@@ -892,7 +893,7 @@ static int cmd_merge(int argc, char **argv)
         return bad;
     }
     double t0 = fb_now();
-    fb_result rc = fb_merge(parts, n, out, threads);
+    fb_result rc = fb_merge(parts, n, out, threads, zip_level);
     if (!rc && json) {
         json_t *sum = summary_start("merge"), *in = json_array();
         for (int i = 0; i < n; i++) json_array_append_new(in, json_string(parts[i]));

@@ -34,7 +34,7 @@ static const char *const k_attrs[] = {"fractalbake/scene", "fractalbake/seed", "
 /* The merged file, W x H: the channels given, the EXR parts (names, compressions) and the fractalbake
  * attributes of the first input. */
 static fb_result open_output(const exrio_reader *first, const char *out, int W, int H, const exrio_channel *ch, int nch,
-                             int threads, exrio_writer **w)
+                             int threads, int zip_level, exrio_writer **w)
 {
     exrio_attr attrs[sizeof k_attrs / sizeof k_attrs[0]];
     int nattrs = 0;
@@ -59,6 +59,7 @@ static fb_result open_output(const exrio_reader *first, const char *out, int W, 
                                                     .attrs = attrs,
                                                     .nattrs = nattrs,
                                                     .threads = threads,
+                                                    .zip_level = zip_level,
                                                     .nparts = nparts,
                                                     .part_names = part_names,
                                                     .part_compression = part_comp},
@@ -116,7 +117,7 @@ static fb_result check_parts(part *p, int n, const char *const *paths, int *W, i
     return FB_OK;
 }
 
-static fb_result merge_points(part *p, int n, const char *const *paths, const char *out, int threads);
+static fb_result merge_points(part *p, int n, const char *const *paths, const char *out, int threads, int zip_level);
 
 /* How many of the n files carry attribute `attr`: all or none, else an error ("3 of the 4 files are
  * WHAT"). */
@@ -128,9 +129,9 @@ static fb_result count_kind(const part *p, int n, const char *attr, const char *
         return fb_fail(FB_ERR_INPUT, "merge: %d of the %d files are %s: merge one kind at a time", *count, n, what);
     return FB_OK;
 }
-static fb_result merge_tasks(part *p, int n, const char *const *paths, const char *out, int threads);
+static fb_result merge_tasks(part *p, int n, const char *const *paths, const char *out, int threads, int zip_level);
 
-fb_result fb_merge(const char *const *paths, int n, const char *out, int threads)
+fb_result fb_merge(const char *const *paths, int n, const char *out, int threads, int zip_level)
 {
     if (n < 1) return fb_fail(FB_ERR_USAGE, "merge: no parts given");
     fb_result rc = FB_OK;
@@ -144,13 +145,13 @@ fb_result fb_merge(const char *const *paths, int n, const char *out, int threads
     int tasks = 0, points = 0;
     if (!rc) rc = count_kind(p, n, "fractalbake/task", "task files (render --task), the others not", &tasks);
     if (!rc && tasks) {
-        rc = merge_tasks(p, n, paths, out, threads);
+        rc = merge_tasks(p, n, paths, out, threads, zip_level);
         goto out;
     }
     if (!rc)
         rc = count_kind(p, n, "fractalbake/points-part", "points parts (--points-part), the others regions", &points);
     if (!rc && points) {
-        rc = merge_points(p, n, paths, out, threads);
+        rc = merge_points(p, n, paths, out, threads, zip_level);
         goto out;
     }
     if (!rc) rc = check_parts(p, n, paths, &W, &H);
@@ -171,7 +172,7 @@ fb_result fb_merge(const char *const *paths, int n, const char *out, int threads
                 rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     if (rc) goto out;
 
-    rc = open_output(p[0].r, out, W, H, ch, nch, threads, &w);
+    rc = open_output(p[0].r, out, W, H, ch, nch, threads, zip_level, &w);
     for (int y0 = 0; y0 < H && !rc; y0 += MERGE_STRIP) {
         int rows = y0 + MERGE_STRIP <= H ? MERGE_STRIP : H - y0;
         for (int i = 0; i < n && !rc; i++) {
@@ -338,7 +339,7 @@ static fb_result chaos_add(chaos_layer *cl, int ncl, const fb_scene *sc, exrio_r
     return FB_OK;
 }
 
-static fb_result merge_points(part *p, int n, const char *const *paths, const char *out, int threads)
+static fb_result merge_points(part *p, int n, const char *const *paths, const char *out, int threads, int zip_level)
 {
     fb_result rc = FB_OK;
     int N = 0, seen[4097] = {0};
@@ -423,7 +424,7 @@ static fb_result merge_points(part *p, int n, const char *const *paths, const ch
         if (!(outp[nout] = malloc((size_t)W * MERGE_STRIP * 4))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
         nout++;
     }
-    if (!rc) rc = open_output(p[0].r, out, W, H, ch, nout, threads, &w);
+    if (!rc) rc = open_output(p[0].r, out, W, H, ch, nout, threads, zip_level, &w);
     for (int c = 0; c < nch && !rc; c++) /* buffers for every part channel: read, and compared */
         if (!(in[c] = malloc((size_t)W * MERGE_STRIP * 4)) || !(cmp[c] = malloc((size_t)W * MERGE_STRIP * 4)))
             rc = fb_fail(FB_ERR_NOMEM, "out of memory");
@@ -494,7 +495,7 @@ static const char *backend_of(const char *list, const char *name, char *out, siz
     return NULL;
 }
 
-static fb_result merge_tasks(part *p, int n, const char *const *paths, const char *out, int threads)
+static fb_result merge_tasks(part *p, int n, const char *const *paths, const char *out, int threads, int zip_level)
 {
     fb_result rc = FB_OK;
     const char *scene_json = exrio_attr_string(p[0].r, "fractalbake/scene");
@@ -687,7 +688,8 @@ static fb_result merge_tasks(part *p, int n, const char *const *paths, const cha
                                                           .nchannels = nout,
                                                           .attrs = attrs,
                                                           .nattrs = nattrs,
-                                                          .threads = threads},
+                                                          .threads = threads,
+                                                          .zip_level = zip_level},
                                      &w);
     }
     /* strip by strip: each file's rows in place, the chaos games' from their sums */

@@ -11,7 +11,8 @@
 
 #define FB_MERGE_MAX_CHANNELS 128
 
-/* Writes `out` (atomically) from the n region files `paths`; threads: compression workers (0: all cores). */
-fb_result fb_merge(const char *const *paths, int n, const char *out, int threads);
+/* Writes `out` (atomically) from the n region files `paths`; threads: compression workers (0: all
+ * cores); zip_level: the deflate level of ZIP chunks (0: EXRIO_ZIP_LEVEL). */
+fb_result fb_merge(const char *const *paths, int n, const char *out, int threads, int zip_level);
 
 #endif

@@ -358,8 +358,8 @@ static fb_result check_finite(const layer_run *runs, int nlayers, const void *co
                         return fb_fail(FB_ERR_INPUT,
                                        "layer %s: the %s gives %s at pixel (%d, %d) of %s: its inputs, weights or "
                                        "ranges are too large for a float (at most 3.4e38)",
-                                       g->layer->name, g->layer->cls->name, isnan(v) ? "NaN" : "an infinity", x0 + x, y0 + r,
-                                       g->channel_names[c]);
+                                       g->layer->name, g->layer->cls->name, isnan(v) ? "NaN" : "an infinity", x0 + x,
+                                       y0 + r, g->channel_names[c]);
                     return fb_fail(FB_ERR_INTERNAL,
                                    "layer %s: channel %s holds %s at pixel (%d, %d): an internal error, please "
                                    "report it with the scene",
@@ -416,7 +416,8 @@ static fb_result plan_memory(const fb_engine *e, const fb_bake_desc *d, const la
     bool zip = s->compression == EXRIO_ZIP;
     for (int i = 0; i < s->nlayers; i++) zip = zip || (s->multipart && s->layers[i].compression == EXRIO_ZIP);
     if (d->out && zip)
-        plan->writer += (uint64_t)e->threads * (exrio_zip_state_bytes() + 3 * 16 * (uint64_t)rw * 4 * (uint64_t)nch);
+        plan->writer +=
+            (uint64_t)e->threads * (exrio_zip_state_bytes(d->zip_level) + 3 * 16 * (uint64_t)rw * 4 * (uint64_t)nch);
     if (d->preview) {
         int rh = d->region[2] > 0 ? d->region[3] : s->height; /* the preview shows the region */
         int side = rw > rh ? rw : rh, scale = (side + 2047) / 2048;
@@ -701,7 +702,8 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
                                                       .nchannels = nch,
                                                       .attrs = attrs,
                                                       .nattrs = nattrs,
-                                                      .threads = e->threads},
+                                                      .threads = e->threads,
+                                                      .zip_level = d->zip_level},
                                  &w);
         if (rc) goto out;
     }

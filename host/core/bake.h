@@ -33,6 +33,7 @@ typedef struct fb_bake_desc {
      * coverage channel A; op layers are left out). NULL: the only layer, or "over" when there are several. */
     const char *preview_layer;
     int strip_rows; /* 0: automatic */
+    int zip_level;  /* the deflate level of ZIP chunks; 0: EXRIO_ZIP_LEVEL */
     /* Only the pixels [x, x + w) x [y, y + h) of the image, as in the full bake, into a file whose
      * data window is that region (fractalbake merge joins such files). w == 0: the whole image. */
     int region[4];

@@ -132,16 +132,9 @@ static void set_error(exrio_writer *w, fb_result rc, const char *msg)
     snprintf(w->error_msg, sizeof w->error_msg, "%s", msg);
 }
 
-static int g_zip_level; /* --zip-level; 0: EXRIO_ZIP_LEVEL */
-
-void exrio_set_zip_level(int level)
+uint64_t exrio_zip_state_bytes(int level)
 {
-    g_zip_level = level;
-}
-
-uint64_t exrio_zip_state_bytes(void)
-{
-    int level = g_zip_level > 0 ? g_zip_level : EXRIO_ZIP_LEVEL;
+    if (level <= 0) level = EXRIO_ZIP_LEVEL;
     return level <= 1 ? (uint64_t)200 << 10 : level <= 9 ? (uint64_t)656 << 10 : (uint64_t)8800 << 10;
 }
 
@@ -525,8 +518,7 @@ fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
 
     int nbatches = (d->height + w->batch_rows - 1) / w->batch_rows;
     w->order = calloc((size_t)nbatches + 1, sizeof *w->order);
-    int level = d->zip_level > 0 ? d->zip_level : g_zip_level;
-    w->zip_level = level > 0 && level <= EXRIO_ZIP_LEVEL_MAX ? level : EXRIO_ZIP_LEVEL;
+    w->zip_level = d->zip_level > 0 && d->zip_level <= EXRIO_ZIP_LEVEL_MAX ? d->zip_level : EXRIO_ZIP_LEVEL;
     w->nthreads = d->threads > 0 ? d->threads : fb_cpu_count();
     w->max_in_flight = 2 * w->nthreads + 2;
     w->threads = calloc((size_t)w->nthreads, sizeof *w->threads);

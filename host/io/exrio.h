@@ -68,12 +68,9 @@ typedef struct exrio_writer_desc {
 #define EXRIO_ZIP_LEVEL     1
 #define EXRIO_ZIP_LEVEL_MAX 12
 
-/* The level of every writer whose desc gives none, for the whole process (--zip-level); 0: the default. */
-void exrio_set_zip_level(int level);
-
-/* The memory of one compression thread's deflate state at the process's level (measured with
+/* The memory of one compression thread's deflate state at `level` (0: EXRIO_ZIP_LEVEL; measured with
  * libdeflate 1.14: 0.2 MiB at level 1, 0.65 MiB at 2 to 9, 8.6 MiB at 10 to 12). */
-uint64_t exrio_zip_state_bytes(void);
+uint64_t exrio_zip_state_bytes(int level);
 
 typedef struct exrio_writer exrio_writer;
 
