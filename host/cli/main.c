@@ -398,8 +398,6 @@ static fb_result bake_scene(const char *command, fb_scene *scene, const common_o
         if (!chaos) return fb_fail(FB_ERR_USAGE, "--points-part: the scene has no chaos-game layer to split by points");
         if (o->region[2] > 0)
             return fb_fail(FB_ERR_USAGE, "--points-part: not with --region (split a bake by pixels or by points)");
-        scene->points_part[0] = o->points_part[0];
-        scene->points_part[1] = o->points_part[1];
     }
     /* render --task K/N: the plan's share K, as a scene of its layers only */
     fb_scene *sub = NULL;
@@ -445,7 +443,7 @@ static fb_result bake_scene(const char *command, fb_scene *scene, const common_o
         }
         fb_plan_describe(scene, t, share, sizeof share);
         if (t->band) ot.region[0] = 0, ot.region[1] = t->y0, ot.region[2] = scene->width, ot.region[3] = t->y1 - t->y0;
-        if (t->points) sub->points_part[0] = t->part, sub->points_part[1] = t->nparts;
+        if (t->points) ot.points_part[0] = t->part, ot.points_part[1] = t->nparts;
         snprintf(task_attr, sizeof task_attr, "%d/%d", o->task[0], o->task[1]);
         task_attrs[0] = (exrio_attr){"fractalbake/task", task_attr};
         task_attrs[1] = (exrio_attr){"fractalbake/plan", plan_json};
@@ -473,6 +471,7 @@ static fb_result bake_scene(const char *command, fb_scene *scene, const common_o
                                  .preview_layer = o->preview_layer,
                                  .strip_rows = o->strip_rows,
                                  .zip_level = o->zip_level,
+                                 .points_part = {o->points_part[0], o->points_part[1]},
                                  .region = {o->region[0], o->region[1], o->region[2], o->region[3]},
                                  .progress = !o->quiet,
                                  .plan = &plan,

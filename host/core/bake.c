@@ -607,7 +607,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
 
     for (int i = 0; i < s->nlayers && !rc; i++) {
         fb_log_context("layer %s", s->layers[i].name);
-        rc = fb_gen_init(&runs[i].gen, s, &s->layers[i]);
+        rc = fb_gen_init_part(&runs[i].gen, s, &s->layers[i], d->points_part);
         runs[i].gen.scalar = e->scalar;
         runs[i].e = *e;
         if (e->per_layer) /* auto on a CPU device: each layer where it runs faster (engine.h) */
@@ -674,8 +674,8 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         /* a points part: which, and each chaos-game layer's points outside the frame (merge needs
          * them for the density) */
         char part[32], outside[FB_MAX_LAYERS * 90] = "";
-        if (s->points_part[1] > 0) {
-            snprintf(part, sizeof part, "%d/%d", s->points_part[0], s->points_part[1]);
+        if (d->points_part[1] > 0) {
+            snprintf(part, sizeof part, "%d/%d", d->points_part[0], d->points_part[1]);
             for (int i = 0; i < s->nlayers; i++)
                 if (runs[i].gen.points_split)
                     snprintf(outside + strlen(outside), sizeof outside - strlen(outside), "%s%s=%llu",

@@ -34,6 +34,9 @@ typedef struct fb_bake_desc {
     const char *preview_layer;
     int strip_rows; /* 0: automatic */
     int zip_level;  /* the deflate level of ZIP chunks; 0: EXRIO_ZIP_LEVEL */
+    /* The points part {K, N} (1 <= K <= N) of every chaos game to compute (render --points-part
+     * K/N), the other layers whole; N == 0: the whole games. */
+    int points_part[2];
     /* Only the pixels [x, x + w) x [y, y + h) of the image, as in the full bake, into a file whose
      * data window is that region (fractalbake merge joins such files). w == 0: the whole image. */
     int region[4];

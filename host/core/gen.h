@@ -20,6 +20,9 @@ struct fb_engine;
 struct fb_gen {
     const fb_scene *scene;
     const fb_layer *layer;
+    /* A run option, not part of the scene: the points part {K, N} (1 <= K <= N) of a chaos game this
+     * run computes (render --points-part K/N; fb_gen_init_part); N == 0: the whole game. */
+    int points_part[2];
     int nchannels;
     int preview_channel; /* the float channel a grey preview shows */
     int preview_rgb;     /* if >= 0: the first of three float channels R, G, B shown in colour instead (-1) */
@@ -172,7 +175,7 @@ typedef struct fb_gen_class {
     struct {
         double max_abs, fail_percent;
     } tolerance;
-    const fb_tone_ops *tone;     /* NULL: tonemap does not apply */
+    const fb_tone_ops *tone; /* NULL: tonemap does not apply */
     /* Its benchmarks (cli/bench.c runs them; NULL: none). */
     fb_result (*bench)(struct fb_bench *b);
 } fb_gen_class;
@@ -188,6 +191,9 @@ void fb_gen_names(char *out, size_t size);
 
 /* Sets up the generator of `layer`. */
 fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer);
+
+/* The same for points part {K, N} of a chaos game (N == 0: the whole game, as fb_gen_init). */
+fb_result fb_gen_init_part(fb_gen *g, const fb_scene *scene, const fb_layer *layer, const int points_part[2]);
 
 /* The kernel's planes (nkernel, or the channels), the plane of stored channel c, and whether plane k
  * is stored. */

@@ -23,7 +23,6 @@
 
 #define FB_PLAN_MAX_TASKS 1024
 
-
 typedef struct fb_task {
     bool band;        /* rows [y0, y1) of the banded layers; else whole-image layers and points parts */
     int y0, y1;       /* band: the rows */

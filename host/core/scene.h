@@ -59,9 +59,6 @@ typedef struct fb_scene {
     fb_layer layers[FB_MAX_LAYERS];
     int order[FB_MAX_LAYERS]; /* every layer after the layers it refers to (op layers last, in dependency order) */
     char *json;               /* the scene with every default filled in, canonical (sorted keys); owned */
-    /* Not part of the scene text: a points part {K, N} (1 <= K <= N) of a bake split by chaos-game
-     * points (render --points-part K/N); N == 0: the whole game. */
-    int points_part[2];
 } fb_scene;
 
 /* Parses and validates JSON text. `origin` names the file for messages (NULL: the command line,

@@ -857,9 +857,9 @@ static fb_result ifs_init(fb_gen *g)
     /* A points part K of N runs the K-th share of the chains, cut at multiples of 64 (a workgroup):
      * the parts' histograms add up to the whole game's exactly. */
     st->cr0 = 0, st->cr1 = p->chains;
-    st->part = s->points_part[1] > 0;
+    st->part = g->points_part[1] > 0;
     if (st->part) {
-        uint64_t groups = (p->chains + 63) / 64, k = (uint64_t)s->points_part[0], parts = (uint64_t)s->points_part[1];
+        uint64_t groups = (p->chains + 63) / 64, k = (uint64_t)g->points_part[0], parts = (uint64_t)g->points_part[1];
         uint64_t c0 = groups * (k - 1) / parts * 64, c1 = groups * k / parts * 64;
         st->cr0 = (uint32_t)(c0 < p->chains ? c0 : p->chains);
         st->cr1 = (uint32_t)(c1 < p->chains ? c1 : p->chains);
