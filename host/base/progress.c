@@ -2,10 +2,30 @@
 
 #include "fb.h"
 
+#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
-#include <unistd.h>
+
+/* Where progress goes: set once by the program (the command line) before any work, like the log's
+ * sink; none: progress is computed and shown nowhere. */
+static fb_progress_sink g_sink;
+
+void fb_progress_set_sink(const fb_progress_sink *sink)
+{
+    g_sink = sink ? *sink : (fb_progress_sink){0};
+}
+
+static void emit(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+static void emit(const char *fmt, ...)
+{
+    char text[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    if (g_sink.write) g_sink.write(text, g_sink.user);
+}
 
 void fb_format_rate(double r, const char *unit, char *out, int size)
 {
@@ -40,12 +60,11 @@ static void draw(fb_progress *p, bool final)
     pthread_mutex_unlock(&p->mu);
     if (!p->tty) {
         if (p->steps)
-            fprintf(stderr, "fractalbake: %s: %llu of %llu%s%s, %.0f s so far, about %s left\n", p->label,
-                    (unsigned long long)done, (unsigned long long)total, detail[0] ? ": " : "", detail, el, left);
+            emit("fractalbake: %s: %llu of %llu%s%s, %.0f s so far, about %s left\n", p->label,
+                 (unsigned long long)done, (unsigned long long)total, detail[0] ? ": " : "", detail, el, left);
         else
-            fprintf(stderr, "fractalbake: %s: %.1f%% (%.4g of %.4g %s, %s, %.0f s so far, about %s left)\n", p->label,
-                    100 * f, (double)done * shown, (double)total * shown, p->unit, rate, el, left);
-        fflush(stderr);
+            emit("fractalbake: %s: %.1f%% (%.4g of %.4g %s, %s, %.0f s so far, about %s left)\n", p->label, 100 * f,
+                 (double)done * shown, (double)total * shown, p->unit, rate, el, left);
         return;
     }
     (void) final;
@@ -54,11 +73,10 @@ static void draw(fb_progress *p, bool final)
     for (int i = 0; i < w; i++) bar[i] = i < fill ? '#' : '.';
     bar[w] = 0;
     if (p->steps)
-        fprintf(stderr, "\r%s [%s] %llu of %llu  %s left  %-40.40s", p->label, bar, (unsigned long long)done,
-                (unsigned long long)total, left, detail);
+        emit("\r%s [%s] %llu of %llu  %s left  %-40.40s", p->label, bar, (unsigned long long)done,
+             (unsigned long long)total, left, detail);
     else
-        fprintf(stderr, "\r%s [%s] %3d%%  %s  %s left   ", p->label, bar, (int)(100 * f), rate, left);
-    fflush(stderr);
+        emit("\r%s [%s] %3d%%  %s  %s left   ", p->label, bar, (int)(100 * f), rate, left);
     p->drawn = true;
 }
 
@@ -86,14 +104,14 @@ static void *ticker(void *arg)
 static void start(fb_progress *p, bool enabled, const char *label, const char *unit, bool steps)
 {
     memset(p, 0, sizeof *p);
-    p->tty = isatty(STDERR_FILENO);
-    p->enabled = enabled;
+    p->tty = g_sink.terminal;
+    p->enabled = enabled && g_sink.write;
     p->steps = steps;
     p->start = fb_now();
     p->label = label;
     p->unit = unit;
     pthread_mutex_init(&p->mu, NULL);
-    if (enabled) p->running = pthread_create(&p->thread, NULL, ticker, p) == 0;
+    if (p->enabled) p->running = pthread_create(&p->thread, NULL, ticker, p) == 0;
 }
 
 void fb_progress_init(fb_progress *p, bool enabled, const char *label, const char *unit)
@@ -137,8 +155,7 @@ void fb_progress_finish(fb_progress *p)
         p->running = false;
     }
     if (p->drawn && p->tty) {
-        fprintf(stderr, "\r%*s\r", 110, "");
-        fflush(stderr);
+        emit("\r%*s\r", 110, "");
     }
     p->drawn = false;
     pthread_mutex_destroy(&p->mu);

@@ -1,7 +1,9 @@
-/* Progress on stderr. On a terminal, a bar redrawn five times a second by a thread of its own once
- * the work has lasted half a second, with the rate and the time left; for a log, a line after 10 s
- * and then one a minute, so that short runs and logs stay clean and long ones are never silent.
- * Workers report from any thread (fb_progress_add); only the progress thread writes. */
+/* Progress, through a sink the program installs (the command line's writes to stderr). On a
+ * terminal, a bar redrawn five times a second by a thread of its own once the work has lasted half a
+ * second, with the rate and the time left; for a log, a line after 10 s and then one a minute, so that
+ * short runs and logs stay clean and long ones are never silent. Workers report from any thread
+ * (fb_progress_add); only the progress thread writes. Library code never prints: without a sink,
+ * nothing is shown. */
 #ifndef FB_PROGRESS_H
 #define FB_PROGRESS_H
 
@@ -24,6 +26,15 @@ typedef struct fb_progress {
     pthread_t thread;
     pthread_mutex_t mu; /* guards detail */
 } fb_progress;
+
+typedef struct fb_progress_sink {
+    bool terminal;                               /* redraw a bar in place ("\r"), else write log lines */
+    void (*write)(const char *text, void *user); /* shows text as it is */
+    void *user;
+} fb_progress_sink;
+
+/* Installs the sink (copied; NULL: none). Call it before any progress starts. */
+void fb_progress_set_sink(const fb_progress_sink *sink);
 
 /* Starts the progress of `total` units of `unit` (pixels, points): nothing at all unless enabled. */
 void fb_progress_init(fb_progress *p, bool enabled, const char *label, const char *unit);

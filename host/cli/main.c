@@ -13,6 +13,7 @@
 #include "merge.h"
 #include "output.h"
 #include "plan.h"
+#include "progress.h"
 #include "scene.h"
 #include "vkc.h"
 #include "jsonout.h"
@@ -53,6 +54,14 @@ static void sink(int level, const char *msg, void *user)
     } else if (level == FB_LOG_WARN && !g_quiet_warnings) {
         fprintf(stderr, "fractalbake: warning: %s\n", msg);
     }
+}
+
+/* Progress lines and bars (progress.h) go to stderr. */
+static void progress_sink(const char *text, void *user)
+{
+    (void)user;
+    fputs(text, stderr);
+    fflush(stderr);
 }
 
 static int finish(fb_result rc)
@@ -1248,6 +1257,7 @@ static char **normalise_args(int *argc, char **argv)
 int main(int argc, char **argv)
 {
     fb_log_set_sink(sink, NULL);
+    fb_progress_set_sink(&(fb_progress_sink){.terminal = isatty(STDERR_FILENO), .write = progress_sink});
     fb_env_read(&g_env);
     argv = normalise_args(&argc, argv);
     install_signal_handlers();
