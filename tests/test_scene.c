@@ -12,6 +12,7 @@
 #include "gen_op.h"
 #include "gen_terrain.h"
 #include "jsonout.h"
+#include "flags.h"
 #include "scene.h"
 
 #include "testhelp.h"

@@ -14,6 +14,7 @@
 #include "output.h"
 #include "plan.h"
 #include "progress.h"
+#include "flags.h"
 #include "scene.h"
 #include "vkc.h"
 #include "jsonout.h"

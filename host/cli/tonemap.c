@@ -10,6 +10,7 @@
 #include "exrio.h"
 #include "output.h"
 #include "gen.h"
+#include "flags.h"
 #include "scene.h"
 
 #include <jansson.h>

@@ -6,6 +6,7 @@
 
 const fb_gen_class *fb_gen_find(const char *name)
 {
+    if (!name) return NULL;
     for (int i = 0; fb_gen_list[i]; i++)
         if (!strcmp(fb_gen_list[i]->name, name)) return fb_gen_list[i];
     return NULL;

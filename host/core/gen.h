@@ -183,7 +183,7 @@ typedef struct fb_gen_class {
 /* Every generator, NULL-terminated, in the order the help lists them (host/gen/list.c). */
 extern const fb_gen_class *const fb_gen_list[];
 
-/* The generator named `name`, or NULL. */
+/* The generator named `name`, or NULL (also for a NULL name). */
 const fb_gen_class *fb_gen_find(const char *name);
 
 /* "\"fbm\", \"julia\", ...": the names, for messages. */

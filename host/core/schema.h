@@ -90,6 +90,9 @@ fb_result fb_schema_error(const fb_vctx *v, const char *path, const char *fmt, .
 /* "int", "number", "maps"...: a key's type, for listings (fractalbake generators). */
 const char *fb_ktype_name(const fb_keyspec *k);
 
+/* The key named `key` of a table, or NULL. */
+const fb_keyspec *fb_key_find(const fb_keyspec *keys, int n, const char *key);
+
 /* The command-line flag of key k, without the dashes ("layer" for "name"). */
 const char *fb_key_flag(const fb_keyspec *k);
 

@@ -1,0 +1,520 @@
+/*
+ * The schema engine: a generator's key table (schema.h) checks the JSON of its layer, fills in the
+ * defaults and names the file and line, the --set or the flag of a bad value. It knows no generator
+ * by name; scene.c drives it for the scene and each layer.
+ */
+#include "schema.h"
+
+#include "gen.h"
+#include "scene.h"
+#include "textin.h"
+
+#include <jansson.h>
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <ctype.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+const fb_keyspec *fb_key_find(const fb_keyspec *keys, int n, const char *key)
+{
+    for (int i = 0; i < n; i++)
+        if (!strcmp(keys[i].key, key)) return &keys[i];
+    return NULL;
+}
+
+/* The flag of a key: its own, --layer for the layer's name, else --KEY. */
+static const char *flag_of(const fb_keyspec *k)
+{
+    return k->flag ? k->flag : !strcmp(k->key, "name") ? "layer" : k->key;
+}
+
+const char *fb_key_flag(const fb_keyspec *k)
+{
+    return flag_of(k);
+}
+
+const char *fb_ktype_name(const fb_keyspec *k)
+{
+    static const char *const names[] = {
+        [FB_K_INT] = "int",       [FB_K_NUM] = "number",      [FB_K_BOOL] = "bool",       [FB_K_ENUM] = "enum",
+        [FB_K_NAME] = "name",     [FB_K_VEC2] = "vec2",       [FB_K_SIZE] = "size",       [FB_K_LAYERS] = "layers",
+        [FB_K_TYPE] = "type",     [FB_K_NUMLIST] = "numbers", [FB_K_STOPS] = "stops",     [FB_K_STRING] = "string",
+        [FB_K_OUTPUT] = "output", [FB_K_BOUNDS] = "bounds",   [FB_K_FRACS] = "fractions", [FB_K_NAMES] = "names",
+        [FB_K_RULES] = "rules",   [FB_K_REF] = "ref",         [FB_K_REFS] = "refs",       [FB_K_CUSTOM] = "custom",
+    };
+    return k->type >= 0 && k->type <= FB_K_CUSTOM && names[k->type] ? names[k->type] : "?";
+}
+
+/* ---- locating a key path in the source text ------------------------------------------------- */
+
+typedef struct cursor {
+    const char *p;
+    int line;
+} cursor;
+
+static void skip_ws(cursor *c)
+{
+    while (*c->p == ' ' || *c->p == '\t' || *c->p == '\r' || *c->p == '\n') {
+        if (*c->p == '\n') c->line++;
+        c->p++;
+    }
+}
+
+static bool skip_string(cursor *c)
+{
+    if (*c->p != '"') return false;
+    for (c->p++; *c->p && *c->p != '"'; c->p++)
+        if (*c->p == '\\' && c->p[1]) c->p++;
+    if (*c->p != '"') return false;
+    c->p++;
+    return true;
+}
+
+static bool skip_value(cursor *c)
+{
+    skip_ws(c);
+    char open = *c->p;
+    if (open == '"') return skip_string(c);
+    if (open == '{' || open == '[') {
+        char close = open == '{' ? '}' : ']';
+        c->p++;
+        skip_ws(c);
+        if (*c->p == close) {
+            c->p++;
+            return true;
+        }
+        for (;;) {
+            if (open == '{') {
+                skip_ws(c);
+                if (!skip_string(c)) return false;
+                skip_ws(c);
+                if (*c->p++ != ':') return false;
+            }
+            if (!skip_value(c)) return false;
+            skip_ws(c);
+            if (*c->p == ',') {
+                c->p++;
+                continue;
+            }
+            if (*c->p == close) {
+                c->p++;
+                return true;
+            }
+            return false;
+        }
+    }
+    while (*c->p && !strchr(",]} \t\r\n", *c->p)) c->p++;
+    return true;
+}
+
+/* The line of the element at `path` ("layers[0].octaves") in JSON text, or of the deepest enclosing
+ * element that exists. The text has already been parsed successfully by jansson. */
+static int locate(cursor *c, const char *path)
+{
+    skip_ws(c);
+    if (*path == '.') path++;
+    if (!*path) return c->line;
+    int here = c->line;
+    if (*path == '[') {
+        long idx = strtol(path + 1, NULL, 10);
+        const char *rest = strchr(path, ']');
+        if (!rest || *c->p != '[') return here;
+        c->p++;
+        for (long i = 0; i < idx; i++) {
+            if (!skip_value(c)) return here;
+            skip_ws(c);
+            if (*c->p++ != ',') return here;
+        }
+        return locate(c, rest + 1);
+    }
+    size_t klen = strcspn(path, ".[");
+    if (*c->p != '{') return here;
+    c->p++;
+    for (;;) {
+        skip_ws(c);
+        if (*c->p != '"') return here;
+        int key_line = c->line;
+        const char *k = c->p + 1;
+        if (!skip_string(c)) return here;
+        bool match = (size_t)(c->p - 1 - k) == klen && !strncmp(k, path, klen);
+        skip_ws(c);
+        if (*c->p++ != ':') return here;
+        if (match) return path[klen] ? locate(c, path + klen) : key_line;
+        if (!skip_value(c)) return here;
+        skip_ws(c);
+        if (*c->p++ != ',') return here;
+    }
+}
+
+/* ---- validation ----------------------------------------------------------------------------- */
+
+/* Logs "FILE:LINE: PATH: message" (file) or "--KEY: message" (command line) and returns FB_ERR_INPUT. */
+fb_result fb_schema_error(const fb_vctx *v, const char *path, const char *fmt, ...)
+{
+    char msg[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    for (int i = v->nsets - 1; i >= 0; i--) { /* a value given by --set is reported as that --set */
+        size_t n = strlen(v->set_paths[i]);
+        if (!strncmp(path, v->set_paths[i], n) && (!path[n] || path[n] == '.' || path[n] == '['))
+            return fb_fail(FB_ERR_USAGE, "--set %s: %s%s%s", v->sets[i], path[n] ? path + n + 1 : "",
+                           path[n] ? ": " : "", msg);
+    }
+    if (v->origin) {
+        cursor c = {v->text, 1};
+        int line = locate(&c, path);
+        return fb_fail(FB_ERR_INPUT, "%s:%d: %s: %s", v->origin, line, path[0] ? path : "(top level)", msg);
+    }
+    /* The command line: the flag of the layer's (or the scene's) key, and what is inside a value
+     * given as one JSON flag (an L-system condensation set) */
+    const char *key = path;
+    if (!strncmp(key, "layers[", 7) && strchr(key, ']')) key = strchr(key, ']') + 1 + (strchr(key, ']')[1] == '.');
+    char name[64];
+    size_t len = strcspn(key, ".[");
+    snprintf(name, sizeof name, "%.*s", (int)(len < sizeof name ? len : sizeof name - 1), key);
+    const fb_keyspec *k = NULL;
+    if (v->cls)
+        for (int i = 0; i < v->cls->nkeys && !k; i++)
+            if (!strcmp(v->cls->keys[i].key, name)) k = &v->cls->keys[i];
+    const char *flag = k ? flag_of(k) : name;
+    if (key[len] == '.') return fb_fail(FB_ERR_USAGE, "--%s: %s: %s", flag, key + len + 1, msg);
+    /* an element of a list (--maps[1]); a repeatable flag's element is that flag (--rule) */
+    const char *index = key[len] == '[' && !(k && k->type == FB_K_RULES) ? key + len : "";
+    return fb_fail(FB_ERR_USAGE, "--%s%s: %s", flag, index, msg);
+}
+
+/* A short rendering of a JSON value for messages. */
+void fb_json_show(const json_t *j, char *buf, size_t n)
+{
+    char *s = json_dumps(j, JSON_ENCODE_ANY | JSON_COMPACT);
+    snprintf(buf, n, "%s", s ? s : "?");
+    if (strlen(buf) > 40) strcpy(buf + 37, "...");
+    free(s);
+}
+
+bool fb_enum_index(const char *enums, const char *s, int *idx)
+{
+    size_t n = strlen(s);
+    int i = 0;
+    for (const char *p = enums; *p; i++) {
+        size_t len = strcspn(p, "|");
+        if (len == n && !strncmp(p, s, n)) {
+            *idx = i;
+            return true;
+        }
+        p += len + (p[len] == '|');
+    }
+    return false;
+}
+
+static fb_result check_number(const fb_vctx *v, const char *path, const fb_keyspec *k, const json_t *j, bool integer)
+{
+    char shown[64];
+    fb_json_show(j, shown, sizeof shown);
+    if (integer ? !json_is_integer(j) : !json_is_number(j))
+        return fb_schema_error(v, path, "expected %s, found %s", integer ? "an integer" : "a number", shown);
+    double x = json_number_value(j);
+    if (!isfinite(x)) return fb_schema_error(v, path, "expected a finite number, found %s", shown);
+    bool in_range = (k->lo_open ? x > k->lo : x >= k->lo) && x <= k->hi;
+    if (!in_range) {
+        if (integer)
+            return fb_schema_error(v, path, "expected an integer in %.0f..%.0f, found %s", k->lo, k->hi, shown);
+        return fb_schema_error(v, path, "expected a number in %s%g, %g], found %s", k->lo_open ? "(" : "[", k->lo,
+                               k->hi, shown);
+    }
+    return FB_OK;
+}
+
+fb_result fb_schema_check_value(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j)
+{
+    char shown[64];
+    fb_json_show(j, shown, sizeof shown);
+    int idx;
+    switch (k->type) {
+    case FB_K_INT:
+        return check_number(v, path, k, j, true);
+    case FB_K_NUM:
+        return check_number(v, path, k, j, false);
+    case FB_K_BOOL:
+        if (!json_is_boolean(j)) return fb_schema_error(v, path, "expected true or false, found %s", shown);
+        return FB_OK;
+    case FB_K_ENUM:
+        if (!json_is_string(j) || !fb_enum_index(k->enums, json_string_value(j), &idx))
+            return fb_schema_error(v, path, "expected one of %s, found %s", k->enums, shown);
+        return FB_OK;
+    case FB_K_TYPE:
+        if (!json_is_string(j))
+            return fb_schema_error(v, path, "expected a generator name such as \"fbm\", found %s", shown);
+        return FB_OK;
+    case FB_K_NAME: {
+        const char *s = json_is_string(j) ? json_string_value(j) : NULL;
+        bool ok = s && *s && strlen(s) < 64;
+        for (const char *p = s; ok && *p; p++)
+            ok = (*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') || (*p >= '0' && *p <= '9') || *p == '_' ||
+                 *p == '-';
+        if (!ok)
+            return fb_schema_error(v, path, "expected a name of 1 to 63 letters, digits, '_' or '-', found %s", shown);
+        return FB_OK;
+    }
+    case FB_K_VEC2:
+    case FB_K_SIZE: {
+        bool isz = k->type == FB_K_SIZE;
+        if (!json_is_array(j) || json_array_size(j) != 2)
+            return fb_schema_error(v, path, "expected %s, found %s", isz ? "[width, height]" : "[x, y]", shown);
+        for (size_t i = 0; i < 2; i++) {
+            const json_t *e = json_array_get(j, i);
+            bool good = isz ? json_is_integer(e) : json_is_number(e);
+            double x = good ? json_number_value(e) : 0;
+            if (!good || !isfinite(x) || x < k->lo || x > k->hi)
+                return fb_schema_error(v, path, "expected %s with each %s in %g..%g, found %s",
+                                       isz ? "[width, height]" : "[x, y]", isz ? "side an integer" : "component", k->lo,
+                                       k->hi, shown);
+        }
+        if (isz) {
+            unsigned long long px =
+                (unsigned long long)json_integer_value(json_array_get(j, 0)) * json_integer_value(json_array_get(j, 1));
+            if (px > FB_MAX_PIXELS)
+                return fb_schema_error(v, path, "%s is %llu pixels; at most %llu are supported", shown, px,
+                                       FB_MAX_PIXELS);
+        }
+        return FB_OK;
+    }
+    case FB_K_NUMLIST: {
+        bool good = json_is_array(j) && (int)json_array_size(j) == k->count;
+        for (size_t i = 0; good && i < json_array_size(j); i++) {
+            const json_t *e = json_array_get(j, i);
+            double x = json_is_number(e) ? json_number_value(e) : NAN;
+            good = isfinite(x) && x >= k->lo && x <= k->hi;
+        }
+        if (!good)
+            return fb_schema_error(v, path, "expected %d numbers in %g..%g, found %s", k->count, k->lo, k->hi, shown);
+        return FB_OK;
+    }
+    case FB_K_STOPS: {
+        size_t n = json_is_array(j) ? json_array_size(j) : 0;
+        bool good = n >= 2 && n <= FB_PALETTE_MAX_STOPS;
+        double prev = -1;
+        for (size_t i = 0; good && i < n; i++) {
+            const json_t *e = json_array_get(j, i);
+            good = json_is_array(e) && json_array_size(e) == 4;
+            for (size_t c = 0; good && c < 4; c++) {
+                const json_t *x = json_array_get(e, c);
+                double d = json_is_number(x) ? json_number_value(x) : NAN;
+                good = isfinite(d) && d >= 0 && (c > 0 ? d <= k->hi : d <= 1.0);
+            }
+            if (good) {
+                double t = json_number_value(json_array_get(e, 0));
+                good = t > prev && (i > 0 || t == 0.0) && (i + 1 < n || t == 1.0);
+                prev = t;
+            }
+        }
+        if (!good)
+            return fb_schema_error(
+                v, path,
+                "expected 2 to %d stops [t, r, g, b] with t rising from 0 to exactly 1 and colours >= 0, "
+                "found %s",
+                FB_PALETTE_MAX_STOPS, shown);
+        return FB_OK;
+    }
+    case FB_K_REFS:
+        if (!json_is_array(j) || json_array_size(j) < 1 || json_array_size(j) > (size_t)k->count)
+            return fb_schema_error(v, path, "expected a list of 1 to %d channels or numbers, found %s", k->count,
+                                   shown);
+        for (size_t i = 0; i < json_array_size(j); i++) {
+            char sub[300];
+            snprintf(sub, sizeof sub, "%s[%zu]", path, i);
+            fb_result rc = fb_schema_check_value(v, sub, &(fb_keyspec){.type = FB_K_REF}, json_array_get(j, i));
+            if (rc) return rc;
+        }
+        return FB_OK;
+    case FB_K_REF: {
+        if (json_is_number(j)) {
+            if (!isfinite(json_number_value(j)))
+                return fb_schema_error(v, path, "expected a finite number, found %s", shown);
+            return FB_OK;
+        }
+        const char *r = json_is_string(j) ? json_string_value(j) : NULL;
+        bool ok = r && *r && strlen(r) < 128 && r[0] != '.' && r[strlen(r) - 1] != '.';
+        if (!ok) return fb_schema_error(v, path, "expected \"layer.channel\", \"layer\" or a number, found %s", shown);
+        return FB_OK;
+    }
+    case FB_K_STRING:
+    case FB_K_OUTPUT:
+        if (!json_is_string(j) || !*json_string_value(j) || strlen(json_string_value(j)) >= 4096)
+            return fb_schema_error(v, path, "expected a non-empty string, found %s", shown);
+        return FB_OK;
+    case FB_K_BOUNDS: {
+        if (json_is_string(j) && !strcmp(json_string_value(j), "auto")) return FB_OK;
+        bool good = json_is_array(j) && json_array_size(j) == 4;
+        double b[4] = {0};
+        for (size_t i = 0; good && i < 4; i++) {
+            const json_t *e = json_array_get(j, i);
+            b[i] = json_is_number(e) ? json_number_value(e) : NAN;
+            good = isfinite(b[i]) && b[i] >= k->lo && b[i] <= k->hi;
+        }
+        if (!good || !(b[1] > b[0] && b[3] > b[2]))
+            return fb_schema_error(v, path,
+                                   "expected \"auto\" or [xmin, xmax, ymin, ymax] with xmin < xmax and ymin < ymax, "
+                                   "found %s",
+                                   shown);
+        return FB_OK;
+    }
+    case FB_K_FRACS: {
+        size_t n = json_is_array(j) ? json_array_size(j) : 0;
+        bool good = n >= 1 && n <= (size_t)k->count;
+        for (size_t i = 0; good && i < n; i++) {
+            const json_t *e = json_array_get(j, i);
+            double x = json_is_number(e) ? json_number_value(e) : NAN;
+            good = isfinite(x) && x >= k->lo && x <= k->hi;
+        }
+        if (!good)
+            return fb_schema_error(v, path, "expected 1 to %d numbers in %g..%g, found %s", k->count, k->lo, k->hi,
+                                   shown);
+        return FB_OK;
+    }
+    case FB_K_NAMES: {
+        size_t n = json_is_array(j) ? json_array_size(j) : 0;
+        bool good = n >= 1 && n <= 32;
+        for (size_t i = 0; good && i < n; i++) {
+            const json_t *e = json_array_get(j, i);
+            good = json_is_string(e) && fb_enum_index(k->enums, json_string_value(e), &idx);
+            for (size_t m = 0; good && m < i; m++)
+                good = strcmp(json_string_value(json_array_get(j, m)), json_string_value(e));
+        }
+        if (!good)
+            return fb_schema_error(v, path, "expected a list of distinct names from %s, found %s", k->enums, shown);
+        return FB_OK;
+    }
+    case FB_K_RULES: {
+        size_t n = json_is_array(j) ? json_array_size(j) : 0;
+        if (!json_is_array(j) || n > (size_t)k->count)
+            return fb_schema_error(v, path, "expected a list of at most %d rules \"X=successor\", found %s", k->count,
+                                   shown);
+        for (size_t i = 0; i < n; i++) {
+            const json_t *e = json_array_get(j, i);
+            char sub[256], msg[256];
+            snprintf(sub, sizeof sub, "%s[%zu]", path, i);
+            if (!json_is_string(e)) {
+                fb_json_show(e, shown, sizeof shown);
+                return fb_schema_error(v, sub, "expected a rule \"X=successor\", found %s", shown);
+            }
+            if (k->check && !k->check(json_string_value(e), msg, sizeof msg)) return fb_schema_error(v, sub, "%s", msg);
+        }
+        return FB_OK;
+    }
+    case FB_K_CUSTOM:
+        if (!ALWAYS(k->value && k->value->check))
+            return fb_fail(FB_ERR_INTERNAL, "key %s: a value type without a check", k->key);
+        return k->value->check(v, path, k, j);
+    case FB_K_LAYERS:
+        if (!json_is_array(j) || json_array_size(j) < 1 || json_array_size(j) > FB_MAX_LAYERS)
+            return fb_schema_error(v, path, "expected an array of 1 to %d layers, found %s", FB_MAX_LAYERS, shown);
+        return FB_OK;
+    }
+    return FB_OK;
+}
+
+/* Checks every key of `obj` against `keys` and fills in the defaults. */
+fb_result fb_schema_check(const fb_vctx *v, const char *path, json_t *obj, const fb_keyspec *keys, int n,
+                          const char *what)
+{
+    const char *key;
+    json_t *val;
+    char sub[256];
+    json_object_foreach(obj, key, val)
+    {
+        snprintf(sub, sizeof sub, "%s%s%s", path, path[0] ? "." : "", key);
+        const fb_keyspec *k = fb_key_find(keys, n, key);
+        if (!k) {
+            char known[512] = "", hint[96] = "";
+            const char *names[96];
+            for (int i = 0; i < n; i++) {
+                snprintf(known + strlen(known), sizeof known - strlen(known), "%s%s", i ? ", " : "", keys[i].key);
+                if (i < 96) names[i] = keys[i].key;
+            }
+            const char *near = fb_closest(key, names, n < 96 ? n : 96);
+            if (near) snprintf(hint, sizeof hint, "did you mean \"%s\"? ", near);
+            if (!v->origin && !strchr(path, '.')) /* a flag (not a key inside a flag's JSON value) */
+                return fb_fail(FB_ERR_USAGE, "--%s: unknown flag for %s", key, what);
+            return fb_schema_error(v, sub, "unknown key for %s; %s(known keys: %s)", what, hint, known);
+        }
+        fb_result rc = fb_schema_check_value(v, sub, k, val);
+        if (rc) return rc;
+    }
+    for (int i = 0; i < n; i++) {
+        if (!keys[i].def || json_object_get(obj, keys[i].key)) continue;
+        bool given = false; /* a key that stands for this one (gain for hurst) */
+        for (const char *u = keys[i].unless; u && *u && !given; u += strcspn(u, "|"), u += *u == '|') {
+            char other[64];
+            snprintf(other, sizeof other, "%.*s", (int)strcspn(u, "|"), u);
+            given = json_object_get(obj, other) != NULL;
+        }
+        if (given) continue;
+        json_t *d = json_loads(keys[i].def, JSON_DECODE_ANY, NULL);
+        if (!d || json_object_set_new(obj, keys[i].key, d) != 0) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    }
+    return FB_OK;
+}
+
+double fb_json_num(const json_t *obj, const char *key)
+{
+    return json_number_value(json_object_get(obj, key));
+}
+
+bool fb_json_bool(const json_t *obj, const char *key)
+{
+    return json_is_true(json_object_get(obj, key));
+}
+
+void fb_json_vec2(const json_t *obj, const char *key, double out[2])
+{
+    json_t *a = json_object_get(obj, key);
+    out[0] = json_number_value(json_array_get(a, 0));
+    out[1] = json_number_value(json_array_get(a, 1));
+}
+
+/* The colour map keys shared by julia and ifs layers: palette, cosine, stops. */
+fb_result fb_schema_palette(const fb_vctx *v, const char *path, const json_t *obj, fb_palette_spec *pal)
+{
+    const char *named = json_string_value(json_object_get(obj, "palette")); /* optional where it has no default */
+    pal->named = 0;
+    if (named) fb_enum_index(FB_PALETTE_NAMES, named, &pal->named);
+    json_t *cos_j = json_object_get(obj, "cosine"), *stops_j = json_object_get(obj, "stops");
+    if (cos_j && stops_j) {
+        char sub[256];
+        snprintf(sub, sizeof sub, "%s.stops", path);
+        return fb_schema_error(v, sub, "give cosine or stops, not both");
+    }
+    pal->has_cosine = cos_j != NULL;
+    for (size_t i = 0; cos_j && i < 12; i++) pal->cosine[i] = json_number_value(json_array_get(cos_j, i));
+    pal->nstops = stops_j ? (int)json_array_size(stops_j) : 0;
+    for (int i = 0; i < pal->nstops; i++)
+        for (int c = 0; c < 4; c++)
+            pal->stops[i][c] = json_number_value(json_array_get(json_array_get(stops_j, (size_t)i), (size_t)c));
+    return FB_OK;
+}
+
+void fb_json_string(const json_t *obj, const char *key, char *out, size_t size)
+{
+    const json_t *j = json_object_get(obj, key);
+    snprintf(out, size, "%s", json_is_string(j) ? json_string_value(j) : "");
+}
+
+void fb_json_ref(const json_t *j, fb_ref *r)
+{
+    memset(r, 0, sizeof *r);
+    r->layer = -1;
+    if (json_is_number(j)) {
+        r->value = json_number_value(j);
+        return;
+    }
+    r->layer = -2; /* resolved by name in resolve_refs; the whole reference is kept in channel until then */
+    snprintf(r->channel, sizeof r->channel, "%s", json_string_value(j));
+}
