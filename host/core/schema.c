@@ -232,6 +232,8 @@ static fb_result check_number(const fb_vctx *v, const char *path, const fb_keysp
     return FB_OK;
 }
 
+/* One switch over the key types, each case a value's shape and its one message: long, but one idea
+ * (a value type of a generator's own is its fb_kvalue's check). */
 fb_result fb_schema_check_value(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j)
 {
     char shown[64];
