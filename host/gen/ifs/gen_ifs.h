@@ -45,6 +45,11 @@ const struct fb_ifs_stats *fb_gen_ifs_stats(const fb_gen *g);
  * the channels the whole game would have. */
 fb_result fb_gen_ifs_from_sums(fb_gen *g, const uint64_t *hits, const uint64_t *sums, uint64_t outside);
 
+/* Its scene keys and their parser (parse.c). */
+#define FB_IFS_NKEYS 24
+extern const fb_keyspec fb_ifs_keys[FB_IFS_NKEYS];
+fb_result fb_ifs_parse(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L);
+
 /* Its value types (values.c): affine maps, and a condensation set. */
 extern const fb_kvalue fb_ifs_maps_value, fb_ifs_condensation_value;
 
