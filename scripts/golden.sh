@@ -18,6 +18,10 @@ fb=$(realpath "${2:-$root/build/fractalbake}")
 out=${3:-$root/build/golden}
 gold=$root/tests/golden
 export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp}
+# lavapipe's settings, pinned: LP_NATIVE_VECTOR_WIDTH sets its SIMD width and so its subgroup size
+# (256: 8 lanes, 128: 4), which may change a shader's results; LP_NUM_THREADS its rasteriser
+# threads, which change its speed only. The references were rendered with these (docs/ci.md).
+export LP_NATIVE_VECTOR_WIDTH=${LP_NATIVE_VECTOR_WIDTH:-256} LP_NUM_THREADS=${LP_NUM_THREADS:-2}
 mkdir -p "$out"
 
 render() { # NAME OUT.exr [extra args]

@@ -7,15 +7,52 @@
 #include "env.h"
 
 #include "benchkit.h"
+#include "ceilings.h"
 #include "gen.h"
 #include "progress.h"
 
+#include <jansson.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
 static fb_progress g_prog; /* which generator of how many, on stderr */
+
+/* What every row is read against: the machine's ceilings, lavapipe's settings, and an earlier run. */
+typedef struct bench_ctx {
+    fb_ceilings ceil;
+    const fb_env *env;
+    json_t *before;          /* --compare: the earlier run's rows, or NULL */
+    double before_gflops[2]; /* its FMA ceilings: vulkan, native (0: none) */
+    const char *before_path;
+} bench_ctx;
+
+/* The FMA ceiling a row's rate is read against: the Vulkan device's for vulkan rows, else the
+ * native loop's. */
+static double ceiling_of(const bench_ctx *c, const char *backend)
+{
+    return !strcmp(backend, "vulkan") ? c->ceil.vk_gflops : c->ceil.native_gflops;
+}
+
+/* The earlier run's row of the same generator, backend, mode and unit, or NULL. */
+static const json_t *before_row(const bench_ctx *c, const fb_bench_row *r)
+{
+    size_t i;
+    const json_t *o;
+    json_array_foreach(c->before, i, o)
+    {
+        const char *g = json_string_value(json_object_get(o, "generator")),
+                   *be = json_string_value(json_object_get(o, "backend")),
+                   *m = json_string_value(json_object_get(o, "mode")),
+                   *u = json_string_value(json_object_get(o, "unit"));
+        if (g && be && m && u && !strcmp(g, r->generator) && !strcmp(be, r->backend) && !strcmp(m, r->mode) &&
+            !strcmp(u, r->unit))
+            return o;
+    }
+    return NULL;
+}
 
 /* A result line on a terminal where the progress bar is drawn: the bar's line cleared first (the
  * progress thread draws it again). */
@@ -35,6 +72,14 @@ static void print_heading(const fb_bench *b, const char *text)
 
 static void print_row(const fb_bench *b, const fb_bench_row *r)
 {
+    const bench_ctx *c = b->user;
+    bool ceiling = !strcmp(r->generator, "ceiling");
+    double peak = ceiling_of(c, r->backend), per_peak = peak > 0 && !ceiling ? r->rate / peak : 0;
+    const json_t *old = c->before ? before_row(c, r) : NULL;
+    double old_rate = old ? json_number_value(json_object_get(old, "rate")) : 0;
+    double old_peak = old ? c->before_gflops[strcmp(r->backend, "vulkan") ? 1 : 0] : 0;
+    double vs = old_rate > 0 ? r->rate / old_rate : 0;
+    double vs_peak = vs > 0 && old_peak > 0 && peak > 0 ? vs * old_peak / peak : 0;
     clear_bar();
     if (b->json) {
         printf("{\"generator\": \"%s\", \"backend\": \"%s\", \"device\": \"%s\", \"mode\": \"%s\", \"unit\": \"%s\", "
@@ -45,11 +90,18 @@ static void print_row(const fb_bench *b, const fb_bench_row *r)
             printf(", \"%s\": %.*f", r->extra[i].name, r->extra[i].decimals, r->extra[i].value);
         printf(", \"threads\": %d", r->threads);
         if (r->gpu_rate > 0) printf(", \"gpu_rate\": %.3f", r->gpu_rate);
-        printf("}\n");
+        if (per_peak > 0) printf(", \"per_peak_gflops\": %.6g", per_peak);
+        if (vs > 0) printf(", \"vs_before\": %.4f", vs);
+        if (vs_peak > 0) printf(", \"vs_before_per_peak\": %.4f", vs_peak);
+        printf(", \"LP_NUM_THREADS\": \"%s\", \"LP_NATIVE_VECTOR_WIDTH\": \"%s\"}\n", c->env->lp_num_threads,
+               c->env->lp_vector_width);
     } else {
         printf("%-9s %-7s %-22s %9.3f %s", r->generator, r->backend, r->mode, r->rate, r->unit);
         if (r->note[0]) printf("  %s", r->note);
         if (r->gpu_rate > 0) printf("  (timestamps: %.3f %s)", r->gpu_rate, r->unit);
+        if (per_peak > 0) printf("  {%.3g per peak GFLOP/s}", per_peak);
+        if (vs > 0) printf("  <x%.3f of before%s>", vs, vs_peak > 0 ? "" : ", no ceiling then");
+        if (vs_peak > 0) printf("  <x%.3f per peak>", vs_peak);
         if (r->threads > 0 && strcmp(r->backend, "vulkan")) /* a GPU's rows: its EXR threads are not the point */
             printf("  [%s, %d thread%s]\n", r->device, r->threads, r->threads > 1 ? "s" : "");
         else
@@ -68,6 +120,8 @@ fb_result fb_bench_main(int argc, char **argv, const fb_env *env)
                   .points = 268435456,
                   .heading = print_heading,
                   .row = print_row};
+    bench_ctx ctx = {.env = env};
+    b.user = &ctx;
     const fb_gen_class *only = NULL;
     bool quiet = false;
     char names[256] = "", words[256] = ""; /* "fbm|julia|ifs", "fbm, julia or ifs" */
@@ -111,6 +165,33 @@ fb_result fb_bench_main(int argc, char **argv, const fb_env *env)
                 return fb_fail(FB_ERR_USAGE, "--points: expected a number in 1e6..1e12, found \"%s\"", v);
             b.points = (double)(uint64_t)b.points;
             i++;
+        } else if (!strcmp(a, "--compare") && v) {
+            json_decref(ctx.before);
+            ctx.before = json_array();
+            ctx.before_path = v;
+            FILE *f = fopen(v, "r");
+            if (!f) return fb_fail(FB_ERR_INPUT, "--compare: cannot open %s", v);
+            char line[4096];
+            int lineno = 0;
+            while (fgets(line, sizeof line, f)) {
+                lineno++;
+                if (!line[strspn(line, " \t\r\n")]) continue;
+                json_t *o = json_loads(line, 0, NULL);
+                if (!json_is_object(o) || !json_is_number(json_object_get(o, "rate"))) {
+                    json_decref(o);
+                    fclose(f);
+                    return fb_fail(FB_ERR_INPUT, "%s:%d: not a line of `fractalbake bench --json`", v, lineno);
+                }
+                const char *g = json_string_value(json_object_get(o, "generator")),
+                           *m = json_string_value(json_object_get(o, "mode")),
+                           *be = json_string_value(json_object_get(o, "backend"));
+                if (g && m && be && !strcmp(g, "ceiling") && !strcmp(m, "fma"))
+                    ctx.before_gflops[strcmp(be, "vulkan") ? 1 : 0] = json_number_value(json_object_get(o, "rate"));
+                json_array_append_new(ctx.before, o);
+            }
+            fclose(f);
+            if (!json_array_size(ctx.before)) return fb_fail(FB_ERR_INPUT, "--compare: %s holds no bench rows", v);
+            i++;
         } else if (!strcmp(a, "--device") && v) {
             b.device = v;
             i++;
@@ -120,9 +201,14 @@ fb_result fb_bench_main(int argc, char **argv, const fb_env *env)
             i++;
         } else if (!strcmp(a, "--help")) {
             printf("usage: fractalbake bench [--json] [--quiet] [--size WxH] [--generator %s] [--points N] "
-                   "[--backend vulkan|native] [--device D] [--threads N]\n"
+                   "[--backend vulkan|native] [--device D] [--threads N] [--compare EARLIER.json]\n"
                    "Throughput of every generator on each backend, a line per measurement (--json: a JSON object\n"
-                   "per line); progress on stderr unless --quiet.\n",
+                   "per line); progress on stderr unless --quiet. First the machine's ceilings on each backend:\n"
+                   "an FMA-bound kernel (GFLOP/s) and a buffer copy (GB/s), with the CPU, device and driver named;\n"
+                   "every rate is then also given per peak GFLOP/s of its backend, and every line records\n"
+                   "LP_NUM_THREADS and LP_NATIVE_VECTOR_WIDTH (lavapipe's speed and subgroup size).\n"
+                   "--compare EARLIER.json: each row's rate against the same row of an earlier --json run, as is\n"
+                   "and per peak (each run's rate divided by its own ceiling: a change of machine cancels out).\n",
                    names);
             return FB_OK;
         } else {
@@ -135,6 +221,41 @@ fb_result fb_bench_main(int argc, char **argv, const fb_env *env)
     snprintf(out, sizeof out, "%s/bench.exr", dir);
     b.out = out;
     fb_result rc = FB_OK;
+    /* the ceilings, once, before anything else */
+    {
+        fb_engine ne, ve;
+        bool have_vk = false;
+        rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = b.threads}, &ne);
+        if (!rc && b.vulkan) rc = fb_bench_open_vulkan(&b, &ve, &have_vk);
+        if (!rc) rc = fb_ceilings_measure(have_vk ? &ve : NULL, b.native ? &ne : NULL, &ctx.ceil);
+        if (have_vk) fb_engine_close(&ve);
+        fb_engine_close(&ne);
+        if (!rc) {
+            fb_bench_heading(
+                &b, "machine: %s; Vulkan: %s, %s; LP_NUM_THREADS=%s, LP_NATIVE_VECTOR_WIDTH=%s",
+                ctx.ceil.cpu[0] ? ctx.ceil.cpu : "(CPU not named)", ctx.ceil.device[0] ? ctx.ceil.device : "no device",
+                ctx.ceil.driver[0] ? ctx.ceil.driver : "-", env->lp_num_threads[0] ? env->lp_num_threads : "(unset)",
+                env->lp_vector_width[0] ? env->lp_vector_width : "(unset)");
+            struct {
+                const char *backend, *mode, *unit;
+                double rate;
+                const char *device;
+                int threads;
+            } rows[4] = {{"vulkan", "fma", "GFLOP/s", ctx.ceil.vk_gflops, ctx.ceil.device, 0},
+                         {"vulkan", "copy", "GB/s", ctx.ceil.vk_gbps, ctx.ceil.device, 0},
+                         {"native", "fma", "GFLOP/s", ctx.ceil.native_gflops, "native C", ctx.ceil.threads},
+                         {"native", "copy", "GB/s", ctx.ceil.native_gbps, "native C", ctx.ceil.threads}};
+            for (int k = 0; k < 4; k++)
+                if (rows[k].rate > 0)
+                    print_row(&b, &(fb_bench_row){.generator = "ceiling",
+                                                  .backend = rows[k].backend,
+                                                  .device = rows[k].device,
+                                                  .mode = rows[k].mode,
+                                                  .unit = rows[k].unit,
+                                                  .rate = rows[k].rate,
+                                                  .threads = rows[k].threads});
+        }
+    }
     int total = only ? 1 : nb, done = 0;
     fb_progress_init_steps(&g_prog, !quiet, "bench");
     for (int i = 0; fb_gen_list[i] && !rc; i++)
@@ -147,5 +268,6 @@ fb_result fb_bench_main(int argc, char **argv, const fb_env *env)
     fb_progress_finish(&g_prog);
     unlink(out);
     rmdir(dir);
+    json_decref(ctx.before);
     return rc;
 }

@@ -25,4 +25,8 @@ void fb_env_read(fb_env *env)
     else if ((base = getenv("HOME")) && *base)
         snprintf(env->cache_dir, sizeof env->cache_dir, "%s/.cache/fractalbake", base);
     env->vk.cache_dir = env->cache_dir[0] ? env->cache_dir : NULL;
+    const char *lp = getenv("LP_NUM_THREADS");
+    snprintf(env->lp_num_threads, sizeof env->lp_num_threads, "%s", lp ? lp : "");
+    lp = getenv("LP_NATIVE_VECTOR_WIDTH");
+    snprintf(env->lp_vector_width, sizeof env->lp_vector_width, "%s", lp ? lp : "");
 }

@@ -6,6 +6,7 @@
  *   FB_VK_NO_INT64=1       as if the device had no 64-bit buffer atomics
  *   FB_VK_NO_FLOAT64=1     as if the device had no shaderFloat64
  *   FB_NO_PIPELINE_CACHE=1 no pipeline cache on disk
+ *   LP_NUM_THREADS, LP_NATIVE_VECTOR_WIDTH   lavapipe's own (read by it; recorded by the bench)
  *   XDG_CACHE_HOME, HOME   the pipeline cache's folder: $XDG_CACHE_HOME/fractalbake, else
  *                          $HOME/.cache/fractalbake
  */
@@ -17,6 +18,10 @@
 typedef struct fb_env {
     vkc_desc vk;          /* validation, staging, no_int64, no_float64, no_pipeline_cache, cache_dir */
     char cache_dir[1024]; /* vk.cache_dir points here ("" and NULL: none) */
+    /* lavapipe's own settings, which change its speed (LP_NUM_THREADS: its threads) or its results
+     * (LP_NATIVE_VECTOR_WIDTH: 256 gives subgroups of 8, 128 of 4), as given ("" when unset); the
+     * bench records them on every line */
+    char lp_num_threads[32], lp_vector_width[32];
 } fb_env;
 
 /* Reads the variables above into *env. */

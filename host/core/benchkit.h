@@ -41,6 +41,7 @@ typedef struct fb_bench {
     /* the sink: a heading line for people (not in JSON), and each row */
     void (*heading)(const struct fb_bench *b, const char *text);
     void (*row)(const struct fb_bench *b, const fb_bench_row *r);
+    void *user; /* the sink's */
 } fb_bench;
 
 /* A per-pixel generator's benchmark: its one-layer scene's work and unit. */
