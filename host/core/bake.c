@@ -560,157 +560,127 @@ static void heightmaps_free(const fb_scene *s, heightmaps *hm)
     memset(hm, 0, sizeof *hm);
 }
 
-fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
+/* Every output is reserved before any work: a bad target (named twice, a directory, a device node, a
+ * folder that does not exist) fails now, not after minutes of computing. A dry run writes nothing. */
+static fb_result reserve_outputs(const fb_bake_desc *d, const fb_scene *s)
 {
-    if (stats) stats->ran_on[0] = stats->preview[0] = 0, stats->nheightmaps = 0;
-    heightmaps hm = {0};
-    const fb_scene *s = d->scene;
+    if (d->dry_run) return FB_OK;
     fb_result rc = FB_OK;
-    layer_run *runs = calloc((size_t)s->nlayers, sizeof *runs);
-    exrio_channel channels[FB_MAX_LAYERS * FB_GEN_MAX_CHANNELS];
-    int nch = 0;
-    exrio_writer *w = NULL;
-    previews pv = {0};
-    double t0 = fb_now(), gpu = 0;
-    if (!runs) return fb_fail(FB_ERR_NOMEM, "out of memory");
-    int rx = 0, ry = 0, rw = s->width, rh = s->height;
-    fb_outputs_begin();
-    /* Every output is reserved before any work: a bad target (named twice, a directory, a device
-     * node, a folder that does not exist) fails now, not after minutes of computing. A dry run
-     * writes nothing. */
-    if (d->out && !d->dry_run) rc = fb_output_reserve(d->out, "output");
-    if (!rc && d->preview && !d->dry_run) rc = fb_output_reserve(d->preview, "preview");
+    if (d->out) rc = fb_output_reserve(d->out, "output");
+    if (!rc && d->preview) rc = fb_output_reserve(d->preview, "preview");
     const char *side[FB_MAX_OUTPUTS], *side_what[FB_MAX_OUTPUTS];
-    int nside = d->dry_run ? 0 : fb_scene_outputs(s, side, side_what, FB_MAX_OUTPUTS);
+    int nside = fb_scene_outputs(s, side, side_what, FB_MAX_OUTPUTS);
     for (int i = 0; i < nside && !rc; i++) rc = fb_output_reserve(side[i], side_what[i]);
-    if (rc) goto out;
+    return rc;
+}
 
+/* The pixels baked (region[] = x, y, w, h: the desc's region, or the whole image) and the rows of a
+ * strip, which one storage buffer row of the device must hold. */
+static fb_result bake_window(const fb_engine *e, const fb_bake_desc *d, int region[4], int *strip_out)
+{
+    const fb_scene *s = d->scene;
+    region[0] = 0, region[1] = 0, region[2] = s->width, region[3] = s->height;
     if (d->region[2] > 0) {
-        rx = d->region[0], ry = d->region[1], rw = d->region[2], rh = d->region[3];
-        if (rx < 0 || ry < 0 || rh <= 0 || (long)rx + rw > s->width || (long)ry + rh > s->height) {
-            rc = fb_fail(FB_ERR_USAGE, "--region %d,%d,%d,%d: not inside the %d x %d image", rx, ry, rw, rh, s->width,
-                         s->height);
-            goto out;
-        }
+        int rx = d->region[0], ry = d->region[1], rw = d->region[2], rh = d->region[3];
+        if (rx < 0 || ry < 0 || rh <= 0 || (long)rx + rw > s->width || (long)ry + rh > s->height)
+            return fb_fail(FB_ERR_USAGE, "--region %d,%d,%d,%d: not inside the %d x %d image", rx, ry, rw, rh, s->width,
+                           s->height);
+        memcpy(region, d->region, sizeof d->region);
     }
-    int region[4] = {rx, ry, rw, rh};
+    int rh = region[3];
     int strip = d->strip_rows > 0 ? d->strip_rows : auto_strip_rows(s, rh);
     if (strip > rh) strip = rh;
     if (e->kind == FB_BACKEND_VULKAN && (uint64_t)strip * s->width * 4 > vkc_info(e->vk)->max_storage_buffer_range) {
         strip = (int)(vkc_info(e->vk)->max_storage_buffer_range / ((uint64_t)s->width * 4));
-        if (strip < 1) {
-            rc =
-                fb_fail(FB_ERR_INPUT, "image width %d is too wide for one storage buffer row on this device", s->width);
-            goto out;
-        }
+        if (strip < 1)
+            return fb_fail(FB_ERR_INPUT, "image width %d is too wide for one storage buffer row on this device",
+                           s->width);
     }
+    *strip_out = strip;
+    return FB_OK;
+}
 
-    for (int i = 0; i < s->nlayers && !rc; i++) {
-        fb_log_context("layer %s", s->layers[i].name);
-        rc = fb_gen_init_part(&runs[i].gen, s, &s->layers[i], d->points_part);
-        runs[i].gen.scalar = e->scalar;
-        runs[i].e = *e;
-        if (e->per_layer) /* auto on a CPU device: each layer where it runs faster (engine.h) */
-            runs[i].e.kind = runs[i].gen.lavapipe_faster ? FB_BACKEND_VULKAN : FB_BACKEND_NATIVE;
-        for (int c = 0; c < runs[i].gen.nchannels && !rc; c++)
-            channels[nch++] =
-                (exrio_channel){runs[i].gen.channel_names[c], runs[i].gen.channel_types[c], s->multipart ? i : 0};
-    }
-    /* Memory is predicted, not discovered: the whole bake's peak, before anything large exists. */
-    fb_bake_plan plan_local, *plan = d->plan ? d->plan : &plan_local;
-    if (!rc) rc = plan_memory(e, d, runs, strip, nch, rw, plan);
-    if (!rc && d->dry_run) goto out;
-    for (int i = 0; i < s->nlayers && !rc; i++) {
-        fb_log_context("layer %s", s->layers[i].name);
-        rc = run_init(&runs[i].e, &runs[i], strip);
-    }
-    /* Layers that use others (op inputs, a macro shape) find them among every layer's generator. */
-    int offset[FB_MAX_LAYERS];
-    const fb_gen *gens[FB_MAX_LAYERS];
-    for (int i = 0, at = 0; i < s->nlayers; at += runs[i].gen.nchannels, i++) offset[i] = at, gens[i] = &runs[i].gen;
-    for (int i = 0; i < s->nlayers && !rc; i++)
-        if (runs[i].gen.resolve) rc = runs[i].gen.resolve(&runs[i].gen, gens, offset);
-    if (!rc) rc = heightmaps_create(s, runs, offset, rw, rh, &hm);
-    /* Layers computed as a whole (the chaos game) run before the first strip. */
-    for (int j = 0; j < s->nlayers && !rc; j++) { /* in dependency order: a macro's source first */
-        int i = s->order[j];
-        if (!runs[i].gen.prepare) continue;
-        fb_log_context("layer %s", s->layers[i].name);
-        rc = runs[i].gen.prepare(&runs[i].gen, &runs[i].e, d->progress);
-        if (runs[i].gen.prepare_gpu_seconds > 0) gpu += runs[i].gen.prepare_gpu_seconds;
-    }
-    if (rc) goto out;
-
-    /* the backend of the file: one name, or "auto" when the layers ran on different ones (listed) */
-    char backend[16], per_layer[FB_MAX_LAYERS * 80] = "";
+/* The file's backend: one name, or "auto" when the layers ran on different ones, listed in per_layer
+ * ("a=vulkan;b=native"; also when d asks for the list). Returns how many layers ran on Vulkan. */
+static int file_backend(const fb_bake_desc *d, const layer_run *runs, char backend[16], char *per_layer, size_t size)
+{
+    const fb_scene *s = d->scene;
     int nvk = 0;
     for (int i = 0; i < s->nlayers; i++) nvk += runs[i].e.kind == FB_BACKEND_VULKAN;
-    snprintf(backend, sizeof backend, "%s",
-             nvk == s->nlayers ? "vulkan"
-             : nvk == 0        ? "native"
-                               : fb_backend_name(FB_BACKEND_AUTO));
+    snprintf(backend, 16, "%s", nvk == s->nlayers ? "vulkan" : nvk == 0 ? "native" : fb_backend_name(FB_BACKEND_AUTO));
+    per_layer[0] = 0;
     bool list = d->layer_backends || (nvk > 0 && nvk < s->nlayers); /* only where they differ, unless asked */
     for (int i = 0; i < s->nlayers && list; i++)
-        snprintf(per_layer + strlen(per_layer), sizeof per_layer - strlen(per_layer), "%s%s=%s", i ? ";" : "",
-                 s->layers[i].name, fb_backend_name(runs[i].e.kind));
-    if (stats) {
-        ran_on(e, runs, s, stats->ran_on, sizeof stats->ran_on);
-        for (int i = 0; i < s->nlayers; i++) stats->layer_backend[i] = runs[i].e.kind;
-    }
-    if (d->out) {
-        char seed[16], reg[64];
-        snprintf(seed, sizeof seed, "%u", s->seed);
-        snprintf(reg, sizeof reg, "%d,%d,%d,%d", rx, ry, rw, rh);
-        bool partial = d->region[2] > 0;
-        exrio_attr attrs[16] = {
-            {"fractalbake/scene", s->json},      {"fractalbake/seed", seed},
-            {"fractalbake/backend", backend},    {"fractalbake/device", nvk ? e->device : "native C"},
-            {"fractalbake/version", FB_VERSION},
-        };
-        int nattrs = 5;
-        if (partial) attrs[nattrs++] = (exrio_attr){"fractalbake/region", reg};
-        if (per_layer[0]) attrs[nattrs++] = (exrio_attr){"fractalbake/layer-backends", per_layer};
-        for (int a = 0; a < d->nattrs && nattrs < 16; a++) attrs[nattrs++] = d->attrs[a];
-        /* a points part: which, and each chaos-game layer's points outside the frame (merge needs
-         * them for the density) */
-        char part[32], outside[FB_MAX_LAYERS * 90] = "";
-        if (d->points_part[1] > 0) {
-            snprintf(part, sizeof part, "%d/%d", d->points_part[0], d->points_part[1]);
-            for (int i = 0; i < s->nlayers; i++)
-                if (runs[i].gen.points_split)
-                    snprintf(outside + strlen(outside), sizeof outside - strlen(outside), "%s%s=%llu",
-                             outside[0] ? ";" : "", s->layers[i].name, (unsigned long long)runs[i].gen.points_outside);
-            attrs[nattrs++] = (exrio_attr){"fractalbake/points-part", part};
-            attrs[nattrs++] = (exrio_attr){"fractalbake/ifs-outside", outside};
-        }
-        const char *part_names[FB_MAX_LAYERS];
-        exrio_compression part_comp[FB_MAX_LAYERS];
-        for (int i = 0; i < s->nlayers; i++) part_names[i] = s->layers[i].name, part_comp[i] = s->layers[i].compression;
-        rc = exrio_writer_create(&(exrio_writer_desc){.path = d->out,
-                                                      .width = rw,
-                                                      .height = rh,
-                                                      .x0 = rx,
-                                                      .y0 = ry,
-                                                      .full_width = partial ? s->width : 0,
-                                                      .full_height = partial ? s->height : 0,
-                                                      .row_stride = s->width,
-                                                      .nparts = s->multipart ? s->nlayers : 1,
-                                                      .part_names = s->multipart ? part_names : NULL,
-                                                      .part_compression = s->multipart ? part_comp : NULL,
-                                                      .compression = s->compression,
-                                                      .channels = channels,
-                                                      .nchannels = nch,
-                                                      .attrs = attrs,
-                                                      .nattrs = nattrs,
-                                                      .threads = e->threads,
-                                                      .zip_level = d->zip_level},
-                                 &w);
-        if (rc) goto out;
-    }
-    if (d->preview && (rc = previews_create(s, runs, d->preview_layer, region, &pv, stats ? stats->preview : NULL,
-                                            stats ? sizeof stats->preview : 0)))
-        goto out;
+        snprintf(per_layer + strlen(per_layer), size - strlen(per_layer), "%s%s=%s", i ? ";" : "", s->layers[i].name,
+                 fb_backend_name(runs[i].e.kind));
+    return nvk;
+}
 
+/* The EXR writer for the window, with the attributes that let `render --from` and merge read the
+ * file back: the scene, seed, backend, device, version, region, a task's or points part's own. */
+static fb_result open_writer(const fb_engine *e, const fb_bake_desc *d, const layer_run *runs,
+                             const exrio_channel *channels, int nch, const int region[4], exrio_writer **w)
+{
+    const fb_scene *s = d->scene;
+    char backend[16], per_layer[FB_MAX_LAYERS * 80], seed[16], reg[64];
+    int nvk = file_backend(d, runs, backend, per_layer, sizeof per_layer);
+    snprintf(seed, sizeof seed, "%u", s->seed);
+    snprintf(reg, sizeof reg, "%d,%d,%d,%d", region[0], region[1], region[2], region[3]);
+    bool partial = d->region[2] > 0;
+    exrio_attr attrs[16] = {
+        {"fractalbake/scene", s->json},      {"fractalbake/seed", seed},
+        {"fractalbake/backend", backend},    {"fractalbake/device", nvk ? e->device : "native C"},
+        {"fractalbake/version", FB_VERSION},
+    };
+    int nattrs = 5;
+    if (partial) attrs[nattrs++] = (exrio_attr){"fractalbake/region", reg};
+    if (per_layer[0]) attrs[nattrs++] = (exrio_attr){"fractalbake/layer-backends", per_layer};
+    for (int a = 0; a < d->nattrs && nattrs < 14; a++) attrs[nattrs++] = d->attrs[a];
+    /* a points part: which, and each chaos-game layer's points outside the frame (merge needs them
+     * for the density; the attribute keeps its first name, so that older parts still merge) */
+    char part[32], outside[FB_MAX_LAYERS * 90] = "";
+    if (d->points_part[1] > 0) {
+        snprintf(part, sizeof part, "%d/%d", d->points_part[0], d->points_part[1]);
+        for (int i = 0; i < s->nlayers; i++)
+            if (runs[i].gen.points_split)
+                snprintf(outside + strlen(outside), sizeof outside - strlen(outside), "%s%s=%llu",
+                         outside[0] ? ";" : "", s->layers[i].name, (unsigned long long)runs[i].gen.points_outside);
+        attrs[nattrs++] = (exrio_attr){"fractalbake/points-part", part};
+        attrs[nattrs++] = (exrio_attr){"fractalbake/ifs-outside", outside};
+    }
+    const char *part_names[FB_MAX_LAYERS];
+    exrio_compression part_comp[FB_MAX_LAYERS];
+    for (int i = 0; i < s->nlayers; i++) part_names[i] = s->layers[i].name, part_comp[i] = s->layers[i].compression;
+    return exrio_writer_create(&(exrio_writer_desc){.path = d->out,
+                                                    .width = region[2],
+                                                    .height = region[3],
+                                                    .x0 = region[0],
+                                                    .y0 = region[1],
+                                                    .full_width = partial ? s->width : 0,
+                                                    .full_height = partial ? s->height : 0,
+                                                    .row_stride = s->width,
+                                                    .nparts = s->multipart ? s->nlayers : 1,
+                                                    .part_names = s->multipart ? part_names : NULL,
+                                                    .part_compression = s->multipart ? part_comp : NULL,
+                                                    .compression = s->compression,
+                                                    .channels = channels,
+                                                    .nchannels = nch,
+                                                    .attrs = attrs,
+                                                    .nattrs = nattrs,
+                                                    .threads = e->threads,
+                                                    .zip_level = d->zip_level},
+                               w);
+}
+
+/* The strips: each strip of each per-pixel layer dispatched (or queued on the pool) while the last
+ * one is collected, op layers computed from it, checked, and handed to the heightmaps, the previews
+ * and the writer. */
+static fb_result run_strips(fb_engine *e, const fb_bake_desc *d, layer_run *runs, const int *offset,
+                            const int region[4], int strip, exrio_writer *w, heightmaps *hm, previews *pv, double *gpu)
+{
+    const fb_scene *s = d->scene;
+    int rx = region[0], ry = region[1], rw = region[2], rh = region[3];
+    fb_result rc = FB_OK;
     fb_progress prog;
     fb_progress_init(&prog, d->progress, "bake", "pix");
     fb_progress_update(&prog, 0, (uint64_t)rh * rw * (uint64_t)s->nlayers); /* pixels of each layer */
@@ -740,7 +710,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         int at = 0;
         for (int i = 0; i < s->nlayers && !rc; i++) {
             fb_log_context("layer %s, rows %d-%d", s->layers[i].name, y0, y0 + n - 1);
-            if (!runs[i].gen.host_op) rc = run_collect(&runs[i].e, &runs[i], k % SLOTS, planes + at, &gpu);
+            if (!runs[i].gen.host_op) rc = run_collect(&runs[i].e, &runs[i], k % SLOTS, planes + at, gpu);
             if (!rc && run_on_gpu(&runs[i].e, &runs[i])) fb_progress_add(&prog, (uint64_t)n * rw);
             at += runs[i].gen.nchannels;
         }
@@ -754,13 +724,75 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         if (rc) break;
         for (int c = 0; c < at; c++) planes[c] = (const uint8_t *)planes[c] + (size_t)rx * 4; /* the region's columns */
         rc = check_finite(runs, s->nlayers, planes, y0, n, rx, rw, s->width);
-        if (!rc) heightmaps_add(s, &hm, planes, y0 - ry, n, rw);
-        if (!rc && d->preview) rc = previews_add(&pv, runs, y0 - ry, n, planes);
+        if (!rc) heightmaps_add(s, hm, planes, y0 - ry, n, rw);
+        if (!rc && d->preview) rc = previews_add(pv, runs, y0 - ry, n, planes);
         fb_log_context("rows %d-%d", y0, y0 + n - 1);
         if (!rc && w) rc = exrio_writer_rows(w, y0 - ry, n, planes);
         fb_log_context(NULL);
     }
     fb_progress_finish(&prog);
+    return rc;
+}
+
+fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
+{
+    if (stats) stats->ran_on[0] = stats->preview[0] = 0, stats->nheightmaps = 0;
+    heightmaps hm = {0};
+    const fb_scene *s = d->scene;
+    layer_run *runs = calloc((size_t)s->nlayers, sizeof *runs);
+    exrio_channel channels[FB_MAX_LAYERS * FB_GEN_MAX_CHANNELS];
+    int nch = 0, region[4] = {0, 0, s->width, s->height}, strip = 1;
+    exrio_writer *w = NULL;
+    previews pv = {0};
+    double t0 = fb_now(), gpu = 0;
+    if (!runs) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    fb_outputs_begin();
+    fb_result rc = reserve_outputs(d, s);
+    if (!rc) rc = bake_window(e, d, region, &strip);
+    for (int i = 0; i < s->nlayers && !rc; i++) {
+        fb_log_context("layer %s", s->layers[i].name);
+        rc = fb_gen_init_part(&runs[i].gen, s, &s->layers[i], d->points_part);
+        runs[i].gen.scalar = e->scalar;
+        runs[i].e = *e;
+        if (e->per_layer) /* auto on a CPU device: each layer where it runs faster (engine.h) */
+            runs[i].e.kind = runs[i].gen.lavapipe_faster ? FB_BACKEND_VULKAN : FB_BACKEND_NATIVE;
+        for (int c = 0; c < runs[i].gen.nchannels && !rc; c++)
+            channels[nch++] =
+                (exrio_channel){runs[i].gen.channel_names[c], runs[i].gen.channel_types[c], s->multipart ? i : 0};
+    }
+    /* Memory is predicted, not discovered: the whole bake's peak, before anything large exists. */
+    fb_bake_plan plan_local, *plan = d->plan ? d->plan : &plan_local;
+    if (!rc) rc = plan_memory(e, d, runs, strip, nch, region[2], plan);
+    if (!rc && d->dry_run) goto out;
+    for (int i = 0; i < s->nlayers && !rc; i++) {
+        fb_log_context("layer %s", s->layers[i].name);
+        rc = run_init(&runs[i].e, &runs[i], strip);
+    }
+    /* Layers that use others (op inputs, a macro shape) find them among every layer's generator. */
+    int offset[FB_MAX_LAYERS];
+    const fb_gen *gens[FB_MAX_LAYERS];
+    for (int i = 0, at = 0; i < s->nlayers; at += runs[i].gen.nchannels, i++) offset[i] = at, gens[i] = &runs[i].gen;
+    for (int i = 0; i < s->nlayers && !rc; i++)
+        if (runs[i].gen.resolve) rc = runs[i].gen.resolve(&runs[i].gen, gens, offset);
+    if (!rc) rc = heightmaps_create(s, runs, offset, region[2], region[3], &hm);
+    /* Layers computed as a whole (the chaos game) run before the first strip. */
+    for (int j = 0; j < s->nlayers && !rc; j++) { /* in dependency order: a macro's source first */
+        int i = s->order[j];
+        if (!runs[i].gen.prepare) continue;
+        fb_log_context("layer %s", s->layers[i].name);
+        rc = runs[i].gen.prepare(&runs[i].gen, &runs[i].e, d->progress);
+        if (runs[i].gen.prepare_gpu_seconds > 0) gpu += runs[i].gen.prepare_gpu_seconds;
+    }
+    if (rc) goto out;
+    if (stats) {
+        ran_on(e, runs, s, stats->ran_on, sizeof stats->ran_on);
+        for (int i = 0; i < s->nlayers; i++) stats->layer_backend[i] = runs[i].e.kind;
+    }
+    if (d->out && (rc = open_writer(e, d, runs, channels, nch, region, &w))) goto out;
+    if (d->preview && (rc = previews_create(s, runs, d->preview_layer, region, &pv, stats ? stats->preview : NULL,
+                                            stats ? sizeof stats->preview : 0)))
+        goto out;
+    rc = run_strips(e, d, runs, offset, region, strip, w, &hm, &pv, &gpu);
     /* Checked before the file is renamed into place: a validated run that broke a rule is a failure. */
     if (!rc && e->vk && vkc_validation_messages(e->vk))
         rc = fb_fail(FB_ERR_VULKAN, "vulkan validation reported %u message(s) (see above)",
@@ -784,7 +816,7 @@ out:
     if (stats) {
         stats->seconds = fb_now() - t0;
         stats->gpu_seconds = e->kind == FB_BACKEND_VULKAN ? gpu : -1;
-        stats->pixels = (uint64_t)rw * rh;
+        stats->pixels = (uint64_t)region[2] * region[3];
     }
     return rc;
 }
