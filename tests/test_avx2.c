@@ -6,6 +6,7 @@
 #include "fbm_avx2.h"
 #include "ifs_avx2.h"
 #include "julia_avx2.h"
+#include "layer_avx2.h"
 #include "bake.h"
 #include "gen_ifs.h"
 #include "gen.h"
@@ -73,6 +74,88 @@ int main(void)
         fb_gen_fini(&g);
         fb_scene_fini(&s);
     }
+    /* The Julia layer's whole native path on AVX2 lanes: every stored channel of every pixel is the
+     * scalar kernel's to the bit (memcmp, so NaN and -0 count), on rect and polar grids, with the
+     * pole, turbulence (tileable with power-of-two and other periods), jittered samples, gamma,
+     * density, every palette kind and channel subsets (what is not stored is not computed). Widths
+     * that are not multiples of 8 leave a partial last block. */
+    const char *layers[] = {
+        "{\"size\": [203, 61], \"seed\": 9, \"layers\": [{\"type\": \"julia\"}]}",
+        "{\"size\": [160, 120], \"layers\": [{\"type\": \"julia\", \"alpha\": [0.5, 0.25], \"c\": [-0.4, 0.6], "
+        "\"rotation\": 30, \"center\": [0.2, -0.1], \"max-iter\": 500, \"bailout\": 3, \"palette\": \"ember\"}]}",
+        /* the pole 1/a = 2 lies in the grid (pixel centre x = 2 exactly: 6 * (u - 0.5) at u = 5/6) */
+        "{\"size\": [96, 64], \"layers\": [{\"type\": \"julia\", \"alpha\": [0.5, 0], \"scale\": [6, 4], "
+        "\"max-iter\": 12}]}",
+        "{\"size\": [131, 77], \"seed\": 5, \"layers\": [{\"type\": \"julia\", \"mapping\": \"polar\", \"radius\": "
+        "1.7, "
+        "\"alpha\": [0.3, -0.2], \"turbulence\": 0.4, \"samples\": 3, \"palette\": \"aurora\", \"gamma\": 0.8}]}",
+        "{\"size\": [100, 50], \"seed\": 6, \"layers\": [{\"type\": \"julia\", \"mapping\": \"polar\", "
+        "\"turbulence\": 0.7, \"turbulence-frequency\": 3, \"turbulence-octaves\": 5, \"density\": 0, "
+        "\"inside-color\": [0.1, 0.2, 0.3], \"c\": [-0.7, 0.27]}]}",
+        "{\"size\": [117, 90], \"seed\": 7, \"layers\": [{\"type\": \"julia\", \"turbulence\": 0.3, "
+        "\"turbulence-frequency\": 5.5, \"turbulence-hurst\": 0.5, \"samples\": 4, \"max-iter\": 300, "
+        "\"cosine\": [0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 1, 1, 1, 0, 0.33, 0.67], \"period\": 7, \"palette-offset\": 0.3, "
+        "\"brightness\": 2.5, \"density\": 2.5, \"density-count\": 20}]}",
+        "{\"size\": [77, 45], \"seed\": 8, \"layers\": [{\"type\": \"julia\", \"stops\": [[0, 0, 0, 0.1], [0.4, 1, "
+        "0.5, "
+        "0], [1, 1, 1, 1]], \"samples\": 2, \"gamma\": 2.2, \"bailout\": 1000, \"c\": [0.285, 0.01]}]}",
+        "{\"size\": [90, 70], \"layers\": [{\"type\": \"julia\", \"channels\": [\"iter\", \"de\"], \"alpha\": [0.2, "
+        "0.1], "
+        "\"max-iter\": 9}]}",
+        "{\"size\": [90, 70], \"layers\": [{\"type\": \"julia\", \"channels\": [\"n\", \"inside\"], \"mapping\": "
+        "\"polar\"}]}",
+        "{\"size\": [90, 70], \"seed\": 3, \"layers\": [{\"type\": \"julia\", \"channels\": [\"R\", \"G\", \"B\"], "
+        "\"samples\": 5, \"palette\": \"nebula\"}]}",
+    };
+    const int nlayers = (int)(sizeof layers / sizeof layers[0]);
+    int seen_inside = 0, seen_pole = 0, seen_de = 0;
+    for (int k = 0; k < nlayers; k++) {
+        fb_scene s;
+        CHECK(fb_scene_parse(layers[k], NULL, &s) == FB_OK);
+        fb_gen g;
+        CHECK(fb_gen_init(&g, &s, &s.layers[0]) == FB_OK);
+        if (!fb_julia_avx2_layer_supported((const K_JuliaParams *)(const void *)g.params))
+            TEST_SKIP("this CPU has no AVX2");
+        size_t n = (size_t)s.width * s.height;
+        uint32_t stored = g.spec[4];
+        void *a[7] = {0}, *b[7] = {0}, *c[7] = {0};
+        for (int p = 0; p < 7; p++)
+            if (stored & (1u << p)) a[p] = malloc(n * 4), b[p] = malloc(n * 4), c[p] = malloc(n * 4);
+        g.scalar = true;
+        g.native_rows(&g, 0, s.height, a);
+        g.scalar = false;
+        g.native_rows(&g, 0, s.height, b);
+        /* strips of 1, 2, 3, ... rows: the same bits whatever the split */
+        for (int y0 = 0, h = 1; y0 < s.height; y0 += h, h++) {
+            int rows = y0 + h <= s.height ? h : s.height - y0;
+            void *sub[7];
+            for (int p = 0; p < 7; p++) sub[p] = c[p] ? (char *)c[p] + (size_t)y0 * s.width * 4 : NULL;
+            g.native_rows(&g, y0, rows, sub);
+        }
+        static const char *const plane[7] = {"iter", "n", "inside", "de", "R", "G", "B"};
+        for (int p = 0; p < 7; p++) {
+            if (!a[p]) continue;
+            int diff = 0, split = 0;
+            for (size_t i = 0; i < n; i++) {
+                diff += memcmp((char *)a[p] + 4 * i, (char *)b[p] + 4 * i, 4) != 0;
+                split += memcmp((char *)b[p] + 4 * i, (char *)c[p] + 4 * i, 4) != 0;
+            }
+            CHECKF(diff == 0, "julia layer %d: %s differs from the scalar kernel at %d of %zu pixels", k, plane[p],
+                   diff, n);
+            CHECKF(split == 0, "julia layer %d: %s differs between strip splits at %d pixels", k, plane[p], split);
+        }
+        /* what the scenes exercise: inside points, pixels at the pole (iter 0, not inside), distances */
+        for (size_t i = 0; i < n; i++) {
+            if (a[2] && ((float *)a[2])[i] == 1.0f) seen_inside++;
+            if (a[0] && a[2] && ((uint32_t *)a[0])[i] == 0 && ((float *)a[2])[i] == 0.0f) seen_pole++;
+            if (a[3] && ((float *)a[3])[i] > 0.0f) seen_de++;
+        }
+        for (int p = 0; p < 7; p++) free(a[p]), free(b[p]), free(c[p]);
+        fb_gen_fini(&g);
+        fb_scene_fini(&s);
+    }
+    CHECKF(seen_inside > 100 && seen_pole >= 1 && seen_de > 1000, "the scenes saw %d inside, %d pole, %d de pixels",
+           seen_inside, seen_pole, seen_de);
     /* IFS: the AVX2 chaos game's histogram and counters are the portable kernel's (scalar engine),
      * with a chain count that leaves a scalar tail and points that leave an uneven last step. */
     const char *ifss[] = {

@@ -11,6 +11,7 @@
 #include "palette.h"
 #include "julia64_comp.h"
 #include "julia_comp.h"
+#include "layer_avx2.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -203,6 +204,11 @@ static void julia_rows(const fb_gen *g, int y0, int n, void *const *planes)
     const julia_palette *pal = g->input;
     const uint32_t want = want_of(g->spec[4]);
     const bool colour = planes[P_R] != NULL, dbl = g->needs_float64;
+    /* Every channel bit-exact with the loop below (tests/test_avx2.c), so using it changes no result. */
+    if (!g->scalar && !dbl && fb_julia_avx2_layer_supported(p)) {
+        fb_julia_avx2_layer_rows(&(fb_julia_avx2_ctx){p, &pal->colour, pal->entries, &pal->turb, want}, y0, n, planes);
+        return;
+    }
     for (int r = 0; r < n; r++)
         for (uint32_t x = 0; x < p->width; x++) {
             uint32_t y = (uint32_t)(y0 + r);
