@@ -1179,9 +1179,10 @@ static int cmd_devices(int argc, char **argv)
         if (!infos[i].chosen) continue;
         if (!strcmp(infos[i].type, "cpu"))
             printf("--backend auto (the default): %s is a CPU implementation of Vulkan, so each layer runs where it\n"
-                   "is faster on this machine: the native C path (fBm with its AVX2 loop, Julia sets below about 8\n"
-                   "million samples or with turbulence, the chaos game, L-systems, terrain, constraints), the\n"
-                   "device for the rest. --backend vulkan runs every layer on it.\n",
+                   "is faster on this machine: the native C path (fBm with its AVX2 loop, float Julia sets with\n"
+                   "AVX2, other Julia sets below about 8 million samples or with turbulence, the chaos game,\n"
+                   "L-systems, terrain, constraints), the device for the rest. --backend vulkan runs every layer\n"
+                   "on it.\n",
                    infos[i].name);
         else
             printf("--backend auto (the default): every layer runs on %s.\n", infos[i].name);

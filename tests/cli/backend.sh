@@ -8,11 +8,12 @@ require_vulkan
 check "devices explains auto" grep -q -- "--backend auto (the default)" <("$FB" devices)
 cpu=0
 "$FB" devices | grep -q '^0 *\* .* cpu ' && cpu=1
-# a scene of every kind of choice: a Julia set of 8.4 million samples (lavapipe's), simplex fBm
-# (no AVX2 loop: lavapipe's), gradient fBm (the AVX2 loop: native) and a chaos game (native)
+# a scene of every kind of choice: a double-precision Julia set of 8.4 million samples (no AVX2
+# path: lavapipe's), simplex fBm (no AVX2 loop: lavapipe's), gradient fBm (the AVX2 loop: native)
+# and a chaos game (native)
 cat > mix.json << 'JSON'
 {"size": [2048, 1024], "compression": "none",
- "layers": [{"type": "julia", "name": "sky", "samples": 4, "channels": ["iter"]},
+ "layers": [{"type": "julia", "name": "sky", "samples": 4, "channels": ["iter"], "precision": "double"},
             {"type": "fbm", "name": "rock", "noise": "simplex"},
             {"type": "fbm", "name": "ground"},
             {"type": "ifs", "name": "fern", "points": 2000000}]}
