@@ -149,6 +149,23 @@ rm -f j.exr
 "$FB" fbm --backend native --size 16x16 -o k.exr >&- 2> full.txt
 check "a bake that writes nothing on standard output is not hurt by closing it" test $? -eq 0 -a -s k.exr
 
+# the summaries name what was written and what ran where
+"$FB" terrain --backend native --points pts.csv --size 16x16 --mesh sm.ply -o sm.exr 2> sum.txt
+check "terrain's summary names its layer, generator and mesh: $(cat sum.txt)" grep -q "layer terrain (terrain): .*; mesh sm.ply" sum.txt
+check "... and the EXR, after the commit" grep -q "^fractalbake: wrote sm.exr" sum.txt
+"$FB" constrain --backend native --size 257x1 --csv cs.csv -o cs.exr 2> sum.txt
+check "constrain's summary says constrain and names its csv: $(cat sum.txt)" grep -q "(constrain): .*; csv cs.csv" sum.txt
+"$FB" ifs --backend native --size 64x64 --points 100000 -o if.exr --quiet && "$FB" tonemap if.exr -o if2.exr --brightness 2 2> sum.txt
+check "tonemap's summary names its file: $(cat sum.txt)" grep -q "^fractalbake: wrote if2.exr (tone-mapped)" sum.txt
+"$FB" render --set size=64x32 -o jd.exr --json > jd.json
+check "--json: the device named is the one each layer ran on" python3 -c "
+import json; d = json.load(open('jd.json'))
+ok = all((l['backend'] == 'native') == (l['device'] == 'native C') for l in d['layers'])
+vk = [l['device'] for l in d['layers'] if l['backend'] == 'vulkan']
+ok = ok and d['device'] == (vk[0] if vk else 'native C')
+raise SystemExit(0 if ok else 1)"
+check "--tasks 1e1 is 10 tasks (integer flags take exponent notation)" sh -c '"$0" plan --tasks 1e1 --set size=64x32 | grep -q "over 10 tasks"' "$FB"
+
 # ---- 9. SIGKILL: nothing visible, and (O_TMPFILE) nothing at all; concurrent runs: whole sets ----
 mkdir -p kill && echo old > kill/k.exr
 (cd kill && exec "$FB" terrain $N --points ../pts.csv --insert 400000 --size 1024x1024 -o k.exr --preview k.png --mesh k.ply --heightmap k.r16) &
