@@ -6,4 +6,5 @@ cd "$(dirname "$0")/.."
 export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp}
 mkdir -p out
 ./build/fractalbake render -o out/default.exr --preview out/default.png "$@"
-echo "baked out/default.exr and out/default.png"
+echo "baked out/default.exr and out/default.png with $PWD/build/fractalbake"
+echo "(for the README's commands: export PATH=\"$PWD/build:\$PATH\")"

@@ -1,12 +1,18 @@
 /*
  * The output transaction (host/base/output.c): exclusive temporary files, all-or-nothing renames, nesting,
- * refusal of non-regular targets and of one path named twice, and the signal handler's clean-up.
+ * refusal of non-regular targets and of one path named twice, names too long for the folder, the
+ * signal handler's clean-up; anonymous (O_TMPFILE) files that nothing sees and SIGKILL leaves nothing
+ * of; signals during a commit taken after the whole set is in place.
  */
 #include "output.h"
 #include "testhelp.h"
 
 #include <dirent.h>
+#include <errno.h>
 #include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <time.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -53,10 +59,71 @@ static fb_result write_text(const char *name, const char *what, const char *text
     return fb_output_done(at(name), rc);
 }
 
+/* Files in the scratch folder, all names. */
+static int count_all(void)
+{
+    DIR *d = opendir(g_dir);
+    int n = 0;
+    for (struct dirent *e; d && (e = readdir(d));) n += strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
+    if (d) closedir(d);
+    return n;
+}
+
+/* The signal handler of a run, as main's: outside a commit it ends the process. */
+static void on_term(int sig)
+{
+    if (fb_outputs_signal(sig)) _exit(128 + sig);
+}
+
+/* A child that commits generation after generation of one set of 24 files ("set00".."set23", each
+ * holding its generation's number) until it is killed. */
+static void commit_forever(int ready)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_term;
+    sigfillset(&sa.sa_mask);
+    sa.sa_flags = SA_RESTART;
+    sigaction(SIGTERM, &sa, NULL);
+    if (write(ready, "r", 1) != 1) _exit(1); /* the handler is in place: the parent may signal */
+    for (int g = 1;; g++) {
+        char text[32], name[32];
+        snprintf(text, sizeof text, "%d", g);
+        fb_outputs_begin();
+        for (int k = 0; k < 24; k++) {
+            snprintf(name, sizeof name, "set%02d", k);
+            if (write_text(name, "output", text)) _exit(1);
+        }
+        if (fb_outputs_end(FB_OK)) _exit(1);
+    }
+}
+
+/* The generation every file of the set holds; -1 when they differ (or one is missing). */
+static int set_generation(void)
+{
+    int gen = -2;
+    for (int k = 0; k < 24; k++) {
+        char name[32], got[32] = {0};
+        snprintf(name, sizeof name, "set%02d", k);
+        FILE *f = fopen(at(name), "rb");
+        if (!f) return -1;
+        size_t n = fread(got, 1, sizeof got - 1, f);
+        fclose(f);
+        int g = n ? atoi(got) : -1;
+        if (gen == -2) gen = g;
+        if (g != gen) return -1;
+    }
+    return gen;
+}
+
 int main(void)
 {
     snprintf(g_dir, sizeof g_dir, "/tmp/fb-test-output-XXXXXX");
     REQUIRE(mkdtemp(g_dir) != NULL);
+
+    /* First the hidden named temporary files (a file system without O_TMPFILE), which these checks
+     * can see; the anonymous ones after. */
+    fb_outputs_use_tmpfile(false);
 
     /* Outside a transaction an output is its own: renamed when done. */
     REQUIRE(write_text("a.txt", "output", "one") == FB_OK);
@@ -132,6 +199,78 @@ int main(void)
     CHECK(count_files(".tmp") == 0);
     fb_outputs_end(FB_ERR_INTERNAL);
     CHECK(access(at("j.txt"), F_OK) != 0);
+
+    /* A name longer than the folder allows is refused when reserved, before any work (not at the
+     * rename after it). */
+    char longname[300];
+    memset(longname, 'n', 299);
+    longname[299] = 0;
+    fb_outputs_begin();
+    CHECK(fb_output_reserve(at(longname), "heightmap") == FB_ERR_USAGE);
+    CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
+    CHECK(count_files("nnnnnnnn") == 0);
+
+    /* Anonymous files (O_TMPFILE, tmpfs has it): nothing in the folder until the commit, then the
+     * targets alone. */
+    fb_outputs_use_tmpfile(true);
+    int before = count_all();
+    fb_outputs_begin();
+    CHECK(write_text("k.txt", "output", "seven") == FB_OK);
+    CHECK(write_text("l.txt", "preview", "eight") == FB_OK);
+    CHECK(fb_output_reserve(at("m.txt"), "mesh") == FB_OK);
+    CHECK(count_all() == before); /* nothing visible while the run works */
+    fb_output_discard(at("m.txt"));
+    CHECK(fb_outputs_end(FB_OK) == FB_OK);
+    CHECK(has("k.txt", "seven") && has("l.txt", "eight") && count_all() == before + 2);
+    /* the mode is 0666 less the umask, as for the named files */
+    mode_t old_mask = umask(027);
+    CHECK(write_text("n.txt", "output", "nine") == FB_OK);
+    umask(old_mask);
+    struct stat st;
+    CHECK(stat(at("n.txt"), &st) == 0 && (st.st_mode & 0777) == 0640);
+    /* a symbolic link planted at every hidden name is never written through (linkat never replaces) */
+
+    /* SIGKILL in the middle of a run: nothing at all is left of its outputs. */
+    before = count_all();
+    pid_t pid = fork();
+    if (pid == 0) {
+        fb_outputs_begin();
+        int fd1 = -1;
+        if (fb_output_open(at("o.txt"), "output", &fd1) || write(fd1, "x", 1) != 1) _exit(1);
+        if (fb_output_reserve(at("p.txt"), "preview")) _exit(1);
+        raise(SIGKILL);
+        _exit(2);
+    }
+    int status = 0;
+    CHECK(pid > 0 && waitpid(pid, &status, 0) == pid && WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
+    CHECK(count_all() == before);
+
+    /* SIGTERM at random moments of runs that commit one set of 24 files again and again: the set is
+     * always one generation's, never half of two (a signal during the commit waits for its end). */
+    int mixed = 0, rounds = 0, committed = 0;
+    th_rng = (uint64_t)time(NULL) | 1;
+    for (int r = 0; r < 60; r++) {
+        int ready[2];
+        REQUIRE(pipe(ready) == 0);
+        pid = fork();
+        if (pid == 0) commit_forever(ready[1]);
+        char r1;
+        bool up = read(ready[0], &r1, 1) == 1;
+        close(ready[0]);
+        close(ready[1]);
+        if (!up) break;
+        struct timespec ts = {0, (long)(2e6 + th_unif() * 20e6)}; /* 2 to 22 ms */
+        nanosleep(&ts, NULL);
+        kill(pid, SIGTERM);
+        if (waitpid(pid, &status, 0) != pid) break;
+        rounds++;
+        committed += WIFEXITED(status) && WEXITSTATUS(status) == 128 + SIGTERM;
+        int g = set_generation();
+        mixed += g == -1 && access(at("set00"), F_OK) == 0;
+    }
+    CHECKF(rounds == 60 && committed == 60, "%d rounds, %d ended with 143", rounds, committed);
+    CHECKF(mixed == 0, "%d of %d rounds left a set of two generations", mixed, rounds);
+    CHECK(count_files(".tmp") == 0);
 
     char cmd[300];
     snprintf(cmd, sizeof cmd, "rm -rf %s", g_dir);

@@ -76,9 +76,21 @@ int fb_cpu_count(void);
 uint64_t fb_physical_memory(void);
 
 /* The memory a run may use (--max-memory): a bake whose predicted peak exceeds it stops before it
- * allocates. Default 80% of fb_physical_memory(). */
+ * allocates. Default 80% of fb_physical_memory(), and at most the address-space limit (RLIMIT_AS,
+ * ulimit -v) less the address space the process maps beyond its data (fb_memory_set_overhead). */
 uint64_t fb_memory_limit(void);
 void fb_memory_set_limit(uint64_t bytes); /* 0: the default */
+
+/* RLIMIT_AS's soft limit in bytes, UINT64_MAX where there is none. */
+uint64_t fb_address_space_limit(void);
+
+/* The address space the process maps for itself beyond the data a bake predicts (code, thread
+ * stacks, malloc arenas, a Vulkan driver's mappings): set by the engine that will run the bake. */
+void fb_memory_set_overhead(uint64_t bytes);
+
+/* "" when the limit is --max-memory's or 80% of the memory; else " (the default: the address-space
+ * limit ...)", for messages that name the limit. Not thread-safe (a static buffer). */
+const char *fb_memory_limit_note(void);
 
 /* "512M", "8G", "8GiB", "1.5T", "12345678" (bytes), "50%" (of physical memory): at least 1 MiB.
  * False for anything else. */

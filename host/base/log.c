@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
+#include <sys/resource.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -149,9 +150,35 @@ uint64_t fb_physical_memory(void)
     return phys;
 }
 
+static uint64_t g_overhead = (uint64_t)256 << 20; /* fb_memory_set_overhead */
+
+uint64_t fb_address_space_limit(void)
+{
+    struct rlimit r;
+    if (getrlimit(RLIMIT_AS, &r) != 0 || r.rlim_cur == RLIM_INFINITY) return UINT64_MAX;
+    return (uint64_t)r.rlim_cur;
+}
+
+void fb_memory_set_overhead(uint64_t bytes)
+{
+    g_overhead = bytes;
+}
+
+/* The default: 80% of the memory, and no more than the address space (ulimit -v) leaves beyond what
+ * the process and its backend map for themselves (code, thread stacks and malloc arenas, a Vulkan
+ * driver). */
+static uint64_t default_limit(bool *from_as)
+{
+    uint64_t phys = fb_physical_memory() / 10 * 8, as = fb_address_space_limit();
+    uint64_t room = as == UINT64_MAX ? UINT64_MAX : as > g_overhead + ((uint64_t)1 << 20) ? as - g_overhead : 1 << 20;
+    *from_as = room < phys;
+    return room < phys ? room : phys;
+}
+
 uint64_t fb_memory_limit(void)
 {
-    return g_memory_limit ? g_memory_limit : fb_physical_memory() / 10 * 8;
+    bool as;
+    return g_memory_limit ? g_memory_limit : default_limit(&as);
 }
 
 void fb_memory_set_limit(uint64_t bytes)
@@ -198,7 +225,22 @@ fb_result fb_memory_check(uint64_t bytes, const char *who)
     char need[32], lim[32];
     fb_format_bytes(bytes, need, sizeof need);
     fb_format_bytes(fb_memory_limit(), lim, sizeof lim);
-    return fb_fail(FB_ERR_INPUT, "%s needs about %s, more than --max-memory %s", who, need, lim);
+    return fb_fail(FB_ERR_INPUT, "%s needs about %s, more than --max-memory %s%s", who, need, lim,
+                   fb_memory_limit_note());
+}
+
+const char *fb_memory_limit_note(void)
+{
+    static char note[160];
+    bool as = false;
+    if (!g_memory_limit) default_limit(&as);
+    if (!as) return "";
+    char total[32], over[32];
+    fb_format_bytes(fb_address_space_limit(), total, sizeof total);
+    fb_format_bytes(g_overhead, over, sizeof over);
+    snprintf(note, sizeof note,
+             " (the default: the address-space limit, ulimit -v, %s, less about %s the process maps)", total, over);
+    return note;
 }
 
 const char *fb_closest(const char *word, const char *const *cands, int n)

@@ -13,6 +13,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <stdatomic.h>
+#include <sys/file.h>
 #include <sys/random.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -23,7 +25,9 @@ typedef struct entry {
     volatile sig_atomic_t live; /* the temporary file exists: the signal handler removes it */
     int state;
     int fd;     /* RESERVED: the open temporary file, until taken */
-    int keepfd; /* "-" (standard output): the anonymous temporary file, copied out at the commit */
+    int keepfd; /* an anonymous file (O_TMPFILE, or standard output's): kept open until the commit */
+    bool std;   /* "-": copied to standard output at the commit */
+    bool anon;  /* an O_TMPFILE file in the target's folder: linked to a hidden name at the commit */
     char what[32];
     char path[PATH_MAX]; /* as the user gave it */
     char key[PATH_MAX];  /* the folder resolved, then the name: two spellings of one file compare equal */
@@ -40,6 +44,13 @@ static struct {
 static int g_ndone;
 static int g_depth;
 static pthread_mutex_t g_mu = PTHREAD_MUTEX_INITIALIZER;
+static bool g_tmpfile = true; /* fb_outputs_use_tmpfile */
+
+/* The signal hand-off (fb_outputs_signal): IDLE, COMMITTING (a signal waits for the commit's end),
+ * DYING (a handler is removing the temporary files; the commit must not start). */
+enum { IDLE = 0, COMMITTING = 1, DYING = 2 };
+static atomic_int g_phase;
+static volatile sig_atomic_t g_deferred; /* the signal that came during the commit */
 
 static const char *kind_of(mode_t m)
 {
@@ -141,7 +152,7 @@ static fb_result reserve_stdout(const char *what, entry **out)
         if (fd >= 0) close(fd);
         return fb_fail(FB_ERR_IO, "-: cannot create a temporary file for the %s: %s", what, strerror(err));
     }
-    *e = (entry){.live = 0, .state = RESERVED, .fd = fd, .keepfd = keep};
+    *e = (entry){.live = 0, .state = RESERVED, .fd = fd, .keepfd = keep, .std = true};
     snprintf(e->what, sizeof e->what, "%s", what);
     snprintf(e->path, sizeof e->path, "-");
     snprintf(e->key, sizeof e->key, "-");
@@ -171,7 +182,38 @@ static fb_result copy_to_stdout(entry *e)
     }
 }
 
-/* Resolves path to its key; checks the target; creates the temporary file. Called locked. */
+/* Creates the hidden named temporary file beside the target (".NAME.<16 hex>.tmp"), exclusively:
+ * the fallback where the folder's file system has no O_TMPFILE. Returns the fd or -1 (errno). */
+static int create_named(entry *e, const char *dir, const char *base)
+{
+    int fd = -1;
+    for (int tries = 0; tries < 16 && fd < 0; tries++) {
+        char tmp[PATH_MAX];
+        snprintf(tmp, sizeof tmp, "%s/.%.180s.%016llx.tmp", dir, base, (unsigned long long)random64());
+        /* The name is written before the file exists, so that a signal between the two removes
+         * nothing else: unlink of a name that does not exist yet is harmless. */
+        memcpy(e->tmp, tmp, sizeof tmp);
+        fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0666);
+        if (fd < 0 && errno != EEXIST) break;
+        if (fd >= 0) e->live = 1;
+    }
+    return fd;
+}
+
+/* An O_TMPFILE file in dir (nothing visible, nothing left by any end of the process), linkable at the
+ * commit through /proc/self/fd. -1 where the file system or the kernel cannot (errno EOPNOTSUPP,
+ * EISDIR, EINVAL), or without /proc. */
+static int create_anonymous(const char *dir)
+{
+    if (!g_tmpfile || access("/proc/self/fd", X_OK) != 0) {
+        errno = EOPNOTSUPP;
+        return -1;
+    }
+    return open(dir, O_TMPFILE | O_WRONLY | O_CLOEXEC, 0666);
+}
+
+/* Resolves path to its key; checks the target and its name; creates the temporary file. Called
+ * locked. */
 static fb_result reserve_locked(const char *path, const char *what, entry **out)
 {
     char dir[PATH_MAX], key[PATH_MAX];
@@ -184,25 +226,32 @@ static fb_result reserve_locked(const char *path, const char *what, entry **out)
         return fb_fail(FB_ERR_USAGE, "%s: names a folder, not a file for the %s", path, what);
     if (!key_of(path, key))
         return fb_fail(FB_ERR_USAGE, "%s: cannot create the %s: folder %s: %s", path, what, dir, strerror(errno));
-    entry *dup = find(key);
-    if (dup)
+    /* The name must fit the folder's file system now, not at the commit after the work. */
+    long name_max = pathconf(dir, _PC_NAME_MAX);
+    if (name_max <= 0) name_max = NAME_MAX;
+    if ((long)strlen(base) > name_max)
+        return fb_fail(FB_ERR_USAGE, "%.60s...: the %s's file name has %zu bytes, more than the %ld its folder allows",
+                       path, what, strlen(base), name_max);
+    if (strlen(key) >= PATH_MAX - 32) return fb_fail(FB_ERR_USAGE, "%.60s...: path too long for the %s", path, what);
+    entry *twice = find(key);
+    if (twice)
         return fb_fail(FB_ERR_USAGE, "%s: named as the %s and as the %s: two outputs cannot share one path", path,
-                       dup->what, what);
+                       twice->what, what);
     struct stat st;
     if (lstat(path, &st) == 0 && !S_ISREG(st.st_mode))
         return fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", path,
                        kind_of(st.st_mode), what);
     entry *e = free_entry();
     if (!e) return fb_fail(FB_ERR_USAGE, "%s: more than %d outputs", path, FB_MAX_OUTPUTS);
-    int fd = -1;
-    for (int tries = 0; tries < 16 && fd < 0; tries++) {
-        char tmp[PATH_MAX];
-        snprintf(tmp, sizeof tmp, "%s/.%.180s.%016llx.tmp", dir, base, (unsigned long long)random64());
-        /* The name is written before the file exists, so that a signal between the two removes
-         * nothing else: unlink of a name that does not exist yet is harmless. */
-        memcpy(e->tmp, tmp, sizeof tmp);
-        fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0666);
-        if (fd < 0 && errno != EEXIST) break;
+    e->live = 0;
+    e->tmp[0] = 0;
+    int fd = create_anonymous(dir), keep = -1;
+    bool anon = fd >= 0;
+    if (fd < 0 && (errno == EOPNOTSUPP || errno == EISDIR || errno == EINVAL || errno == ENOENT))
+        fd = create_named(e, dir, base);
+    if (anon && (keep = dup(fd)) < 0) {
+        close(fd);
+        fd = -1;
     }
     if (fd < 0) {
         int err = errno;
@@ -210,12 +259,13 @@ static fb_result reserve_locked(const char *path, const char *what, entry **out)
                        "%s: cannot create the %s: %s", path, what, strerror(err));
     }
     e->fd = fd;
-    e->keepfd = -1;
+    e->keepfd = keep;
+    e->anon = anon;
+    e->std = false;
     e->state = RESERVED;
     snprintf(e->what, sizeof e->what, "%s", what);
     snprintf(e->path, sizeof e->path, "%s", path);
     memcpy(e->key, key, sizeof key);
-    e->live = 1;
     if (e == &g_out[g_count]) g_count = g_count + 1;
     *out = e;
     return FB_OK;
@@ -234,6 +284,126 @@ static void abort_locked(void)
     g_count = 0;
 }
 
+/* The folder of a file entry's key, for the commit lock. */
+static void key_dir(const entry *e, char *dir, size_t size)
+{
+    const char *slash = strrchr(e->key, '/');
+    snprintf(dir, size, "%.*s", slash == e->key ? 1 : (int)(slash - e->key), e->key);
+}
+
+static int cmp_str(const void *a, const void *b)
+{
+    return strcmp(*(const char *const *)a, *(const char *const *)b);
+}
+
+/* Locks every folder the entries write into (flock, exclusive, in the folders' sorted order so that
+ * two runs never wait for each other crosswise): concurrent runs committing into the same folders
+ * put their sets in place one whole set at a time. Returns how many fds it opened in fds. A folder
+ * that cannot be locked (a file system without flock) is committed unlocked. */
+static int lock_folders(entry **list, int n, int *fds)
+{
+    static char dirs[FB_MAX_OUTPUTS][PATH_MAX];
+    const char *sorted[FB_MAX_OUTPUTS];
+    int nd = 0, nfd = 0;
+    for (int i = 0; i < n; i++) {
+        if (list[i]->std) continue;
+        key_dir(list[i], dirs[nd], sizeof dirs[nd]);
+        sorted[nd] = dirs[nd];
+        nd++;
+    }
+    qsort(sorted, (size_t)nd, sizeof sorted[0], cmp_str);
+    for (int i = 0; i < nd; i++) {
+        if (i > 0 && !strcmp(sorted[i], sorted[i - 1])) continue;
+        int fd = open(sorted[i], O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+        if (fd < 0) continue;
+        while (flock(fd, LOCK_EX) != 0 && errno == EINTR) {
+        }
+        fds[nfd++] = fd;
+    }
+    return nfd;
+}
+
+/* Gives the anonymous file a hidden name beside its target (linkat through /proc/self/fd, which
+ * never replaces an existing name: a planted one makes it try another). */
+static fb_result link_hidden(entry *e)
+{
+    char proc[64], dir[PATH_MAX];
+    const char *base;
+    snprintf(proc, sizeof proc, "/proc/self/fd/%d", e->keepfd);
+    split(e->path, dir, sizeof dir, &base);
+    for (int tries = 0; tries < 16; tries++) {
+        snprintf(e->tmp, sizeof e->tmp, "%s/.%.180s.%016llx.tmp", dir, base, (unsigned long long)random64());
+        e->live = 1; /* before the name exists: a signal then removes nothing else */
+        if (linkat(AT_FDCWD, proc, AT_FDCWD, e->tmp, AT_SYMLINK_FOLLOW) == 0) return FB_OK;
+        e->live = 0;
+        if (errno != EEXIST) break;
+    }
+    return fb_fail(FB_ERR_IO, "%s: cannot give the %s a name in its folder: %s", e->path, e->what, strerror(errno));
+}
+
+/* Puts the n taken entries in place, as one set: names and targets checked again, the folders
+ * locked, signals held off (fb_outputs_signal), every anonymous file given its hidden name, standard
+ * output written (it cannot be taken back), then the renames. Records what was written. On a
+ * failure, nothing more is renamed and the rest are removed by the caller. Called locked. */
+static fb_result commit_locked(entry **list, int n)
+{
+    fb_result rc = FB_OK;
+    struct stat st;
+    /* Checked again just before the renames: a target that became a non-regular file since. */
+    for (int i = 0; i < n && !rc; i++)
+        if (!list[i]->std && lstat(list[i]->path, &st) == 0 && !S_ISREG(st.st_mode))
+            rc = fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", list[i]->path,
+                         kind_of(st.st_mode), list[i]->what);
+    if (rc) return rc;
+    int lockfds[FB_MAX_OUTPUTS], nlock = lock_folders(list, n, lockfds);
+    int idle = IDLE;
+    while (!atomic_compare_exchange_strong(&g_phase, &idle, COMMITTING)) { /* a handler is ending the run */
+        idle = IDLE;
+        pause();
+    }
+    uint64_t bytes[FB_MAX_OUTPUTS];
+    for (int i = 0; i < n; i++) {
+        entry *e = list[i];
+        bytes[i] = e->keepfd >= 0 ? (fstat(e->keepfd, &st) == 0 ? (uint64_t)st.st_size : 0)
+                                  : (lstat(e->tmp, &st) == 0 ? (uint64_t)st.st_size : 0);
+    }
+    if (g_deferred) rc = FB_ERR_INTERNAL; /* a signal came before the first rename: nothing is put in place */
+    for (int i = 0; i < n && !rc; i++)
+        if (list[i]->anon) rc = link_hidden(list[i]);
+    for (int i = 0; i < n && !rc; i++)
+        if (list[i]->std) rc = copy_to_stdout(list[i]);
+    for (int i = 0; i < n && !rc; i++) {
+        entry *e = list[i];
+        if (!e->std && rename(e->tmp, e->path) != 0) {
+            rc = fb_fail(FB_ERR_IO, "%s: cannot move the %s into place: %s", e->path, e->what, strerror(errno));
+            break;
+        }
+        e->live = 0; /* in place: the handler must not remove it any more */
+        if (g_ndone < FB_MAX_OUTPUTS) {
+            snprintf(g_done[g_ndone].path, sizeof g_done[0].path, "%s", e->path);
+            snprintf(g_done[g_ndone].what, sizeof g_done[0].what, "%s", e->what);
+            g_done[g_ndone++].bytes = bytes[i];
+        }
+    }
+    for (int i = 0; i < nlock; i++) close(lockfds[i]); /* the locks go with the fds */
+    if (rc) /* the hidden names given so far go too (drop unlinks what is live) */
+        for (int i = 0; i < n; i++)
+            if (list[i]->live && list[i]->anon) unlink(list[i]->tmp), list[i]->live = 0;
+    atomic_store(&g_phase, IDLE);
+    return rc;
+}
+
+/* A signal that came during the commit: taken now, as if it had come after (its handler ends the
+ * run). */
+static void deliver_deferred(void)
+{
+    int sig = g_deferred;
+    if (sig) {
+        g_deferred = 0;
+        raise(sig);
+    }
+}
+
 fb_result fb_outputs_end(fb_result rc)
 {
     pthread_mutex_lock(&g_mu);
@@ -241,38 +411,19 @@ fb_result fb_outputs_end(fb_result rc)
     if (rc) {
         abort_locked();
     } else if (g_depth == 0) {
+        entry *list[FB_MAX_OUTPUTS];
+        int n = 0;
         for (int i = 0; i < g_count && !rc; i++)
             if (g_out[i].state == RESERVED)
                 rc =
                     fb_fail(FB_ERR_INTERNAL, "%s: the %s was reserved but never written", g_out[i].path, g_out[i].what);
-        /* Checked again just before the renames: a target that became a non-regular file since. */
-        struct stat st;
-        for (int i = 0; i < g_count && !rc; i++)
-            if (g_out[i].state == TAKEN && g_out[i].keepfd < 0 && lstat(g_out[i].path, &st) == 0 &&
-                !S_ISREG(st.st_mode))
-                rc = fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", g_out[i].path,
-                             kind_of(st.st_mode), g_out[i].what);
-        for (int i = 0; i < g_count && !rc; i++) {
-            entry *e = &g_out[i];
-            if (e->state != TAKEN) continue;
-            struct stat fs;
-            uint64_t bytes = e->keepfd >= 0 ? (fstat(e->keepfd, &fs) == 0 ? (uint64_t)fs.st_size : 0)
-                                            : (lstat(e->tmp, &fs) == 0 ? (uint64_t)fs.st_size : 0);
-            if (e->keepfd >= 0) {
-                if ((rc = copy_to_stdout(e))) break;
-            } else if (rename(e->tmp, e->path) != 0) {
-                rc = fb_fail(FB_ERR_IO, "%s: cannot move the %s into place: %s", e->path, e->what, strerror(errno));
-                break;
-            }
-            e->live = 0; /* renamed: the handler must not remove it any more */
-            e->state = FREE;
-            snprintf(g_done[g_ndone].path, sizeof g_done[0].path, "%s", e->path);
-            snprintf(g_done[g_ndone].what, sizeof g_done[0].what, "%s", e->what);
-            g_done[g_ndone++].bytes = bytes;
-        }
+            else if (g_out[i].state == TAKEN)
+                list[n++] = &g_out[i];
+        if (!rc) rc = commit_locked(list, n);
         abort_locked(); /* after a failed rename: the rest are removed */
     }
     pthread_mutex_unlock(&g_mu);
+    deliver_deferred();
     return rc;
 }
 
@@ -355,19 +506,12 @@ fb_result fb_output_done(const char *path, fb_result rc)
     if (!e || e->state != TAKEN) {
         rc = fb_fail(FB_ERR_INTERNAL, "%s: finished but never opened as an output", path);
     } else if (g_depth == 0) {
-        struct stat st;
-        if (e->keepfd >= 0)
-            rc = copy_to_stdout(e);
-        else if (lstat(e->path, &st) == 0 && !S_ISREG(st.st_mode))
-            rc = fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", e->path,
-                         kind_of(st.st_mode), e->what);
-        else if (rename(e->tmp, e->path) != 0)
-            rc = fb_fail(FB_ERR_IO, "%s: cannot move the %s into place: %s", e->path, e->what, strerror(errno));
-        else
-            e->live = 0;
+        g_ndone = 0;
+        rc = commit_locked(&e, 1);
         drop(e);
     }
     pthread_mutex_unlock(&g_mu);
+    deliver_deferred();
     return rc;
 }
 
@@ -384,6 +528,24 @@ void fb_outputs_unlink_all(void)
 {
     for (int i = 0; i < g_count; i++)
         if (g_out[i].live) unlink(g_out[i].tmp);
+}
+
+bool fb_outputs_signal(int sig)
+{
+    int idle = IDLE;
+    if (atomic_compare_exchange_strong(&g_phase, &idle, DYING)) {
+        fb_outputs_unlink_all();
+        return true;
+    }
+    if (idle == COMMITTING && !g_deferred) g_deferred = sig;
+    return false; /* COMMITTING: taken when the commit ends; DYING: another thread is ending the run */
+}
+
+void fb_outputs_use_tmpfile(bool on)
+{
+    pthread_mutex_lock(&g_mu);
+    g_tmpfile = on;
+    pthread_mutex_unlock(&g_mu);
 }
 
 fb_result fb_output_format(const char *flag, const char *path, const char *ext)

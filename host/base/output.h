@@ -2,11 +2,15 @@
  * The files a run writes, as one transaction.
  *
  * Every output (the EXR, its preview, a terrain mesh, a CSV, a plot, a diff image) is written to a
- * temporary file created exclusively (O_CREAT | O_EXCL, mode 0666 less the umask, a name of 64
- * random bits) in the target's folder. Nothing is renamed into place until the whole run has
- * succeeded; then every temporary file is renamed over its target, one after another. On any failure,
- * and on SIGINT, SIGTERM or SIGHUP (main() installs the handler), every temporary file is removed and
- * no target is touched.
+ * temporary file in the target's folder, mode 0666 less the umask: an anonymous one (O_TMPFILE)
+ * where the file system allows, which nothing can see and no end of the process (SIGKILL, a crash,
+ * a power cut) leaves behind; elsewhere a hidden one created exclusively (O_CREAT | O_EXCL, a name
+ * of 64 random bits). Names, folders and targets are checked when an output is reserved, before
+ * any work. Nothing is put in place until the whole run has succeeded; then, at the commit, the
+ * folders are locked (flock: runs committing into the same folders do it one whole set at a time),
+ * signals are held off (fb_outputs_signal), each anonymous file is linked to a hidden name, and every
+ * file is renamed over its target. On any failure, and on a signal before the commit, every
+ * temporary file is removed and no target is touched.
  *
  * Only regular files are replaced: a target that exists and is anything else (a directory, a device
  * node, a symbolic link, a FIFO) is refused before anything is computed, as is one path named twice.
@@ -68,6 +72,17 @@ int fb_outputs_written(const char **paths, const char **whats, uint64_t *bytes, 
 
 /* For a signal handler: removes every temporary file of the transaction. Async-signal-safe. */
 void fb_outputs_unlink_all(void);
+
+/* For a handler of a signal that ends the run (async-signal-safe, any thread). Outside a commit:
+ * removes every temporary file and returns true (the handler then ends the process). During a
+ * commit: records the signal and returns false; the commit finishes the whole set (or, when the
+ * signal came before its first rename, puts nothing in place) and then raises the signal again,
+ * which ends the run like one that came after. */
+bool fb_outputs_signal(int sig);
+
+/* Whether outputs may be anonymous (O_TMPFILE) files (default true). false: always the hidden named
+ * temporary file, as on a file system without O_TMPFILE (for tests of that path). */
+void fb_outputs_use_tmpfile(bool on);
 
 /* A file named for one image format (".png") where another is written (ext, ".exr") is refused:
  * FB_ERR_USAGE naming the flag. Names without an image extension (a mesh, /dev/null, "out") are

@@ -6,9 +6,13 @@
  *   bad input (FB_ERR_INPUT, exit 2) naming the path.
  * - A line's content ends at '#' (a comment); blank lines are skipped. Fields are separated by
  *   commas and/or blanks; two commas in a row make an empty field.
- * - The first content line is a header when its first field is not a number (by its form: "x,y,z"
- *   or "easting northing height"), never because the line failed to parse: "10.5,10" on line 1 is
- *   data, and an error there is reported like anywhere else.
+ * - The first content line is a header when its first field does not begin like a number ("x,y,z",
+ *   "easting northing height"): whatever strtod can start reading (a sign, digits, a point, "0x",
+ *   "inf", "nan") makes the line data, even when its value overflows ("1e400", "0x1p99999") or the
+ *   rest is not a number, so that the error is reported like anywhere else, never swallowed.
+ * - Regular files and pipes are read ("-" is standard input; a FIFO or a shell's <(...) too), and
+ *   nothing waits on a FIFO that has no writer: it reads as nothing, which is bad input naming it.
+ *   Devices and sockets (/dev/zero) are refused. A line too long for memory is bad input too.
  */
 #ifndef FB_TEXTIN_H
 #define FB_TEXTIN_H
@@ -18,8 +22,9 @@
 #include <stdbool.h>
 #include <stdio.h>
 
-/* fopen(path, "rb") for an input, refusing a directory; failures logged as FB_ERR_INPUT. "-" is
- * standard input, which one run reads once (a second "-" is FB_ERR_USAGE). */
+/* fopen(path, "rb") for an input (never blocking on a FIFO without a writer), refusing a directory,
+ * a device or a socket; failures logged as FB_ERR_INPUT.
+ * "-" is standard input, which one run reads once (a second "-" is FB_ERR_USAGE). */
 fb_result fb_input_open(const char *path, const char *what, FILE **out);
 
 typedef struct fb_lines {
@@ -30,6 +35,7 @@ typedef struct fb_lines {
     int lineno;   /* of the line last returned */
     int contents; /* content lines seen, the header included */
     bool header;  /* the first content line was a header */
+    bool fifo;    /* a FIFO or pipe: empty means no writer */
 } fb_lines;
 
 /* Opens path for fb_lines_next; `what` names the file's role in messages ("points", "centres"). */
@@ -40,6 +46,16 @@ fb_result fb_lines_open(fb_lines *l, const char *path, const char *what);
 int fb_lines_next(fb_lines *l, char **fields, int max, int *nf);
 
 void fb_lines_close(fb_lines *l);
+
+/* A decimal integer in lo..hi, for metadata: digits with an optional sign, no blanks, no overflow
+ * (4294967302 is not 6). end NULL: the whole of s; else *end is set after the digits. */
+bool fb_text_int(const char *s, long long lo, long long hi, const char **end, long long *out);
+
+/* Whether s is valid UTF-8 (what a JSON string holds: a value that is not cannot enter a scene). */
+bool fb_text_utf8(const char *s);
+
+/* Whether s begins like a number (the header rule above). */
+bool fb_text_starts_number(const char *s);
 
 /* A whole field as a finite or infinite double ("nan" and "inf" parse; overflow does not). */
 bool fb_text_number(const char *s, double *out);

@@ -7,6 +7,7 @@
 
 #include "gen.h"
 #include "schema.h"
+#include "textin.h"
 
 #include <jansson.h>
 
@@ -226,6 +227,10 @@ fb_result fb_scene_from_flags(const char *kind, int argc, char **argv, char **js
         }
         json_t *target = scene_level ? root : layer;
         json_t *val;
+        if (k->type != FB_K_BOOL && i + 1 < argc && !fb_text_utf8(argv[i + 1])) {
+            rc = fb_fail(FB_ERR_USAGE, "--%s: the value is not UTF-8 text (a scene holds JSON strings)", flag);
+            goto out;
+        }
         if (k->type == FB_K_RULES) { /* repeatable: each --rule adds one production */
             if (i + 1 >= argc) {
                 rc = fb_fail(FB_ERR_USAGE, "--%s: missing value", flag);
@@ -250,6 +255,12 @@ fb_result fb_scene_from_flags(const char *kind, int argc, char **argv, char **js
             }
         }
         json_object_set_new(target, k->key, val);
+    }
+    /* a named palette beside a cosine or gradient one would be ignored */
+    if (json_object_get(layer, "palette") && (json_object_get(layer, "stops") || json_object_get(layer, "cosine"))) {
+        rc = fb_fail(FB_ERR_USAGE, "--palette with --%s: the named palette would be ignored; give one of them",
+                     json_object_get(layer, "stops") ? "stops" : "cosine");
+        goto out;
     }
     json_array_append_new(layers, layer);
     layer = NULL;

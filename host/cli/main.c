@@ -4,6 +4,7 @@
  */
 #include "bake.h"
 #include "bench.h"
+#include "cliout.h"
 #include "tonemap.h"
 #include "compare.h"
 #include "env.h"
@@ -16,12 +17,14 @@
 #include "progress.h"
 #include "flags.h"
 #include "scene.h"
+#include "textin.h"
 #include "vkc.h"
 #include "jsonout.h"
 
 #include <jansson.h>
 
 #include <errno.h>
+#include <math.h>
 #include <stddef.h>
 #include <signal.h>
 #include <stdio.h>
@@ -170,13 +173,19 @@ typedef struct common_opts {
     uint64_t max_memory; /* 0: the default (80% of physical memory) */
 } common_opts;
 
+/* An integer flag's value: decimal, or exponent notation with a whole value (--tasks 1e1 is 10), as
+ * the generators' integer flags take it. */
 static bool parse_int_arg(const char *s, long lo, long hi, int *out)
 {
+    long long v;
+    if (fb_text_int(s, lo, hi, NULL, &v)) {
+        *out = (int)v;
+        return true;
+    }
     char *end;
-    errno = 0;
-    long v = strtol(s, &end, 10);
-    if (!*s || *end || errno || v < lo || v > hi) return false;
-    *out = (int)v;
+    double d = strtod(s, &end);
+    if (!*s || *end || !(d >= (double)lo && d <= (double)hi) || d != floor(d) || !strpbrk(s, "eE")) return false;
+    *out = (int)d;
     return true;
 }
 
@@ -203,9 +212,12 @@ static bool parse_region(const char *s, int r[4])
 
 static bool parse_points_part(const char *s, int pp[2])
 {
-    int used = 0;
-    return sscanf(s, "%d/%d%n", &pp[0], &pp[1], &used) == 2 && !s[used] && pp[1] >= 1 && pp[1] <= 4096 && pp[0] >= 1 &&
-           pp[0] <= pp[1];
+    const char *end;
+    long long k, n;
+    if (!fb_text_int(s, 1, 4096, &end, &k) || *end != '/' || !fb_text_int(end + 1, 1, 4096, NULL, &n) || k > n)
+        return false;
+    pp[0] = (int)k, pp[1] = (int)n;
+    return true;
 }
 
 /* The common options (without dashes), for "did you mean" hints. */
@@ -348,7 +360,7 @@ static void report(const char *layer, const char *summary, const char *json, voi
         json_array_foreach(layers, i, l) if (!strcmp(json_string_value(json_object_get(l, "name")), layer))
             json_object_set_new(l, "summary", json_loads(json, 0, NULL));
     } else if (!o->quiet) {
-        fprintf(stderr, "fractalbake: %s\n", summary);
+        cli_after("fractalbake: %s", summary);
     }
 }
 
@@ -395,6 +407,10 @@ static fb_result bake_scene(const char *command, fb_scene *scene, const common_o
 {
     if (o->json && !o->dry_run && o->out && !strcmp(o->out, "-"))
         return fb_fail(FB_ERR_USAGE, "--json: standard output holds the EXR (-o -): one or the other");
+    if (o->preview_layer && !o->preview)
+        return fb_fail(FB_ERR_USAGE,
+                       "--preview-layer %s: only with --preview FILE.png (there is no preview to show it)",
+                       o->preview_layer);
     if (o->json && !o->dry_run) {
         json_t *sum = summary_start(command), *layers = json_array();
         for (int i = 0; i < scene->nlayers; i++)
@@ -500,7 +516,9 @@ static fb_result bake_scene(const char *command, fb_scene *scene, const common_o
             json_object_set_new(g_summary, "region",
                                 json_pack("[iiii]", o->region[0], o->region[1], o->region[2], o->region[3]));
         json_object_set_new(g_summary, "seconds", json_real(st.seconds));
-        json_object_set_new(g_summary, "device", json_string(e.device));
+        bool any_vk = false; /* "device": the Vulkan device where a layer ran on it, else native C */
+        for (int i = 0; i < scene->nlayers; i++) any_vk = any_vk || st.layer_backend[i] == FB_BACKEND_VULKAN;
+        json_object_set_new(g_summary, "device", json_string(any_vk ? e.device : "native C"));
         if (st.preview[0]) json_object_set_new(g_summary, "preview", json_string(st.preview));
         json_t *hms = json_array();
         for (int i = 0; i < st.nheightmaps; i++) {
@@ -518,27 +536,30 @@ static fb_result bake_scene(const char *command, fb_scene *scene, const common_o
         else
             json_decref(hms);
         json_t *layers = json_object_get(g_summary, "layers");
-        for (int i = 0; i < scene->nlayers; i++)
-            json_object_set_new(json_array_get(layers, (size_t)i), "backend",
-                                json_string(fb_backend_name(st.layer_backend[i])));
+        for (int i = 0; i < scene->nlayers; i++) {
+            json_t *l = json_array_get(layers, (size_t)i);
+            json_object_set_new(l, "backend", json_string(fb_backend_name(st.layer_backend[i])));
+            json_object_set_new(l, "device",
+                                json_string(st.layer_backend[i] == FB_BACKEND_VULKAN ? e.device : "native C"));
+        }
     } else if (!rc && !o->quiet) {
-        if (o->task[1] > 0) fprintf(stderr, "fractalbake: task %d/%d: %s\n", o->task[0], o->task[1], share);
-        fprintf(stderr, "fractalbake: wrote %s (%d x %d%s, %d layer%s) in %.2f s %s\n",
-                strcmp(o->out, "-") ? o->out : "standard output", o->region[2] ? o->region[2] : scene->width,
-                o->region[2] ? o->region[3] : scene->height, o->region[2] ? " region" : "", scene->nlayers,
-                scene->nlayers == 1 ? "" : "s", st.seconds, st.ran_on);
-        if (st.preview[0]) fprintf(stderr, "fractalbake: preview %s: %s\n", o->preview, st.preview);
+        if (o->task[1] > 0) cli_after("fractalbake: task %d/%d: %s", o->task[0], o->task[1], share);
+        cli_after("fractalbake: wrote %s (%d x %d%s, %d layer%s) in %.2f s %s",
+                  strcmp(o->out, "-") ? o->out : "standard output", o->region[2] ? o->region[2] : scene->width,
+                  o->region[2] ? o->region[3] : scene->height, o->region[2] ? " region" : "", scene->nlayers,
+                  scene->nlayers == 1 ? "" : "s", st.seconds, st.ran_on);
+        if (st.preview[0]) cli_after("fractalbake: preview %s: %s", o->preview, st.preview);
         for (int i = 0; i < st.nheightmaps; i++) {
             const fb_bake_heightmap *h = &st.heightmaps[i];
             char lo[40], hi[40];
             fb_format_shortest(h->lo, lo, sizeof lo);
             fb_format_shortest(h->hi, hi, sizeof hi);
             if (h->format == FB_HEIGHTMAP_GEOTIFF)
-                fprintf(stderr, "fractalbake: heightmap %s: layer %s's heights as float, with its geotransform\n",
-                        h->path, h->layer);
+                cli_after("fractalbake: heightmap %s: layer %s's heights as float, with its geotransform", h->path,
+                          h->layer);
             else
-                fprintf(stderr, "fractalbake: heightmap %s: layer %s's heights %s (0) to %s (65535), %s\n", h->path,
-                        h->layer, lo, hi, heightmap_format_name(h->format));
+                cli_after("fractalbake: heightmap %s: layer %s's heights %s (0) to %s (65535), %s", h->path, h->layer,
+                          lo, hi, heightmap_format_name(h->format));
         }
     }
     fb_engine_close(&e);
@@ -836,6 +857,8 @@ static int cmd_compare(int argc, char **argv)
     d.b = files[1];
     if (quiet && !d.json) d.print = print_result_only;
     fb_verdict v = FB_VERDICT_PASS;
+    if (d.heat && !d.diff_png)
+        return usage_error("%s", "--heat: only with --diff-png OUT.png (it chooses that picture's colours)");
     fb_result rc = fb_compare(&d, &v);
     if (rc) return finish(rc);
     return v == FB_VERDICT_FAIL ? 1 : 0;
@@ -909,7 +932,7 @@ static int cmd_merge(int argc, char **argv)
         json_object_set_new(sum, "parts", in);
         json_object_set_new(sum, "seconds", json_real(fb_now() - t0));
     } else if (!rc && !quiet) {
-        fprintf(stderr, "fractalbake: merged %d part%s into %s in %.2f s\n", n, n == 1 ? "" : "s", out, fb_now() - t0);
+        cli_after("fractalbake: merged %d part%s into %s in %.2f s", n, n == 1 ? "" : "s", out, fb_now() - t0);
     }
     free(parts);
     return finish(rc);
@@ -1191,24 +1214,6 @@ static int cmd_devices(int argc, char **argv)
     return 0;
 }
 
-/* SIGINT, SIGTERM, SIGHUP: this run's temporary files go, no output is renamed into place, and the
- * exit status is 128 + the signal (130 for Ctrl-C), as a shell reports a process killed by it. */
-static void on_signal(int sig)
-{
-    fb_outputs_unlink_all();
-    _exit(128 + sig);
-}
-
-static void install_signal_handlers(void)
-{
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigfillset(&sa.sa_mask); /* no second signal inside the handler */
-    const int sigs[] = {SIGINT, SIGTERM, SIGHUP};
-    for (size_t i = 0; i < sizeof sigs / sizeof sigs[0]; i++) sigaction(sigs[i], &sa, NULL);
-}
-
 static int run_command(int argc, char **argv);
 
 /* The habits of other command lines, spelled the one way the commands read: --flag=value becomes
@@ -1258,14 +1263,16 @@ static char **normalise_args(int *argc, char **argv)
 
 int main(int argc, char **argv)
 {
+    cli_start();
     fb_log_set_sink(sink, NULL);
     fb_progress_set_sink(&(fb_progress_sink){.terminal = isatty(STDERR_FILENO), .write = progress_sink});
     fb_env_read(&g_env);
     argv = normalise_args(&argc, argv);
-    install_signal_handlers();
     /* bench bakes to a scratch file again and again: each of its bakes is a transaction of its own */
     if (argc >= 2 && !strcmp(argv[1], "bench")) {
         int code = run_command(argc, argv);
+        fb_result out = cli_stdout_finish();
+        if (out && code == 0) code = finish(out);
         free_args();
         return code;
     }
@@ -1276,7 +1283,8 @@ int main(int argc, char **argv)
     g_first_error[0] = 0;
     fb_result rc = fb_outputs_end(code == 0 || code == 1 ? FB_OK : FB_ERR_INTERNAL);
     if (rc && (code == 0 || code == 1)) code = finish(rc);
-    if (g_summary && code == 0) { /* --json: the summary, now that the outputs are in place */
+    cli_after_flush(code == 0 || code == 1); /* "wrote ...": now that it is true */
+    if (g_summary && code == 0) {            /* --json: the summary, now that the outputs are in place */
         const char *paths[FB_MAX_OUTPUTS], *whats[FB_MAX_OUTPUTS];
         uint64_t bytes[FB_MAX_OUTPUTS];
         int n = fb_outputs_written(paths, whats, bytes, FB_MAX_OUTPUTS);
@@ -1290,8 +1298,19 @@ int main(int argc, char **argv)
         free(text);
     }
     json_decref(g_summary);
+    g_first_error[0] = 0;
+    fb_result out = cli_stdout_finish();
+    if (out && (code == 0 || code == 1)) code = finish(out);
     free_args();
     return code;
+}
+
+/* tonemap's output path, for its summary line: the value of its -o (it refused a command without). */
+static const char *tonemap_out(int argc, char **argv)
+{
+    for (int i = 0; i + 1 < argc; i++)
+        if (!strcmp(argv[i], "-o") || !strcmp(argv[i], "--output")) return argv[i + 1];
+    return "the output";
 }
 
 static int run_command(int argc, char **argv)
@@ -1320,7 +1339,7 @@ static int run_command(int argc, char **argv)
         if (!rc && json && !help)
             json_object_set_new(summary_start("tonemap"), "seconds", json_real(fb_now() - t0));
         else if (!rc && !quiet && !help)
-            fprintf(stderr, "fractalbake: tone-mapped in %.2f s\n", fb_now() - t0);
+            cli_after("fractalbake: wrote %s (tone-mapped) in %.2f s", tonemap_out(argc - 2, argv + 2), fb_now() - t0);
         return finish(rc);
     }
     if (!strcmp(cmd, "compare")) return cmd_compare(argc - 2, argv + 2);

@@ -8,6 +8,7 @@
  * values, so half channels round-trip exactly and the merged pixels are the full bake's.
  */
 #include "merge.h"
+#include "textin.h"
 
 #include "exrio.h"
 #include "engine.h"
@@ -27,9 +28,10 @@ typedef struct part {
 } part;
 
 /* The attributes a fractalbake file carries, in the order bake writes them (so that a merged file
- * is byte for byte the whole-image bake); the region attribute is left out. */
-static const char *const k_attrs[] = {"fractalbake/scene", "fractalbake/seed", "fractalbake/backend",
-                                      "fractalbake/device", "fractalbake/version"};
+ * is byte for byte the whole-image bake, whatever backend ran each layer); the region attribute is
+ * left out. */
+static const char *const k_attrs[] = {"fractalbake/scene",  "fractalbake/seed",    "fractalbake/backend",
+                                      "fractalbake/device", "fractalbake/version", "fractalbake/layer-backends"};
 
 /* The merged file, W x H: the channels given, the EXR parts (names, compressions) and the fractalbake
  * attributes of the first input. */
@@ -205,15 +207,30 @@ out:
 
 /* ---- points parts: chaos-game hits added ------------------------------------------------------ */
 
+/* "K/N" of a part or task attribute: decimal integers, K >= k_lo, 1 <= N <= n_max, nothing else. */
+static bool parse_kn(const char *s, int k_lo, int n_max, int *k, int *n)
+{
+    const char *end;
+    long long a, b;
+    if (!s || !fb_text_int(s, k_lo, n_max, &end, &a) || *end != '/' || !fb_text_int(end + 1, 1, n_max, NULL, &b))
+        return false;
+    *k = (int)a, *n = (int)b;
+    return true;
+}
+
 /* The outside count of layer `name` in a part's "fractalbake/ifs-outside" ("a=12;b=0"). */
 static bool outside_of(const char *attr, const char *name, uint64_t *out)
 {
     size_t len = strlen(name);
     for (const char *q = attr; q && *q; q = strchr(q, ';') ? strchr(q, ';') + 1 : NULL)
         if (!strncmp(q, name, len) && q[len] == '=') {
-            char *end;
-            *out = strtoull(q + len + 1, &end, 10);
-            return end != q + len + 1;
+            /* digits up to the next ';', at most the documented maximum of a chaos game's points */
+            const char *end;
+            long long v;
+            if (!fb_text_int(q + len + 1, 0, 100000000000000ll, &end, &v) || (*end && *end != ';') || q[len + 1] == '+')
+                return false;
+            *out = (uint64_t)v;
+            return true;
         }
     return false;
 }
@@ -308,8 +325,10 @@ static fb_result chaos_add(chaos_layer *cl, int ncl, const fb_scene *sc, exrio_r
         uint64_t o = 0;
         const char *name = sc->layers[cl[k].layer].name;
         if (!outside_of(exrio_attr_string(r, "fractalbake/ifs-outside"), name, &o))
-            return fb_fail(FB_ERR_INPUT, "%s: no outside count for layer %s (attribute fractalbake/ifs-outside)", path,
-                           name);
+            return fb_fail(FB_ERR_INPUT,
+                           "%s: no outside count for layer %s, or a malformed one (attribute fractalbake/ifs-outside: "
+                           "NAME=COUNT;..., counts 0..1e14)",
+                           path, name);
         cl[k].outside += o;
         for (int s = 0, j = 0; s < cl[k].ops->nsums; s++) /* the channels' indices in this file */
             for (int h = 0; h < (cl[k].ops->sums[s].wide ? 2 : 1); h++, j++) {
@@ -349,7 +368,7 @@ static fb_result merge_points(part *p, int n, const char *const *paths, const ch
         int k = 0, nn = 0;
         const char *pp = exrio_attr_string(p[i].r, "fractalbake/points-part");
         const char *scene = exrio_attr_string(p[i].r, "fractalbake/scene");
-        if (sscanf(pp, "%d/%d", &k, &nn) != 2 || k < 1 || nn < 1 || k > nn || nn > 4096)
+        if (!parse_kn(pp, 1, 4096, &k, &nn) || k < 1 || k > nn)
             return fb_fail(FB_ERR_INPUT, "%s: malformed attribute fractalbake/points-part \"%s\"", paths[i], pp);
         if (i == 0) N = nn;
         if (nn != N) return fb_fail(FB_ERR_INPUT, "%s: part %d of %d, but %s is of %d", paths[i], k, nn, paths[0], N);
@@ -531,7 +550,7 @@ static fb_result merge_tasks(part *p, int n, const char *const *paths, const cha
     for (int i = 0; i < n && !rc; i++) {
         int k = -1, nn = 0;
         const char *t = exrio_attr_string(p[i].r, "fractalbake/task");
-        if (sscanf(t, "%d/%d", &k, &nn) != 2 || nn != plan->ntasks || k < 0 || k >= plan->nactive)
+        if (!parse_kn(t, 0, FB_PLAN_MAX_TASKS, &k, &nn) || nn != plan->ntasks || k >= plan->nactive)
             rc = fb_fail(FB_ERR_INPUT, "%s: task \"%s\" is not one of the plan's %d tasks with work", paths[i], t,
                          plan->nactive);
         else if (file_of[k] >= 0)

@@ -434,9 +434,9 @@ static fb_result plan_memory(const fb_engine *e, const fb_bake_desc *d, const la
         fb_format_bytes(plan->limit, lim, sizeof lim);
         fb_format_bytes(plan->layers[largest].bytes, big, sizeof big);
         return fb_fail(FB_ERR_INPUT,
-                       "the bake needs about %s, more than --max-memory %s; layer %s alone needs %s (lower its size, "
-                       "points or insertions, or raise --max-memory)",
-                       need, lim, plan->layers[largest].name, big);
+                       "the bake needs about %s, more than --max-memory %s%s; layer %s alone needs %s (lower its "
+                       "size, points or insertions, or raise --max-memory)",
+                       need, lim, fb_memory_limit_note(), plan->layers[largest].name, big);
     }
     return FB_OK;
 }

@@ -352,16 +352,28 @@ static uint32_t mask_of(const fb_scene *s, const json_t *names, bool *ok)
     return m;
 }
 
+/* An integer of a stored plan, range-checked (a "tasks" of 4294967302 is not 6): *ok goes false on
+ * anything else. */
+static int int_of(const json_t *v, int lo, int hi, bool *ok)
+{
+    json_int_t x = json_integer_value(v);
+    if (!json_is_integer(v) || x < lo || x > hi) {
+        *ok = false;
+        return lo;
+    }
+    return (int)x;
+}
+
 fb_result fb_plan_parse(const char *text, const fb_scene *s, fb_plan *p)
 {
     memset(p, 0, sizeof *p);
     json_error_t err;
     json_t *o = json_loads(text, 0, &err);
     bool ok = o != NULL;
-    p->ntasks = (int)json_integer_value(json_object_get(o, "tasks"));
-    p->nactive = (int)json_integer_value(json_object_get(o, "active"));
-    p->nbands = (int)json_integer_value(json_object_get(o, "bands"));
-    p->nparts = (int)json_integer_value(json_object_get(o, "points_parts"));
+    p->ntasks = int_of(json_object_get(o, "tasks"), 1, FB_PLAN_MAX_TASKS, &ok);
+    p->nactive = int_of(json_object_get(o, "active"), 1, FB_PLAN_MAX_TASKS, &ok);
+    p->nbands = int_of(json_object_get(o, "bands"), 0, FB_PLAN_MAX_TASKS, &ok);
+    p->nparts = int_of(json_object_get(o, "points_parts"), 0, FB_PLAN_MAX_TASKS, &ok);
     p->startup = json_number_value(json_object_get(o, "startup"));
     const json_t *tl = json_object_get(o, "task_list");
     ok = ok && p->ntasks >= 1 && p->ntasks <= FB_PLAN_MAX_TASKS && p->nactive >= 1 && p->nactive <= p->ntasks &&
@@ -370,18 +382,18 @@ fb_result fb_plan_parse(const char *text, const fb_scene *s, fb_plan *p)
         const json_t *j = json_array_get(tl, (size_t)k), *r = json_object_get(j, "rows"),
                      *pp = json_object_get(j, "points_part");
         fb_task *t = &p->tasks[k];
-        ok = json_integer_value(json_object_get(j, "task")) == k;
+        ok = int_of(json_object_get(j, "task"), 0, FB_PLAN_MAX_TASKS, &ok) == k && ok;
         t->layers = mask_of(s, json_object_get(j, "layers"), &ok);
         t->seconds = json_number_value(json_object_get(j, "seconds"));
         if (r) {
             t->band = true;
-            t->y0 = (int)json_integer_value(json_array_get(r, 0));
-            t->y1 = (int)json_integer_value(json_array_get(r, 1));
+            t->y0 = int_of(json_array_get(r, 0), 0, s->height, &ok);
+            t->y1 = int_of(json_array_get(r, 1), 0, s->height, &ok);
             ok = ok && 0 <= t->y0 && t->y0 < t->y1 && t->y1 <= s->height;
         }
         if (pp) {
-            t->part = (int)json_integer_value(json_array_get(pp, 0));
-            t->nparts = (int)json_integer_value(json_array_get(pp, 1));
+            t->part = int_of(json_array_get(pp, 0), 1, FB_PLAN_MAX_TASKS, &ok);
+            t->nparts = int_of(json_array_get(pp, 1), 1, FB_PLAN_MAX_TASKS, &ok);
             t->points = mask_of(s, json_object_get(j, "points_layers"), &ok);
             ok = ok && 1 <= t->part && t->part <= t->nparts && t->points && !(t->points & ~t->layers);
         }

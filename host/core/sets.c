@@ -6,6 +6,7 @@
 
 #include "gen.h"
 #include "schema.h"
+#include "textin.h"
 
 #include <jansson.h>
 
@@ -62,6 +63,9 @@ fb_result fb_scene_apply_set(struct json_t *root, const char *set, char jpath[25
     const char *eq = strchr(set, '=');
     if (!eq || eq == set)
         return fb_fail(FB_ERR_USAGE, "--set %s: expected KEY.PATH=VALUE (e.g. layers.sky.c=-0.8,0.156)", set);
+    if (!fb_text_utf8(set))
+        return fb_fail(FB_ERR_USAGE, "--set %.*s: the value is not UTF-8 text (a scene holds JSON strings)",
+                       (int)(eq - set), set);
     json_t *node = root, *val = set_value(eq + 1);
     if (!val) return fb_fail(FB_ERR_NOMEM, "out of memory");
     jpath[0] = 0;

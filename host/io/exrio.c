@@ -831,6 +831,8 @@ fb_result exrio_open(const char *path, exrio_reader **out)
     struct stat fst;
     uint64_t file_size = fstat(fileno(probe), &fst) == 0 && S_ISREG(fst.st_mode) ? (uint64_t)fst.st_size : UINT64_MAX;
     fclose(probe);
+    if (file_size == UINT64_MAX) /* a FIFO: OpenEXR reads by offsets, and would wait for a writer */
+        return fb_fail(FB_ERR_INPUT, "%s: is a FIFO or pipe, not a regular file: an EXR is read by offsets", path);
     exrio_reader *r = calloc(1, sizeof *r);
     if (!r) return fb_fail(FB_ERR_NOMEM, "out of memory");
     snprintf(r->path, sizeof r->path, "%s", path);

@@ -78,6 +78,25 @@ for name in (b'dataWindow\0box2i\0', b'displayWindow\0box2i\0'):
     d[i:i + 16] = struct.pack('<4i', 0, 0, 29999, 29999)
 open('huge.exr', 'wb').write(d)
 PY
+# data that a header rule must not swallow; constraint sets with nothing in them
+printf '1e400 5 5\n0 0 1\n1 0 2\n0 1 3\n' > ovf.xyz
+printf '1e999,5\n3,3\n' > ovf.csv
+printf '0x1p99999,5\n3,3\n' > hexovf.csv
+: > nopins.csv
+printf 'x,y\n# nothing else\n' > hdrpins.csv
+# tampered metadata: task and plan numbers past 32 bits, outside counts malformed or huge
+SETATTR="python3 $HERE/exr-setattr.py"
+printf '{"size": [256, 128], "layers": [{"type": "fbm"}]}' > two.json
+for k in 0 1; do "$FB" render two.json $N --task $k/2 --task-startup 0 -o task$k.exr --quiet; done
+$SETATTR task0.exr fractalbake/task 0/4294967298 tk-trunc.exr
+for k in 0 1; do
+  $SETATTR task$k.exr fractalbake/plan --sub '"tasks":2' '"tasks":4294967298' pl$k.tmp.exr
+  $SETATTR pl$k.tmp.exr fractalbake/task $k/4294967298 plan$k.exr
+  rm pl$k.tmp.exr
+done
+$SETATTR pp1.exr fractalbake/ifs-outside plants=18446744073709551615 ppmax.exr
+$SETATTR pp1.exr fractalbake/ifs-outside plants=12x ppbad.exr
+$SETATTR pp1.exr fractalbake/ifs-outside plants=-1 ppneg.exr
 before=$(ls -A | sort)
 vk=0
 have_vulkan && vk=1

@@ -62,7 +62,11 @@ check "compare: --diff and --diff-png on one path is usage (exit 2)" test $? -eq
 echo old > late.exr
 "$FB" julia $N --size 3000x3000 -o late.exr --preview late.png 2> late.txt &
 pid=$!
-for _ in $(seq 200); do ls -A | grep -q '^\.late\.png\..*\.tmp$' && break; sleep 0.02; done
+# its outputs are reserved: an anonymous file (O_TMPFILE) held open, or the hidden temporary one
+for _ in $(seq 200); do
+  { ls -l /proc/$pid/fd 2> /dev/null | grep -q '/#[0-9]* (deleted)' || ls -A | grep -q '^\.late\.png\..*\.tmp$'; } && break
+  sleep 0.02
+done
 mkdir late.png
 wait $pid
 rc=$?
@@ -97,7 +101,131 @@ for sig in INT TERM HUP; do
   done
 done
 
-# ---- 10. a documented maximum runs, tells how far it is, and stops at once on Ctrl-C ----
+# ---- 6. every signal that ends a run ends it like SIGINT: SIGPIPE, SIGXFSZ ----
+rm -f pp.png
+"$FB" fbm --backend native --size 512x512 -o - --preview pp.png 2> pipe.txt | true
+rc=${PIPESTATUS[0]}
+check "SIGPIPE (-o - | true): exit $rc, wanted 141" test $rc -eq 141
+check "... no preview, no temporary file" test ! -e pp.png && no_temp_files
+check "... no \"wrote\" line" test ! -s pipe.txt
+echo old > fsz.exr
+(ulimit -f 100 && "$FB" fbm $N --size 1024x1024 -o fsz.exr --preview fsz.png)
+rc=$?
+check "SIGXFSZ (ulimit -f 100): exit $rc, wanted 153" test $rc -eq 153
+check "... the old output untouched, no preview" test "$(cat fsz.exr)" = old -a ! -e fsz.png
+check "... no temporary file" no_temp_files
+"$FB" scene default 2> /dev/null | head -c 10 > /dev/null
+rc=${PIPESTATUS[0]}
+check "scene default | head -c 10: exit $rc, wanted 141 (or 0 when it fit the pipe)" test $rc -eq 141 -o $rc -eq 0
+
+# ---- 7. names and folders checked before the work; nothing renamed when one cannot be ----
+echo old > nm.exr
+long=$(printf 'h%.0s' $(seq 300)).r16
+expect_fail 2 "file name has 304 bytes, more than the 255" "" -- terrain $N --points pts.csv --size 32x32 -o nm.exr --heightmap "$long"
+check "a 304-byte heightmap name: the EXR was left as it was" test "$(cat nm.exr)" = old
+expect_fail 2 "cannot create the preview: folder nofolder" "" -- fbm $N --size 16x16 -o nm.exr --preview nofolder/p.png
+check "a missing folder: the EXR was left as it was" test "$(cat nm.exr)" = old
+
+# ---- 8. "wrote" only after the commit; every write to standard output checked (exit 3) ----
+"$FB" fbm --backend native --size 64x64 -o - > /dev/full 2> full.txt
+rc=$?
+check "-o - > /dev/full: exit $rc, wanted 3" test $rc -eq 3
+check "... one line, no \"wrote\": $(cat full.txt)" test "$(wc -l < full.txt)" -eq 1 -a "$(grep -c wrote full.txt)" -eq 0
+"$FB" fbm $N --size 16x16 -o c1.exr
+for cmd in "scene default" "plan --tasks 2" "info c1.exr" "compare c1.exr c1.exr" "devices" "--help" "fbm --help" \
+  "fbm --size 16x16 --dry-run" "fbm --backend native --size 16x16 -o j.exr --json" "--version"; do
+  # shellcheck disable=SC2086
+  "$FB" $cmd > /dev/full 2> full.txt
+  rc=$?
+  check "$cmd > /dev/full: exit $rc, wanted 3" test $rc -eq 3
+  check "$cmd > /dev/full: one line naming standard output: $(cat full.txt)" grep -q "standard output: cannot write" full.txt
+  # shellcheck disable=SC2086
+  "$FB" $cmd >&- 2> full.txt
+  rc=$?
+  check "$cmd with standard output closed: exit $rc, wanted 3" test $rc -eq 3
+  check "$cmd with standard output closed: one line: $(cat full.txt)" grep -q "standard output: cannot write" full.txt
+done
+rm -f j.exr
+"$FB" fbm --backend native --size 16x16 -o k.exr >&- 2> full.txt
+check "a bake that writes nothing on standard output is not hurt by closing it" test $? -eq 0 -a -s k.exr
+
+# the summaries name what was written and what ran where
+"$FB" terrain --backend native --points pts.csv --size 16x16 --mesh sm.ply -o sm.exr 2> sum.txt
+check "terrain's summary names its layer, generator and mesh: $(cat sum.txt)" grep -q "layer terrain (terrain): .*; mesh sm.ply" sum.txt
+check "... and the EXR, after the commit" grep -q "^fractalbake: wrote sm.exr" sum.txt
+"$FB" constrain --backend native --size 257x1 --csv cs.csv -o cs.exr 2> sum.txt
+check "constrain's summary says constrain and names its csv: $(cat sum.txt)" grep -q "(constrain): .*; csv cs.csv" sum.txt
+"$FB" ifs --backend native --size 64x64 --points 100000 -o if.exr --quiet && "$FB" tonemap if.exr -o if2.exr --brightness 2 2> sum.txt
+check "tonemap's summary names its file: $(cat sum.txt)" grep -q "^fractalbake: wrote if2.exr (tone-mapped)" sum.txt
+"$FB" render --set size=64x32 -o jd.exr --json > jd.json
+check "--json: the device named is the one each layer ran on" python3 -c "
+import json; d = json.load(open('jd.json'))
+ok = all((l['backend'] == 'native') == (l['device'] == 'native C') for l in d['layers'])
+vk = [l['device'] for l in d['layers'] if l['backend'] == 'vulkan']
+ok = ok and d['device'] == (vk[0] if vk else 'native C')
+raise SystemExit(0 if ok else 1)"
+check "--tasks 1e1 is 10 tasks (integer flags take exponent notation)" sh -c '"$0" plan --tasks 1e1 --set size=64x32 | grep -q "over 10 tasks"' "$FB"
+
+# ---- 9. SIGKILL: nothing visible, and (O_TMPFILE) nothing at all; concurrent runs: whole sets ----
+mkdir -p kill && echo old > kill/k.exr
+(cd kill && exec "$FB" terrain $N --points ../pts.csv --insert 400000 --size 1024x1024 -o k.exr --preview k.png --mesh k.ply --heightmap k.r16) &
+pid=$!
+sleep 0.5
+kill -KILL $pid
+wait $pid
+rc=$?
+check "SIGKILL: exit $rc, wanted 137" test $rc -eq 137
+check "SIGKILL: the folder holds the old output and nothing else: $(ls -A kill | tr '\n' ' ')" test "$(ls -A kill)" = k.exr -a "$(cat kill/k.exr)" = old
+# 12 runs at once, each writing the same EXR and preview with its own seed, 8 rounds: the pair in
+# place is always one run's (the EXR's stored seed names the run; its preview must be that run's)
+mkdir -p race
+for k in $(seq 12); do "$FB" fbm $N --size 96x96 --seed $k -o race/ref$k.exr --preview race/ref$k.png; done
+mixed=0
+for round in $(seq 8); do
+  for k in $(seq 12); do "$FB" fbm $N --size 96x96 --seed $k -o race/o.exr --preview race/o.png & done
+  wait
+  seed=$("$FB" info race/o.exr | sed -n 's/.*fractalbake\/seed[^0-9]*\([0-9]*\).*/\1/p' | head -1)
+  if [ -z "$seed" ] || ! cmp -s race/o.png "race/ref$seed.png" || ! cmp -s race/o.exr "race/ref$seed.exr"; then mixed=$((mixed + 1)); fi
+done
+check "concurrent runs writing one set of paths: $mixed of 8 rounds left files of two runs" test $mixed -eq 0
+check "... no temporary file" no_temp_files race
+
+# ---- 10. inputs that are not regular files are refused at once; so are empty constraint sets ----
+mkfifo fifo.csv
+timeout 20 "$FB" terrain $N --points fifo.csv --size 16x16 -o f.exr 2> fifo.txt
+rc=$?
+check "a FIFO as --points: exit $rc, wanted 2 at once" test $rc -eq 2
+check "... one line naming the FIFO: $(cat fifo.txt)" grep -q "fifo.csv: a FIFO with nothing written to it (no writer)" fifo.txt
+printf 'x,y,z\n0,0,0\n10,0,1\n0,10,2\n' > three.csv
+"$FB" terrain $N --points <(cat three.csv) --size 16x16 -o sub.exr
+check "a pipe with a writer (<(...)) is read" test $? -eq 0 -a -s sub.exr
+"$FB" terrain $N --points pts.csv --size 16x16 -o st.exr
+mv pts.csv pts.keep && mkfifo pts.csv
+timeout 20 "$FB" render $N --from st.exr --set layers.terrain.points=pts.csv -o st2.exr 2> fifo.txt
+rc=$?
+check "a FIFO named by a stored scene (--from): exit $rc, wanted 2 at once" test $rc -eq 2 -a ! -e st2.exr
+rm pts.csv && mv pts.keep pts.csv
+(ulimit -v 400000 && "$FB" constrain $N --size 64x64 --points /dev/zero -o z.exr 2> zero.txt)
+rc=$?
+check "/dev/zero as constraint points under ulimit -v: exit $rc, wanted 2" test $rc -eq 2 -a ! -e z.exr
+check "... one line: $(cat zero.txt)" grep -q "/dev/zero: is a character device, not a regular file or a pipe" zero.txt
+
+# ---- 11. the memory limit knows ulimit -v, and the Vulkan driver's needs ----
+(ulimit -v 600000 && timeout 60 "$FB" terrain --backend native --points pts.csv --insert 5000000 --size 512x512 -o big5.exr 2> as.txt)
+rc=$?
+check "5e6 insertions under ulimit -v 600000: refused at once (exit $rc, wanted 2)" test $rc -eq 2
+check "... naming the address-space limit: $(cat as.txt)" grep -q "the address-space limit, ulimit -v" as.txt
+if have_vulkan; then
+  (ulimit -v 300000 && "$FB" julia --backend vulkan --size 1024x512 -o jv.exr 2> as.txt)
+  rc=$?
+  check "Vulkan under ulimit -v 300000: exit $rc, wanted 2 (not a crash in the driver)" test $rc -eq 2 -a ! -e jv.exr
+  check "... one line: $(cat as.txt)" grep -q "a Vulkan driver needs about" as.txt
+  (ulimit -v 300000 && "$FB" julia --size 256x128 -o ja.exr --quiet 2> as.txt)
+  check "--backend auto under ulimit -v 300000 bakes natively" test $? -eq 0 -a -s ja.exr
+fi
+check "no temporary file after the faults" no_temp_files
+
+# ---- 12. a documented maximum runs, tells how far it is, and stops at once on Ctrl-C ----
 "$FB" ifs --help | grep -q "1e14 takes days: progress is shown and Ctrl-C stops it" && ok || bad "ifs --help says nothing of 1e14"
 "$FB" ifs --backend native --points 1e14 --size 128x128 -o long.exr 2> long.txt &
 pid=$!

@@ -94,6 +94,17 @@ for be in vulkan native; do
   cmp -s whole_$be.exr merged_$be.exr && ok || bad "merged regions ($be) differ from the whole bake"
   valid_exr pb_$be.exr
 done
+# --backend auto with layers on both (lavapipe: fBm natively, a Julia set of 8.4 million samples on
+# the device): the merged bands keep the fractalbake/layer-backends attribute, byte for byte
+printf '{"size": [2048, 1024], "layers": [{"type": "fbm", "octaves": 3}, {"type": "julia", "samples": 4, "max-iter": 30}]}' > mix.json
+"$FB" render mix.json --quiet -o mix_whole.exr && "$FB" render mix.json --quiet --region 0,0,2048,512 -o mix_a.exr &&
+  "$FB" render mix.json --quiet --region 0,512,2048,512 -o mix_b.exr && "$FB" merge mix_b.exr mix_a.exr -o mix_m.exr --quiet &&
+  ok || bad "the auto region bakes failed"
+if "$FB" devices --json | grep -q '"auto": *"per layer"'; then # lavapipe: each layer where it is faster
+  "$FB" info mix_whole.exr | grep -q "fractalbake/layer-backends string *fbm=native;sky=vulkan" && ok || bad "the auto bake did not run a layer on each backend"
+fi
+cmp -s mix_whole.exr mix_m.exr && ok || bad "merged auto regions differ from the whole auto bake"
+rm -f mix_*.exr
 "$FB" info pb_vulkan.exr | grep -q "the region 0,21,50,43 of a 128 x 64 image" && ok || bad "info does not show the region"
 "$FB" merge pc_vulkan.exr pa_vulkan.exr pb_vulkan.exr -o merged_t1.exr --threads 1 --quiet && cmp -s merged_vulkan.exr merged_t1.exr && ok || bad "merge --threads 1 differs"
 "$FB" compare c.exr set.exr --max-abs 0.01 --diff-png cd.png > /dev/null; [ $? -eq 1 ] && [ "$(od -An -tu1 -j25 -N1 cd.png | tr -d ' ')" = "2" ] && [ "$(png_wh cd.png)" = "128 64" ] && ok || bad "compare --diff-png wrote no RGB picture"

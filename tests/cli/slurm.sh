@@ -3,18 +3,66 @@
 # started here on localhost (tests/slurm/slurm.conf.in), the recipe submits the plan's tasks as a
 # job array and a dependent merge; the merged file equals the one-command bake byte for byte. Then
 # one array task is cancelled, and the merge job fails naming it.
-# Returns 77 (not run) where slurm-wlm is not installed or this is not root (slurmd runs as root).
+# First, without Slurm, the recipe's input checks: values from the environment that would run code or
+# divide by zero, and outputs its merge could not write, stop it before anything is submitted.
+# Returns 77 (the cluster part not run) where slurm-wlm is not installed or this is not root (slurmd
+# runs as root), after the checks above passed (1 where one failed).
 # Usage: slurm.sh PATH/TO/fractalbake
 . "$(dirname "$0")/lib.sh"
 cli_init "$@"
+recipe=$ROOT/docs/examples/slurm-bake.sh
+
+# ---- the recipe's inputs, without Slurm: nothing from the environment is evaluated, bad values stop
+# it (exit 2, one line) before it bakes or submits anything. A fake sbatch records any submission.
+mkdir -p fake
+printf '#!/bin/sh\necho "$@" >> %s/submitted\necho 1\n' "$T" > fake/sbatch
+chmod +x fake/sbatch
+printf '#!/bin/sh\necho "$@" >> %s/baked\n' "$T" > fake/fractalbake
+chmod +x fake/fractalbake
+"$FB" scene default --set size=256x128 > inj.json
+inject() { # inject DESCRIPTION ENV... -- ARGS: exit 2, one stderr line, nothing run, no file made
+  local what=$1
+  shift
+  local envs=()
+  while [ "$1" != -- ]; do envs+=("$1"); shift; done
+  shift
+  rm -f touched submitted baked
+  env PATH="$T/fake:$PATH" "${envs[@]}" bash "$recipe" "$@" > inj.out 2> inj.err
+  local rc=$?
+  check "$what: exit $rc, wanted 2 ($(cat inj.err))" test $rc -eq 2
+  check "$what: one stderr line" test "$(wc -l < inj.err)" -eq 1
+  check "$what: no command run from the environment" test ! -e touched
+  check "$what: nothing baked or submitted" test ! -e submitted -a ! -e baked
+}
+inject "SLURM_ARRAY_TASK_ID running a command" 'SLURM_ARRAY_TASK_ID=BASH_VERSINFO[$(touch touched)]' -- --task inj.json parts 4
+inject "SLURM_ARRAY_TASK_MIN running a command" SLURM_ARRAY_TASK_ID=1 'SLURM_ARRAY_TASK_MIN=a[$(touch touched)]' -- --task inj.json parts 4
+inject "SLURM_ARRAY_TASK_STEP running a command" SLURM_ARRAY_TASK_ID=1 'SLURM_ARRAY_TASK_STEP=x[$(touch touched)]' -- --task inj.json parts 4
+inject "SLURM_ARRAY_TASK_STEP=0" SLURM_ARRAY_TASK_ID=1 SLURM_ARRAY_TASK_STEP=0 -- --task inj.json parts 4
+inject "SLURM_ARRAY_TASK_ID=-1" SLURM_ARRAY_TASK_ID=-1 -- --task inj.json parts 4
+inject "a task beyond N" SLURM_ARRAY_TASK_ID=9 -- --task inj.json parts 4
+inject "SLURM_CPUS_PER_TASK running a command" SLURM_ARRAY_TASK_ID=1 'SLURM_CPUS_PER_TASK=$(touch touched)' -- --task inj.json parts 4
+inject "TASKS not an integer" -- inj.json out/x.exr '4$(touch touched)'
+inject "TASKS=0" -- inj.json out/x.exr 0
+inject "an output named .png" -- inj.json OUT.png 4
+echo plain > afile
+inject "an output in a folder that cannot be made" -- inj.json afile/x.exr 4
+inject "a missing scene" -- missing.json x.exr 4
+# a good task runs fractalbake with the task's number and the threads Slurm gives it
+rm -f baked
+env PATH="$T/fake:$PATH" SLURM_ARRAY_TASK_ID=7 SLURM_ARRAY_TASK_MIN=3 SLURM_ARRAY_TASK_STEP=2 SLURM_CPUS_PER_TASK=3 \
+  bash "$recipe" --task inj.json parts 4
+check "a task's K is (ID - MIN) / STEP: $(cat baked 2> /dev/null)" grep -q -- "--task 2/4 --threads 3 --quiet -o parts/task-0002.exr" baked
+
 for c in munged mungekey slurmctld slurmd sbatch scontrol sinfo; do
   command -v $c > /dev/null || {
-    echo "no $c (Debian: slurm-wlm): not run"
+    echo "no $c (Debian: slurm-wlm): the Slurm cluster part not run"
+    [ "$fail" -eq 0 ] || cli_finish
     exit 77
   }
 done
 [ "$(id -u)" -eq 0 ] || {
-  echo "not root (slurmd runs jobs as root here): not run"
+  echo "not root (slurmd runs jobs as root here): the Slurm cluster part not run"
+  [ "$fail" -eq 0 ] || cli_finish
   exit 77
 }
 require_vulkan
@@ -45,7 +93,6 @@ check "the one-node Slurm is up" sh -c 'sinfo -h -o %t | grep -q idle'
 
 # the recipe needs only `fractalbake` on PATH (what `cmake --install` puts there)
 export PATH=$(dirname "$FB"):$PATH
-recipe=$ROOT/docs/examples/slurm-bake.sh
 "$FB" scene default --set size=1024x512 > scene.json
 "$FB" plan scene.json --tasks 4 --json > plan.json
 active=$(python3 -c "import json; print(json.load(open('plan.json'))['active'])")

@@ -249,6 +249,9 @@ static fb_result each_line(const char *path, const char *what, const char *(*fn)
         if (err) rc = fb_fail(FB_ERR_INPUT, "%s:%d: %s", path, in.lineno, err);
     }
     if (!rc && got < 0) rc = FB_ERR_INPUT;
+    if (!rc && in.contents - in.header == 0) /* an empty set is a mistake, not a bake with nothing asked */
+        rc = fb_fail(FB_ERR_INPUT, "%s: no %s in the file (%s)", path, what,
+                     in.header ? "a header and no data line" : "no data line");
     fb_lines_close(&in);
     return rc;
 }
@@ -547,8 +550,10 @@ static fb_result constrain_prepare(fb_gen *g, struct fb_engine *e, bool progress
     }
     if (P->plot[0] && (rc = write_plot(s, sc->width, P->plot))) return rc;
     snprintf(g->summary, sizeof g->summary,
-             "%s: %d x %d, %d discrete and %d continuous constraints, T %.3g, H %.3g; max |D - d| %.4g; %.3f s",
-             g->layer->name, sc->width, sc->height, s->npoints, s->nregions, P->T, P->hurst, maxdev, secs);
+             "layer %s (constrain): %d x %d, %d discrete and %d continuous constraints, T %.3g, H %.3g; max |D - d| "
+             "%.4g; %.3f s%s%.150s%s%.150s",
+             g->layer->name, sc->width, sc->height, s->npoints, s->nregions, P->T, P->hurst, maxdev, secs,
+             P->csv[0] ? "; csv " : "", P->csv, P->plot[0] ? "; plot " : "", P->plot);
     snprintf(g->summary_json, sizeof g->summary_json,
              "{\"layer\": \"%s\", \"generator\": \"constrain\", \"width\": %d, \"height\": %d, \"points\": %d, "
              "\"regions\": %d, \"max_deviation\": %.9g, \"seconds\": %.6f}",

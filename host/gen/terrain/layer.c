@@ -205,6 +205,10 @@ static fb_result parse_terrain(const fb_vctx *v, const char *path, json_t *obj, 
                                    "(metres, like their heights), such as a UTM zone",
                                    crs);
         t->epsg = (int)code;
+        const char *hm = json_string_value(json_object_get(obj, "heightmap")), *dot = hm ? strrchr(hm, '.') : NULL;
+        if (!dot || (strcasecmp(dot, ".tif") && strcasecmp(dot, ".tiff")))
+            return fb_schema_error(v, sub, "%s is recorded only in a GeoTIFF heightmap (heightmap NAME.tif): %s", crs,
+                                   hm ? "this heightmap is not one" : "no heightmap is written");
     }
     if (t->mesh[0]) {
         const char *dot = strrchr(t->mesh, '.');
@@ -481,11 +485,11 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     double t_out = fb_now() - t0;
     const fb_terrain_stats *st = &s->st;
     snprintf(g->summary, sizeof g->summary,
-             "%s: %u input points (%llu duplicates left out), %llu inserted, %llu variances clamped to 0, %u "
-             "triangles; sigma %.6g; triangulate %.3f s, refine %.3f s, bin%s %.3f s",
+             "layer %s (terrain): %u input points (%llu duplicates left out), %llu inserted, %llu variances clamped "
+             "to 0, %u triangles; sigma %.6g; triangulate %.3f s, refine %.3f s, bin%s %.3f s%s%.200s",
              g->layer->name, st->input, (unsigned long long)st->duplicates, (unsigned long long)st->inserted,
              (unsigned long long)st->clamped, s->t.dt.nfinite, st->sigma, st->build_seconds, st->refine_seconds,
-             P->mesh[0] ? " and mesh" : "", t_out);
+             P->mesh[0] ? " and mesh" : "", t_out, P->mesh[0] ? "; mesh " : "", P->mesh);
     snprintf(g->summary_json, sizeof g->summary_json,
              "{\"layer\": \"%s\", \"generator\": \"terrain\", \"input_points\": %u, \"duplicates\": %llu, "
              "\"inserted\": %llu, \"clamped_variances\": %llu, \"rejected_sites\": %llu, \"variance_stages\": %u, "
