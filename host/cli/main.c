@@ -7,6 +7,7 @@
 #include "tonemap.h"
 #include "compare.h"
 #include "env.h"
+#include "info.h"
 #include "exrio.h"
 #include "generators.h"
 #include "heightmap.h"
@@ -767,6 +768,8 @@ static int cmd_compare(int argc, char **argv)
             {"--rmse", offsetof(fb_compare_desc, rmse)},
             {"--psnr", offsetof(fb_compare_desc, psnr)},
             {"--ssim", offsetof(fb_compare_desc, ssim)},
+            {"--flip-fail", offsetof(fb_compare_desc, flip_fail)},
+            {"--flip-warn", offsetof(fb_compare_desc, flip_warn)},
         };
         fb_limit *lim = NULL;
         for (size_t k = 0; k < sizeof limits / sizeof limits[0] && !lim; k++)
@@ -781,6 +784,31 @@ static int cmd_compare(int argc, char **argv)
             if (strcmp(a, "--layer") && fb_output_format(a, val, !strcmp(a, "--diff") ? ".exr" : ".png"))
                 return finish(FB_ERR_USAGE);
             i++;
+        } else if (!strcmp(a, "--flip-png")) {
+            if (!val) return usage_error("%s: missing value", a);
+            if (fb_output_format(a, val, ".png")) return finish(FB_ERR_USAGE);
+            d.flip_png = val;
+            i++;
+        } else if (!strcmp(a, "--flip-mode") || !strcmp(a, "--flip-stat")) {
+            static const char *const modes[] = {"auto", "ldr", "hdr"}, *const stats[] = {"mean", "median", "q1", "q3",
+                                                                                         "max"};
+            bool mode = !strcmp(a, "--flip-mode");
+            int n = mode ? 3 : 5, k = 0;
+            if (!val) return usage_error("%s: missing value", a);
+            while (k < n && strcmp(val, (mode ? modes : stats)[k])) k++;
+            if (k == n) {
+                fb_fail(FB_ERR_USAGE, "%s: expected %s, found \"%s\"", a,
+                        mode ? "auto|ldr|hdr" : "mean|median|q1|q3|max", val);
+                return finish(FB_ERR_USAGE);
+            }
+            if (mode)
+                d.flip_mode = (fb_flip_mode)k;
+            else
+                d.flip_stat = k;
+            d.flip = true;
+            i++;
+        } else if (!strcmp(a, "--flip")) {
+            d.flip = true;
         } else if (!strcmp(a, "--ignore-missing")) {
             d.ignore_missing = true;
         } else if (!strcmp(a, "--heat")) {
@@ -805,6 +833,15 @@ static int cmd_compare(int argc, char **argv)
                    "  --rmse E, --psnr DB, --ssim S              fail beyond an RMSE, below a PSNR or an SSIM\n"
                    "  (--failpercent and --warnpercent are accepted too)\n"
                    "\n"
+                   "FLIP (Andersson et al. 2020; HDR-FLIP 2021), per layer of R, G, B (or Y as grey):\n"
+                   "  --flip                     compute it: LDR-FLIP for PNGs, HDR-FLIP for EXRs (ACES, automatic\n"
+                   "                             exposures); the mean, weighted median and quartiles, max\n"
+                   "  --flip-fail E, --flip-warn E   fail (warn) when a layer's statistic is beyond E (LAYER=E rules)\n"
+                   "  --flip-stat mean|median|q1|q3|max   the statistic they test (default mean)\n"
+                   "  --flip-mode auto|ldr|hdr   LDR-FLIP takes sRGB values in [0, 1], HDR-FLIP linear ones\n"
+                   "  --flip-png OUT.png         the error of the layer with the largest mean, grey (255: error 1)\n"
+                   "  (each implies --flip; --diff then holds LAYER.FLIP too)\n"
+                   "\n"
                    "--diff writes |A - B| per channel; --diff-png a picture: red where a channel fails, over A's\n"
                    "first channel in dim grey; with --heat a heat map of the largest |A - B| over the channels,\n"
                    "log scale (black 1e-8, blue 1e-6, red 1e-4, yellow 0.01, white 1). --json: the report as one\n"
@@ -816,10 +853,11 @@ static int cmd_compare(int argc, char **argv)
                    "every fractalbake command does, and lets a warning pass.\n");
             return 0;
         } else if (a[0] == '-' && a[1]) {
-            static const char *const flags[] = {"max-abs", "fail",           "fail-percent", "failpercent", "hardfail",
-                                                "warn",    "warn-percent",   "warnpercent",  "hardwarn",    "rmse",
-                                                "psnr",    "ssim",           "layer",        "diff",        "diff-png",
-                                                "heat",    "ignore-missing", "json",         "quiet",       "help"};
+            static const char *const flags[] = {
+                "max-abs",     "fail",      "fail-percent",   "failpercent", "hardfail", "warn",  "warn-percent",
+                "warnpercent", "hardwarn",  "rmse",           "psnr",        "ssim",     "layer", "diff",
+                "diff-png",    "heat",      "ignore-missing", "json",        "quiet",    "help",  "flip",
+                "flip-fail",   "flip-warn", "flip-stat",      "flip-mode",   "flip-png"};
             const char *near = !strncmp(a, "--", 2) ? fb_closest(a + 2, flags, sizeof flags / sizeof flags[0]) : NULL;
             char hint[96] = "";
             if (near) snprintf(hint, sizeof hint, "; did you mean --%s?", near);
@@ -832,6 +870,7 @@ static int cmd_compare(int argc, char **argv)
         }
     }
     if (nfiles != 2) return usage_error("%s", "compare: expected two images: fractalbake compare A.exr B.exr");
+    if (d.flip_fail.set || d.flip_warn.set || d.flip_png) d.flip = true;
     d.a = files[0];
     d.b = files[1];
     if (quiet && !d.json) d.print = print_result_only;
