@@ -644,7 +644,7 @@ static fb_result flip_one(cmp *k, flip_unit *u)
     fb_result rc = va && vb ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory");
     for (int q = 0; q < 3 && !rc; q++) {
         pa[q] = buf + (size_t)q * n, pb[q] = buf + (size_t)(3 + q) * n;
-        va[k->st[u->ch[q]].ia] = pa[q], vb[k->st[u->ch[q]].ib] = pb[q];
+        if (q == 0 || !u->grey) va[k->st[u->ch[q]].ia] = pa[q], vb[k->st[u->ch[q]].ib] = pb[q];
     }
     if (!rc && !(rc = image_read_rows(&k->A, 0, k->H, va))) rc = image_read_rows(&k->B, 0, k->H, vb);
     if (u->grey && !rc)
