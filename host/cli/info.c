@@ -48,15 +48,18 @@ fb_result fb_info(const char *path, bool json, void (*print)(const char *line, v
     if (np > 1) {
         P("parts:       %d", np);
         for (int p = 0; p < np; p++) {
-            P("  part %-2d %-12s compression %s", p, exrio_part_name(r, p), exrio_part_compression(r, p));
-            json_array_append_new(
-                parts, json_pack("{ssss}", "name", exrio_part_name(r, p), "compression", exrio_part_compression(r, p)));
+            P("  part %-2d %-12s compression %s, %s", p, exrio_part_name(r, p), exrio_part_compression(r, p),
+              exrio_part_storage(r, p));
+            json_array_append_new(parts, json_pack("{ssssss}", "name", exrio_part_name(r, p), "compression",
+                                                   exrio_part_compression(r, p), "storage", exrio_part_storage(r, p)));
         }
         json_object_set_new(o, "parts", parts);
         parts = NULL;
     } else {
         P("compression: %s", exrio_compression_of(r));
         json_object_set_new(o, "compression", json_string(exrio_compression_of(r)));
+        P("storage:     %s", exrio_part_storage(r, 0));
+        json_object_set_new(o, "storage", json_string(exrio_part_storage(r, 0)));
     }
     P("channels:    %d", exrio_nchannels(r));
     /* Channels grouped by layer (the text before the last dot) within each part; the layer is named

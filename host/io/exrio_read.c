@@ -68,12 +68,16 @@ struct exrio_reader {
     int nparts;
     struct rpart {
         const exr_attr_chlist_t *chlist;
-        int first; /* its first channel's flat index */
-        int chunk_rows;
+        int first;          /* its first channel's flat index */
+        int chunk_rows;     /* scanlines per chunk, or a tile's height */
+        int tile_w;         /* tiled parts: a tile's width (0: scanlines); level (0, 0), the top, is read */
+        char storage[96];   /* "scanline", or the tiles and their levels */
         int buf_rows;       /* rows of chunk_buf per channel: chunk_rows, or the image's height if less */
         uint8_t *chunk_buf; /* one decoded chunk, all channels of the part */
     } parts[EXRIO_MAX_PARTS];
     exrzip_inflater inflater; /* ZIP chunks (zip_decompress) */
+    uint8_t *mem;             /* a file read from standard input, whole */
+    size_t mem_size;
 };
 
 /* OpenEXRCore's decompress step for ZIP chunks: exrzip_inflate, libdeflate's. */
@@ -139,24 +143,71 @@ static fb_result check_size(const char *path, int part, int w, int h, const stru
     return FB_OK;
 }
 
+/* Standard input, whole, into r->mem (within --max-memory). */
+static fb_result slurp_stdin(exrio_reader *r)
+{
+    size_t cap = 1 << 20;
+    if (!(r->mem = malloc(cap))) return fb_fail(FB_ERR_NOMEM, "out of memory reading standard input");
+    for (;;) {
+        if (r->mem_size == cap) {
+            if (fb_memory_check((uint64_t)cap * 2, "an EXR on standard input")) return FB_ERR_INPUT;
+            uint8_t *b = realloc(r->mem, cap * 2);
+            if (!b) return fb_fail(FB_ERR_NOMEM, "out of memory reading standard input");
+            r->mem = b, cap *= 2;
+        }
+        size_t got = fread(r->mem + r->mem_size, 1, cap - r->mem_size, stdin);
+        r->mem_size += got;
+        if (got == 0) break;
+    }
+    if (ferror(stdin)) return fb_fail(FB_ERR_IO, "standard input: %s", strerror(errno));
+    if (r->mem_size == 0) return fb_fail(FB_ERR_INPUT, "standard input: empty, not an OpenEXR file");
+    return FB_OK;
+}
+
+static int64_t mem_read(exr_const_context_t ctxt, void *user, void *buf, uint64_t sz, uint64_t offset,
+                        exr_stream_error_func_ptr_t error_cb)
+{
+    (void)ctxt, (void)error_cb;
+    const exrio_reader *r = user;
+    if (offset >= r->mem_size) return 0;
+    uint64_t n = r->mem_size - offset < sz ? r->mem_size - offset : sz;
+    memcpy(buf, r->mem + offset, n);
+    return (int64_t)n;
+}
+
+static int64_t mem_size(exr_const_context_t ctxt, void *user)
+{
+    (void)ctxt;
+    return (int64_t)((const exrio_reader *)user)->mem_size;
+}
+
 fb_result exrio_open(const char *path, exrio_reader **out)
 {
     fb_result rc = FB_OK;
     FILE *probe = NULL;
-    if (!strcmp(path, "-")) /* OpenEXR reads by offsets: a pipe will not do */
-        return fb_fail(FB_ERR_USAGE, "-: an EXR cannot be read from standard input: give its file");
-    if ((rc = fb_input_open(path, "EXR", &probe))) return rc;
-    struct stat fst;
-    uint64_t file_size = fstat(fileno(probe), &fst) == 0 && S_ISREG(fst.st_mode) ? (uint64_t)fst.st_size : UINT64_MAX;
-    fclose(probe);
+    bool std_in = !strcmp(path, "-");
+    uint64_t file_size = UINT64_MAX;
+    if (!std_in) {
+        if ((rc = fb_input_open(path, "EXR", &probe))) return rc;
+        struct stat fst;
+        file_size = fstat(fileno(probe), &fst) == 0 && S_ISREG(fst.st_mode) ? (uint64_t)fst.st_size : UINT64_MAX;
+        fclose(probe);
+    }
     exrio_reader *r = calloc(1, sizeof *r);
     if (!r) return fb_fail(FB_ERR_NOMEM, "out of memory");
-    snprintf(r->path, sizeof r->path, "%s", path);
+    snprintf(r->path, sizeof r->path, "%s", std_in ? "standard input" : path);
     exr_context_initializer_t init = exrio_initializer();
-    exr_result_t er = exr_start_read(&r->ctx, path, &init);
+    if (std_in) { /* OpenEXR reads by offsets: standard input is read whole first */
+        if ((rc = slurp_stdin(r))) goto fail;
+        file_size = r->mem_size;
+        init.user_data = r;
+        init.read_fn = mem_read;
+        init.size_fn = mem_size;
+    }
+    exr_result_t er = exr_start_read(&r->ctx, std_in ? "-" : path, &init);
     if (er != EXR_ERR_SUCCESS) {
         r->ctx = NULL;
-        rc = fb_fail(FB_ERR_INPUT, "%s: not a readable OpenEXR file: %s", path, exrio_exr_msg());
+        rc = fb_fail(FB_ERR_INPUT, "%s: not a readable OpenEXR file: %s", r->path, exrio_exr_msg());
         goto fail;
     }
     int np = 0;
@@ -170,8 +221,10 @@ fb_result exrio_open(const char *path, exrio_reader **out)
         exr_storage_t st;
         exr_attr_box2i_t dw, disp;
         struct rpart *rp = &r->parts[p];
-        if (exr_get_storage(r->ctx, p, &st) != EXR_ERR_SUCCESS || st != EXR_STORAGE_SCANLINE) {
-            rc = fb_fail(FB_ERR_INPUT, "%s: only scanline (not tiled or deep) EXR files are supported", path);
+        if (exr_get_storage(r->ctx, p, &st) != EXR_ERR_SUCCESS ||
+            (st != EXR_STORAGE_SCANLINE && st != EXR_STORAGE_TILED)) {
+            rc = fb_fail(FB_ERR_INPUT, "%s: part %d holds deep data; fractalbake reads scanline and tiled parts",
+                         r->path, p);
             goto fail;
         }
         if (exr_get_data_window(r->ctx, p, &dw) != EXR_ERR_SUCCESS || exr_get_channels(r->ctx, p, &rp->chlist) ||
@@ -197,7 +250,24 @@ fb_result exrio_open(const char *path, exrio_reader **out)
         rp->first = r->nchannels;
         r->nchannels += rp->chlist->num_channels;
         int32_t spc = 1;
-        exr_get_scanlines_per_chunk(r->ctx, p, &spc);
+        if (st == EXR_STORAGE_TILED) {
+            uint32_t tx = 0, ty = 0;
+            exr_tile_level_mode_t lm;
+            exr_tile_round_mode_t rm;
+            if (exr_get_tile_descriptor(r->ctx, p, &tx, &ty, &lm, &rm) != EXR_ERR_SUCCESS || tx < 1 || ty < 1 ||
+                tx > EXRIO_MAX_DIM || ty > EXRIO_MAX_DIM) {
+                rc = fb_fail(FB_ERR_INPUT, "%s: part %d is tiled without a usable tile size", r->path, p);
+                goto fail;
+            }
+            rp->tile_w = (int)tx, spc = (int32_t)ty;
+            snprintf(rp->storage, sizeof rp->storage, "tiled %u x %u%s", tx, ty,
+                     lm == EXR_TILE_MIPMAP_LEVELS   ? ", mip-mapped: the top level read"
+                     : lm == EXR_TILE_RIPMAP_LEVELS ? ", rip-mapped: the top level read"
+                                                    : "");
+        } else {
+            snprintf(rp->storage, sizeof rp->storage, "scanline");
+            exr_get_scanlines_per_chunk(r->ctx, p, &spc);
+        }
         rp->chunk_rows = spc > 0 ? spc : 1;
         int w = dw.max.x - dw.min.x + 1, n = rp->chlist->num_channels;
         exr_compression_t comp = EXR_COMPRESSION_NONE;
@@ -230,6 +300,7 @@ void exrio_close(exrio_reader **pr)
     if (r->ctx) exr_finish(&r->ctx);
     for (int p = 0; p < EXRIO_MAX_PARTS; p++) free(r->parts[p].chunk_buf);
     exrzip_inflater_free(&r->inflater);
+    free(r->mem);
     memset(r, 0, sizeof *r);
     free(r);
     *pr = NULL;
@@ -286,6 +357,11 @@ int exrio_find_channel(const exrio_reader *r, const char *name)
     for (int c = 0; c < r->nchannels; c++)
         if (!strcmp(exrio_channel_name(r, c), name)) return c;
     return -1;
+}
+
+const char *exrio_part_storage(const exrio_reader *r, int p)
+{
+    return p >= 0 && p < r->nparts ? r->parts[p].storage : "";
 }
 
 const char *exrio_compression_of(const exrio_reader *r)
@@ -476,35 +552,52 @@ fb_result exrio_read_rows(exrio_reader *r, int y0, int nrows, void *const *plane
         exr_decode_pipeline_t dec = {0};
         bool init = false;
         int y = y0;
+        int ntx = rp->tile_w ? (r->width + rp->tile_w - 1) / rp->tile_w : 1;
         while (y < y0 + nrows) {
-            exr_chunk_info_t cinfo;
-            exr_result_t er = exr_read_scanline_chunk_info(r->ctx, p, y + r->dw_y, &cinfo);
-            if (er == EXR_ERR_SUCCESS)
-                er = init ? exr_decoding_update(r->ctx, p, &cinfo, &dec)
-                          : exr_decoding_initialize(r->ctx, p, &cinfo, &dec);
-            if (er != EXR_ERR_SUCCESS) goto exr_fail;
-            init = true;
-            int cy0 = cinfo.start_y - r->dw_y, ch = cinfo.height;
-            for (int c = 0; c < dec.channel_count; c++) {
-                int idx = -1;
-                for (int k = 0; k < rp->chlist->num_channels; k++)
-                    if (!strcmp(rp->chlist->entries[k].name.str, dec.channels[c].channel_name)) idx = k;
-                dec.channels[c].decode_to_ptr = rp->chunk_buf + (size_t)idx * rb * (size_t)rp->buf_rows;
-                dec.channels[c].user_pixel_stride = 4;
-                dec.channels[c].user_line_stride = (int32_t)rb;
-                dec.channels[c].user_bytes_per_element = 4;
-                dec.channels[c].user_data_type =
-                    dec.channels[c].data_type == EXR_PIXEL_UINT ? EXR_PIXEL_UINT : EXR_PIXEL_FLOAT;
+            int cy0 = 0, ch = 0;
+            for (int tx = 0; tx < ntx; tx++) { /* a scanline chunk, or each tile of a row of tiles */
+                exr_chunk_info_t cinfo;
+                exr_result_t er = rp->tile_w ? exr_read_tile_chunk_info(r->ctx, p, tx, y / rp->chunk_rows, 0, 0, &cinfo)
+                                             : exr_read_scanline_chunk_info(r->ctx, p, y + r->dw_y, &cinfo);
+                if (er == EXR_ERR_SUCCESS)
+                    er = init ? exr_decoding_update(r->ctx, p, &cinfo, &dec)
+                              : exr_decoding_initialize(r->ctx, p, &cinfo, &dec);
+                if (er != EXR_ERR_SUCCESS) goto exr_fail;
+                init = true;
+                cy0 = rp->tile_w ? y / rp->chunk_rows * rp->chunk_rows : cinfo.start_y - r->dw_y, ch = cinfo.height;
+                size_t xoff = (size_t)tx * (size_t)rp->tile_w * 4;
+                if (ch < 1 || ch > rp->buf_rows || cy0 < 0 ||
+                    (rp->tile_w && (int)cinfo.width > r->width - tx * rp->tile_w)) {
+                    rc = fb_fail(FB_ERR_INPUT, "%s: a chunk of %d rows at row %d does not fit the image", r->path, ch,
+                                 cy0);
+                    break;
+                }
+                for (int c = 0; c < dec.channel_count; c++) {
+                    int idx = -1;
+                    for (int k = 0; k < rp->chlist->num_channels; k++)
+                        if (!strcmp(rp->chlist->entries[k].name.str, dec.channels[c].channel_name)) idx = k;
+                    dec.channels[c].decode_to_ptr = rp->chunk_buf + (size_t)idx * rb * (size_t)rp->buf_rows + xoff;
+                    dec.channels[c].user_pixel_stride = 4;
+                    dec.channels[c].user_line_stride = (int32_t)rb;
+                    dec.channels[c].user_bytes_per_element = 4;
+                    dec.channels[c].user_data_type =
+                        dec.channels[c].data_type == EXR_PIXEL_UINT ? EXR_PIXEL_UINT : EXR_PIXEL_FLOAT;
+                }
+                er = exr_decoding_choose_default_routines(r->ctx, p, &dec);
+                exr_compression_t comp = EXR_COMPRESSION_NONE;
+                exr_get_compression(r->ctx, p, &comp);
+                if (comp == EXR_COMPRESSION_ZIP || comp == EXR_COMPRESSION_ZIPS) {
+                    dec.decoding_user_data = r;
+                    dec.decompress_fn = zip_decompress;
+                }
+                if (er == EXR_ERR_SUCCESS) er = exr_decoding_run(r->ctx, p, &dec);
+                if (er != EXR_ERR_SUCCESS) goto exr_fail;
+                continue;
+            exr_fail:
+                rc = fb_fail(FB_ERR_INPUT, "%s: cannot decode rows from %d: %s", r->path, y, exrio_exr_msg());
+                break;
             }
-            er = exr_decoding_choose_default_routines(r->ctx, p, &dec);
-            exr_compression_t comp = EXR_COMPRESSION_NONE;
-            exr_get_compression(r->ctx, p, &comp);
-            if (comp == EXR_COMPRESSION_ZIP || comp == EXR_COMPRESSION_ZIPS) {
-                dec.decoding_user_data = r;
-                dec.decompress_fn = zip_decompress;
-            }
-            if (er == EXR_ERR_SUCCESS) er = exr_decoding_run(r->ctx, p, &dec);
-            if (er != EXR_ERR_SUCCESS) goto exr_fail;
+            if (rc) break;
             int from = y > cy0 ? y : cy0;
             int to = (y0 + nrows < cy0 + ch) ? y0 + nrows : cy0 + ch;
             for (int c = 0; c < rp->chlist->num_channels; c++) {
@@ -514,10 +607,6 @@ fb_result exrio_read_rows(exrio_reader *r, int y0, int nrows, void *const *plane
                 memcpy((uint8_t *)dst + (size_t)(from - y0) * rb, src, (size_t)(to - from) * rb);
             }
             y = to;
-            continue;
-        exr_fail:
-            rc = fb_fail(FB_ERR_INPUT, "%s: cannot decode rows from %d: %s", r->path, y, exrio_exr_msg());
-            break;
         }
         if (init) exr_decoding_destroy(r->ctx, &dec);
     }
