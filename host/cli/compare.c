@@ -245,6 +245,13 @@ typedef struct cmp {
     json_t *missing;
     fb_verdict verdict;
     char reason[512];
+    /* --idiff-stats: over every compared value */
+    uint8_t *over;         /* per pixel of a block: 1 over the warning, 2 over the failure */
+    double i_warn, i_fail; /* the thresholds of the two counts (idiff's default 1e-6) */
+    double i_sum, i_sq, i_peak, i_max;
+    int i_mx, i_my;
+    const char *i_mc;
+    uint64_t i_nvals, i_nwarn, i_nfail;
 } cmp;
 
 static double value(const void *plane, bool is_uint, size_t i)
@@ -425,6 +432,8 @@ static json_t *flip_json(const cmp *k, const flip_unit *u)
     return j;
 }
 
+static json_t *idiff_json(const cmp *k);
+
 /* The end of the report: the verdict line, or the JSON object. */
 static void report(const cmp *k)
 {
@@ -452,6 +461,7 @@ static void report(const cmp *k)
         for (int u = 0; u < k->nfu; u++) json_array_append_new(f, flip_json(k, &k->fu[u]));
         json_object_set_new(o, "flip", f);
     }
+    if (k->over) json_object_set_new(o, "idiff", idiff_json(k));
     if (k->missing && json_array_size(k->missing)) json_object_set(o, "missing", k->missing);
     char *text = fb_json_dumps(o, 0);
     d->print(text ? text : "{}", d->user);
@@ -769,6 +779,18 @@ static void picture_background(cmp *k, size_t npix)
     }
 }
 
+/* --idiff-stats: one finite pair of values into the totals and the block's per-pixel flags. */
+static void idiff_value(cmp *k, const chan_stats *c, double va, double vb, double ad, double avg, size_t i, int y0)
+{
+    k->i_sum += ad, k->i_sq += ad * ad, k->i_nvals++;
+    if (va > k->i_peak) k->i_peak = va;
+    if (vb > k->i_peak) k->i_peak = vb;
+    if (ad > k->i_max || !k->i_mc)
+        k->i_max = ad, k->i_mx = (int)(i % (size_t)k->W), k->i_my = y0 + (int)(i / (size_t)k->W), k->i_mc = c->name;
+    if (ad > k->i_warn && ad > k->d->warnrelative * avg) k->over[i] |= 1;
+    if (ad > k->i_fail && ad > k->d->failrelative * avg) k->over[i] |= 2;
+}
+
 /* One channel's share of a block: its statistics, its diff row and its marks on the picture. */
 static void channel_block(cmp *k, int s, int y0, int n)
 {
@@ -784,6 +806,7 @@ static void channel_block(cmp *k, int s, int y0, int n)
             } else {
                 c->nonfinite_mismatch++, c->beyond++, c->beyond_warn++;
                 c->max_abs = ad = INFINITY;
+                if (k->over) k->over[i] |= 3;
             }
         } else {
             ad = fabs(va - vb);
@@ -793,8 +816,12 @@ static void channel_block(cmp *k, int s, int y0, int n)
             if (va > c->a_hi) c->a_hi = va;
             if (ad > c->max_abs || (c->max_x < 0 && ad > 0))
                 c->max_abs = ad, c->max_x = (int)(i % W), c->max_y = y0 + (int)(i / W);
-            if (ad > c->fail) c->beyond++;
-            if (c->has_warn && ad > c->warn) c->beyond_warn++;
+            double avg = 0.5 * (fabs(va) + fabs(vb));
+            bool over_fail = ad > c->fail && ad > k->d->failrelative * avg;
+            bool over_warn = ad > c->warn && ad > k->d->warnrelative * avg;
+            if (over_fail) c->beyond++;
+            if (c->has_warn && over_warn) c->beyond_warn++;
+            if (k->over) idiff_value(k, c, va, vb, ad, avg, i, y0);
         }
         if (k->pd) k->pd[s][i] = (float)ad;
         if (k->png && k->d->heat) {
@@ -822,12 +849,20 @@ static fb_result stream_blocks(cmp *k)
             (!k->pb[k->st[s].ib] && !(k->pb[k->st[s].ib] = malloc(block * 4))))
             return fb_fail(FB_ERR_NOMEM, "out of memory");
     if ((rc = setup_ssim(k))) return rc;
+    if (k->d->idiff_stats) {
+        if (!(k->over = malloc(block ? block : 1))) return fb_fail(FB_ERR_NOMEM, "out of memory");
+        k->i_warn = k->d->warn.has_all ? k->d->warn.all : 1e-6;
+        k->i_fail = k->d->fail.has_all ? k->d->fail.all : 1e-6;
+        k->i_peak = 1.0;
+    }
     for (int y0 = 0; y0 < k->H && k->nst > 0; y0 += BLOCK_ROWS) {
         int n = y0 + BLOCK_ROWS <= k->H ? BLOCK_ROWS : k->H - y0;
         size_t npix = (size_t)k->W * n;
         if ((rc = image_read_rows(&k->A, y0, n, k->pa)) || (rc = image_read_rows(&k->B, y0, n, k->pb))) return rc;
         if (k->png) picture_background(k, npix);
+        if (k->over) memset(k->over, 0, npix);
         for (int s = 0; s < k->nst; s++) channel_block(k, s, y0, n);
+        for (size_t i = 0; k->over && i < npix; i++) k->i_nwarn += k->over[i] & 1, k->i_nfail += k->over[i] >> 1;
         if (k->png && k->d->heat)
             for (size_t i = 0; i < npix; i++) {
                 float rgb[3];
@@ -861,9 +896,10 @@ static void channel_verdict(cmp *k, chan_stats *c)
 #define FAIL_IF(cond, ...)                                                                                             \
     if (c->verdict != FB_VERDICT_FAIL && (cond))                                                                       \
     c->verdict = FB_VERDICT_FAIL, snprintf(c->why, sizeof c->why, __VA_ARGS__)
-    FAIL_IF(c->abs_test && c->pct > c->failpct, "%.4g%% of pixels beyond %g (allowed %g%%)", c->pct, c->fail,
-            c->failpct);
-    FAIL_IF(c->has_hardfail && c->max_abs > c->hardfail, "max |A - B| %g beyond --hardfail %g", c->max_abs,
+    bool allowed = (long long)c->beyond <= k->d->allowfailures && c->nonfinite_mismatch == 0;
+    FAIL_IF(!allowed && c->abs_test && c->pct > c->failpct, "%.4g%% of pixels beyond %g (allowed %g%%%s)", c->pct,
+            c->fail, c->failpct, k->d->allowfailures ? " or --allowfailures" : "");
+    FAIL_IF(!allowed && c->has_hardfail && c->max_abs > c->hardfail, "max |A - B| %g beyond --hardfail %g", c->max_abs,
             c->hardfail);
     FAIL_IF(c->has_rmse && !(c->rmse <= c->rmse_max), "RMSE %g beyond %g", c->rmse, c->rmse_max);
     FAIL_IF(c->has_psnr && !(c->psnr >= c->psnr_min), "PSNR %.2f dB below %g", c->psnr, c->psnr_min);
@@ -925,6 +961,46 @@ static void flip_verdict(cmp *k, flip_unit *u)
         say(d, "%-16s %llu pixels non-finite in one file only: FLIP error 1", "", (unsigned long long)u->nonfinite);
 }
 
+static double idiff_rms(const cmp *k)
+{
+    return k->i_nvals ? sqrt(k->i_sq / (double)k->i_nvals) : 0;
+}
+
+/* --idiff-stats: idiff's block, its numbers by its definitions. */
+static void idiff_lines(const cmp *k)
+{
+    const fb_compare_desc *d = k->d;
+    double npels = (double)k->W * k->H, rms = idiff_rms(k);
+    say(d, "idiff statistics over the %d compared channels:", k->nst);
+    say(d, "  Mean error = %.6g", k->i_nvals ? k->i_sum / (double)k->i_nvals : 0);
+    say(d, "  RMS error = %.6g", rms);
+    say(d, "  Peak SNR = %.6g", rms > 0 ? 20 * log10(k->i_peak / rms) : INFINITY);
+    say(d, "  Max error  = %.6g @ (%d, %d, %s)", k->i_max, k->i_mx, k->i_my, k->i_mc ? k->i_mc : "-");
+    say(d, "  %llu pixels (%.3g%%) over %g", (unsigned long long)k->i_nwarn, npels ? 100 * k->i_nwarn / npels : 0,
+        k->i_warn);
+    say(d, "  %llu pixels (%.3g%%) over %g", (unsigned long long)k->i_nfail, npels ? 100 * k->i_nfail / npels : 0,
+        k->i_fail);
+}
+
+static json_t *idiff_json(const cmp *k)
+{
+    double npels = (double)k->W * k->H, rms = idiff_rms(k);
+    json_t *j = json_object();
+    json_object_set_new(j, "mean_error", json_real(k->i_nvals ? k->i_sum / (double)k->i_nvals : 0));
+    json_object_set_new(j, "rms_error", json_real(rms));
+    json_object_set_new(j, "peak_snr", json_num(rms > 0 ? 20 * log10(k->i_peak / rms) : INFINITY));
+    json_object_set_new(j, "peak", json_real(k->i_peak));
+    json_object_set_new(j, "max_error", json_real(k->i_max));
+    if (k->i_mc) json_object_set_new(j, "max_at", json_pack("[iis]", k->i_mx, k->i_my, k->i_mc));
+    json_object_set_new(j, "warn_pixels", json_integer((json_int_t)k->i_nwarn));
+    json_object_set_new(j, "warn_percent", json_real(npels ? 100 * k->i_nwarn / npels : 0));
+    json_object_set_new(j, "warn_threshold", json_real(k->i_warn));
+    json_object_set_new(j, "fail_pixels", json_integer((json_int_t)k->i_nfail));
+    json_object_set_new(j, "fail_percent", json_real(npels ? 100 * k->i_nfail / npels : 0));
+    json_object_set_new(j, "fail_threshold", json_real(k->i_fail));
+    return j;
+}
+
 /* The verdicts; the reason: the first channel (or FLIP layer) with the worst one. */
 static void verdicts(cmp *k)
 {
@@ -943,6 +1019,7 @@ static void verdicts(cmp *k)
     }
     if (v > k->verdict) k->verdict = v;
     if (!k->reason[0]) snprintf(k->reason, sizeof k->reason, "%s", worst);
+    if (k->over) idiff_lines(k);
 }
 
 static void cmp_free(cmp *k)
@@ -961,6 +1038,7 @@ static void cmp_free(cmp *k)
     for (int u = 0; u < k->nfu; u++) free(k->fu[u].map);
     json_decref(k->missing);
     free(k->fu);
+    free(k->over);
     free(k->dnames);
     free(k->pd);
     free(k->dch);

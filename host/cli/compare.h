@@ -39,6 +39,14 @@ typedef struct fb_compare_desc {
      * `failpercent` percent of its pixels do (default 0), or any pixel is beyond `hardfail`; the same
      * with warn for a warning. Then the statistics: RMSE at most, PSNR and SSIM at least. */
     fb_limit fail, failpercent, hardfail, warn, warnpercent, hardwarn, rmse, psnr, ssim;
+    /* idiff's --allowfailures: a channel fails on its failing pixels (beyond fail, and beyond
+     * failrelative * (|A| + |B|) / 2 when that is set) or on hardfail only when more than
+     * allowfailures of its pixels fail; warnrelative likewise for warnings */
+    long long allowfailures;
+    double failrelative, warnrelative;
+    /* idiff's statistics over all compared channels together (peak: max(1, the largest value)),
+     * the failing and warning counts per pixel (any channel over) */
+    bool idiff_stats;
     bool ignore_missing;
     const char *diff;     /* write |A - B| per common channel here */
     const char *diff_png; /* and a picture: red where a channel fails, A's grey elsewhere; or `heat` */
