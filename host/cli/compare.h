@@ -52,6 +52,8 @@ typedef struct fb_compare_desc {
     const char *diff_png; /* and a picture: red where a channel fails, A's grey elsewhere; or `heat` */
     bool heat;            /* the picture as a heat map of max |A - B| over the channels, log scale */
     bool json;            /* the report as one JSON object instead of lines */
+    const char *report;   /* an HTML page: every layer's pictures, statistics and verdict, failing first */
+    const char *junit;    /* JUnit XML: a test case per channel (or FLIP layer) and threshold */
     /* FLIP (flip.h) per layer of R, G, B float channels (or Y as grey): LDR-FLIP for PNGs, HDR-FLIP
      * for EXRs unless flip_mode says; a layer fails (warns) when its statistic flip_stat (0 mean,
      * 1 weighted median, 2 first, 3 third weighted quartile, 4 max) is beyond flip_fail (flip_warn),

@@ -805,6 +805,11 @@ static int cmd_compare(int argc, char **argv)
             if (strcmp(a, "--layer") && fb_output_format(a, val, !strcmp(a, "--diff") ? ".exr" : ".png"))
                 return finish(FB_ERR_USAGE);
             i++;
+        } else if (!strcmp(a, "--report") || !strcmp(a, "--junit")) {
+            if (!val) return usage_error("%s: missing value", a);
+            if (fb_output_format(a, val, !strcmp(a, "--report") ? ".html" : ".xml")) return finish(FB_ERR_USAGE);
+            *(!strcmp(a, "--report") ? &d.report : &d.junit) = val;
+            i++;
         } else if (!strcmp(a, "--flip-png")) {
             if (!val) return usage_error("%s: missing value", a);
             if (fb_output_format(a, val, ".png")) return finish(FB_ERR_USAGE);
@@ -878,6 +883,9 @@ static int cmd_compare(int argc, char **argv)
                 "                             also beyond R * (|A| + |B|) / 2\n"
                 "  idiff's single-dash spellings (-fail, -failpercent, -hardfail, -allowfailures, -warn, ...)\n"
                 "  are taken too.\n"
+                "--report OUT.html: one page that works offline: every layer's reference, test, difference\n"
+                "and FLIP pictures (full size on click), statistics and verdict, failing layers first, and the\n"
+                "stored scenes' keys that differ. --junit OUT.xml: a test case per channel and threshold.\n"
                 "--idiff-stats adds idiff's statistics: over all compared channels together, RMS error and\n"
                 "PSNR with peak max(1, the largest value), the pixels over --warn and --fail (any channel).\n"
                 "\n"
@@ -906,7 +914,8 @@ static int cmd_compare(int argc, char **argv)
                 "warn-percent", "warnpercent", "hardwarn",     "rmse",          "psnr",           "ssim",
                 "layer",        "diff",        "diff-png",     "heat",          "ignore-missing", "json",
                 "quiet",        "help",        "flip",         "flip-fail",     "flip-warn",      "flip-stat",
-                "flip-mode",    "flip-png",    "idiff-stats",  "allowfailures", "failrelative",   "warnrelative"};
+                "flip-mode",    "flip-png",    "idiff-stats",  "allowfailures", "failrelative",   "warnrelative",
+                "report",       "junit"};
             const char *near = !strncmp(a, "--", 2) ? fb_closest(a + 2, flags, sizeof flags / sizeof flags[0]) : NULL;
             char hint[96] = "";
             if (near) snprintf(hint, sizeof hint, "; did you mean --%s?", near);
