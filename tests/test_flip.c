@@ -193,12 +193,37 @@ static void check_pool(void)
     CHECK(fabs(r.mean - 1.5 / 8) < 1e-7 && fabs(r.min - 0.1) < 1e-7 && fabs(r.max - 0.5) < 1e-7, "mean %g", r.mean);
 }
 
+/* The same bits on 1, 2 and 3 threads (bands of 16 rows; 100 rows leave a partial band). */
+static void check_threads(const char *dir)
+{
+    rgb a, b;
+    CHECK(load(dir, "b8_rgb.exr", &a) && load(dir, "b6_rgb.exr", &b), "cannot load b8/b6");
+    int h = a.h < 100 ? a.h : 100;
+    size_t n = (size_t)a.w * h;
+    float *m[3];
+    for (int t = 0; t < 3; t++) {
+        fb_flip_result r;
+        m[t] = malloc(n * sizeof(float));
+        fb_flip_set_threads(t + 1);
+        CHECK(!fb_flip((const float *const *)a.p, (const float *const *)b.p, a.w, h, true, fb_flip_default_ppd(), m[t],
+                       &r),
+              "fb_flip failed");
+    }
+    fb_flip_set_threads(0);
+    CHECK(!memcmp(m[0], m[1], n * sizeof(float)) && !memcmp(m[0], m[2], n * sizeof(float)),
+          "FLIP differs between 1, 2 and 3 threads");
+    for (int t = 0; t < 3; t++) free(m[t]);
+    unload(&a);
+    unload(&b);
+}
+
 int main(int argc, char **argv)
 {
     const char *dir = argc > 1 ? argv[1] : "tests/data/flip";
     check_pool();
     check_zero_median();
     check_cases(dir);
+    check_threads(dir);
     if (failures) fprintf(stderr, "%d failures\n", failures);
     return failures ? 1 : 0;
 }

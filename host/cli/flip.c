@@ -15,6 +15,8 @@
  */
 #include "flip.h"
 
+#include "pool.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -193,21 +195,53 @@ typedef struct flip_work {
     float *ycc[2]; /* YCxCz of ref and test, 3 per pixel */
     float *tmp[2]; /* the first pass: 4 per pixel (Y, Cx, Cz1, Cz2) or 3 (dx, ddx, g) */
     float *color;  /* the colour difference */
+    fb_pool *pool; /* rows in bands over the cores: every row computed alone, the same bits */
+    /* the pass being run over bands of rows, and its operands */
+    void (*pass)(struct flip_work *k, int y0, int y1);
+    const float *const *src3;
+    float *dst, *err, **dst3, m;
+    int side;
 } flip_work;
 
-static void to_ycxcz(const float *const src[3], size_t n, float *o)
+#define FLIP_BAND 16
+
+static int g_threads; /* fb_flip_set_threads; 0: one per core */
+
+void fb_flip_set_threads(int n)
 {
-    for (size_t i = 0; i < n; i++) {
+    g_threads = n;
+}
+
+static void band_task(void *ctx, int t)
+{
+    flip_work *k = ctx;
+    int y0 = t * FLIP_BAND, y1 = y0 + FLIP_BAND < k->h ? y0 + FLIP_BAND : k->h;
+    k->pass(k, y0, y1);
+}
+
+static void run_bands(flip_work *k, void (*pass)(flip_work *, int, int))
+{
+    k->pass = pass;
+    fb_pool_run(k->pool, (k->h + FLIP_BAND - 1) / FLIP_BAND, band_task, k);
+}
+
+static void to_ycxcz_rows(flip_work *k, int y0, int y1)
+{
+    const float *const *src = k->src3;
+    float *o = k->dst;
+    for (size_t i = (size_t)y0 * k->w; i < (size_t)y1 * k->w; i++) {
         float c[3] = {srgb_to_linear(src[0][i]), srgb_to_linear(src[1][i]), srgb_to_linear(src[2][i])}, t[3];
         rgb_to_xyz(c, t);
         xyz_to_ycxcz(t, o + 3 * i);
     }
 }
 
-static void color_pass_x(const flip_work *k, const float *src, float *dst)
+static void color_pass_x(flip_work *k, int y0, int y1)
 {
     int r = k->rs;
-    for (int y = 0; y < k->h; y++)
+    const float *src = k->ycc[k->side];
+    float *dst = k->tmp[k->side];
+    for (int y = y0; y < y1; y++)
         for (int x = 0; x < k->w; x++) {
             float s0 = 0, s1 = 0, s2 = 0, s3 = 0;
             for (int i = -r; i <= r; i++) {
@@ -243,10 +277,9 @@ static void color_at(const flip_work *k, const float *t, int x, int y, float lab
     hunt(lab);
 }
 
-static void color_difference(flip_work *k)
+static void color_rows(flip_work *k, int y0, int y1)
 {
-    for (int s = 0; s < 2; s++) color_pass_x(k, k->ycc[s], k->tmp[s]);
-    for (int y = 0; y < k->h; y++)
+    for (int y = y0; y < y1; y++)
         for (int x = 0; x < k->w; x++) {
             float a[3], b[3];
             color_at(k, k->tmp[0], x, y, a);
@@ -260,11 +293,19 @@ static void color_difference(flip_work *k)
         }
 }
 
-static void feature_pass_x(const flip_work *k, const float *src, float *dst)
+static void color_difference(flip_work *k)
+{
+    for (k->side = 0; k->side < 2; k->side++) run_bands(k, color_pass_x);
+    run_bands(k, color_rows);
+}
+
+static void feature_pass_x(flip_work *k, int y0, int y1)
 {
     int r = k->rf;
     const float o116 = 1.0f / 116.0f, s116 = 16.0f / 116.0f;
-    for (int y = 0; y < k->h; y++)
+    const float *src = k->ycc[k->side];
+    float *dst = k->tmp[k->side];
+    for (int y = y0; y < y1; y++)
         for (int x = 0; x < k->w; x++) {
             float dx = 0, ddx = 0, g = 0;
             for (int i = -r; i <= r; i++) {
@@ -293,11 +334,11 @@ static void features_at(const flip_work *k, const float *t, int x, int y, float 
     *point = sqrtf(ddx * ddx + ddy * ddy);
 }
 
-static void final_error(flip_work *k, float *err)
+static void final_rows(flip_work *k, int y0, int y1)
 {
     const float norm = 1.0f / sqrtf(2.0f);
-    for (int s = 0; s < 2; s++) feature_pass_x(k, k->ycc[s], k->tmp[s]);
-    for (int y = 0; y < k->h; y++)
+    float *err = k->err;
+    for (int y = y0; y < y1; y++)
         for (int x = 0; x < k->w; x++) {
             float ea, pa, eb, pb;
             features_at(k, k->tmp[0], x, y, &ea, &pa);
@@ -306,6 +347,13 @@ static void final_error(flip_work *k, float *err)
             size_t i = (size_t)y * k->w + x;
             err[i] = powf(k->color[i], 1.0f - f);
         }
+}
+
+static void final_error(flip_work *k, float *err)
+{
+    for (k->side = 0; k->side < 2; k->side++) run_bands(k, feature_pass_x);
+    k->err = err;
+    run_bands(k, final_rows);
 }
 
 static fb_result work_init(flip_work *k, int w, int h, float ppd)
@@ -326,7 +374,7 @@ static fb_result work_init(flip_work *k, int w, int h, float ppd)
     feature_filter(ppd, k->rf, k->ff);
     k->cmax = max_distance();
     k->pccmax = 0.4f * k->cmax;
-    return FB_OK;
+    return fb_pool_create(g_threads > 0 ? g_threads : fb_cpu_count(), &k->pool);
 }
 
 static void work_fini(flip_work *k)
@@ -336,14 +384,16 @@ static void work_fini(flip_work *k)
     free(k->ff);
     for (int s = 0; s < 2; s++) free(k->ycc[s]), free(k->tmp[s]);
     free(k->color);
+    fb_pool_destroy(&k->pool);
 }
 
 /* LDR-FLIP of two sRGB images into err. */
 static void ldr_flip(flip_work *k, const float *const ref[3], const float *const test[3], float *err)
 {
-    size_t n = (size_t)k->w * k->h;
-    to_ycxcz(ref, n, k->ycc[0]);
-    to_ycxcz(test, n, k->ycc[1]);
+    k->src3 = ref, k->dst = k->ycc[0];
+    run_bands(k, to_ycxcz_rows);
+    k->src3 = test, k->dst = k->ycc[1];
+    run_bands(k, to_ycxcz_rows);
     color_difference(k);
     final_error(k, err);
 }
@@ -397,10 +447,12 @@ void fb_flip_exposures(const float *const ref[3], size_t n, float *start, float 
     *nexp = (int)(steps > 2.0f ? steps : 2.0f);
 }
 
-static void expose_tonemap(const float *const src[3], size_t n, float m, float *dst[3])
+static void expose_rows(flip_work *k, int y0, int y1)
 {
+    const float *const *src = k->src3;
+    float **dst = k->dst3, m = k->m;
     for (int q = 0; q < 3; q++)
-        for (size_t i = 0; i < n; i++) {
+        for (size_t i = (size_t)y0 * k->w; i < (size_t)y1 * k->w; i++) {
             float v = src[q][i] * m;
             v = (v * v * ACES[0] + v * ACES[1] + ACES[2]) / (v * v * ACES[3] + v * ACES[4] + ACES[5]);
             v = fminf(fmaxf(v, 0.0f), 1.0f);
@@ -420,8 +472,10 @@ static fb_result hdr_flip(flip_work *k, const float *const ref[3], const float *
     memset(err, 0, n * sizeof *err);
     for (int i = 0; i < out->nexp; i++) {
         float m = powf(2.0f, out->start_exposure + (float)i * step);
-        expose_tonemap(ref, n, m, r);
-        expose_tonemap(test, n, m, t);
+        k->m = m, k->src3 = ref, k->dst3 = r;
+        run_bands(k, expose_rows);
+        k->src3 = test, k->dst3 = t;
+        run_bands(k, expose_rows);
         ldr_flip(k, (const float *const *)r, (const float *const *)t, e);
         for (size_t p = 0; p < n; p++)
             if (e[p] > err[p]) err[p] = e[p];

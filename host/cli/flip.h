@@ -35,6 +35,10 @@ typedef struct fb_flip_result {
 fb_result fb_flip(const float *const ref[3], const float *const test[3], int width, int height, bool hdr, float ppd,
                   float *map, fb_flip_result *out);
 
+/* The threads fb_flip runs on (0, the default: one per core). Rows are computed independently, so
+ * the result is the same bits whatever the count. */
+void fb_flip_set_threads(int n);
+
 /* The automatic exposure range from the reference's linear RGB (as fb_flip uses). */
 void fb_flip_exposures(const float *const ref[3], size_t n, float *start, float *stop, int *nexp, bool *zero_median);
 
