@@ -70,6 +70,8 @@ for f in ci*.sh; do
   check "$f (a CI example) has commands" grep -q "fractalbake compare" "$f"
   check "$f runs as written and passes" sh -c "cd '$d' && bash '$T/$f' > log.txt 2>&1"
   check "  with its diff picture" test -s "$d/out/diff.png"
+  check "  its HTML page" grep -q "<section id=\"layer-0\"" "$d/out/report.html"
+  check "  and its JUnit file" python3 -c "import xml.etree.ElementTree as E; assert E.parse('$d/out/junit.xml').getroot().find('testsuite').get('failures') == '0'"
   n=$((n + 1))
 done
 check "two CI examples found" test "$n" = 2
