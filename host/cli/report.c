@@ -60,13 +60,15 @@ static const char CSS[] =
     "#full{display:none;position:fixed;inset:0;background:rgba(0,0,0,.85);overflow:auto;cursor:zoom-out}"
     "#full img{display:block;margin:20px auto;image-rendering:pixelated}ul{margin:4px 0}";
 
-/* Every picture loaded: body[data-images] says how many of how many, for a reader and for tests. */
+/* A click shows a picture at full size (and #full=N in the address opens picture N so); once loaded,
+ * body[data-images] says how many of how many pictures loaded, for a reader and for tests. */
 static const char JS[] =
     "function show(i){var f=document.getElementById('full');f.firstChild.src=i.src;f.style.display='block';}"
     "document.getElementById('full').onclick=function(){this.style.display='none';};"
     "window.addEventListener('load',function(){var im=document.querySelectorAll('img.thumb'),ok=0;"
     "for(var k=0;k<im.length;k++)if(im[k].complete&&im[k].naturalWidth>0)ok++;"
-    "document.body.setAttribute('data-images',ok+'/'+im.length);});";
+    "document.body.setAttribute('data-images',ok+'/'+im.length);"
+    "var m=/^#full=(\\d+)$/.exec(location.hash);if(m&&im[+m[1]])show(im[+m[1]]);});";
 
 static void layer_html(FILE *f, const fb_report_layer *L, int index)
 {

@@ -28,6 +28,13 @@ $C --virtual-time-budget=5000 --enable-logging=stderr --v=0 --dump-dom "file://$
 check "Chromium renders the page" grep -q '<section id="layer-0"' dom.html
 check "every picture loads (8 of 8)" grep -q '<body data-images="8/8">' dom.html
 check "no console message" sh -c "! grep -q ':CONSOLE' chrome.err"
+$C --virtual-time-budget=5000 --dump-dom "file://$T/r.html#full=5" > full.html 2> /dev/null
+check "a picture opens at full size (#full=5: the sixth, shown over the page)" python3 -c "
+import re
+d = open('full.html').read()
+thumbs = re.findall(r'<img class=\"thumb\"[^>]*src=\"([^\"]+)\"', d)
+m = re.search(r'<div id=\"full\" style=\"display: block;\"><img alt=\"full size\" src=\"([^\"]+)\"', d)
+assert len(thumbs) == 8 and m and m.group(1) == thumbs[5]"
 printf '<html><body><script>console.error("boom")</script></body></html>' > noisy.html
 $C --virtual-time-budget=2000 --enable-logging=stderr --v=0 --dump-dom "file://$T/noisy.html" > /dev/null 2> noisy.err
 check "  (a page that logs is caught)" grep -q ':CONSOLE.*boom' noisy.err
