@@ -8,6 +8,7 @@
 #include "tonemap.h"
 #include "compare.h"
 #include "env.h"
+#include "info.h"
 #include "exrio.h"
 #include "generators.h"
 #include "heightmap.h"
@@ -763,6 +764,80 @@ static int cmd_render(int argc, char **argv)
     return finish(rc);
 }
 
+/* idiff's single-dash spelling of a flag compare shares, as ours (in buf); its other flags answered
+ * with ours (NULL, the error logged); any other argument as it is. */
+static const char *idiff_flag(const char *a, char *buf, size_t size)
+{
+    /* idiff's own single-dash spellings of the flags that mean the same here; its others answered */
+    static const char *const idiff_same[] = {"fail", "failrelative", "failpercent", "hardfail", "allowfailures",
+                                             "warn", "warnrelative", "warnpercent", "hardwarn"};
+    static const char *const idiff_other[][2] = {
+        {"-o", "the difference image: --diff OUT.exr (|A - B|; idiff -o writes A - B)"},
+        {"-od", "--diff writes its file whatever the difference"},
+        {"-abs", "--diff writes |A - B| already"},
+        {"-scale", "--diff writes |A - B| unscaled"},
+        {"-p", "a perceptual comparison: --flip (idiff -p is Yee's metric)"},
+        {"-a", "every part is compared: channels are matched by name"},
+        {"-v", "compare prints its statistics already (--idiff-stats: idiff's)"},
+        {"-q", "--quiet"}};
+    for (size_t k = 0; a[0] == '-' && a[1] != '-' && k < sizeof idiff_same / sizeof idiff_same[0]; k++)
+        if (!strcmp(a + 1, idiff_same[k])) return snprintf(buf, size, "-%s", a), buf;
+    for (size_t k = 0; k < sizeof idiff_other / sizeof idiff_other[0]; k++)
+        if (!strcmp(a, idiff_other[k][0])) {
+            fb_fail(FB_ERR_USAGE, "%s: idiff's flag; fractalbake compare: %s", a, idiff_other[k][1]);
+            return NULL;
+        }
+    return a;
+}
+
+static void compare_help(void)
+{
+    printf("usage: fractalbake compare A B [thresholds] [--layer L] [--ignore-missing] [--diff OUT.exr]\n"
+           "                          [--diff-png OUT.png [--heat]] [--json] [--quiet]\n"
+           "A and B are EXR or PNG files (a PNG's channels are Y, Y A, R G B or R G B A, 0..1).\n"
+           "Per channel: the largest |A - B| and where, RMSE, PSNR (peak: A's range), the share of pixels\n"
+           "beyond the fail threshold, and with --ssim the mean SSIM (Wang et al. 2004, L: A's range).\n"
+           "\n"
+           "thresholds (idiff's names; each takes a value for every channel, CHANNEL=VALUE or\n"
+           "LAYER=VALUE rules, or both: --max-abs 1e-4,sky.R=1e-3,terrain=1e-6):\n"
+           "  --max-abs E, --fail E      a pixel fails when |A - B| > E (default 0: every pixel equal)\n"
+           "  --fail-percent P           the channel fails when more than P%% of its pixels fail (default 0)\n"
+           "  --hardfail E               ... or when any pixel's |A - B| > E, whatever P\n"
+           "  --warn E, --warn-percent P, --hardwarn E   the same for a warning\n"
+           "  --rmse E, --psnr DB, --ssim S              fail beyond an RMSE, below a PSNR or an SSIM\n"
+           "  (--failpercent and --warnpercent are accepted too)\n"
+           "  --allowfailures N          a channel fails (on --fail-percent or --hardfail) only when more than\n"
+           "                             N of its pixels are beyond --fail (idiff's rule)\n"
+           "  --failrelative R, --warnrelative R   a pixel is beyond --fail (--warn) only when |A - B| is\n"
+           "                             also beyond R * (|A| + |B|) / 2\n"
+           "  idiff's single-dash spellings (-fail, -failpercent, -hardfail, -allowfailures, -warn, ...)\n"
+           "  are taken too.\n"
+           "--report OUT.html: one page that works offline: every layer's reference, test, difference\n"
+           "and FLIP pictures (full size on click), statistics and verdict, failing layers first, and the\n"
+           "stored scenes' keys that differ. --junit OUT.xml: a test case per channel and threshold.\n"
+           "--idiff-stats adds idiff's statistics: over all compared channels together, RMS error and\n"
+           "PSNR with peak max(1, the largest value), the pixels over --warn and --fail (any channel).\n"
+           "\n"
+           "FLIP (Andersson et al. 2020; HDR-FLIP 2021), per layer of R, G, B (or Y as grey):\n"
+           "  --flip                     compute it: LDR-FLIP for PNGs, HDR-FLIP for EXRs (ACES, automatic\n"
+           "                             exposures); the mean, weighted median and quartiles, max\n"
+           "  --flip-fail E, --flip-warn E   fail (warn) when a layer's statistic is beyond E (LAYER=E rules)\n"
+           "  --flip-stat mean|median|q1|q3|max   the statistic they test (default mean)\n"
+           "  --flip-mode auto|ldr|hdr   LDR-FLIP takes sRGB values in [0, 1], HDR-FLIP linear ones\n"
+           "  --flip-png OUT.png         the error of the layer with the largest mean, grey (255: error 1)\n"
+           "  (each implies --flip; --diff then holds LAYER.FLIP too)\n"
+           "\n"
+           "--diff writes |A - B| per channel; --diff-png a picture: red where a channel fails, over A's\n"
+           "first channel in dim grey; with --heat a heat map of the largest |A - B| over the channels,\n"
+           "log scale (black 1e-8, blue 1e-6, red 1e-4, yellow 0.01, white 1). --json: the report as one\n"
+           "JSON object. --quiet: only the result line.\n"
+           "\n"
+           "exit: 0 pass or warn (the result line says WARN; --json: \"result\": \"warn\"), 1 fail (also\n"
+           "different sizes or channel sets, with the reason), 2 bad usage or input, 3 runtime failure.\n"
+           "idiff returns 1 for a warning and 2 for a failure: fractalbake keeps 2 for bad input, as\n"
+           "every fractalbake command does, and lets a warning pass.\n");
+}
+
 static int cmd_compare(int argc, char **argv)
 {
     fb_compare_desc d = {.print = print_line};
@@ -771,6 +846,8 @@ static int cmd_compare(int argc, char **argv)
     bool quiet = false;
     for (int i = 0; i < argc; i++) {
         const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
+        char dashed[64];
+        if (!(a = idiff_flag(a, dashed, sizeof dashed))) return finish(FB_ERR_USAGE);
         /* idiff's names beside ours: --fail is --max-abs, --failpercent --fail-percent */
         static const struct {
             const char *flag;
@@ -788,6 +865,8 @@ static int cmd_compare(int argc, char **argv)
             {"--rmse", offsetof(fb_compare_desc, rmse)},
             {"--psnr", offsetof(fb_compare_desc, psnr)},
             {"--ssim", offsetof(fb_compare_desc, ssim)},
+            {"--flip-fail", offsetof(fb_compare_desc, flip_fail)},
+            {"--flip-warn", offsetof(fb_compare_desc, flip_warn)},
         };
         fb_limit *lim = NULL;
         for (size_t k = 0; k < sizeof limits / sizeof limits[0] && !lim; k++)
@@ -802,6 +881,54 @@ static int cmd_compare(int argc, char **argv)
             if (strcmp(a, "--layer") && fb_output_format(a, val, !strcmp(a, "--diff") ? ".exr" : ".png"))
                 return finish(FB_ERR_USAGE);
             i++;
+        } else if (!strcmp(a, "--report") || !strcmp(a, "--junit")) {
+            if (!val) return usage_error("%s: missing value", a);
+            if (fb_output_format(a, val, !strcmp(a, "--report") ? ".html" : ".xml")) return finish(FB_ERR_USAGE);
+            *(!strcmp(a, "--report") ? &d.report : &d.junit) = val;
+            i++;
+        } else if (!strcmp(a, "--flip-png")) {
+            if (!val) return usage_error("%s: missing value", a);
+            if (fb_output_format(a, val, ".png")) return finish(FB_ERR_USAGE);
+            d.flip_png = val;
+            i++;
+        } else if (!strcmp(a, "--flip-mode") || !strcmp(a, "--flip-stat")) {
+            static const char *const modes[] = {"auto", "ldr", "hdr"}, *const stats[] = {"mean", "median", "q1", "q3",
+                                                                                         "max"};
+            bool mode = !strcmp(a, "--flip-mode");
+            int n = mode ? 3 : 5, k = 0;
+            if (!val) return usage_error("%s: missing value", a);
+            while (k < n && strcmp(val, (mode ? modes : stats)[k])) k++;
+            if (k == n) {
+                fb_fail(FB_ERR_USAGE, "%s: expected %s, found \"%s\"", a,
+                        mode ? "auto|ldr|hdr" : "mean|median|q1|q3|max", val);
+                return finish(FB_ERR_USAGE);
+            }
+            if (mode)
+                d.flip_mode = (fb_flip_mode)k;
+            else
+                d.flip_stat = k;
+            d.flip = true;
+            i++;
+        } else if (!strcmp(a, "--flip")) {
+            d.flip = true;
+        } else if (!strcmp(a, "--idiff-stats")) {
+            d.idiff_stats = true;
+        } else if (!strcmp(a, "--allowfailures") || !strcmp(a, "--failrelative") || !strcmp(a, "--warnrelative")) {
+            char *end;
+            if (!val) return usage_error("%s: missing value", a);
+            errno = 0;
+            double v = strtod(val, &end);
+            bool count = !strcmp(a, "--allowfailures");
+            if (end == val || *end || errno || !isfinite(v) || v < 0 || (count && (v != floor(v) || v > 9e18))) {
+                fb_fail(FB_ERR_USAGE, "%s: expected %s, found \"%s\"", a,
+                        count ? "a whole number of pixels >= 0" : "a finite number >= 0", val);
+                return finish(FB_ERR_USAGE);
+            }
+            if (count)
+                d.allowfailures = (long long)v;
+            else
+                *(!strcmp(a, "--failrelative") ? &d.failrelative : &d.warnrelative) = v;
+            i++;
         } else if (!strcmp(a, "--ignore-missing")) {
             d.ignore_missing = true;
         } else if (!strcmp(a, "--heat")) {
@@ -811,36 +938,16 @@ static int cmd_compare(int argc, char **argv)
         } else if (!strcmp(a, "--quiet")) {
             quiet = true;
         } else if (!strcmp(a, "--help")) {
-            printf("usage: fractalbake compare A B [thresholds] [--layer L] [--ignore-missing] [--diff OUT.exr]\n"
-                   "                          [--diff-png OUT.png [--heat]] [--json] [--quiet]\n"
-                   "A and B are EXR or PNG files (a PNG's channels are Y, Y A, R G B or R G B A, 0..1).\n"
-                   "Per channel: the largest |A - B| and where, RMSE, PSNR (peak: A's range), the share of pixels\n"
-                   "beyond the fail threshold, and with --ssim the mean SSIM (Wang et al. 2004, L: A's range).\n"
-                   "\n"
-                   "thresholds (idiff's names; each takes a value for every channel, CHANNEL=VALUE or\n"
-                   "LAYER=VALUE rules, or both: --max-abs 1e-4,sky.R=1e-3,terrain=1e-6):\n"
-                   "  --max-abs E, --fail E      a pixel fails when |A - B| > E (default 0: every pixel equal)\n"
-                   "  --fail-percent P           the channel fails when more than P%% of its pixels fail (default 0)\n"
-                   "  --hardfail E               ... or when any pixel's |A - B| > E, whatever P\n"
-                   "  --warn E, --warn-percent P, --hardwarn E   the same for a warning\n"
-                   "  --rmse E, --psnr DB, --ssim S              fail beyond an RMSE, below a PSNR or an SSIM\n"
-                   "  (--failpercent and --warnpercent are accepted too)\n"
-                   "\n"
-                   "--diff writes |A - B| per channel; --diff-png a picture: red where a channel fails, over A's\n"
-                   "first channel in dim grey; with --heat a heat map of the largest |A - B| over the channels,\n"
-                   "log scale (black 1e-8, blue 1e-6, red 1e-4, yellow 0.01, white 1). --json: the report as one\n"
-                   "JSON object. --quiet: only the result line.\n"
-                   "\n"
-                   "exit: 0 pass or warn (the result line says WARN; --json: \"result\": \"warn\"), 1 fail (also\n"
-                   "different sizes or channel sets, with the reason), 2 bad usage or input, 3 runtime failure.\n"
-                   "idiff returns 1 for a warning and 2 for a failure: fractalbake keeps 2 for bad input, as\n"
-                   "every fractalbake command does, and lets a warning pass.\n");
+            compare_help();
             return 0;
         } else if (a[0] == '-' && a[1]) {
-            static const char *const flags[] = {"max-abs", "fail",           "fail-percent", "failpercent", "hardfail",
-                                                "warn",    "warn-percent",   "warnpercent",  "hardwarn",    "rmse",
-                                                "psnr",    "ssim",           "layer",        "diff",        "diff-png",
-                                                "heat",    "ignore-missing", "json",         "quiet",       "help"};
+            static const char *const flags[] = {
+                "max-abs",      "fail",        "fail-percent", "failpercent",   "hardfail",       "warn",
+                "warn-percent", "warnpercent", "hardwarn",     "rmse",          "psnr",           "ssim",
+                "layer",        "diff",        "diff-png",     "heat",          "ignore-missing", "json",
+                "quiet",        "help",        "flip",         "flip-fail",     "flip-warn",      "flip-stat",
+                "flip-mode",    "flip-png",    "idiff-stats",  "allowfailures", "failrelative",   "warnrelative",
+                "report",       "junit"};
             const char *near = !strncmp(a, "--", 2) ? fb_closest(a + 2, flags, sizeof flags / sizeof flags[0]) : NULL;
             char hint[96] = "";
             if (near) snprintf(hint, sizeof hint, "; did you mean --%s?", near);
@@ -853,6 +960,7 @@ static int cmd_compare(int argc, char **argv)
         }
     }
     if (nfiles != 2) return usage_error("%s", "compare: expected two images: fractalbake compare A.exr B.exr");
+    if (d.flip_fail.set || d.flip_warn.set || d.flip_png) d.flip = true;
     d.a = files[0];
     d.b = files[1];
     if (quiet && !d.json) d.print = print_result_only;

@@ -95,6 +95,8 @@ void exrio_writer_abort(exrio_writer **w);
 
 typedef struct exrio_reader exrio_reader;
 
+/* Scanline or tiled parts (tiled: the top level of a mip- or rip-map), one or several; "-" reads
+ * standard input, whole, first (within --max-memory). Deep parts are refused. */
 fb_result exrio_open(const char *path, exrio_reader **out);
 void exrio_close(exrio_reader **r);
 
@@ -115,6 +117,9 @@ int exrio_nparts(const exrio_reader *r);
 int exrio_channel_part(const exrio_reader *r, int c);
 const char *exrio_part_name(const exrio_reader *r, int p);
 const char *exrio_part_compression(const exrio_reader *r, int p);
+/* "scanline", or "tiled W x H" with ", mip-mapped: the top level read" (or rip-mapped): tiled parts
+ * are read at their full-resolution level. */
+const char *exrio_part_storage(const exrio_reader *r, int p);
 
 /* The value of a string attribute, or NULL. Valid until exrio_close. */
 const char *exrio_attr_string(const exrio_reader *r, const char *name);

@@ -105,20 +105,19 @@ fb_result fb_png_read(const char *path, fb_png *out)
     return rc;
 }
 
-fb_result fb_png_write(const char *path, const char *what, int width, int height, int channels, int bits,
-                       const void *pix, const char *const (*kv)[2], int nkv)
+/* The PNG into f; `name` names the destination in messages. */
+static fb_result png_to(FILE *f, const char *name, const char *what, int width, int height, int channels, int bits,
+                        const void *pix, const char *const (*kv)[2], int nkv)
 {
-    FILE *f = NULL;
-    fb_result rc = fb_output_fopen(path, what, (void **)&f);
-    if (rc) return rc;
+    volatile fb_result rc = FB_OK;
     int bpp = channels * bits / 8;
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, png_error_cb, png_warning_cb);
     png_infop info = png ? png_create_info_struct(png) : NULL;
     uint8_t *volatile row = malloc((size_t)width * bpp);
     if (!png || !info || !row) {
-        rc = fb_fail(FB_ERR_NOMEM, "out of memory writing %s", path);
+        rc = fb_fail(FB_ERR_NOMEM, "out of memory writing %s", name);
     } else if (setjmp(png_jmpbuf(png))) {
-        rc = fb_fail(FB_ERR_IO, "%s: cannot write %s (%s)", path, what, t_png_msg);
+        rc = fb_fail(FB_ERR_IO, "%s: cannot write %s (%s)", name, what, t_png_msg);
     } else {
         png_init_io(png, f);
         png_set_IHDR(png, info, (png_uint_32)width, (png_uint_32)height, bits,
@@ -145,6 +144,32 @@ fb_result fb_png_write(const char *path, const char *what, int width, int height
     }
     png_destroy_write_struct(png ? &png : NULL, info ? &info : NULL);
     free((void *)row);
+    return rc;
+}
+
+fb_result fb_png_write(const char *path, const char *what, int width, int height, int channels, int bits,
+                       const void *pix, const char *const (*kv)[2], int nkv)
+{
+    FILE *f = NULL;
+    fb_result rc = fb_output_fopen(path, what, (void **)&f);
+    if (rc) return rc;
+    rc = png_to(f, path, what, width, height, channels, bits, pix, kv, nkv);
     if (fclose(f) != 0 && !rc) rc = fb_fail(FB_ERR_IO, "%s: cannot write %s: %s", path, what, strerror(errno));
     return fb_output_done(path, rc);
+}
+
+fb_result fb_png_encode(int width, int height, int channels, const uint8_t *pix, uint8_t **out, size_t *size)
+{
+    char *buf = NULL;
+    size_t n = 0;
+    FILE *f = open_memstream(&buf, &n);
+    if (!f) return fb_fail(FB_ERR_NOMEM, "out of memory encoding a PNG");
+    fb_result rc = png_to(f, "a picture in memory", "PNG", width, height, channels, 8, pix, NULL, 0);
+    if (fclose(f) != 0 && !rc) rc = fb_fail(FB_ERR_NOMEM, "out of memory encoding a PNG");
+    if (rc) {
+        free(buf);
+        return rc;
+    }
+    *out = (uint8_t *)buf, *size = n;
+    return FB_OK;
 }

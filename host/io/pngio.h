@@ -30,4 +30,7 @@ void fb_png_fini(fb_png *png);
 fb_result fb_png_write(const char *path, const char *what, int width, int height, int channels, int bits,
                        const void *pix, const char *const (*kv)[2], int nkv);
 
+/* The same as PNG bytes in memory (8 bits, 1 or 3 channels): *out (malloc'd) and *size. */
+fb_result fb_png_encode(int width, int height, int channels, const uint8_t *pix, uint8_t **out, size_t *size);
+
 #endif

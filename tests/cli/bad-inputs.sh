@@ -66,6 +66,7 @@ ln -s victim.txt alink.png
 "$FB" fbm $N --size 16x16 -o small.exr --preview small.png --quiet
 head -c 100 small.png > trunc.png
 rm small.png
+"$FB" fbm $N --size 16x16 -o nocommon.exr --preview nocommon.png --quiet && rm nocommon.exr # R G B: no channel in common with small.exr
 printf 'not an exr at all\n' > text.exr
 : > zero.exr
 head -c 300 small.exr > trunc.exr

@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# compare in idiff's own terms, against OpenImageIO's idiff on six pairs: --idiff-stats gives idiff's
+# mean error, RMS error, peak SNR, max error and the pixels over the warning and failure thresholds
+# (with -failrelative too), each equal to idiff's printed value at its printed precision; idiff's
+# single-dash flags are taken (or answered with ours); --allowfailures and --failrelative give
+# idiff's verdicts (exit 0 where idiff passes, 1 where it fails).
+# Usage: idiff.sh PATH/TO/fractalbake
+. "$(dirname "$0")/lib.sh"
+cli_init "$@"
+command -v idiff > /dev/null || { echo "idiff (openimageio-tools) is not installed" >&2; exit 77; }
+D=$ROOT/tests/data/flip
+N="--backend native --quiet"
+oiiotool --create 8x8 1 --fill:color=1 8x8+0+0 -d float -o one.exr
+oiiotool --create 8x8 1 --fill:color=1.1 8x8+0+0 --fill:color=3 2x2+1+1 -d float -o onep.exr
+cat > sc.json << 'JSON'
+{"size": [120, 80], "layers": [{"type": "fbm", "name": "h", "octaves": 3},
+ {"type": "op", "name": "a", "op": "add", "inputs": ["h", 0.5]}]}
+JSON
+sed 's/"octaves": 3/"octaves": 4/' sc.json > sc2.json
+"$FB" render sc.json $N -o s1.exr
+"$FB" render sc2.json $N -o s2.exr
+oiiotool --create 64x64 3 --fill:color=1,1,1 16x64+48+0 -d float -o zref.exr
+oiiotool --create 64x64 3 --fill:color=0.8,0.8,0.8 16x64+48+0 -d float -o ztest.exr
+# same PAIR ARGS...: idiff's numbers and ours (--idiff-stats, the same flags single-dashed)
+same() {
+  local a=$1 b=$2
+  shift 2
+  idiff "$@" "$a" "$b" > idiff.txt
+  "$FB" compare "$a" "$b" "$@" --idiff-stats --ignore-missing > ours.txt
+  python3 - << 'PY'
+import re
+def grab(path):
+    t = open(path).read()
+    v = {k: float(re.search(k + r" += (\S+)", t).group(1)) for k in ("Mean error", "RMS error", "Peak SNR", "Max error")}
+    v["over"] = [(int(n), float(p)) for n, p in re.findall(r"(\d+) pixels \(([\d.e+-]+)%\) over", t)]
+    return v
+i, o = grab("idiff.txt"), grab("ours.txt")
+for k in ("Mean error", "RMS error", "Peak SNR", "Max error"):  # idiff prints 6 significant digits
+    assert abs(i[k] - o[k]) <= 5e-6 * max(abs(i[k]), 1e-30) + 1e-12, (k, i[k], o[k])
+assert len(i["over"]) == 2 and [n for n, _ in i["over"]] == [n for n, _ in o["over"]], (i["over"], o["over"])
+for (_, p), (_, q) in zip(i["over"], o["over"]):
+    assert abs(p - q) <= 0.006 * max(p, 1) , (p, q)
+PY
+}
+check "pair 1: b8 vs b6 (HDR sky, -fail 0.005)" same "$D/b8_rgb.exr" "$D/b6_rgb.exr" -fail 0.005
+check "pair 2: j4 vs j1 (PNG, -fail 0.1 -warn 0.01)" same "$D/j4_rgb.png" "$D/j1_rgb.png" -fail 0.1 -warn 0.01
+check "pair 3: j4 vs j4v (EXR, the defaults)" same "$D/j4_rgb.exr" "$D/j4v_rgb.exr"
+check "pair 4: constants, peak 3 (-fail 0.01 -failrelative 0.5)" same one.exr onep.exr -fail 0.01 -failrelative 0.5
+check "pair 5: two-layer bakes (-fail 0.02 -failpercent 5)" same s1.exr s2.exr -fail 0.02 -failpercent 5
+check "pair 6: three quarters black (-fail 0.1 -warn 0.05)" same zref.exr ztest.exr -fail 0.1 -warn 0.05
+
+# verdicts with idiff's rules: 64 pixels, 60 off by 0.1, 4 by 2
+v() { "$FB" compare one.exr onep.exr "$@" > out.txt 2> err.txt; echo $?; }
+iv() { idiff "$@" one.exr onep.exr > /dev/null; echo $?; }
+check "allowfailures 64: idiff passes" test "$(iv -fail 0.01 -allowfailures 64)" = 0
+check "  and so does compare" test "$(v -fail 0.01 -allowfailures 64)" = 0
+check "allowfailures 63: idiff fails" test "$(iv -fail 0.01 -allowfailures 63)" = 2
+check "  and so does compare" test "$(v --fail 0.01 --allowfailures 63)" = 1
+check "allowfailures 63 with -failpercent 99 and -hardfail 1: idiff fails on hardfail" \
+  test "$(iv -fail 0.01 -allowfailures 63 -failpercent 99 -hardfail 1)" = 2
+check "  and so does compare" test "$(v -fail 0.01 -allowfailures 63 -failpercent 99 -hardfail 1)" = 1
+check "allowfailures 64 and -hardfail 1: idiff passes (allowed failures pass hardfail)" \
+  test "$(iv -fail 0.01 -allowfailures 64 -hardfail 1)" = 0
+check "  and so does compare" test "$(v -fail 0.01 -allowfailures 64 -hardfail 1)" = 0
+# relative: 0.1 / 1.05 = 0.0952 and 2 / 2 = 1 relative
+check "-failrelative 0.5: only the 4 pixels at 2 fail, idiff fails" test "$(iv -fail 0.01 -failrelative 0.5)" = 2
+check "  and so does compare" test "$(v -fail 0.01 -failrelative 0.5)" = 1
+check "  4 pixels beyond" grep -q "(4 px)" out.txt
+check "-failrelative 1: none fails, idiff passes" test "$(iv -fail 0.01 -failrelative 1 -warn 10)" = 0
+check "  and so does compare" test "$(v -fail 0.01 -failrelative 1)" = 0
+check "idiff's -o is answered with --diff" test "$(v -o d.exr)" = 2
+check "  naming it" grep -q -- "-o: idiff's flag; fractalbake compare: the difference image: --diff OUT.exr" err.txt
+check "--allowfailures 1.5 is refused" test "$(v --allowfailures 1.5)" = 2
+check "  with one line" grep -q "expected a whole number of pixels >= 0" err.txt
+cli_finish
