@@ -7,9 +7,11 @@ cd "$(dirname "$0")/.."
 
 PKGS="build-essential cmake pkg-config libvulkan-dev mesa-vulkan-drivers vulkan-tools glslang-tools spirv-tools
 vulkan-validationlayers libopenexr-dev openexr libjansson-dev libpng-dev time
-libqhull-dev clang python3 libdeflate-dev openimageio-tools libtiff-dev libgeotiff-dev geotiff-bin libtiff-tools"
-# --test: also what only the tests use (a real one-node Slurm for tests/cli/slurm.sh)
-[ "${1:-}" = --test ] && PKGS="$PKGS slurm-wlm"
+libqhull-dev clang python3 libdeflate-dev openimageio-tools libtiff-dev libgeotiff-dev geotiff-bin libtiff-tools
+libxml2-dev libflam3-dev"
+# --test: also what only the tests use (a real one-node Slurm for tests/cli/slurm.sh, flam3-render for
+# tests/cli/flame.sh)
+[ "${1:-}" = --test ] && PKGS="$PKGS slurm-wlm flam3-utils"
 missing=()
 for p in $PKGS; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

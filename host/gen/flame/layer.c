@@ -1,0 +1,237 @@
+/*
+ * The flame generator: a .flame genome (flam3's XML) rendered as flam3 3.1.1 renders it, with the
+ * chaos game of kernels/flame.h on the native thread pool into a fixed-point histogram, then flam3's
+ * density estimation, spatial filter and tone map (render.c; docs/flames.md).
+ *
+ * Channels: NAME.R, .G, .B (linear: the sRGB decoding of flam3's 8-bit output, the background
+ * composited under), NAME.A (flam3's alpha), NAME.acc_R, .acc_G, .acc_B, .acc_A (the filtered
+ * accumulation at brightness 1: what the tone map reads) and NAME.count (hits).
+ */
+#include "bake.h"
+#include "gen_flame.h"
+#include "pool.h"
+#include "progress.h"
+#include "render.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define FB_FLAME_PALETTES "/usr/share/flam3/flam3-palettes.xml"
+
+static const fb_keyspec flame_keys[] = {
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"flame\""},
+    {"name", FB_K_NAME, 0, 0, false, NULL, "\"flame\"",
+     "layer name; channels NAME.R, .G, .B, .A, .acc_R, .acc_G, .acc_B, .acc_A, .count (flag: --layer)"},
+    {"file", FB_K_STRING, 0, 0, false, NULL, NULL, "a .flame file (flam3's XML genomes); required"},
+    {"flame", FB_K_STRING, 0, 0, false, NULL, NULL,
+     "the <flame> to render: its name attribute, or its index from 0 (default: the first)"},
+    {"quality", FB_K_NUM, 0, 1e6, false, NULL, "0", "samples per pixel (0: the genome's quality attribute)"},
+    {"palettes", FB_K_STRING, 0, 0, false, NULL, "\"" FB_FLAME_PALETTES "\"",
+     "flam3's palette library, for genomes with palette=\"N\""},
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "true", "store R, G, B, A as half (flags: --half, --float)"},
+    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
+     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+};
+
+static fb_result parse_flame(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
+{
+    char sub[256];
+    fb_flame_params *f = (void *)L->params;
+    fb_result rc = fb_schema_check(v, path, obj, flame_keys, FB_NKEYS(flame_keys), "a flame layer");
+    if (rc) return rc;
+    const char *file = json_string_value(json_object_get(obj, "file"));
+    if (!file) {
+        snprintf(sub, sizeof sub, "%s.file", path);
+        return fb_schema_error(v, sub, "a flame layer needs a .flame file");
+    }
+    const char *pick = json_string_value(json_object_get(obj, "flame"));
+    const char *palettes = json_string_value(json_object_get(obj, "palettes"));
+    char *text = NULL;
+    size_t len = 0;
+    if ((rc = fb_flame_slurp(file, &text, &len))) return rc;
+    rc = fb_flame_read(text, len, file, pick, palettes, &f->genome, NULL);
+    free(text);
+    if (rc) return rc;
+    f->quality = fb_json_num(obj, "quality");
+    if (s->points_part[1] > 0) {
+        snprintf(sub, sizeof sub, "%s", path);
+        return fb_schema_error(v, sub, "a flame layer cannot be split by points parts yet (--points-part)");
+    }
+    return FB_OK;
+}
+
+/* ---- the chaos game --------------------------------------------------------------------------- */
+
+typedef struct flame_state {
+    fb_flame_setup S;
+    float *acc[4];
+    uint32_t *count;
+    uint64_t bad;
+    double seconds;
+} flame_state;
+
+static flame_state *state(const fb_gen *g)
+{
+    return g->owned;
+}
+
+typedef struct game {
+    const fb_flame_setup *S;
+    fb_flame_cell **hist;
+    uint64_t *bad;
+    uint32_t c0, c1; /* the chains of this round */
+    int ntasks;
+} game;
+
+/* Chains [c0, c1) of the round, the task's contiguous share, into its own histogram. */
+static void game_task(void *ctx, int task)
+{
+    game *G = ctx;
+    const fb_flame_setup *S = G->S;
+    const K_FlameParams P = S->p;
+    uint64_t span = G->c1 - G->c0;
+    uint32_t a = G->c0 + (uint32_t)(span * (uint64_t)task / (uint64_t)G->ntasks);
+    uint32_t b = G->c0 + (uint32_t)(span * (uint64_t)(task + 1) / (uint64_t)G->ntasks);
+    fb_flame_cell *h = G->hist[task];
+    uint64_t bad = 0;
+    const K_FlameXform *k_flame_xf = S->xf;
+    const K_FlameVar *k_flame_var = S->var;
+    const uint *k_flame_dist = S->dist;
+    for (uint32_t i = a; i < b; i++) {
+        uint32_t key = k_flame_key(P.seed, i), len = i + 1 == P.chains ? P.last_len : P.len;
+        K_FlameChain s = k_flame_init(key);
+        for (uint32_t t = 0; t < P.fuse; t++) s = k_flame_step(P, s, key K_FLAME_TABLES);
+        for (uint32_t t = 0; t < len; t++) {
+            s = k_flame_step(P, s, key K_FLAME_TABLES);
+            fb_flame_plot(S, &s, h);
+        }
+        bad += s.bad;
+    }
+    G->bad[task] += bad;
+}
+
+static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
+{
+    flame_state *st = state(g);
+    const fb_flame_setup *S = &st->S;
+    size_t cells = (size_t)S->p.hist_w * S->p.hist_h, npix = (size_t)g->scene->width * g->scene->height;
+    int threads = e->pool ? fb_pool_threads(e->pool) : 1;
+    if (threads > 64) threads = 64;
+    while (threads > 1 && (uint64_t)threads * cells * sizeof(fb_flame_cell) > (2ull << 30)) threads--;
+    if (e->kind == FB_BACKEND_VULKAN)
+        fb_log(FB_LOG_INFO, "%s: the flame's chaos game runs on the native backend (no shader yet)", g->layer->name);
+    fb_flame_cell *hist[64] = {0};
+    uint64_t bad[64] = {0};
+    fb_result rc = FB_OK;
+    for (int t = 0; t < threads && !rc; t++)
+        if (!(hist[t] = calloc(cells, sizeof(fb_flame_cell))))
+            rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
+    for (int k = 0; k < 4 && !rc; k++)
+        if (!(st->acc[k] = malloc(npix * sizeof(float)))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (!rc && !(st->count = malloc(npix * sizeof(uint32_t)))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    fb_progress prog;
+    char label[96];
+    snprintf(label, sizeof label, "%s: chaos game", g->layer->name);
+    fb_progress_init(&prog, progress, label, "pts");
+    double t0 = fb_now();
+    /* rounds of chains, so that the bar moves; each round split over the tasks */
+    uint32_t per_round = 64u * (uint32_t)threads;
+    for (uint32_t c0 = 0; c0 < S->p.chains && !rc; c0 += per_round) {
+        uint32_t c1 = S->p.chains - c0 > per_round ? c0 + per_round : S->p.chains;
+        game G = {S, hist, bad, c0, c1, threads};
+        if (e->pool)
+            fb_pool_run(e->pool, threads, game_task, &G);
+        else
+            game_task(&G, 0);
+        double done = (double)c1 * S->p.len;
+        fb_progress_update(&prog, (uint64_t)fmin(done, S->samples), (uint64_t)S->samples);
+    }
+    fb_progress_finish(&prog);
+    for (int t = 1; t < threads && !rc; t++) fb_flame_hist_add(hist[0], hist[t], cells);
+    for (int t = 0; t < threads; t++) st->bad += bad[t];
+    double t1 = fb_now();
+    if (!rc) rc = fb_flame_filter(S, hist[0], st->acc, st->count);
+    for (int t = 0; t < threads; t++) free(hist[t]);
+    st->seconds = fb_now() - t0;
+    g->prepare_gpu_seconds = -1;
+    if (rc) return rc;
+    fb_log(FB_LOG_INFO,
+           "%s: %.0f points in %u chains, %.3g Mpts/s (chaos game %.2f s, filters %.2f s), %llu bad values",
+           g->layer->name, S->samples, S->p.chains, S->samples / (t1 - t0) * 1e-6, t1 - t0, fb_now() - t1,
+           (unsigned long long)st->bad);
+    snprintf(g->summary, sizeof g->summary, "%s: flame %.0f points, %.3g Mpts/s", g->layer->name, S->samples,
+             S->samples / (t1 - t0) * 1e-6);
+    return FB_OK;
+}
+
+static void flame_rows(const fb_gen *g, int y0, int n, void *const *planes)
+{
+    const flame_state *st = state(g);
+    size_t w = (size_t)g->scene->width, at = (size_t)y0 * w, len = (size_t)n * w;
+    const float *acc[4] = {st->acc[0] + at, st->acc[1] + at, st->acc[2] + at, st->acc[3] + at};
+    fb_flame_tone_row(&st->S.tone, len, acc, planes[0], planes[1], planes[2], planes[3]);
+    for (int k = 0; k < 4; k++) memcpy(planes[4 + k], acc[k], len * 4);
+    memcpy(planes[8], st->count + at, len * 4);
+}
+
+static void flame_fini(fb_gen *g)
+{
+    flame_state *st = state(g);
+    if (!st) return;
+    fb_flame_setup_fini(&st->S);
+    for (int k = 0; k < 4; k++) free(st->acc[k]);
+    free(st->count);
+}
+
+/* The histogram (one per thread), the density estimation's doubles, and the image-size planes kept. */
+static uint64_t flame_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
+{
+    const flame_state *st = state(g);
+    uint64_t cells = (uint64_t)st->S.p.hist_w * st->S.p.hist_h, n = (uint64_t)g->scene->width * g->scene->height;
+    int threads = e->pool ? fb_pool_threads(e->pool) : 1;
+    if (threads > 64) threads = 64;
+    *hold = 20 * n;
+    return (uint64_t)threads * cells * sizeof(fb_flame_cell) + 32 * cells + 20 * n;
+}
+
+static fb_result flame_init(fb_gen *g)
+{
+    const fb_scene *s = g->scene;
+    const fb_flame_params *f = fb_layer_params(g->layer);
+    flame_state *st = calloc(1, sizeof *st);
+    if (!st) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    g->owned = st;
+    g->fini = flame_fini;
+    fb_result rc = fb_flame_setup_init(&f->genome, s->width, s->height, f->quality, s->seed, &st->S);
+    if (rc) return rc;
+    static const char *const suffix[9] = {"R", "G", "B", "A", "acc_R", "acc_G", "acc_B", "acc_A", "count"};
+    exrio_type colour = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
+    const exrio_type types[9] = {colour,      colour,      colour,      colour,    EXRIO_FLOAT,
+                                 EXRIO_FLOAT, EXRIO_FLOAT, EXRIO_FLOAT, EXRIO_UINT};
+    g->nchannels = 9;
+    for (int c = 0; c < 9; c++) {
+        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        g->channel_types[c] = types[c];
+    }
+    g->preview_channel = 3;
+    g->preview_rgb = 0;
+    g->native_rows = flame_rows;
+    g->prepare = flame_prepare;
+    g->memory = flame_memory;
+    return FB_OK;
+}
+
+const fb_gen_class fb_gen_flame = {
+    .name = "flame",
+    .synopsis = "flame --file F.flame [options] -o OUT.exr",
+    .summary = "a fractal flame from a .flame genome (flam3's XML), rendered as flam3 does",
+    .what = "a flame layer",
+    .keys = flame_keys,
+    .nkeys = FB_NKEYS(flame_keys),
+    .params_size = sizeof(fb_flame_params),
+    .parse = parse_flame,
+    .init = flame_init,
+};
+_Static_assert(sizeof(fb_flame_params) <= FB_LAYER_PARAMS_MAX, "FB_LAYER_PARAMS_MAX is too small");
