@@ -79,7 +79,9 @@ static flame_state *state(const fb_gen *g)
 
 typedef struct game {
     const fb_flame_setup *S;
-    fb_flame_cell **hist;
+    fb_flame_cell32 **hist; /* one per task */
+    fb_flame_cell *total;
+    size_t cells;
     uint64_t *bad;
     uint32_t c0, c1; /* the chains of this round */
     int ntasks;
@@ -94,22 +96,36 @@ static void game_task(void *ctx, int task)
     uint64_t span = G->c1 - G->c0;
     uint32_t a = G->c0 + (uint32_t)(span * (uint64_t)task / (uint64_t)G->ntasks);
     uint32_t b = G->c0 + (uint32_t)(span * (uint64_t)(task + 1) / (uint64_t)G->ntasks);
-    fb_flame_cell *h = G->hist[task];
+    fb_flame_cell32 *h = G->hist[task];
     uint64_t bad = 0;
     const K_FlameXform *k_flame_xf = S->xf;
     const K_FlameVar *k_flame_var = S->var;
     const uint *k_flame_dist = S->dist;
+    /* The points of a chain are computed into a buffer, then scattered: a loop of independent
+     * increments keeps many cache misses in flight, where plotting inside the chain's dependent
+     * loop waits for each (the histogram does not fit in the caches). */
+    enum { BUF = 1024 };
+    K_FlameChain pts[BUF];
     for (uint32_t i = a; i < b; i++) {
         uint32_t key = k_flame_key(P.seed, i), len = i + 1 == P.chains ? P.last_len : P.len;
         K_FlameChain s = k_flame_init(key);
         for (uint32_t t = 0; t < P.fuse; t++) s = k_flame_step(P, s, key K_FLAME_TABLES);
-        for (uint32_t t = 0; t < len; t++) {
-            s = k_flame_step(P, s, key K_FLAME_TABLES);
-            fb_flame_plot(S, &s, h);
+        for (uint32_t t0 = 0; t0 < len; t0 += BUF) {
+            uint32_t n = len - t0 < BUF ? len - t0 : BUF;
+            for (uint32_t t = 0; t < n; t++) pts[t] = s = k_flame_step(P, s, key K_FLAME_TABLES);
+            for (uint32_t t = 0; t < n; t++) fb_flame_plot(S, &pts[t], h);
         }
         bad += s.bad;
     }
     G->bad[task] += bad;
+}
+
+/* The task's share of the cells of every task's 32-bit histogram, folded into the total. */
+static void fold_task(void *ctx, int task)
+{
+    game *G = ctx;
+    size_t c0 = G->cells * (size_t)task / (size_t)G->ntasks, c1 = G->cells * (size_t)(task + 1) / (size_t)G->ntasks;
+    for (int t = 0; t < G->ntasks; t++) fb_flame_hist_fold(G->total, G->hist[t], c0, c1);
 }
 
 static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
@@ -119,14 +135,15 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
     size_t cells = (size_t)S->p.hist_w * S->p.hist_h, npix = (size_t)g->scene->width * g->scene->height;
     int threads = e->pool ? fb_pool_threads(e->pool) : 1;
     if (threads > 64) threads = 64;
-    while (threads > 1 && (uint64_t)threads * cells * sizeof(fb_flame_cell) > (2ull << 30)) threads--;
+    while (threads > 1 && (uint64_t)threads * cells * sizeof(fb_flame_cell32) > (1ull << 30)) threads--;
     if (e->kind == FB_BACKEND_VULKAN)
         fb_log(FB_LOG_INFO, "%s: the flame's chaos game runs on the native backend (no shader yet)", g->layer->name);
-    fb_flame_cell *hist[64] = {0};
+    fb_flame_cell32 *hist[64] = {0};
     uint64_t bad[64] = {0};
-    fb_result rc = FB_OK;
+    fb_flame_cell *total = calloc(cells, sizeof *total);
+    fb_result rc = total ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
     for (int t = 0; t < threads && !rc; t++)
-        if (!(hist[t] = calloc(cells, sizeof(fb_flame_cell))))
+        if (!(hist[t] = calloc(cells, sizeof(fb_flame_cell32))))
             rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
     for (int k = 0; k < 4 && !rc; k++)
         if (!(st->acc[k] = malloc(npix * sizeof(float)))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
@@ -136,24 +153,28 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
     snprintf(label, sizeof label, "%s: chaos game", g->layer->name);
     fb_progress_init(&prog, progress, label, "pts");
     double t0 = fb_now();
-    /* rounds of chains, so that the bar moves; each round split over the tasks */
-    uint32_t per_round = 64u * (uint32_t)threads;
+    /* Rounds of chains: each task's share of a round plots at most FB_FLAME_ROUND_POINTS points,
+     * so its 32-bit cells cannot overflow before the round's fold into the 64-bit total. */
+    uint32_t per_task = FB_FLAME_ROUND_POINTS / S->p.len, per_round = per_task * (uint32_t)threads;
     for (uint32_t c0 = 0; c0 < S->p.chains && !rc; c0 += per_round) {
         uint32_t c1 = S->p.chains - c0 > per_round ? c0 + per_round : S->p.chains;
-        game G = {S, hist, bad, c0, c1, threads};
-        if (e->pool)
+        game G = {S, hist, total, cells, bad, c0, c1, threads};
+        if (e->pool) {
             fb_pool_run(e->pool, threads, game_task, &G);
-        else
+            fb_pool_run(e->pool, threads, fold_task, &G);
+        } else {
             game_task(&G, 0);
+            fold_task(&G, 0);
+        }
         double done = (double)c1 * S->p.len;
         fb_progress_update(&prog, (uint64_t)fmin(done, S->samples), (uint64_t)S->samples);
     }
     fb_progress_finish(&prog);
-    for (int t = 1; t < threads && !rc; t++) fb_flame_hist_add(hist[0], hist[t], cells);
     for (int t = 0; t < threads; t++) st->bad += bad[t];
     double t1 = fb_now();
-    if (!rc) rc = fb_flame_filter(S, hist[0], st->acc, st->count);
+    if (!rc) rc = fb_flame_filter(S, total, st->acc, st->count);
     for (int t = 0; t < threads; t++) free(hist[t]);
+    free(total);
     st->seconds = fb_now() - t0;
     g->prepare_gpu_seconds = -1;
     if (rc) return rc;
@@ -185,7 +206,7 @@ static void flame_fini(fb_gen *g)
     free(st->count);
 }
 
-/* The histogram (one per thread), the density estimation's doubles, and the image-size planes kept. */
+/* The 32-bit histograms (one per thread), the 64-bit total, the density estimation's doubles, and the image-size planes kept. */
 static uint64_t flame_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
 {
     const flame_state *st = state(g);
@@ -193,7 +214,7 @@ static uint64_t flame_memory(const fb_gen *g, const struct fb_engine *e, uint64_
     int threads = e->pool ? fb_pool_threads(e->pool) : 1;
     if (threads > 64) threads = 64;
     *hold = 20 * n;
-    return (uint64_t)threads * cells * sizeof(fb_flame_cell) + 32 * cells + 20 * n;
+    return (uint64_t)threads * cells * sizeof(fb_flame_cell32) + cells * sizeof(fb_flame_cell) + 32 * cells + 20 * n;
 }
 
 static fb_result flame_init(fb_gen *g)

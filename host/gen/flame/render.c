@@ -388,7 +388,7 @@ fb_result fb_flame_setup_init(const fb_flame_genome *g, int width, int height, d
         for (int k = 0; k < 4; k++) {
             double v = g->palette[i][k] * 255.0;
             s->pal255[i][k] = v;
-            s->palq[i][k] = (uint32_t)llround(fmin(fmax(v, 0), 255.0) * 256.0);
+            s->palq[i][k] = (uint32_t)llround(fmin(fmax(v, 0), 255.0) * 16.0);
         }
     s->tone =
         (fb_flame_tone){g->brightness, g->gamma,           g->gamma_threshold,
@@ -406,11 +406,12 @@ void fb_flame_setup_fini(fb_flame_setup *s)
     memset(s, 0, sizeof *s);
 }
 
-void fb_flame_hist_add(fb_flame_cell *a, const fb_flame_cell *b, size_t cells)
+void fb_flame_hist_fold(fb_flame_cell *a, fb_flame_cell32 *b, size_t c0, size_t c1)
 {
-    for (size_t i = 0; i < cells; i++) {
+    for (size_t i = c0; i < c1; i++) {
         for (int k = 0; k < 5; k++) a[i].c[k] += b[i].c[k];
         a[i].hits += b[i].hits;
+        memset(&b[i], 0, sizeof b[i]);
     }
 }
 
@@ -428,7 +429,7 @@ fb_result fb_flame_filter(const fb_flame_setup *S, const fb_flame_cell *hist, fl
     int W = (int)S->p.hist_w, H = (int)S->p.hist_h, os = S->ss;
     double(*acc)[4] = calloc((size_t)W * H, sizeof *acc);
     if (!acc) return fb_fail(FB_ERR_NOMEM, "out of memory for the flame's density estimation");
-    const double k1 = S->k1, k2 = S->k2, q = 1.0 / 256.0;
+    const double k1 = S->k1, k2 = S->k2, q = 1.0 / 16.0;
     if (S->de_max_index == 0) {
         for (size_t i = 0; i < (size_t)W * H; i++) {
             double c3 = hist[i].c[3] * q;

@@ -9,12 +9,22 @@
 #include "genome.h"
 
 /* One histogram cell: the sums of r, g, b, a (the palette's 0..255 scale times the point's opacity,
- * in units of 2^-8) and of the opacity (255 per opaque hit, the same units), and the hit count.
- * Integers, so that the sum over threads, strips, points parts and devices is the same bits. */
+ * in units of 2^-4) and of the opacity (255 per opaque hit, the same units), and the hit count.
+ * Integers, so that the sum over threads, strips, points parts and devices is the same bits. The
+ * chaos game adds into 32-bit cells (half the memory traffic of 64-bit ones: the game waits on its
+ * scattered writes), folded into 64-bit ones before any could overflow (FB_FLAME_ROUND_POINTS). */
+typedef struct fb_flame_cell32 {
+    uint32_t c[5];
+    uint32_t hits;
+} fb_flame_cell32;
+
 typedef struct fb_flame_cell {
     uint64_t c[5];
     uint64_t hits;
 } fb_flame_cell;
+
+/* A cell gains at most 4080 (255 in units of 2^-4) a point: 2^20 points fit in a 32-bit cell. */
+#define FB_FLAME_ROUND_POINTS (1u << 20)
 
 /* flam3's tone map of a filtered accumulation (brightness 1): the genome's values. */
 typedef struct fb_flame_tone {
@@ -29,7 +39,7 @@ typedef struct fb_flame_setup {
     uint32_t nvar;
     uint32_t *dist; /* (nxf + 1) rows of K_FLAME_GRAIN xform numbers */
     uint32_t ndist;
-    uint32_t palq[256][4]; /* step mode: the palette times 255, in units of 2^-8 */
+    uint32_t palq[256][4]; /* step mode: the palette times 255, in units of 2^-4 */
     double pal255[256][4];
     bool linear_palette;
     int width, height, ss;
@@ -57,15 +67,15 @@ void fb_flame_setup_fini(fb_flame_setup *s);
 K_FlameVar fb_flame_var_params(const fb_flame_xform *x, int v);
 
 /* Adds the plotted point of chain state s to the histogram (nothing if outside or invisible). */
-static inline void fb_flame_plot(const fb_flame_setup *S, const K_FlameChain *s, fb_flame_cell *hist)
+static inline void fb_flame_plot(const fb_flame_setup *S, const K_FlameChain *s, fb_flame_cell32 *hist)
 {
     uint32_t cell = k_flame_cell(S->p, *s);
     uint32_t visq = S->xf[s->vis].visq;
     if (cell == K_FLAME_NONE || visq == 0) return;
-    fb_flame_cell *h = &hist[cell];
+    fb_flame_cell32 *h = &hist[cell];
     if (!S->linear_palette) {
         const uint32_t *q = S->palq[k_flame_index(s->pc)];
-        for (int k = 0; k < 4; k++) h->c[k] += ((uint64_t)q[k] * visq + 16384) >> 15;
+        for (int k = 0; k < 4; k++) h->c[k] += (q[k] * visq + 16384) >> 15;
     } else {
         double v = s->pc * 256.0, f;
         int i = (int)v;
@@ -77,9 +87,9 @@ static inline void fb_flame_plot(const fb_flame_setup *S, const K_FlameChain *s,
             f = v - i;
         double vis = visq / 32768.0;
         for (int k = 0; k < 4; k++)
-            h->c[k] += (uint64_t)llround((S->pal255[i][k] * (1 - f) + S->pal255[i + 1][k] * f) * vis * 256.0);
+            h->c[k] += (uint32_t)llround((S->pal255[i][k] * (1 - f) + S->pal255[i + 1][k] * f) * vis * 16.0);
     }
-    h->c[4] += ((uint64_t)65280 * visq + 16384) >> 15;
+    h->c[4] += (4080u * visq + 16384) >> 15;
     h->hits++;
 }
 
@@ -93,7 +103,7 @@ fb_result fb_flame_filter(const fb_flame_setup *S, const fb_flame_cell *hist, fl
 void fb_flame_tone_row(const fb_flame_tone *t, size_t n, const float *const acc[4], float *R, float *G, float *B,
                        float *A);
 
-/* Adds histogram b into a (points parts, threads). */
-void fb_flame_hist_add(fb_flame_cell *a, const fb_flame_cell *b, size_t cells);
+/* Adds cells [c0, c1) of the 32-bit histogram b into a and zeroes them in b. */
+void fb_flame_hist_fold(fb_flame_cell *a, fb_flame_cell32 *b, size_t c0, size_t c1);
 
 #endif
