@@ -186,6 +186,14 @@ K_FN float k_flame_u01(uint key, uint n)
     return k_u01(k_hash(n ^ key));
 }
 
+/* C's (int) conversion as flam3 compiled on x86-64 does it: a value beyond the int range (or NaN)
+ * becomes INT_MIN (cvttsd2si's "integer indefinite"). fan2 and rings2 with a zero parameter divide
+ * by 1e-10 and land there, and flam3's images depend on it. */
+K_FN float k_flame_itrunc(float v)
+{
+    return (v >= 2147483648.0f || v < -2147483648.0f || k_isnan(v)) ? -2147483648.0f : k_trunc(v);
+}
+
 K_FN bool k_flame_bad(float v)
 {
     return k_isnan(v) || v > 1e10f || v < -1e10f;
@@ -325,14 +333,14 @@ K_FN K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint key, uint
             p1 += w * (k_sin(V.p2 * tx) - k_cos(V.p3 * ty));
         } else if (id == K_V_FAN2) {
             float dx = V.p0, dy = V.p1, dx2 = 0.5f * dx;
-            float t = atxy + dy - dx * k_trunc((atxy + dy) / dx);
+            float t = atxy + dy - dx * k_flame_itrunc((atxy + dy) / dx);
             float a = t > dx2 ? atxy - dx2 : atxy + dx2;
             float r = w * sq;
             p0 += r * k_sin(a);
             p1 += r * k_cos(a);
         } else if (id == K_V_RINGS2) {
             float dx = V.p0;
-            float r = sq + (-2.0f * dx * k_trunc((sq + dx) / (2.0f * dx)) + sq * (1.0f - dx));
+            float r = sq + (-2.0f * dx * k_flame_itrunc((sq + dx) / (2.0f * dx)) + sq * (1.0f - dx));
             p0 += w * sina * r;
             p1 += w * cosa * r;
         } else if (id == K_V_EYEFISH) {

@@ -260,7 +260,7 @@ static fb_result hex_colors(const reader *r, const char *s, int n, int chan, fb_
 }
 
 /* flam3_interp_missing_colors: entries not given are interpolated between their neighbours, wrapping. */
-static void fill_missing(fb_flame_genome *g, const bool *set)
+static void fill_missing(fb_flame_genome *g, bool *set)
 {
     int minix = -1, maxix = -1;
     for (int i = 0; i < 256; i++)
@@ -288,6 +288,7 @@ static void fill_missing(fb_flame_genome *g, const bool *set)
             double f = (j - intl) / (double)(intr - intl);
             for (int k = 0; k < 4; k++)
                 g->palette[j][k] = g->palette[colorli][k] * (1.0 - f) + g->palette[colorri][k] * f;
+            set[j] = true;
         }
         i = colorri + 1;
     }
@@ -469,6 +470,46 @@ static fb_result parse_xform(reader *r, xmlNodePtr node, fb_flame_xform *x, bool
     return FB_OK;
 }
 
+static double round6(double x)
+{
+    x *= 1e6;
+    if (x < 0) x -= 1.0;
+    return 1e-6 * (int)(x + 0.5);
+}
+
+/* <symmetry kind="K"> (flam3_add_symmetry): K >= 2 adds K - 1 rotations by 2 pi / K, K <= -1 a
+ * reflection x -> -x and |K| - 1 rotations; weight 1, linear, colour speed 0 each. flam3 then sorts
+ * the added xforms, which changes only which random numbers pick them (not the image) unless xaos
+ * names them: xaos with symmetry is refused. */
+static fb_result add_symmetry(const reader *r, fb_flame_genome *g, int sym, int *nstd)
+{
+    if (sym == 0) return bad(r, "<symmetry kind=\"0\">: a random symmetry is not reproducible%s%s", "", "");
+    if (sym == 1) return FB_OK;
+    int n = sym < 0 ? -sym : sym - 1;
+    if (sym < -FB_FLAME_MAX_XFORMS || *nstd + n > FB_FLAME_MAX_XFORMS)
+        return bad(r, "<symmetry>: more than %s xforms%s", "24", "");
+    if (sym < 0) {
+        fb_flame_xform *x = &g->xf[(*nstd)++];
+        init_xform(x, *nstd - 1);
+        x->weight = 1, x->color_speed = 0, x->var[0] = 1, x->color = 1;
+        x->c[0][0] = -1, x->c[1][1] = 1;
+        sym = -sym;
+    }
+    double a = 2 * M_PI / sym;
+    for (int k = 1; k < sym; k++) {
+        fb_flame_xform *x = &g->xf[(*nstd)++];
+        init_xform(x, *nstd - 1);
+        x->weight = 1, x->color_speed = 0, x->var[0] = 1;
+        x->color = sym < 3 ? 0.0 : (k - 1.0) / (sym - 2.0);
+        x->c[0][0] = round6(cos(k * a));
+        x->c[0][1] = round6(sin(k * a));
+        x->c[1][0] = round6(-x->c[0][1]);
+        x->c[1][1] = x->c[0][0];
+    }
+    g->symmetry = true;
+    return FB_OK;
+}
+
 static fb_result parse_flame(reader *r, xmlNodePtr node, const char *palettes, fb_flame_genome *g)
 {
     memset(g, 0, sizeof *g);
@@ -574,7 +615,7 @@ static fb_result parse_flame(reader *r, xmlNodePtr node, const char *palettes, f
         if (!strcmp(en, "xform") || !strcmp(en, "finalxform")) {
             bool final = en[0] == 'f';
             if (final && g->has_final) return bad(r, "more than one %s%s", "<finalxform>", "");
-            if (!final && nstd == FB_FLAME_MAX_XFORMS) return bad(r, "more than %s xforms%s", "12", "");
+            if (!final && nstd == FB_FLAME_MAX_XFORMS) return bad(r, "more than %s xforms%s", "24", "");
             int at = final ? FB_FLAME_MAX_XFORMS : nstd;
             init_xform(&g->xf[at], nstd);
             snprintf(r->where + strlen(r->where), sizeof r->where - strlen(r->where),
@@ -649,7 +690,11 @@ static fb_result parse_flame(reader *r, xmlNodePtr node, const char *palettes, f
             xmlFree(data);
             snprintf(g->form, sizeof g->form, pal ? "a <palette> element" : "a <colors> element");
         } else if (!strcmp(en, "symmetry")) {
-            rc = bad(r, "the <symmetry> element is not supported%s%s", "", "");
+            xmlChar *kx = xmlGetProp(c, (const xmlChar *)"kind");
+            int kind = 0;
+            rc = kx ? integer(r, "symmetry kind", (const char *)kx, &kind) : bad(r, "<symmetry>: no kind%s%s", "", "");
+            xmlFree(kx);
+            if (!rc) rc = add_symmetry(r, g, kind, &nstd);
         }
         /* <edit> is history */
     }
@@ -663,6 +708,7 @@ static fb_result parse_flame(reader *r, xmlNodePtr node, const char *palettes, f
     for (int i = 0; i < nstd; i++)
         for (int j = 0; j < nstd; j++)
             if (fabs(g->xf[i].chaos[j] - 1.0) > 1e-10) g->chaos = true;
+    if (g->chaos && g->symmetry) return bad(r, "xaos together with <symmetry> is not supported%s%s", "", "");
     for (int i = 0; g->chaos && i < nstd; i++) {
         double s = 0;
         for (int j = 0; j < nstd; j++) s += g->xf[j].weight * g->xf[i].chaos[j];

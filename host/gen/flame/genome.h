@@ -9,8 +9,9 @@
 
 #include "kernels/flame.h"
 
-#define FB_FLAME_MAX_XFORMS 12 /* ordinary xforms (flam3_nxforms), plus one final xform */
-#define FB_FLAME_NPARAMS    28
+#define FB_FLAME_MAX_XFORMS                                                                                            \
+    24 /* ordinary xforms (flam3 has no limit; <symmetry> adds up to 25), plus one final xform */
+#define FB_FLAME_NPARAMS 28
 
 /* The parametric variations' parameters, by index into fb_flame_xform.par. */
 enum {
@@ -95,6 +96,7 @@ typedef struct fb_flame_genome {
     int nxforms;            /* ordinary xforms xf[0 .. nxforms) */
     bool has_final;         /* and the final xform, xf[nxforms] */
     bool chaos;             /* some xaos entry is not 1 */
+    bool symmetry;          /* xforms were added by <symmetry> */
     char form[64];          /* how the palette was given, for messages: "<color> elements", ... */
     double palette[256][4]; /* r, g, b (premultiplied by a), a in [0, 1] */
     fb_flame_xform xf[FB_FLAME_MAX_XFORMS + 1];

@@ -206,7 +206,8 @@ static void flame_fini(fb_gen *g)
     free(st->count);
 }
 
-/* The 32-bit histograms (one per thread), the 64-bit total, the density estimation's doubles, and the image-size planes kept. */
+/* The 32-bit histograms (one per thread), the 64-bit total, the density estimation's doubles, and the image-size planes
+ * kept. */
 static uint64_t flame_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
 {
     const flame_state *st = state(g);
