@@ -113,7 +113,7 @@ static void game_task(void *ctx, int task)
         for (uint32_t t0 = 0; t0 < len; t0 += BUF) {
             uint32_t n = len - t0 < BUF ? len - t0 : BUF;
             for (uint32_t t = 0; t < n; t++) pts[t] = s = k_flame_step(P, s, key K_FLAME_TABLES);
-            for (uint32_t t = 0; t < n; t++) fb_flame_plot(S, &pts[t], h);
+            for (uint32_t t = 0; t < n; t++) fb_flame_plot(S, &pts[t], h, G->total);
         }
         bad += s.bad;
     }
@@ -153,21 +153,24 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
     snprintf(label, sizeof label, "%s: chaos game", g->layer->name);
     fb_progress_init(&prog, progress, label, "pts");
     double t0 = fb_now();
-    /* Rounds of chains: each task's share of a round plots at most FB_FLAME_ROUND_POINTS points,
-     * so its 32-bit cells cannot overflow before the round's fold into the 64-bit total. */
-    uint32_t per_task = FB_FLAME_ROUND_POINTS / S->p.len, per_round = per_task * (uint32_t)threads;
+    /* rounds of chains, for the progress bar; the 32-bit cells are folded once, at the end */
+    uint32_t per_round = 64u * (uint32_t)threads;
     for (uint32_t c0 = 0; c0 < S->p.chains && !rc; c0 += per_round) {
         uint32_t c1 = S->p.chains - c0 > per_round ? c0 + per_round : S->p.chains;
         game G = {S, hist, total, cells, bad, c0, c1, threads};
-        if (e->pool) {
+        if (e->pool)
             fb_pool_run(e->pool, threads, game_task, &G);
-            fb_pool_run(e->pool, threads, fold_task, &G);
-        } else {
+        else
             game_task(&G, 0);
-            fold_task(&G, 0);
-        }
         double done = (double)c1 * S->p.len;
         fb_progress_update(&prog, (uint64_t)fmin(done, S->samples), (uint64_t)S->samples);
+    }
+    if (!rc) {
+        game G = {S, hist, total, cells, bad, 0, 0, threads};
+        if (e->pool)
+            fb_pool_run(e->pool, threads, fold_task, &G);
+        else
+            fold_task(&G, 0);
     }
     fb_progress_finish(&prog);
     for (int t = 0; t < threads; t++) st->bad += bad[t];

@@ -6,6 +6,7 @@
 #include "render.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -404,6 +405,14 @@ void fb_flame_setup_fini(fb_flame_setup *s)
     free(s->de_coefs);
     free(s->de_widths);
     memset(s, 0, sizeof *s);
+}
+
+void fb_flame_spill(fb_flame_cell *total, fb_flame_cell32 *h)
+{
+    for (int k = 0; k < 5; k++)
+        atomic_fetch_add_explicit((_Atomic uint64_t *)&total->c[k], h->c[k], memory_order_relaxed);
+    atomic_fetch_add_explicit((_Atomic uint64_t *)&total->hits, h->hits, memory_order_relaxed);
+    memset(h, 0, sizeof *h);
 }
 
 void fb_flame_hist_fold(fb_flame_cell *a, fb_flame_cell32 *b, size_t c0, size_t c1)

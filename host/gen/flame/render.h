@@ -11,8 +11,9 @@
 /* One histogram cell: the sums of r, g, b, a (the palette's 0..255 scale times the point's opacity,
  * in units of 2^-4) and of the opacity (255 per opaque hit, the same units), and the hit count.
  * Integers, so that the sum over threads, strips, points parts and devices is the same bits. The
- * chaos game adds into 32-bit cells (half the memory traffic of 64-bit ones: the game waits on its
- * scattered writes), folded into 64-bit ones before any could overflow (FB_FLAME_ROUND_POINTS). */
+ * chaos game adds into 32-bit cells of its own (half the memory traffic of 64-bit ones: the game
+ * waits on its scattered writes); a cell whose opacity sum (the largest of its sums) passes 2^31 is
+ * added into the shared 64-bit total at once (atomically) and cleared, so none overflows. */
 typedef struct fb_flame_cell32 {
     uint32_t c[5];
     uint32_t hits;
@@ -22,9 +23,6 @@ typedef struct fb_flame_cell {
     uint64_t c[5];
     uint64_t hits;
 } fb_flame_cell;
-
-/* A cell gains at most 4080 (255 in units of 2^-4) a point: 2^20 points fit in a 32-bit cell. */
-#define FB_FLAME_ROUND_POINTS (1u << 20)
 
 /* flam3's tone map of a filtered accumulation (brightness 1): the genome's values. */
 typedef struct fb_flame_tone {
@@ -66,8 +64,12 @@ void fb_flame_setup_fini(fb_flame_setup *s);
 /* The K_FlameVar of variation v of xform x (its weight and parameters, as flam3's precalc does). */
 K_FlameVar fb_flame_var_params(const fb_flame_xform *x, int v);
 
+/* Adds a 32-bit cell into the 64-bit total (atomically: other threads may spill into it) and clears it. */
+void fb_flame_spill(fb_flame_cell *total, fb_flame_cell32 *h);
+
 /* Adds the plotted point of chain state s to the histogram (nothing if outside or invisible). */
-static inline void fb_flame_plot(const fb_flame_setup *S, const K_FlameChain *s, fb_flame_cell32 *hist)
+static inline void fb_flame_plot(const fb_flame_setup *S, const K_FlameChain *s, fb_flame_cell32 *hist,
+                                 fb_flame_cell *total)
 {
     uint32_t cell = k_flame_cell(S->p, *s);
     uint32_t visq = S->xf[s->vis].visq;
@@ -91,6 +93,7 @@ static inline void fb_flame_plot(const fb_flame_setup *S, const K_FlameChain *s,
     }
     h->c[4] += (4080u * visq + 16384) >> 15;
     h->hits++;
+    if (h->c[4] >= 0x80000000u) fb_flame_spill(&total[cell], h);
 }
 
 /* From the histogram (hist_w x hist_h cells) to the image: density estimation and the spatial filter
