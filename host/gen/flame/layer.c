@@ -55,10 +55,7 @@ static fb_result parse_flame(const fb_vctx *v, const char *path, json_t *obj, co
     free(text);
     if (rc) return rc;
     f->quality = fb_json_num(obj, "quality");
-    if (s->points_part[1] > 0) {
-        snprintf(sub, sizeof sub, "%s", path);
-        return fb_schema_error(v, sub, "a flame layer cannot be split by points parts yet (--points-part)");
-    }
+    (void)s;
     return FB_OK;
 }
 
@@ -221,10 +218,29 @@ static uint64_t flame_memory(const fb_gen *g, const struct fb_engine *e, uint64_
     return (uint64_t)threads * cells * sizeof(fb_flame_cell32) + cells * sizeof(fb_flame_cell) + 32 * cells + 20 * n;
 }
 
+/* Seconds of one core of the reference machine: the chaos game per point (1.0 s of user time for
+ * 13 Mpts at 512 x 512, bench/RESULTS.md) and density estimation, filter, tone map and the written
+ * channels per pixel. */
+#define FLAME_POINT_SECONDS 7.6e-8
+#define FLAME_PIXEL_SECONDS 4e-7
+
+static fb_result flame_cost(const fb_scene *s, int layer, double *rows, double *total)
+{
+    const fb_flame_params *f = fb_layer_params(&s->layers[layer]);
+    double q = f->quality > 0 ? f->quality : f->genome.quality, zoom = pow(2.0, f->genome.zoom);
+    double pixels = (double)s->width * s->height;
+    (void)rows;
+    *total = q * zoom * zoom * pixels * FLAME_POINT_SECONDS + pixels * FLAME_PIXEL_SECONDS;
+    return FB_OK;
+}
+
 static fb_result flame_init(fb_gen *g)
 {
     const fb_scene *s = g->scene;
     const fb_flame_params *f = fb_layer_params(g->layer);
+    if (g->points_part[1] > 0)
+        return fb_fail(FB_ERR_INPUT, "layer %s: a flame layer cannot be split by points parts yet (--points-part)",
+                       g->layer->name);
     flame_state *st = calloc(1, sizeof *st);
     if (!st) return fb_fail(FB_ERR_NOMEM, "out of memory");
     g->owned = st;
@@ -258,5 +274,7 @@ const fb_gen_class fb_gen_flame = {
     .params_size = sizeof(fb_flame_params),
     .parse = parse_flame,
     .init = flame_init,
+    .share = FB_SHARE_WHOLE, /* one task: its chaos game cannot be split by points parts yet */
+    .cost = flame_cost,
+    .example = "[{\"type\": \"flame\", \"file\": \"docs/examples/flames.flame\", \"flame\": \"gold\", \"quality\": 2}]",
 };
-_Static_assert(sizeof(fb_flame_params) <= FB_LAYER_PARAMS_MAX, "FB_LAYER_PARAMS_MAX is too small");
