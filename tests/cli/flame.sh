@@ -84,6 +84,14 @@ cmp -s t1.exr t2.exr && ok || bad "flame depends on threads or strip rows"
 "$FB" flame --file final.flame --size 128x96 --quality 20 --backend native --threads 3 --quiet -o t3.exr
 "$FB" flame --file final.flame --size 128x96 --quality 20 --backend native --threads 1 --quiet -o t4.exr
 cmp -s t3.exr t4.exr && ok || bad "flame (final xform) depends on threads"
+# re-toned from the stored accumulations: unchanged parameters give the same bytes, new ones the
+# pixels of a bake made with them
+"$FB" tonemap t1.exr -o t1b.exr --quiet && cmp -s t1.exr t1b.exr && ok || bad "tonemap with unchanged parameters changed the flame"
+"$FB" flame --file xaos.flame --size 128x96 --quality 20 --backend native --brightness 9 --gamma 2.5 --vibrancy 0.5 \
+    --background 0.2,0.1,0 --quiet -o tm.exr
+"$FB" tonemap t1.exr -o tm2.exr --brightness 9 --gamma 2.5 --vibrancy 0.5 --background 0.2,0.1,0 --quiet
+"$FB" compare tm.exr tm2.exr --max-abs 0 > /dev/null && ok || bad "flame tonemap differs from a bake with the same tone parameters"
+"$FB" compare tm.exr t1.exr --max-abs 0.01 > /dev/null && bad "--brightness 9 --gamma 2.5 changed nothing" || ok
 # a flame picked by index or by name: the same pixels
 "$FB" flame --file final.flame --flame test-final --size 128x96 --quality 20 --quiet -o t5.exr
 "$FB" compare t4.exr t5.exr --max-abs 0 > /dev/null && ok || bad "--flame 0 and --flame test-final differ"

@@ -30,6 +30,14 @@ static const fb_keyspec flame_keys[] = {
     {"quality", FB_K_NUM, 0, 1e6, false, NULL, "0", "samples per pixel (0: the genome's quality attribute)"},
     {"palettes", FB_K_STRING, 0, 0, false, NULL, "\"" FB_FLAME_PALETTES "\"",
      "flam3's palette library, for genomes with palette=\"N\""},
+    {"brightness", FB_K_NUM, 0, 1e6, false, NULL, NULL, "the tone map's brightness (default: the genome's)"},
+    {"gamma", FB_K_NUM, 0, 100, true, NULL, NULL, "the tone map's gamma (default: the genome's)"},
+    {"gamma-threshold", FB_K_NUM, 0, 1e6, false, NULL, NULL,
+     "below it the gamma curve is linear (default: the genome's)"},
+    {"vibrancy", FB_K_NUM, -10, 10, false, NULL, NULL, "1: gamma on alpha, 0: per channel (default: the genome's)"},
+    {"highlight-power", FB_K_NUM, -1e6, 1e6, false, NULL, NULL,
+     "over-bright pixels: < 0 clip, 0 keep the hue, larger fade to white (default: the genome's)"},
+    {"background", FB_K_NUMLIST, 0, 1, false, NULL, NULL, "background R,G,B in [0, 1] (default: the genome's)", 3},
     {"half", FB_K_BOOL, 0, 0, false, NULL, "true", "store R, G, B, A as half (flags: --half, --float)"},
     {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
@@ -55,6 +63,17 @@ static fb_result parse_flame(const fb_vctx *v, const char *path, json_t *obj, co
     free(text);
     if (rc) return rc;
     f->quality = fb_json_num(obj, "quality");
+    const fb_flame_genome *gn = &f->genome;
+    f->tone =
+        (fb_flame_tone){gn->brightness, gn->gamma,           gn->gamma_threshold,
+                        gn->vibrancy,   gn->highlight_power, {gn->background[0], gn->background[1], gn->background[2]}};
+    if (json_object_get(obj, "brightness")) f->tone.brightness = fb_json_num(obj, "brightness");
+    if (json_object_get(obj, "gamma")) f->tone.gamma = fb_json_num(obj, "gamma");
+    if (json_object_get(obj, "gamma-threshold")) f->tone.gamma_threshold = fb_json_num(obj, "gamma-threshold");
+    if (json_object_get(obj, "vibrancy")) f->tone.vibrancy = fb_json_num(obj, "vibrancy");
+    if (json_object_get(obj, "highlight-power")) f->tone.highlight_power = fb_json_num(obj, "highlight-power");
+    json_t *bg = json_object_get(obj, "background");
+    for (size_t k = 0; bg && k < 3; k++) f->tone.background[k] = json_number_value(json_array_get(bg, k));
     (void)s;
     return FB_OK;
 }
@@ -247,6 +266,7 @@ static fb_result flame_init(fb_gen *g)
     g->fini = flame_fini;
     fb_result rc = fb_flame_setup_init(&f->genome, s->width, s->height, f->quality, s->seed, &st->S);
     if (rc) return rc;
+    st->S.tone = f->tone;
     static const char *const suffix[9] = {"R", "G", "B", "A", "acc_R", "acc_G", "acc_B", "acc_A", "count"};
     exrio_type colour = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
     const exrio_type types[9] = {colour,      colour,      colour,      colour,    EXRIO_FLOAT,
@@ -276,5 +296,6 @@ const fb_gen_class fb_gen_flame = {
     .init = flame_init,
     .share = FB_SHARE_WHOLE, /* one task: its chaos game cannot be split by points parts yet */
     .cost = flame_cost,
+    .tone = &fb_flame_tone_ops,
     .example = "[{\"type\": \"flame\", \"file\": \"docs/examples/flames.flame\", \"flame\": \"gold\", \"quality\": 2}]",
 };
