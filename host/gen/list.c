@@ -9,6 +9,7 @@
     X(fbm)                                                                                                             \
     X(julia)                                                                                                           \
     X(ifs)                                                                                                             \
+    X(flame)                                                                                                           \
     X(lsystem)                                                                                                         \
     X(terrain)                                                                                                         \
     X(constrain)                                                                                                       \

@@ -1,0 +1,301 @@
+/*
+ * The flame generator: a .flame genome (flam3's XML) rendered as flam3 3.1.1 renders it, with the
+ * chaos game of kernels/flame.h on the native thread pool into a fixed-point histogram, then flam3's
+ * density estimation, spatial filter and tone map (render.c; docs/flames.md).
+ *
+ * Channels: NAME.R, .G, .B (linear: the sRGB decoding of flam3's 8-bit output, the background
+ * composited under), NAME.A (flam3's alpha), NAME.acc_R, .acc_G, .acc_B, .acc_A (the filtered
+ * accumulation at brightness 1: what the tone map reads) and NAME.count (hits).
+ */
+#include "bake.h"
+#include "gen_flame.h"
+#include "pool.h"
+#include "progress.h"
+#include "render.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define FB_FLAME_PALETTES "/usr/share/flam3/flam3-palettes.xml"
+
+static const fb_keyspec flame_keys[] = {
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"flame\""},
+    {"name", FB_K_NAME, 0, 0, false, NULL, "\"flame\"",
+     "layer name; channels NAME.R, .G, .B, .A, .acc_R, .acc_G, .acc_B, .acc_A, .count (flag: --layer)"},
+    {"file", FB_K_STRING, 0, 0, false, NULL, NULL, "a .flame file (flam3's XML genomes); required"},
+    {"flame", FB_K_STRING, 0, 0, false, NULL, NULL,
+     "the <flame> to render: its name attribute, or its index from 0 (default: the first)"},
+    {"quality", FB_K_NUM, 0, 1e6, false, NULL, "0", "samples per pixel (0: the genome's quality attribute)"},
+    {"palettes", FB_K_STRING, 0, 0, false, NULL, "\"" FB_FLAME_PALETTES "\"",
+     "flam3's palette library, for genomes with palette=\"N\""},
+    {"brightness", FB_K_NUM, 0, 1e6, false, NULL, NULL, "the tone map's brightness (default: the genome's)"},
+    {"gamma", FB_K_NUM, 0, 100, true, NULL, NULL, "the tone map's gamma (default: the genome's)"},
+    {"gamma-threshold", FB_K_NUM, 0, 1e6, false, NULL, NULL,
+     "below it the gamma curve is linear (default: the genome's)"},
+    {"vibrancy", FB_K_NUM, -10, 10, false, NULL, NULL, "1: gamma on alpha, 0: per channel (default: the genome's)"},
+    {"highlight-power", FB_K_NUM, -1e6, 1e6, false, NULL, NULL,
+     "over-bright pixels: < 0 clip, 0 keep the hue, larger fade to white (default: the genome's)"},
+    {"background", FB_K_NUMLIST, 0, 1, false, NULL, NULL, "background R,G,B in [0, 1] (default: the genome's)", 3},
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "true", "store R, G, B, A as half (flags: --half, --float)"},
+    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
+     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+};
+
+static fb_result parse_flame(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
+{
+    char sub[256];
+    fb_flame_params *f = (void *)L->params;
+    fb_result rc = fb_schema_check(v, path, obj, flame_keys, FB_NKEYS(flame_keys), "a flame layer");
+    if (rc) return rc;
+    const char *file = json_string_value(json_object_get(obj, "file"));
+    if (!file) {
+        snprintf(sub, sizeof sub, "%s.file", path);
+        return fb_schema_error(v, sub, "a flame layer needs a .flame file");
+    }
+    const char *pick = json_string_value(json_object_get(obj, "flame"));
+    const char *palettes = json_string_value(json_object_get(obj, "palettes"));
+    char *text = NULL;
+    size_t len = 0;
+    if ((rc = fb_flame_slurp(file, &text, &len))) return rc;
+    rc = fb_flame_read(text, len, file, pick, palettes, &f->genome, NULL);
+    free(text);
+    if (rc) return rc;
+    f->quality = fb_json_num(obj, "quality");
+    const fb_flame_genome *gn = &f->genome;
+    f->tone =
+        (fb_flame_tone){gn->brightness, gn->gamma,           gn->gamma_threshold,
+                        gn->vibrancy,   gn->highlight_power, {gn->background[0], gn->background[1], gn->background[2]}};
+    if (json_object_get(obj, "brightness")) f->tone.brightness = fb_json_num(obj, "brightness");
+    if (json_object_get(obj, "gamma")) f->tone.gamma = fb_json_num(obj, "gamma");
+    if (json_object_get(obj, "gamma-threshold")) f->tone.gamma_threshold = fb_json_num(obj, "gamma-threshold");
+    if (json_object_get(obj, "vibrancy")) f->tone.vibrancy = fb_json_num(obj, "vibrancy");
+    if (json_object_get(obj, "highlight-power")) f->tone.highlight_power = fb_json_num(obj, "highlight-power");
+    json_t *bg = json_object_get(obj, "background");
+    for (size_t k = 0; bg && k < 3; k++) f->tone.background[k] = json_number_value(json_array_get(bg, k));
+    (void)s;
+    return FB_OK;
+}
+
+/* ---- the chaos game --------------------------------------------------------------------------- */
+
+typedef struct flame_state {
+    fb_flame_setup S;
+    float *acc[4];
+    uint32_t *count;
+    uint64_t bad;
+    double seconds;
+} flame_state;
+
+static flame_state *state(const fb_gen *g)
+{
+    return g->owned;
+}
+
+typedef struct game {
+    const fb_flame_setup *S;
+    fb_flame_cell32 **hist; /* one per task */
+    fb_flame_cell *total;
+    size_t cells;
+    uint64_t *bad;
+    uint32_t c0, c1; /* the chains of this round */
+    int ntasks;
+} game;
+
+/* Chains [c0, c1) of the round, the task's contiguous share, into its own histogram. */
+static void game_task(void *ctx, int task)
+{
+    game *G = ctx;
+    const fb_flame_setup *S = G->S;
+    const K_FlameParams P = S->p;
+    uint64_t span = G->c1 - G->c0;
+    uint32_t a = G->c0 + (uint32_t)(span * (uint64_t)task / (uint64_t)G->ntasks);
+    uint32_t b = G->c0 + (uint32_t)(span * (uint64_t)(task + 1) / (uint64_t)G->ntasks);
+    fb_flame_cell32 *h = G->hist[task];
+    uint64_t bad = 0;
+    const K_FlameXform *k_flame_xf = S->xf;
+    const K_FlameVar *k_flame_var = S->var;
+    const uint *k_flame_dist = S->dist;
+    /* The points of a chain are computed into a buffer, then scattered: a loop of independent
+     * increments keeps many cache misses in flight, where plotting inside the chain's dependent
+     * loop waits for each (the histogram does not fit in the caches). */
+    enum { BUF = 1024 };
+    K_FlameChain pts[BUF];
+    for (uint32_t i = a; i < b; i++) {
+        uint32_t key = k_flame_key(P.seed, i), len = i + 1 == P.chains ? P.last_len : P.len;
+        K_FlameChain s = k_flame_init(key);
+        for (uint32_t t = 0; t < P.fuse; t++) s = k_flame_step(P, s, key K_FLAME_TABLES);
+        for (uint32_t t0 = 0; t0 < len; t0 += BUF) {
+            uint32_t n = len - t0 < BUF ? len - t0 : BUF;
+            for (uint32_t t = 0; t < n; t++) pts[t] = s = k_flame_step(P, s, key K_FLAME_TABLES);
+            for (uint32_t t = 0; t < n; t++) fb_flame_plot(S, &pts[t], h, G->total);
+        }
+        bad += s.bad;
+    }
+    G->bad[task] += bad;
+}
+
+/* The task's share of the cells of every task's 32-bit histogram, folded into the total. */
+static void fold_task(void *ctx, int task)
+{
+    game *G = ctx;
+    size_t c0 = G->cells * (size_t)task / (size_t)G->ntasks, c1 = G->cells * (size_t)(task + 1) / (size_t)G->ntasks;
+    for (int t = 0; t < G->ntasks; t++) fb_flame_hist_fold(G->total, G->hist[t], c0, c1);
+}
+
+static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
+{
+    flame_state *st = state(g);
+    const fb_flame_setup *S = &st->S;
+    size_t cells = (size_t)S->p.hist_w * S->p.hist_h, npix = (size_t)g->scene->width * g->scene->height;
+    int threads = e->pool ? fb_pool_threads(e->pool) : 1;
+    if (threads > 64) threads = 64;
+    while (threads > 1 && (uint64_t)threads * cells * sizeof(fb_flame_cell32) > (1ull << 30)) threads--;
+    if (e->kind == FB_BACKEND_VULKAN)
+        fb_log(FB_LOG_INFO, "%s: the flame's chaos game runs on the native backend (no shader yet)", g->layer->name);
+    fb_flame_cell32 *hist[64] = {0};
+    uint64_t bad[64] = {0};
+    fb_flame_cell *total = calloc(cells, sizeof *total);
+    fb_result rc = total ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
+    for (int t = 0; t < threads && !rc; t++)
+        if (!(hist[t] = calloc(cells, sizeof(fb_flame_cell32))))
+            rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
+    for (int k = 0; k < 4 && !rc; k++)
+        if (!(st->acc[k] = malloc(npix * sizeof(float)))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (!rc && !(st->count = malloc(npix * sizeof(uint32_t)))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    fb_progress prog;
+    char label[96];
+    snprintf(label, sizeof label, "%s: chaos game", g->layer->name);
+    fb_progress_init(&prog, progress, label, "pts");
+    double t0 = fb_now();
+    /* rounds of chains, for the progress bar; the 32-bit cells are folded once, at the end */
+    uint32_t per_round = 64u * (uint32_t)threads;
+    for (uint32_t c0 = 0; c0 < S->p.chains && !rc; c0 += per_round) {
+        uint32_t c1 = S->p.chains - c0 > per_round ? c0 + per_round : S->p.chains;
+        game G = {S, hist, total, cells, bad, c0, c1, threads};
+        if (e->pool)
+            fb_pool_run(e->pool, threads, game_task, &G);
+        else
+            game_task(&G, 0);
+        double done = (double)c1 * S->p.len;
+        fb_progress_update(&prog, (uint64_t)fmin(done, S->samples), (uint64_t)S->samples);
+    }
+    if (!rc) {
+        game G = {S, hist, total, cells, bad, 0, 0, threads};
+        if (e->pool)
+            fb_pool_run(e->pool, threads, fold_task, &G);
+        else
+            fold_task(&G, 0);
+    }
+    fb_progress_finish(&prog);
+    for (int t = 0; t < threads; t++) st->bad += bad[t];
+    double t1 = fb_now();
+    if (!rc) rc = fb_flame_filter(S, total, st->acc, st->count);
+    for (int t = 0; t < threads; t++) free(hist[t]);
+    free(total);
+    st->seconds = fb_now() - t0;
+    g->prepare_gpu_seconds = -1;
+    if (rc) return rc;
+    fb_log(FB_LOG_INFO,
+           "%s: %.0f points in %u chains, %.3g Mpts/s (chaos game %.2f s, filters %.2f s), %llu bad values",
+           g->layer->name, S->samples, S->p.chains, S->samples / (t1 - t0) * 1e-6, t1 - t0, fb_now() - t1,
+           (unsigned long long)st->bad);
+    snprintf(g->summary, sizeof g->summary, "%s: flame %.0f points, %.3g Mpts/s", g->layer->name, S->samples,
+             S->samples / (t1 - t0) * 1e-6);
+    return FB_OK;
+}
+
+static void flame_rows(const fb_gen *g, int y0, int n, void *const *planes)
+{
+    const flame_state *st = state(g);
+    size_t w = (size_t)g->scene->width, at = (size_t)y0 * w, len = (size_t)n * w;
+    const float *acc[4] = {st->acc[0] + at, st->acc[1] + at, st->acc[2] + at, st->acc[3] + at};
+    fb_flame_tone_row(&st->S.tone, len, acc, planes[0], planes[1], planes[2], planes[3]);
+    for (int k = 0; k < 4; k++) memcpy(planes[4 + k], acc[k], len * 4);
+    memcpy(planes[8], st->count + at, len * 4);
+}
+
+static void flame_fini(fb_gen *g)
+{
+    flame_state *st = state(g);
+    if (!st) return;
+    fb_flame_setup_fini(&st->S);
+    for (int k = 0; k < 4; k++) free(st->acc[k]);
+    free(st->count);
+}
+
+/* The 32-bit histograms (one per thread), the 64-bit total, the density estimation's doubles, and the image-size planes
+ * kept. */
+static uint64_t flame_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
+{
+    const flame_state *st = state(g);
+    uint64_t cells = (uint64_t)st->S.p.hist_w * st->S.p.hist_h, n = (uint64_t)g->scene->width * g->scene->height;
+    int threads = e->pool ? fb_pool_threads(e->pool) : 1;
+    if (threads > 64) threads = 64;
+    *hold = 20 * n;
+    return (uint64_t)threads * cells * sizeof(fb_flame_cell32) + cells * sizeof(fb_flame_cell) + 32 * cells + 20 * n;
+}
+
+/* Seconds of one core of the reference machine: the chaos game per point (1.0 s of user time for
+ * 13 Mpts at 512 x 512, bench/RESULTS.md) and density estimation, filter, tone map and the written
+ * channels per pixel. */
+#define FLAME_POINT_SECONDS 7.6e-8
+#define FLAME_PIXEL_SECONDS 4e-7
+
+static fb_result flame_cost(const fb_scene *s, int layer, double *rows, double *total)
+{
+    const fb_flame_params *f = fb_layer_params(&s->layers[layer]);
+    double q = f->quality > 0 ? f->quality : f->genome.quality, zoom = pow(2.0, f->genome.zoom);
+    double pixels = (double)s->width * s->height;
+    (void)rows;
+    *total = q * zoom * zoom * pixels * FLAME_POINT_SECONDS + pixels * FLAME_PIXEL_SECONDS;
+    return FB_OK;
+}
+
+static fb_result flame_init(fb_gen *g)
+{
+    const fb_scene *s = g->scene;
+    const fb_flame_params *f = fb_layer_params(g->layer);
+    if (g->points_part[1] > 0)
+        return fb_fail(FB_ERR_INPUT, "layer %s: a flame layer cannot be split by points parts yet (--points-part)",
+                       g->layer->name);
+    flame_state *st = calloc(1, sizeof *st);
+    if (!st) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    g->owned = st;
+    g->fini = flame_fini;
+    fb_result rc = fb_flame_setup_init(&f->genome, s->width, s->height, f->quality, s->seed, &st->S);
+    if (rc) return rc;
+    st->S.tone = f->tone;
+    static const char *const suffix[9] = {"R", "G", "B", "A", "acc_R", "acc_G", "acc_B", "acc_A", "count"};
+    exrio_type colour = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
+    const exrio_type types[9] = {colour,      colour,      colour,      colour,    EXRIO_FLOAT,
+                                 EXRIO_FLOAT, EXRIO_FLOAT, EXRIO_FLOAT, EXRIO_UINT};
+    g->nchannels = 9;
+    for (int c = 0; c < 9; c++) {
+        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        g->channel_types[c] = types[c];
+    }
+    g->preview_channel = 3;
+    g->preview_rgb = 0;
+    g->native_rows = flame_rows;
+    g->prepare = flame_prepare;
+    g->memory = flame_memory;
+    return FB_OK;
+}
+
+const fb_gen_class fb_gen_flame = {
+    .name = "flame",
+    .synopsis = "flame --file F.flame [options] -o OUT.exr",
+    .summary = "a fractal flame from a .flame genome (flam3's XML), rendered as flam3 does",
+    .what = "a flame layer",
+    .keys = flame_keys,
+    .nkeys = FB_NKEYS(flame_keys),
+    .params_size = sizeof(fb_flame_params),
+    .parse = parse_flame,
+    .init = flame_init,
+    .share = FB_SHARE_WHOLE, /* one task: its chaos game cannot be split by points parts yet */
+    .cost = flame_cost,
+    .tone = &fb_flame_tone_ops,
+    .example = "[{\"type\": \"flame\", \"file\": \"docs/examples/flames.flame\", \"flame\": \"gold\", \"quality\": 2}]",
+};
