@@ -22,7 +22,7 @@ for scene in "$root"/docs/examples/gallery-*.json; do
   name=$(basename "$scene" .json)
   sets=()
   if [ "$width" -gt 0 ]; then
-    size=$("$FB" scene "$scene" | python3 -c "import json, sys; w, h = json.load(sys.stdin)['size']; print('%dx%d' % ($width, max(1, round(h * $width / w))))")
+    size=$(cd "$root" && "$FB" scene "$scene" | python3 -c "import json, sys; w, h = json.load(sys.stdin)['size']; print('%dx%d' % ($width, max(1, round(h * $width / w))))")
     sets=(--set "size=$size")
   fi
   (cd "$root" && "$FB" render "$scene" "${sets[@]}" -o "$tmp/$name.exr" --preview "$out/$name.png" --quiet)
