@@ -80,46 +80,78 @@ typedef struct grids {
     int rows_per_task;
 } grids;
 
+/* One cell of each pass; l, r, t, b: whether the neighbour on that side is in the grid (constants
+ * for the interior, so that the compiler drops the tests there). */
+static inline __attribute__((always_inline)) void flux_cell(const K_ErodeParams p, k_vec4 *restrict F,
+                                                            const k_vec4 *restrict S, uint i, uint w, bool l, bool r,
+                                                            bool t, bool b)
+{
+    k_vec4 c = S[i];
+    float hc = k_erode_surface(p, c);
+    k_vec4 hn = k_vec4(l ? k_erode_surface(p, S[i - 1]) : hc, r ? k_erode_surface(p, S[i + 1]) : hc,
+                       t ? k_erode_surface(p, S[i - w]) : hc, b ? k_erode_surface(p, S[i + w]) : hc);
+    k_vec4 inside = k_vec4(l ? 1.0f : 0.0f, r ? 1.0f : 0.0f, t ? 1.0f : 0.0f, b ? 1.0f : 0.0f);
+    float d1 = c.y + p.rain;
+    F[i] = k_erode_flux(p, F[i], d1, hc, hn, inside);
+}
+
+static inline __attribute__((always_inline)) void water_cell(const K_ErodeParams p, const k_vec4 *restrict S,
+                                                             const k_vec4 *restrict F, k_vec4 *restrict T,
+                                                             k_vec4 *restrict M, uint i, uint w, bool l, bool r, bool t,
+                                                             bool b)
+{
+    k_vec4 c = S[i];
+    k_vec4 fin = k_vec4(l ? F[i - 1].y : 0.0f, r ? F[i + 1].x : 0.0f, t ? F[i - w].w : 0.0f, b ? F[i + w].z : 0.0f);
+    k_vec4 bn = k_vec4(l ? S[i - 1].x : c.x, r ? S[i + 1].x : c.x, t ? S[i - w].x : c.x, b ? S[i + w].x : c.x);
+    float d1 = c.y + p.rain;
+    k_vec4 o = k_erode_water(p, c.x, d1, c.z, F[i], fin, bn);
+    T[i] = k_vec4(o.x, o.y, o.z, d1);
+    M[i] = k_erode_masks(p, M[i], c.x, o.x, o.w);
+}
+
+static inline __attribute__((always_inline)) void settle_cell(const K_ErodeParams p, const k_vec4 *restrict T,
+                                                              const k_vec4 *restrict F, k_vec4 *restrict S,
+                                                              k_vec4 *restrict M, uint i, uint w, bool l, bool r,
+                                                              bool t, bool b)
+{
+    k_vec4 c = T[i], wall = k_vec4(c.x, 0.0f, 0.0f, 0.0f);
+    k_vec4 fin = k_vec4(l ? F[i - 1].y : 0.0f, r ? F[i + 1].x : 0.0f, t ? F[i - w].w : 0.0f, b ? F[i + w].z : 0.0f);
+    k_vec4 cl = l ? T[i - 1] : wall, cr = r ? T[i + 1] : wall;
+    k_vec4 ct = t ? T[i - w] : wall, cb = b ? T[i + w] : wall;
+    float s = k_erode_sediment(p, c.z, c.w, F[i], k_vec4(cl.z, cr.z, ct.z, cb.z), k_vec4(cl.w, cr.w, ct.w, cb.w), fin);
+    float nb = k_erode_thermal(p, c.x, k_vec4(cl.x, cr.x, ct.x, cb.x));
+    S[i] = k_vec4(nb, c.y, s, 0.0f);
+    M[i] = k_erode_masks(p, M[i], c.x, nb, 0.0f);
+}
+
+/* A pass over rows [y0, y1): the first and last cells of a row, and the rows at the grid's top and
+ * bottom, test their neighbours; the rest do not. */
+#define PASS_ROWS(CELL, ...)                                                                                           \
+    for (uint y = (uint)y0; y < (uint)y1; y++) {                                                                       \
+        bool t = y > 0, b = y + 1 < h;                                                                                 \
+        uint row = y * w;                                                                                              \
+        if (w == 1) {                                                                                                  \
+            CELL(p, __VA_ARGS__, row, w, false, false, t, b);                                                          \
+            continue;                                                                                                  \
+        }                                                                                                              \
+        CELL(p, __VA_ARGS__, row, w, false, true, t, b);                                                               \
+        if (t && b)                                                                                                    \
+            for (uint x = 1; x + 1 < w; x++) CELL(p, __VA_ARGS__, row + x, w, true, true, true, true);                 \
+        else                                                                                                           \
+            for (uint x = 1; x + 1 < w; x++) CELL(p, __VA_ARGS__, row + x, w, true, true, t, b);                       \
+        CELL(p, __VA_ARGS__, row + w - 1, w, true, false, t, b);                                                       \
+    }
+
 static void pass_rows(grids *g, int y0, int y1)
 {
     const K_ErodeParams p = g->p;
     const uint w = p.width, h = p.height;
-    k_vec4 *S = g->S, *T = g->T, *F = g->F, *M = g->M;
-    for (uint y = (uint)y0; y < (uint)y1; y++)
-        for (uint x = 0; x < w; x++) {
-            uint i = y * w + x;
-            bool l = x > 0, r = x + 1 < w, t = y > 0, b = y + 1 < h;
-            if (p.pass == K_ERODE_PASS_FLUX) {
-                k_vec4 c = S[i];
-                float hc = k_erode_surface(p, c);
-                k_vec4 hn = k_vec4(l ? k_erode_surface(p, S[i - 1]) : hc, r ? k_erode_surface(p, S[i + 1]) : hc,
-                                   t ? k_erode_surface(p, S[i - w]) : hc, b ? k_erode_surface(p, S[i + w]) : hc);
-                k_vec4 inside = k_vec4(l ? 1.0f : 0.0f, r ? 1.0f : 0.0f, t ? 1.0f : 0.0f, b ? 1.0f : 0.0f);
-                float d1 = c.y + p.rain;
-                F[i] = k_erode_flux(p, F[i], d1, hc, hn, inside);
-            } else if (p.pass == K_ERODE_PASS_WATER) {
-                k_vec4 c = S[i];
-                k_vec4 fin =
-                    k_vec4(l ? F[i - 1].y : 0.0f, r ? F[i + 1].x : 0.0f, t ? F[i - w].w : 0.0f, b ? F[i + w].z : 0.0f);
-                k_vec4 bn =
-                    k_vec4(l ? S[i - 1].x : c.x, r ? S[i + 1].x : c.x, t ? S[i - w].x : c.x, b ? S[i + w].x : c.x);
-                float d1 = c.y + p.rain;
-                k_vec4 o = k_erode_water(p, c.x, d1, c.z, F[i], fin, bn);
-                T[i] = k_vec4(o.x, o.y, o.z, d1);
-                M[i] = k_erode_masks(p, M[i], c.x, o.x, o.w);
-            } else {
-                k_vec4 c = T[i], wall = k_vec4(c.x, 0.0f, 0.0f, 0.0f);
-                k_vec4 fin =
-                    k_vec4(l ? F[i - 1].y : 0.0f, r ? F[i + 1].x : 0.0f, t ? F[i - w].w : 0.0f, b ? F[i + w].z : 0.0f);
-                k_vec4 cl = l ? T[i - 1] : wall, cr = r ? T[i + 1] : wall;
-                k_vec4 ct = t ? T[i - w] : wall, cb = b ? T[i + w] : wall;
-                float s = k_erode_sediment(p, c.z, c.w, F[i], k_vec4(cl.z, cr.z, ct.z, cb.z),
-                                           k_vec4(cl.w, cr.w, ct.w, cb.w), fin);
-                float nb = k_erode_thermal(p, c.x, k_vec4(cl.x, cr.x, ct.x, cb.x));
-                S[i] = k_vec4(nb, c.y, s, 0.0f);
-                M[i] = k_erode_masks(p, M[i], c.x, nb, 0.0f);
-            }
-        }
+    if (p.pass == K_ERODE_PASS_FLUX)
+        PASS_ROWS(flux_cell, g->F, g->S)
+    else if (p.pass == K_ERODE_PASS_WATER)
+        PASS_ROWS(water_cell, g->S, g->F, g->T, g->M)
+    else
+        PASS_ROWS(settle_cell, g->T, g->F, g->S, g->M)
 }
 
 static void pass_task(void *ctx, int task)

@@ -255,7 +255,7 @@ static fb_result erode_resolve(fb_gen *g, const fb_gen *const *gens, const int *
     int c = fb_gen_channel_of(src, P->input.channel, g->layer->name, "input");
     if (c < 0) return FB_ERR_INPUT;
     if (src->host_op || src->channel_types[c] == EXRIO_UINT)
-        return fb_fail(FB_ERR_INPUT, "layer \"%s\": input \"%s\": %s", g->layer->name, src->channel_names[c],
+        return fb_fail(FB_ERR_INPUT, "input \"%s\": %s", src->channel_names[c],
                        src->host_op ? "an op layer cannot be eroded yet (bake it, or erode the layer it reads)"
                                     : "a channel of integers, not heights");
     state(g)->src = src;
