@@ -270,6 +270,17 @@ static int erode_refs(fb_layer *L, fb_ref_slot *out)
     return 1;
 }
 
+/* The plan's cost model: seconds of one core of the reference machine (docs/scenes.md). Memory-bound
+ * passes: 1024 x 1024 x 50 iterations ran at 1.8 Mcell-iterations/s on one loaded core beside the
+ * peer's 1.84 (bench/RESULTS.md); 100 ns a cell-iteration is its unloaded rate. */
+static fb_result erode_cost(const fb_scene *s, int layer, double *rows, double *total)
+{
+    (void)rows;
+    const fb_erode_layer_params *P = fb_layer_params(&s->layers[layer]);
+    *total = (double)s->width * s->height * (P->iterations * 1.0e-7 /* a cell-iteration */ + 2.0e-8 /* a pixel */);
+    return FB_OK;
+}
+
 const fb_gen_class fb_gen_erode = {
     .name = "erode",
     .synopsis = NULL,
@@ -281,6 +292,10 @@ const fb_gen_class fb_gen_erode = {
     .parse = parse_erode,
     .refs = erode_refs,
     .init = erode_init,
+    .share = FB_SHARE_WHOLE,
+    .cost = erode_cost,
+    .example = "[{\"type\": \"fbm\", \"name\": \"h\", \"octaves\": 5}, {\"type\": \"erode\", \"name\": \"e\", "
+               "\"input\": \"h\", \"extent\": 8, \"iterations\": 20, \"duration\": 10}]",
+    .tolerance = {1e-5, 0}, /* its fBm input's; the erode channels are the same bits (tests/test_erode.c) */
     .bench = fb_erode_bench,
 };
-_Static_assert(sizeof(fb_erode_layer_params) <= FB_LAYER_PARAMS_MAX, "FB_LAYER_PARAMS_MAX is too small");
