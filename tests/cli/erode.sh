@@ -38,4 +38,7 @@ printf '{"size": [64, 64], "layers": [{"type": "terrain", "name": "t", "points":
   "$SRC" > t.json
 "$FB" render t.json --backend native -o te.exr --preview te.png 2> te.txt && grep -q "64 x 64 cells of " te.txt &&
   ! grep -q "cells of 16," te.txt && [ "$(png_wh te.png)" = "64 64" ] && ok || bad "erode over terrain: $(cat te.txt)"
+# the eroded heights as an engine heightmap: 16-bit raw, two bytes a pixel, the range named
+"$FB" render e.json --backend native --set layers.e.heightmap=e.r16 -o hm.exr 2> hm.txt && [ "$(stat -c %s e.r16)" = $((2 * 96 * 80)) ] &&
+  grep -q "heightmap e.r16: layer e's heights" hm.txt && ok || bad "erode heightmap: $(cat hm.txt)"
 cli_finish
