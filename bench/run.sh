@@ -4,7 +4,8 @@
 # The Delaunay peer (CGAL's Delaunay_triangulation_2, bench/cgal_delaunay.cpp) is built and run
 # beside fractalbake's own when libcgal-dev can be installed, and the chaos-game peer (libflam3 rendering
 # the fern, bench/flam3_fern.c) when libflam3-dev can; fractalbake never links either. The fBm peer
-# (bench/fbm_peer.c, a minimal AVX2 gradient fBm at 4096 x 4096) always runs.
+# (bench/fbm_peer.c, a minimal AVX2 gradient fBm at 4096 x 4096) and the erosion peer
+# (bench/erode_peer.c, the virtual-pipe model written plainly, at up to 1024 x 1024) always run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh
@@ -22,9 +23,12 @@ if dpkg-query -W -f='${Status}' libflam3-dev 2>/dev/null | grep -q "install ok i
 fi
 # the fBm peer (bench/fbm_peer.c): plain C and pthreads, always built
 gcc -O3 -mavx2 -o build/fbm_peer bench/fbm_peer.c -lpthread -lm
+# the erosion peer (bench/erode_peer.c): the same pipe model written plainly, always built
+gcc -O3 -march=native -o build/erode_peer bench/erode_peer.c -lpthread -lm
 {
   ./build/fractalbake bench --json "$@"
   ./build/fbm_peer --json "$@"
+  ./build/erode_peer --json "$@"
   if [ -n "$peer" ]; then "$peer" --json; fi
   if [ -n "$flam3" ]; then "$flam3" --json "$@"; fi
 } | while read -r line; do

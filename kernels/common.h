@@ -103,7 +103,13 @@ static inline k_vec3 k_vec3_make(float x, float y, float z)
     k_vec3 v = {x, y, z};
     return v;
 }
-#define k_vec3(x, y, z) k_vec3_make(x, y, z)
+#define k_vec3(x, y, z)    k_vec3_make(x, y, z)
+static inline k_vec4 k_vec4_make(float x, float y, float z, float w)
+{
+    k_vec4 v = {x, y, z, w};
+    return v;
+}
+#define k_vec4(x, y, z, w) k_vec4_make(x, y, z, w)
 #endif
 
 K_FN float k_clamp(float x, float lo, float hi)

@@ -13,6 +13,7 @@
     X(lsystem)                                                                                                         \
     X(terrain)                                                                                                         \
     X(constrain)                                                                                                       \
+    X(erode)                                                                                                           \
     X(op)
 
 #define DECLARE(name) extern const fb_gen_class fb_gen_##name;

@@ -59,6 +59,13 @@ printf '{"size": [64, 32], "layers": [{"type": "ifs", "maps": [[0.5, 0, 0, 0.5, 
 printf '{"size": [64, 32], "layers": [{"type": "lsystem", "axiom": "F",\n "rules": ["F=F[+F]", 3]}]}' > lrule.json
 printf 'leaf {\n  .5 0 0 .5 0 0 .5\n  .5 0 0 .5 1 0 zz\n}\n' > broken.ifs
 printf 'halves { .5 0 0 .5 0 0 .5 .5 0 0 .5 1 0 .5 }\nthirds {\n .33 0 0 .33 0 0 .3 .33 0 0 .33 .66 0 .3 .33 0 0 .33 .33 .5 .4\n}\n' > two.ifs
+printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode"}]}' > enoin.json
+printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": 3}]}' > enum.json
+printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": "hill"}]}' > ename.json
+printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "op", "name": "o", "op": "remap", "inputs": ["h"], "from": [0, 1]}, {"type": "erode", "input": "o"}]}' > eop.json
+printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": "h", "extent": 0}]}' > eext.json
+printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": "h.Z"}]}' > echan.json
+printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": "h", "talus": 90}]}' > etal.json
 mkdir -p unreadable.json adir adir.ply adir.png
 mkfifo afifo
 echo precious > victim.txt

@@ -50,6 +50,11 @@ cat > ops.json << 'JSON'
  {"type": "op", "name": "snow", "op": "threshold", "inputs": ["height"], "level": 0.2, "width": 0.1}]}
 JSON
 predicted_vs_measured "op, native, zip level 12" render ops.json $N --zip-level 12
+cat > erode.json << 'JSON'
+{"size": [2048, 2048], "layers": [{"type": "fbm", "name": "h", "octaves": 4},
+ {"type": "erode", "name": "e", "input": "h", "iterations": 2}]}
+JSON
+predicted_vs_measured "erode, native" render erode.json $N
 if have_vulkan; then
   V="--backend vulkan"
   predicted_vs_measured "fbm, vulkan" fbm $V --size 8192x4096
@@ -76,6 +81,8 @@ refused() {
   check "$what: took $ms ms and $((rss >> 10)) MiB before refusing" test $ms -lt 3000 -a "$rss" -lt 400000
   check "$what: no output" test ! -e r.exr
 }
+refused "erode 16384^2 under 4G" "layer e: erosion of 16384 x 16384 cells needs about 24.00 GiB, more than --max-memory 4.00 GiB" \
+  render erode.json $N --set size=16384x16384 --max-memory 4G
 refused "ifs 16384^2 under 4G" "needs about 10.0. GiB, more than --max-memory 4.00 GiB; layer plants alone" \
   ifs $N --size 16384x16384 --max-memory 4G
 refused "constrain 65536x32768 under 8G" "layer terrain needs about .* GiB, more than --max-memory 8.00 GiB" \

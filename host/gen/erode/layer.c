@@ -1,0 +1,305 @@
+/*
+ * The erode layer: another layer's heights eroded by water (virtual pipes) and by slides above the
+ * talus angle (erode.h), computed whole in prepare on the engine's backend; strips are copied out.
+ *
+ * Channels: NAME.Y (the settled height: bed plus the sediment still suspended), NAME.flow (the
+ * time-averaged discharge per unit width), NAME.wear (material removed), NAME.deposition (material
+ * laid down), NAME.sediment (suspended at the end), NAME.water (depth at the end).
+ */
+#include "engine.h"
+#include "erode.h"
+#include "exrio.h"
+#include "gen_erode.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- the scene keys and their parser ---------------------------------------------------------- */
+
+static const fb_keyspec erode_keys[] = {
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"erode\""},
+    {"name", FB_K_NAME, 0, 0, false, NULL, "\"eroded\"",
+     "layer name; channels NAME.Y, .flow, .wear, .deposition, .sediment, .water"},
+    {"input", FB_K_REF, 0, 0, false, NULL, NULL, "the heights to erode: another layer's channel (\"layer\": its Y)"},
+    {"extent", FB_K_NUM, 0, 1e12, true, NULL, NULL,
+     "the image's width in world units (the heights' unit); default: the input's world width, else 1024"},
+    {"iterations", FB_K_INT, 1, 1000000, false, NULL, "200",
+     "time steps over the duration (more: a smaller step; double them with the size)"},
+    {"duration", FB_K_NUM, 0, 1e9, true, NULL, "60", "simulated time, in time units"},
+    {"rain", FB_K_NUM, 0, 1e6, false, NULL, "0.005", "water added everywhere, height per time unit"},
+    {"gravity", FB_K_NUM, 0, 1e6, true, NULL, "9.81", "the acceleration that drives water down the pipes"},
+    {"capacity", FB_K_NUM, 0, 1e6, false, NULL, "0.05", "Kc: sediment carried per unit sin(slope) and unit speed"},
+    {"dissolve", FB_K_NUM, 0, 1e6, false, NULL, "0.5", "Ks: rate at which water takes up its capacity, per time unit"},
+    {"deposit", FB_K_NUM, 0, 1e6, false, NULL, "1.0", "Kd: rate at which water drops sediment above it, per time unit"},
+    {"evaporation", FB_K_NUM, 0, 1e6, false, NULL, "0.2", "Ke: water lost, fraction per time unit"},
+    {"depth", FB_K_NUM, 0, 1e6, true, NULL, "0.05",
+     "the water depth that carries the full capacity; shallower water carries proportionally less"},
+    {"talus", FB_K_NUM, 0, 89.9, false, NULL, "35", "thermal erosion: slopes steeper than this angle (degrees) slide"},
+    {"thermal", FB_K_NUM, 0, 1e6, false, NULL, "0.5", "thermal erosion rate, per time unit (0: none)"},
+    {"heightmap", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
+     "also write the eroded heights (Y) for engines: OUT.png (16-bit grey) or OUT.r16 (16-bit raw, little-endian)"},
+    {"heightmap-range", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL,
+     "heights stored as 0 and 65535 in a 16-bit heightmap (LO,HI; default: the image's lowest and highest)"},
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store the channels as half (flags: --half, --float)"},
+    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
+     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+};
+
+static fb_result parse_erode(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
+{
+    (void)s;
+    fb_result rc = fb_schema_check(v, path, obj, erode_keys, FB_NKEYS(erode_keys), "an erode layer");
+    if (rc) return rc;
+    fb_erode_layer_params *P = (void *)L->params;
+    char sub[256];
+    const json_t *in = json_object_get(obj, "input");
+    if (!in || json_is_number(in)) {
+        snprintf(sub, sizeof sub, "%s.input", path);
+        return fb_schema_error(v, sub,
+                               in ? "expected another layer's heights (\"layer\" or \"layer.channel\"), not a number"
+                                  : "required for an erode layer (the layer whose heights it erodes)");
+    }
+    fb_json_ref(in, &P->input);
+    P->extent = json_object_get(obj, "extent") ? fb_json_num(obj, "extent") : 0;
+    P->iterations = (int)json_integer_value(json_object_get(obj, "iterations"));
+    P->duration = fb_json_num(obj, "duration");
+    P->rain = fb_json_num(obj, "rain");
+    P->gravity = fb_json_num(obj, "gravity");
+    P->capacity = fb_json_num(obj, "capacity");
+    P->dissolve = fb_json_num(obj, "dissolve");
+    P->deposit = fb_json_num(obj, "deposit");
+    P->evaporate = fb_json_num(obj, "evaporation");
+    P->depth = fb_json_num(obj, "depth");
+    P->talus = fb_json_num(obj, "talus");
+    P->thermal = fb_json_num(obj, "thermal");
+    return FB_OK;
+}
+
+/* ---- the layer --------------------------------------------------------------------------------- */
+
+typedef struct erode_state {
+    const fb_gen *src; /* the input layer (resolve) and its channel */
+    int channel;
+    float *height; /* bed + sediment */
+    fb_erode_out out;
+} erode_state;
+
+static erode_state *state(const fb_gen *g)
+{
+    return g->owned;
+}
+
+static void erode_fini(fb_gen *g)
+{
+    erode_state *s = state(g);
+    if (!s) return;
+    free(s->height);
+    fb_erode_out_free(&s->out);
+}
+
+static double extent_of(const fb_gen *g)
+{
+    const fb_erode_layer_params *P = fb_layer_params(g->layer);
+    const erode_state *s = state(g);
+    if (P->extent > 0) return P->extent;
+    if (s && s->src && s->src->has_world) return s->src->world[1] - s->src->world[0];
+    return 1024;
+}
+
+/* The input's channel, band by band through its native rows (its prepare has run: the bake
+ * prepares sources first), so that it is the same on every backend. */
+static fb_result read_input(const fb_gen *g, float *bed)
+{
+    const erode_state *s = state(g);
+    const fb_gen *src = s->src;
+    const fb_scene *sc = g->scene;
+    const int band = 64;
+    fb_result rc = FB_OK;
+    void *planes[FB_GEN_MAX_CHANNELS] = {0};
+    for (int k = 0; k < fb_gen_nplanes(src) && !rc; k++)
+        if (fb_gen_plane_stored(src, k) && !(planes[k] = malloc((size_t)sc->width * band * 4)))
+            rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    for (int y0 = 0; y0 < sc->height && !rc; y0 += band) {
+        int n = y0 + band <= sc->height ? band : sc->height - y0;
+        src->native_rows(src, y0, n, planes);
+        memcpy(bed + (size_t)y0 * sc->width, planes[fb_gen_plane_of(src, s->channel)], (size_t)n * sc->width * 4);
+    }
+    for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(planes[k]);
+    for (size_t i = 0; !rc && i < (size_t)sc->width * sc->height; i++)
+        if (!isfinite(bed[i]))
+            rc = fb_fail(FB_ERR_INPUT, "layer %s: the heights of layer %s have a NaN or infinite value at (%zu, %zu)",
+                         g->layer->name, src->layer->name, i % sc->width, i / sc->width);
+    return rc;
+}
+
+static fb_result erode_prepare(fb_gen *g, struct fb_engine *e, bool progress)
+{
+    erode_state *s = state(g);
+    const fb_erode_layer_params *P = fb_layer_params(g->layer);
+    const fb_scene *sc = g->scene;
+    size_t n = (size_t)sc->width * sc->height;
+    float *bed = malloc(n * sizeof *bed);
+    if (!bed) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    fb_result rc = read_input(g, bed);
+    double extent = extent_of(g);
+    fb_erode_desc d = {.width = sc->width,
+                       .height = sc->height,
+                       .cell = extent / sc->width,
+                       .iterations = P->iterations,
+                       .duration = P->duration,
+                       .rain = P->rain,
+                       .gravity = P->gravity,
+                       .capacity = P->capacity,
+                       .dissolve = P->dissolve,
+                       .deposit = P->deposit,
+                       .evaporate = P->evaporate,
+                       .depth = P->depth,
+                       .talus = P->talus,
+                       .thermal = P->thermal,
+                       .bed = bed};
+    fb_progress prog;
+    char label[96];
+    snprintf(label, sizeof label, "%s: erosion", g->layer->name);
+    fb_progress_init(&prog, progress, label, "cells");
+    double t0 = fb_now();
+    if (!rc)
+        rc = e->kind == FB_BACKEND_VULKAN ? fb_erode_run_vulkan(&d, e->vk, &prog, &s->out)
+                                          : fb_erode_run_native(&d, e->pool, &prog, &s->out);
+    fb_progress_finish(&prog);
+    double secs = fb_now() - t0;
+    if (!rc && !(s->height = malloc(n * sizeof *s->height))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (rc) {
+        free(bed);
+        return rc;
+    }
+    double moved = 0, total0 = 0, total1 = 0;
+    for (size_t i = 0; i < n; i++) {
+        s->height[i] = s->out.bed[i] + s->out.sediment[i];
+        moved += s->out.wear[i];
+        total0 += bed[i];
+        total1 += (double)s->out.bed[i] + s->out.sediment[i];
+    }
+    free(bed);
+    free(s->out.bed), s->out.bed = NULL; /* the strips need only the settled height */
+    g->prepare_gpu_seconds = s->out.gpu_seconds;
+    if (s->src->has_world) {
+        g->has_world = true;
+        memcpy(g->world, s->src->world, sizeof g->world);
+        g->epsg = s->src->epsg;
+    }
+    if (sc->height > 1) g->preview_shade[0] = g->preview_shade[1] = extent / sc->width;
+    double cell_iters = (double)n * P->iterations;
+    snprintf(g->summary, sizeof g->summary,
+             "%s: %d x %d cells of %.4g, %d iterations over %.4g; material moved %.6g, mass change %.3g (relative); "
+             "%.3f s, %.3g Mcell-iterations/s",
+             g->layer->name, sc->width, sc->height, d.cell, P->iterations, P->duration, moved,
+             total0 != 0 ? (total1 - total0) / fabs(total0) : total1 - total0, secs, cell_iters / secs * 1e-6);
+    snprintf(g->summary_json, sizeof g->summary_json,
+             "{\"layer\": \"%s\", \"generator\": \"erode\", \"width\": %d, \"height\": %d, \"cell\": %.9g, "
+             "\"iterations\": %d, \"moved\": %.9g, \"seconds\": %.6f}",
+             g->layer->name, sc->width, sc->height, d.cell, P->iterations, moved, secs);
+    return FB_OK;
+}
+
+static void erode_rows(const fb_gen *g, int y0, int n, void *const *planes)
+{
+    const erode_state *s = state(g);
+    size_t at = (size_t)y0 * g->scene->width, len = (size_t)n * g->scene->width * 4;
+    const float *src[6] = {s->height, s->out.flow, s->out.wear, s->out.deposit, s->out.sediment, s->out.water};
+    for (int c = 0; c < 6; c++)
+        if (planes[c]) memcpy(planes[c], src[c] + at, len);
+}
+
+/* The model's grids (4 x 16 bytes a cell) and its result (6 floats), plus the input (4): all at the
+ * peak; five channels kept for the strips. */
+static uint64_t erode_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
+{
+    (void)e;
+    uint64_t npx = (uint64_t)g->scene->width * g->scene->height;
+    *hold = 5 * 4 * npx;
+    return fb_erode_memory(g->scene->width, g->scene->height) + 4 * npx + 4 * npx;
+}
+
+static fb_result erode_resolve(fb_gen *g, const fb_gen *const *gens, const int *plane_offset);
+
+static fb_result erode_init(fb_gen *g)
+{
+    uint64_t hold, peak = erode_memory(g, NULL, &hold);
+    char who[96];
+    snprintf(who, sizeof who, "erosion of %d x %d cells", g->scene->width, g->scene->height);
+    fb_result rc = fb_memory_check(peak, who);
+    if (rc) return rc;
+    erode_state *s = calloc(1, sizeof *s);
+    if (!s) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    g->owned = s;
+    g->fini = erode_fini;
+    static const char *const suffix[6] = {"Y", "flow", "wear", "deposition", "sediment", "water"};
+    g->nchannels = 6;
+    for (int c = 0; c < g->nchannels; c++) {
+        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        g->channel_types[c] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
+    }
+    g->preview_channel = 0;
+    if (g->scene->height > 1) g->preview_shade[0] = g->preview_shade[1] = extent_of(g) / g->scene->width;
+    g->native_rows = erode_rows;
+    g->prepare = erode_prepare;
+    g->memory = erode_memory;
+    g->resolve = erode_resolve;
+    g->prepare_gpu_seconds = -1;
+    return FB_OK;
+}
+
+static fb_result erode_resolve(fb_gen *g, const fb_gen *const *gens, const int *plane_offset)
+{
+    (void)plane_offset;
+    const fb_erode_layer_params *P = fb_layer_params(g->layer);
+    const fb_gen *src = gens[P->input.layer];
+    int c = fb_gen_channel_of(src, P->input.channel, g->layer->name, "input");
+    if (c < 0) return FB_ERR_INPUT;
+    if (src->host_op || src->channel_types[c] == EXRIO_UINT)
+        return fb_fail(FB_ERR_INPUT, "input \"%s\": %s", src->channel_names[c],
+                       src->host_op ? "an op layer cannot be eroded yet (bake it, or erode the layer it reads)"
+                                    : "a channel of integers, not heights");
+    state(g)->src = src;
+    state(g)->channel = c;
+    return FB_OK;
+}
+
+static int erode_refs(fb_layer *L, fb_ref_slot *out)
+{
+    fb_erode_layer_params *P = (void *)L->params;
+    out[0] = (fb_ref_slot){&P->input, "input", NULL};
+    return 1;
+}
+
+/* The plan's cost model: seconds of one core of the reference machine (docs/scenes.md). Memory-bound
+ * passes: 1024 x 1024 x 50 iterations ran at 1.8 Mcell-iterations/s on one loaded core beside the
+ * peer's 1.84 (bench/RESULTS.md); 100 ns a cell-iteration is its unloaded rate. */
+static fb_result erode_cost(const fb_scene *s, int layer, double *rows, double *total)
+{
+    (void)rows;
+    const fb_erode_layer_params *P = fb_layer_params(&s->layers[layer]);
+    *total = (double)s->width * s->height * (P->iterations * 1.0e-7 /* a cell-iteration */ + 2.0e-8 /* a pixel */);
+    return FB_OK;
+}
+
+const fb_gen_class fb_gen_erode = {
+    .name = "erode",
+    .synopsis = NULL,
+    .summary = "another layer's heights eroded by water (virtual pipes) and by slides (talus angle), with masks",
+    .what = "an erode layer",
+    .keys = erode_keys,
+    .nkeys = FB_NKEYS(erode_keys),
+    .params_size = sizeof(fb_erode_layer_params),
+    .parse = parse_erode,
+    .refs = erode_refs,
+    .init = erode_init,
+    .share = FB_SHARE_WHOLE,
+    .cost = erode_cost,
+    .example = "[{\"type\": \"fbm\", \"name\": \"h\", \"octaves\": 5}, {\"type\": \"erode\", \"name\": \"e\", "
+               "\"input\": \"h\", \"extent\": 8, \"iterations\": 20, \"duration\": 10}]",
+    .tolerance = {1e-5, 0}, /* its fBm input's; the erode channels are the same bits (tests/test_erode.c) */
+    .bench = fb_erode_bench,
+};

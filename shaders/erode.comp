@@ -1,0 +1,59 @@
+#version 450
+// Erosion: one pass of one iteration (push constant p.pass), one invocation per cell. The math is
+// kernels/erode.h; host/gen/erode/erode.c gathers the neighbours the same way on the CPU.
+#extension GL_GOOGLE_include_directive : require
+#define K_GLSL 1
+#include "../kernels/erode.h"
+
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
+
+layout(push_constant) uniform Push
+{
+    K_ErodeParams p;
+}
+pc;
+
+// S: (bed, water, sediment, 0); T: after the water pass (bed, water, sediment, depth after rain);
+// F: outflow fluxes (left, right, top, bottom); M: masks (flow, wear, deposition, 0).
+layout(std430, set = 0, binding = 0) buffer SBuf { vec4 v[]; } S;
+layout(std430, set = 0, binding = 1) buffer TBuf { vec4 v[]; } T;
+layout(std430, set = 0, binding = 2) buffer FBuf { vec4 v[]; } F;
+layout(std430, set = 0, binding = 3) buffer MBuf { vec4 v[]; } M;
+
+void main()
+{
+    K_ErodeParams p = pc.p;
+    uint x = gl_GlobalInvocationID.x, y = gl_GlobalInvocationID.y;
+    if (x >= p.width || y >= p.height) return;
+    uint w = p.width, i = y * w + x;
+    bool l = x > 0u, r = x + 1u < w, t = y > 0u, b = y + 1u < p.height;
+    if (p.pass == K_ERODE_PASS_FLUX) {
+        vec4 c = S.v[i];
+        float hc = k_erode_surface(p, c);
+        vec4 hn = vec4(l ? k_erode_surface(p, S.v[i - 1u]) : hc, r ? k_erode_surface(p, S.v[i + 1u]) : hc,
+                       t ? k_erode_surface(p, S.v[i - w]) : hc, b ? k_erode_surface(p, S.v[i + w]) : hc);
+        vec4 inside = vec4(l ? 1.0f : 0.0f, r ? 1.0f : 0.0f, t ? 1.0f : 0.0f, b ? 1.0f : 0.0f);
+        precise float d1 = c.y + p.rain;
+        F.v[i] = k_erode_flux(p, F.v[i], d1, hc, hn, inside);
+    } else if (p.pass == K_ERODE_PASS_WATER) {
+        vec4 c = S.v[i];
+        vec4 fin = vec4(l ? F.v[i - 1u].y : 0.0f, r ? F.v[i + 1u].x : 0.0f, t ? F.v[i - w].w : 0.0f,
+                        b ? F.v[i + w].z : 0.0f);
+        vec4 bn = vec4(l ? S.v[i - 1u].x : c.x, r ? S.v[i + 1u].x : c.x, t ? S.v[i - w].x : c.x,
+                       b ? S.v[i + w].x : c.x);
+        precise float d1 = c.y + p.rain;
+        vec4 o = k_erode_water(p, c.x, d1, c.z, F.v[i], fin, bn);
+        T.v[i] = vec4(o.x, o.y, o.z, d1);
+        M.v[i] = k_erode_masks(p, M.v[i], c.x, o.x, o.w);
+    } else {
+        vec4 c = T.v[i];
+        vec4 fin = vec4(l ? F.v[i - 1u].y : 0.0f, r ? F.v[i + 1u].x : 0.0f, t ? F.v[i - w].w : 0.0f,
+                        b ? F.v[i + w].z : 0.0f);
+        vec4 cl = l ? T.v[i - 1u] : vec4(c.x, 0.0f, 0.0f, 0.0f), cr = r ? T.v[i + 1u] : vec4(c.x, 0.0f, 0.0f, 0.0f);
+        vec4 ct = t ? T.v[i - w] : vec4(c.x, 0.0f, 0.0f, 0.0f), cb = b ? T.v[i + w] : vec4(c.x, 0.0f, 0.0f, 0.0f);
+        float s = k_erode_sediment(p, c.z, c.w, F.v[i], vec4(cl.z, cr.z, ct.z, cb.z), vec4(cl.w, cr.w, ct.w, cb.w), fin);
+        float nb = k_erode_thermal(p, c.x, vec4(cl.x, cr.x, ct.x, cb.x));
+        S.v[i] = vec4(nb, c.y, s, 0.0f);
+        M.v[i] = k_erode_masks(p, M.v[i], c.x, nb, 0.0f);
+    }
+}
