@@ -95,7 +95,7 @@ done
 # loaded machine) with a rate and the time left
 if command -v script > /dev/null; then
   start=$EPOCHREALTIME
-  script -qc "'$FB' julia --size 512x256 --samples 16 --max-iter 3000 --backend native --threads 1 -o pb.exr" /dev/null > pb.txt 2>&1
+  script -qc "'$FB' julia --size 512x256 --samples 64 --max-iter 3000 --backend native --threads 1 -o pb.exr" /dev/null > pb.txt 2>&1
   el=$(awk -v a="$start" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.2f", b - a }')
   draws=$(tr '\r' '\n' < pb.txt | grep -c '^bake \[')
   check "progress: $draws redraws in $el s" awk -v d="$draws" -v e="$el" 'BEGIN { exit !(e < 1.5 || d >= 2 * (e - 1)) }'

@@ -96,7 +96,7 @@ for be in vulkan native; do
 done
 # --backend auto with layers on both (lavapipe: fBm natively, a Julia set of 8.4 million samples on
 # the device): the merged bands keep the fractalbake/layer-backends attribute, byte for byte
-printf '{"size": [2048, 1024], "layers": [{"type": "fbm", "octaves": 3}, {"type": "julia", "samples": 4, "max-iter": 30}]}' > mix.json
+printf '{"size": [2048, 1024], "layers": [{"type": "fbm", "octaves": 3}, {"type": "julia", "samples": 4, "max-iter": 30, "precision": "double"}]}' > mix.json
 "$FB" render mix.json --quiet -o mix_whole.exr && "$FB" render mix.json --quiet --region 0,0,2048,512 -o mix_a.exr &&
   "$FB" render mix.json --quiet --region 0,512,2048,512 -o mix_b.exr && "$FB" merge mix_b.exr mix_a.exr -o mix_m.exr --quiet &&
   ok || bad "the auto region bakes failed"
