@@ -160,7 +160,8 @@ int main(int argc, char **argv)
     if (NT <= 0) NT = (int)sysconf(_SC_NPROCESSORS_ONLN);
     /* the parameters of fractalbake bench's erode rows: cell 1024 / W, 15 time units */
     double l = 1024.0 / W, dt = 15.0 / ITERS;
-    rain = (float)(0.005 * dt), pipe_ = (float)(dt * 9.81 * l), vol = (float)(l * l / dt), dt_area = (float)(dt / (l * l));
+    rain = (float)(0.005 * dt), pipe_ = (float)(dt * 9.81 * l), vol = (float)(l * l / dt),
+    dt_area = (float)(dt / (l * l));
     inv_l = (float)(1 / l), half_inv_l = (float)(0.5 / l), kc = 0.05f, ks = (float)fmin(1, 0.5 * dt);
     kd = (float)fmin(1, dt), keep = (float)(1 - 0.2 * dt), dmin = 1e-4f, talus = (float)(tan(35 * M_PI / 180) * l);
     kt = (float)fmin(0.5, 0.5 * dt), flow_w = (float)(dt / 15), inv_depth = 20;
@@ -184,9 +185,10 @@ int main(int argc, char **argv)
             }
     double rate = (double)W * H * ITERS / t[1] * 1e-6;
     if (json)
-        printf("{\"generator\": \"erode\", \"backend\": \"native\", \"device\": \"minimal C peer (bench/erode_peer.c)\", "
-               "\"mode\": \"peer\", \"unit\": \"Mcell-iter/s\", \"rate\": %.3f, \"size\": [%d, %d], \"threads\": %d}\n",
-               rate, W, H, NT);
+        printf(
+            "{\"generator\": \"erode\", \"backend\": \"native\", \"device\": \"minimal C peer (bench/erode_peer.c)\", "
+            "\"mode\": \"peer\", \"unit\": \"Mcell-iter/s\", \"rate\": %.3f, \"size\": [%d, %d], \"threads\": %d}\n",
+            rate, W, H, NT);
     else
         printf("erode peer %d x %d, %d iterations, %d threads: %.3f Mcell-iter/s (%.3f s)\n", W, H, ITERS, NT, rate,
                t[1]);

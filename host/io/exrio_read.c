@@ -193,8 +193,9 @@ fb_result exrio_open(const char *path, exrio_reader **out)
         file_size = fstat(fileno(probe), &fst) == 0 && S_ISREG(fst.st_mode) ? (uint64_t)fst.st_size : UINT64_MAX;
         fclose(probe);
         if (file_size == UINT64_MAX) /* a FIFO: OpenEXR reads by offsets, and would wait for a writer */
-            return fb_fail(FB_ERR_INPUT, "%s: is a FIFO or pipe, not a regular file: an EXR is read by offsets (use - for "
-                                         "standard input)",
+            return fb_fail(FB_ERR_INPUT,
+                           "%s: is a FIFO or pipe, not a regular file: an EXR is read by offsets (use - for "
+                           "standard input)",
                            path);
     }
     exrio_reader *r = calloc(1, sizeof *r);
