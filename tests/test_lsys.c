@@ -33,7 +33,7 @@ static char *derive(const fb_lsys *ls, uint32_t seed, size_t *len)
 {
     char *s = NULL;
     size_t n = 0;
-    fb_result rc = fb_lsys_derive(ls, seed, 1u << 28, 0, "test", &s, &n);
+    fb_result rc = fb_lsys_derive(ls, seed, 1u << 28, 0, NULL, "test", &s, &n);
     CHECKF(rc == FB_OK, "%s", g_last_error);
     if (len) *len = n;
     return s;
@@ -97,11 +97,11 @@ static void test_explosion(void)
     size_t n = 0;
     CHECK(fb_lsys_parse_rule("F=FF", &ls.rules[0], msg, sizeof msg));
     g_last_error[0] = 0;
-    fb_result rc = fb_lsys_derive(&ls, 1, 1000, 0, "test", &s, &n);
+    fb_result rc = fb_lsys_derive(&ls, 1, 1000, 0, NULL, "test", &s, &n);
     /* 2^9 = 512 <= 1000 < 1024 = 2^10: refused at iteration 10, before any string of 1024 exists */
     CHECKF(rc == FB_ERR_INPUT && s == NULL && strstr(g_last_error, "iteration 10 of 40"), "%s", g_last_error);
     ls.iterations = 9;
-    rc = fb_lsys_derive(&ls, 1, 512, 0, "test", &s, &n);
+    rc = fb_lsys_derive(&ls, 1, 512, 0, NULL, "test", &s, &n);
     CHECK(rc == FB_OK && n == 512);
     free(s);
 }

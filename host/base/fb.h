@@ -75,29 +75,30 @@ int fb_cpu_count(void);
 /* Physical memory, or the container's (cgroup v2 memory.max) where that is less. */
 uint64_t fb_physical_memory(void);
 
-/* The memory a run may use (--max-memory): a bake whose predicted peak exceeds it stops before it
- * allocates. Default 80% of fb_physical_memory(), and at most the address-space limit (RLIMIT_AS,
- * ulimit -v) less the address space the process maps beyond its data (fb_memory_set_overhead). */
-uint64_t fb_memory_limit(void);
-void fb_memory_set_limit(uint64_t bytes); /* 0: the default */
+/* The memory a run may use, carried in the descriptors of the work that allocates it (a bake's,
+ * a merge's, a layer's fb_gen): limit, --max-memory's bytes, 0 for the default, 80% of
+ * fb_physical_memory() and at most the address-space limit (RLIMIT_AS, ulimit -v) less overhead,
+ * the address space the process maps for itself beyond the data a bake predicts (code, thread
+ * stacks, malloc arenas, a Vulkan driver's mappings: the engine that runs the bake knows it; 0: 256
+ * MiB). A NULL fb_memory is {0, 0}: the default limit. */
+typedef struct fb_memory {
+    uint64_t limit, overhead;
+} fb_memory;
+uint64_t fb_memory_limit(const fb_memory *m);
 
 /* RLIMIT_AS's soft limit in bytes, UINT64_MAX where there is none. */
 uint64_t fb_address_space_limit(void);
 
-/* The address space the process maps for itself beyond the data a bake predicts (code, thread
- * stacks, malloc arenas, a Vulkan driver's mappings): set by the engine that will run the bake. */
-void fb_memory_set_overhead(uint64_t bytes);
-
 /* "" when the limit is --max-memory's or 80% of the memory; else " (the default: the address-space
- * limit ...)", for messages that name the limit. Not thread-safe (a static buffer). */
-const char *fb_memory_limit_note(void);
+ * limit ...)" in buf, for messages that name the limit. */
+const char *fb_memory_limit_note(const fb_memory *m, char *buf, size_t size);
 
 /* "512M", "8G", "8GiB", "1.5T", "12345678" (bytes), "50%" (of physical memory): at least 1 MiB.
  * False for anything else. */
 bool fb_parse_memory(const char *s, uint64_t *out);
 
-/* FB_ERR_INPUT "WHO needs about X, more than --max-memory Y" when bytes exceed fb_memory_limit(). */
-fb_result fb_memory_check(uint64_t bytes, const char *who);
+/* FB_ERR_INPUT "WHO needs about X, more than --max-memory Y" when bytes exceed fb_memory_limit(m). */
+fb_result fb_memory_check(const fb_memory *m, uint64_t bytes, const char *who);
 
 /* "12.3 MiB" / "1.25 GiB" */
 void fb_format_bytes(uint64_t bytes, char *out, size_t size);

@@ -134,8 +134,6 @@ void *fb_malloc_large(size_t size)
     return p;
 }
 
-static uint64_t g_memory_limit; /* 0: not set, the default applies */
-
 uint64_t fb_physical_memory(void)
 {
     long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
@@ -150,8 +148,6 @@ uint64_t fb_physical_memory(void)
     return phys;
 }
 
-static uint64_t g_overhead = (uint64_t)256 << 20; /* fb_memory_set_overhead */
-
 uint64_t fb_address_space_limit(void)
 {
     struct rlimit r;
@@ -159,31 +155,27 @@ uint64_t fb_address_space_limit(void)
     return (uint64_t)r.rlim_cur;
 }
 
-void fb_memory_set_overhead(uint64_t bytes)
-{
-    g_overhead = bytes;
-}
-
 /* The default: 80% of the memory, and no more than the address space (ulimit -v) leaves beyond what
  * the process and its backend map for themselves (code, thread stacks and malloc arenas, a Vulkan
  * driver). */
-static uint64_t default_limit(bool *from_as)
+static uint64_t overhead_of(const fb_memory *m)
 {
+    return m && m->overhead ? m->overhead : (uint64_t)256 << 20;
+}
+
+static uint64_t default_limit(const fb_memory *m, bool *from_as)
+{
+    uint64_t over = overhead_of(m);
     uint64_t phys = fb_physical_memory() / 10 * 8, as = fb_address_space_limit();
-    uint64_t room = as == UINT64_MAX ? UINT64_MAX : as > g_overhead + ((uint64_t)1 << 20) ? as - g_overhead : 1 << 20;
+    uint64_t room = as == UINT64_MAX ? UINT64_MAX : as > over + ((uint64_t)1 << 20) ? as - over : 1 << 20;
     *from_as = room < phys;
     return room < phys ? room : phys;
 }
 
-uint64_t fb_memory_limit(void)
+uint64_t fb_memory_limit(const fb_memory *m)
 {
     bool as;
-    return g_memory_limit ? g_memory_limit : default_limit(&as);
-}
-
-void fb_memory_set_limit(uint64_t bytes)
-{
-    g_memory_limit = bytes;
+    return m && m->limit ? m->limit : default_limit(m, &as);
 }
 
 bool fb_parse_memory(const char *s, uint64_t *out)
@@ -219,28 +211,28 @@ void fb_format_bytes(uint64_t bytes, char *out, size_t size)
         snprintf(out, size, "%.1f MiB", (double)bytes / (double)(1ull << 20));
 }
 
-fb_result fb_memory_check(uint64_t bytes, const char *who)
+fb_result fb_memory_check(const fb_memory *m, uint64_t bytes, const char *who)
 {
-    if (bytes <= fb_memory_limit()) return FB_OK;
-    char need[32], lim[32];
+    if (bytes <= fb_memory_limit(m)) return FB_OK;
+    char need[32], lim[32], note[160];
     fb_format_bytes(bytes, need, sizeof need);
-    fb_format_bytes(fb_memory_limit(), lim, sizeof lim);
+    fb_format_bytes(fb_memory_limit(m), lim, sizeof lim);
     return fb_fail(FB_ERR_INPUT, "%s needs about %s, more than --max-memory %s%s", who, need, lim,
-                   fb_memory_limit_note());
+                   fb_memory_limit_note(m, note, sizeof note));
 }
 
-const char *fb_memory_limit_note(void)
+const char *fb_memory_limit_note(const fb_memory *m, char *buf, size_t size)
 {
-    static char note[160];
     bool as = false;
-    if (!g_memory_limit) default_limit(&as);
-    if (!as) return "";
+    buf[0] = 0;
+    if (!(m && m->limit)) default_limit(m, &as);
+    if (!as) return buf;
     char total[32], over[32];
     fb_format_bytes(fb_address_space_limit(), total, sizeof total);
-    fb_format_bytes(g_overhead, over, sizeof over);
-    snprintf(note, sizeof note,
-             " (the default: the address-space limit, ulimit -v, %s, less about %s the process maps)", total, over);
-    return note;
+    fb_format_bytes(overhead_of(m), over, sizeof over);
+    snprintf(buf, size, " (the default: the address-space limit, ulimit -v, %s, less about %s the process maps)", total,
+             over);
+    return buf;
 }
 
 const char *fb_closest(const char *word, const char *const *cands, int n)

@@ -3,8 +3,7 @@
  * fb_gen_class.bench, in the generators' folders) and prints their rows, for people or as JSON lines
  * (bench/run.sh appends those to bench/results.jsonl).
  */
-#include "bench.h"
-#include "env.h"
+#include "command.h"
 
 #include "benchkit.h"
 #include "ceilings.h"
@@ -110,109 +109,189 @@ static void print_row(const fb_bench *b, const fb_bench_row *r)
     fflush(stdout);
 }
 
-fb_result fb_bench_main(int argc, char **argv, const fb_env *env)
+typedef struct bench_opts {
+    fb_arg_list files;
+    bool json, quiet, help;
+    int size[2];
+    int backend; /* 0: both, 1: vulkan, 2: native */
+    const fb_gen_class *only;
+    double points;
+    const char *compare, *device;
+    int threads;
+} bench_opts;
+
+static void init(void *opts)
 {
-    fb_bench b = {.vk_options = env->vk,
-                  .width = 4096,
-                  .height = 4096,
-                  .vulkan = true,
-                  .native = true,
-                  .points = 268435456,
-                  .heading = print_heading,
-                  .row = print_row};
-    bench_ctx ctx = {.env = env};
-    b.user = &ctx;
-    const fb_gen_class *only = NULL;
-    bool quiet = false;
-    char names[256] = "", words[256] = ""; /* "fbm|julia|ifs", "fbm, julia or ifs" */
+    bench_opts *o = opts;
+    o->size[0] = o->size[1] = 4096;
+    o->points = 268435456;
+}
+
+/* "fbm|julia|ifs" (sep "|") or "fbm, julia or ifs" (sep NULL): the generators that have benchmarks. */
+static void bench_names(const char *sep, char *out, size_t size)
+{
     int nb = 0, k = 0;
+    out[0] = 0;
     for (int i = 0; fb_gen_list[i]; i++) nb += fb_gen_list[i]->bench != NULL;
     for (int i = 0; fb_gen_list[i]; i++) {
         if (!fb_gen_list[i]->bench) continue;
-        snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", k ? "|" : "", fb_gen_list[i]->name);
-        snprintf(words + strlen(words), sizeof words - strlen(words), "%s%s",
+        snprintf(out + strlen(out), size - strlen(out), "%s%s",
                  !k            ? ""
+                 : sep         ? sep
                  : k == nb - 1 ? " or "
                                : ", ",
                  fb_gen_list[i]->name);
         k++;
     }
-    for (int i = 0; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "--json")) {
-            b.json = true;
-        } else if (!strcmp(a, "--quiet")) {
-            quiet = true;
-        } else if (!strcmp(a, "--size") && v) {
-            if (sscanf(v, "%dx%d", &b.width, &b.height) != 2 || b.width < 64 || b.height < 64 || b.width > 16384 ||
-                b.height > 16384)
-                return fb_fail(FB_ERR_USAGE, "--size: expected WxH with sides in 64..16384, found \"%s\"", v);
-            i++;
-        } else if (!strcmp(a, "--backend") && v) {
-            b.vulkan = !strcmp(v, "vulkan");
-            b.native = !strcmp(v, "native");
-            if (!b.vulkan && !b.native)
-                return fb_fail(FB_ERR_USAGE, "--backend: expected vulkan or native, found \"%s\"", v);
-            i++;
-        } else if (!strcmp(a, "--generator") && v) {
-            only = fb_gen_find(v);
-            if (!only || !only->bench) return fb_fail(FB_ERR_USAGE, "--generator: expected %s, found \"%s\"", words, v);
-            i++;
-        } else if (!strcmp(a, "--points") && v) {
-            char *end;
-            b.points = strtod(v, &end);
-            if (*end || !(b.points >= 1e6 && b.points <= 1e12))
-                return fb_fail(FB_ERR_USAGE, "--points: expected a number in 1e6..1e12, found \"%s\"", v);
-            b.points = (double)(uint64_t)b.points;
-            i++;
-        } else if (!strcmp(a, "--compare") && v) {
-            json_decref(ctx.before);
-            ctx.before = json_array();
-            ctx.before_path = v;
-            FILE *f = fopen(v, "r");
-            if (!f) return fb_fail(FB_ERR_INPUT, "--compare: cannot open %s", v);
-            char line[4096];
-            int lineno = 0;
-            while (fgets(line, sizeof line, f)) {
-                lineno++;
-                if (!line[strspn(line, " \t\r\n")]) continue;
-                json_t *o = json_loads(line, 0, NULL);
-                if (!json_is_object(o) || !json_is_number(json_object_get(o, "rate"))) {
-                    json_decref(o);
-                    fclose(f);
-                    return fb_fail(FB_ERR_INPUT, "%s:%d: not a line of `fractalbake bench --json`", v, lineno);
-                }
-                const char *g = json_string_value(json_object_get(o, "generator")),
-                           *m = json_string_value(json_object_get(o, "mode")),
-                           *be = json_string_value(json_object_get(o, "backend"));
-                if (g && m && be && !strcmp(g, "ceiling") && !strcmp(m, "fma"))
-                    ctx.before_gflops[strcmp(be, "vulkan") ? 1 : 0] = json_number_value(json_object_get(o, "rate"));
-                json_array_append_new(ctx.before, o);
-            }
+}
+
+static fb_result arg_size(const char *flag, const char *v, void *field)
+{
+    int *wh = field, used = 0;
+    if (sscanf(v, "%dx%d%n", &wh[0], &wh[1], &used) != 2 || v[used] || wh[0] < 64 || wh[1] < 64 || wh[0] > 16384 ||
+        wh[1] > 16384)
+        return fb_fail(FB_ERR_USAGE, "%s: expected WxH with sides in 64..16384, found \"%s\"", flag, v);
+    return FB_OK;
+}
+
+static fb_result arg_backend(const char *flag, const char *v, void *field)
+{
+    if (strcmp(v, "vulkan") && strcmp(v, "native"))
+        return fb_fail(FB_ERR_USAGE, "%s: expected vulkan or native, found \"%s\"", flag, v);
+    *(int *)field = !strcmp(v, "vulkan") ? 1 : 2;
+    return FB_OK;
+}
+
+static fb_result arg_generator(const char *flag, const char *v, void *field)
+{
+    const fb_gen_class *c = fb_gen_find(v);
+    if (!c || !c->bench) {
+        char words[256];
+        bench_names(NULL, words, sizeof words);
+        return fb_fail(FB_ERR_USAGE, "%s: expected %s, found \"%s\"", flag, words, v);
+    }
+    *(const fb_gen_class **)field = c;
+    return FB_OK;
+}
+
+static fb_result arg_points(const char *flag, const char *v, void *field)
+{
+    char *end;
+    double p = strtod(v, &end);
+    if (*end || !(p >= 1e6 && p <= 1e12))
+        return fb_fail(FB_ERR_USAGE, "%s: expected a number in 1e6..1e12, found \"%s\"", flag, v);
+    *(double *)field = (double)(uint64_t)p;
+    return FB_OK;
+}
+
+/* --compare EARLIER.json: the rows of an earlier `bench --json` run, and its FMA ceilings. */
+static fb_result read_before(const char *v, bench_ctx *ctx)
+{
+    ctx->before = json_array();
+    ctx->before_path = v;
+    FILE *f = fopen(v, "r");
+    if (!f) return fb_fail(FB_ERR_INPUT, "--compare: cannot open %s", v);
+    char line[4096];
+    int lineno = 0;
+    while (fgets(line, sizeof line, f)) {
+        lineno++;
+        if (!line[strspn(line, " \t\r\n")]) continue;
+        json_t *o = json_loads(line, 0, NULL);
+        if (!json_is_object(o) || !json_is_number(json_object_get(o, "rate"))) {
+            json_decref(o);
             fclose(f);
-            if (!json_array_size(ctx.before)) return fb_fail(FB_ERR_INPUT, "--compare: %s holds no bench rows", v);
-            i++;
-        } else if (!strcmp(a, "--device") && v) {
-            b.device = v;
-            i++;
-        } else if (!strcmp(a, "--threads") && v) {
-            b.threads = atoi(v);
-            if (b.threads < 1) return fb_fail(FB_ERR_USAGE, "--threads: expected a positive integer, found \"%s\"", v);
-            i++;
-        } else if (!strcmp(a, "--help")) {
-            printf("usage: fractalbake bench [--json] [--quiet] [--size WxH] [--generator %s] [--points N] "
-                   "[--backend vulkan|native] [--device D] [--threads N] [--compare EARLIER.json]\n"
-                   "Throughput of every generator on each backend, a line per measurement (--json: a JSON object\n"
-                   "per line); progress on stderr unless --quiet. First the machine's ceilings on each backend:\n"
-                   "an FMA-bound kernel (GFLOP/s) and a buffer copy (GB/s), with the CPU, device and driver named;\n"
-                   "every rate is then also given per peak GFLOP/s of its backend, and every line records\n"
-                   "LP_NUM_THREADS and LP_NATIVE_VECTOR_WIDTH (lavapipe's speed and subgroup size).\n"
-                   "--compare EARLIER.json: each row's rate against the same row of an earlier --json run, as is\n"
-                   "and per peak (each run's rate divided by its own ceiling: a change of machine cancels out).\n",
-                   names);
-            return FB_OK;
-        } else {
-            return fb_fail(FB_ERR_USAGE, "%s: unknown or incomplete flag for `fractalbake bench`", a);
+            return fb_fail(FB_ERR_INPUT, "%s:%d: not a line of `fractalbake bench --json`", v, lineno);
+        }
+        const char *g = json_string_value(json_object_get(o, "generator")),
+                   *m = json_string_value(json_object_get(o, "mode")),
+                   *be = json_string_value(json_object_get(o, "backend"));
+        if (g && m && be && !strcmp(g, "ceiling") && !strcmp(m, "fma"))
+            ctx->before_gflops[strcmp(be, "vulkan") ? 1 : 0] = json_number_value(json_object_get(o, "rate"));
+        json_array_append_new(ctx->before, o);
+    }
+    fclose(f);
+    if (!json_array_size(ctx->before)) return fb_fail(FB_ERR_INPUT, "--compare: %s holds no bench rows", v);
+    return FB_OK;
+}
+
+static void help(const fb_cli *cli)
+{
+    (void)cli;
+    char names[256];
+    bench_names("|", names, sizeof names);
+    printf("usage: fractalbake bench [--json] [--quiet] [--size WxH] [--generator %s] [--points N] "
+           "[--backend vulkan|native] [--device D] [--threads N] [--compare EARLIER.json]\n"
+           "Throughput of every generator on each backend, a line per measurement (--json: a JSON object\n"
+           "per line); progress on stderr unless --quiet. First the machine's ceilings on each backend:\n"
+           "an FMA-bound kernel (GFLOP/s) and a buffer copy (GB/s), with the CPU, device and driver named;\n"
+           "every rate is then also given per peak GFLOP/s of its backend, and every line records\n"
+           "LP_NUM_THREADS and LP_NATIVE_VECTOR_WIDTH (lavapipe's speed and subgroup size).\n"
+           "--compare EARLIER.json: each row's rate against the same row of an earlier --json run, as is\n"
+           "and per peak (each run's rate divided by its own ceiling: a change of machine cancels out).\n",
+           names);
+}
+
+static fb_result bench(const fb_env *env, const bench_opts *o);
+
+static fb_result run(const fb_cli *cli, void *opts)
+{
+    return bench(cli->env, opts);
+}
+
+#define B(f) offsetof(bench_opts, f)
+static const fb_arg flags[] = {
+    {FB_ARG_BOOL, "--json", NULL, B(json)},
+    {FB_ARG_BOOL, "--quiet", NULL, B(quiet)},
+    {FB_ARG_VALUE, "--size", NULL, B(size), .parse = arg_size},
+    {FB_ARG_VALUE, "--backend", NULL, B(backend), .parse = arg_backend},
+    {FB_ARG_VALUE, "--generator", NULL, B(only), .parse = arg_generator},
+    {FB_ARG_VALUE, "--points", NULL, B(points), .parse = arg_points},
+    {FB_ARG_STRING, "--compare", NULL, B(compare)},
+    {FB_ARG_STRING, "--device", NULL, B(device)},
+    {FB_ARG_INT, "--threads", NULL, B(threads), 1, 1024},
+    {FB_ARG_BOOL, "--help", "-h", B(help)},
+    {FB_ARG_END},
+};
+static const fb_arg *const tables[] = {flags, NULL};
+static const fb_argspec spec = {.flags = tables, .files_off = B(files)};
+
+/* bench bakes to a scratch file again and again: each of its bakes is a transaction of its own */
+const fb_command fb_cmd_bench = {
+    .name = "bench",
+    .usage = "  bench [--json] [--size WxH]        throughput of every generator on each backend\n",
+    .opts_size = sizeof(bench_opts),
+    .init = init,
+    .args = &spec,
+    .help = help,
+    .help_off = B(help),
+    .run = run,
+    .own_outputs = true};
+#undef B
+
+static fb_result bench(const fb_env *env, const bench_opts *o)
+{
+    fb_bench b = {.vk_options = env->vk,
+                  .width = o->size[0],
+                  .height = o->size[1],
+                  .vulkan = o->backend != 2,
+                  .native = o->backend != 1,
+                  .points = o->points,
+                  .device = o->device,
+                  .threads = o->threads,
+                  .json = o->json,
+                  .heading = print_heading,
+                  .row = print_row};
+    bench_ctx ctx = {.env = env};
+    b.user = &ctx;
+    const fb_gen_class *only = o->only;
+    bool quiet = o->quiet;
+    int nb = 0;
+    for (int i = 0; fb_gen_list[i]; i++) nb += fb_gen_list[i]->bench != NULL;
+    if (o->compare) {
+        fb_result rc = read_before(o->compare, &ctx);
+        if (rc) {
+            json_decref(ctx.before);
+            return rc;
         }
     }
     char dir[] = "/tmp/fractalbake-bench-XXXXXX";

@@ -59,7 +59,7 @@ int fb_scene_flags(const char *kind, const char **out, int max)
 int fb_scene_flag_arity(const char *kind, const char *flag)
 {
     bool scene_level;
-    if (!strcmp(flag, "float")) return 0;
+    if (!strcmp(flag, "float") || !strcmp(flag, "half")) return 0; /* the layer's output type */
     const fb_keyspec *k = flag_spec(kind, flag, &scene_level);
     if (!k) return -1;
     return k->type == FB_K_BOOL ? 0 : 1;

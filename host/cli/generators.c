@@ -4,7 +4,7 @@
  * example scene's layers and its stated Vulkan-against-native tolerance. The conformance test
  * (tests/cli/conformance.sh) reads the JSON form, so it covers a new generator with no other edit.
  */
-#include "generators.h"
+#include "command.h"
 
 #include "gen.h"
 #include "jsonout.h"
@@ -41,23 +41,24 @@ static json_t *class_json(const fb_gen_class *c)
                      c->tolerance.fail_percent, "tonemap", c->tone != NULL);
 }
 
-fb_result fb_generators_main(int argc, char **argv)
+typedef struct generators_opts {
+    fb_arg_list files;
+    bool json, help;
+} generators_opts;
+
+static void help(const fb_cli *cli)
 {
-    bool json = false;
-    for (int i = 0; i < argc; i++) {
-        if (!strcmp(argv[i], "--json")) {
-            json = true;
-        } else if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            printf("usage: fractalbake generators [--json]\n"
-                   "Lists every generator: its command, what it makes and how `fractalbake plan` shares its\n"
-                   "layers between tasks (bands, points parts or whole); --json adds each one's keys (type,\n"
-                   "range, default, flag), a small example scene's layers and its Vulkan tolerance.\n");
-            return FB_OK;
-        } else {
-            return fb_fail(FB_ERR_USAGE, "%s: unknown argument for `fractalbake generators` (it takes --json)",
-                           argv[i]);
-        }
-    }
+    (void)cli;
+    printf("usage: fractalbake generators [--json]\n"
+           "Lists every generator: its command, what it makes and how `fractalbake plan` shares its\n"
+           "layers between tasks (bands, points parts or whole); --json adds each one's keys (type,\n"
+           "range, default, flag), a small example scene's layers and its Vulkan tolerance.\n");
+}
+
+static fb_result run(const fb_cli *cli, void *opts)
+{
+    (void)cli;
+    bool json = ((const generators_opts *)opts)->json;
     if (json) {
         json_t *arr = json_array();
         for (const fb_gen_class *const *c = fb_gen_list; *c; c++) json_array_append_new(arr, class_json(*c));
@@ -74,3 +75,20 @@ fb_result fb_generators_main(int argc, char **argv)
                (*c)->summary ? (*c)->summary : "");
     return FB_OK;
 }
+
+static const fb_arg flags[] = {
+    {FB_ARG_BOOL, "--json", NULL, offsetof(generators_opts, json)},
+    {FB_ARG_BOOL, "--help", "-h", offsetof(generators_opts, help)},
+    {FB_ARG_END},
+};
+static const fb_arg *const tables[] = {flags, NULL};
+static const fb_argspec spec = {.flags = tables, .files_off = offsetof(generators_opts, files)};
+
+const fb_command fb_cmd_generators = {
+    .name = "generators",
+    .usage = "  generators [--json]                the generators, their keys and how a plan shares them\n",
+    .opts_size = sizeof(generators_opts),
+    .args = &spec,
+    .help = help,
+    .help_off = offsetof(generators_opts, help),
+    .run = run};

@@ -119,7 +119,7 @@ static fb_result check_parts(part *p, int n, const char *const *paths, int *W, i
     return FB_OK;
 }
 
-static fb_result merge_points(part *p, int n, const char *const *paths, const char *out, int threads, int zip_level);
+static fb_result merge_points(part *p, int n, const fb_merge_desc *d);
 
 /* How many of the n files carry attribute `attr`: all or none, else an error ("3 of the 4 files are
  * WHAT"). */
@@ -131,10 +131,12 @@ static fb_result count_kind(const part *p, int n, const char *attr, const char *
         return fb_fail(FB_ERR_INPUT, "merge: %d of the %d files are %s: merge one kind at a time", *count, n, what);
     return FB_OK;
 }
-static fb_result merge_tasks(part *p, int n, const char *const *paths, const char *out, int threads, int zip_level);
+static fb_result merge_tasks(part *p, int n, const fb_merge_desc *d);
 
-fb_result fb_merge(const char *const *paths, int n, const char *out, int threads, int zip_level)
+fb_result fb_merge(const fb_merge_desc *d)
 {
+    const char *const *paths = d->paths, *out = d->out;
+    const int n = d->n, threads = d->threads, zip_level = d->zip_level;
     if (n < 1) return fb_fail(FB_ERR_USAGE, "merge: no parts given");
     fb_result rc = FB_OK;
     part *p = calloc((size_t)n, sizeof *p);
@@ -147,13 +149,13 @@ fb_result fb_merge(const char *const *paths, int n, const char *out, int threads
     int tasks = 0, points = 0;
     if (!rc) rc = count_kind(p, n, "fractalbake/task", "task files (render --task), the others not", &tasks);
     if (!rc && tasks) {
-        rc = merge_tasks(p, n, paths, out, threads, zip_level);
+        rc = merge_tasks(p, n, d);
         goto out;
     }
     if (!rc)
         rc = count_kind(p, n, "fractalbake/points-part", "points parts (--points-part), the others regions", &points);
     if (!rc && points) {
-        rc = merge_points(p, n, paths, out, threads, zip_level);
+        rc = merge_points(p, n, d);
         goto out;
     }
     if (!rc) rc = check_parts(p, n, paths, &W, &H);
@@ -358,8 +360,11 @@ static fb_result chaos_add(chaos_layer *cl, int ncl, const fb_scene *sc, exrio_r
     return FB_OK;
 }
 
-static fb_result merge_points(part *p, int n, const char *const *paths, const char *out, int threads, int zip_level)
+static fb_result merge_points(part *p, int n, const fb_merge_desc *d)
 {
+    const char *const *paths = d->paths, *out = d->out;
+    const int threads = d->threads, zip_level = d->zip_level;
+    const fb_memory mem = {d->max_memory, 0};
     fb_result rc = FB_OK;
     int N = 0, seen[4097] = {0};
     const char *scene_json = exrio_attr_string(p[0].r, "fractalbake/scene");
@@ -415,7 +420,7 @@ static fb_result merge_points(part *p, int n, const char *const *paths, const ch
         if (sc.layers[l].cls->share == FB_SHARE_POINTS) nchaos++, bytes_px += chaos_bytes(&sc.layers[l]);
     char who[4200];
     snprintf(who, sizeof who, "merging the points parts of %s (%d x %d, %d chaos-game layers)", paths[0], W, H, nchaos);
-    if (!rc) rc = fb_memory_check((uint64_t)npx * bytes_px, who);
+    if (!rc) rc = fb_memory_check(&mem, (uint64_t)npx * bytes_px, who);
     for (int l = 0; l < sc.nlayers && !rc; l++) {
         if (sc.layers[l].cls->share != FB_SHARE_POINTS) continue;
         chaos_layer *c = &cl[ncl++];
@@ -514,8 +519,11 @@ static const char *backend_of(const char *list, const char *name, char *out, siz
     return NULL;
 }
 
-static fb_result merge_tasks(part *p, int n, const char *const *paths, const char *out, int threads, int zip_level)
+static fb_result merge_tasks(part *p, int n, const fb_merge_desc *d)
 {
+    const char *const *paths = d->paths, *out = d->out;
+    const int threads = d->threads, zip_level = d->zip_level;
+    const fb_memory mem = {d->max_memory, 0};
     fb_result rc = FB_OK;
     const char *scene_json = exrio_attr_string(p[0].r, "fractalbake/scene");
     const char *plan_text = exrio_attr_string(p[0].r, "fractalbake/plan");
@@ -648,7 +656,7 @@ static fb_result merge_tasks(part *p, int n, const char *const *paths, const cha
         for (int k = 0; k < ncl; k++) bytes_px += chaos_bytes(&sc->layers[cl[k].layer]);
         snprintf(who, sizeof who, "merging the points parts of %s (%d x %d, %d chaos-game layers)", paths[0], W, H,
                  ncl);
-        rc = fb_memory_check((uint64_t)npx * bytes_px, who);
+        rc = fb_memory_check(&mem, (uint64_t)npx * bytes_px, who);
     }
     for (int k = 0; k < ncl && !rc; k++) rc = chaos_alloc(&cl[k], &sc->layers[cl[k].layer], W, H);
     for (int t = 0; t < plan->nactive && !rc && ncl; t++)

@@ -11,8 +11,16 @@
 
 #define FB_MERGE_MAX_CHANNELS 128
 
-/* Writes `out` (atomically) from the n region files `paths`; threads: compression workers (0: all
- * cores); zip_level: the deflate level of ZIP chunks (0: EXRIO_ZIP_LEVEL). */
-fb_result fb_merge(const char *const *paths, int n, const char *out, int threads, int zip_level);
+typedef struct fb_merge_desc {
+    const char *const *paths; /* the n part files */
+    int n;
+    const char *out;     /* the whole file, written through the output transaction */
+    int threads;         /* compression workers; 0: all cores */
+    int zip_level;       /* the deflate level of ZIP chunks; 0: EXRIO_ZIP_LEVEL */
+    uint64_t max_memory; /* --max-memory; 0: the default (fb_memory_limit) */
+} fb_merge_desc;
+
+/* Writes d->out from the parts: region files, points parts or task files (see above). */
+fb_result fb_merge(const fb_merge_desc *d);
 
 #endif

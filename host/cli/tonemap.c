@@ -5,8 +5,9 @@
  * tone-mapped channels recomputed and the scene updated; with the parameters unchanged it
  * reproduces the bake bit for bit (tests/cli/ifs.sh).
  */
-#include "tonemap.h"
+#include "command.h"
 
+#include "cliout.h"
 #include "exrio.h"
 #include "output.h"
 #include "gen.h"
@@ -86,55 +87,32 @@ static fb_result apply_flags(const fb_gen_class *c, json_t *lj, int argc, char *
     return FB_OK;
 }
 
-fb_result fb_tonemap_main(int argc, char **argv, bool *quiet, bool *json)
-{
-    const char *in = NULL, *out = NULL, *layer = NULL;
-    char **flags = calloc((size_t)argc + 1, sizeof *flags);
-    int nflags = 0;
-    fb_result rc = flags ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory");
-    for (int i = 0; i < argc && !rc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--layer")) {
-            if (!v) rc = fb_fail(FB_ERR_USAGE, "%s: missing value", a);
-            *(!strcmp(a, "--layer") ? &layer : &out) = v;
-            if (v && strcmp(a, "--layer")) rc = fb_output_format(a, v, ".exr");
-            i++;
-        } else if (!strcmp(a, "--quiet")) {
-            *quiet = true;
-        } else if (!strcmp(a, "--json")) {
-            *json = true;
-        } else if (!strcmp(a, "--help")) {
-            char classes[256];
-            tone_classes(classes, sizeof classes);
-            printf("usage: fractalbake tonemap IN.exr -o OUT.exr [--layer NAME] [--brightness B] [--gamma G]\n"
-                   "          [--gamma-threshold T] [--vibrancy V] [--highlight-power P] [--palette NAME |\n"
-                   "          --cosine ... | --stops ...]\n"
-                   "Recomputes the tone-mapped channels of a layer that stores what its tone map reads (%s\n"
-                   "layers: R, G, B, A from the density and colour channels) with new tone parameters; the\n"
-                   "other channels keep their stored values and the layer is not computed again.\n"
-                   "--layer NAME: which layer (default: the first that can be re-toned).\n"
-                   "--quiet: no summary line; --json: a JSON summary on standard output.\n",
-                   classes);
-            free(flags);
-            return FB_OK;
-        } else if (!strncmp(a, "--", 2)) {
-            int arity = tone_flag_arity(a + 2);
-            if (arity < 0) {
-                rc = fb_fail(FB_ERR_USAGE, "%s: unknown flag for `fractalbake tonemap`", a);
-                break;
-            }
-            flags[nflags++] = argv[i];
-            if (arity == 1 && v) flags[nflags++] = argv[++i];
-        } else if (!in) {
-            in = a;
-        } else {
-            rc = fb_fail(FB_ERR_USAGE, "%s: tonemap takes one input file", a);
-        }
-    }
-    if (!rc && !in)
-        rc = fb_fail(FB_ERR_USAGE, "tonemap: expected an input EXR (fractalbake tonemap IN.exr -o OUT.exr)");
-    if (!rc && !out) rc = fb_fail(FB_ERR_USAGE, "-o: missing output file (fractalbake tonemap IN.exr -o OUT.exr)");
+typedef struct tonemap_opts {
+    fb_arg_list files, flags; /* flags: the tone flags and their values */
+    const char *out, *layer;
+    bool quiet, json, help;
+} tonemap_opts;
 
+static void help(const fb_cli *cli)
+{
+    (void)cli;
+    char classes[256];
+    tone_classes(classes, sizeof classes);
+    printf("usage: fractalbake tonemap IN.exr -o OUT.exr [--layer NAME] [--brightness B] [--gamma G]\n"
+           "          [--gamma-threshold T] [--vibrancy V] [--highlight-power P] [--palette NAME |\n"
+           "          --cosine ... | --stops ...]\n"
+           "Recomputes the tone-mapped channels of a layer that stores what its tone map reads (%s\n"
+           "layers: R, G, B, A from the density and colour channels) with new tone parameters; the\n"
+           "other channels keep their stored values and the layer is not computed again.\n"
+           "--layer NAME: which layer (default: the first that can be re-toned).\n"
+           "--quiet: no summary line; --json: a JSON summary on standard output.\n",
+           classes);
+}
+
+/* The tone-mapped copy of `in` in `out`. */
+static fb_result tonemap(const char *in, const char *out, const char *layer, int nflags, char **flags)
+{
+    fb_result rc = FB_OK;
     exrio_reader *r = NULL;
     exrio_writer *w = NULL;
     json_t *root = NULL;
@@ -226,6 +204,53 @@ fb_result fb_tonemap_main(int argc, char **argv, bool *quiet, bool *json)
     free(strip);
     free(planes);
     free(chans);
-    free(flags);
     return rc;
 }
+
+static fb_result run(const fb_cli *cli, void *opts)
+{
+    const tonemap_opts *o = opts;
+    if (!o->files.n)
+        return fb_fail(FB_ERR_USAGE, "tonemap: expected an input EXR (fractalbake tonemap IN.exr -o OUT.exr)");
+    if (!o->out) return fb_fail(FB_ERR_USAGE, "-o: missing output file (fractalbake tonemap IN.exr -o OUT.exr)");
+    double t0 = fb_now();
+    fb_result rc = tonemap(o->files.v[0], o->out, o->layer, o->flags.n, (char **)o->flags.v);
+    if (!rc && o->json)
+        json_object_set_new(fb_cli_summary(cli, "tonemap"), "seconds", json_real(fb_now() - t0));
+    else if (!rc && !o->quiet)
+        cli_after("fractalbake: wrote %s (tone-mapped) in %.2f s", o->out, fb_now() - t0);
+    return rc;
+}
+
+static int flag_arity(const void *data, const char *flag)
+{
+    (void)data;
+    return tone_flag_arity(flag);
+}
+
+#define T(f) offsetof(tonemap_opts, f)
+static const fb_arg flags[] = {
+    {FB_ARG_OUTPUT, "--output", "-o", T(out), .ext = ".exr"},
+    {FB_ARG_STRING, "--layer", NULL, T(layer)},
+    {FB_ARG_BOOL, "--quiet", NULL, T(quiet)},
+    {FB_ARG_BOOL, "--json", NULL, T(json)},
+    {FB_ARG_BOOL, "--help", "-h", T(help)},
+    {FB_ARG_END},
+};
+static const fb_arg *const tables[] = {flags, NULL};
+static const fb_argspec spec = {.flags = tables,
+                                .files_off = T(files),
+                                .max_files = 1,
+                                .too_many = "%s: tonemap takes one input file",
+                                .arity = flag_arity,
+                                .pass_off = T(flags)};
+
+const fb_command fb_cmd_tonemap = {
+    .name = "tonemap",
+    .usage = "  tonemap IN.exr -o OUT.exr [tone]   re-run a chaos game's tone mapping (no new game)\n",
+    .opts_size = sizeof(tonemap_opts),
+    .args = &spec,
+    .help = help,
+    .help_off = T(help),
+    .run = run};
+#undef T

@@ -377,14 +377,15 @@ static fb_result check_finite(const layer_run *runs, int nlayers, const void *co
  * its strip buffers (two slots a layer on Vulkan), then either the preparing or the writer's queue
  * (2 x threads + 3 batches of 64 rows, raw and compressed) and the preview's sums. Pages a layer
  * allocates but never touches (a chaos game's empty histogram cells) count: it is a bound. Fails naming the largest
- * layer when the peak is beyond fb_memory_limit(). */
+ * layer when the peak is beyond the bake's limit (its max_memory, with the engine's overhead). */
 static fb_result plan_memory(const fb_engine *e, const fb_bake_desc *d, const layer_run *runs, int strip, int nch,
                              int rw, fb_bake_plan *plan)
 {
     const fb_scene *s = d->scene;
     memset(plan, 0, sizeof *plan);
     plan->nlayers = s->nlayers;
-    plan->limit = fb_memory_limit();
+    const fb_memory mem = {d->max_memory, e->overhead};
+    plan->limit = fb_memory_limit(&mem);
     plan->base = e->kind == FB_BACKEND_VULKAN ? (uint64_t)96 << 20 : (uint64_t)12 << 20;
     uint64_t hold_sum = 0, extra_max = 0, strips_sum = 0;
     int largest = 0;
@@ -429,14 +430,14 @@ static fb_result plan_memory(const fb_engine *e, const fb_bake_desc *d, const la
     uint64_t prepare = extra_max, strips = plan->writer + plan->preview;
     plan->peak = plan->base + strips_sum + hold_sum + (prepare > strips ? prepare : strips);
     if (plan->peak > plan->limit) {
-        char need[32], lim[32], big[32];
+        char need[32], lim[32], big[32], note[160];
         fb_format_bytes(plan->peak, need, sizeof need);
         fb_format_bytes(plan->limit, lim, sizeof lim);
         fb_format_bytes(plan->layers[largest].bytes, big, sizeof big);
         return fb_fail(FB_ERR_INPUT,
                        "the bake needs about %s, more than --max-memory %s%s; layer %s alone needs %s (lower its "
                        "size, points or insertions, or raise --max-memory)",
-                       need, lim, fb_memory_limit_note(), plan->layers[largest].name, big);
+                       need, lim, fb_memory_limit_note(&mem, note, sizeof note), plan->layers[largest].name, big);
     }
     return FB_OK;
 }
@@ -751,7 +752,8 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     if (!rc) rc = bake_window(e, d, region, &strip);
     for (int i = 0; i < s->nlayers && !rc; i++) {
         fb_log_context("layer %s", s->layers[i].name);
-        rc = fb_gen_init_part(&runs[i].gen, s, &s->layers[i], d->points_part);
+        rc = fb_gen_init_run(&runs[i].gen, s, &s->layers[i],
+                             &(fb_gen_run){{d->points_part[0], d->points_part[1]}, {d->max_memory, e->overhead}});
         runs[i].gen.scalar = e->scalar;
         runs[i].e = *e;
         if (e->per_layer) /* auto on a CPU device: each layer where it runs faster (engine.h) */

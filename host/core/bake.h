@@ -42,7 +42,9 @@ typedef struct fb_bake_desc {
     int region[4];
     bool progress; /* draw a progress bar on stderr */
     /* Fill *plan (if not NULL) with the predicted memory; dry_run: stop there, writing nothing. A
-     * bake whose peak exceeds fb_memory_limit() fails before it allocates (FB_ERR_INPUT). */
+     * bake whose peak exceeds max_memory (--max-memory; 0: the default, fb_memory_limit) fails
+     * before it allocates (FB_ERR_INPUT). */
+    uint64_t max_memory;
     fb_bake_plan *plan;
     bool dry_run;
     /* Called after a successful bake for each layer that reports on its computation (terrain):

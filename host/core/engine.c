@@ -31,7 +31,7 @@ fb_result fb_engine_open(const fb_engine_desc *d, fb_engine *e)
 {
     memset(e, 0, sizeof *e);
     e->threads = d->threads > 0 ? d->threads : fb_cpu_count();
-    fb_memory_set_overhead(native_overhead(e->threads));
+    e->overhead = native_overhead(e->threads);
     uint64_t as = fb_address_space_limit(), need = vulkan_overhead(e->threads);
     if (d->backend != FB_BACKEND_NATIVE && as != UINT64_MAX && as < need + ((uint64_t)64 << 20)) {
         char have[32], want[32];
@@ -67,7 +67,7 @@ fb_result fb_engine_open(const fb_engine_desc *d, fb_engine *e)
             /* the host's own work (chaos-game reductions, rasterised meshes, native layers) on every core */
             rc = fb_pool_create(e->threads, &e->pool);
             if (rc) vkc_destroy(&e->vk);
-            if (!rc) fb_memory_set_overhead(need);
+            if (!rc) e->overhead = need;
             return rc;
         }
         /* Only a missing loader or device falls back, and only when vulkan was not asked for. */

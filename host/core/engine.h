@@ -22,6 +22,9 @@ typedef struct fb_engine {
      * same bits as that backend alone. */
     bool per_layer;
     char device[256];
+    /* The address space this engine maps beyond the data a bake predicts (its threads' stacks and
+     * arenas, a Vulkan driver's mappings): fb_memory.overhead of the bakes it runs. */
+    uint64_t overhead;
 } fb_engine;
 
 typedef struct fb_engine_desc {

@@ -21,16 +21,17 @@ void fb_gen_names(char *out, size_t size)
 
 fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer)
 {
-    return fb_gen_init_part(g, scene, layer, (const int[2]){0, 0});
+    return fb_gen_init_run(g, scene, layer, &(fb_gen_run){{0, 0}, {0, 0}});
 }
 
-fb_result fb_gen_init_part(fb_gen *g, const fb_scene *scene, const fb_layer *layer, const int points_part[2])
+fb_result fb_gen_init_run(fb_gen *g, const fb_scene *scene, const fb_layer *layer, const fb_gen_run *run)
 {
     memset(g, 0, sizeof *g);
     g->scene = scene;
     g->layer = layer;
-    g->points_part[0] = points_part[0];
-    g->points_part[1] = points_part[1];
+    g->points_part[0] = run->points_part[0];
+    g->points_part[1] = run->points_part[1];
+    g->budget = run->budget;
     g->preview_rgb = -1;
     if (!layer->cls) return fb_fail(FB_ERR_INTERNAL, "layer %s: no generator", layer->name);
     return layer->cls->init(g);

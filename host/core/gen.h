@@ -21,8 +21,11 @@ struct fb_gen {
     const fb_scene *scene;
     const fb_layer *layer;
     /* A run option, not part of the scene: the points part {K, N} (1 <= K <= N) of a chaos game this
-     * run computes (render --points-part K/N; fb_gen_init_part); N == 0: the whole game. */
+     * run computes (render --points-part K/N; fb_gen_init_run); N == 0: the whole game. */
     int points_part[2];
+    /* What the layer may allocate (the bake's --max-memory and its engine's overhead): a class
+     * whose init allocates much checks its peak against it (fb_memory_check(&g->budget, ...)). */
+    fb_memory budget;
     int nchannels;
     int preview_channel; /* the float channel a grey preview shows */
     int preview_rgb;     /* if >= 0: the first of three float channels R, G, B shown in colour instead (-1) */
@@ -192,8 +195,15 @@ void fb_gen_names(char *out, size_t size);
 /* Sets up the generator of `layer`. */
 fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer);
 
-/* The same for points part {K, N} of a chaos game (N == 0: the whole game, as fb_gen_init). */
-fb_result fb_gen_init_part(fb_gen *g, const fb_scene *scene, const fb_layer *layer, const int points_part[2]);
+/* The run options a bake gives its layers: the points part {K, N} of a chaos game (N == 0: the
+ * whole game) and the memory it may use. */
+typedef struct fb_gen_run {
+    int points_part[2];
+    fb_memory budget;
+} fb_gen_run;
+
+/* fb_gen_init with run options (fb_gen_init: {0}, the whole game and the default memory limit). */
+fb_result fb_gen_init_run(fb_gen *g, const fb_scene *scene, const fb_layer *layer, const fb_gen_run *run);
 
 /* The kernel's planes (nkernel, or the channels), the plane of stored channel c, and whether plane k
  * is stored. */

@@ -150,7 +150,7 @@ static fb_result slurp_stdin(exrio_reader *r)
     if (!(r->mem = malloc(cap))) return fb_fail(FB_ERR_NOMEM, "out of memory reading standard input");
     for (;;) {
         if (r->mem_size == cap) {
-            if (fb_memory_check((uint64_t)cap * 2, "an EXR on standard input")) return FB_ERR_INPUT;
+            if (fb_memory_check(NULL, (uint64_t)cap * 2, "an EXR on standard input")) return FB_ERR_INPUT;
             uint8_t *b = realloc(r->mem, cap * 2);
             if (!b) return fb_fail(FB_ERR_NOMEM, "out of memory reading standard input");
             r->mem = b, cap *= 2;

@@ -70,7 +70,7 @@ fb_result fb_png_read(const char *path, fb_png *out)
         static const char *const names[5][4] = {{0}, {"Y"}, {"Y", "A"}, {"R", "G", "B"}, {"R", "G", "B", "A"}};
         if (nc < 1 || nc > 4) {
             rc = fb_fail(FB_ERR_INPUT, "%s: a PNG with %d channels", path, nc);
-        } else if ((rc = fb_memory_check((uint64_t)w * h * (uint64_t)nc * 6, path)) == FB_OK) { /* planes, rows */
+        } else if ((rc = fb_memory_check(NULL, (uint64_t)w * h * (uint64_t)nc * 6, path)) == FB_OK) { /* planes, rows */
             o->width = (int)w, o->height = (int)h, o->channels = nc;
             for (int c = 0; c < nc; c++) {
                 o->names[c] = names[nc][c];

@@ -19,7 +19,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (fb_lsys_valid(&ls, &bad, msg, sizeof msg)) {
         char *s = NULL;
         size_t len = 0;
-        if (fb_lsys_derive(&ls, 7, 1u << 16, 1u << 14, "fuzz", &s, &len) == FB_OK) {
+        if (fb_lsys_derive(&ls, 7, 1u << 16, 1u << 14,
+                           &(fb_memory){(uint64_t)1 << 30, 0} /* refused beyond, never allocated */, "fuzz", &s,
+                           &len) == FB_OK) {
             fb_lsys_seg *segs = NULL;
             size_t nsegs = 0;
             int depth = 0;

@@ -598,7 +598,7 @@ static fb_result constrain_init(fb_gen *g)
     uint64_t hold, peak = constrain_memory(g, NULL, &hold);
     char who[96]; /* checked before the macro shape, 4 bytes a pixel, is allocated */
     snprintf(who, sizeof who, "layer %s", g->layer->name);
-    fb_result mrc = fb_memory_check(peak, who);
+    fb_result mrc = fb_memory_check(&g->budget, peak, who);
     if (mrc) return mrc;
     constrain_state *s = calloc(1, sizeof *s);
     if (!s) return fb_fail(FB_ERR_NOMEM, "out of memory");

@@ -229,7 +229,7 @@ static fb_result erode_init(fb_gen *g)
     uint64_t hold, peak = erode_memory(g, NULL, &hold);
     char who[96];
     snprintf(who, sizeof who, "erosion of %d x %d cells", g->scene->width, g->scene->height);
-    fb_result rc = fb_memory_check(peak, who);
+    fb_result rc = fb_memory_check(&g->budget, peak, who);
     if (rc) return rc;
     erode_state *s = calloc(1, sizeof *s);
     if (!s) return fb_fail(FB_ERR_NOMEM, "out of memory");

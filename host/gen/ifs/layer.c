@@ -128,7 +128,7 @@ static fb_result lsystem_condensation(const fb_gen *g, K_IfsMap **out, uint32_t 
     fb_lsys_seg *segs = NULL;
     int depth = 0;
     snprintf(who, sizeof who, "layer %s: condensation", g->layer->name);
-    fb_result rc = fb_lsys_derive(&f->cond_sys, g->scene->seed, f->cond_max_symbols, 0, who, &str, &len);
+    fb_result rc = fb_lsys_derive(&f->cond_sys, g->scene->seed, f->cond_max_symbols, 0, &g->budget, who, &str, &len);
     if (rc) return rc;
     size_t nf = 0;
     for (size_t i = 0; i < len; i++) nf += str[i] == 'F';

@@ -39,7 +39,7 @@ static fb_result retone_begin(const fb_layer *L, exrio_reader *r, const char *pa
     snprintf(who, sizeof who, "tonemap %s (%d x %d)", path, width, height);
     float *density = NULL;
     void **one = NULL;
-    if (!rc) rc = fb_memory_check((uint64_t)n * 4, who);
+    if (!rc) rc = fb_memory_check(NULL, (uint64_t)n * 4, who);
     if (!rc && (!(density = malloc(n * 4)) || !(one = calloc((size_t)nch, sizeof *one))))
         rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     for (int y = 0; y < height && !rc; y += 256) {

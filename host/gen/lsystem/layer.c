@@ -362,7 +362,7 @@ static fb_result lsystem_init(fb_gen *g)
     snprintf(who, sizeof who, "layer %s", g->layer->name);
     uint64_t tiles = (uint64_t)p->tiles_x * ((p->height + TILE - 1) / TILE);
     uint64_t max_f = tiles + 1 < MAX_INPUT_WORDS ? (MAX_INPUT_WORDS - tiles - 1) / (K_LSYS_SEG_WORDS + 1) : 1;
-    fb_result rc = fb_lsys_derive(&L->sys, sc->seed, L->max_symbols, max_f, who, &str, &len);
+    fb_result rc = fb_lsys_derive(&L->sys, sc->seed, L->max_symbols, max_f, &g->budget, who, &str, &len);
     if (rc) return rc;
     /* Refuse a drawing the rasteriser cannot take before the turtle allocates its segments. */
     size_t nf = 0;

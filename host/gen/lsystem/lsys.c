@@ -209,7 +209,8 @@ static inline int choose(const prodtab *t, unsigned char c, uint32_t seed, int i
  * system the two are the exact counts, so an explosion is refused at once instead of after gigabytes
  * of rewriting; for a stochastic one, only what must happen is refused here, and derive checks each
  * string's real length before allocating it. */
-static fb_result predict(const fb_lsys *ls, const prodtab *t, uint64_t max_symbols, uint64_t max_f, const char *who)
+static fb_result predict(const fb_lsys *ls, const prodtab *t, uint64_t max_symbols, uint64_t max_f,
+                         const fb_memory *mem, const char *who)
 {
     static double lo[256], hi[256], nlo[256], nhi[256]; /* doubles: saturate instead of wrapping */
     double cmin[256], cmax[256];
@@ -244,10 +245,10 @@ static fb_result predict(const fb_lsys *ls, const prodtab *t, uint64_t max_symbo
                            "%s: the string would exceed max-symbols (%llu) at iteration %d of %d (at least %.4g "
                            "symbols); use fewer iterations or raise max-symbols",
                            who, (unsigned long long)max_symbols, it + 1, ls->iterations, m);
-        if (prev + m + 2 > (double)fb_memory_limit()) {
+        if (prev + m + 2 > (double)fb_memory_limit(mem)) {
             char need[32], lim[32];
             fb_format_bytes((uint64_t)fmin(prev + m + 2, 9e18), need, sizeof need);
-            fb_format_bytes(fb_memory_limit(), lim, sizeof lim);
+            fb_format_bytes(fb_memory_limit(mem), lim, sizeof lim);
             return fb_fail(FB_ERR_INPUT,
                            "%s: iteration %d of %d needs at least %s for its strings, more than --max-memory %s; use "
                            "fewer iterations",
@@ -263,8 +264,8 @@ static fb_result predict(const fb_lsys *ls, const prodtab *t, uint64_t max_symbo
     return FB_OK;
 }
 
-fb_result fb_lsys_derive(const fb_lsys *ls, uint32_t seed, uint64_t max_symbols, uint64_t max_f, const char *who,
-                         char **out, size_t *len)
+fb_result fb_lsys_derive(const fb_lsys *ls, uint32_t seed, uint64_t max_symbols, uint64_t max_f, const fb_memory *mem,
+                         const char *who, char **out, size_t *len)
 {
     *out = NULL;
     *len = 0;
@@ -277,7 +278,7 @@ fb_result fb_lsys_derive(const fb_lsys *ls, uint32_t seed, uint64_t max_symbols,
         return fb_fail(FB_ERR_INPUT, "%s: the axiom has %zu symbols, more than max-symbols (%llu)", who, n,
                        (unsigned long long)max_symbols);
     }
-    fb_result rc = predict(ls, t, max_symbols, max_f, who);
+    fb_result rc = predict(ls, t, max_symbols, max_f, mem, who);
     if (rc) {
         free(t);
         return rc;
@@ -297,9 +298,9 @@ fb_result fb_lsys_derive(const fb_lsys *ls, uint32_t seed, uint64_t max_symbols,
             f += r < 0 ? cur[i] == 'F' : t->nf[r];
         }
         char need[32], lim[32];
-        if (m <= max_symbols && (uint64_t)n + m + 2 > fb_memory_limit()) {
+        if (m <= max_symbols && (uint64_t)n + m + 2 > fb_memory_limit(mem)) {
             fb_format_bytes((uint64_t)n + m + 2, need, sizeof need);
-            fb_format_bytes(fb_memory_limit(), lim, sizeof lim);
+            fb_format_bytes(fb_memory_limit(mem), lim, sizeof lim);
             free(cur);
             free(t);
             return fb_fail(FB_ERR_INPUT,

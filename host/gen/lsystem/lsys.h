@@ -46,11 +46,11 @@ bool fb_lsys_valid(const fb_lsys *ls, int *bad, char *msg, size_t n);
 /* Rewrites the axiom `iterations` times in parallel. Stochastic productions are chosen by a hash of
  * (seed, iteration, position), so a derivation is a pure function of the seed. Each string's length
  * is counted before it is allocated: fails with FB_ERR_INPUT, naming `who` and the iteration, when a
- * string would exceed max_symbols symbols, when two strings would not fit in fb_memory_limit(), or
+ * string would exceed max_symbols symbols, when two strings would not fit in fb_memory_limit(mem), or
  * (max_f > 0) when the last would hold more than max_f F symbols. On success *out is a malloc'd
  * NUL-terminated string of *len symbols. */
-fb_result fb_lsys_derive(const fb_lsys *ls, uint32_t seed, uint64_t max_symbols, uint64_t max_f, const char *who,
-                         char **out, size_t *len);
+fb_result fb_lsys_derive(const fb_lsys *ls, uint32_t seed, uint64_t max_symbols, uint64_t max_f, const fb_memory *mem,
+                         const char *who, char **out, size_t *len);
 
 /* One drawn segment, in the turtle's units. */
 typedef struct fb_lsys_seg {
