@@ -519,41 +519,33 @@ static const char *backend_of(const char *list, const char *name, char *out, siz
     return NULL;
 }
 
-static fb_result merge_tasks(part *p, int n, const fb_merge_desc *d)
-{
-    const char *const *paths = d->paths, *out = d->out;
-    const int threads = d->threads, zip_level = d->zip_level;
-    const fb_memory mem = {d->max_memory, 0};
-    fb_result rc = FB_OK;
-    const char *scene_json = exrio_attr_string(p[0].r, "fractalbake/scene");
-    const char *plan_text = exrio_attr_string(p[0].r, "fractalbake/plan");
-    if (!scene_json || !plan_text)
-        return fb_fail(FB_ERR_INPUT, "%s: a task file without its scene or plan (attributes fractalbake/scene, /plan)",
-                       paths[0]);
-    for (int i = 1; i < n; i++) {
-        const char *sj = exrio_attr_string(p[i].r, "fractalbake/scene"),
-                   *pj = exrio_attr_string(p[i].r, "fractalbake/plan");
-        if (!sj || strcmp(sj, scene_json))
-            return fb_fail(FB_ERR_INPUT, "%s: baked from another scene than %s (attribute fractalbake/scene)", paths[i],
-                           paths[0]);
-        if (!pj || strcmp(pj, plan_text))
-            return fb_fail(FB_ERR_INPUT, "%s: a task of another plan than %s (attribute fractalbake/plan: another N?)",
-                           paths[i], paths[0]);
-    }
-    fb_scene *sc = calloc(1, sizeof *sc);
-    fb_plan *plan = malloc(sizeof *plan);
-    int *file_of = calloc(FB_PLAN_MAX_TASKS, sizeof *file_of);
-    chaos_layer *cl = calloc(FB_MAX_LAYERS, sizeof *cl);
-    int(*map)[FB_MERGE_MAX_CHANNELS] = calloc((size_t)n, sizeof *map); /* file channel -> output channel, or -1 */
+/* The state of merging the task files of one plan. */
+typedef struct task_merge {
+    part *p;
+    int n;
+    const fb_merge_desc *d;
+    fb_scene *sc;
+    fb_plan *plan;
+    int *file_of;    /* task k's file, -1 before it is found */
+    chaos_layer *cl; /* the chaos games split by points */
+    int ncl;
+    int (*map)[FB_MERGE_MAX_CHANNELS]; /* file channel -> output channel, or -1 */
     exrio_channel ch[FB_MERGE_MAX_CHANNELS];
-    int nout = 0, ncl = 0;
-    void *outp[FB_MERGE_MAX_CHANNELS] = {0};
-    exrio_writer *w = NULL;
-    if (!sc || !plan || !file_of || !cl || !map) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
-    if (!rc) rc = fb_scene_parse(scene_json, paths[0], sc);
-    if (!rc) rc = fb_plan_parse(plan_text, sc, plan);
-    int W = sc ? sc->width : 0, H = sc ? sc->height : 0;
-    /* which file is which task; the set complete */
+    int nout;
+    void *outp[FB_MERGE_MAX_CHANNELS]; /* a strip of each output channel */
+} task_merge;
+
+/* Which file is which task, the set complete, each file's window its task's share. */
+static fb_result tasks_assign(task_merge *m)
+{
+    part *p = m->p;
+    const int n = m->n;
+    const char *const *paths = m->d->paths;
+    fb_scene *sc = m->sc;
+    fb_plan *plan = m->plan;
+    int *file_of = m->file_of;
+    const int W = sc->width, H = sc->height;
+    fb_result rc = FB_OK;
     for (int k = 0; k < FB_PLAN_MAX_TASKS && file_of; k++) file_of[k] = -1;
     for (int i = 0; i < n && !rc; i++) {
         int k = -1, nn = 0;
@@ -593,27 +585,39 @@ static fb_result merge_tasks(part *p, int n, const fb_merge_desc *d)
                          paths[i], k, y0, y0 + exrio_height(p[i].r) - 1, fw, fh, ey0, ey0 + eh - 1);
         p[i].y0 = y0, p[i].h = exrio_height(p[i].r), p[i].w = W;
     }
-    /* the output's channels, layer by layer: a chaos game split by points from its generator, the
-     * others as the files hold them (every band the same) */
-    for (int i = 0; i < n && map; i++)
-        for (int c = 0; c < FB_MERGE_MAX_CHANNELS; c++) map[i][c] = -1;
+    return rc;
+}
+
+/* The output's channels, layer by layer: a chaos game split by points from its generator, the
+ * others as the files hold them (every band the same), and map[file][channel] their place. */
+static fb_result tasks_channels(task_merge *m)
+{
+    part *p = m->p;
+    const int n = m->n;
+    const char *const *paths = m->d->paths;
+    fb_scene *sc = m->sc;
+    fb_plan *plan = m->plan;
+    int *file_of = m->file_of;
+    fb_result rc = FB_OK;
+    for (int i = 0; i < n && m->map; i++)
+        for (int c = 0; c < FB_MERGE_MAX_CHANNELS; c++) m->map[i][c] = -1;
     for (int l = 0; l < (sc ? sc->nlayers : 0) && !rc; l++) {
         if (plan->share[l] == FB_SHARE_POINTS) {
-            chaos_layer *c = &cl[ncl];
-            ncl++;
+            chaos_layer *c = &m->cl[m->ncl];
+            m->ncl++;
             c->layer = l;
             rc = fb_gen_init(&c->gen, sc, &sc->layers[l]);
             for (int j = 0; j < c->gen.nchannels && !rc; j++) {
-                if (nout == FB_MERGE_MAX_CHANNELS)
-                    rc = fb_fail(FB_ERR_INPUT, "merge handles at most %d channels", nout);
+                if (m->nout == FB_MERGE_MAX_CHANNELS)
+                    rc = fb_fail(FB_ERR_INPUT, "merge handles at most %d channels", m->nout);
                 else
-                    ch[nout++] =
+                    m->ch[m->nout++] =
                         (exrio_channel){c->gen.channel_names[j], c->gen.channel_types[j], sc->multipart ? l : 0};
             }
             continue;
         }
         bool first = true;
-        int at = nout;
+        int at = m->nout;
         for (int k = 0; k < plan->nactive && !rc; k++) {
             if (!(plan->tasks[k].layers >> l & 1)) continue;
             const exrio_reader *r = p[file_of[k]].r;
@@ -622,35 +626,51 @@ static fb_result merge_tasks(part *p, int n, const fb_merge_desc *d)
                 if (layer_of_channel(sc, r, c) != l) continue;
                 int o = -1;
                 if (first) {
-                    if (nout == FB_MERGE_MAX_CHANNELS) {
-                        rc = fb_fail(FB_ERR_INPUT, "merge handles at most %d channels", nout);
+                    if (m->nout == FB_MERGE_MAX_CHANNELS) {
+                        rc = fb_fail(FB_ERR_INPUT, "merge handles at most %d channels", m->nout);
                         break;
                     }
-                    o = nout;
-                    ch[nout++] =
+                    o = m->nout;
+                    m->ch[m->nout++] =
                         (exrio_channel){exrio_channel_name(r, c), exrio_channel_type(r, c), sc->multipart ? l : 0};
                 } else {
-                    for (int q = at; q < nout; q++)
-                        if (!strcmp(ch[q].name, exrio_channel_name(r, c)) && ch[q].type == exrio_channel_type(r, c))
+                    for (int q = at; q < m->nout; q++)
+                        if (!strcmp(m->ch[q].name, exrio_channel_name(r, c)) &&
+                            m->ch[q].type == exrio_channel_type(r, c))
                             o = q;
                     if (o < 0)
                         rc = fb_fail(FB_ERR_INPUT, "%s: channel %s is not in the other bands of layer %s",
                                      paths[file_of[k]], exrio_channel_name(r, c), sc->layers[l].name);
                 }
-                map[file_of[k]][c] = o;
+                m->map[file_of[k]][c] = o;
                 count++;
             }
             if (!rc && exrio_nchannels(r) > FB_MERGE_MAX_CHANNELS)
                 rc = fb_fail(FB_ERR_INPUT, "%s: more than %d channels", paths[file_of[k]], FB_MERGE_MAX_CHANNELS);
-            if (!rc && (count == 0 || (!first && count != nout - at)))
+            if (!rc && (count == 0 || (!first && count != m->nout - at)))
                 rc = fb_fail(FB_ERR_INPUT, "%s: task %d's file lacks channels of layer %s", paths[file_of[k]], k,
                              sc->layers[l].name);
             first = false;
         }
     }
-    /* the chaos games split by points: every part's hits added */
+    return rc;
+}
+
+/* The chaos games split by points: every part's hits added. */
+static fb_result tasks_chaos(task_merge *m)
+{
+    part *p = m->p;
+    const char *const *paths = m->d->paths;
+    fb_scene *sc = m->sc;
+    fb_plan *plan = m->plan;
+    int *file_of = m->file_of;
+    const int W = sc->width, H = sc->height;
+    const fb_memory mem = {m->d->max_memory, 0};
+    fb_result rc = FB_OK;
     size_t npx = (size_t)W * H;
-    if (!rc && ncl) {
+    chaos_layer *cl = m->cl;
+    const int ncl = m->ncl;
+    if (ncl) {
         char who[4200];
         uint64_t bytes_px = 0;
         for (int k = 0; k < ncl; k++) bytes_px += chaos_bytes(&sc->layers[cl[k].layer]);
@@ -663,10 +683,23 @@ static fb_result merge_tasks(part *p, int n, const fb_merge_desc *d)
         if (plan->tasks[t].points) rc = chaos_add(cl, ncl, sc, p[file_of[t]].r, paths[file_of[t]], W, H);
     for (int k = 0; k < ncl && !rc; k++)
         rc = cl[k].ops->from_sums(&cl[k].gen, (const uint64_t *const *)cl[k].sum, cl[k].outside);
-    /* the attributes a one-command bake writes: its backend composed from the layers' */
+    return rc;
+}
+
+/* The output file, with the attributes a one-command bake writes: its backend composed from the
+ * layers', and the strip buffers. */
+static fb_result tasks_open_output(task_merge *m, const char *scene_json, exrio_writer **wp)
+{
+    part *p = m->p;
+    const char *const *paths = m->d->paths;
+    fb_scene *sc = m->sc;
+    fb_plan *plan = m->plan;
+    int *file_of = m->file_of;
+    const int W = sc->width, H = sc->height;
+    fb_result rc = FB_OK;
     char backend[16], per_layer[FB_MAX_LAYERS * 80] = "", device[1024] = "native C", seed[16];
     int nvk = 0;
-    for (int l = 0; l < (sc ? sc->nlayers : 0) && !rc; l++) {
+    for (int l = 0; l < sc->nlayers && !rc; l++) {
         char b[32] = "";
         int holder = -1;
         for (int k = 0; k < plan->nactive && holder < 0; k++)
@@ -701,24 +734,64 @@ static fb_result merge_tasks(part *p, int n, const fb_merge_desc *d)
         exrio_compression part_comp[FB_MAX_LAYERS];
         for (int l = 0; l < sc->nlayers; l++)
             part_names[l] = sc->layers[l].name, part_comp[l] = sc->layers[l].compression;
-        for (int o = 0; o < nout && !rc; o++)
-            if (!(outp[o] = malloc((size_t)W * MERGE_STRIP * 4))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        for (int o = 0; o < m->nout && !rc; o++)
+            if (!(m->outp[o] = malloc((size_t)W * MERGE_STRIP * 4))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
         if (!rc)
-            rc = exrio_writer_create(&(exrio_writer_desc){.path = out,
+            rc = exrio_writer_create(&(exrio_writer_desc){.path = m->d->out,
                                                           .width = W,
                                                           .height = H,
                                                           .nparts = sc->multipart ? sc->nlayers : 1,
                                                           .part_names = sc->multipart ? part_names : NULL,
                                                           .part_compression = sc->multipart ? part_comp : NULL,
                                                           .compression = sc->compression,
-                                                          .channels = ch,
-                                                          .nchannels = nout,
+                                                          .channels = m->ch,
+                                                          .nchannels = m->nout,
                                                           .attrs = attrs,
                                                           .nattrs = nattrs,
-                                                          .threads = threads,
-                                                          .zip_level = zip_level},
-                                     &w);
+                                                          .threads = m->d->threads,
+                                                          .zip_level = m->d->zip_level},
+                                     wp);
     }
+    return rc;
+}
+
+/* Task files of one plan (render --task K/N) joined into the bake they share. */
+static fb_result merge_tasks(part *p, int n, const fb_merge_desc *d)
+{
+    const char *const *paths = d->paths;
+    const char *scene_json = exrio_attr_string(p[0].r, "fractalbake/scene");
+    const char *plan_text = exrio_attr_string(p[0].r, "fractalbake/plan");
+    if (!scene_json || !plan_text)
+        return fb_fail(FB_ERR_INPUT, "%s: a task file without its scene or plan (attributes fractalbake/scene, /plan)",
+                       paths[0]);
+    for (int i = 1; i < n; i++) {
+        const char *sj = exrio_attr_string(p[i].r, "fractalbake/scene"),
+                   *pj = exrio_attr_string(p[i].r, "fractalbake/plan");
+        if (!sj || strcmp(sj, scene_json))
+            return fb_fail(FB_ERR_INPUT, "%s: baked from another scene than %s (attribute fractalbake/scene)", paths[i],
+                           paths[0]);
+        if (!pj || strcmp(pj, plan_text))
+            return fb_fail(FB_ERR_INPUT, "%s: a task of another plan than %s (attribute fractalbake/plan: another N?)",
+                           paths[i], paths[0]);
+    }
+    task_merge m = {.p = p,
+                    .n = n,
+                    .d = d,
+                    .sc = calloc(1, sizeof *m.sc),
+                    .plan = malloc(sizeof *m.plan),
+                    .file_of = calloc(FB_PLAN_MAX_TASKS, sizeof *m.file_of),
+                    .cl = calloc(FB_MAX_LAYERS, sizeof *m.cl),
+                    .map = calloc((size_t)n, sizeof *m.map)};
+    exrio_writer *w = NULL;
+    fb_result rc = FB_OK;
+    if (!m.sc || !m.plan || !m.file_of || !m.cl || !m.map) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (!rc) rc = fb_scene_parse(scene_json, paths[0], m.sc);
+    if (!rc) rc = fb_plan_parse(plan_text, m.sc, m.plan);
+    if (!rc) rc = tasks_assign(&m);
+    if (!rc) rc = tasks_channels(&m);
+    if (!rc) rc = tasks_chaos(&m);
+    if (!rc) rc = tasks_open_output(&m, scene_json, &w);
+    const int W = m.sc ? m.sc->width : 0, H = m.sc ? m.sc->height : 0;
     /* strip by strip: each file's rows in place, the chaos games' from their sums */
     for (int y0 = 0; y0 < H && !rc; y0 += MERGE_STRIP) {
         int rowsn = y0 + MERGE_STRIP <= H ? MERGE_STRIP : H - y0;
@@ -729,21 +802,21 @@ static fb_result merge_tasks(part *p, int n, const fb_merge_desc *d)
             void *own[FB_MERGE_MAX_CHANNELS] = {0};
             bool any = false;
             for (int c = 0; c < exrio_nchannels(p[i].r); c++)
-                if (map[i][c] >= 0) own[c] = (uint8_t *)outp[map[i][c]] + (size_t)(from - y0) * W * 4, any = true;
+                if (m.map[i][c] >= 0) own[c] = (uint8_t *)m.outp[m.map[i][c]] + (size_t)(from - y0) * W * 4, any = true;
             if (any) rc = exrio_read_rows(p[i].r, from - p[i].y0, to - from, own);
         }
-        for (int k = 0; k < ncl && !rc; k++) rc = chaos_rows(&cl[k], ch, outp, nout, y0, rowsn, paths[0]);
-        if (!rc) rc = exrio_writer_rows(w, y0, rowsn, (const void *const *)outp);
+        for (int k = 0; k < m.ncl && !rc; k++) rc = chaos_rows(&m.cl[k], m.ch, m.outp, m.nout, y0, rowsn, paths[0]);
+        if (!rc) rc = exrio_writer_rows(w, y0, rowsn, (const void *const *)m.outp);
     }
     if (!rc) rc = exrio_writer_finish(&w);
     exrio_writer_abort(&w);
-    chaos_free(cl, ncl);
-    for (int o = 0; o < FB_MERGE_MAX_CHANNELS; o++) free(outp[o]);
-    if (sc) fb_scene_fini(sc);
-    free(sc);
-    free(plan);
-    free(file_of);
-    free(cl);
-    free(map);
+    chaos_free(m.cl, m.ncl);
+    for (int o = 0; o < FB_MERGE_MAX_CHANNELS; o++) free(m.outp[o]);
+    if (m.sc) fb_scene_fini(m.sc);
+    free(m.sc);
+    free(m.plan);
+    free(m.file_of);
+    free(m.cl);
+    free(m.map);
     return rc;
 }
