@@ -1307,10 +1307,10 @@ static void cmp_free(cmp *k)
 
 fb_result fb_compare(const fb_compare_desc *d, fb_verdict *verdict)
 {
-    cmp k = {.d = d, .missing = json_array(), .verdict = FB_VERDICT_PASS};
-    fb_result rc = FB_OK;
     if (!strcmp(d->a, "-") && !strcmp(d->b, "-"))
         return fb_fail(FB_ERR_USAGE, "compare - -: standard input can be read once; give one of the files by name");
+    cmp k = {.d = d, .missing = json_array(), .verdict = FB_VERDICT_PASS};
+    fb_result rc = FB_OK;
     /* every named output is checked (and its temporary file made) before the work, whatever the files hold */
     if (d->diff) rc = fb_output_reserve(d->diff, "diff");
     if (!rc && d->diff_png) rc = fb_output_reserve(d->diff_png, "diff picture");
