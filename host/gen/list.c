@@ -8,6 +8,7 @@
 #define FB_GENERATORS(X)                                                                                               \
     X(fbm)                                                                                                             \
     X(julia)                                                                                                           \
+    X(stars)                                                                                                           \
     X(ifs)                                                                                                             \
     X(flame)                                                                                                           \
     X(lsystem)                                                                                                         \
