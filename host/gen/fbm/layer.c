@@ -110,7 +110,7 @@ _Static_assert(offsetof(K_FbmParams, inv_width) == 60, "std430 offset");
 _Static_assert(offsetof(K_FbmParams, inv_height) == 64, "std430 offset");
 _Static_assert(offsetof(K_FbmParams, inv_freq_x) == 68, "std430 offset");
 _Static_assert(offsetof(K_FbmParams, inv_freq_y) == 72, "std430 offset");
-_Static_assert(offsetof(K_FbmParams, pad0) == 76 && offsetof(K_FbmParams, pad1) == 80, "std430 offset");
+_Static_assert(offsetof(K_FbmParams, mapping) == 76 && offsetof(K_FbmParams, pad1) == 80, "std430 offset");
 _Static_assert(offsetof(fbm_push, y0) == 84 && offsetof(fbm_push, rows) == 88, "std430 offset");
 _Static_assert(sizeof(fbm_push) == 92 && sizeof(fbm_push) <= FB_GEN_MAX_PUSH, "push constants");
 _Static_assert(sizeof(K_FbmParams) <= sizeof(((fb_gen *)0)->params), "params fit");
