@@ -40,12 +40,11 @@ static const fb_keyspec stars_keys[] = {
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
 };
 
-/* The sizes a mapping takes, or a message. */
+/* The smallest sizes a mapping takes (the spread must fit in a face or a period), or a message. */
 static const char *size_problem(unsigned mapping, int w, int h)
 {
-    if (mapping == K_ENV_LATLONG && w != 2 * h) return "a lat-long sky is 2N x N pixels";
+    /* the scene checks an environment map's shape (2N x N, N x 6N) */
     if (mapping == K_ENV_LATLONG && h < 8) return "a lat-long star sky is at least 16 x 8 pixels";
-    if (mapping == K_ENV_CUBE && h != 6 * w) return "a cube sky is N x 6N pixels (six faces stacked)";
     if (mapping == K_ENV_CUBE && w < 12) return "a cube star sky has faces of at least 12 x 12 pixels";
     if (mapping == K_STARS_POLAR && w < 12) return "a polar star sky is at least 12 pixels wide";
     return NULL;
@@ -184,7 +183,7 @@ static fb_result place_wrapped(placer *pl, const fb_star *s, const double flux[3
         x = (lon / (-2 * M_PI) + 0.5) * (W - 1), y = (lat / (-M_PI) + 0.5) * (H - 1), period = W - 1;
     } else {
         if (d[1] <= 0) return FB_OK; /* below the horizon */
-        double u = lon / (2 * M_PI);
+        double u = atan2(d[2], d[0]) / (2 * M_PI); /* the julia layer's polar grid: d.x + i d.z ~ exp(i 2 pi u) */
         x = (u < 0 ? u + 1 : u) * W - 0.5;
         y = (1 - sqrt((1 - d[1]) / (1 + d[1]))) * H - 0.5, period = W;
     }
