@@ -102,6 +102,10 @@ K_FN float k_stars_weight(K_StarsParams p, float rx, float ry, uint flags, uint 
 {
     if (p.mapping == K_ENV_CUBE && (flags >> 8) != y / p.n) return 0.0f;
     float fx = K_F(x);
+    /* beyond the tent's reach (the masses below would be exactly 0; a pole row's or a corner's share
+     * comes from stars within reach of the pixel's centre too) */
+    float reach = p.radius + 0.5f;
+    if (k_abs(fx - rx) >= reach || k_abs(K_F(y) - ry) >= reach) return 0.0f;
     float xlo = k_max(fx - 0.5f, p.x_lo), xhi = k_min(fx + 0.5f, p.x_hi);
     k_vec2 yr = k_stars_rows(p, y, (flags & K_STARS_CLAMP_Y) != 0u);
     float r = p.radius, k = p.inv_2r2;

@@ -102,7 +102,7 @@ _Static_assert(sizeof(stars_push) <= FB_GEN_MAX_PUSH && sizeof(K_StarsParams) <=
                "push constants");
 _Static_assert(sizeof(K_StarsRec) == 4 * K_STARS_REC_WORDS, "record words");
 
-#define TILE_SHIFT 4u
+#define TILE_SHIFT 3u
 #define TILE       (1u << TILE_SHIFT)
 
 static const K_StarsParams *params(const fb_gen *g)
@@ -182,7 +182,7 @@ static fb_result place_wrapped(placer *pl, const fb_star *s, const double flux[3
         double lat = asin(d[1] > 1 ? 1 : d[1] < -1 ? -1 : d[1]);
         x = (lon / (-2 * M_PI) + 0.5) * (W - 1), y = (lat / (-M_PI) + 0.5) * (H - 1), period = W - 1;
     } else {
-        if (d[1] <= 0) return FB_OK; /* below the horizon */
+        if (d[1] <= 0) return FB_OK;               /* below the horizon */
         double u = atan2(d[2], d[0]) / (2 * M_PI); /* the julia layer's polar grid: d.x + i d.z ~ exp(i 2 pi u) */
         x = (u < 0 ? u + 1 : u) * W - 0.5;
         y = (1 - sqrt((1 - d[1]) / (1 + d[1]))) * H - 0.5, period = W;
@@ -399,4 +399,5 @@ const fb_gen_class fb_gen_stars = {
     .share = FB_SHARE_BAND,
     .cost = stars_cost,
     .example = "[{\"type\": \"stars\", \"limit\": 7}]",
+    .bench = fb_stars_bench,
 };
