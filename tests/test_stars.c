@@ -11,6 +11,7 @@
 #include "catalog.h"
 #include "exrio.h"
 #include "gen.h"
+#include "../kernels/envmap.h"
 
 #include "testengines.h"
 #include "testhelp.h"
@@ -305,6 +306,71 @@ static bool centroid(const image *im, double x, double y, double d[3])
     return true;
 }
 
+/* The same for cube position (x, y): the flux-weighted centroid of the pixels of its face within 3
+ * of the brightest within 4, their directions from kernels/envmap.h (checked against OpenEXR's). */
+static bool cube_centroid(const image *im, double x, double y, double d[3])
+{
+    int n = im->w, f0 = (int)floor((y + 0.5) / n) * n, bx = -1, by = -1;
+    float best = 0;
+    for (int j = (int)y - 4; j <= (int)y + 4; j++)
+        for (int i = (int)x - 4; i <= (int)x + 4; i++) {
+            if (i < 0 || j < f0 || i >= n || j >= f0 + n) continue;
+            float v = im->p[1][(size_t)j * n + i];
+            if (v > best) best = v, bx = i, by = j;
+        }
+    if (bx < 0) return false;
+    double sum[3] = {0, 0, 0};
+    for (int j = by - 3; j <= by + 3; j++)
+        for (int i = bx - 3; i <= bx + 3; i++) {
+            if (i < 0 || j < f0 || i >= n || j >= f0 + n) continue;
+            k_vec3 e = k_env_cube_dir((float)i, (float)j, (uint32_t)n);
+            double v[3] = {e.x, e.y, e.z}, f = im->p[1][(size_t)j * n + i] * pixel_omega(im, i, j);
+            normalise(v);
+            for (int c = 0; c < 3; c++) sum[c] += f * v[c];
+        }
+    normalise(sum);
+    memcpy(d, sum, sizeof sum);
+    return true;
+}
+
+/* The same stars in another mapping: the brightest stars away from the cube's edges, centred in a
+ * 256-pixel cube where the 1024-wide lat-long map has them. */
+static void test_mappings(void)
+{
+    fb_stars_params P = defaults();
+    fb_star *s = NULL;
+    size_t n = 0;
+    CHECK(fb_stars_catalog(&P, 3, &s, &n) == FB_OK);
+    image a, c;
+    CHECKF(render("latlong", 1024, 512, NULL, &a) == FB_OK, "%s", g_last_error);
+    CHECKF(render("cube", 256, 1536, NULL, &c) == FB_OK, "%s", g_last_error);
+    if (!a.p[0] || !c.p[0] || !s) return;
+    int checked = 0, close = 0;
+    double pix = 2.0 / 255; /* a cube pixel's angle at the face's centre, its largest */
+    for (int k = 0; k < 40; k++) {
+        size_t best = n;
+        for (size_t i = 0; i < n; i++)
+            if (fabs(s[i].dir[1]) < 0.9 && (best == n || s[i].mag < s[best].mag)) best = i;
+        if (best == n) break;
+        double *d = s[best].dir, lat = asin(d[1]), lon = atan2(d[0], d[2]);
+        s[best].mag = 1e9;
+        k_vec2 cp = k_env_cube_pos(k_vec3((float)d[0], (float)d[1], (float)d[2]), 256);
+        double b = fmod(cp.y, 256);
+        if (cp.x < 5 || cp.x > 250 || b < 5 || b > 250) continue; /* split between faces */
+        double ax = (lon / (-2 * M_PI) + 0.5) * (a.w - 1), ay = (lat / (-M_PI) + 0.5) * (a.h - 1);
+        double da[3], dc[3];
+        if (!centroid(&a, ax, ay, da) || !cube_centroid(&c, cp.x, cp.y, dc)) continue;
+        double ang = acos(fmin(1, da[0] * dc[0] + da[1] * dc[1] + da[2] * dc[2]));
+        checked++;
+        close += ang < pix;
+    }
+    CHECKF(checked >= 25 && close >= checked - 2, "%d of %d stars within a cube pixel in both mappings", close,
+           checked);
+    image_free(&a);
+    image_free(&c);
+    free(s);
+}
+
 static void test_positions(void)
 {
     fb_stars_params P = defaults();
@@ -403,6 +469,7 @@ int main(int argc, char **argv)
     test_colours();
     test_flux();
     test_positions();
+    test_mappings();
 
     fb_engine engines[4];
     bool have_gpu;
