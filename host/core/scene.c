@@ -161,7 +161,9 @@ static fb_result parse_root(const fb_vctx *v, json_t *root, fb_scene *s)
         snprintf(path, sizeof path, "layers[%d]", i);
         if (!json_is_object(lj)) return fb_schema_error(v, path, "expected a layer object with a \"type\"");
         json_t *type = json_object_get(lj, "type");
-        if (!type) return fb_schema_error(v, path, "missing key \"type\" (the generator, e.g. \"fbm\")");
+        if (!type)
+            return fb_schema_error(v, path,
+                                   "missing key \"type\" (the generator; `fractalbake generators` lists them)");
         const char *t = json_is_string(type) ? json_string_value(type) : "";
         fb_layer *L = &s->layers[i];
         memset(L, 0, sizeof *L);

@@ -420,7 +420,8 @@ fb_result fb_schema_check_value(const fb_vctx *v, const char *path, const fb_key
         return FB_OK;
     case FB_K_TYPE:
         if (!json_is_string(j))
-            return fb_schema_error(v, path, "expected a generator name such as \"fbm\", found %s", shown);
+            return fb_schema_error(v, path, "expected a generator name (`fractalbake generators` lists them), found %s",
+                                   shown);
         return FB_OK;
     case FB_K_NAME:
         return check_name(v, path, k, j, shown);
