@@ -184,8 +184,12 @@ static void cmp_free(cmp *k)
         ssim_fini(&k->st[s].ssim);
         free(k->st[s].ra);
         free(k->st[s].rb);
+        free(k->st[s].over);
     }
-    for (int u = 0; u < k->nfu; u++) free(k->fu[u].map);
+    for (int u = 0; u < k->nfu; u++) free(k->fu[u].map), free(k->fu[u].own), free(k->fu[u].bad);
+    fb_pool_destroy(&k->pool);
+    free(k->ba);
+    free(k->bb);
     json_decref(k->missing);
     free(k->fu);
     free(k->over);
@@ -217,6 +221,8 @@ fb_result fb_compare(const fb_compare_desc *d, fb_verdict *verdict)
     if (!rc && k.verdict == FB_VERDICT_PASS) rc = match_channels(&k);
     if (!rc && k.nst > 0) rc = cmp_find_flip_units(&k);
     if (!rc && k.nst > 0) rc = cmp_check_rules(&k);
+    if (!rc && k.nst > 0) rc = fb_pool_create(d->threads > 0 ? d->threads : fb_cpu_count(), &k.pool);
+    if (!rc && k.nst > 0 && (d->flip || d->report)) rc = cmp_read_whole(&k);
     if (!rc && k.nst > 0) rc = cmp_compute_flip(&k);
     if (!rc && k.nst > 0) rc = open_outputs(&k);
     if (!rc && k.nst > 0) rc = cmp_stream_blocks(&k);

@@ -62,53 +62,79 @@ fb_result cmp_find_flip_units(cmp *k)
     return FB_OK;
 }
 
-/* One unit's FLIP map: its six planes read whole, non-finite values replaced by 0 for the filters
- * and their pixels given the largest error, 1, where the files disagree. */
-static fb_result flip_one(cmp *k, flip_unit *u)
+/* A unit's planes: the whole planes, or when a value is not finite in either file a copy with
+ * those values 0 for the filters, and the pixels where the files disagree marked bad (error 1). */
+static fb_result flip_planes(cmp *k, flip_unit *u, const float *pa[3], const float *pb[3])
 {
     size_t n = (size_t)k->W * k->H;
-    float *buf = malloc(n * 6 * sizeof(float));
-    if (!buf || !(u->map = malloc(n * sizeof(float)))) {
-        free(buf);
+    int nq = u->grey ? 1 : 3;
+    bool finite = true;
+    for (int q = 0; q < 3; q++) {
+        pa[q] = k->pa[k->st[u->ch[q]].ia], pb[q] = k->pb[k->st[u->ch[q]].ib];
+        for (size_t i = 0; i < n && finite && q < nq; i++) finite = isfinite(pa[q][i]) && isfinite(pb[q][i]);
+    }
+    if (finite) return FB_OK;
+    if (!(u->own = malloc(n * 2 * (size_t)nq * sizeof(float))) || !(u->bad = calloc(n ? n : 1, 1)))
         return fb_fail(FB_ERR_NOMEM, "out of memory for FLIP of %s (%d x %d)", u->name, k->W, k->H);
-    }
-    float *pa[3], *pb[3];
-    int na = image_nchannels(&k->A), nb = image_nchannels(&k->B);
-    void **va = calloc((size_t)na, sizeof *va), **vb = calloc((size_t)nb, sizeof *vb);
-    fb_result rc = va && vb ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory");
-    for (int q = 0; q < 3 && !rc; q++) {
-        pa[q] = buf + (size_t)q * n, pb[q] = buf + (size_t)(3 + q) * n;
-        if (q == 0 || !u->grey) va[k->st[u->ch[q]].ia] = pa[q], vb[k->st[u->ch[q]].ib] = pb[q];
-    }
-    if (!rc && !(rc = image_read_rows(&k->A, 0, k->H, va))) rc = image_read_rows(&k->B, 0, k->H, vb);
-    if (u->grey && !rc)
-        for (int q = 1; q < 3; q++) pa[q] = pa[0], pb[q] = pb[0];
-    free(va);
-    free(vb);
-    uint8_t *bad = rc ? NULL : calloc(n, 1);
-    if (!rc && !bad) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
-    for (size_t i = 0; i < n && !rc; i++)
-        for (int q = 0; q < 3; q++) {
-            float x = pa[q][i], y = pb[q][i];
-            if (isfinite(x) && isfinite(y)) continue;
-            if (!((isnan(x) && isnan(y)) || x == y)) bad[i] = 1;
-            if (!isfinite(x)) pa[q][i] = 0;
-            if (!isfinite(y)) pb[q][i] = 0;
+    for (int q = 0; q < nq; q++) {
+        float *x = u->own + (size_t)(2 * q) * n, *y = x + n;
+        for (size_t i = 0; i < n; i++) {
+            float va = pa[q][i], vb = pb[q][i];
+            if (!isfinite(va) || !isfinite(vb)) {
+                if (!((isnan(va) && isnan(vb)) || va == vb)) u->bad[i] = 1;
+                va = isfinite(va) ? va : 0, vb = isfinite(vb) ? vb : 0;
+            }
+            x[i] = va, y[i] = vb;
         }
-    if (!rc)
-        rc = fb_flip((const float *const *)pa, (const float *const *)pb, k->W, k->H, u->hdr, fb_flip_default_ppd(),
-                     u->map, &u->r);
-    for (size_t i = 0; i < n && !rc; i++)
-        if (bad[i]) u->map[i] = 1.0f, u->nonfinite++;
+    }
+    for (int q = 0; q < 3; q++) pa[q] = u->own + (size_t)(2 * (u->grey ? 0 : q)) * n, pb[q] = pa[q] + n;
+    return FB_OK;
+}
+
+/* One unit's job: its planes, its map, its exposures (a task per unit). */
+static void flip_prepare_task(void *ctx, int t)
+{
+    cmp *k = ctx;
+    flip_unit *u = &k->fu[t];
+    const float *pa[3], *pb[3];
+    size_t n = (size_t)k->W * k->H;
+    u->rc = flip_planes(k, u, pa, pb);
+    if (!u->rc && !(u->map = malloc((n ? n : 1) * sizeof(float))))
+        u->rc = fb_fail(FB_ERR_NOMEM, "out of memory for FLIP of %s (%d x %d)", u->name, k->W, k->H);
+    if (!u->rc) u->rc = fb_flip_job_create(pa, pb, k->W, k->H, u->hdr, fb_flip_default_ppd(), u->map, &u->job);
+}
+
+/* Every unit's bands, as one list of tasks. */
+static void flip_band_task(void *ctx, int t)
+{
+    cmp *k = ctx;
+    for (int u = 0; u < k->nfu; u++) {
+        int nb = k->fu[u].job ? fb_flip_job_bands(k->fu[u].job) : 0;
+        if (t < nb) {
+            fb_flip_job_band(k->fu[u].job, t);
+            return;
+        }
+        t -= nb;
+    }
+}
+
+/* A unit's statistics, its bad pixels at error 1 included (a task per unit). */
+static void flip_finish_task(void *ctx, int t)
+{
+    cmp *k = ctx;
+    flip_unit *u = &k->fu[t];
+    size_t n = (size_t)k->W * k->H;
+    if (!u->job) return;
+    fb_result rc = fb_flip_job_finish(&u->job, &u->r);
+    for (size_t i = 0; i < n && !rc && u->bad; i++)
+        if (u->bad[i]) u->map[i] = 1.0f, u->nonfinite++;
     if (!rc && u->nonfinite) {
         fb_flip_result keep = u->r;
         rc = fb_flip_pool(u->map, n, &u->r);
         u->r.start_exposure = keep.start_exposure, u->r.stop_exposure = keep.stop_exposure;
         u->r.nexp = keep.nexp, u->r.zero_median = keep.zero_median;
     }
-    free(bad);
-    free(buf);
-    return rc;
+    if (!u->rc) u->rc = rc;
 }
 
 /* The FLIP picture: the unit of the largest mean error, grey, round(255 * error). */
@@ -130,11 +156,18 @@ static fb_result write_flip_png(cmp *k)
     return rc;
 }
 
+/* Every unit's FLIP on the threads: the jobs, every band of every unit, the statistics. */
 fb_result cmp_compute_flip(cmp *k)
 {
-    fb_result rc = FB_OK;
-    for (int u = 0; u < k->nfu && !rc; u++) rc = flip_one(k, &k->fu[u]);
-    return rc ? rc : write_flip_png(k);
+    if (k->nfu == 0) return FB_OK;
+    fb_pool_run(k->pool, k->nfu, flip_prepare_task, k);
+    int bands = 0;
+    for (int u = 0; u < k->nfu; u++) bands += k->fu[u].job ? fb_flip_job_bands(k->fu[u].job) : 0;
+    fb_pool_run(k->pool, bands, flip_band_task, k);
+    fb_pool_run(k->pool, k->nfu, flip_finish_task, k);
+    for (int u = 0; u < k->nfu; u++)
+        if (k->fu[u].rc) return k->fu[u].rc;
+    return write_flip_png(k);
 }
 
 void cmp_flip_verdict(cmp *k, flip_unit *u)

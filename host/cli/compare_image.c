@@ -82,3 +82,36 @@ fb_result image_read_rows(image *im, int y0, int n, void *const *planes)
         if (planes[c]) memcpy(planes[c], im->png.plane[c] + (size_t)y0 * w, (size_t)n * w * sizeof(float));
     return FB_OK;
 }
+
+/* ---- the compared channels whole ------------------------------------------------------------- */
+
+typedef struct whole_job {
+    cmp *k;
+    fb_result rc[2];
+} whole_job;
+
+static void whole_task(void *ctx, int side)
+{
+    whole_job *j = ctx;
+    cmp *k = j->k;
+    j->rc[side] = image_read_rows(side ? &k->B : &k->A, 0, k->H, side ? k->pb : k->pa);
+}
+
+fb_result cmp_read_whole(cmp *k)
+{
+    size_t n = (size_t)k->W * k->H;
+    k->ba = calloc((size_t)image_nchannels(&k->A) + 1, sizeof *k->ba);
+    k->bb = calloc((size_t)image_nchannels(&k->B) + 1, sizeof *k->bb);
+    if (!k->ba || !k->bb) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    for (int s = 0; s < k->nst; s++) {
+        const chan_stats *c = &k->st[s];
+        if (!(k->pa[c->ia] = malloc(n ? n * 4 : 1)) || !(k->pb[c->ib] = malloc(n ? n * 4 : 1)))
+            return fb_fail(FB_ERR_NOMEM,
+                           "out of memory for the compared channels whole (%d of %d x %d, for FLIP or the report)",
+                           k->nst, k->W, k->H);
+    }
+    k->whole = true;
+    whole_job j = {.k = k};
+    fb_pool_run(k->pool, 2, whole_task, &j); /* both files at once */
+    return j.rc[0] ? j.rc[0] : j.rc[1];
+}

@@ -70,8 +70,8 @@ typedef struct chan_stats {
      * their order, so that the totals do not depend on the threads) */
     uint8_t *over;
     double i_sum, i_sq, i_peak, i_max;
-    int i_mx, i_my;
-    uint64_t i_nvals;
+    int i_mx, i_my; /* -1: none yet */
+    uint64_t i_nvals, i_nonfinite;
     /* the statistics, once every row is in; a non-finite pixel that differs makes RMSE +inf, PSNR
      * -inf and SSIM -1 (the worst each can be), so no statistic passes it */
     double rmse, psnr, pct, wpct, ssim_v;
@@ -85,7 +85,8 @@ typedef struct flip_unit {
     int ch[3];      /* indices into the channel stats */
     bool hdr, grey;
     float *map;
-    float *own; /* the unit's planes when they had non-finite values (replaced by 0), else NULL */
+    float *own;   /* the unit's planes when they had non-finite values (replaced by 0), else NULL */
+    uint8_t *bad; /* then: the pixels non-finite in one file only */
     fb_flip_job *job;
     fb_result rc;
     fb_flip_result r;
@@ -124,6 +125,7 @@ typedef struct cmp {
     int i_mx, i_my;
     const char *i_mc;
     uint64_t i_nvals, i_nwarn, i_nfail;
+    uint64_t i_nonfinite; /* values non-finite in one file only: mean, RMS and max error inf */
 } cmp;
 
 static inline double cmp_value(const void *plane, bool is_uint, size_t i)

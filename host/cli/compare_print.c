@@ -150,37 +150,48 @@ void cmp_channel_lines(const cmp *k, const chan_stats *c)
     if (c->n && c->a_lo == 0 && c->a_hi == 0) cmp_say(d, "%-16s all-zero in %s", "", d->a);
 }
 
-static double idiff_rms(const cmp *k)
+/* idiff's mean and RMS error and peak SNR; a non-finite value in one file only makes them inf, inf
+ * and -inf, the worst each can be (as RMSE and PSNR per channel) */
+static void idiff_numbers(const cmp *k, double *mean, double *rms, double *psnr)
 {
-    return k->i_nvals ? sqrt(k->i_sq / (double)k->i_nvals) : 0;
+    *mean = k->i_nvals ? k->i_sum / (double)k->i_nvals : 0;
+    *rms = k->i_nvals ? sqrt(k->i_sq / (double)k->i_nvals) : 0;
+    *psnr = *rms > 0 ? 20 * log10(k->i_peak / *rms) : INFINITY;
+    if (k->i_nonfinite) *mean = *rms = INFINITY, *psnr = -INFINITY;
 }
 
 /* --idiff-stats: idiff's block, its numbers by its definitions. */
 void cmp_idiff_lines(const cmp *k)
 {
     const fb_compare_desc *d = k->d;
-    double npels = (double)k->W * k->H, rms = idiff_rms(k);
+    double npels = (double)k->W * k->H, mean, rms, psnr;
+    idiff_numbers(k, &mean, &rms, &psnr);
     cmp_say(d, "idiff statistics over the %d compared channels:", k->nst);
-    cmp_say(d, "  Mean error = %.6g", k->i_nvals ? k->i_sum / (double)k->i_nvals : 0);
+    cmp_say(d, "  Mean error = %.6g", mean);
     cmp_say(d, "  RMS error = %.6g", rms);
-    cmp_say(d, "  Peak SNR = %.6g", rms > 0 ? 20 * log10(k->i_peak / rms) : INFINITY);
+    cmp_say(d, "  Peak SNR = %.6g", psnr);
     cmp_say(d, "  Max error  = %.6g @ (%d, %d, %s)", k->i_max, k->i_mx, k->i_my, k->i_mc ? k->i_mc : "-");
     cmp_say(d, "  %llu pixels (%.3g%%) over %g", (unsigned long long)k->i_nwarn, npels ? 100 * k->i_nwarn / npels : 0,
             k->i_warn);
     cmp_say(d, "  %llu pixels (%.3g%%) over %g", (unsigned long long)k->i_nfail, npels ? 100 * k->i_nfail / npels : 0,
             k->i_fail);
+    if (k->i_nonfinite)
+        cmp_say(d, "  %llu values non-finite in one file only: each over both thresholds, the errors at their worst",
+                (unsigned long long)k->i_nonfinite);
 }
 
 static json_t *cmp_idiff_json(const cmp *k)
 {
-    double npels = (double)k->W * k->H, rms = idiff_rms(k);
+    double npels = (double)k->W * k->H, mean, rms, psnr;
+    idiff_numbers(k, &mean, &rms, &psnr);
     json_t *j = json_object();
-    json_object_set_new(j, "mean_error", json_real(k->i_nvals ? k->i_sum / (double)k->i_nvals : 0));
-    json_object_set_new(j, "rms_error", json_real(rms));
-    json_object_set_new(j, "peak_snr", json_num(rms > 0 ? 20 * log10(k->i_peak / rms) : INFINITY));
+    json_object_set_new(j, "mean_error", json_num(mean));
+    json_object_set_new(j, "rms_error", json_num(rms));
+    json_object_set_new(j, "peak_snr", json_num(psnr));
     json_object_set_new(j, "peak", json_real(k->i_peak));
-    json_object_set_new(j, "max_error", json_real(k->i_max));
+    json_object_set_new(j, "max_error", json_num(k->i_max));
     if (k->i_mc) json_object_set_new(j, "max_at", json_pack("[iis]", k->i_mx, k->i_my, k->i_mc));
+    json_object_set_new(j, "nonfinite_differ", json_integer((json_int_t)k->i_nonfinite));
     json_object_set_new(j, "warn_pixels", json_integer((json_int_t)k->i_nwarn));
     json_object_set_new(j, "warn_percent", json_real(npels ? 100 * k->i_nwarn / npels : 0));
     json_object_set_new(j, "warn_threshold", json_real(k->i_warn));

@@ -34,31 +34,18 @@ static fb_result add_picture(fb_report_layer *L, const char *label, const uint8_
     return rc;
 }
 
-/* Reads channels idx[0..n) of the layer whole from A and B (as doubles). */
+/* Channels idx[0..n) of the layer from A and B, as doubles. */
 static fb_result read_layer(cmp *k, const int *idx, int n, double **va, double **vb)
 {
     size_t np = (size_t)k->W * k->H;
-    fb_result rc = FB_OK;
-    int na = image_nchannels(&k->A), nb = image_nchannels(&k->B);
-    void **pa = calloc((size_t)na, sizeof *pa), **pb = calloc((size_t)nb, sizeof *pb);
-    if (!pa || !pb) rc = fb_fail(FB_ERR_NOMEM, "out of memory for the report");
-    for (int q = 0; q < n && !rc; q++) {
+    for (int q = 0; q < n; q++) {
         const chan_stats *c = &k->st[idx[q]];
-        if (!(pa[c->ia] = malloc(np * 4)) || !(pb[c->ib] = malloc(np * 4)) || !(va[q] = malloc(np * 8)) ||
-            !(vb[q] = malloc(np * 8)))
-            rc = fb_fail(FB_ERR_NOMEM, "out of memory for the report");
+        if (!(va[q] = malloc(np * 8)) || !(vb[q] = malloc(np * 8)))
+            return fb_fail(FB_ERR_NOMEM, "out of memory for the report");
+        for (size_t i = 0; i < np; i++) /* the channels were read whole (cmp_read_whole) */
+            va[q][i] = cmp_value(k->pa[c->ia], c->uint_a, i), vb[q][i] = cmp_value(k->pb[c->ib], c->uint_b, i);
     }
-    if (!rc) rc = image_read_rows(&k->A, 0, k->H, pa);
-    if (!rc) rc = image_read_rows(&k->B, 0, k->H, pb);
-    for (int q = 0; q < n && !rc; q++) {
-        const chan_stats *c = &k->st[idx[q]];
-        for (size_t i = 0; i < np; i++)
-            va[q][i] = cmp_value(pa[c->ia], c->uint_a, i), vb[q][i] = cmp_value(pb[c->ib], c->uint_b, i);
-    }
-    for (int q = 0; q < n && pa && pb; q++) free(pa[k->st[idx[q]].ia]), free(pb[k->st[idx[q]].ib]);
-    free(pa);
-    free(pb);
-    return rc;
+    return FB_OK;
 }
 
 /* The layer's four pictures: A and B (colour, or its Y or first channel in grey over A's range),
