@@ -28,6 +28,7 @@
  */
 #include "flip.h"
 
+#include "clones.h"
 #include "pool.h"
 
 #include <math.h>
@@ -37,12 +38,6 @@
 
 #define FPI       3.14159265358979f
 #define FLIP_BAND 64 /* rows a band */
-
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define CLONES
-#endif
 
 static const float ILL[3] = {0.950428545f, 1.000000000f, 1.088900371f};
 static const float INV_ILL[3] = {1.052156925f, 1.000000000f, 0.918357670f};
@@ -212,7 +207,7 @@ static void filters_fini(flip_filters *f)
 }
 
 /* out = the filter c (taps 0..r) along a row p, read from p[-r] to p[w - 1 + r] */
-CLONES static void hfilter(const float *p, const float *c, int r, bool anti, int w, float *out)
+FB_CLONES static void hfilter(const float *p, const float *c, int r, bool anti, int w, float *out)
 {
     if (anti)
         for (int x = 0; x < w; x++) out[x] = 0.0f;
@@ -229,7 +224,7 @@ CLONES static void hfilter(const float *p, const float *c, int r, bool anti, int
 }
 
 /* out = the filter c down the rows rows[-r..r] (rows points at the centre's pointer) */
-CLONES static void vfilter(const float *const *rows, const float *c, int r, bool anti, int w, float *out)
+FB_CLONES static void vfilter(const float *const *rows, const float *c, int r, bool anti, int w, float *out)
 {
     const float *m = rows[0];
     if (anti)
@@ -272,8 +267,8 @@ static inline __attribute__((always_inline)) void linear_plane(const float *s, i
 
 /* y (the linear luminance, which is both Y/116 + 16/116 and what the CSF of Y filters) and, in
  * colour, Cx and Cz, of w pixels of the planes s (exposed by m and tone mapped when hdr). */
-CLONES static void linear_row(const float *const s[3], int w, bool hdr, float m, bool grey, float *y, float *cx,
-                              float *cz)
+FB_CLONES static void linear_row(const float *const s[3], int w, bool hdr, float m, bool grey, float *y, float *cx,
+                                 float *cz)
 {
     linear_plane(s[0], w, hdr, m, y);
     if (grey) return;
@@ -335,8 +330,8 @@ static inline __attribute__((always_inline)) float pixel_error(const float *cons
     return d > 0.0f ? e : f >= 1.0f ? 1.0f : 0.0f; /* 0^0 = 1, as powf */
 }
 
-CLONES static void error_row_grey(const float *const *a, const float *const *b, int w, row_consts k, bool first,
-                                  float *restrict err)
+FB_CLONES static void error_row_grey(const float *const *a, const float *const *b, int w, row_consts k, bool first,
+                                     float *restrict err)
 {
     for (int x = 0; x < w; x++) {
         float e = pixel_error(a, b, x, true, k), o = first ? 0.0f : err[x];
@@ -344,8 +339,8 @@ CLONES static void error_row_grey(const float *const *a, const float *const *b, 
     }
 }
 
-CLONES static void error_row_colour(const float *const *a, const float *const *b, int w, row_consts k, bool first,
-                                    float *restrict err)
+FB_CLONES static void error_row_colour(const float *const *a, const float *const *b, int w, row_consts k, bool first,
+                                       float *restrict err)
 {
     for (int x = 0; x < w; x++) {
         float e = pixel_error(a, b, x, false, k), o = first ? 0.0f : err[x];

@@ -1,6 +1,8 @@
 /* SSIM, streamed (ssim.h). */
 #include "ssim.h"
 
+#include "clones.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,43 +18,52 @@ fb_result ssim_init(ssim_acc *s, int width, double range)
     s->c2 = (0.03 * L) * (0.03 * L);
     s->width = width;
     s->vw = width - 2 * SSIM_R;
-    if (!(s->ring = calloc((size_t)SSIM_N * 5 * (size_t)s->vw, sizeof *s->ring)))
+    if (!(s->ring = calloc((size_t)SSIM_N * 5 * (size_t)s->vw, sizeof *s->ring)) ||
+        !(s->tmp = calloc(6 * (size_t)s->vw, sizeof *s->tmp)))
         return fb_fail(FB_ERR_NOMEM, "out of memory for SSIM");
     return FB_OK;
 }
 
-/* One image row of both channels (doubles). */
-void ssim_row(ssim_acc *s, const double *a, const double *b)
+/* One image row of both channels (doubles). Each loop runs along the row (it vectorises); each
+ * value's sums are taken in the window's order, so the bits are those of a plain loop per pixel. */
+FB_CLONES void ssim_row(ssim_acc *s, const double *a, const double *b)
 {
-    double *h = s->ring + (size_t)(s->rows_in % SSIM_N) * 5 * s->vw;
-    for (int x = 0; x < s->vw; x++) {
-        double ma = 0, mb = 0, aa = 0, bb = 0, ab = 0;
-        for (int k = 0; k < SSIM_N; k++) {
-            double w = s->w[k], va = a[x + k], vb = b[x + k];
-            ma += w * va, mb += w * vb, aa += w * va * va, bb += w * vb * vb, ab += w * va * vb;
+    int vw = s->vw;
+    double *h = s->ring + (size_t)(s->rows_in % SSIM_N) * 5 * vw;
+    double *ma = h, *mb = h + vw, *aa = h + 2 * vw, *bb = h + 3 * vw, *ab = h + 4 * vw;
+    for (int x = 0; x < 5 * vw; x++) h[x] = 0;
+    for (int k = 0; k < SSIM_N; k++) {
+        double w = s->w[k];
+        const double *pa = a + k, *pb = b + k;
+        for (int x = 0; x < vw; x++) {
+            double va = pa[x], vb = pb[x];
+            ma[x] += w * va, mb[x] += w * vb, aa[x] += w * va * va, bb[x] += w * vb * vb, ab[x] += w * va * vb;
         }
-        h[x] = ma, h[s->vw + x] = mb, h[2 * s->vw + x] = aa, h[3 * s->vw + x] = bb, h[4 * s->vw + x] = ab;
     }
     s->rows_in++;
     if (s->rows_in < SSIM_N) return;
-    for (int x = 0; x < s->vw; x++) { /* the window centred SSIM_R rows back */
-        double st[5] = {0, 0, 0, 0, 0};
-        for (int k = 0; k < SSIM_N; k++) {
-            const double *r = s->ring + (size_t)((s->rows_in - SSIM_N + k) % SSIM_N) * 5 * s->vw;
-            for (int q = 0; q < 5; q++) st[q] += s->w[k] * r[q * s->vw + x];
-        }
-        double mu_a = st[0], mu_b = st[1];
-        double va = st[2] - mu_a * mu_a, vb = st[3] - mu_b * mu_b, cov = st[4] - mu_a * mu_b;
-        s->sum +=
-            ((2 * mu_a * mu_b + s->c1) * (2 * cov + s->c2)) / ((mu_a * mu_a + mu_b * mu_b + s->c1) * (va + vb + s->c2));
-        s->count++;
+    double *st = s->tmp, *m = s->tmp + 5 * vw; /* the window centred SSIM_R rows back */
+    for (int x = 0; x < 5 * vw; x++) st[x] = 0;
+    for (int k = 0; k < SSIM_N; k++) {
+        const double *r = s->ring + (size_t)((s->rows_in - SSIM_N + k) % SSIM_N) * 5 * vw;
+        double w = s->w[k];
+        for (int x = 0; x < 5 * vw; x++) st[x] += w * r[x];
     }
+    for (int x = 0; x < vw; x++) {
+        double mu_a = st[x], mu_b = st[vw + x];
+        double va = st[2 * vw + x] - mu_a * mu_a, vb = st[3 * vw + x] - mu_b * mu_b, cov = st[4 * vw + x] - mu_a * mu_b;
+        m[x] =
+            ((2 * mu_a * mu_b + s->c1) * (2 * cov + s->c2)) / ((mu_a * mu_a + mu_b * mu_b + s->c1) * (va + vb + s->c2));
+    }
+    for (int x = 0; x < vw; x++) s->sum += m[x];
+    s->count += (uint64_t)vw;
 }
 
 void ssim_fini(ssim_acc *s)
 {
     free(s->ring);
-    s->ring = NULL;
+    free(s->tmp);
+    s->ring = s->tmp = NULL;
 }
 
 double ssim_mean(const ssim_acc *s)
