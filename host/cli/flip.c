@@ -37,7 +37,7 @@
 #include <string.h>
 
 #define FPI       3.14159265358979f
-#define FLIP_BAND 64 /* rows a band */
+#define FLIP_BAND 128 /* rows a band: its first and last r rows are filtered for it alone */
 
 static const float ILL[3] = {0.950428545f, 1.000000000f, 1.088900371f};
 static const float INV_ILL[3] = {1.052156925f, 1.000000000f, 0.918357670f};
