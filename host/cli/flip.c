@@ -223,6 +223,77 @@ FB_CLONES static void hfilter(const float *p, const float *c, int r, bool anti, 
     }
 }
 
+#pragma GCC diagnostic ignored "-Wpsabi" /* v8f passed between inlined helpers only */
+typedef float v8f __attribute__((vector_size(32)));
+
+static inline __attribute__((always_inline)) v8f ld8(const float *p)
+{
+    v8f v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+
+/* The four filters of one row at once, 8 pixels at a time with the sums in registers: o[0] the
+ * symmetric c[0] (radius r0), o[1] and o[3] the symmetric c[1], c[3], o[2] the antisymmetric c[2]
+ * (radius r1 <= r0). Each sum is taken in hfilter's order: the same bits. */
+FB_CLONES static void hfilter4(const float *p, const float *const c[4], int r0, int r1, int w, float *const o[4])
+{
+    int x = 0;
+    for (; x + 8 <= w; x += 8) {
+        const float *q = p + x;
+        v8f m = ld8(q), a0 = c[0][0] * m, a1 = c[1][0] * m, a2 = {0}, a3 = c[3][0] * m;
+        for (int i = 1; i <= r1; i++) {
+            v8f u = ld8(q + i), v = ld8(q - i), sum = u + v, dif = u - v;
+            a0 += c[0][i] * sum, a1 += c[1][i] * sum, a2 += c[2][i] * dif, a3 += c[3][i] * sum;
+        }
+        for (int i = r1 + 1; i <= r0; i++) a0 += c[0][i] * (ld8(q + i) + ld8(q - i));
+        memcpy(o[0] + x, &a0, sizeof a0), memcpy(o[1] + x, &a1, sizeof a1);
+        memcpy(o[2] + x, &a2, sizeof a2), memcpy(o[3] + x, &a3, sizeof a3);
+    }
+    for (; x < w; x++) { /* the last few, one at a time */
+        const float *q = p + x;
+        float m = q[0], a0 = c[0][0] * m, a1 = c[1][0] * m, a2 = 0.0f, a3 = c[3][0] * m;
+        for (int i = 1; i <= r1; i++) {
+            float u = q[i], v = q[-i], sum = u + v, dif = u - v;
+            a0 += c[0][i] * sum, a1 += c[1][i] * sum, a2 += c[2][i] * dif, a3 += c[3][i] * sum;
+        }
+        for (int i = r1 + 1; i <= r0; i++) a0 += c[0][i] * (q[i] + q[-i]);
+        o[0][x] = a0, o[1][x] = a1, o[2][x] = a2, o[3][x] = a3;
+    }
+}
+
+/* Down the rows, four filters at once the same way: o[0] the symmetric c[0] over the rows Ry (radius
+ * r0), o[1] the symmetric c[1] over Rx, o[2] the antisymmetric c[2] and o[3] the symmetric c[3], both
+ * over Rg (radius r1 <= r0); vfilter's order, the same bits. */
+FB_CLONES static void vfilter4(const float *const *Ry, const float *const *Rx, const float *const *Rg,
+                               const float *const c[4], int r0, int r1, int w, float *const o[4])
+{
+    int x = 0;
+    for (; x + 8 <= w; x += 8) {
+        v8f m = ld8(Rg[0] + x), a0 = c[0][0] * ld8(Ry[0] + x), a1 = c[1][0] * ld8(Rx[0] + x), a2 = {0};
+        v8f a3 = c[3][0] * m;
+        for (int i = 1; i <= r1; i++) {
+            v8f u = ld8(Rg[i] + x), v = ld8(Rg[-i] + x);
+            a0 += c[0][i] * (ld8(Ry[i] + x) + ld8(Ry[-i] + x));
+            a1 += c[1][i] * (ld8(Rx[i] + x) + ld8(Rx[-i] + x));
+            a2 += c[2][i] * (u - v), a3 += c[3][i] * (u + v);
+        }
+        for (int i = r1 + 1; i <= r0; i++) a0 += c[0][i] * (ld8(Ry[i] + x) + ld8(Ry[-i] + x));
+        memcpy(o[0] + x, &a0, sizeof a0), memcpy(o[1] + x, &a1, sizeof a1);
+        memcpy(o[2] + x, &a2, sizeof a2), memcpy(o[3] + x, &a3, sizeof a3);
+    }
+    for (; x < w; x++) { /* the last few, one at a time */
+        float a0 = c[0][0] * Ry[0][x], a1 = c[1][0] * Rx[0][x], a2 = 0.0f, a3 = c[3][0] * Rg[0][x];
+        for (int i = 1; i <= r1; i++) {
+            float u = Rg[i][x], v = Rg[-i][x];
+            a0 += c[0][i] * (Ry[i][x] + Ry[-i][x]), a1 += c[1][i] * (Rx[i][x] + Rx[-i][x]);
+            a2 += c[2][i] * (u - v), a3 += c[3][i] * (u + v);
+        }
+        for (int i = r1 + 1; i <= r0; i++) a0 += c[0][i] * (Ry[i][x] + Ry[-i][x]);
+        o[0][x] = a0, o[1][x] = a1, o[2][x] = a2, o[3][x] = a3;
+    }
+}
+
 /* out = the filter c down the rows rows[-r..r] (rows points at the centre's pointer) */
 FB_CLONES static void vfilter(const float *const *rows, const float *c, int r, bool anti, int w, float *out)
 {
@@ -308,43 +379,71 @@ static inline __attribute__((always_inline)) void filtered_lab(float fy, float f
 
 typedef struct row_consts {
     float cmax, pccmax;
+    float lc;  /* log2(0.95 / pccmax): the colour error's scale below pccmax, in the exponent */
+    float hyt; /* a little below the HyAB distance whose 0.7th power is pccmax */
 } row_consts;
 
-static inline __attribute__((always_inline)) float pixel_error(const float *const *a, const float *const *b, int x,
-                                                               bool grey, row_consts k)
+/* The colour distance (HyAB of the Hunt-adjusted CIELAB) and the feature difference of pixel x. */
+static inline __attribute__((always_inline)) void pixel_parts(const float *const *a, const float *const *b, int x,
+                                                              bool grey, float *hy, float *f)
 {
     float la[3], lb[3];
     filtered_lab(a[V_Y][x], grey ? 0.0f : a[V_CX][x], grey ? 0.0f : a[V_CZ][x], grey, la);
     filtered_lab(b[V_Y][x], grey ? 0.0f : b[V_CX][x], grey ? 0.0f : b[V_CZ][x], grey, lb);
     float da = la[1] - lb[1], db = la[2] - lb[2];
-    float hy = fabsf(la[0] - lb[0]) + sqrtf(da * da + db * db);
-    float d = fpow(hy, 0.7f);
-    d = d < k.pccmax ? d * (0.95f / k.pccmax) : 0.95f + ((d - k.pccmax) / (k.cmax - k.pccmax)) * (1.0f - 0.95f);
+    *hy = fabsf(la[0] - lb[0]) + sqrtf(da * da + db * db);
     float ea = sqrtf(a[V_DX][x] * a[V_DX][x] + a[V_DY][x] * a[V_DY][x]);
     float pa = sqrtf(a[V_DDX][x] * a[V_DDX][x] + a[V_DDY][x] * a[V_DDY][x]);
     float eb = sqrtf(b[V_DX][x] * b[V_DX][x] + b[V_DY][x] * b[V_DY][x]);
     float pb = sqrtf(b[V_DDX][x] * b[V_DDX][x] + b[V_DDY][x] * b[V_DDY][x]);
     float de = fabsf(ea - eb), dp = fabsf(pa - pb);
-    float f = sqrtf(0.707106781f * (de > dp ? de : dp));
+    *f = sqrtf(0.707106781f * (de > dp ? de : dp));
+}
+
+/* The error color^(1 - f) where color = hy^0.7 mapped to [0, 1]: below 0.95 (most pixels) the map is
+ * a scale, taken in the exponent: 2^((1 - f) (0.7 log2 hy + lc)). */
+static inline __attribute__((always_inline)) float error_low(float hy, float f, row_consts k)
+{
+    float e = fexp2((1.0f - f) * (0.7f * flog2(hy > 1e-30f ? hy : 1e-30f) + k.lc));
+    return hy > 0.0f ? e : f >= 1.0f ? 1.0f : 0.0f; /* 0^0 = 1, as powf */
+}
+
+/* The same in full, for any hy. */
+static float error_full(float hy, float f, row_consts k)
+{
+    float d = fpow(hy, 0.7f);
+    d = d < k.pccmax ? d * (0.95f / k.pccmax) : 0.95f + ((d - k.pccmax) / (k.cmax - k.pccmax)) * (1.0f - 0.95f);
     float e = fexp2((1.0f - f) * flog2(d > 1e-30f ? d : 1e-30f));
-    return d > 0.0f ? e : f >= 1.0f ? 1.0f : 0.0f; /* 0^0 = 1, as powf */
+    return d > 0.0f ? e : f >= 1.0f ? 1.0f : 0.0f;
 }
 
-FB_CLONES static void error_row_grey(const float *const *a, const float *const *b, int w, row_consts k, bool first,
-                                     float *restrict err)
+FB_CLONES static void parts_row_grey(const float *const *a, const float *const *b, int w, row_consts k,
+                                     float *restrict hy, float *restrict f, float *restrict e)
 {
-    for (int x = 0; x < w; x++) {
-        float e = pixel_error(a, b, x, true, k), o = first ? 0.0f : err[x];
-        err[x] = e > o ? e : o;
-    }
+    for (int x = 0; x < w; x++) pixel_parts(a, b, x, true, &hy[x], &f[x]), e[x] = error_low(hy[x], f[x], k);
 }
 
-FB_CLONES static void error_row_colour(const float *const *a, const float *const *b, int w, row_consts k, bool first,
-                                       float *restrict err)
+FB_CLONES static void parts_row_colour(const float *const *a, const float *const *b, int w, row_consts k,
+                                       float *restrict hy, float *restrict f, float *restrict e)
 {
+    for (int x = 0; x < w; x++) pixel_parts(a, b, x, false, &hy[x], &f[x]), e[x] = error_low(hy[x], f[x], k);
+}
+
+/* One output row's error: the parts along the row, the few pixels of large colour error again in
+ * full, then the largest over the exposures so far. */
+static void error_row(const float *const *a, const float *const *b, int w, bool grey, row_consts k, bool first,
+                      float *const t[3], float *err)
+{
+    float *hy = t[0], *f = t[1], *e = t[2];
+    if (grey)
+        parts_row_grey(a, b, w, k, hy, f, e);
+    else
+        parts_row_colour(a, b, w, k, hy, f, e);
+    for (int x = 0; x < w; x++)
+        if (hy[x] >= k.hyt) e[x] = error_full(hy[x], f[x], k);
     for (int x = 0; x < w; x++) {
-        float e = pixel_error(a, b, x, false, k), o = first ? 0.0f : err[x];
-        err[x] = e > o ? e : o;
+        float o = first ? 0.0f : err[x];
+        err[x] = e[x] > o ? e[x] : o;
     }
 }
 
@@ -394,6 +493,8 @@ fb_result fb_flip_job_create(const float *const ref[3], const float *const test[
     j->grey = ref[0] == ref[1] && ref[1] == ref[2] && test[0] == test[1] && test[1] == test[2];
     j->k.cmax = max_distance();
     j->k.pccmax = 0.4f * j->k.cmax;
+    j->k.lc = (float)log2(0.95 / j->k.pccmax);
+    j->k.hyt = (float)(pow(j->k.pccmax, 1 / 0.7) * (1 - 1e-5));
     fb_result rc = filters_init(&j->f, ppd);
     if (!rc && hdr) {
         fb_flip_result *r = &j->r;
@@ -418,25 +519,31 @@ int fb_flip_job_bands(const fb_flip_job *j)
 /* A band's memory: per image, the padded linear rows and a ring of 2r + 1 rows of each horizontally
  * filtered plane; per output row, the vertically filtered planes. */
 typedef struct band {
-    int w, r, nring, nh;
+    int w, r, nring, nh, stride;
     float *mem;
-    float *lin[2][3];      /* y, cx, cz, each w + 2r with r of clamped edge each side */
-    float *ring[2][H_N];   /* nring rows of w each */
-    float *v[2][V_N];      /* one row each */
-    const float **rows[2]; /* per H plane, the ring's rows around the centre */
+    float *lin[2][3];    /* y, cx, cz, each w + 2r with r of clamped edge each side */
+    float *ring[2][H_N]; /* nring rows of w each */
+    float *v[2][V_N];    /* one row each */
+    float *t[3];         /* an output row's colour distance, feature difference and error */
 } band;
 
 static bool band_init(band *b, const fb_flip_job *j)
 {
     memset(b, 0, sizeof *b);
     b->w = j->w, b->r = j->f.r, b->nring = 2 * b->r + 1, b->nh = j->grey ? 4 : H_N;
-    size_t pad = (size_t)b->w + 2 * (size_t)b->r, per = 3 * pad + (size_t)H_N * b->nring * b->w + (size_t)V_N * b->w;
+    /* a ring row's stride: a cache line more than the row, rounded, so that the rows a filter reads
+     * at once do not all fall in the same sets of the cache (4 KiB apart for 1024 pixels) */
+    b->stride = ((b->w + 15) & ~15) + 16;
+    size_t pad = (size_t)b->w + 2 * (size_t)b->r;
+    size_t per = 3 * pad + (size_t)H_N * b->nring * b->stride + (size_t)(V_N + 2) * b->stride;
     if (!(b->mem = malloc(2 * per * sizeof(float)))) return false;
     for (int s = 0; s < 2; s++) {
         float *m = b->mem + s * per;
         for (int q = 0; q < 3; q++) b->lin[s][q] = m, m += pad;
-        for (int q = 0; q < H_N; q++) b->ring[s][q] = m, m += (size_t)b->nring * b->w;
-        for (int q = 0; q < V_N; q++) b->v[s][q] = m, m += b->w;
+        for (int q = 0; q < H_N; q++) b->ring[s][q] = m, m += (size_t)b->nring * b->stride;
+        for (int q = 0; q < V_N; q++) b->v[s][q] = m, m += b->stride;
+        for (int q = 0; q < 2 && s == 0; q++) b->t[q] = m, m += b->stride;
+        if (s == 1) b->t[2] = m;
     }
     return true;
 }
@@ -456,11 +563,16 @@ static void band_hrow(band *b, const fb_flip_job *j, int s, int yy, float m, int
     }
     const flip_filters *f = &j->f;
     float *const *rg = b->ring[s];
-    size_t o = (size_t)slot * w;
-    hfilter(y, f->tap[F_Y], f->rs, false, w, rg[H_Y] + o);
-    hfilter(y, f->tap[F_G], f->rf, false, w, rg[H_G] + o);
-    hfilter(y, f->tap[F_DG], f->rf, true, w, rg[H_DX] + o);
-    hfilter(y, f->tap[F_DDG], f->rf, false, w, rg[H_DDX] + o);
+    size_t o = (size_t)slot * b->stride;
+    if (f->rf <= f->rs) {
+        hfilter4(y, (const float *const[4]){f->tap[F_Y], f->tap[F_G], f->tap[F_DG], f->tap[F_DDG]}, f->rs, f->rf, w,
+                 (float *const[4]){rg[H_Y] + o, rg[H_G] + o, rg[H_DX] + o, rg[H_DDX] + o});
+    } else {
+        hfilter(y, f->tap[F_Y], f->rs, false, w, rg[H_Y] + o);
+        hfilter(y, f->tap[F_G], f->rf, false, w, rg[H_G] + o);
+        hfilter(y, f->tap[F_DG], f->rf, true, w, rg[H_DX] + o);
+        hfilter(y, f->tap[F_DDG], f->rf, false, w, rg[H_DDX] + o);
+    }
     if (j->grey) return;
     hfilter(cx, f->tap[F_CX], f->rs, false, w, rg[H_CX] + o);
     hfilter(cz, f->tap[F_CZ1], f->rs, false, w, rg[H_CZ1] + o);
@@ -476,14 +588,20 @@ static void band_vrow(band *b, const fb_flip_job *j, int s, int y)
     for (int q = 0; q < H_N; q++) {
         c[q] = rows[q] + r;
         for (int i = -r; i <= r; i++)
-            c[q][i] = b->ring[s][q] + (size_t)(((y + i) % b->nring + b->nring) % b->nring) * w;
+            c[q][i] = b->ring[s][q] + (size_t)(((y + i) % b->nring + b->nring) % b->nring) * b->stride;
     }
     float *const *v = b->v[s];
-    vfilter(c[H_Y], f->tap[F_Y], f->rs, false, w, v[V_Y]);
-    vfilter(c[H_DX], f->tap[F_G], f->rf, false, w, v[V_DX]);
+    if (f->rf <= f->rs) {
+        vfilter4(c[H_Y], c[H_DX], c[H_G],
+                 (const float *const[4]){f->tap[F_Y], f->tap[F_G], f->tap[F_DG], f->tap[F_DDG]}, f->rs, f->rf, w,
+                 (float *const[4]){v[V_Y], v[V_DX], v[V_DY], v[V_DDY]});
+    } else {
+        vfilter(c[H_Y], f->tap[F_Y], f->rs, false, w, v[V_Y]);
+        vfilter(c[H_DX], f->tap[F_G], f->rf, false, w, v[V_DX]);
+        vfilter(c[H_G], f->tap[F_DG], f->rf, true, w, v[V_DY]);
+        vfilter(c[H_G], f->tap[F_DDG], f->rf, false, w, v[V_DDY]);
+    }
     vfilter(c[H_DDX], f->tap[F_G], f->rf, false, w, v[V_DDX]);
-    vfilter(c[H_G], f->tap[F_DG], f->rf, true, w, v[V_DY]);
-    vfilter(c[H_G], f->tap[F_DDG], f->rf, false, w, v[V_DDY]);
     if (j->grey) return;
     vfilter(c[H_CX], f->tap[F_CX], f->rs, false, w, v[V_CX]);
     vfilter(c[H_CZ1], f->tap[F_CZ1], f->rs, false, w, v[V_CZ]);
@@ -510,10 +628,7 @@ void fb_flip_job_band(fb_flip_job *j, int t)
             const float *va[V_N], *vb[V_N];
             for (int q = 0; q < V_N; q++) va[q] = b.v[0][q], vb[q] = b.v[1][q];
             float *err = j->map + (size_t)y * j->w;
-            if (j->grey)
-                error_row_grey(va, vb, j->w, j->k, e == 0, err);
-            else
-                error_row_colour(va, vb, j->w, j->k, e == 0, err);
+            error_row(va, vb, j->w, j->grey, j->k, e == 0, b.t, err);
         }
     }
     free(b.mem);
