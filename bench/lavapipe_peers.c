@@ -322,6 +322,14 @@ static int parse(int argc, char **argv, options *o)
     if (o->reps < 1 || o->reps > MAX_REPS) return usage("--reps: 1 to 31");
     if (o->rows < 1 || o->rows > o->size) return usage("--rows: 1 to the size");
     if (o->only && strcmp(o->only, "fbm") && strcmp(o->only, "julia")) return usage("--only: fbm or julia");
+    for (int i = 0; i < o->nspv; i++) {
+        bool fbm = strstr(o->spv_file[i], "fbm") != NULL, julia = strstr(o->spv_file[i], "julia") != NULL;
+        if (fbm == julia) return usage("--spv: the file's name must name one case, fbm or julia");
+        if (o->only && strcmp(o->only, fbm ? "fbm" : "julia"))
+            return usage("--spv: a file of the case --only leaves out");
+    }
+    if (o->nchannels && o->only && strcmp(o->only, "julia"))
+        return usage("--channels: a julia variant, but --only fbm");
     const char *val = getenv("FB_VK_VALIDATION");
     o->validation = val && !strcmp(val, "1");
     return 0;
