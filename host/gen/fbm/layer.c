@@ -200,6 +200,34 @@ static void fb_fbm_params_fill(const fb_scene *s, const fb_layer *L, K_FbmParams
     fb_fbm_params_frame(p, s->width, s->height);
 }
 
+double fb_fbm_lattice_bound(const K_FbmParams *p)
+{
+    double amp_sum = 0, amp = 1;
+    for (uint32_t i = 0; i < p->octaves; i++, amp *= fabs((double)p->gain)) amp_sum += amp;
+    /* |u|, |v| < 1, then the warp: u' = u + warp fbm(u, v) / fx with |fbm| <= amp_sum (every shape is in [-1, 1]) */
+    double um = 1 + fabs((double)p->warp) * amp_sum * fabs((double)p->inv_freq_x);
+    double vm = 1 + fabs((double)p->warp) * amp_sum * fabs((double)p->inv_freq_y);
+    double lac = fabs((double)p->lacunarity), rc = fabs((double)p->rot_c), rs = fabs((double)p->rot_s);
+    double x = fabs((double)p->freq_x) * um + fabs((double)p->offset_x);
+    double y = fabs((double)p->freq_y) * vm + fabs((double)p->offset_y);
+    double cx = fabs((double)p->freq_x), cy = fabs((double)p->freq_y), bound = 0;
+    for (uint32_t i = 0; i < p->octaves; i++) {
+        double m = x > y ? x : y;
+        if ((p->flags & K_FBM_TILEABLE) != 0u) { /* u round(cells) + an offset under 256 */
+            double tx = um * (cx + 1) + 255 + fabs((double)p->offset_x),
+                   ty = vm * (cy + 1) + 255 + fabs((double)p->offset_y);
+            m = tx > ty ? tx : ty;
+        }
+        /* simplex skews by (x + y)(sqrt(3) - 1)/2; cellular looks 2 cells away; 1e-5: float rounding */
+        m = (m * (1 + 0.7320508) + 3) * (1 + 1e-5);
+        if (isnan(m)) return INFINITY;
+        if (m > bound) bound = m;
+        double nx = lac * (rc * x + rs * y) * (1 + 1e-5) + 64, ny = lac * (rs * x + rc * y) * (1 + 1e-5) + 64;
+        x = nx, y = ny, cx *= lac, cy *= lac;
+    }
+    return isfinite(bound) ? bound : INFINITY;
+}
+
 static fb_result fbm_init(fb_gen *g)
 {
     fb_fbm_params_fill(g->scene, g->layer, (K_FbmParams *)(void *)g->params);
@@ -214,7 +242,8 @@ static fb_result fbm_init(fb_gen *g)
     g->push_size = sizeof(fbm_push);
     g->spec[0] = params(g)->noise;
     g->spec[1] = params(g)->flags;
-    g->nspec = 2;
+    g->spec[2] = fb_fbm_lattice_bound(params(g)) < 16777216.0 ? 1u : 0u;
+    g->nspec = 3;
     return FB_OK;
 }
 
