@@ -3,8 +3,13 @@
  * kernels/sincos.h against libm; the Julia layer's lat-long and cube grids (every pixel's escape
  * count and distance estimate) against the stereographic projection of the pixel's direction
  * (envmap.h's directions, which tests/test_envmap.cpp checks against OpenEXR's), warped and iterated
- * in double; the poles' rows hold one value each and the lat-long seam's two columns agree.
+ * in double; the poles' rows hold one value each and the lat-long seam's two columns agree. fBm on
+ * the sphere: 3D cellular noise against a brute-force search, each pole row one value for every
+ * noise kind and the seam's columns one meridian (their difference under 2% of neighbours'), the six cube faces alike
+ * in variance and variogram over angular distance (over seeds, within 4 standard errors), and neighbours across the
+ * lat-long seam and every cube edge no farther apart than neighbours inside a face.
  */
+#include "../kernels/fbm.h"
 #include "../kernels/julia.h"
 #include "../kernels/sincos.h"
 
@@ -155,6 +160,184 @@ static void test_poles_seam(void)
     CHECKF(seam_bad <= 1, "the seam: %d of %d rows differ between the first and last columns", seam_bad, H);
 }
 
+/* ---- fBm on the sphere ---------------------------------------------------------------------- */
+
+static K_FbmParams fbm_env(uint mapping, int w, int h, uint noise, uint seed)
+{
+    K_FbmParams p;
+    memset(&p, 0, sizeof p);
+    p.seed = seed, p.noise = noise, p.octaves = 6, p.gain = 0.5f, p.lacunarity = 2.0f;
+    p.rot_c = 0.8f, p.rot_s = 0.6f;
+    p.freq_x = p.freq_y = 6.0f;
+    p.width = (uint)w, p.height = (uint)h, p.mapping = mapping;
+    p.inv_width = 1.0f / (float)w, p.inv_height = 1.0f / (float)h;
+    p.inv_freq_x = p.inv_freq_y = 1.0f / p.freq_x;
+    return p;
+}
+
+/* F1 and F2 of the 5 x 5 x 5 search with skipping against every point of the 7 x 7 x 7 block. */
+static void test_cellular3(void)
+{
+    int bad = 0;
+    uint32_t st = 1;
+    for (int i = 0; i < 200000; i++) {
+        float q[3];
+        for (int k = 0; k < 3; k++) st = st * 1664525u + 1013904223u, q[k] = (float)(st >> 8) / 16777216.0f * 40 - 20;
+        k_vec2 f = k_cellular3(77u, k_vec3(q[0], q[1], q[2]));
+        double f1 = 1e9, f2 = 1e9;
+        float fl[3] = {floorf(q[0]), floorf(q[1]), floorf(q[2])};
+        for (int dz = -3; dz <= 3; dz++)
+            for (int dy = -3; dy <= 3; dy++)
+                for (int dx = -3; dx <= 3; dx++) {
+                    uint P = K_NOISE_PERIOD;
+                    uint h =
+                        k_hash3i(77u, k_cell_add(k_wrap_cell(fl[0], P), dx, P),
+                                 k_cell_add(k_wrap_cell(fl[1], P), dy, P), k_cell_add(k_wrap_cell(fl[2], P), dz, P));
+                    uint h2 = k_hash(h);
+                    double ox = dx + (double)k_u01(h) - (q[0] - fl[0]), oy = dy + (double)k_u01(h2) - (q[1] - fl[1]);
+                    double oz = dz + (double)k_u01(k_hash(h2)) - (q[2] - fl[2]);
+                    double d2 = ox * ox + oy * oy + oz * oz;
+                    if (d2 < f1)
+                        f2 = f1, f1 = d2;
+                    else if (d2 < f2)
+                        f2 = d2;
+                }
+        bad += fabs(f.x - sqrt(f1)) > 1e-5 || fabs(f.y - sqrt(f2)) > 1e-5;
+    }
+    CHECKF(bad == 0, "3D cellular: %d of 200000 queries miss the nearest points", bad);
+}
+
+/* Each pole row of a lat-long fBm is one point: its spread is below 1e-4 while the image's standard
+ * deviation is above 0.05, for every noise kind; the seam's two columns are one meridian. */
+static void test_fbm_poles(void)
+{
+    enum { W = 256, H = 128 };
+    for (uint kind = 0; kind < K_NOISE_COUNT; kind++) {
+        K_FbmParams p = fbm_env(K_ENV_LATLONG, W, H, kind, 5u);
+        double s = 0, s2 = 0, spread = 0, seam = 0;
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++) {
+                double v = k_fbm_map_pixel(p, (uint)x, (uint)y);
+                s += v, s2 += v * v;
+            }
+        double sd = sqrt(s2 / (W * H) - (s / (W * H)) * (s / (W * H)));
+        for (int row = 0; row < H; row += H - 1) {
+            float lo = 1e9f, hi = -1e9f;
+            for (int x = 0; x < W; x++) {
+                float v = k_fbm_map_pixel(p, (uint)x, (uint)row);
+                lo = fminf(lo, v), hi = fmaxf(hi, v);
+            }
+            spread = fmax(spread, hi - lo);
+        }
+        double step = 0; /* the mean difference between neighbours along a row */
+        for (int y = 0; y < H; y++) {
+            seam = fmax(seam, fabsf(k_fbm_map_pixel(p, 0, (uint)y) - k_fbm_map_pixel(p, W - 1, (uint)y)));
+            for (int x = 0; x + 1 < W; x++)
+                step += fabsf(k_fbm_map_pixel(p, (uint)x + 1, (uint)y) - k_fbm_map_pixel(p, (uint)x, (uint)y));
+        }
+        step /= (double)H * (W - 1);
+        CHECKF(sd > 0.05 && spread < 1e-4 && seam < 0.02 * step,
+               "noise %u: pole rows spread %g, seam %g (neighbours %g), image sd %g", kind, spread, seam, step, sd);
+    }
+}
+
+static double angle_between(k_vec3 a, k_vec3 b)
+{
+    double cx = (double)a.y * b.z - (double)a.z * b.y, cy = (double)a.z * b.x - (double)a.x * b.z;
+    double cz = (double)a.x * b.y - (double)a.y * b.x;
+    return atan2(sqrt(cx * cx + cy * cy + cz * cz), (double)a.x * b.x + (double)a.y * b.y + (double)a.z * b.z);
+}
+
+/* The six faces of a cube fBm, over S seeds: each face's mean square and its variogram in four bins of
+ * angular distance (pairs 1 to 4 pixels apart along a row of the face) against the other faces'
+ * mean, within 4 standard errors of the seeds' spread. */
+static void test_fbm_faces(void)
+{
+    enum { N = 40, S = 16, NB = 4 };
+    static const double edges[NB + 1] = {0.015, 0.03, 0.06, 0.12, 0.2};
+    static double stat[S][6][NB + 1];
+    memset(stat, 0, sizeof stat);
+    for (int sd = 0; sd < S; sd++) {
+        K_FbmParams p = fbm_env(K_ENV_CUBE, N, 6 * N, K_NOISE_GRADIENT, 100u + (uint)sd);
+        static float img[6 * N][N];
+        for (int y = 0; y < 6 * N; y++)
+            for (int x = 0; x < N; x++) img[y][x] = k_fbm_map_pixel(p, (uint)x, (uint)y);
+        for (int f = 0; f < 6; f++) {
+            double sum[NB] = {0}, cnt[NB] = {0}, sq = 0;
+            for (int y = f * N; y < f * N + N; y++)
+                for (int x = 0; x < N; x++) {
+                    sq += (double)img[y][x] * img[y][x];
+                    k_vec3 a = k_env_cube_dir((float)x, (float)y, N);
+                    for (int k = 1; k <= 4 && x + k < N; k++) {
+                        double t = angle_between(a, k_env_cube_dir((float)(x + k), (float)y, N));
+                        for (int b = 0; b < NB; b++)
+                            if (t >= edges[b] && t < edges[b + 1]) {
+                                double d = (double)img[y][x + k] - img[y][x];
+                                sum[b] += d * d, cnt[b]++;
+                            }
+                    }
+                }
+            stat[sd][f][0] = sq / (N * N);
+            for (int b = 0; b < NB; b++) stat[sd][f][b + 1] = cnt[b] > 0 ? 0.5 * sum[b] / cnt[b] : 0;
+        }
+    }
+    int worst_face = -1;
+    double worst = 0;
+    for (int m = 0; m <= NB; m++)
+        for (int f = 0; f < 6; f++) {
+            /* the seed-wise difference between this face and the mean of the other five */
+            double s = 0, s2 = 0;
+            for (int sd = 0; sd < S; sd++) {
+                double others = 0;
+                for (int g = 0; g < 6; g++) others += g == f ? 0 : stat[sd][g][m] / 5;
+                double d = stat[sd][f][m] - others;
+                s += d, s2 += d * d;
+            }
+            double mean = s / S, se = sqrt(fmax(s2 / S - mean * mean, 1e-300) / (S - 1));
+            double z = fabs(mean) / se;
+            if (z > worst) worst = z, worst_face = f * 10 + m;
+        }
+    CHECKF(worst <= 4.0, "cube faces: face %d statistic %d is %.2f standard errors from the others", worst_face / 10,
+           worst_face % 10, worst);
+}
+
+/* Neighbours across every cube edge (a face's edge pixel and the pixel one step beyond it, found on
+ * the neighbouring face) differ by no more per radian than neighbours inside the faces: the edges'
+ * mean |difference| / angle within 4 standard errors above the interior's. */
+static void test_fbm_edges(void)
+{
+    enum { N = 64 };
+    K_FbmParams p = fbm_env(K_ENV_CUBE, N, 6 * N, K_NOISE_GRADIENT, 9u);
+    double in_s = 0, in_n = 0, e_s = 0, e_s2 = 0, e_n = 0;
+    for (int f = 0; f < 6; f++)
+        for (int y = f * N; y < f * N + N; y++)
+            for (int x = 0; x < N; x++) {
+                float v = k_fbm_map_pixel(p, (uint)x, (uint)y);
+                k_vec3 a = k_env_cube_dir((float)x, (float)y, N);
+                if (x + 1 < N) {
+                    float w = k_fbm_map_pixel(p, (uint)x + 1, (uint)y);
+                    in_s += fabs((double)w - v) / angle_between(a, k_env_cube_dir((float)x + 1, (float)y, N)), in_n++;
+                }
+                bool edge = x == 0 || x == N - 1 || y == f * N || y == f * N + N - 1;
+                if (!edge) continue;
+                /* one pixel outward, continuing the face's plane, lands on the neighbouring face */
+                float ox = x == 0 ? -1.0f : x == N - 1 ? (float)N : (float)x;
+                float oy = y == f * N ? (float)y - 1.0f : y == f * N + N - 1 ? (float)y + 1.0f : (float)y;
+                k_vec3 out = k_env_cube_dir_face(ox, oy, (uint)f, N);
+                k_vec2 q = k_env_cube_pos(out, N);
+                int qx = (int)lroundf(q.x), qy = (int)lroundf(q.y);
+                if (qy / N == f) continue;
+                k_vec3 b = k_env_cube_dir((float)qx, (float)qy, N);
+                double t = angle_between(a, b);
+                if (t < 1e-6) continue;
+                double r = fabs((double)k_fbm_map_pixel(p, (uint)qx, (uint)qy) - v) / t;
+                e_s += r, e_s2 += r * r, e_n++;
+            }
+    double in_mean = in_s / in_n, e_mean = e_s / e_n, e_se = sqrt((e_s2 / e_n - e_mean * e_mean) / (e_n - 1));
+    CHECKF(e_n > 12 * (N - 2) && e_mean <= in_mean + 4 * e_se,
+           "cube edges: %.0f pairs, mean |d|/angle %.4g against %.4g inside (se %.3g)", e_n, e_mean, in_mean, e_se);
+}
+
 int main(void)
 {
     test_sincos();
@@ -162,5 +345,9 @@ int main(void)
     test_julia_map(K_JULIA_LATLONG, 130, 65);
     test_julia_map(K_JULIA_CUBE, 48, 288);
     test_poles_seam();
+    test_cellular3();
+    test_fbm_poles();
+    test_fbm_faces();
+    test_fbm_edges();
     TEST_REPORT();
 }
