@@ -9,7 +9,8 @@
 #ifndef FB_KERNELS_FBM_H
 #define FB_KERNELS_FBM_H
 
-#include "noise.h"
+#include "noise3.h"
+#include "sincos.h"
 
 #define K_FBM_RIDGED   1u
 #define K_FBM_BILLOW   2u
@@ -36,7 +37,7 @@ K_STRUCT(K_FbmParams)
     float inv_height; /* may differ from C's by 2.5 ULP while a multiplication rounds the same */
     float inv_freq_x;
     float inv_freq_y;
-    uint pad0;
+    uint mapping; /* K_ENV_RECT (the plane), K_ENV_LATLONG or K_ENV_CUBE (kernels/envmap.h) */
     uint pad1;
 }
 K_END(K_FbmParams)
@@ -108,6 +109,56 @@ K_FN float k_fbm_pixel(K_FbmParams p, uint px, uint py)
         v = v + p.warp * dv * p.inv_freq_y;
     }
     return k_fbm_uv(p, 0u, u, v);
+}
+
+/*
+ * fBm on the unit sphere (environment maps), for one random stream: the octaves of 3D noise
+ * (noise3.h) at x_0 = d fx / (2 pi) + offset, so that fx octave-0 cells go round the equator as
+ * they go across a rect image's width, then x_{i+1} = L R3 x_i + o_{i+1}, R3 the per-octave
+ * rotation (rot_c, rot_s) about z and then about x, o a hashed fraction of a cell as in 2D. A
+ * direction has no edge, so there is no seam and no pinch; the tileable flag does not apply.
+ */
+K_FN float k_fbm3(K_FbmParams p, uint stream, k_vec3 d)
+{
+    uint seed = k_hash3(p.seed, stream, 0x0fb3u);
+    float k = p.freq_x * (1.0f / K_TAU);
+    float x = d.x * k + p.offset_x, y = d.y * k + p.offset_y, z = d.z * k;
+    float amp = 1.0f, sum = 0.0f;
+    for (uint i = 0u; i < p.octaves; i++) {
+        uint h = k_hash(seed + i * 0x9e3779b9u);
+        sum += amp * k_fbm_shape(k_noise3(p.noise, h, k_vec3(x, y, z)), p.flags);
+        amp *= p.gain;
+        float ax = p.rot_c * x - p.rot_s * y;
+        float ay = p.rot_s * x + p.rot_c * y;
+        float by = p.rot_c * ay - p.rot_s * z;
+        float bz = p.rot_s * ay + p.rot_c * z;
+        uint ho = k_hash(h ^ 0x5bd1e995u), ho2 = k_hash(ho);
+        x = p.lacunarity * ax + K_F(ho & 0xffffu) * (64.0f / 65536.0f);
+        y = p.lacunarity * by + K_F(ho >> 16) * (64.0f / 65536.0f);
+        z = p.lacunarity * bz + K_F(ho2 & 0xffffu) * (64.0f / 65536.0f);
+    }
+    return sum;
+}
+
+/* The fBm value at direction d (any length but zero) with the optional domain warp: d' = d + w
+ * (fbm_1, fbm_2, fbm_3)(d) / k, k = fx / (2 pi) cells per unit, then fbm_0(d'). */
+K_FN float k_fbm_dir(K_FbmParams p, k_vec3 d)
+{
+    float len = k_sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    k_vec3 u = k_vec3(d.x / len, d.y / len, d.z / len);
+    if (p.warp != 0.0f) {
+        float s = p.warp * K_TAU / p.freq_x;
+        u = k_vec3(u.x + s * k_fbm3(p, 1u, u), u.y + s * k_fbm3(p, 2u, u), u.z + s * k_fbm3(p, 3u, u));
+    }
+    return k_fbm3(p, 0u, u);
+}
+
+/* The fBm value of pixel (px, py) of the layer's mapping: the plane (k_fbm_pixel) or the direction
+ * through the pixel's centre of a lat-long or cube environment map (envmap.h). */
+K_FN float k_fbm_map_pixel(K_FbmParams p, uint px, uint py)
+{
+    if (p.mapping == K_ENV_RECT) return k_fbm_pixel(p, px, py);
+    return k_fbm_dir(p, k_env_dir_exact(p.mapping, K_F(px), K_F(py), p.width, p.height));
 }
 
 #endif

@@ -4,6 +4,10 @@
  *   (7)  rectangular: p = s_u (u - 0.5) + i s_v (v - 0.5)      (then rotated and centred)
  *   (8)  polar:       p = r v exp(i 2 pi u)                     t(0, v) = t(1, v): seamless
  *   (11) z_0 = A(p^-1) = (p - conj(a)) / (1 - a p),  z_{n+1} = z_n^2 + c
+ * and on the sphere (environment maps, kernels/envmap.h), the direction d of a pixel through the
+ * stereographic projection from the nadir: p = r (d.x + i d.z) / (1 + d.y), so that the allpass
+ * warp stays a Moebius map, the upper hemisphere is the polar disc |p| <= r (zenith: the centre,
+ * horizon: the rim), and the nadir is the point at infinity.
  *
  * Per pixel: the escape count at the user's bailout R (`iter`), a smooth count that does not depend
  * on R, whether the orbit stayed bounded for max_iter steps, and a distance estimate in pixels.
@@ -12,10 +16,13 @@
 #define FB_KERNELS_JULIA_H
 
 #include "fbm.h"
+#include "sincos.h"
 #include "hash.h"
 
-#define K_JULIA_RECT  0u
-#define K_JULIA_POLAR 1u
+#define K_JULIA_RECT    0u
+#define K_JULIA_POLAR   1u
+#define K_JULIA_LATLONG 2u /* environment maps: envmap.h's positions, each pixel a direction */
+#define K_JULIA_CUBE    3u
 
 /* Orbits continue past R until |z| > 2^16 for the smooth count and the distance estimate, where
  * ln|z_{n+1}| = 2 ln|z_n| holds to 1e-9 and the smooth value no longer depends on the radius. */
@@ -26,12 +33,12 @@ K_STRUCT(K_JuliaParams)
 {
     uint width;
     uint height;
-    uint mapping;  /* K_JULIA_RECT or K_JULIA_POLAR */
+    uint mapping;  /* K_JULIA_RECT, _POLAR, _LATLONG or _CUBE */
     uint max_iter; /* >= 1 */
     float c_re, c_im;
     float a_re, a_im;       /* allpass alpha; 0 is the plain Julia set */
     float scale_u, scale_v; /* rect: s_u, s_v */
-    float radius;           /* polar: r */
+    float radius;           /* polar, latlong, cube: r */
     float center_re, center_im;
     float rot_c, rot_s; /* rotation of the starting grid (host-computed cos, sin) */
     float bailout2;     /* R^2, R >= 2 */
@@ -133,8 +140,13 @@ K_STRUCT(K_JuliaStart)
 }
 K_END(K_JuliaStart)
 
-/* (tw_re, tw_im): the turbulence term lambda W(p) added to z0 (eq. 13); 0 for none. */
-K_FN K_JuliaStart k_julia_begin(K_JuliaParams p, float px, float py, float dpx, float dpy, float tw_re, float tw_im)
+/* z0 = (nr + i ni) / (dr + i di) + tw and dz0 = (1 - |a|^2) (qr + i qi) / (dr + i di)^2: the allpass
+ * warp's value and derivative from its numerator and denominator (q: the derivative of its argument,
+ * times what the form needs). A zero denominator is the pole: the point at infinity, outside every
+ * filled Julia set, so the pixel escapes before the first iteration and nothing non-finite reaches
+ * the output. */
+K_FN K_JuliaStart k_julia_quotient(K_JuliaParams p, float nr, float ni, float dr, float di, float qr, float qi,
+                                   float tw_re, float tw_im)
 {
     K_PRECISE K_JuliaStart s;
     s.ok = 0u;
@@ -142,14 +154,7 @@ K_FN K_JuliaStart k_julia_begin(K_JuliaParams p, float px, float py, float dpx, 
     s.o.zi = 0.0f;
     s.o.dzr = 0.0f;
     s.o.dzi = 0.0f;
-    /* z0 = (p - conj(a)) / (1 - a p); dz0/dx = (1 - |a|^2) / (1 - a p)^2 * dp/dx */
-    K_PRECISE float nr = px - p.a_re;
-    K_PRECISE float ni = py + p.a_im;
-    K_PRECISE float dr = 1.0f - (p.a_re * px - p.a_im * py);
-    K_PRECISE float di = -(p.a_re * py + p.a_im * px);
     K_PRECISE float den = dr * dr + di * di;
-    /* The pole p = 1/a sends z0 to infinity, which lies outside every filled Julia set: the pixel
-     * escapes before the first iteration. Nothing non-finite reaches the output. */
     if (!(den > 1.0e-30f)) return s;
     float inv = 1.0f / den;
     /* precise: an orbit is chaotic, so one fused rounding would change the escape count of
@@ -157,14 +162,118 @@ K_FN K_JuliaStart k_julia_begin(K_JuliaParams p, float px, float py, float dpx, 
     K_PRECISE float zr = (nr * dr + ni * di) * inv + tw_re;
     K_PRECISE float zi = (ni * dr - nr * di) * inv + tw_im;
     float k = 1.0f - (p.a_re * p.a_re + p.a_im * p.a_im);
-    float sr = (dr * dr - di * di) * inv * inv, si = -2.0f * dr * di * inv * inv; /* 1 / (1 - a p)^2 */
+    float sr = (dr * dr - di * di) * inv * inv, si = -2.0f * dr * di * inv * inv; /* 1 / den^2 */
     float wr = k * sr, wi = k * si;
     s.o.zr = zr;
     s.o.zi = zi;
-    s.o.dzr = wr * dpx - wi * dpy;
-    s.o.dzi = wr * dpy + wi * dpx;
+    s.o.dzr = wr * qr - wi * qi;
+    s.o.dzi = wr * qi + wi * qr;
     s.ok = zr * zr + zi * zi < 1.0e30f ? 1u : 0u;
     return s;
+}
+
+/* (tw_re, tw_im): the turbulence term lambda W(p) added to z0 (eq. 13); 0 for none.
+ * z0 = (p - conj(a)) / (1 - a p); dz0/dx = (1 - |a|^2) / (1 - a p)^2 * dp/dx */
+K_FN K_JuliaStart k_julia_begin(K_JuliaParams p, float px, float py, float dpx, float dpy, float tw_re, float tw_im)
+{
+    K_PRECISE float nr = px - p.a_re;
+    K_PRECISE float ni = py + p.a_im;
+    K_PRECISE float dr = 1.0f - (p.a_re * px - p.a_im * py);
+    K_PRECISE float di = -(p.a_re * py + p.a_im * px);
+    return k_julia_quotient(p, nr, ni, dr, di, dpx, dpy, tw_re, tw_im);
+}
+
+/* ---- environment maps: the grid from directions ---------------------------------------------- */
+
+/* A pixel's point of the plane in homogeneous form, p = N / D (D = 0: the point at infinity), with
+ * G = N' D - N D' (the derivative along the image's columns, per pixel of y: p' = G / D^2), and its
+ * unit direction d (for the turbulence). On a lat-long map the column is a meridian, whose pixels
+ * are the same arc pi / (H - 1) apart everywhere (a row's pixels crowd towards the poles), so the
+ * distance estimate in pixels is the smaller of the two; on a cube, the face's column. */
+K_STRUCT(K_JuliaHom)
+{
+    float nr, ni, d, gr, gi;
+    k_vec3 dir;
+}
+K_END(K_JuliaHom)
+
+/* Lat-long: p = r e tan(b), e = sin(lon) + i cos(lon) (the direction of d.x + i d.z), b = pi/4 - lat/2
+ * = (pi/2) y / (H - 1) from the zenith; N = r e sin(b), D = cos(b) = sin(pi/2 - b), both from
+ * their own small arguments, so that D keeps its relative precision towards the nadir; then
+ * G = r e db/dy. A sample beyond a pole (b < 0 or b > pi/2) continues over it. Cube: N = r (c.x + i
+ * c.z), D = |c| + c.y for the face point c (D computed as (c.x^2 + c.z^2) / (|c| - c.y) below the
+ * horizon, without cancellation), G from one pixel's step down the face. */
+K_FN K_JuliaHom k_julia_env_point(K_JuliaParams p, float ex, float ey)
+{
+    K_PRECISE K_JuliaHom h;
+    if (p.mapping == K_JULIA_LATLONG) {
+        k_vec2 ll = k_env_latlong_angles(ex, ey, p.width, p.height);
+        k_vec2 lon = k_sincos(ll.y), lat = k_sincos(ll.x);
+        float so = lon.x, co = lon.y;
+        float k = p.height > 1u ? (0.5f * K_PI) / K_F(p.height - 1u) : 0.0f; /* db/dy */
+        K_PRECISE float b = k * ey, g = k * (K_F(p.height - 1u) - ey);
+        K_PRECISE float sb = k_sincos(b).x;
+        h.nr = p.radius * so * sb;
+        h.ni = p.radius * co * sb;
+        h.d = k_sincos(g).x;
+        h.gr = p.radius * so * k;
+        h.gi = p.radius * co * k;
+        h.dir = k_vec3(so * lat.y, lat.x, co * lat.y);
+        return h;
+    }
+    uint face = k_env_cube_face(ey, p.width);
+    k_vec3 c = k_env_cube_dir_face(ex, ey, face, p.width);
+    k_vec3 c1 = k_env_cube_dir_face(ex, ey + 1.0f, face, p.width);
+    K_PRECISE float len = k_sqrt(c.x * c.x + c.y * c.y + c.z * c.z);
+    K_PRECISE float q = c.x * c.x + c.z * c.z;
+    K_PRECISE float D = c.y >= 0.0f ? len + c.y : q / (len - c.y);
+    K_PRECISE float gx = c1.x - c.x, gy = c1.y - c.y, gz = c1.z - c.z;
+    K_PRECISE float dD = (c.x * gx + c.y * gy + c.z * gz) / len + gy; /* D' */
+    h.nr = p.radius * c.x;
+    h.ni = p.radius * c.z;
+    h.d = D;
+    h.gr = p.radius * (gx * D - c.x * dD);
+    h.gi = p.radius * (gz * D - c.z * dD);
+    h.dir = k_vec3(c.x / len, c.y / len, c.z / len);
+    return h;
+}
+
+/* The orbit's start at a pixel's point p = N / D: the rotation R and centre c, then z0 = A(p),
+ * written homogeneously (times D) so that the nadir, D = 0, is the point at infinity without a
+ * division by zero: z0 = num / den with
+ *   num = R N + (c - conj(a)) D,   den = (1 - a c) D - a R N,
+ * so the nadir gives z0 = -1/a (for a = 0: infinity, which escapes at once), and
+ *   dz0/dy = A'(p) R p' = (1 - |a|^2) R G / den^2.
+ * (tw_re, tw_im): the turbulence term added to z0. */
+K_FN K_JuliaStart k_julia_env_begin(K_JuliaParams p, K_JuliaHom e, float tw_re, float tw_im)
+{
+    K_PRECISE float D = e.d;
+    K_PRECISE float pr = p.rot_c * e.nr - p.rot_s * e.ni, pi = p.rot_s * e.nr + p.rot_c * e.ni; /* R N */
+    K_PRECISE float nr = pr + (p.center_re - p.a_re) * D;
+    K_PRECISE float ni = pi + (p.center_im + p.a_im) * D;
+    K_PRECISE float acr = 1.0f - (p.a_re * p.center_re - p.a_im * p.center_im); /* 1 - a c */
+    K_PRECISE float aci = -(p.a_re * p.center_im + p.a_im * p.center_re);
+    K_PRECISE float dr = acr * D - (p.a_re * pr - p.a_im * pi);
+    K_PRECISE float di = aci * D - (p.a_re * pi + p.a_im * pr);
+    float qr = p.rot_c * e.gr - p.rot_s * e.gi, qi = p.rot_s * e.gr + p.rot_c * e.gi; /* R G */
+    return k_julia_quotient(p, nr, ni, dr, di, qr, qi, tw_re, tw_im);
+}
+
+/* W on the sphere: the two streams of 3D fBm at the direction (fbm.h, k_fbm3), scaled by lambda. */
+K_FN k_vec2 k_julia_turbulence3(K_JuliaParams p, K_FbmParams t, k_vec3 d)
+{
+    if (p.lambda == 0.0f) return k_vec2(0.0f, 0.0f);
+    float wr = k_clamp(0.5f + 0.5f * p.turb_norm * k_fbm3(t, 1u, d), 0.0f, 1.0f);
+    float wi = k_clamp(0.5f + 0.5f * p.turb_norm * k_fbm3(t, 2u, d), 0.0f, 1.0f);
+    return k_vec2(p.lambda * wr, p.lambda * wi);
+}
+
+/* The start of the orbit at environment-map position (ex, ey) (envmap.h: pixel centres at integers). */
+K_FN K_JuliaStart k_julia_env_start(K_JuliaParams p, K_FbmParams turb, float ex, float ey)
+{
+    K_JuliaHom e = k_julia_env_point(p, ex, ey);
+    k_vec2 w = k_julia_turbulence3(p, turb, e.dir);
+    return k_julia_env_begin(p, e, w.x, w.y);
 }
 
 /* The result of an orbit that took n steps (escaped: it reached the bailout; else it stayed
@@ -281,6 +390,7 @@ K_FN k_vec2 k_julia_turbulence(K_JuliaParams p, K_FbmParams t, float u, float v)
  * +0.5), turbulence included. */
 K_FN K_JuliaStart k_julia_start_at(K_JuliaParams p, K_FbmParams turb, float fx, float fy)
 {
+    if (p.mapping >= K_JULIA_LATLONG) return k_julia_env_start(p, turb, fx - 0.5f, fy - 0.5f);
     K_PRECISE float u = fx * p.inv_width;
     K_PRECISE float v = 1.0f - fy * p.inv_height;
     k_vec2 s = k_julia_start(p, u, v);

@@ -37,5 +37,5 @@ void main()
     K_FbmParams p = pc.p;
     p.noise = NOISE;
     p.flags = FLAGS;
-    dst.v[r * p.width + x] = k_fbm_pixel(p, x, pc.y0 + r);
+    dst.v[r * p.width + x] = k_fbm_map_pixel(p, x, pc.y0 + r);
 }

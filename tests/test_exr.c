@@ -193,6 +193,47 @@ static void incompressible(exrio_compression comp, int H)
     free(g);
 }
 
+/* The envmap attribute (OpenEXR: 0 latlong, 1 cube) on every part, read back; none when not asked. */
+static void envmap(exrio_envmap e, int nparts)
+{
+    char path[128];
+    snprintf(path, sizeof path, "%s/env-%d-%d.exr", g_dir, (int)e, nparts);
+    exrio_channel ch[2] = {{"a.Y", EXRIO_FLOAT, 0}, {"b.Y", EXRIO_FLOAT, nparts - 1}};
+    const char *names[2] = {"a", "b"};
+    static float f[8 * 4];
+    exrio_writer *w = NULL;
+    fb_result rc = exrio_writer_create(&(exrio_writer_desc){.path = path,
+                                                            .width = 8,
+                                                            .height = 4,
+                                                            .channels = ch,
+                                                            .nchannels = 2,
+                                                            .nparts = nparts,
+                                                            .part_names = nparts > 1 ? names : NULL,
+                                                            .envmap = e},
+                                       &w);
+    const void *planes[2] = {f, f};
+    if (!rc) rc = exrio_writer_rows(w, 0, 4, planes);
+    if (!rc) rc = exrio_writer_finish(&w);
+    CHECK(rc == FB_OK);
+    exrio_reader *r = NULL;
+    CHECK(exrio_open(path, &r) == FB_OK);
+    if (!r) return;
+    CHECKF(exrio_envmap_of(r) == e, "envmap %d written, %d read", (int)e, (int)exrio_envmap_of(r));
+    int found = 0;
+    for (int i = 0; i < exrio_attr_count(r); i++) {
+        const char *name, *type;
+        char text[32];
+        exrio_attr_at(r, i, &name, &type);
+        if (strcmp(name, "envmap")) continue;
+        exrio_attr_text(r, i, text, sizeof text);
+        found++;
+        CHECKF(!strcmp(type, "envmap") && !strcmp(text, e == EXRIO_ENVMAP_CUBE ? "cube" : "latlong"),
+               "envmap attribute of type %s, value %s", type, text);
+    }
+    CHECKF(found == (e != EXRIO_ENVMAP_NONE), "%d envmap attributes in the first part", found);
+    exrio_close(&r);
+}
+
 int main(void)
 {
     if (!mkdtemp(g_dir)) TEST_SKIP("no temporary folder");
@@ -205,6 +246,11 @@ int main(void)
     roundtrip(EXRIO_ZIP);
     roundtrip(EXRIO_PIZ);
     failures();
+    for (int np = 1; np <= 2; np++) {
+        envmap(EXRIO_ENVMAP_NONE, np);
+        envmap(EXRIO_ENVMAP_LATLONG, np);
+        envmap(EXRIO_ENVMAP_CUBE, np);
+    }
     char cmd[128];
     snprintf(cmd, sizeof cmd, "rm -rf %s", g_dir);
     if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", g_dir);

@@ -208,7 +208,7 @@ static void test_sets(void)
     for (int i = 0; i < 7 && i < s.nlayers; i++) CHECKF(!strcmp(s.layers[i].name, names[i]), "layer %d", i);
     CHECK(s.layers[0].cls == &fb_gen_fbm && s.layers[3].cls == &fb_gen_op && s.layers[4].cls == &fb_gen_op &&
           s.layers[5].cls == &fb_gen_op);
-    CHECK(s.layers[1].cls == &fb_gen_julia && P(fb_julia_params, s.layers[1])->polar &&
+    CHECK(s.layers[1].cls == &fb_gen_julia && P(fb_julia_params, s.layers[1])->mapping == K_JULIA_POLAR &&
           P(fb_julia_params, s.layers[1])->turbulence > 0 &&
           (P(fb_julia_params, s.layers[1])->alpha[0] != 0 || P(fb_julia_params, s.layers[1])->alpha[1] != 0));
     CHECK(s.layers[2].cls == &fb_gen_terrain && P(fb_terrain_layer_params, s.layers[2])->points_inline &&
@@ -301,6 +301,79 @@ static void json_numbers(void)
     json_decref(j);
 }
 
+/* The nearest environment-map size by search (the message must name it). */
+static void nearest_env(bool latlong, int w, int h, char *out, size_t size)
+{
+    long best = -1;
+    double bd = 1e300;
+    for (long n = 1; n <= 20000; n++) {
+        double a = latlong ? w - 2.0 * n : w - (double)n, b = latlong ? h - (double)n : h - 6.0 * n;
+        if (a * a + b * b < bd) bd = a * a + b * b, best = n;
+    }
+    snprintf(out, size, "the nearest is %ld x %ld", latlong ? 2 * best : best, latlong ? best : 6 * best);
+}
+
+/* Environment maps: the mapping key sets the layer's and the file's envmap; op layers take their
+ * inputs'; layers that disagree, an op over both kinds, and a wrong size are refused, naming the
+ * key and (for the size) the nearest valid one. */
+static void test_envmaps(void)
+{
+    fb_scene s;
+    char want[64], json[512];
+    fb_log_set_sink(sink, NULL);
+    CHECK(
+        fb_scene_parse("{\"size\": [64, 32], \"layers\": [{\"type\": \"julia\", \"mapping\": \"latlong\"}, {\"type\": "
+                       "\"op\", \"op\": \"remap\", \"inputs\": [\"sky.n\"], \"from\": [0, 10]}]}",
+                       "t.json", &s) == FB_OK);
+    CHECK(s.envmap == EXRIO_ENVMAP_LATLONG && s.layers[0].envmap == EXRIO_ENVMAP_LATLONG &&
+          s.layers[1].envmap == EXRIO_ENVMAP_LATLONG);
+    fb_scene_fini(&s);
+    CHECK(fb_scene_parse("{\"size\": [16, 96], \"layers\": [{\"type\": \"julia\", \"mapping\": \"cube\"}]}", "t.json",
+                         &s) == FB_OK);
+    CHECK(s.envmap == EXRIO_ENVMAP_CUBE);
+    fb_scene_fini(&s);
+    CHECK(fb_scene_parse("{\"size\": [64, 40], \"layers\": [{\"type\": \"julia\", \"mapping\": \"polar\"}]}", "t.json",
+                         &s) == FB_OK);
+    CHECK(s.envmap == EXRIO_ENVMAP_NONE);
+    fb_scene_fini(&s);
+    static const int sizes[][3] = {{1, 100, 60}, {1, 64, 33}, {1, 7, 1}, {0, 20, 100}, {0, 16, 97}, {0, 100, 10}};
+    for (int k = 0; k < 6; k++) {
+        bool ll = sizes[k][0];
+        snprintf(json, sizeof json, "{\"size\": [%d, %d], \"layers\": [{\"type\": \"julia\", \"mapping\": \"%s\"}]}",
+                 sizes[k][1], sizes[k][2], ll ? "latlong" : "cube");
+        g_last_error[0] = 0;
+        CHECKF(fb_scene_parse(json, "t.json", &s) == FB_ERR_INPUT, "%s refused", json);
+        nearest_env(ll, sizes[k][1], sizes[k][2], want, sizeof want);
+        CHECKF(strstr(g_last_error, want) && strstr(g_last_error, "size") &&
+                   strstr(g_last_error, ll ? "2N x N" : "N x 6N"),
+               "%s: \"%s\" names %s", json, g_last_error, want);
+    }
+    g_last_error[0] = 0;
+    CHECK(
+        fb_scene_parse("{\"size\": [64, 32], \"layers\": [{\"type\": \"julia\", \"mapping\": \"latlong\"}, {\"type\": "
+                       "\"fbm\"}]}",
+                       "t.json", &s) == FB_ERR_INPUT);
+    CHECKF(strstr(g_last_error, "layers[1]") && strstr(g_last_error, "separate files"), "mixed: %s", g_last_error);
+    g_last_error[0] = 0;
+    CHECK(fb_scene_parse("{\"size\": [64, 32], \"layers\": [{\"type\": \"julia\", \"mapping\": \"cube\"}, {\"type\": "
+                         "\"julia\", \"name\": \"b\", \"mapping\": \"latlong\"}]}",
+                         "t.json", &s) == FB_ERR_INPUT);
+    CHECKF(strstr(g_last_error, "layers[1].mapping") && strstr(g_last_error, "lat-long"), "cube+latlong: %s",
+           g_last_error);
+    g_last_error[0] = 0;
+    CHECK(fb_scene_parse(
+              "{\"size\": [64, 32], \"layers\": [{\"type\": \"julia\", \"mapping\": \"latlong\"}, {\"type\": "
+              "\"fbm\", \"name\": \"f\"}, {\"type\": \"op\", \"op\": \"add\", \"inputs\": [\"sky.n\", \"f\"]}]}",
+              "t.json", &s) == FB_ERR_INPUT);
+    CHECKF(strstr(g_last_error, "inputs[1]") && strstr(g_last_error, "combines"), "op over both: %s", g_last_error);
+    g_last_error[0] = 0;
+    CHECK(fb_scene_parse("{\"size\": [64, 32], \"layers\": [{\"type\": \"julia\", \"mapping\": \"latlong\", "
+                         "\"precision\": \"double\"}]}",
+                         "t.json", &s) == FB_ERR_INPUT);
+    CHECKF(strstr(g_last_error, "precision"), "double: %s", g_last_error);
+    fb_log_set_sink(NULL, NULL);
+}
+
 int main(void)
 {
     json_numbers();
@@ -310,5 +383,6 @@ int main(void)
     test_keys();
     test_flags();
     test_canonical();
+    test_envmaps();
     TEST_REPORT();
 }

@@ -61,6 +61,12 @@ fb_result fb_info(const char *path, bool json, void (*print)(const char *line, v
         P("storage:     %s", exrio_part_storage(r, 0));
         json_object_set_new(o, "storage", json_string(exrio_part_storage(r, 0)));
     }
+    exrio_envmap env = exrio_envmap_of(r);
+    if (env != EXRIO_ENVMAP_NONE) {
+        const char *ename = env == EXRIO_ENVMAP_LATLONG ? "latlong" : "cube";
+        P("envmap:      %s", ename);
+        json_object_set_new(o, "envmap", json_string(ename));
+    }
     P("channels:    %d", exrio_nchannels(r));
     /* Channels grouped by layer (the text before the last dot) within each part; the layer is named
      * in full, and a part's channels without a dot are its part's (a multi-part file) or "(no

@@ -64,7 +64,8 @@ static fb_result open_output(const exrio_reader *first, const char *out, int W, 
                                                     .zip_level = zip_level,
                                                     .nparts = nparts,
                                                     .part_names = part_names,
-                                                    .part_compression = part_comp},
+                                                    .part_compression = part_comp,
+                                                    .envmap = exrio_envmap_of(first)},
                                w);
 }
 
@@ -749,7 +750,8 @@ static fb_result tasks_open_output(task_merge *m, const char *scene_json, exrio_
                                                           .attrs = attrs,
                                                           .nattrs = nattrs,
                                                           .threads = m->d->threads,
-                                                          .zip_level = m->d->zip_level},
+                                                          .zip_level = m->d->zip_level,
+                                                          .envmap = sc->envmap},
                                      wp);
     }
     return rc;

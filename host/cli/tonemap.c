@@ -184,7 +184,8 @@ static fb_result tonemap(const char *in, const char *out, const char *layer, int
                                                       .channels = chans,
                                                       .nchannels = nch,
                                                       .attrs = attrs,
-                                                      .nattrs = na},
+                                                      .nattrs = na,
+                                                      .envmap = scene.envmap},
                                  &w);
     }
     for (int y = 0; y < height && !rc; y += rows) {

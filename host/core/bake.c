@@ -669,7 +669,8 @@ static fb_result open_writer(const fb_engine *e, const fb_bake_desc *d, const la
                                                     .attrs = attrs,
                                                     .nattrs = nattrs,
                                                     .threads = e->threads,
-                                                    .zip_level = d->zip_level},
+                                                    .zip_level = d->zip_level,
+                                                    .envmap = s->envmap},
                                w);
 }
 

@@ -179,6 +179,13 @@ typedef struct fb_gen_class {
         double max_abs, fail_percent;
     } tolerance;
     const fb_tone_ops *tone; /* NULL: tonemap does not apply */
+    /* Environment maps: a layer whose class's keys include "mapping" with the values "latlong" or
+     * "cube" is one when its key says so (the scene engine reads the key into fb_layer.envmap, checks
+     * that a file's layers agree and the size fits; the bake writes the `envmap` attribute). The
+     * class then computes pixel (x, y) at the direction k_env_dir gives (kernels/envmap.h).
+     * envmap_of_refs: a layer of this class takes the mapping of the layers it refers to (an op layer,
+     * which combines them pixel by pixel); false: a layer without such a key is a plane. */
+    bool envmap_of_refs;
     /* Its benchmarks (cli/bench.c runs them; NULL: none). */
     fb_result (*bench)(struct fb_bench *b);
 } fb_gen_class;

@@ -139,6 +139,83 @@ static fb_result parse_heightmap(const fb_vctx *v, const char *path, const json_
     return FB_OK;
 }
 
+/* The mapping a layer declares with its "mapping" key, where its class's table has one (gen.h). */
+static exrio_envmap layer_envmap_key(const fb_layer *L, const json_t *lj)
+{
+    if (!fb_key_find(L->cls->keys, L->cls->nkeys, "mapping")) return EXRIO_ENVMAP_NONE;
+    const char *m = json_string_value(json_object_get(lj, "mapping"));
+    if (m && !strcmp(m, "latlong")) return EXRIO_ENVMAP_LATLONG;
+    if (m && !strcmp(m, "cube")) return EXRIO_ENVMAP_CUBE;
+    return EXRIO_ENVMAP_NONE;
+}
+
+static const char *envmap_words(exrio_envmap e)
+{
+    return e == EXRIO_ENVMAP_LATLONG ? "a lat-long environment map"
+           : e == EXRIO_ENVMAP_CUBE  ? "a cube environment map"
+                                     : "a plane";
+}
+
+/* Where a layer's mapping comes from, for messages: its "mapping" key, or the layer. */
+static void envmap_path(const fb_scene *s, int i, char *out, size_t size)
+{
+    const fb_layer *L = &s->layers[i];
+    bool key = fb_key_find(L->cls->keys, L->cls->nkeys, "mapping") != NULL;
+    snprintf(out, size, "layers[%d]%s", i, key ? ".mapping" : "");
+}
+
+/* An environment map's size (2N x N lat-long, N x 6N cube, as OpenEXR's ImfEnvmap.h lays them out);
+ * the message names the nearest valid size (least squares in both sides). */
+static fb_result check_envmap_size(const fb_vctx *v, const fb_scene *s)
+{
+    int w = s->width, h = s->height;
+    bool ll = s->envmap == EXRIO_ENVMAP_LATLONG;
+    if (s->envmap == EXRIO_ENVMAP_NONE || (ll ? w == 2 * h : h == 6 * w)) return FB_OK;
+    long n = lround(ll ? (2.0 * w + h) / 5.0 : (w + 6.0 * h) / 37.0);
+    long lim = ll ? FB_MAX_DIM / 2 : FB_MAX_DIM / 6;
+    n = n < 1 ? 1 : n > lim ? lim : n;
+    return fb_schema_error(v, "size", "%s is %s pixels%s, found %d x %d: the nearest is %ld x %ld",
+                           envmap_words(s->envmap), ll ? "2N x N" : "N x 6N", ll ? "" : " (six faces stacked)", w, h,
+                           ll ? 2 * n : n, ll ? n : 6 * n);
+}
+
+/* Each layer's mapping (a layer of an envmap_of_refs class takes its inputs'), then the file's: every
+ * layer's, which must agree, since a file has one envmap attribute; then its size. */
+static fb_result check_envmaps(const fb_vctx *v, fb_scene *s)
+{
+    char sub[96], other[96];
+    fb_ref_slot refs[FB_MAX_REFS];
+    for (int k = 0; k < s->nlayers; k++) {
+        int i = s->order[k], first = -1;
+        fb_layer *L = &s->layers[i];
+        if (!L->cls->envmap_of_refs) continue;
+        int nr = layer_refs(s, i, refs);
+        for (int r = 0; r < nr; r++) {
+            int j = refs[r].ref->layer;
+            if (j < 0) continue;
+            if (first < 0) first = j, L->envmap = s->layers[j].envmap;
+            if (s->layers[j].envmap == L->envmap) continue;
+            snprintf(sub, sizeof sub, "layers[%d].%s", i, refs[r].key);
+            return fb_schema_error(
+                v, sub, "layer \"%s\" combines \"%s\", %s, with \"%s\", %s: a pixel is not the same point in both",
+                L->name, s->layers[first].name, envmap_words(s->layers[first].envmap), s->layers[j].name,
+                envmap_words(s->layers[j].envmap));
+        }
+    }
+    s->envmap = s->layers[0].envmap;
+    for (int i = 1; i < s->nlayers; i++) {
+        if (s->layers[i].envmap == s->envmap) continue;
+        envmap_path(s, i, sub, sizeof sub);
+        envmap_path(s, 0, other, sizeof other);
+        return fb_schema_error(v, sub,
+                               "layer \"%s\" is %s but layer \"%s\" (%s) is %s: one EXR file is one environment "
+                               "map or none (its envmap attribute); bake them into separate files",
+                               s->layers[i].name, envmap_words(s->layers[i].envmap), s->layers[0].name, other,
+                               envmap_words(s->envmap));
+    }
+    return check_envmap_size(v, s);
+}
+
 static fb_result parse_root(const fb_vctx *v, json_t *root, fb_scene *s)
 {
     char path[64];
@@ -182,6 +259,7 @@ static fb_result parse_root(const fb_vctx *v, json_t *root, fb_scene *s)
         snprintf(L->name, sizeof L->name, "%s", json_string_value(json_object_get(lj, "name")));
         L->half = fb_json_bool(lj, "half");
         if ((rc = parse_heightmap(v, path, lj, L))) return rc;
+        L->envmap = layer_envmap_key(L, lj);
         const json_t *lc = json_object_get(lj, "compression");
         L->compression = lc ? (exrio_compression)exrio_compression_parse(json_string_value(lc)) : s->compression;
         if (lc && !s->multipart) {
@@ -197,7 +275,8 @@ static fb_result parse_root(const fb_vctx *v, json_t *root, fb_scene *s)
                 return fb_schema_error(v, sub, "layer name \"%s\" is already used by layers[%d]", L->name, k);
             }
     }
-    return resolve_refs(v, s);
+    if ((rc = resolve_refs(v, s))) return rc;
+    return check_envmaps(v, s);
 }
 
 fb_result fb_scene_parse(const char *text, const char *origin, fb_scene *out)

@@ -40,6 +40,10 @@ typedef struct fb_layer {
     char heightmap[1024];
     bool heightmap_range_set;
     double heightmap_range[2];
+    /* What the layer is on the sphere: its "mapping" key when its class's table has one taking
+     * "latlong" or "cube" (kernels/envmap.h's conventions); for a class that combines its inputs pixel
+     * by pixel (fb_gen_class.envmap_of_refs), its inputs' mapping; otherwise a plane (NONE). */
+    exrio_envmap envmap;
     /* the generator's parameters (its fb_NAME_params, cls->params_size bytes, zeroed before its parse;
      * owned by the scene: fb_scene_fini frees them), read with fb_layer_params */
     void *params;
@@ -55,6 +59,9 @@ typedef struct fb_scene {
     uint32_t seed;
     exrio_compression compression;
     bool multipart; /* "parts": "per-layer": one EXR part per layer, named after it */
+    /* The file's `envmap` attribute: every layer's envmap, which must agree (one attribute per file);
+     * the size is then 2N x N (lat-long) or N x 6N (cube). */
+    exrio_envmap envmap;
     int nlayers;
     fb_layer layers[FB_MAX_LAYERS];
     int order[FB_MAX_LAYERS]; /* every layer after the layers it refers to (op layers last, in dependency order) */

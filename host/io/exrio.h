@@ -36,6 +36,10 @@ typedef struct exrio_channel {
     int part;         /* the part it is stored in (multi-part files), 0.. nparts - 1 */
 } exrio_channel;
 
+/* The `envmap` attribute (OpenEXR's ImfEnvmap.h): what the image is on the sphere. NONE: a plane, no
+ * attribute. The values are kernels/envmap.h's K_ENV_*. */
+typedef enum exrio_envmap { EXRIO_ENVMAP_NONE = 0, EXRIO_ENVMAP_LATLONG = 1, EXRIO_ENVMAP_CUBE = 2 } exrio_envmap;
+
 typedef struct exrio_attr {
     const char *name;
     const char *value; /* stored as an EXR string attribute */
@@ -60,8 +64,9 @@ typedef struct exrio_writer_desc {
     int nchannels;
     const exrio_attr *attrs;
     int nattrs;
-    int threads;   /* compression workers; 0: one per core */
-    int zip_level; /* ZIP: the deflate level, 1 (fastest) to 12 (smallest); 0: EXRIO_ZIP_LEVEL */
+    int threads;         /* compression workers; 0: one per core */
+    int zip_level;       /* ZIP: the deflate level, 1 (fastest) to 12 (smallest); 0: EXRIO_ZIP_LEVEL */
+    exrio_envmap envmap; /* set on every part as the `envmap` attribute (NONE: not written) */
 } exrio_writer_desc;
 
 /* The default deflate level of ZIP chunks (libdeflate's scale; chosen by measurement, bench/RESULTS.md). */
@@ -123,6 +128,9 @@ const char *exrio_part_storage(const exrio_reader *r, int p);
 
 /* The value of a string attribute, or NULL. Valid until exrio_close. */
 const char *exrio_attr_string(const exrio_reader *r, const char *name);
+
+/* The first part's `envmap` attribute (EXRIO_ENVMAP_NONE where it has none or another value). */
+exrio_envmap exrio_envmap_of(const exrio_reader *r);
 
 /* Attribute i of exrio_attr_count: its name and type name. */
 int exrio_attr_count(const exrio_reader *r);

@@ -390,6 +390,15 @@ const char *exrio_attr_string(const exrio_reader *r, const char *name)
     return s;
 }
 
+exrio_envmap exrio_envmap_of(const exrio_reader *r)
+{
+    exr_envmap_t e = EXR_ENVMAP_LAST_TYPE;
+    if (exr_attr_get_envmap(r->ctx, 0, "envmap", &e) != EXR_ERR_SUCCESS) return EXRIO_ENVMAP_NONE;
+    return e == EXR_ENVMAP_LATLONG ? EXRIO_ENVMAP_LATLONG
+           : e == EXR_ENVMAP_CUBE  ? EXRIO_ENVMAP_CUBE
+                                   : EXRIO_ENVMAP_NONE;
+}
+
 int exrio_attr_count(const exrio_reader *r)
 {
     int32_t n = 0;

@@ -343,6 +343,10 @@ fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
                 er = exr_add_channel(
                     w->ctx, part, d->channels[c].name, pixel_type(d->channels[c].type),
                     d->channels[c].type == EXRIO_UINT ? EXR_PERCEPTUALLY_LINEAR : EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+        /* every part is an image of the same sphere, so each says so (OpenEXR: 0 latlong, 1 cube) */
+        if (er == EXR_ERR_SUCCESS && d->envmap != EXRIO_ENVMAP_NONE)
+            er = exr_attr_set_envmap(w->ctx, part, "envmap",
+                                     d->envmap == EXRIO_ENVMAP_CUBE ? EXR_ENVMAP_CUBE : EXR_ENVMAP_LATLONG);
         for (int a = 0; a < d->nattrs && er == EXR_ERR_SUCCESS && p == 0; a++)
             er = exr_attr_set_string(w->ctx, part, d->attrs[a].name, d->attrs[a].value);
     }

@@ -19,6 +19,7 @@ typedef struct fb_fbm_params {
     double offset[2];
     bool ridged, billow, tileable;
     double warp;
+    unsigned mapping; /* K_ENV_RECT, K_ENV_LATLONG or K_ENV_CUBE (kernels/envmap.h) */
 } fb_fbm_params;
 
 extern const fb_gen_class fb_gen_fbm;

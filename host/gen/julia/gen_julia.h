@@ -8,7 +8,7 @@
 #include "palette.h"
 
 typedef struct fb_julia_params {
-    bool polar; /* mapping: rect (eq. 7) or polar (eq. 8) */
+    unsigned mapping; /* K_JULIA_RECT (eq. 7), _POLAR (eq. 8), _LATLONG or _CUBE (environment maps) */
     double scale[2];
     double radius;
     double center[2];

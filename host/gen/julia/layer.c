@@ -25,11 +25,13 @@ static const fb_keyspec julia_keys[] = {
     {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"julia\""},
     {"name", FB_K_NAME, 0, 0, false, NULL, "\"sky\"",
      "layer name; channels NAME.iter, .n, .inside, .de, .R, .G, .B (flag: --layer)"},
-    {"mapping", FB_K_ENUM, 0, 0, false, "rect|polar", "\"rect\"",
-     "starting grid: rect (eq. 7) or polar (eq. 8, seamless left/right)"},
+    {"mapping", FB_K_ENUM, 0, 0, false, "rect|polar|latlong|cube", "\"rect\"",
+     "starting grid: rect (eq. 7), polar (eq. 8, seamless left/right), or an environment map of the sphere, "
+     "latlong (2N x N) or cube (N x 6N), through p = r (d.x + i d.z) / (1 + d.y) (docs/sky.md)"},
     {"scale", FB_K_VEC2, 0, 1e6, false, NULL, NULL,
      "rect: width and height of the grid (default 3 wide, square pixels)"},
-    {"radius", FB_K_NUM, 0, 1e6, true, NULL, "1.5", "polar: radius r of p = r v exp(i 2 pi u)"},
+    {"radius", FB_K_NUM, 0, 1e6, true, NULL, "1.5",
+     "polar: radius r of p = r v exp(i 2 pi u); latlong, cube: the horizon's |p|"},
     {"center", FB_K_VEC2, -1e6, 1e6, false, NULL, "[0.0, 0.0]", "centre of the starting grid (RE,IM)"},
     {"rotation", FB_K_NUM, -360, 360, false, NULL, "0.0", "rotation of the starting grid, degrees"},
     {"alpha", FB_K_VEC2, -1e6, 1e6, false, NULL, "[0.0, 0.0]",
@@ -74,7 +76,9 @@ static fb_result parse_julia(const fb_vctx *v, const char *path, json_t *obj, co
     fb_result rc = fb_schema_check(v, path, obj, julia_keys, FB_NKEYS(julia_keys), "a julia layer");
     if (rc) return rc;
     fb_julia_params *j = (void *)L->params;
-    j->polar = !strcmp(json_string_value(json_object_get(obj, "mapping")), "polar");
+    int mapping = 0;
+    fb_enum_index("rect|polar|latlong|cube", json_string_value(json_object_get(obj, "mapping")), &mapping);
+    j->mapping = (unsigned)mapping; /* K_JULIA_RECT, _POLAR, _LATLONG, _CUBE */
     fb_json_vec2(obj, "scale", j->scale);
     fb_json_vec2(obj, "center", j->center);
     fb_json_vec2(obj, "alpha", j->alpha);
@@ -105,6 +109,13 @@ static fb_result parse_julia(const fb_vctx *v, const char *path, json_t *obj, co
         int idx = 0;
         fb_enum_index("iter|n|inside|de|R|G|B", json_string_value(json_array_get(chs, i)), &idx);
         j->channels |= 1u << idx;
+    }
+    if (j->double_precision && j->mapping >= K_JULIA_LATLONG) {
+        char sub[256];
+        snprintf(sub, sizeof sub, "%s.precision", path);
+        return fb_schema_error(v, sub,
+                               "\"double\" is for the rect and polar grids; an environment map's directions "
+                               "are float (use \"float\")");
     }
     unsigned rgb = j->channels & 0x70u;
     if (rgb && rgb != 0x70u) {
@@ -241,7 +252,7 @@ static fb_result julia_init(fb_gen *g)
     memset(p, 0, sizeof *p);
     p->width = (uint32_t)s->width;
     p->height = (uint32_t)s->height;
-    p->mapping = j->polar ? K_JULIA_POLAR : K_JULIA_RECT;
+    p->mapping = j->mapping;
     p->max_iter = (uint32_t)j->max_iter;
     p->c_re = (float)j->c[0];
     p->c_im = (float)j->c[1];
@@ -292,7 +303,9 @@ static fb_result julia_init(fb_gen *g)
         .bailout2 = j->bailout * j->bailout,
     };
     k_julia_d_constants(&pal->dp);
-    /* Turbulence W: fBm over (u, v) with the layer's own parameters; tileable for polar grids. */
+    /* Turbulence W: fBm over (u, v) with the layer's own parameters; tileable for polar grids; on
+     * the sphere for environment maps (k_fbm3: the frequency's cells round the equator). */
+    bool polar = j->mapping == K_JULIA_POLAR;
     K_FbmParams *t = &pal->turb;
     t->seed = s->seed;
     t->noise = K_NOISE_GRADIENT;
@@ -301,9 +314,10 @@ static fb_result julia_init(fb_gen *g)
     t->lacunarity = 2.0f;
     t->rot_c = 0.8f; /* the paper's rotation (0.8, 0.6) between octaves */
     t->rot_s = 0.6f;
-    t->flags = j->polar ? K_FBM_TILEABLE : 0u;
+    t->flags = polar ? K_FBM_TILEABLE : 0u;
     t->freq_x = (float)j->turb_frequency;
-    t->freq_y = (float)(j->polar ? j->turb_frequency : j->turb_frequency * s->height / s->width);
+    t->freq_y =
+        (float)(polar || j->mapping >= K_JULIA_LATLONG ? j->turb_frequency : j->turb_frequency * s->height / s->width);
     fb_fbm_params_frame(t, s->width, s->height);
     double gsum = 0, amp = 1;
     for (int i = 0; i < j->turb_octaves; i++, amp *= t->gain) gsum += amp;

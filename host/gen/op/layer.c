@@ -234,6 +234,7 @@ const fb_gen_class fb_gen_op = {
     .params_size = sizeof(fb_op_params),
     .parse = parse_op,
     .refs = op_refs,
+    .envmap_of_refs = true, /* pixel by pixel: an op of environment maps is one */
     .init = op_init,
     .share = FB_SHARE_BAND,
     .cost = op_cost,
