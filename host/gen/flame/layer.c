@@ -9,9 +9,7 @@
  */
 #include "bake.h"
 #include "gen_flame.h"
-#include "pool.h"
-#include "progress.h"
-#include "render.h"
+#include "game.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -96,57 +94,6 @@ static flame_state *state(const fb_gen *g)
     return g->owned;
 }
 
-typedef struct game {
-    const fb_flame_setup *S;
-    fb_flame_cell32 **hist; /* one per task */
-    fb_flame_cell *total;
-    size_t cells;
-    uint64_t *bad;
-    uint32_t c0, c1; /* the chains of this round */
-    int ntasks;
-} game;
-
-/* Chains [c0, c1) of the round, the task's contiguous share, into its own histogram. */
-static void game_task(void *ctx, int task)
-{
-    game *G = ctx;
-    const fb_flame_setup *S = G->S;
-    const K_FlameParams P = S->p;
-    uint64_t span = G->c1 - G->c0;
-    uint32_t a = G->c0 + (uint32_t)(span * (uint64_t)task / (uint64_t)G->ntasks);
-    uint32_t b = G->c0 + (uint32_t)(span * (uint64_t)(task + 1) / (uint64_t)G->ntasks);
-    fb_flame_cell32 *h = G->hist[task];
-    uint64_t bad = 0;
-    const K_FlameXform *k_flame_xf = S->xf;
-    const K_FlameVar *k_flame_var = S->var;
-    const uint *k_flame_dist = S->dist;
-    /* The points of a chain are computed into a buffer, then scattered: a loop of independent
-     * increments keeps many cache misses in flight, where plotting inside the chain's dependent
-     * loop waits for each (the histogram does not fit in the caches). */
-    enum { BUF = 1024 };
-    K_FlameChain pts[BUF];
-    for (uint32_t i = a; i < b; i++) {
-        uint32_t key = k_flame_key(P.seed, i), len = i + 1 == P.chains ? P.last_len : P.len;
-        K_FlameChain s = k_flame_init(key);
-        for (uint32_t t = 0; t < P.fuse; t++) s = k_flame_step(P, s, key K_FLAME_TABLES);
-        for (uint32_t t0 = 0; t0 < len; t0 += BUF) {
-            uint32_t n = len - t0 < BUF ? len - t0 : BUF;
-            for (uint32_t t = 0; t < n; t++) pts[t] = s = k_flame_step(P, s, key K_FLAME_TABLES);
-            for (uint32_t t = 0; t < n; t++) fb_flame_plot(S, &pts[t], h, G->total);
-        }
-        bad += s.bad;
-    }
-    G->bad[task] += bad;
-}
-
-/* The task's share of the cells of every task's 32-bit histogram, folded into the total. */
-static void fold_task(void *ctx, int task)
-{
-    game *G = ctx;
-    size_t c0 = G->cells * (size_t)task / (size_t)G->ntasks, c1 = G->cells * (size_t)(task + 1) / (size_t)G->ntasks;
-    for (int t = 0; t < G->ntasks; t++) fb_flame_hist_fold(G->total, G->hist[t], c0, c1);
-}
-
 /* The points of the chains [cr0, cr1) (the last chain of all may be shorter). */
 static double chain_points(const flame_state *st)
 {
@@ -176,44 +123,6 @@ static fb_result finish(flame_state *st, fb_flame_cell *total)
     return rc;
 }
 
-/* The chains [cr0, cr1) on the pool's threads, each into its own 32-bit histogram, folded into
- * `total` (zeroed, hist_w x hist_h cells). */
-static fb_result play(flame_state *st, fb_engine *e, fb_flame_cell *total, fb_progress *prog)
-{
-    const fb_flame_setup *S = &st->S;
-    size_t cells = (size_t)S->p.hist_w * S->p.hist_h;
-    int threads = e->pool ? fb_pool_threads(e->pool) : 1;
-    if (threads > 64) threads = 64;
-    while (threads > 1 && (uint64_t)threads * cells * sizeof(fb_flame_cell32) > (1ull << 30)) threads--;
-    fb_flame_cell32 *hist[64] = {0};
-    uint64_t bad[64] = {0};
-    fb_result rc = FB_OK;
-    for (int t = 0; t < threads && !rc; t++)
-        if (!(hist[t] = calloc(cells, sizeof(fb_flame_cell32))))
-            rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
-    /* rounds of chains, for the progress bar; the 32-bit cells are folded once, at the end */
-    uint32_t per_round = 64u * (uint32_t)threads;
-    for (uint32_t c0 = st->cr0; c0 < st->cr1 && !rc; c0 += per_round) {
-        uint32_t c1 = st->cr1 - c0 > per_round ? c0 + per_round : st->cr1;
-        game G = {S, hist, total, cells, bad, c0, c1, threads};
-        if (e->pool)
-            fb_pool_run(e->pool, threads, game_task, &G);
-        else
-            game_task(&G, 0);
-        double done = (double)(c1 - st->cr0) * S->p.len, points = chain_points(st);
-        fb_progress_update(prog, (uint64_t)fmin(done, points), (uint64_t)points);
-    }
-    if (!rc) {
-        game G = {S, hist, total, cells, bad, 0, 0, threads};
-        if (e->pool)
-            fb_pool_run(e->pool, threads, fold_task, &G);
-        else
-            fold_task(&G, 0);
-    }
-    for (int t = 0; t < threads; t++) st->bad += bad[t], free(hist[t]);
-    return rc;
-}
-
 static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
 {
     flame_state *st = state(g);
@@ -229,7 +138,8 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
     snprintf(label, sizeof label, "%s: chaos game", g->layer->name);
     fb_progress_init(&prog, progress, label, "pts");
     double t0 = fb_now();
-    if (!rc) rc = play(st, e, total, &prog);
+    int threads = e->pool ? fb_pool_threads(e->pool) : 1;
+    if (!rc) rc = fb_flame_play(S, e->pool, threads, st->cr0, st->cr1, total, &st->bad, &prog);
     fb_progress_finish(&prog);
     double t1 = fb_now(), points = chain_points(st);
     if (!rc)
@@ -338,7 +248,8 @@ static uint64_t flame_memory(const fb_gen *g, const struct fb_engine *e, uint64_
     int threads = e->pool ? fb_pool_threads(e->pool) : 1;
     if (threads > 64) threads = 64;
     *hold = 20 * n + (st->nsums ? cells * sizeof(fb_flame_cell) : 0); /* a points part keeps its histogram */
-    return (uint64_t)threads * cells * sizeof(fb_flame_cell32) + cells * sizeof(fb_flame_cell) + 32 * cells + 20 * n;
+    return (uint64_t)threads * cells * fb_flame_cell_bytes(&st->S) + cells * sizeof(fb_flame_cell) + 32 * cells +
+           20 * n;
 }
 
 /* Seconds of one core of the reference machine: the chaos game per point (1.0 s of user time for
