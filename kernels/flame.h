@@ -50,6 +50,7 @@
 #define K_FLAME_ATAN_XY   1u /* flags: the xform's variations use atan2(x, y) */
 #define K_FLAME_ATAN_YX   2u /* ... atan2(y, x) */
 #define K_FLAME_HAS_POST  4u
+#define K_FLAME_SQRT      8u /* ... the length of (tx, ty) and flam3's sina, cosa */
 #define K_FLAME_DRAWS_MAX 64u
 
 /* flam3's variation numbers (flam3.h VAR_*), the ones implemented here. */
@@ -222,11 +223,15 @@ K_FN K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint key, uint
     float tx = X.ax * x + X.bx * y + X.cx;
     float ty = X.ay * x + X.by * y + X.cy;
     float sumsq = tx * tx + ty * ty;
-    float sq = k_sqrt(sumsq);
+    float sq = 0.0f, sina = 0.0f, cosa = 0.0f; /* sina, cosa: flam3's precalc_sina and precalc_cosa, its naming */
+    if ((X.flags & K_FLAME_SQRT) != 0u) {
+        sq = k_sqrt(sumsq);
+        sina = tx / sq;
+        cosa = ty / sq;
+    }
     float atxy = 0.0f, atyx = 0.0f;
     if ((X.flags & K_FLAME_ATAN_XY) != 0u) atxy = k_atan2(tx, ty);
     if ((X.flags & K_FLAME_ATAN_YX) != 0u) atyx = k_atan2(ty, tx);
-    float sina = tx / sq, cosa = ty / sq; /* flam3's precalc_sina and precalc_cosa, in its naming */
     float p0 = 0.0f, p1 = 0.0f;
     for (uint k = 0u; k < X.nvar; k++) {
         K_FlameVar V = k_flame_var[X.var0 + k];

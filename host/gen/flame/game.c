@@ -19,6 +19,7 @@ typedef struct cell16 {
 
 #define BATCH    1024 /* points computed before they are scattered */
 #define AHEAD    12   /* records prefetched ahead of the one added */
+#define LANES    4    /* chains a thread steps in turn */
 #define OPAQUE_Q 4080u
 
 static bool compact(const fb_flame_setup *S)
@@ -132,36 +133,79 @@ typedef struct game {
     int ntasks;
 } game;
 
+static void scatter(const game *G, int task, const K_FlameChain *pts, uint32_t n, records *rec)
+{
+    make_records(G->S, pts, n, rec);
+    if (G->compact)
+        scatter16(G->S, rec, G->hist[task], G->total);
+    else
+        scatter32(G->S, rec, pts, G->hist[task], G->total);
+}
+
+/* LANES chains from chain i on (all of length len) stepped in turn: their steps are independent, so
+ * the processor overlaps one chain's dependent arithmetic with the others'. The points go to the
+ * histogram in an order of their own, which integer sums do not see. */
+static uint64_t play_lanes(const game *G, int task, uint32_t i, uint32_t len, K_FlameChain *pts, records *rec)
+{
+    const fb_flame_setup *S = G->S;
+    const K_FlameParams P = S->p;
+    const K_FlameXform *k_flame_xf = S->xf;
+    const K_FlameVar *k_flame_var = S->var;
+    const uint *k_flame_dist = S->dist;
+    K_FlameChain s[LANES];
+    uint32_t key[LANES];
+    uint64_t bad = 0;
+    for (int j = 0; j < LANES; j++) {
+        key[j] = k_flame_key(P.seed, i + (uint32_t)j);
+        s[j] = k_flame_init(key[j]);
+    }
+    for (uint32_t t = 0; t < P.fuse; t++)
+        for (int j = 0; j < LANES; j++) s[j] = k_flame_step(P, s[j], key[j] K_FLAME_TABLES);
+    for (uint32_t t0 = 0; t0 < len; t0 += BATCH / LANES) {
+        uint32_t n = len - t0 < BATCH / LANES ? len - t0 : BATCH / LANES;
+        for (uint32_t t = 0; t < n; t++)
+            for (int j = 0; j < LANES; j++)
+                pts[t * LANES + (uint32_t)j] = s[j] = k_flame_step(P, s[j], key[j] K_FLAME_TABLES);
+        scatter(G, task, pts, n * LANES, rec);
+    }
+    for (int j = 0; j < LANES; j++) bad += s[j].bad;
+    return bad;
+}
+
+/* Chain i alone. */
+static uint64_t play_chain(const game *G, int task, uint32_t i, uint32_t len, K_FlameChain *pts, records *rec)
+{
+    const fb_flame_setup *S = G->S;
+    const K_FlameParams P = S->p;
+    const K_FlameXform *k_flame_xf = S->xf;
+    const K_FlameVar *k_flame_var = S->var;
+    const uint *k_flame_dist = S->dist;
+    uint32_t key = k_flame_key(P.seed, i);
+    K_FlameChain s = k_flame_init(key);
+    for (uint32_t t = 0; t < P.fuse; t++) s = k_flame_step(P, s, key K_FLAME_TABLES);
+    for (uint32_t t0 = 0; t0 < len; t0 += BATCH) {
+        uint32_t n = len - t0 < BATCH ? len - t0 : BATCH;
+        for (uint32_t t = 0; t < n; t++) pts[t] = s = k_flame_step(P, s, key K_FLAME_TABLES);
+        scatter(G, task, pts, n, rec);
+    }
+    return s.bad;
+}
+
 /* Chains [c0, c1) of the round, the task's contiguous share, into its own histogram. */
 static void game_task(void *ctx, int task)
 {
     game *G = ctx;
-    const fb_flame_setup *S = G->S;
-    const K_FlameParams P = S->p;
+    const K_FlameParams *P = &G->S->p;
     uint64_t span = G->c1 - G->c0;
     uint32_t a = G->c0 + (uint32_t)(span * (uint64_t)task / (uint64_t)G->ntasks);
     uint32_t b = G->c0 + (uint32_t)(span * (uint64_t)(task + 1) / (uint64_t)G->ntasks);
+    uint32_t full = b < P->chains ? b : P->chains - 1; /* chains before the last one of all: length len */
     uint64_t bad = 0;
-    const K_FlameXform *k_flame_xf = S->xf;
-    const K_FlameVar *k_flame_var = S->var;
-    const uint *k_flame_dist = S->dist;
     K_FlameChain pts[BATCH];
     records rec;
-    for (uint32_t i = a; i < b; i++) {
-        uint32_t key = k_flame_key(P.seed, i), len = i + 1 == P.chains ? P.last_len : P.len;
-        K_FlameChain s = k_flame_init(key);
-        for (uint32_t t = 0; t < P.fuse; t++) s = k_flame_step(P, s, key K_FLAME_TABLES);
-        for (uint32_t t0 = 0; t0 < len; t0 += BATCH) {
-            uint32_t n = len - t0 < BATCH ? len - t0 : BATCH;
-            for (uint32_t t = 0; t < n; t++) pts[t] = s = k_flame_step(P, s, key K_FLAME_TABLES);
-            make_records(S, pts, n, &rec);
-            if (G->compact)
-                scatter16(S, &rec, G->hist[task], G->total);
-            else
-                scatter32(S, &rec, pts, G->hist[task], G->total);
-        }
-        bad += s.bad;
-    }
+    uint32_t i = a;
+    for (; i + LANES <= full; i += LANES) bad += play_lanes(G, task, i, P->len, pts, &rec);
+    for (; i < b; i++) bad += play_chain(G, task, i, i + 1 == P->chains ? P->last_len : P->len, pts, &rec);
     G->bad[task] += bad;
 }
 
