@@ -19,7 +19,6 @@ typedef struct cell16 {
 
 #define BATCH    1024 /* points computed before they are scattered */
 #define AHEAD    12   /* records prefetched ahead of the one added */
-#define LANES    4    /* chains a thread steps in turn */
 #define OPAQUE_Q 4080u
 
 static bool compact(const fb_flame_setup *S)
@@ -142,38 +141,8 @@ static void scatter(const game *G, int task, const K_FlameChain *pts, uint32_t n
         scatter32(G->S, rec, pts, G->hist[task], G->total);
 }
 
-/* LANES chains from chain i on (all of length len) stepped in turn: their steps are independent, so
- * the processor overlaps one chain's dependent arithmetic with the others'. The points go to the
- * histogram in an order of their own, which integer sums do not see. */
-static uint64_t play_lanes(const game *G, int task, uint32_t i, uint32_t len, K_FlameChain *pts, records *rec)
-{
-    const fb_flame_setup *S = G->S;
-    const K_FlameParams P = S->p;
-    const K_FlameXform *k_flame_xf = S->xf;
-    const K_FlameVar *k_flame_var = S->var;
-    const uint *k_flame_dist = S->dist;
-    K_FlameChain s[LANES];
-    uint32_t key[LANES];
-    uint64_t bad = 0;
-    for (int j = 0; j < LANES; j++) {
-        key[j] = k_flame_key(P.seed, i + (uint32_t)j);
-        s[j] = k_flame_init(key[j]);
-    }
-    for (uint32_t t = 0; t < P.fuse; t++)
-        for (int j = 0; j < LANES; j++) s[j] = k_flame_step(P, s[j], key[j] K_FLAME_TABLES);
-    for (uint32_t t0 = 0; t0 < len; t0 += BATCH / LANES) {
-        uint32_t n = len - t0 < BATCH / LANES ? len - t0 : BATCH / LANES;
-        for (uint32_t t = 0; t < n; t++)
-            for (int j = 0; j < LANES; j++)
-                pts[t * LANES + (uint32_t)j] = s[j] = k_flame_step(P, s[j], key[j] K_FLAME_TABLES);
-        scatter(G, task, pts, n * LANES, rec);
-    }
-    for (int j = 0; j < LANES; j++) bad += s[j].bad;
-    return bad;
-}
-
-/* Chain i alone. */
-static uint64_t play_chain(const game *G, int task, uint32_t i, uint32_t len, K_FlameChain *pts, records *rec)
+/* Chain i, of length len. */
+static uint64_t play(const game *G, int task, uint32_t i, uint32_t len, K_FlameChain *pts, records *rec)
 {
     const fb_flame_setup *S = G->S;
     const K_FlameParams P = S->p;
@@ -199,13 +168,10 @@ static void game_task(void *ctx, int task)
     uint64_t span = G->c1 - G->c0;
     uint32_t a = G->c0 + (uint32_t)(span * (uint64_t)task / (uint64_t)G->ntasks);
     uint32_t b = G->c0 + (uint32_t)(span * (uint64_t)(task + 1) / (uint64_t)G->ntasks);
-    uint32_t full = b < P->chains ? b : P->chains - 1; /* chains before the last one of all: length len */
     uint64_t bad = 0;
     K_FlameChain pts[BATCH];
     records rec;
-    uint32_t i = a;
-    for (; i + LANES <= full; i += LANES) bad += play_lanes(G, task, i, P->len, pts, &rec);
-    for (; i < b; i++) bad += play_chain(G, task, i, i + 1 == P->chains ? P->last_len : P->len, pts, &rec);
+    for (uint32_t i = a; i < b; i++) bad += play(G, task, i, i + 1 == P->chains ? P->last_len : P->len, pts, &rec);
     G->bad[task] += bad;
 }
 
