@@ -44,6 +44,14 @@
 #define k_rint(x)     rintf(x)
 #endif
 
+/* The step inlined into its caller in C: returned through memory, its state is otherwise stored
+ * field by field and read back whole, which the processor cannot forward (a stall a point). */
+#ifdef K_GLSL
+#define K_FLAME_INLINE
+#else
+#define K_FLAME_INLINE static inline __attribute__((always_inline))
+#endif
+
 #define K_FLAME_EPS       1e-10f
 #define K_FLAME_GRAIN     16384u /* entries of one row of the xform choice table (flam3's CHOOSE_XFORM_GRAIN) */
 #define K_FLAME_NONE      0xffffffffu
@@ -214,7 +222,7 @@ K_END(K_FlameOut)
 #define K_FLAME_RAND() k_flame_u01(key, n++)
 
 /* Applies xform `fn` to (x, y, c): flam3's apply_xform, each variation with flam3's formula. */
-K_FN K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint key, uint n0 K_FLAME_TABLES_DECL)
+K_FLAME_INLINE K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint key, uint n0 K_FLAME_TABLES_DECL)
 {
     K_FlameXform X = k_flame_xf[fn];
     uint n = n0;
@@ -534,7 +542,7 @@ K_FN K_FlameChain k_flame_init(uint key)
 
 /* One iteration of the chain (flam3_iterate's loop body): the xform chosen and applied, retried on
  * a bad value at most four times, then the final xform and the camera's rotation for the plot. */
-K_FN K_FlameChain k_flame_step(K_FlameParams P, K_FlameChain s, uint key K_FLAME_TABLES_DECL)
+K_FLAME_INLINE K_FlameChain k_flame_step(K_FlameParams P, K_FlameChain s, uint key K_FLAME_TABLES_DECL)
 {
     uint fn = 0u;
     K_FlameOut o;
