@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Fractal flames beside libflam3 (flam3-render of Debian's flam3-utils), the same genome, the same
 # size, quality and thread count, side by side in one run: points per second of the whole render
-# (chaos game, density estimation, filter, tone map and writing the file), the median of 3 runs each.
+# (chaos game, density estimation, filter, tone map and writing the file), the median of 3 runs each,
+# alternated, in wall seconds and in CPU seconds (user + system: less sensitive to a loaded machine).
 #
 #   bench/flame.sh [FRACTALBAKE] [THREADS] [QUALITY]    defaults: build/fractalbake, 2, 50
 #
@@ -24,17 +25,19 @@ ET.ElementTree(f).write(sys.argv[2])
 EOF
 points=$((1024 * 1024 * q))
 median() { sort -g | sed -n 2p; }
-t_fb=$(for i in 1 2 3; do
-    s=$(date +%s.%N)
-    "$FB" flame --file "$tmp/g.flame" --size 1024x1024 --threads "$threads" --backend native --quiet -o "$tmp/o.exr"
-    echo "$(date +%s.%N) - $s" | bc
-done | median)
-t_f3=$(for i in 1 2 3; do
-    s=$(date +%s.%N)
-    env nthreads="$threads" isaac_seed=bench out="$tmp/o.png" flam3-render < "$tmp/g.flame" > /dev/null 2>&1
-    echo "$(date +%s.%N) - $s" | bc
-done | median)
-printf 'flame 1024x1024 quality %s (%d points), %d threads, %s\n' "$q" "$points" "$threads" "$(date -u +%F)"
-printf '  fractalbake native  %6.2f s  %7.1f Mpts/s\n' "$t_fb" "$(echo "$points / $t_fb / 1000000" | bc -l)"
-printf '  flam3-render 3.1.1  %6.2f s  %7.1f Mpts/s\n' "$t_f3" "$(echo "$points / $t_f3 / 1000000" | bc -l)"
-printf '  ratio               %6.2fx\n' "$(echo "$t_f3 / $t_fb" | bc -l)"
+# run: "WALL CPU" seconds of one render (CPU: user + system, every thread's), the command after it
+run() { /usr/bin/time -f '%e %U %S' -o "$tmp/t" "$@" > /dev/null 2>&1; awk '{print $1, $2 + $3}' "$tmp/t"; }
+fb() { run "$FB" flame --file "$tmp/g.flame" --size 1024x1024 --threads "$threads" --backend native --quiet -o "$tmp/o.exr"; }
+f3() { run env nthreads="$threads" isaac_seed=bench out="$tmp/o.png" flam3-render < "$tmp/g.flame"; }
+# alternated, so that both see the same load; the medians of wall and of CPU seconds
+for i in 1 2 3; do fb >> "$tmp/fb"; f3 >> "$tmp/f3"; done
+t_fb=$(cut -d' ' -f1 "$tmp/fb" | median) c_fb=$(cut -d' ' -f2 "$tmp/fb" | median)
+t_f3=$(cut -d' ' -f1 "$tmp/f3" | median) c_f3=$(cut -d' ' -f2 "$tmp/f3" | median)
+printf 'flame 1024x1024 quality %s (%d points), %d threads, %s, load %s\n' "$q" "$points" "$threads" "$(date -u +%F)" \
+    "$(cut -d' ' -f1 /proc/loadavg)"
+printf '  %-20s %7s %9s %8s %12s\n' renderer "wall s" "Mpts/s" "CPU s" "Mpts/CPU-s"
+line() { printf '  %-20s %7.2f %9.1f %8.2f %12.1f\n' "$1" "$2" "$(echo "$points / $2 / 1000000" | bc -l)" "$3" \
+    "$(echo "$points / $3 / 1000000" | bc -l)"; }
+line "fractalbake native" "$t_fb" "$c_fb"
+line "flam3-render 3.1.1" "$t_f3" "$c_f3"
+printf '  ratio (flam3 / ours)        %6.2fx            %6.2fx\n' "$(echo "$t_f3 / $t_fb" | bc -l)" "$(echo "$c_f3 / $c_fb" | bc -l)"

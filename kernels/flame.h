@@ -44,12 +44,21 @@
 #define k_rint(x)     rintf(x)
 #endif
 
+/* The step inlined into its caller in C: returned through memory, its state is otherwise stored
+ * field by field and read back whole, which the processor cannot forward (a stall a point). */
+#ifdef K_GLSL
+#define K_FLAME_INLINE
+#else
+#define K_FLAME_INLINE static inline __attribute__((always_inline))
+#endif
+
 #define K_FLAME_EPS       1e-10f
 #define K_FLAME_GRAIN     16384u /* entries of one row of the xform choice table (flam3's CHOOSE_XFORM_GRAIN) */
 #define K_FLAME_NONE      0xffffffffu
 #define K_FLAME_ATAN_XY   1u /* flags: the xform's variations use atan2(x, y) */
 #define K_FLAME_ATAN_YX   2u /* ... atan2(y, x) */
 #define K_FLAME_HAS_POST  4u
+#define K_FLAME_SQRT      8u /* ... the length of (tx, ty) and flam3's sina, cosa */
 #define K_FLAME_DRAWS_MAX 64u
 
 /* flam3's variation numbers (flam3.h VAR_*), the ones implemented here. */
@@ -213,7 +222,7 @@ K_END(K_FlameOut)
 #define K_FLAME_RAND() k_flame_u01(key, n++)
 
 /* Applies xform `fn` to (x, y, c): flam3's apply_xform, each variation with flam3's formula. */
-K_FN K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint key, uint n0 K_FLAME_TABLES_DECL)
+K_FLAME_INLINE K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint key, uint n0 K_FLAME_TABLES_DECL)
 {
     K_FlameXform X = k_flame_xf[fn];
     uint n = n0;
@@ -222,11 +231,15 @@ K_FN K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint key, uint
     float tx = X.ax * x + X.bx * y + X.cx;
     float ty = X.ay * x + X.by * y + X.cy;
     float sumsq = tx * tx + ty * ty;
-    float sq = k_sqrt(sumsq);
+    float sq = 0.0f, sina = 0.0f, cosa = 0.0f; /* sina, cosa: flam3's precalc_sina and precalc_cosa, its naming */
+    if ((X.flags & K_FLAME_SQRT) != 0u) {
+        sq = k_sqrt(sumsq);
+        sina = tx / sq;
+        cosa = ty / sq;
+    }
     float atxy = 0.0f, atyx = 0.0f;
     if ((X.flags & K_FLAME_ATAN_XY) != 0u) atxy = k_atan2(tx, ty);
     if ((X.flags & K_FLAME_ATAN_YX) != 0u) atyx = k_atan2(ty, tx);
-    float sina = tx / sq, cosa = ty / sq; /* flam3's precalc_sina and precalc_cosa, in its naming */
     float p0 = 0.0f, p1 = 0.0f;
     for (uint k = 0u; k < X.nvar; k++) {
         K_FlameVar V = k_flame_var[X.var0 + k];
@@ -529,7 +542,7 @@ K_FN K_FlameChain k_flame_init(uint key)
 
 /* One iteration of the chain (flam3_iterate's loop body): the xform chosen and applied, retried on
  * a bad value at most four times, then the final xform and the camera's rotation for the plot. */
-K_FN K_FlameChain k_flame_step(K_FlameParams P, K_FlameChain s, uint key K_FLAME_TABLES_DECL)
+K_FLAME_INLINE K_FlameChain k_flame_step(K_FlameParams P, K_FlameChain s, uint key K_FLAME_TABLES_DECL)
 {
     uint fn = 0u;
     K_FlameOut o;

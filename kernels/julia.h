@@ -140,8 +140,13 @@ K_STRUCT(K_JuliaStart)
 }
 K_END(K_JuliaStart)
 
-/* (tw_re, tw_im): the turbulence term lambda W(p) added to z0 (eq. 13); 0 for none. */
-K_FN K_JuliaStart k_julia_begin(K_JuliaParams p, float px, float py, float dpx, float dpy, float tw_re, float tw_im)
+/* z0 = (nr + i ni) / (dr + i di) + tw and dz0 = (1 - |a|^2) (qr + i qi) / (dr + i di)^2: the allpass
+ * warp's value and derivative from its numerator and denominator (q: the derivative of its argument,
+ * times what the form needs). A zero denominator is the pole: the point at infinity, outside every
+ * filled Julia set, so the pixel escapes before the first iteration and nothing non-finite reaches
+ * the output. */
+K_FN K_JuliaStart k_julia_quotient(K_JuliaParams p, float nr, float ni, float dr, float di, float qr, float qi,
+                                   float tw_re, float tw_im)
 {
     K_PRECISE K_JuliaStart s;
     s.ok = 0u;
@@ -149,14 +154,7 @@ K_FN K_JuliaStart k_julia_begin(K_JuliaParams p, float px, float py, float dpx, 
     s.o.zi = 0.0f;
     s.o.dzr = 0.0f;
     s.o.dzi = 0.0f;
-    /* z0 = (p - conj(a)) / (1 - a p); dz0/dx = (1 - |a|^2) / (1 - a p)^2 * dp/dx */
-    K_PRECISE float nr = px - p.a_re;
-    K_PRECISE float ni = py + p.a_im;
-    K_PRECISE float dr = 1.0f - (p.a_re * px - p.a_im * py);
-    K_PRECISE float di = -(p.a_re * py + p.a_im * px);
     K_PRECISE float den = dr * dr + di * di;
-    /* The pole p = 1/a sends z0 to infinity, which lies outside every filled Julia set: the pixel
-     * escapes before the first iteration. Nothing non-finite reaches the output. */
     if (!(den > 1.0e-30f)) return s;
     float inv = 1.0f / den;
     /* precise: an orbit is chaotic, so one fused rounding would change the escape count of
@@ -164,14 +162,25 @@ K_FN K_JuliaStart k_julia_begin(K_JuliaParams p, float px, float py, float dpx, 
     K_PRECISE float zr = (nr * dr + ni * di) * inv + tw_re;
     K_PRECISE float zi = (ni * dr - nr * di) * inv + tw_im;
     float k = 1.0f - (p.a_re * p.a_re + p.a_im * p.a_im);
-    float sr = (dr * dr - di * di) * inv * inv, si = -2.0f * dr * di * inv * inv; /* 1 / (1 - a p)^2 */
+    float sr = (dr * dr - di * di) * inv * inv, si = -2.0f * dr * di * inv * inv; /* 1 / den^2 */
     float wr = k * sr, wi = k * si;
     s.o.zr = zr;
     s.o.zi = zi;
-    s.o.dzr = wr * dpx - wi * dpy;
-    s.o.dzi = wr * dpy + wi * dpx;
+    s.o.dzr = wr * qr - wi * qi;
+    s.o.dzi = wr * qi + wi * qr;
     s.ok = zr * zr + zi * zi < 1.0e30f ? 1u : 0u;
     return s;
+}
+
+/* (tw_re, tw_im): the turbulence term lambda W(p) added to z0 (eq. 13); 0 for none.
+ * z0 = (p - conj(a)) / (1 - a p); dz0/dx = (1 - |a|^2) / (1 - a p)^2 * dp/dx */
+K_FN K_JuliaStart k_julia_begin(K_JuliaParams p, float px, float py, float dpx, float dpy, float tw_re, float tw_im)
+{
+    K_PRECISE float nr = px - p.a_re;
+    K_PRECISE float ni = py + p.a_im;
+    K_PRECISE float dr = 1.0f - (p.a_re * px - p.a_im * py);
+    K_PRECISE float di = -(p.a_re * py + p.a_im * px);
+    return k_julia_quotient(p, nr, ni, dr, di, dpx, dpy, tw_re, tw_im);
 }
 
 /* ---- environment maps: the grid from directions ---------------------------------------------- */
@@ -238,12 +247,6 @@ K_FN K_JuliaHom k_julia_env_point(K_JuliaParams p, float ex, float ey)
  * (tw_re, tw_im): the turbulence term added to z0. */
 K_FN K_JuliaStart k_julia_env_begin(K_JuliaParams p, K_JuliaHom e, float tw_re, float tw_im)
 {
-    K_PRECISE K_JuliaStart s;
-    s.ok = 0u;
-    s.o.zr = 0.0f;
-    s.o.zi = 0.0f;
-    s.o.dzr = 0.0f;
-    s.o.dzi = 0.0f;
     K_PRECISE float D = e.d;
     K_PRECISE float pr = p.rot_c * e.nr - p.rot_s * e.ni, pi = p.rot_s * e.nr + p.rot_c * e.ni; /* R N */
     K_PRECISE float nr = pr + (p.center_re - p.a_re) * D;
@@ -252,21 +255,8 @@ K_FN K_JuliaStart k_julia_env_begin(K_JuliaParams p, K_JuliaHom e, float tw_re, 
     K_PRECISE float aci = -(p.a_re * p.center_im + p.a_im * p.center_re);
     K_PRECISE float dr = acr * D - (p.a_re * pr - p.a_im * pi);
     K_PRECISE float di = aci * D - (p.a_re * pi + p.a_im * pr);
-    K_PRECISE float den = dr * dr + di * di;
-    if (!(den > 1.0e-30f)) return s; /* the pole of A (or the nadir without a warp): escapes */
-    float inv = 1.0f / den;
-    K_PRECISE float zr = (nr * dr + ni * di) * inv + tw_re;
-    K_PRECISE float zi = (ni * dr - nr * di) * inv + tw_im;
-    float k = 1.0f - (p.a_re * p.a_re + p.a_im * p.a_im);
     float qr = p.rot_c * e.gr - p.rot_s * e.gi, qi = p.rot_s * e.gr + p.rot_c * e.gi; /* R G */
-    float sr = (dr * dr - di * di) * inv * inv, si = -2.0f * dr * di * inv * inv;     /* 1 / den^2 */
-    float wr = k * sr, wi = k * si;
-    s.o.zr = zr;
-    s.o.zi = zi;
-    s.o.dzr = wr * qr - wi * qi;
-    s.o.dzi = wr * qi + wi * qr;
-    s.ok = zr * zr + zi * zi < 1.0e30f ? 1u : 0u;
-    return s;
+    return k_julia_quotient(p, nr, ni, dr, di, qr, qi, tw_re, tw_im);
 }
 
 /* W on the sphere: the two streams of 3D fBm at the direction (fbm.h, k_fbm3), scaled by lambda. */

@@ -29,9 +29,18 @@
  * division be off by 2.5 ULP, so no kernel divides. Beyond 2^24 cells (octaves finer than any
  * pixel) the float path only has to stay in range. GLSL leaves % of negative operands undefined,
  * hence the shift to a non-negative value first. */
+/* A shader whose every lattice index is known on the host to stay under 2^24 cells (fBm's scenes
+ * but for huge frequencies: host/gen/fbm/layer.c) defines K_WRAP_SMALL as true, a specialisation
+ * constant, before including this file: the float path then folds away. On lavapipe both sides of
+ * the test run in every lane, and that path cost fBm a tenth of its time (bench/RESULTS.md). Where
+ * |i| < 2^24 both paths give the same cell, so the result is the same bits. */
+#ifndef K_WRAP_SMALL
+#define K_WRAP_SMALL false
+#endif
+
 K_FN uint k_wrap_cell(float i, uint p)
 {
-    if (k_abs(i) < 16777216.0f) {
+    if (K_WRAP_SMALL || k_abs(i) < 16777216.0f) {
         int ii = K_I(i);
         /* A power-of-two period (every non-tileable lattice) is a mask, also for negative ii in two's
          * complement. Integer division has no SIMD instruction: on lavapipe, where one invocation is

@@ -15,6 +15,7 @@
 #define FB_KERNELS_NOISE3_H
 
 #include "noise.h"
+#include "sincos.h"
 
 /* Hash of 3D lattice coordinates under an (already hashed) seed: the 2D hash of (ix, iy) under a
  * seed that depends on the layer iz. */
@@ -126,7 +127,7 @@ K_FN float k_cell_gap2(int d, float t)
 /* Cellular noise: F1 and F2, one uniformly jittered feature point per cell, searched over the
  * 5 x 5 x 5 neighbourhood with the cells whose nearest face is beyond the current F2 skipped. A cell
  * three away is at least 2 away, while F2 exceeds 2 only if the query's own cell and all 26
- * neighbours hold at most one point within 2: not in the 10^7 queries of tests/test_noise3.c. */
+ * neighbours hold at most one point within 2: in none of tests/test_sky.c's 200,000 queries. */
 K_FN k_vec2 k_cellular3(uint seed, k_vec3 q)
 {
     float fx = k_floor(q.x), fy = k_floor(q.y), fz = k_floor(q.z);
@@ -159,7 +160,8 @@ K_FN k_vec2 k_cellular3(uint seed, k_vec3 q)
     return k_vec2(k_sqrt(f1), k_sqrt(f2));
 }
 
-/* Sine noise in [-1, 1], period 1 cell, the coordinate reduced first as in 2D. */
+/* Sine noise in [-1, 1], period 1 cell, the coordinate reduced first as in 2D; sin from sincos.h,
+ * the same bits on every device. */
 K_FN float k_sine_noise3(k_vec3 q)
 {
     float fx = k_floor(q.x), fy = k_floor(q.y), fz = k_floor(q.z);
@@ -167,7 +169,7 @@ K_FN float k_sine_noise3(k_vec3 q)
     float xr = K_F(k_wrap_cell(fx, P)) + (q.x - fx);
     float yr = K_F(k_wrap_cell(fy, P)) + (q.y - fy);
     float zr = K_F(k_wrap_cell(fz, P)) + (q.z - fz);
-    return k_sin(K_TAU * xr) * k_sin(K_TAU * yr) * k_sin(K_TAU * zr);
+    return k_sincos(K_TAU * xr).x * k_sincos(K_TAU * yr).x * k_sincos(K_TAU * zr).x;
 }
 
 /* Dispatch on the noise kind, with noise.h's mappings of cellular F1 (from [0, sqrt(3)]) and of

@@ -75,7 +75,7 @@ int main(void)
         fb_scene_fini(&s);
     }
     /* The Julia layer's whole native path on AVX2 lanes: every stored channel of every pixel is the
-     * scalar kernel's to the bit (memcmp, so NaN and -0 count), on rect and polar grids, with the
+     * scalar kernel's to the bit (memcmp, so NaN and -0 count), on rect, polar, lat-long and cube grids, with the
      * pole, turbulence (tileable with power-of-two and other periods), jittered samples, gamma,
      * density, every palette kind and channel subsets (what is not stored is not computed). Widths
      * that are not multiples of 8 leave a partial last block. */
@@ -106,6 +106,11 @@ int main(void)
         "\"polar\"}]}",
         "{\"size\": [90, 70], \"seed\": 3, \"layers\": [{\"type\": \"julia\", \"channels\": [\"R\", \"G\", \"B\"], "
         "\"samples\": 5, \"palette\": \"nebula\"}]}",
+        /* environment maps: the nadir (-1/a) and the pole of the warp on the sphere, turbulence, samples */
+        "{\"size\": [130, 65], \"seed\": 4, \"layers\": [{\"type\": \"julia\", \"mapping\": \"latlong\", "
+        "\"alpha\": [-0.3, 0.1], \"turbulence\": 0.2, \"samples\": 3, \"rotation\": 15}]}",
+        "{\"size\": [21, 126], \"seed\": 2, \"layers\": [{\"type\": \"julia\", \"mapping\": \"cube\", "
+        "\"alpha\": [0.5, 0], \"radius\": 1.1, \"max-iter\": 40}]}",
     };
     const int nlayers = (int)(sizeof layers / sizeof layers[0]);
     int seen_inside = 0, seen_pole = 0, seen_de = 0;

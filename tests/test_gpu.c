@@ -201,11 +201,16 @@ int main(void)
     if (!mkdtemp(g_dir)) TEST_SKIP("no temporary folder");
 
     static const char *noises[] = {"gradient", "value", "simplex", "cellular", "cellular-f2", "sine"};
-    static const char *styles[] = {"", ", \"ridged\": true", ", \"billow\": true, \"warp\": 0.8",
-                                   ", \"tileable\": true, \"warp\": 0.5"};
-    const int W = 193, H = 77;
+    static const char *styles[] = {"",
+                                   ", \"ridged\": true",
+                                   ", \"billow\": true, \"warp\": 0.8",
+                                   ", \"tileable\": true, \"warp\": 0.5",
+                                   ", \"mapping\": \"latlong\"",
+                                   ", \"mapping\": \"cube\", \"warp\": 0.5"};
+    static const int sizes[][2] = {{193, 77}, {193, 77}, {193, 77}, {193, 77}, {192, 96}, {32, 192}};
     for (int n = 0; n < 6; n++)
-        for (int st = 0; st < 4; st++) {
+        for (int st = 0; st < 6; st++) {
+            const int W = sizes[st][0], H = sizes[st][1];
             if (st == 3 && n == 2) continue; /* simplex is not tileable */
             char json[512];
             snprintf(json, sizeof json,

@@ -54,7 +54,8 @@ static void test_keys(void)
     CHECK(p.flags == K_FBM_RIDGED && p.warp == 0.25f);
     CHECK(p.width == 200 && p.height == 100 && p.inv_width == 1.0f / 200.0f);
     CHECK(g.nchannels == 1 && !strcmp(g.channel_names[0], "h.Y") && g.channel_types[0] == EXRIO_HALF);
-    CHECK(g.nspec == 2 && g.spec[0] == K_NOISE_CELLULAR_F2 && g.spec[1] == K_FBM_RIDGED);
+    /* 6 cells x 1.99^12 at the finest octave: far under 2^24, so the small-coordinate shader */
+    CHECK(g.nspec == 3 && g.spec[0] == K_NOISE_CELLULAR_F2 && g.spec[1] == K_FBM_RIDGED && g.spec[2] == 1u);
     fb_scene_fini(&s);
 
     /* defaults, filled into the stored scene */

@@ -4,6 +4,7 @@
 #include "bake.h"
 #include "cliout.h"
 #include "exrio.h"
+#include "faces.h"
 #include "heightmap.h"
 #include "output.h"
 #include "plan.h"
@@ -92,6 +93,7 @@ const fb_arg fb_bake_flags[] = {
     {FB_ARG_OUTPUT, "--output", "-o", OPT(out), .ext = ".exr"},
     {FB_ARG_OUTPUT, "--preview", NULL, OPT(preview), .ext = ".png"},
     {FB_ARG_STRING, "--preview-layer", NULL, OPT(preview_layer)},
+    {FB_ARG_STRING, "--cube-faces", NULL, OPT(cube_faces)},
     {FB_ARG_STRING, "--device", NULL, OPT(device)},
     {FB_ARG_VALUE, "--backend", NULL, OPT(backend), .parse = arg_backend},
     {FB_ARG_INT, "--threads", NULL, OPT(threads), 1, 1024},
@@ -188,6 +190,21 @@ static fb_result check_options(const fb_scene *scene, const fb_bake_opts *o)
         if (!chaos) return fb_fail(FB_ERR_USAGE, "--points-part: the scene has no chaos-game layer to split by points");
         if (o->region[2] > 0)
             return fb_fail(FB_ERR_USAGE, "--points-part: not with --region (split a bake by pixels or by points)");
+    }
+    if (o->cube_faces) {
+        char names[6][FB_FACES_PATH];
+        fb_result rc = fb_faces_paths(o->cube_faces, names);
+        if (rc) return rc;
+        if (scene->envmap != EXRIO_ENVMAP_CUBE)
+            return fb_fail(FB_ERR_USAGE,
+                           "--cube-faces: the scene is %s, not a cube environment map (\"mapping\": \"cube\")",
+                           scene->envmap == EXRIO_ENVMAP_LATLONG ? "a lat-long environment map" : "a plane");
+        const char *clash = o->region[2]        ? "--region"
+                            : o->task[1]        ? "--task"
+                            : o->points_part[1] ? "--points-part"
+                            : o->dry_run        ? "--dry-run"
+                                                : NULL;
+        if (clash) return fb_fail(FB_ERR_USAGE, "--cube-faces: not with %s (a face set is the whole cube)", clash);
     }
     if (o->task_startup >= 0 && !o->task[1])
         return fb_fail(FB_ERR_USAGE, "--task-startup: only with --task K/N (and fractalbake plan)");
@@ -365,7 +382,8 @@ fb_result fb_cli_bake(const fb_cli *cli, const char *command, fb_scene *scene, c
                                  .user = &ctx,
                                  .attrs = ts.attrs,
                                  .nattrs = o->task[1] > 0 ? 2 : 0,
-                                 .layer_backends = o->task[1] > 0},
+                                 .layer_backends = o->task[1] > 0,
+                                 .cube_faces = o->cube_faces},
                  &st);
     if (!rc && o->dry_run)
         print_plan(&plan, o->json);

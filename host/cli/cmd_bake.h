@@ -9,7 +9,7 @@
 
 /* Options every baking command shares (the table fb_bake_flags reads them). */
 typedef struct fb_bake_opts {
-    const char *out, *preview, *preview_layer, *device;
+    const char *out, *preview, *preview_layer, *device, *cube_faces;
     fb_backend backend;
     int threads, strip_rows, zip_level;
     int region[4];       /* x, y, w, h; w == 0: none */

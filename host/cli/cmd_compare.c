@@ -97,7 +97,9 @@ static void help(const fb_cli *cli)
            "--diff writes |A - B| per channel; --diff-png a picture: red where a channel fails, over A's\n"
            "first channel in dim grey; with --heat a heat map of the largest |A - B| over the channels,\n"
            "log scale (black 1e-8, blue 1e-6, red 1e-4, yellow 0.01, white 1). --json: the report as one\n"
-           "JSON object. --quiet: only the result line.\n"
+           "JSON object. --quiet: only the result line. --threads N: the threads (default one per core;\n"
+           "the same results for any N). FLIP and --report hold the compared channels of both files in\n"
+           "memory; the other statistics read blocks of rows.\n"
            "\n"
            "exit: 0 pass or warn (the result line says WARN; --json: \"result\": \"warn\"), 1 fail (also\n"
            "different sizes or channel sets, with the reason), 2 bad usage or input, 3 runtime failure.\n"
@@ -203,6 +205,7 @@ static const fb_arg flags[] = {
     {FB_ARG_BOOL, "--heat", NULL, D(heat)},
     {FB_ARG_BOOL, "--json", NULL, D(json)},
     {FB_ARG_BOOL, "--quiet", NULL, offsetof(compare_opts, quiet)},
+    {FB_ARG_INT, "--threads", NULL, D(threads), 1, 1024},
     {FB_ARG_BOOL, "--help", "-h", offsetof(compare_opts, help)},
     {FB_ARG_END},
 };

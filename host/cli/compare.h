@@ -63,6 +63,7 @@ typedef struct fb_compare_desc {
     int flip_stat;
     fb_limit flip_fail, flip_warn;
     const char *flip_png; /* the FLIP error of the layer with the largest mean, grey */
+    int threads;          /* the threads to run on (0: one per core); the results are the same bits for any */
     void (*print)(const char *line, void *user);
     void *user;
 } fb_compare_desc;

@@ -242,18 +242,21 @@ static bool outside_of(const char *attr, const char *name, uint64_t *out)
 typedef struct chaos_layer {
     fb_gen gen;
     const fb_points_ops *ops;
-    int layer;                              /* its index in the scene */
-    int nch;                                /* the parts' channels of its sums: 1 each, 2 for a wide one */
-    int idx[2 * FB_POINTS_MAX_SUMS];        /* their indices in the part being read */
-    uint32_t *rows[2 * FB_POINTS_MAX_SUMS]; /* a strip of each */
-    uint64_t *sum[FB_POINTS_MAX_SUMS];      /* added over the parts */
+    int layer; /* its index in the scene */
+    int nsums; /* its sums (as many as its class sizes for the layer) */
+    int nch;   /* the parts' channels of its sums: 1 each, 2 for a wide one */
+    char (*suffix)[40];
+    bool *wide;
+    int *idx;        /* the channels' indices in the part being read */
+    uint32_t **rows; /* a strip of each */
+    uint64_t **sum;  /* added over the parts */
     uint64_t outside;
 } chaos_layer;
 
-/* Bytes per pixel of a chaos layer's sums. */
-static uint64_t chaos_bytes(const fb_layer *L)
+/* Bytes per pixel of a chaos layer's sums (its generator initialised). */
+static uint64_t chaos_bytes(const chaos_layer *c)
 {
-    return 8u * (uint64_t)L->cls->points->nsums;
+    return 8u * (uint64_t)c->gen.layer->cls->points->nsums(&c->gen);
 }
 
 /* Whether channel `name` is one of a chaos layer's sums that the whole game's layer does not store
@@ -265,11 +268,10 @@ static bool chaos_sum_only(const chaos_layer *c, const char *name)
     if (strncmp(name, lname, len) || name[len] != '.') return false;
     for (int j = 0; j < c->gen.nchannels; j++)
         if (!strcmp(c->gen.channel_names[j], name)) return false;
-    for (int k = 0; k < c->ops->nsums; k++) {
-        size_t sl = strlen(c->ops->sums[k].suffix);
+    for (int k = 0; k < c->nsums; k++) {
+        size_t sl = strlen(c->suffix[k]);
         const char *q = name + len + 1;
-        if (!strncmp(q, c->ops->sums[k].suffix, sl) &&
-            (c->ops->sums[k].wide ? !strcmp(q + sl, "_lo") || !strcmp(q + sl, "_hi") : !q[sl]))
+        if (!strncmp(q, c->suffix[k], sl) && (c->wide[k] ? !strcmp(q + sl, "_lo") || !strcmp(q + sl, "_hi") : !q[sl]))
             return true;
     }
     return false;
@@ -296,22 +298,28 @@ static void chaos_free(chaos_layer *cl, int ncl)
 {
     for (int k = 0; k < ncl; k++) {
         fb_gen_fini(&cl[k].gen);
-        for (int j = 0; j < FB_POINTS_MAX_SUMS; j++) free(cl[k].sum[j]);
-        for (int j = 0; j < 2 * FB_POINTS_MAX_SUMS; j++) free(cl[k].rows[j]);
+        for (int j = 0; cl[k].sum && j < cl[k].nsums; j++) free(cl[k].sum[j]);
+        for (int j = 0; cl[k].rows && j < 2 * cl[k].nsums; j++) free(cl[k].rows[j]);
+        free(cl[k].sum), free(cl[k].rows), free(cl[k].idx), free(cl[k].suffix), free(cl[k].wide);
     }
 }
 
-/* A chaos layer's strip rows and its image of sums. */
-static fb_result chaos_alloc(chaos_layer *c, const fb_layer *L, int W, int H)
+/* A chaos layer's sums (its generator initialised): their names, strip rows and image of sums. */
+static fb_result chaos_alloc(chaos_layer *c, int W, int H)
 {
+    const fb_layer *L = c->gen.layer;
     c->ops = L->cls->points;
     c->nch = 0;
-    if (!ALWAYS(c->ops && c->ops->from_sums && c->ops->nsums <= FB_POINTS_MAX_SUMS))
+    if (!ALWAYS(c->ops && c->ops->from_sums && c->ops->nsums && c->ops->sum))
         return fb_fail(FB_ERR_INTERNAL, "generator %s splits by points but has no sums to merge", L->cls->name);
-    bool ok = true;
-    for (int k = 0; k < c->ops->nsums; k++) {
+    int n = c->nsums = c->ops->nsums(&c->gen);
+    bool ok = n > 0 && (c->suffix = calloc((size_t)n, sizeof *c->suffix)) && (c->wide = calloc((size_t)n, 1)) &&
+              (c->idx = calloc(2 * (size_t)n, sizeof *c->idx)) && (c->rows = calloc(2 * (size_t)n, sizeof *c->rows)) &&
+              (c->sum = calloc((size_t)n, sizeof *c->sum));
+    for (int k = 0; k < n && ok; k++) {
+        c->wide[k] = c->ops->sum(&c->gen, k, c->suffix[k], sizeof c->suffix[k]);
         ok = ok && (c->sum[k] = calloc((size_t)W * H, sizeof *c->sum[k]));
-        for (int h = 0; h < (c->ops->sums[k].wide ? 2 : 1); h++)
+        for (int h = 0; h < (c->wide[k] ? 2 : 1); h++)
             ok = ok && (c->rows[c->nch++] = malloc((size_t)W * MERGE_STRIP * 4));
     }
     return ok ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory");
@@ -333,13 +341,10 @@ static fb_result chaos_add(chaos_layer *cl, int ncl, const fb_scene *sc, exrio_r
                            "NAME=COUNT;..., counts 0..1e14)",
                            path, name);
         cl[k].outside += o;
-        for (int s = 0, j = 0; s < cl[k].ops->nsums; s++) /* the channels' indices in this file */
-            for (int h = 0; h < (cl[k].ops->sums[s].wide ? 2 : 1); h++, j++) {
-                char cn[96];
-                snprintf(cn, sizeof cn, "%s.%s%s", name, cl[k].ops->sums[s].suffix,
-                         !cl[k].ops->sums[s].wide ? ""
-                         : h                      ? "_hi"
-                                                  : "_lo");
+        for (int s = 0, j = 0; s < cl[k].nsums; s++) /* the channels' indices in this file */
+            for (int h = 0; h < (cl[k].wide[s] ? 2 : 1); h++, j++) {
+                char cn[160];
+                snprintf(cn, sizeof cn, "%s.%s%s", name, cl[k].suffix[s], !cl[k].wide[s] ? "" : h ? "_hi" : "_lo");
                 if ((cl[k].idx[j] = exrio_find_channel(r, cn)) < 0)
                     return fb_fail(FB_ERR_INPUT, "%s: no channel %s (not a points part of this scene)", path, cn);
                 in[cl[k].idx[j]] = cl[k].rows[j];
@@ -351,9 +356,9 @@ static fb_result chaos_add(chaos_layer *cl, int ncl, const fb_scene *sc, exrio_r
         if (rc) return rc;
         for (int k = 0; k < ncl; k++) {
             chaos_layer *c = &cl[k];
-            for (int s = 0, j = 0; s < c->ops->nsums; s++) {
+            for (int s = 0, j = 0; s < c->nsums; s++) {
                 uint64_t *sum = c->sum[s] + (size_t)y0 * W;
-                const uint32_t *lo = c->rows[j++], *hi = c->ops->sums[s].wide ? c->rows[j++] : NULL;
+                const uint32_t *lo = c->rows[j++], *hi = c->wide[s] ? c->rows[j++] : NULL;
                 for (size_t q = 0; q < (size_t)rowsn * W; q++) sum[q] += (hi ? (uint64_t)hi[q] << 32 : 0) | lo[q];
             }
         }
@@ -417,23 +422,22 @@ static fb_result merge_points(part *p, int n, const fb_merge_desc *d)
     size_t npx = (size_t)W * H;
     int nchaos = 0;
     uint64_t bytes_px = 0;
-    for (int l = 0; l < sc.nlayers; l++)
-        if (sc.layers[l].cls->share == FB_SHARE_POINTS) nchaos++, bytes_px += chaos_bytes(&sc.layers[l]);
-    char who[4200];
-    snprintf(who, sizeof who, "merging the points parts of %s (%d x %d, %d chaos-game layers)", paths[0], W, H, nchaos);
-    if (!rc) rc = fb_memory_check(&mem, (uint64_t)npx * bytes_px, who);
-    for (int l = 0; l < sc.nlayers && !rc; l++) {
+    for (int l = 0; l < sc.nlayers && !rc; l++) { /* the whole game's layers */
         if (sc.layers[l].cls->share != FB_SHARE_POINTS) continue;
         chaos_layer *c = &cl[ncl++];
         c->layer = l;
-        rc = chaos_alloc(c, &sc.layers[l], W, H);
+        rc = fb_gen_init(&c->gen, &sc, &sc.layers[l]);
+        if (!rc) nchaos++, bytes_px += chaos_bytes(c);
     }
+    char who[4200];
+    snprintf(who, sizeof who, "merging the points parts of %s (%d x %d, %d chaos-game layers)", paths[0], W, H, nchaos);
+    if (!rc) rc = fb_memory_check(&mem, (uint64_t)npx * bytes_px, who);
+    for (int k = 0; k < ncl && !rc; k++) rc = chaos_alloc(&cl[k], W, H);
     for (int i = 0; i < n && !rc; i++) rc = chaos_add(cl, ncl, &sc, p[i].r, paths[i], W, H);
     for (int k = 0; k < ncl && !rc; k++) {
         chaos_layer *c = &cl[k];
         for (int j = 0; j < c->nch; j++) free(c->rows[j]), c->rows[j] = NULL;
-        rc = fb_gen_init(&c->gen, &sc, &sc.layers[c->layer]); /* the whole game's layer */
-        if (!rc) rc = c->ops->from_sums(&c->gen, (const uint64_t *const *)c->sum, c->outside);
+        rc = c->ops->from_sums(&c->gen, (const uint64_t *const *)c->sum, c->outside);
     }
     /* the output: every channel but the colour sums; chaos layers' from their generator */
     for (int c = 0; c < nch && !rc; c++) {
@@ -674,12 +678,12 @@ static fb_result tasks_chaos(task_merge *m)
     if (ncl) {
         char who[4200];
         uint64_t bytes_px = 0;
-        for (int k = 0; k < ncl; k++) bytes_px += chaos_bytes(&sc->layers[cl[k].layer]);
+        for (int k = 0; k < ncl; k++) bytes_px += chaos_bytes(&cl[k]);
         snprintf(who, sizeof who, "merging the points parts of %s (%d x %d, %d chaos-game layers)", paths[0], W, H,
                  ncl);
         rc = fb_memory_check(&mem, (uint64_t)npx * bytes_px, who);
     }
-    for (int k = 0; k < ncl && !rc; k++) rc = chaos_alloc(&cl[k], &sc->layers[cl[k].layer], W, H);
+    for (int k = 0; k < ncl && !rc; k++) rc = chaos_alloc(&cl[k], W, H);
     for (int t = 0; t < plan->nactive && !rc && ncl; t++)
         if (plan->tasks[t].points) rc = chaos_add(cl, ncl, sc, p[file_of[t]].r, paths[file_of[t]], W, H);
     for (int k = 0; k < ncl && !rc; k++)

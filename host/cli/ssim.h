@@ -21,6 +21,7 @@ typedef struct ssim_acc {
     double c1, c2;
     int width, vw; /* image width, valid width (width - 10) */
     double *ring;  /* SSIM_N rows x 5 statistics x vw, the horizontally filtered rows */
+    double *tmp;   /* 6 x vw: a row's 5 statistics filtered vertically, and its SSIM; 3 x width: the squares */
     int rows_in;   /* rows added so far */
     double sum;    /* of the SSIM map */
     uint64_t count;

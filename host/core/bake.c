@@ -2,6 +2,7 @@
  * The bake driver. See bake.h.
  */
 #include "bake.h"
+#include "faces.h"
 
 #include "output.h"
 #include "preview.h"
@@ -425,6 +426,7 @@ static fb_result plan_memory(const fb_engine *e, const fb_bake_desc *d, const la
         uint64_t px = (uint64_t)((rw + scale - 1) / scale) * (uint64_t)((rh + scale - 1) / scale);
         plan->preview = px * (4 * 8 + 4) * (uint64_t)s->nlayers;
     }
+    if (d->cube_faces) plan->preview += fb_faces_bytes(s->width, nch); /* one face of every channel */
     /* Layers prepare (chaos game, mesh, grid) before the writer and the preview exist: the peak is
      * the worse of the two phases. */
     uint64_t prepare = extra_max, strips = plan->writer + plan->preview;
@@ -678,7 +680,8 @@ static fb_result open_writer(const fb_engine *e, const fb_bake_desc *d, const la
  * one is collected, op layers computed from it, checked, and handed to the heightmaps, the previews
  * and the writer. */
 static fb_result run_strips(fb_engine *e, const fb_bake_desc *d, layer_run *runs, const int *offset,
-                            const int region[4], int strip, exrio_writer *w, heightmaps *hm, previews *pv, double *gpu)
+                            const int region[4], int strip, exrio_writer *w, heightmaps *hm, previews *pv,
+                            fb_faces *faces, double *gpu)
 {
     const fb_scene *s = d->scene;
     int rx = region[0], ry = region[1], rw = region[2], rh = region[3];
@@ -730,10 +733,34 @@ static fb_result run_strips(fb_engine *e, const fb_bake_desc *d, layer_run *runs
         if (!rc && d->preview) rc = previews_add(pv, runs, y0 - ry, n, planes);
         fb_log_context("rows %d-%d", y0, y0 + n - 1);
         if (!rc && w) rc = exrio_writer_rows(w, y0 - ry, n, planes);
+        if (!rc && faces) rc = fb_faces_rows(faces, y0, n, planes, s->width);
         fb_log_context(NULL);
     }
     fb_progress_finish(&prog);
     return rc;
+}
+
+/* The engine face sets of a cube bake (faces.h): the whole cube, every channel; PNG faces show the
+ * first colour layer. */
+static fb_result faces_create(const fb_engine *e, const fb_bake_desc *d, const layer_run *runs,
+                              const exrio_channel *channels, int nch, fb_faces **out)
+{
+    const fb_scene *s = d->scene;
+    if (s->envmap != EXRIO_ENVMAP_CUBE || d->region[2] > 0)
+        return fb_fail(FB_ERR_USAGE,
+                       "--cube-faces: needs the whole of a cube environment map (mapping cube, no --region)");
+    int rgb = -1;
+    for (int i = 0, at = 0; i < s->nlayers && rgb < 0; at += runs[i].gen.nchannels, i++)
+        if (runs[i].gen.preview_rgb >= 0) rgb = at + runs[i].gen.preview_rgb;
+    return fb_faces_create(&(fb_faces_desc){.pattern = d->cube_faces,
+                                            .n = s->width,
+                                            .channels = channels,
+                                            .nchannels = nch,
+                                            .rgb = rgb,
+                                            .compression = s->compression,
+                                            .threads = e->threads,
+                                            .zip_level = d->zip_level},
+                           out);
 }
 
 fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
@@ -746,6 +773,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     int nch = 0, region[4] = {0, 0, s->width, s->height}, strip = 1;
     exrio_writer *w = NULL;
     previews pv = {0};
+    fb_faces *faces = NULL;
     double t0 = fb_now(), gpu = 0;
     if (!runs) return fb_fail(FB_ERR_NOMEM, "out of memory");
     fb_outputs_begin();
@@ -767,6 +795,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     fb_bake_plan plan_local, *plan = d->plan ? d->plan : &plan_local;
     if (!rc) rc = plan_memory(e, d, runs, strip, nch, region[2], plan);
     if (!rc && d->dry_run) goto out;
+    if (!rc && d->cube_faces) rc = faces_create(e, d, runs, channels, nch, &faces);
     for (int i = 0; i < s->nlayers && !rc; i++) {
         fb_log_context("layer %s", s->layers[i].name);
         rc = run_init(&runs[i].e, &runs[i], strip);
@@ -795,7 +824,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     if (d->preview && (rc = previews_create(s, runs, d->preview_layer, region, &pv, stats ? stats->preview : NULL,
                                             stats ? sizeof stats->preview : 0)))
         goto out;
-    rc = run_strips(e, d, runs, offset, region, strip, w, &hm, &pv, &gpu);
+    rc = run_strips(e, d, runs, offset, region, strip, w, &hm, &pv, faces, &gpu);
     /* Checked before the file is renamed into place: a validated run that broke a rule is a failure. */
     if (!rc && e->vk && vkc_validation_messages(e->vk))
         rc = fb_fail(FB_ERR_VULKAN, "vulkan validation reported %u message(s) (see above)",
@@ -813,6 +842,7 @@ out:
     rc = fb_outputs_end(rc); /* every output renamed into place now, or none */
     for (int k = 0; k < pv.n; k++) fb_preview_destroy(&pv.p[k]);
     free(pv.conv);
+    fb_faces_destroy(&faces);
     heightmaps_free(s, &hm);
     for (int i = 0; i < s->nlayers; i++) run_fini(&runs[i].e, &runs[i]);
     free(runs);

@@ -56,6 +56,9 @@ typedef struct fb_bake_desc {
     const exrio_attr *attrs;
     int nattrs;
     bool layer_backends;
+    /* A cube environment map's six faces as engine face sets (faces.h: render --cube-faces); NULL:
+     * none. The whole image, no region. */
+    const char *cube_faces;
 } fb_bake_desc;
 
 /* A heightmap a bake wrote: its layer, file, format and the heights stored as 0 and 65535. */

@@ -11,7 +11,7 @@
 #include "scene.h"
 #include "schema.h"
 
-#define FB_GEN_MAX_CHANNELS 10
+#define FB_GEN_MAX_CHANNELS 64
 #define FB_GEN_MAX_PUSH     128
 
 typedef struct fb_gen fb_gen;
@@ -110,16 +110,15 @@ typedef enum fb_share {
 } fb_share;
 
 /* Merging points parts (fractalbake merge): a chaos game split by points (FB_SHARE_POINTS) stores in
- * each part its per-pixel sums, which add over the parts, and the points that fell outside the frame
- * (fb_gen.points_outside). Sum k is the uint channel LAYER.SUFFIX, or, wide, the pair LAYER.SUFFIX_lo
- * and LAYER.SUFFIX_hi of one 64-bit sum. */
-#define FB_POINTS_MAX_SUMS 8
+ * each part its sums, which add over the parts, and the points that fell outside the frame
+ * (fb_gen.points_outside). Sum k is width x height values: the uint channel LAYER.SUFFIX, or, wide,
+ * the pair LAYER.SUFFIX_lo and LAYER.SUFFIX_hi of one 64-bit sum. The class sizes them to the layer
+ * (a histogram larger than the image takes several). */
 typedef struct fb_points_ops {
-    int nsums;
-    struct {
-        const char *suffix;
-        bool wide;
-    } sums[FB_POINTS_MAX_SUMS];
+    /* The number of sums of layer g (initialised for the whole game by fb_gen_init). */
+    int (*nsums)(const fb_gen *g);
+    /* Sum k's channel suffix (into suffix, of `size` bytes); returns whether it is wide. */
+    bool (*sum)(const fb_gen *g, int k, char *suffix, size_t size);
     /* Sets up g (initialised for the whole game's layer) from the sums over every part (sums[k]: width
      * x height values) and the outside count, in place of its chaos game; its native_rows then gives
      * the channels the whole game would have. */

@@ -174,9 +174,9 @@ static fb_result check_envmap_size(const fb_vctx *v, const fb_scene *s)
     long n = lround(ll ? (2.0 * w + h) / 5.0 : (w + 6.0 * h) / 37.0);
     long lim = ll ? FB_MAX_DIM / 2 : FB_MAX_DIM / 6;
     n = n < 1 ? 1 : n > lim ? lim : n;
-    return fb_schema_error(v, "size", "%s is %s pixels, found %d x %d: the nearest is %ld x %ld",
-                           envmap_words(s->envmap), ll ? "2N x N" : "N x 6N (six faces stacked)", w, h, ll ? 2 * n : n,
-                           ll ? n : 6 * n);
+    return fb_schema_error(v, "size", "%s is %s pixels%s, found %d x %d: the nearest is %ld x %ld",
+                           envmap_words(s->envmap), ll ? "2N x N" : "N x 6N", ll ? "" : " (six faces stacked)", w, h,
+                           ll ? 2 * n : n, ll ? n : 6 * n);
 }
 
 /* Each layer's mapping (a layer of an envmap_of_refs class takes its inputs'), then the file's: every
@@ -238,7 +238,9 @@ static fb_result parse_root(const fb_vctx *v, json_t *root, fb_scene *s)
         snprintf(path, sizeof path, "layers[%d]", i);
         if (!json_is_object(lj)) return fb_schema_error(v, path, "expected a layer object with a \"type\"");
         json_t *type = json_object_get(lj, "type");
-        if (!type) return fb_schema_error(v, path, "missing key \"type\" (the generator, e.g. \"fbm\")");
+        if (!type)
+            return fb_schema_error(v, path,
+                                   "missing key \"type\" (the generator; `fractalbake generators` lists them)");
         const char *t = json_is_string(type) ? json_string_value(type) : "";
         fb_layer *L = &s->layers[i];
         memset(L, 0, sizeof *L);

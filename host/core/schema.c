@@ -232,8 +232,175 @@ static fb_result check_number(const fb_vctx *v, const char *path, const fb_keysp
     return FB_OK;
 }
 
-/* One switch over the key types, each case a value's shape and its one message: long, but one idea
- * (a value type of a generator's own is its fb_kvalue's check). */
+static fb_result check_name(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j, const char *shown)
+{
+    const char *s = json_is_string(j) ? json_string_value(j) : NULL;
+    bool ok = s && *s && strlen(s) < 64;
+    for (const char *p = s; ok && *p; p++)
+        ok = (*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') || (*p >= '0' && *p <= '9') || *p == '_' || *p == '-';
+    if (!ok) return fb_schema_error(v, path, "expected a name of 1 to 63 letters, digits, '_' or '-', found %s", shown);
+    return FB_OK;
+}
+
+static fb_result check_pair(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j, const char *shown)
+{
+    bool isz = k->type == FB_K_SIZE;
+    if (!json_is_array(j) || json_array_size(j) != 2)
+        return fb_schema_error(v, path, "expected %s, found %s", isz ? "[width, height]" : "[x, y]", shown);
+    for (size_t i = 0; i < 2; i++) {
+        const json_t *e = json_array_get(j, i);
+        bool good = isz ? json_is_integer(e) : json_is_number(e);
+        double x = good ? json_number_value(e) : 0;
+        if (!good || !isfinite(x) || x < k->lo || x > k->hi)
+            return fb_schema_error(v, path, "expected %s with each %s in %g..%g, found %s",
+                                   isz ? "[width, height]" : "[x, y]", isz ? "side an integer" : "component", k->lo,
+                                   k->hi, shown);
+    }
+    if (isz) {
+        unsigned long long px =
+            (unsigned long long)json_integer_value(json_array_get(j, 0)) * json_integer_value(json_array_get(j, 1));
+        if (px > FB_MAX_PIXELS)
+            return fb_schema_error(v, path, "%s is %llu pixels; at most %llu are supported", shown, px, FB_MAX_PIXELS);
+    }
+    return FB_OK;
+}
+
+static fb_result check_numlist(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j, const char *shown)
+{
+    bool good = json_is_array(j) && (int)json_array_size(j) == k->count;
+    for (size_t i = 0; good && i < json_array_size(j); i++) {
+        const json_t *e = json_array_get(j, i);
+        double x = json_is_number(e) ? json_number_value(e) : NAN;
+        good = isfinite(x) && x >= k->lo && x <= k->hi;
+    }
+    if (!good)
+        return fb_schema_error(v, path, "expected %d numbers in %g..%g, found %s", k->count, k->lo, k->hi, shown);
+    return FB_OK;
+}
+
+static fb_result check_stops(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j, const char *shown)
+{
+    size_t n = json_is_array(j) ? json_array_size(j) : 0;
+    bool good = n >= 2 && n <= FB_PALETTE_MAX_STOPS;
+    double prev = -1;
+    for (size_t i = 0; good && i < n; i++) {
+        const json_t *e = json_array_get(j, i);
+        good = json_is_array(e) && json_array_size(e) == 4;
+        for (size_t c = 0; good && c < 4; c++) {
+            const json_t *x = json_array_get(e, c);
+            double d = json_is_number(x) ? json_number_value(x) : NAN;
+            good = isfinite(d) && d >= 0 && (c > 0 ? d <= k->hi : d <= 1.0);
+        }
+        if (good) {
+            double t = json_number_value(json_array_get(e, 0));
+            good = t > prev && (i > 0 || t == 0.0) && (i + 1 < n || t == 1.0);
+            prev = t;
+        }
+    }
+    if (!good)
+        return fb_schema_error(
+            v, path,
+            "expected 2 to %d stops [t, r, g, b] with t rising from 0 to exactly 1 and colours >= 0, "
+            "found %s",
+            FB_PALETTE_MAX_STOPS, shown);
+    return FB_OK;
+}
+
+static fb_result check_ref(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j, const char *shown)
+{
+    if (json_is_number(j)) {
+        if (!isfinite(json_number_value(j)))
+            return fb_schema_error(v, path, "expected a finite number, found %s", shown);
+        return FB_OK;
+    }
+    const char *r = json_is_string(j) ? json_string_value(j) : NULL;
+    bool ok = r && *r && strlen(r) < 128 && r[0] != '.' && r[strlen(r) - 1] != '.';
+    if (!ok) return fb_schema_error(v, path, "expected \"layer.channel\", \"layer\" or a number, found %s", shown);
+    return FB_OK;
+}
+
+static fb_result check_bounds(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j, const char *shown)
+{
+    if (json_is_string(j) && !strcmp(json_string_value(j), "auto")) return FB_OK;
+    bool good = json_is_array(j) && json_array_size(j) == 4;
+    double b[4] = {0};
+    for (size_t i = 0; good && i < 4; i++) {
+        const json_t *e = json_array_get(j, i);
+        b[i] = json_is_number(e) ? json_number_value(e) : NAN;
+        good = isfinite(b[i]) && b[i] >= k->lo && b[i] <= k->hi;
+    }
+    if (!good || !(b[1] > b[0] && b[3] > b[2]))
+        return fb_schema_error(v, path,
+                               "expected \"auto\" or [xmin, xmax, ymin, ymax] with xmin < xmax and ymin < ymax, "
+                               "found %s",
+                               shown);
+    return FB_OK;
+}
+
+static fb_result check_fracs(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j, const char *shown)
+{
+    size_t n = json_is_array(j) ? json_array_size(j) : 0;
+    bool good = n >= 1 && n <= (size_t)k->count;
+    for (size_t i = 0; good && i < n; i++) {
+        const json_t *e = json_array_get(j, i);
+        double x = json_is_number(e) ? json_number_value(e) : NAN;
+        good = isfinite(x) && x >= k->lo && x <= k->hi;
+    }
+    if (!good)
+        return fb_schema_error(v, path, "expected 1 to %d numbers in %g..%g, found %s", k->count, k->lo, k->hi, shown);
+    return FB_OK;
+}
+
+static fb_result check_names(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j, const char *shown)
+{
+    size_t n = json_is_array(j) ? json_array_size(j) : 0;
+    bool good = n >= 1 && n <= 32;
+    int idx;
+    for (size_t i = 0; good && i < n; i++) {
+        const json_t *e = json_array_get(j, i);
+        good = json_is_string(e) && fb_enum_index(k->enums, json_string_value(e), &idx);
+        for (size_t m = 0; good && m < i; m++)
+            good = strcmp(json_string_value(json_array_get(j, m)), json_string_value(e));
+    }
+    if (!good) return fb_schema_error(v, path, "expected a list of distinct names from %s, found %s", k->enums, shown);
+    return FB_OK;
+}
+
+static fb_result check_rules(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j, const char *shown)
+{
+    size_t n = json_is_array(j) ? json_array_size(j) : 0;
+    if (!json_is_array(j) || n > (size_t)k->count)
+        return fb_schema_error(v, path, "expected a list of at most %d rules \"X=successor\", found %s", k->count,
+                               shown);
+    for (size_t i = 0; i < n; i++) {
+        const json_t *e = json_array_get(j, i);
+        char sub[256], msg[256];
+        snprintf(sub, sizeof sub, "%s[%zu]", path, i);
+        if (!json_is_string(e)) {
+            char rule[64];
+            fb_json_show(e, rule, sizeof rule);
+            return fb_schema_error(v, sub, "expected a rule \"X=successor\", found %s", rule);
+        }
+        if (k->check && !k->check(json_string_value(e), msg, sizeof msg)) return fb_schema_error(v, sub, "%s", msg);
+    }
+    return FB_OK;
+}
+
+static fb_result check_refs(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j, const char *shown)
+{
+    if (!json_is_array(j) || json_array_size(j) < 1 || json_array_size(j) > (size_t)k->count)
+        return fb_schema_error(v, path, "expected a list of 1 to %d channels or numbers, found %s", k->count, shown);
+    for (size_t i = 0; i < json_array_size(j); i++) {
+        char sub[300];
+        snprintf(sub, sizeof sub, "%s[%zu]", path, i);
+        fb_result rc = fb_schema_check_value(v, sub, &(fb_keyspec){.type = FB_K_REF}, json_array_get(j, i));
+        if (rc) return rc;
+    }
+    return FB_OK;
+}
+
+/* One switch over the key types: a value's shape and its one message, the longer ones in their own
+ * functions above (a value type of a generator's own is its fb_kvalue's check). */
 fb_result fb_schema_check_value(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j)
 {
     char shown[64];
@@ -253,164 +420,35 @@ fb_result fb_schema_check_value(const fb_vctx *v, const char *path, const fb_key
         return FB_OK;
     case FB_K_TYPE:
         if (!json_is_string(j))
-            return fb_schema_error(v, path, "expected a generator name such as \"fbm\", found %s", shown);
-        return FB_OK;
-    case FB_K_NAME: {
-        const char *s = json_is_string(j) ? json_string_value(j) : NULL;
-        bool ok = s && *s && strlen(s) < 64;
-        for (const char *p = s; ok && *p; p++)
-            ok = (*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') || (*p >= '0' && *p <= '9') || *p == '_' ||
-                 *p == '-';
-        if (!ok)
-            return fb_schema_error(v, path, "expected a name of 1 to 63 letters, digits, '_' or '-', found %s", shown);
-        return FB_OK;
-    }
-    case FB_K_VEC2:
-    case FB_K_SIZE: {
-        bool isz = k->type == FB_K_SIZE;
-        if (!json_is_array(j) || json_array_size(j) != 2)
-            return fb_schema_error(v, path, "expected %s, found %s", isz ? "[width, height]" : "[x, y]", shown);
-        for (size_t i = 0; i < 2; i++) {
-            const json_t *e = json_array_get(j, i);
-            bool good = isz ? json_is_integer(e) : json_is_number(e);
-            double x = good ? json_number_value(e) : 0;
-            if (!good || !isfinite(x) || x < k->lo || x > k->hi)
-                return fb_schema_error(v, path, "expected %s with each %s in %g..%g, found %s",
-                                       isz ? "[width, height]" : "[x, y]", isz ? "side an integer" : "component", k->lo,
-                                       k->hi, shown);
-        }
-        if (isz) {
-            unsigned long long px =
-                (unsigned long long)json_integer_value(json_array_get(j, 0)) * json_integer_value(json_array_get(j, 1));
-            if (px > FB_MAX_PIXELS)
-                return fb_schema_error(v, path, "%s is %llu pixels; at most %llu are supported", shown, px,
-                                       FB_MAX_PIXELS);
-        }
-        return FB_OK;
-    }
-    case FB_K_NUMLIST: {
-        bool good = json_is_array(j) && (int)json_array_size(j) == k->count;
-        for (size_t i = 0; good && i < json_array_size(j); i++) {
-            const json_t *e = json_array_get(j, i);
-            double x = json_is_number(e) ? json_number_value(e) : NAN;
-            good = isfinite(x) && x >= k->lo && x <= k->hi;
-        }
-        if (!good)
-            return fb_schema_error(v, path, "expected %d numbers in %g..%g, found %s", k->count, k->lo, k->hi, shown);
-        return FB_OK;
-    }
-    case FB_K_STOPS: {
-        size_t n = json_is_array(j) ? json_array_size(j) : 0;
-        bool good = n >= 2 && n <= FB_PALETTE_MAX_STOPS;
-        double prev = -1;
-        for (size_t i = 0; good && i < n; i++) {
-            const json_t *e = json_array_get(j, i);
-            good = json_is_array(e) && json_array_size(e) == 4;
-            for (size_t c = 0; good && c < 4; c++) {
-                const json_t *x = json_array_get(e, c);
-                double d = json_is_number(x) ? json_number_value(x) : NAN;
-                good = isfinite(d) && d >= 0 && (c > 0 ? d <= k->hi : d <= 1.0);
-            }
-            if (good) {
-                double t = json_number_value(json_array_get(e, 0));
-                good = t > prev && (i > 0 || t == 0.0) && (i + 1 < n || t == 1.0);
-                prev = t;
-            }
-        }
-        if (!good)
-            return fb_schema_error(
-                v, path,
-                "expected 2 to %d stops [t, r, g, b] with t rising from 0 to exactly 1 and colours >= 0, "
-                "found %s",
-                FB_PALETTE_MAX_STOPS, shown);
-        return FB_OK;
-    }
-    case FB_K_REFS:
-        if (!json_is_array(j) || json_array_size(j) < 1 || json_array_size(j) > (size_t)k->count)
-            return fb_schema_error(v, path, "expected a list of 1 to %d channels or numbers, found %s", k->count,
+            return fb_schema_error(v, path, "expected a generator name (`fractalbake generators` lists them), found %s",
                                    shown);
-        for (size_t i = 0; i < json_array_size(j); i++) {
-            char sub[300];
-            snprintf(sub, sizeof sub, "%s[%zu]", path, i);
-            fb_result rc = fb_schema_check_value(v, sub, &(fb_keyspec){.type = FB_K_REF}, json_array_get(j, i));
-            if (rc) return rc;
-        }
         return FB_OK;
-    case FB_K_REF: {
-        if (json_is_number(j)) {
-            if (!isfinite(json_number_value(j)))
-                return fb_schema_error(v, path, "expected a finite number, found %s", shown);
-            return FB_OK;
-        }
-        const char *r = json_is_string(j) ? json_string_value(j) : NULL;
-        bool ok = r && *r && strlen(r) < 128 && r[0] != '.' && r[strlen(r) - 1] != '.';
-        if (!ok) return fb_schema_error(v, path, "expected \"layer.channel\", \"layer\" or a number, found %s", shown);
-        return FB_OK;
-    }
+    case FB_K_NAME:
+        return check_name(v, path, k, j, shown);
+    case FB_K_VEC2:
+    case FB_K_SIZE:
+        return check_pair(v, path, k, j, shown);
+    case FB_K_NUMLIST:
+        return check_numlist(v, path, k, j, shown);
+    case FB_K_STOPS:
+        return check_stops(v, path, k, j, shown);
+    case FB_K_REFS:
+        return check_refs(v, path, k, j, shown);
+    case FB_K_REF:
+        return check_ref(v, path, k, j, shown);
     case FB_K_STRING:
     case FB_K_OUTPUT:
         if (!json_is_string(j) || !*json_string_value(j) || strlen(json_string_value(j)) >= 4096)
             return fb_schema_error(v, path, "expected a non-empty string, found %s", shown);
         return FB_OK;
-    case FB_K_BOUNDS: {
-        if (json_is_string(j) && !strcmp(json_string_value(j), "auto")) return FB_OK;
-        bool good = json_is_array(j) && json_array_size(j) == 4;
-        double b[4] = {0};
-        for (size_t i = 0; good && i < 4; i++) {
-            const json_t *e = json_array_get(j, i);
-            b[i] = json_is_number(e) ? json_number_value(e) : NAN;
-            good = isfinite(b[i]) && b[i] >= k->lo && b[i] <= k->hi;
-        }
-        if (!good || !(b[1] > b[0] && b[3] > b[2]))
-            return fb_schema_error(v, path,
-                                   "expected \"auto\" or [xmin, xmax, ymin, ymax] with xmin < xmax and ymin < ymax, "
-                                   "found %s",
-                                   shown);
-        return FB_OK;
-    }
-    case FB_K_FRACS: {
-        size_t n = json_is_array(j) ? json_array_size(j) : 0;
-        bool good = n >= 1 && n <= (size_t)k->count;
-        for (size_t i = 0; good && i < n; i++) {
-            const json_t *e = json_array_get(j, i);
-            double x = json_is_number(e) ? json_number_value(e) : NAN;
-            good = isfinite(x) && x >= k->lo && x <= k->hi;
-        }
-        if (!good)
-            return fb_schema_error(v, path, "expected 1 to %d numbers in %g..%g, found %s", k->count, k->lo, k->hi,
-                                   shown);
-        return FB_OK;
-    }
-    case FB_K_NAMES: {
-        size_t n = json_is_array(j) ? json_array_size(j) : 0;
-        bool good = n >= 1 && n <= 32;
-        for (size_t i = 0; good && i < n; i++) {
-            const json_t *e = json_array_get(j, i);
-            good = json_is_string(e) && fb_enum_index(k->enums, json_string_value(e), &idx);
-            for (size_t m = 0; good && m < i; m++)
-                good = strcmp(json_string_value(json_array_get(j, m)), json_string_value(e));
-        }
-        if (!good)
-            return fb_schema_error(v, path, "expected a list of distinct names from %s, found %s", k->enums, shown);
-        return FB_OK;
-    }
-    case FB_K_RULES: {
-        size_t n = json_is_array(j) ? json_array_size(j) : 0;
-        if (!json_is_array(j) || n > (size_t)k->count)
-            return fb_schema_error(v, path, "expected a list of at most %d rules \"X=successor\", found %s", k->count,
-                                   shown);
-        for (size_t i = 0; i < n; i++) {
-            const json_t *e = json_array_get(j, i);
-            char sub[256], msg[256];
-            snprintf(sub, sizeof sub, "%s[%zu]", path, i);
-            if (!json_is_string(e)) {
-                fb_json_show(e, shown, sizeof shown);
-                return fb_schema_error(v, sub, "expected a rule \"X=successor\", found %s", shown);
-            }
-            if (k->check && !k->check(json_string_value(e), msg, sizeof msg)) return fb_schema_error(v, sub, "%s", msg);
-        }
-        return FB_OK;
-    }
+    case FB_K_BOUNDS:
+        return check_bounds(v, path, k, j, shown);
+    case FB_K_FRACS:
+        return check_fracs(v, path, k, j, shown);
+    case FB_K_NAMES:
+        return check_names(v, path, k, j, shown);
+    case FB_K_RULES:
+        return check_rules(v, path, k, j, shown);
     case FB_K_CUSTOM:
         if (!ALWAYS(k->value && k->value->check))
             return fb_fail(FB_ERR_INTERNAL, "key %s: a value type without a check", k->key);

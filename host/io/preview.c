@@ -112,7 +112,7 @@ void fb_preview_add_rows(fb_preview *p, int y0, int n, const float *const *rows)
     }
 }
 
-static uint8_t srgb8(double v)
+uint8_t fb_srgb8(double v)
 {
     v = v < 0 ? 0 : v > 1 ? 1 : v;
     v = v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1 / 2.4) - 0.055;
@@ -140,7 +140,7 @@ static void render(const fb_preview *p, uint8_t *img, bool rgb)
             size_t i = (size_t)y * p->pw + x;
             if (nc == 3) {
                 for (int c = 0; c < 3; c++)
-                    img[i * 3 + c] = p->count[i] ? srgb8(p->sum[i * p->channels + c] / p->count[i]) : 0;
+                    img[i * 3 + c] = p->count[i] ? fb_srgb8(p->sum[i * p->channels + c] / p->count[i]) : 0;
                 continue;
             }
             uint8_t g = p->shade_dx > 0 ? (uint8_t)lrint(255.0 * hillshade(p, x, y))
@@ -295,7 +295,7 @@ fb_result fb_preview_write_over(const fb_preview *const *layers, int n, const ch
                 }
                 for (int j = 0; j < 3; j++) out[j] = c[j] + (1 - a) * out[j];
             }
-            for (int j = 0; j < 3; j++) img[i * 3 + j] = srgb8(out[j]);
+            for (int j = 0; j < 3; j++) img[i * 3 + j] = fb_srgb8(out[j]);
         }
     fb_result rc = write_png(path, "preview", p0->pw, p0->ph, 3, img);
     free(img);

@@ -36,6 +36,9 @@ fb_result fb_preview_write_over(const fb_preview *const *layers, int n, const ch
  * draws it alone) under its label, in a grid of about as many columns as rows; an RGB PNG. */
 fb_result fb_preview_write_sheet(const fb_preview *const *tiles, const char *const *labels, int n, const char *path);
 
+/* Linear v in [0, 1] (clamped) as an 8-bit sRGB value (IEC 61966-2-1's curve). */
+uint8_t fb_srgb8(double v);
+
 /* Writes 8-bit RGB pixels (row by row) as a PNG, through the output transaction (output.h); `what`
  * names the output in messages ("plot", "diff picture"). */
 fb_result fb_png_write_rgb(const char *path, const char *what, int width, int height, const uint8_t *rgb);

@@ -104,4 +104,24 @@ check "--ssim above the measured value fails" test "$(code base.png noisy.png --
 check "--ssim below it passes" test "$(code base.png noisy.png --ssim 0.95)" = 0
 "$FB" fbm $N --size 8x8 -o tiny.exr
 check "--ssim on 8 x 8 is bad usage" test "$(code tiny.exr tiny.exr --ssim 0.5)" = 2
+# the same bits on any thread count: every statistic, FLIP and the diff EXR, 1, 2 and 3 threads
+# (130 rows: two blocks of 64 and a partial one; FLIP's bands of 64 likewise)
+cat > t1.json << 'JSON'
+{"size": [150, 130], "layers": [{"type": "fbm", "name": "h", "octaves": 3},
+ {"type": "op", "name": "a", "op": "add", "inputs": ["h", 0.5]}, {"type": "fbm", "name": "c", "octaves": 4}]}
+JSON
+sed 's/"octaves": 3/"octaves": 4/; s/"octaves": 4}]}/"octaves": 5}]}/' t1.json > t2.json
+"$FB" render t1.json $N -o t1.exr
+"$FB" render t2.json $N -o t2.exr
+for t in 1 2 3; do
+  "$FB" compare t1.exr t2.exr --fail 0.01 --ssim 0.5 --idiff-stats --flip --json --threads $t --diff td$t.exr > tj$t.json
+  "$FB" compare "$ROOT/tests/data/flip/j4_rgb.exr" "$ROOT/tests/data/flip/j1_rgb.exr" --flip --max-abs 1 --json \
+    --threads $t > tc$t.json
+done
+check "--threads 1, 2, 3: the same report" sh -c "cmp tj1.json tj2.json && cmp tj1.json tj3.json"
+check "  and the same diff EXR" sh -c "cmp td1.exr td2.exr && cmp td1.exr td3.exr"
+check "  and the same colour FLIP" sh -c "cmp tc1.json tc2.json && cmp tc1.json tc3.json"
+check "  (the report holds three FLIP layers and idiff's block)" \
+  test "$(json_get tj1.json "len(r['flip']), 'idiff' in r")" = "3 True"
+check "--threads 0 is bad usage" test "$(code t1.exr t2.exr --threads 0)" = 2
 cli_finish

@@ -92,6 +92,27 @@ cmp -s t3.exr t4.exr && ok || bad "flame (final xform) depends on threads"
 "$FB" tonemap t1.exr -o tm2.exr --brightness 9 --gamma 2.5 --vibrancy 0.5 --background 0.2,0.1,0 --quiet
 "$FB" compare tm.exr tm2.exr --max-abs 0 > /dev/null && ok || bad "flame tonemap differs from a bake with the same tone parameters"
 "$FB" compare tm.exr t1.exr --max-abs 0.01 > /dev/null && bad "--brightness 9 --gamma 2.5 changed nothing" || ok
+# points parts (render --points-part, and a plan's tasks) merged, in any order: the whole bake's
+# bytes (parts baked on 1, 3 and 5 threads); a part alone differs from it
+"$FB" flame --file xaos.flame --size 128x96 --quality 20 --backend native --threads 2 --quiet -o pw.exr
+for k in 1 2 3; do
+    "$FB" flame --file xaos.flame --size 128x96 --quality 20 --backend native --threads $((2 * k - 1)) \
+        --points-part $k/3 --quiet -o pp$k.exr || bad "flame points part $k/3 failed"
+done
+"$FB" merge pp3.exr pp1.exr pp2.exr -o ppm.exr --quiet && cmp -s pw.exr ppm.exr && ok || bad "flame points parts do not merge to the whole bake"
+cmp -s pw.exr pp2.exr && bad "a flame points part is the whole bake" || ok
+"$FB" compare pw.exr pp2.exr --layer flame > /dev/null; [ $? -eq 1 ] && ok || bad "a flame points part holds the whole game"
+printf '{"size": [128, 96], "seed": 7, "layers": [{"type": "flame", "file": "final.flame", "quality": 200},
+ {"type": "fbm", "name": "clouds", "octaves": 3}]}' > fplan.json
+"$FB" plan fplan.json --tasks 4 --task-startup 0 --json > fplan.plan
+check "a flame is split by points parts" python3 -c "
+import json; p = json.load(open('fplan.plan')); s = {l['name']: l['split'] for l in p['layers']}
+assert s['flame'] == 'points parts' and p['points_parts'] >= 2, (s, p['points_parts'])"
+"$FB" render fplan.json -o fpw.exr --quiet
+rm -rf ft && mkdir ft
+for k in 0 1 2 3; do "$FB" render fplan.json --task-startup 0 --task $k/4 -o ft/t$k.exr --quiet || bad "flame task $k/4 failed"; done
+"$FB" merge ft/t*.exr -o fpm.exr --quiet && cmp -s fpw.exr fpm.exr && ok || bad "a flame plan's tasks do not merge to the whole bake"
+
 # a flame picked by index or by name: the same pixels
 "$FB" flame --file final.flame --flame test-final --size 128x96 --quality 20 --quiet -o t5.exr
 "$FB" compare t4.exr t5.exr --max-abs 0 > /dev/null && ok || bad "--flame 0 and --flame test-final differ"

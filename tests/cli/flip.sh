@@ -77,7 +77,8 @@ assert abs(f["start_exposure"] - math.log2(x)) < 1e-5 and abs(f["stop_exposure"]
 assert f["num_exposures"] == 2 and 0.01 < f["mean"] < 1, f
 PY
 
-# a layer's Y as grey: the same picture as R = G = B
+# a layer's Y as grey: the same picture as R = G = B, within what both promise against the tool
+# (the grey path filters Y alone; the colour path carries the tool's rounding in Cx and Cz)
 oiiotool zref.exr --ch Y=R -o yref.exr
 oiiotool ztest.exr --ch Y=R -o ytest.exr
 "$FB" compare yref.exr ytest.exr --flip --max-abs 1 --json > y.json
@@ -85,7 +86,8 @@ check "Y as grey equals R = G = B" python3 -c "
 import json
 a = json.load(open('out.json'))['flip'][0]; b = json.load(open('y.json'))['flip'][0]
 assert b['channels'] == 'Y' and b['name'] == 'Y', b
-assert all(a[k] == b[k] for k in ('mean', 'weighted_median', 'weighted_q1', 'weighted_q3', 'max')), (a, b)"
+assert all(abs(a[k] - b[k]) <= 1e-4 for k in ('mean', 'weighted_median', 'weighted_q1', 'weighted_q3', 'max')), (a, b)
+assert a['num_exposures'] == b['num_exposures'] and a['start_exposure'] == b['start_exposure'], (a, b)"
 
 # non-finite: one infinite pixel in the test fails RMSE, PSNR, SSIM and FLIP (each at its worst)
 oiiotool zref.exr --fill:color=1e39,1e39,1e39 1x1+3+3 -d float -o inf.exr

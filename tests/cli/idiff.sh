@@ -72,4 +72,18 @@ check "idiff's -o is answered with --diff" test "$(v -o d.exr)" = 2
 check "  naming it" grep -q -- "-o: idiff's flag; fractalbake compare: the difference image: --diff OUT.exr" err.txt
 check "--allowfailures 1.5 is refused" test "$(v --allowfailures 1.5)" = 2
 check "  with one line" grep -q "expected a whole number of pixels >= 0" err.txt
+# a non-finite value in one file only: a failing pixel in idiff's counts, and the errors at their
+# worst (mean and RMS error inf, peak SNR -inf, the max error inf where it is), as in every statistic
+oiiotool one.exr --fill:color=1e39 1x1+3+2 -d float -o inf.exr
+vi() { "$FB" compare one.exr inf.exr "$@" > out.txt 2> err.txt; echo $?; }
+check "an infinite pixel fails --idiff-stats" test "$(vi --fail 0.1 --idiff-stats)" = 1
+check "  its max error is inf, there" grep -q "Max error  = inf @ (3, 2, Y)" out.txt
+check "  mean and RMS error inf, peak SNR -inf" sh -c "grep -q 'Mean error = inf' out.txt && grep -q 'RMS error = inf' out.txt && grep -q 'Peak SNR = -inf' out.txt"
+"$FB" compare one.exr inf.exr --fail 0.1 --idiff-stats --json > inf.json
+check "  the JSON: one failing pixel, one non-finite value, no finite error" python3 -c "
+import json
+i = json.load(open('inf.json'))['idiff']
+assert i['fail_pixels'] == 1 and i['warn_pixels'] == 1 and i['nonfinite_differ'] == 1, i
+assert i['max_error'] is None and i['rms_error'] is None and i['mean_error'] is None and i['peak_snr'] is None, i
+assert i['max_at'] == [3, 2, 'Y'], i"
 cli_finish

@@ -25,12 +25,16 @@ static const fb_keyspec fbm_keys[] = {
     {"octaves", FB_K_INT, 1, 32, false, NULL, "8", "number of octaves"},
     {"lacunarity", FB_K_NUM, 1.01, 8, false, NULL, "2.0", "frequency ratio between octaves"},
     {"rotation", FB_K_NUM, -180, 180, false, NULL, "36.87", "rotation between octaves, degrees"},
-    {"frequency", FB_K_NUM, 0, 1e6, true, NULL, "4.0", "cycles of the first octave across the image width"},
+    {"frequency", FB_K_NUM, 0, 1e6, true, NULL, "4.0",
+     "cycles of the first octave across the image width (latlong, cube: round the equator)"},
     {"offset", FB_K_VEC2, -1e6, 1e6, false, NULL, "[0.0, 0.0]", "domain offset, in first-octave cells (X,Y)"},
     {"ridged", FB_K_BOOL, 0, 0, false, NULL, "false", "ridged octaves (1 - |n|)^2"},
     {"billow", FB_K_BOOL, 0, 0, false, NULL, "false", "billow octaves 2|n| - 1"},
     {"warp", FB_K_NUM, 0, 100, false, NULL, "0.0", "domain-warp strength, in first-octave cells"},
     {"tileable", FB_K_BOOL, 0, 0, false, NULL, "false", "periodic in x and y: the image wraps without a seam"},
+    {"mapping", FB_K_ENUM, 0, 0, false, "rect|latlong|cube", "\"rect\"",
+     "the plane, or an environment map of the sphere, latlong (2N x N) or cube (N x 6N): 3D fBm at each "
+     "pixel's direction, no seam and no pinch (docs/sky.md)"},
     {"heightmap", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
      "also write the heights for engines: OUT.png (16-bit grey) or OUT.r16 (16-bit raw, little-endian)"},
     {"heightmap-range", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL,
@@ -69,6 +73,16 @@ static fb_result parse_fbm(const fb_vctx *v, const char *path, json_t *obj, cons
     f->billow = fb_json_bool(obj, "billow");
     f->tileable = fb_json_bool(obj, "tileable");
     f->warp = fb_json_num(obj, "warp");
+    int mapping = 0;
+    fb_enum_index("rect|latlong|cube", json_string_value(json_object_get(obj, "mapping")), &mapping);
+    static const unsigned maps[] = {K_ENV_RECT, K_ENV_LATLONG, K_ENV_CUBE};
+    f->mapping = maps[mapping];
+    if (f->tileable && f->mapping != K_ENV_RECT) {
+        snprintf(sub, sizeof sub, "%s.tileable", path);
+        return fb_schema_error(v, sub,
+                               "an environment map has no edges to tile: drop \"tileable\" (the sphere "
+                               "has no seam)");
+    }
     if (f->ridged && f->billow) {
         snprintf(sub, sizeof sub, "%s.billow", path);
         return fb_schema_error(v, sub, "ridged and billow cannot both be set");
@@ -128,7 +142,7 @@ static const K_FbmParams *params(const fb_gen *g)
         p.noise = KIND;                                                                                                \
         for (int r = 0; r < n; r++)                                                                                    \
             for (uint32_t x = 0; x < p.width; x++)                                                                     \
-                out[(size_t)r * p.width + x] = k_fbm_pixel(p, x, (uint32_t)(y0 + r));                                  \
+                out[(size_t)r * p.width + x] = k_fbm_map_pixel(p, x, (uint32_t)(y0 + r));                              \
     }
 FBM_ROWS(K_NOISE_GRADIENT)
 FBM_ROWS(K_NOISE_VALUE)
@@ -137,12 +151,18 @@ FBM_ROWS(K_NOISE_CELLULAR)
 FBM_ROWS(K_NOISE_CELLULAR_F2)
 FBM_ROWS(K_NOISE_SINE)
 
+/* The AVX2 loop is the plane's (environment maps run the portable kernel). */
+static bool avx2_applies(const K_FbmParams *p)
+{
+    return p->mapping == K_ENV_RECT && fb_fbm_avx2_supported(p);
+}
+
 static void fbm_rows(const fb_gen *g, int y0, int n, void *const *planes)
 {
     const K_FbmParams *p = params(g);
     float *out = planes[0];
     /* Bit-exact with the kernel (tests/test_avx2.c), so using it changes no result. */
-    if (!g->scalar && fb_fbm_avx2_supported(p)) {
+    if (!g->scalar && avx2_applies(p)) {
         fb_fbm_avx2_rows(p, y0, n, out);
         return;
     }
@@ -197,7 +217,36 @@ static void fb_fbm_params_fill(const fb_scene *s, const fb_layer *L, K_FbmParams
     p->offset_x = (float)f->offset[0];
     p->offset_y = (float)f->offset[1];
     p->warp = (float)f->warp;
+    p->mapping = f->mapping;
     fb_fbm_params_frame(p, s->width, s->height);
+}
+
+double fb_fbm_lattice_bound(const K_FbmParams *p)
+{
+    double amp_sum = 0, amp = 1;
+    for (uint32_t i = 0; i < p->octaves; i++, amp *= fabs((double)p->gain)) amp_sum += amp;
+    /* |u|, |v| < 1, then the warp: u' = u + warp fbm(u, v) / fx with |fbm| <= amp_sum (every shape is in [-1, 1]) */
+    double um = 1 + fabs((double)p->warp) * amp_sum * fabs((double)p->inv_freq_x);
+    double vm = 1 + fabs((double)p->warp) * amp_sum * fabs((double)p->inv_freq_y);
+    double lac = fabs((double)p->lacunarity), rc = fabs((double)p->rot_c), rs = fabs((double)p->rot_s);
+    double x = fabs((double)p->freq_x) * um + fabs((double)p->offset_x);
+    double y = fabs((double)p->freq_y) * vm + fabs((double)p->offset_y);
+    double cx = fabs((double)p->freq_x), cy = fabs((double)p->freq_y), bound = 0;
+    for (uint32_t i = 0; i < p->octaves; i++) {
+        double m = x > y ? x : y;
+        if ((p->flags & K_FBM_TILEABLE) != 0u) { /* u round(cells) + an offset under 256 */
+            double tx = um * (cx + 1) + 255 + fabs((double)p->offset_x),
+                   ty = vm * (cy + 1) + 255 + fabs((double)p->offset_y);
+            m = tx > ty ? tx : ty;
+        }
+        /* simplex skews by (x + y)(sqrt(3) - 1)/2; cellular looks 2 cells away; 1e-5: float rounding */
+        m = (m * (1 + 0.7320508) + 3) * (1 + 1e-5);
+        if (isnan(m)) return INFINITY;
+        if (m > bound) bound = m;
+        double nx = lac * (rc * x + rs * y) * (1 + 1e-5) + 64, ny = lac * (rs * x + rc * y) * (1 + 1e-5) + 64;
+        x = nx, y = ny, cx *= lac, cy *= lac;
+    }
+    return isfinite(bound) ? bound : INFINITY;
 }
 
 static fb_result fbm_init(fb_gen *g)
@@ -207,14 +256,15 @@ static fb_result fbm_init(fb_gen *g)
     snprintf(g->channel_names[0], sizeof g->channel_names[0], "%s.Y", g->layer->name);
     g->channel_types[0] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
     g->native_rows = fbm_rows;
-    g->lavapipe_faster = !fb_fbm_avx2_supported(params(g)); /* the AVX2 loop beats lavapipe 1.6x; C does not */
+    g->lavapipe_faster = !avx2_applies(params(g)); /* the AVX2 loop beats lavapipe 1.6x; C does not */
     g->spv = fbm_comp;
     g->spv_size = sizeof fbm_comp;
     g->params_size = sizeof(K_FbmParams);
     g->push_size = sizeof(fbm_push);
     g->spec[0] = params(g)->noise;
     g->spec[1] = params(g)->flags;
-    g->nspec = 2;
+    g->spec[2] = fb_fbm_lattice_bound(params(g)) < 16777216.0 ? 1u : 0u;
+    g->nspec = 3;
     return FB_OK;
 }
 
@@ -222,8 +272,9 @@ static fb_result fbm_init(fb_gen *g)
 static fb_result fbm_cost(const fb_scene *s, int layer, double *rows, double *total)
 {
     const fb_fbm_params *f = fb_layer_params(&s->layers[layer]);
-    double row =
-        (double)s->width * (f->octaves * 3.0e-9 /* an octave of one pixel */ + 9.0e-9 /* its frame and channel */);
+    /* an octave of one pixel (3D noise on the sphere: twice the lattice corners), its frame and channel */
+    double octave = f->mapping == K_ENV_RECT ? 3.0e-9 : 6.0e-9;
+    double row = (double)s->width * (f->octaves * octave + 9.0e-9);
     *total = 0;
     for (int y = 0; y < s->height; y++) rows[y] = row, *total += row;
     return FB_OK;

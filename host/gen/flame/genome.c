@@ -510,6 +510,160 @@ static fb_result add_symmetry(const reader *r, fb_flame_genome *g, int sym, int 
     return FB_OK;
 }
 
+/* One attribute of <flame>: the camera, the filters, density estimation and the tone map. */
+static fb_result flame_attr(reader *r, const char *name, const char *val, fb_flame_genome *g, int *palette_number,
+                            double *hue)
+{
+    fb_result rc = FB_OK;
+    double v2[3];
+    if (!strcmp(name, "name")) {
+        snprintf(g->name, sizeof g->name, "%s", val);
+    } else if (!strcmp(name, "size")) {
+        if (!numbers(val, 2, v2) || v2[0] < 1 || v2[1] < 1 || v2[0] > 65536 || v2[1] > 65536 || v2[0] != floor(v2[0]) ||
+            v2[1] != floor(v2[1]))
+            rc = bad(r, "attribute size: expected two positive integers, found '%s'%s", val, "");
+        else
+            g->width = (int)v2[0], g->height = (int)v2[1];
+    } else if (!strcmp(name, "center")) {
+        if (!numbers(val, 2, g->center)) rc = bad(r, "attribute center: expected two numbers, found '%s'%s", val, "");
+    } else if (!strcmp(name, "background")) {
+        if (!numbers(val, 3, g->background))
+            rc = bad(r, "attribute background: expected three numbers, found '%s'%s", val, "");
+    } else if (!strcmp(name, "scale")) {
+        rc = number(r, name, val, &g->scale);
+    } else if (!strcmp(name, "zoom")) {
+        rc = number(r, name, val, &g->zoom);
+    } else if (!strcmp(name, "rotate")) {
+        rc = number(r, name, val, &g->rotate);
+    } else if (!strcmp(name, "supersample") || !strcmp(name, "oversample")) {
+        rc = integer(r, name, val, &g->supersample);
+        if (!rc && (g->supersample < 1 || g->supersample > 8))
+            rc = bad(r, "attribute %s: expected 1 to 8, found '%s'", name, val);
+    } else if (!strcmp(name, "filter")) {
+        rc = number(r, name, val, &g->filter);
+    } else if (!strcmp(name, "filter_shape")) {
+        g->filter_shape = -1;
+        for (int k = 0; k < 14; k++)
+            if (!strcmp(val, filter_shapes[k])) g->filter_shape = k;
+        if (g->filter_shape < 0) rc = bad(r, "attribute filter_shape: unknown shape '%s'%s", val, "");
+    } else if (!strcmp(name, "quality")) {
+        rc = number(r, name, val, &g->quality);
+        if (!rc && !(g->quality > 0)) rc = bad(r, "attribute quality: must be positive, found '%s'%s", val, "");
+    } else if (!strcmp(name, "passes")) {
+        int p;
+        if (!(rc = integer(r, name, val, &p)) && p != 1)
+            rc = bad(r, "attribute passes: only 1 is supported, found '%s'%s", val, "");
+    } else if (!strcmp(name, "brightness")) {
+        rc = number(r, name, val, &g->brightness);
+    } else if (!strcmp(name, "gamma")) {
+        rc = number(r, name, val, &g->gamma);
+        if (!rc && !(g->gamma > 0)) rc = bad(r, "attribute gamma: must be positive, found '%s'%s", val, "");
+    } else if (!strcmp(name, "highlight_power")) {
+        rc = number(r, name, val, &g->highlight_power);
+    } else if (!strcmp(name, "vibrancy")) {
+        rc = number(r, name, val, &g->vibrancy);
+    } else if (!strcmp(name, "gamma_threshold")) {
+        rc = number(r, name, val, &g->gamma_threshold);
+    } else if (!strcmp(name, "estimator_radius")) {
+        rc = number(r, name, val, &g->estimator);
+        if (!rc && (g->estimator < 0 || g->estimator > 100))
+            rc = bad(r, "attribute estimator_radius: expected 0 to 100, found '%s'%s", val, "");
+    } else if (!strcmp(name, "estimator_minimum")) {
+        rc = number(r, name, val, &g->estimator_minimum);
+        if (!rc && g->estimator_minimum < 0)
+            rc = bad(r, "attribute estimator_minimum: must be >= 0, found '%s'%s", val, "");
+    } else if (!strcmp(name, "estimator_curve")) {
+        rc = number(r, name, val, &g->estimator_curve);
+        if (!rc && !(g->estimator_curve > 0))
+            rc = bad(r, "attribute estimator_curve: must be positive, found '%s'%s", val, "");
+    } else if (!strcmp(name, "palette_mode")) {
+        if (!strcmp(val, "linear"))
+            g->palette_mode = FB_FLAME_PALETTE_LINEAR;
+        else if (strcmp(val, "step"))
+            rc = bad(r, "attribute palette_mode: expected step or linear, found '%s'%s", val, "");
+    } else if (!strcmp(name, "palette")) {
+        rc = integer(r, name, val, palette_number);
+    } else if (!strcmp(name, "hue")) {
+        rc = number(r, name, val, hue);
+        *hue = fmod(*hue, 1.0);
+    } else if (!strcmp(name, "soloxform")) {
+        rc = bad(r, "attribute soloxform: an editing aid, not supported%s%s", "", "");
+    }
+    return rc;
+}
+
+/* A <color index rgb|rgba [a]> element: one palette entry, alpha premultiplied. */
+static fb_result color_elem(reader *r, xmlNodePtr c, fb_flame_genome *g, bool set[256])
+{
+    fb_result rc = FB_OK;
+    double idx = -1, rgb[4] = {0, 0, 0, 255};
+    for (xmlAttrPtr a = c->properties; a && !rc; a = a->next) {
+        xmlChar *vx = xmlGetProp(c, a->name);
+        const char *an = (const char *)a->name, *val = vx ? (const char *)vx : "";
+        if (!strcmp(an, "index")) {
+            if (!numbers(val, 1, &idx)) rc = bad(r, "<color index>: expected an integer, found '%s'%s", val, "");
+        } else if (!strcmp(an, "rgb")) {
+            if (!numbers(val, 3, rgb)) rc = bad(r, "<color rgb>: expected three numbers, found '%s'%s", val, "");
+        } else if (!strcmp(an, "rgba")) {
+            if (!numbers(val, 4, rgb)) rc = bad(r, "<color rgba>: expected four numbers, found '%s'%s", val, "");
+        } else if (!strcmp(an, "a")) {
+            if (!numbers(val, 1, &rgb[3])) rc = bad(r, "<color a>: expected a number, found '%s'%s", val, "");
+        } else {
+            rc = bad(r, "<color>: unknown attribute '%s'%s", an, "");
+        }
+        xmlFree(vx);
+    }
+    if (!rc && (idx < 0 || idx > 255 || idx != floor(idx)))
+        rc = bad(r, "<color>: a missing or bad index (0 to 255)%s%s", "", "");
+    if (!rc) {
+        int i = (int)idx;
+        double a = rgb[3] / 255.0;
+        g->palette[i][3] = a;
+        for (int k = 0; k < 3; k++) g->palette[i][k] = a * rgb[k] / 255.0;
+        set[i] = true;
+    }
+    snprintf(g->form, sizeof g->form, "<color> elements");
+    return rc;
+}
+
+/* A <colors data> or <palette count format> element: hexadecimal colours. */
+static fb_result colors_elem(reader *r, xmlNodePtr c, const char *en, fb_flame_genome *g, bool set[256])
+{
+    fb_result rc = FB_OK;
+    bool pal = en[0] == 'p';
+    int count = 0, chan = pal ? 0 : -4;
+    xmlChar *data = NULL;
+    for (xmlAttrPtr a = c->properties; a && !rc; a = a->next) {
+        xmlChar *vx = xmlGetProp(c, a->name);
+        const char *an = (const char *)a->name, *val = vx ? (const char *)vx : "";
+        if (!strcmp(an, "count")) {
+            rc = integer(r, "count", val, &count);
+            if (!rc && (count < 1 || count > 256)) rc = bad(r, "<%s count>: expected 1 to 256%s", en, "");
+        } else if (pal && !strcmp(an, "format")) {
+            chan = !strcmp(val, "RGB") ? 3 : !strcmp(val, "RGBA") ? 4 : 0;
+            if (!chan) rc = bad(r, "<palette format>: expected RGB or RGBA, found '%s'%s", val, "");
+        } else if (!pal && !strcmp(an, "data")) {
+            data = xmlStrdup(vx);
+        } else if (pal && (!strcmp(an, "index0") || !strcmp(an, "index1") || !strcmp(an, "hue0") ||
+                           !strcmp(an, "hue1") || !strcmp(an, "blend"))) {
+            rc = bad(r, "<palette %s>: the blend of two library palettes is not supported%s", an, "");
+        } else {
+            rc = bad(r, "<%s>: unknown attribute '%s'", en, an);
+        }
+        xmlFree(vx);
+    }
+    if (!rc && pal) {
+        if (!chan) rc = bad(r, "<palette>: no format attribute%s%s", "", "");
+        data = xmlNodeGetContent(c);
+    }
+    if (!rc && !data) rc = bad(r, "<%s>: no colour data%s", en, "");
+    if (!rc && !count) rc = bad(r, "<%s>: no count%s", en, "");
+    if (!rc) rc = hex_colors(r, (const char *)data, count, chan, g, set);
+    xmlFree(data);
+    snprintf(g->form, sizeof g->form, pal ? "a <palette> element" : "a <colors> element");
+    return rc;
+}
+
 static fb_result parse_flame(reader *r, xmlNodePtr node, const char *palettes, fb_flame_genome *g)
 {
     memset(g, 0, sizeof *g);
@@ -527,81 +681,7 @@ static fb_result parse_flame(reader *r, xmlNodePtr node, const char *palettes, f
         const char *name = (const char *)a->name;
         xmlChar *vx = xmlGetProp(node, a->name);
         const char *val = vx ? (const char *)vx : "";
-        double v2[3];
-        if (!strcmp(name, "name")) {
-            snprintf(g->name, sizeof g->name, "%s", val);
-        } else if (!strcmp(name, "size")) {
-            if (!numbers(val, 2, v2) || v2[0] < 1 || v2[1] < 1 || v2[0] > 65536 || v2[1] > 65536 ||
-                v2[0] != floor(v2[0]) || v2[1] != floor(v2[1]))
-                rc = bad(r, "attribute size: expected two positive integers, found '%s'%s", val, "");
-            else
-                g->width = (int)v2[0], g->height = (int)v2[1];
-        } else if (!strcmp(name, "center")) {
-            if (!numbers(val, 2, g->center))
-                rc = bad(r, "attribute center: expected two numbers, found '%s'%s", val, "");
-        } else if (!strcmp(name, "background")) {
-            if (!numbers(val, 3, g->background))
-                rc = bad(r, "attribute background: expected three numbers, found '%s'%s", val, "");
-        } else if (!strcmp(name, "scale")) {
-            rc = number(r, name, val, &g->scale);
-        } else if (!strcmp(name, "zoom")) {
-            rc = number(r, name, val, &g->zoom);
-        } else if (!strcmp(name, "rotate")) {
-            rc = number(r, name, val, &g->rotate);
-        } else if (!strcmp(name, "supersample") || !strcmp(name, "oversample")) {
-            rc = integer(r, name, val, &g->supersample);
-            if (!rc && (g->supersample < 1 || g->supersample > 8))
-                rc = bad(r, "attribute %s: expected 1 to 8, found '%s'", name, val);
-        } else if (!strcmp(name, "filter")) {
-            rc = number(r, name, val, &g->filter);
-        } else if (!strcmp(name, "filter_shape")) {
-            g->filter_shape = -1;
-            for (int k = 0; k < 14; k++)
-                if (!strcmp(val, filter_shapes[k])) g->filter_shape = k;
-            if (g->filter_shape < 0) rc = bad(r, "attribute filter_shape: unknown shape '%s'%s", val, "");
-        } else if (!strcmp(name, "quality")) {
-            rc = number(r, name, val, &g->quality);
-            if (!rc && !(g->quality > 0)) rc = bad(r, "attribute quality: must be positive, found '%s'%s", val, "");
-        } else if (!strcmp(name, "passes")) {
-            int p;
-            if (!(rc = integer(r, name, val, &p)) && p != 1)
-                rc = bad(r, "attribute passes: only 1 is supported, found '%s'%s", val, "");
-        } else if (!strcmp(name, "brightness")) {
-            rc = number(r, name, val, &g->brightness);
-        } else if (!strcmp(name, "gamma")) {
-            rc = number(r, name, val, &g->gamma);
-            if (!rc && !(g->gamma > 0)) rc = bad(r, "attribute gamma: must be positive, found '%s'%s", val, "");
-        } else if (!strcmp(name, "highlight_power")) {
-            rc = number(r, name, val, &g->highlight_power);
-        } else if (!strcmp(name, "vibrancy")) {
-            rc = number(r, name, val, &g->vibrancy);
-        } else if (!strcmp(name, "gamma_threshold")) {
-            rc = number(r, name, val, &g->gamma_threshold);
-        } else if (!strcmp(name, "estimator_radius")) {
-            rc = number(r, name, val, &g->estimator);
-            if (!rc && (g->estimator < 0 || g->estimator > 100))
-                rc = bad(r, "attribute estimator_radius: expected 0 to 100, found '%s'%s", val, "");
-        } else if (!strcmp(name, "estimator_minimum")) {
-            rc = number(r, name, val, &g->estimator_minimum);
-            if (!rc && g->estimator_minimum < 0)
-                rc = bad(r, "attribute estimator_minimum: must be >= 0, found '%s'%s", val, "");
-        } else if (!strcmp(name, "estimator_curve")) {
-            rc = number(r, name, val, &g->estimator_curve);
-            if (!rc && !(g->estimator_curve > 0))
-                rc = bad(r, "attribute estimator_curve: must be positive, found '%s'%s", val, "");
-        } else if (!strcmp(name, "palette_mode")) {
-            if (!strcmp(val, "linear"))
-                g->palette_mode = FB_FLAME_PALETTE_LINEAR;
-            else if (strcmp(val, "step"))
-                rc = bad(r, "attribute palette_mode: expected step or linear, found '%s'%s", val, "");
-        } else if (!strcmp(name, "palette")) {
-            rc = integer(r, name, val, &palette_number);
-        } else if (!strcmp(name, "hue")) {
-            rc = number(r, name, val, &hue);
-            hue = fmod(hue, 1.0);
-        } else if (!strcmp(name, "soloxform")) {
-            rc = bad(r, "attribute soloxform: an editing aid, not supported%s%s", "", "");
-        }
+        rc = flame_attr(r, name, val, g, &palette_number, &hue);
         /* the rest (version, time, interpolation..., temporal_*, url, nick, notes) concern animation,
          * editing or credits, not a still image */
         xmlFree(vx);
@@ -627,68 +707,9 @@ static fb_result parse_flame(reader *r, xmlNodePtr node, const char *palettes, f
             else
                 nstd++;
         } else if (!strcmp(en, "color")) {
-            double idx = -1, rgb[4] = {0, 0, 0, 255};
-            for (xmlAttrPtr a = c->properties; a && !rc; a = a->next) {
-                xmlChar *vx = xmlGetProp(c, a->name);
-                const char *an = (const char *)a->name, *val = vx ? (const char *)vx : "";
-                if (!strcmp(an, "index")) {
-                    if (!numbers(val, 1, &idx))
-                        rc = bad(r, "<color index>: expected an integer, found '%s'%s", val, "");
-                } else if (!strcmp(an, "rgb")) {
-                    if (!numbers(val, 3, rgb))
-                        rc = bad(r, "<color rgb>: expected three numbers, found '%s'%s", val, "");
-                } else if (!strcmp(an, "rgba")) {
-                    if (!numbers(val, 4, rgb))
-                        rc = bad(r, "<color rgba>: expected four numbers, found '%s'%s", val, "");
-                } else if (!strcmp(an, "a")) {
-                    if (!numbers(val, 1, &rgb[3])) rc = bad(r, "<color a>: expected a number, found '%s'%s", val, "");
-                } else {
-                    rc = bad(r, "<color>: unknown attribute '%s'%s", an, "");
-                }
-                xmlFree(vx);
-            }
-            if (!rc && (idx < 0 || idx > 255 || idx != floor(idx)))
-                rc = bad(r, "<color>: a missing or bad index (0 to 255)%s%s", "", "");
-            if (!rc) {
-                int i = (int)idx;
-                double a = rgb[3] / 255.0;
-                g->palette[i][3] = a;
-                for (int k = 0; k < 3; k++) g->palette[i][k] = a * rgb[k] / 255.0;
-                set[i] = true;
-            }
-            snprintf(g->form, sizeof g->form, "<color> elements");
+            rc = color_elem(r, c, g, set);
         } else if (!strcmp(en, "colors") || !strcmp(en, "palette")) {
-            bool pal = en[0] == 'p';
-            int count = 0, chan = pal ? 0 : -4;
-            xmlChar *data = NULL;
-            for (xmlAttrPtr a = c->properties; a && !rc; a = a->next) {
-                xmlChar *vx = xmlGetProp(c, a->name);
-                const char *an = (const char *)a->name, *val = vx ? (const char *)vx : "";
-                if (!strcmp(an, "count")) {
-                    rc = integer(r, "count", val, &count);
-                    if (!rc && (count < 1 || count > 256)) rc = bad(r, "<%s count>: expected 1 to 256%s", en, "");
-                } else if (pal && !strcmp(an, "format")) {
-                    chan = !strcmp(val, "RGB") ? 3 : !strcmp(val, "RGBA") ? 4 : 0;
-                    if (!chan) rc = bad(r, "<palette format>: expected RGB or RGBA, found '%s'%s", val, "");
-                } else if (!pal && !strcmp(an, "data")) {
-                    data = xmlStrdup(vx);
-                } else if (pal && (!strcmp(an, "index0") || !strcmp(an, "index1") || !strcmp(an, "hue0") ||
-                                   !strcmp(an, "hue1") || !strcmp(an, "blend"))) {
-                    rc = bad(r, "<palette %s>: the blend of two library palettes is not supported%s", an, "");
-                } else {
-                    rc = bad(r, "<%s>: unknown attribute '%s'", en, an);
-                }
-                xmlFree(vx);
-            }
-            if (!rc && pal) {
-                if (!chan) rc = bad(r, "<palette>: no format attribute%s%s", "", "");
-                data = xmlNodeGetContent(c);
-            }
-            if (!rc && !data) rc = bad(r, "<%s>: no colour data%s", en, "");
-            if (!rc && !count) rc = bad(r, "<%s>: no count%s", en, "");
-            if (!rc) rc = hex_colors(r, (const char *)data, count, chan, g, set);
-            xmlFree(data);
-            snprintf(g->form, sizeof g->form, pal ? "a <palette> element" : "a <colors> element");
+            rc = colors_elem(r, c, en, g, set);
         } else if (!strcmp(en, "symmetry")) {
             xmlChar *kx = xmlGetProp(c, (const xmlChar *)"kind");
             int kind = 0;

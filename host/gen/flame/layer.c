@@ -9,9 +9,7 @@
  */
 #include "bake.h"
 #include "gen_flame.h"
-#include "pool.h"
-#include "progress.h"
-#include "render.h"
+#include "game.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -86,6 +84,9 @@ typedef struct flame_state {
     uint32_t *count;
     uint64_t bad;
     double seconds;
+    uint32_t cr0, cr1;   /* the chains this run plays: all, or a points part's share */
+    int nsums;           /* a points part: the 64-bit sums its histogram is stored as (flame_sums) */
+    fb_flame_cell *hist; /* a points part: its histogram, kept for its sums channels */
 } flame_state;
 
 static flame_state *state(const fb_gen *g)
@@ -93,55 +94,33 @@ static flame_state *state(const fb_gen *g)
     return g->owned;
 }
 
-typedef struct game {
-    const fb_flame_setup *S;
-    fb_flame_cell32 **hist; /* one per task */
-    fb_flame_cell *total;
-    size_t cells;
-    uint64_t *bad;
-    uint32_t c0, c1; /* the chains of this round */
-    int ntasks;
-} game;
-
-/* Chains [c0, c1) of the round, the task's contiguous share, into its own histogram. */
-static void game_task(void *ctx, int task)
+/* The points of the chains [cr0, cr1) (the last chain of all may be shorter). */
+static double chain_points(const flame_state *st)
 {
-    game *G = ctx;
-    const fb_flame_setup *S = G->S;
-    const K_FlameParams P = S->p;
-    uint64_t span = G->c1 - G->c0;
-    uint32_t a = G->c0 + (uint32_t)(span * (uint64_t)task / (uint64_t)G->ntasks);
-    uint32_t b = G->c0 + (uint32_t)(span * (uint64_t)(task + 1) / (uint64_t)G->ntasks);
-    fb_flame_cell32 *h = G->hist[task];
-    uint64_t bad = 0;
-    const K_FlameXform *k_flame_xf = S->xf;
-    const K_FlameVar *k_flame_var = S->var;
-    const uint *k_flame_dist = S->dist;
-    /* The points of a chain are computed into a buffer, then scattered: a loop of independent
-     * increments keeps many cache misses in flight, where plotting inside the chain's dependent
-     * loop waits for each (the histogram does not fit in the caches). */
-    enum { BUF = 1024 };
-    K_FlameChain pts[BUF];
-    for (uint32_t i = a; i < b; i++) {
-        uint32_t key = k_flame_key(P.seed, i), len = i + 1 == P.chains ? P.last_len : P.len;
-        K_FlameChain s = k_flame_init(key);
-        for (uint32_t t = 0; t < P.fuse; t++) s = k_flame_step(P, s, key K_FLAME_TABLES);
-        for (uint32_t t0 = 0; t0 < len; t0 += BUF) {
-            uint32_t n = len - t0 < BUF ? len - t0 : BUF;
-            for (uint32_t t = 0; t < n; t++) pts[t] = s = k_flame_step(P, s, key K_FLAME_TABLES);
-            for (uint32_t t = 0; t < n; t++) fb_flame_plot(S, &pts[t], h, G->total);
-        }
-        bad += s.bad;
-    }
-    G->bad[task] += bad;
+    const K_FlameParams *p = &st->S.p;
+    double n = (double)(st->cr1 - st->cr0) * p->len;
+    return st->cr1 == p->chains && st->cr1 > st->cr0 ? n - (p->len - p->last_len) : n;
 }
 
-/* The task's share of the cells of every task's 32-bit histogram, folded into the total. */
-static void fold_task(void *ctx, int task)
+/* The image planes the filter fills: the accumulations and the hit count. */
+static fb_result alloc_image(flame_state *st, size_t npix)
 {
-    game *G = ctx;
-    size_t c0 = G->cells * (size_t)task / (size_t)G->ntasks, c1 = G->cells * (size_t)(task + 1) / (size_t)G->ntasks;
-    for (int t = 0; t < G->ntasks; t++) fb_flame_hist_fold(G->total, G->hist[t], c0, c1);
+    for (int k = 0; k < 4; k++)
+        if (!(st->acc[k] = malloc(npix * sizeof(float)))) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (!(st->count = malloc(npix * sizeof(uint32_t)))) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    return FB_OK;
+}
+
+/* Density estimation and the spatial filter of the total histogram (taken over: a points part keeps
+ * it for its sums channels, else it is freed). */
+static fb_result finish(flame_state *st, fb_flame_cell *total)
+{
+    fb_result rc = fb_flame_filter(&st->S, total, st->acc, st->count);
+    if (st->nsums && !rc)
+        st->hist = total;
+    else
+        free(total);
+    return rc;
 }
 
 static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
@@ -149,62 +128,95 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
     flame_state *st = state(g);
     const fb_flame_setup *S = &st->S;
     size_t cells = (size_t)S->p.hist_w * S->p.hist_h, npix = (size_t)g->scene->width * g->scene->height;
-    int threads = e->pool ? fb_pool_threads(e->pool) : 1;
-    if (threads > 64) threads = 64;
-    while (threads > 1 && (uint64_t)threads * cells * sizeof(fb_flame_cell32) > (1ull << 30)) threads--;
     if (e->kind == FB_BACKEND_VULKAN)
         fb_log(FB_LOG_INFO, "%s: the flame's chaos game runs on the native backend (no shader yet)", g->layer->name);
-    fb_flame_cell32 *hist[64] = {0};
-    uint64_t bad[64] = {0};
     fb_flame_cell *total = calloc(cells, sizeof *total);
     fb_result rc = total ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
-    for (int t = 0; t < threads && !rc; t++)
-        if (!(hist[t] = calloc(cells, sizeof(fb_flame_cell32))))
-            rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
-    for (int k = 0; k < 4 && !rc; k++)
-        if (!(st->acc[k] = malloc(npix * sizeof(float)))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
-    if (!rc && !(st->count = malloc(npix * sizeof(uint32_t)))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (!rc) rc = alloc_image(st, npix);
     fb_progress prog;
     char label[96];
     snprintf(label, sizeof label, "%s: chaos game", g->layer->name);
     fb_progress_init(&prog, progress, label, "pts");
     double t0 = fb_now();
-    /* rounds of chains, for the progress bar; the 32-bit cells are folded once, at the end */
-    uint32_t per_round = 64u * (uint32_t)threads;
-    for (uint32_t c0 = 0; c0 < S->p.chains && !rc; c0 += per_round) {
-        uint32_t c1 = S->p.chains - c0 > per_round ? c0 + per_round : S->p.chains;
-        game G = {S, hist, total, cells, bad, c0, c1, threads};
-        if (e->pool)
-            fb_pool_run(e->pool, threads, game_task, &G);
-        else
-            game_task(&G, 0);
-        double done = (double)c1 * S->p.len;
-        fb_progress_update(&prog, (uint64_t)fmin(done, S->samples), (uint64_t)S->samples);
-    }
-    if (!rc) {
-        game G = {S, hist, total, cells, bad, 0, 0, threads};
-        if (e->pool)
-            fb_pool_run(e->pool, threads, fold_task, &G);
-        else
-            fold_task(&G, 0);
-    }
+    int threads = e->pool ? fb_pool_threads(e->pool) : 1;
+    if (!rc) rc = fb_flame_play(S, e->pool, threads, st->cr0, st->cr1, total, &st->bad, &prog);
     fb_progress_finish(&prog);
-    for (int t = 0; t < threads; t++) st->bad += bad[t];
-    double t1 = fb_now();
-    if (!rc) rc = fb_flame_filter(S, total, st->acc, st->count);
-    for (int t = 0; t < threads; t++) free(hist[t]);
-    free(total);
+    double t1 = fb_now(), points = chain_points(st);
+    if (!rc)
+        rc = finish(st, total);
+    else
+        free(total);
     st->seconds = fb_now() - t0;
     g->prepare_gpu_seconds = -1;
     if (rc) return rc;
     fb_log(FB_LOG_INFO,
            "%s: %.0f points in %u chains, %.3g Mpts/s (chaos game %.2f s, filters %.2f s), %llu bad values",
-           g->layer->name, S->samples, S->p.chains, S->samples / (t1 - t0) * 1e-6, t1 - t0, fb_now() - t1,
+           g->layer->name, points, st->cr1 - st->cr0, points / (t1 - t0) * 1e-6, t1 - t0, fb_now() - t1,
            (unsigned long long)st->bad);
-    snprintf(g->summary, sizeof g->summary, "%s: flame %.0f points, %.3g Mpts/s", g->layer->name, S->samples,
-             S->samples / (t1 - t0) * 1e-6);
+    snprintf(g->summary, sizeof g->summary, "%s: flame %.0f points, %.3g Mpts/s", g->layer->name, points,
+             points / (t1 - t0) * 1e-6);
     return FB_OK;
 }
+
+/* ---- points parts: the histogram as sums ------------------------------------------------------ */
+
+/* A points part stores its whole histogram (hist_w x hist_h cells of six 64-bit sums, larger than
+ * the image by the supersample and the filters' gutter) as the wide sums hist0, hist1, ...: value
+ * v = k * width * height + pixel of sum k is field v % 6 of cell v / 6 (0 past the last cell). */
+static int flame_nsums(const fb_gen *g)
+{
+    const flame_state *st = state(g);
+    uint64_t values = 6ull * st->S.p.hist_w * st->S.p.hist_h, npix = (uint64_t)g->scene->width * g->scene->height;
+    return (int)((values + npix - 1) / npix);
+}
+
+static bool flame_sum(const fb_gen *g, int k, char *suffix, size_t size)
+{
+    (void)g;
+    snprintf(suffix, size, "hist%d", k);
+    return true;
+}
+
+static uint64_t *cell_field(fb_flame_cell *c, int f)
+{
+    return f < 5 ? &c->c[f] : &c->hits;
+}
+
+/* Rows [y0, y0 + n) of the sums channels: planes[2k], planes[2k + 1] the low and high words of sum k. */
+static void sums_rows(const flame_state *st, size_t npix, size_t at, size_t len, void *const *planes)
+{
+    size_t values = 6 * (size_t)st->S.p.hist_w * st->S.p.hist_h;
+    for (int k = 0; k < st->nsums; k++) {
+        uint32_t *lo = planes[2 * k], *hi = planes[2 * k + 1];
+        for (size_t i = 0; i < len; i++) {
+            size_t v = (size_t)k * npix + at + i;
+            uint64_t x = v < values ? *cell_field(&st->hist[v / 6], (int)(v % 6)) : 0;
+            lo[i] = (uint32_t)x, hi[i] = (uint32_t)(x >> 32);
+        }
+    }
+}
+
+/* The whole game's layer from the parts' sums: their histogram, filtered as a whole bake does. */
+static fb_result flame_from_sums(fb_gen *g, const uint64_t *const *sums, uint64_t outside)
+{
+    flame_state *st = state(g);
+    size_t cells = (size_t)st->S.p.hist_w * st->S.p.hist_h, npix = (size_t)g->scene->width * g->scene->height;
+    (void)outside;
+    fb_flame_cell *total = malloc(cells * sizeof *total);
+    fb_result rc = total ? alloc_image(st, npix) : fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
+    for (size_t v = 0; v < 6 * cells && !rc; v++) *cell_field(&total[v / 6], (int)(v % 6)) = sums[v / npix][v % npix];
+    if (rc) {
+        free(total);
+        return rc;
+    }
+    return finish(st, total);
+}
+
+static const fb_points_ops flame_points_ops = {
+    .nsums = flame_nsums,
+    .sum = flame_sum,
+    .from_sums = flame_from_sums,
+};
 
 static void flame_rows(const fb_gen *g, int y0, int n, void *const *planes)
 {
@@ -214,6 +226,7 @@ static void flame_rows(const fb_gen *g, int y0, int n, void *const *planes)
     fb_flame_tone_row(&st->S.tone, len, acc, planes[0], planes[1], planes[2], planes[3]);
     for (int k = 0; k < 4; k++) memcpy(planes[4 + k], acc[k], len * 4);
     memcpy(planes[8], st->count + at, len * 4);
+    if (st->nsums) sums_rows(st, w * (size_t)g->scene->height, at, len, planes + 9);
 }
 
 static void flame_fini(fb_gen *g)
@@ -223,6 +236,7 @@ static void flame_fini(fb_gen *g)
     fb_flame_setup_fini(&st->S);
     for (int k = 0; k < 4; k++) free(st->acc[k]);
     free(st->count);
+    free(st->hist);
 }
 
 /* The 32-bit histograms (one per thread), the 64-bit total, the density estimation's doubles, and the image-size planes
@@ -233,8 +247,9 @@ static uint64_t flame_memory(const fb_gen *g, const struct fb_engine *e, uint64_
     uint64_t cells = (uint64_t)st->S.p.hist_w * st->S.p.hist_h, n = (uint64_t)g->scene->width * g->scene->height;
     int threads = e->pool ? fb_pool_threads(e->pool) : 1;
     if (threads > 64) threads = 64;
-    *hold = 20 * n;
-    return (uint64_t)threads * cells * sizeof(fb_flame_cell32) + cells * sizeof(fb_flame_cell) + 32 * cells + 20 * n;
+    *hold = 20 * n + (st->nsums ? cells * sizeof(fb_flame_cell) : 0); /* a points part keeps its histogram */
+    return (uint64_t)threads * cells * fb_flame_cell_bytes(&st->S) + cells * sizeof(fb_flame_cell) + 32 * cells +
+           20 * n;
 }
 
 /* Seconds of one core of the reference machine: the chaos game per point (1.0 s of user time for
@@ -257,9 +272,6 @@ static fb_result flame_init(fb_gen *g)
 {
     const fb_scene *s = g->scene;
     const fb_flame_params *f = fb_layer_params(g->layer);
-    if (g->points_part[1] > 0)
-        return fb_fail(FB_ERR_INPUT, "layer %s: a flame layer cannot be split by points parts yet (--points-part)",
-                       g->layer->name);
     flame_state *st = calloc(1, sizeof *st);
     if (!st) return fb_fail(FB_ERR_NOMEM, "out of memory");
     g->owned = st;
@@ -267,15 +279,32 @@ static fb_result flame_init(fb_gen *g)
     fb_result rc = fb_flame_setup_init(&f->genome, s->width, s->height, f->quality, s->seed, &st->S);
     if (rc) return rc;
     st->S.tone = f->tone;
+    /* points part K of N: the K-th share of the chains (any split sums to the whole histogram) */
+    st->cr0 = 0, st->cr1 = st->S.p.chains;
+    if (g->points_part[1] > 0) {
+        uint64_t c = st->S.p.chains, k = (uint64_t)g->points_part[0], parts = (uint64_t)g->points_part[1];
+        st->cr0 = (uint32_t)(c * (k - 1) / parts), st->cr1 = (uint32_t)(c * k / parts);
+        st->nsums = flame_nsums(g);
+        if (9 + 2 * st->nsums > FB_GEN_MAX_CHANNELS)
+            return fb_fail(FB_ERR_INPUT,
+                           "layer %s: a points part stores the flame's histogram (%u x %u cells) in %d channels; at "
+                           "most %d: bake it whole, larger, or with less supersample",
+                           g->layer->name, st->S.p.hist_w, st->S.p.hist_h, 2 * st->nsums, FB_GEN_MAX_CHANNELS - 9);
+    }
     static const char *const suffix[9] = {"R", "G", "B", "A", "acc_R", "acc_G", "acc_B", "acc_A", "count"};
     exrio_type colour = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
     const exrio_type types[9] = {colour,      colour,      colour,      colour,    EXRIO_FLOAT,
                                  EXRIO_FLOAT, EXRIO_FLOAT, EXRIO_FLOAT, EXRIO_UINT};
-    g->nchannels = 9;
-    for (int c = 0; c < 9; c++) {
-        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
-        g->channel_types[c] = types[c];
+    g->nchannels = 9 + 2 * st->nsums; /* a points part also carries its histogram */
+    for (int c = 0; c < g->nchannels; c++) {
+        if (c < 9)
+            snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        else
+            snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.hist%d_%s", g->layer->name, (c - 9) / 2,
+                     (c - 9) % 2 ? "hi" : "lo");
+        g->channel_types[c] = c < 9 ? types[c] : EXRIO_UINT;
     }
+    g->points_split = true; /* merge reads an outside count: a flame's is 0 (its filter needs none) */
     g->preview_channel = 3;
     g->preview_rgb = 0;
     g->native_rows = flame_rows;
@@ -294,8 +323,10 @@ const fb_gen_class fb_gen_flame = {
     .params_size = sizeof(fb_flame_params),
     .parse = parse_flame,
     .init = flame_init,
-    .share = FB_SHARE_WHOLE, /* one task: its chaos game cannot be split by points parts yet */
+    .share = FB_SHARE_POINTS,
     .cost = flame_cost,
+    .part_pixel_seconds = FLAME_PIXEL_SECONDS,
+    .points = &flame_points_ops,
     .tone = &fb_flame_tone_ops,
     .example = "[{\"type\": \"flame\", \"file\": \"docs/examples/flames.flame\", \"flame\": \"gold\", \"quality\": 2}]",
 };

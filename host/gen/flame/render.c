@@ -257,17 +257,45 @@ static uint32_t var_flags(int v)
     case K_V_BLOB:
     case K_V_FAN2:
     case K_V_DISC2:
-        return K_FLAME_ATAN_XY;
-    case K_V_JULIAN:
-    case K_V_JULIASCOPE:
+        return K_FLAME_ATAN_XY | K_FLAME_SQRT;
     case K_V_RADIAL_BLUR:
-    case K_V_NGON:
     case K_V_SUPER_SHAPE:
     case K_V_FLOWER:
     case K_V_CONIC:
+        return K_FLAME_ATAN_YX | K_FLAME_SQRT;
+    case K_V_JULIAN:
+    case K_V_JULIASCOPE:
+    case K_V_NGON:
         return K_FLAME_ATAN_YX;
-    default:
+    /* the variations that use neither the length of (tx, ty) nor the angle */
+    case K_V_LINEAR:
+    case K_V_SINUSOIDAL:
+    case K_V_SPHERICAL:
+    case K_V_SWIRL:
+    case K_V_BENT:
+    case K_V_WAVES:
+    case K_V_POPCORN:
+    case K_V_EXPONENTIAL:
+    case K_V_COSINE:
+    case K_V_PDJ:
+    case K_V_BUBBLE:
+    case K_V_CYLINDER:
+    case K_V_PERSPECTIVE:
+    case K_V_NOISE:
+    case K_V_BLUR:
+    case K_V_GAUSSIAN_BLUR:
+    case K_V_PIE:
+    case K_V_CURL:
+    case K_V_RECTANGLES:
+    case K_V_ARCH:
+    case K_V_TANGENT:
+    case K_V_SQUARE:
+    case K_V_RAYS:
+    case K_V_CROSS:
+    case K_V_BENT2:
         return 0;
+    default:
+        return K_FLAME_SQRT;
     }
 }
 

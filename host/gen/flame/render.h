@@ -67,35 +67,6 @@ K_FlameVar fb_flame_var_params(const fb_flame_xform *x, int v);
 /* Adds a 32-bit cell into the 64-bit total (atomically: other threads may spill into it) and clears it. */
 void fb_flame_spill(fb_flame_cell *total, fb_flame_cell32 *h);
 
-/* Adds the plotted point of chain state s to the histogram (nothing if outside or invisible). */
-static inline void fb_flame_plot(const fb_flame_setup *S, const K_FlameChain *s, fb_flame_cell32 *hist,
-                                 fb_flame_cell *total)
-{
-    uint32_t cell = k_flame_cell(S->p, *s);
-    uint32_t visq = S->xf[s->vis].visq;
-    if (cell == K_FLAME_NONE || visq == 0) return;
-    fb_flame_cell32 *h = &hist[cell];
-    if (!S->linear_palette) {
-        const uint32_t *q = S->palq[k_flame_index(s->pc)];
-        for (int k = 0; k < 4; k++) h->c[k] += (q[k] * visq + 16384) >> 15;
-    } else {
-        double v = s->pc * 256.0, f;
-        int i = (int)v;
-        if (i < 0)
-            i = 0, f = 0;
-        else if (i >= 255)
-            i = 254, f = 1;
-        else
-            f = v - i;
-        double vis = visq / 32768.0;
-        for (int k = 0; k < 4; k++)
-            h->c[k] += (uint32_t)llround((S->pal255[i][k] * (1 - f) + S->pal255[i + 1][k] * f) * vis * 16.0);
-    }
-    h->c[4] += (4080u * visq + 16384) >> 15;
-    h->hits++;
-    if (h->c[4] >= 0x80000000u) fb_flame_spill(&total[cell], h);
-}
-
 /* From the histogram (hist_w x hist_h cells) to the image: density estimation and the spatial filter
  * give each pixel's accumulation at brightness 1 (acc: 4 planes of width x height, r g b a) and its
  * hits (count). Single-threaded in a fixed order, so the floats are the same on every run. */

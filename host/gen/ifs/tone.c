@@ -92,9 +92,22 @@ static fb_result merge_from_sums(fb_gen *g, const uint64_t *const *sums, uint64_
     return fb_gen_ifs_from_sums(g, sums[0], sums[1], outside);
 }
 
+static int merge_nsums(const fb_gen *g)
+{
+    (void)g;
+    return 2;
+}
+
 /* A points part stores the hit count and each pixel's 64-bit colour sum as two uint channels. */
+static bool merge_sum(const fb_gen *g, int k, char *suffix, size_t size)
+{
+    (void)g;
+    snprintf(suffix, size, "%s", k == 0 ? "count" : "colour_sum");
+    return k == 1;
+}
+
 const fb_points_ops fb_ifs_points_ops = {
-    .nsums = 2,
-    .sums = {{"count", false}, {"colour_sum", true}},
+    .nsums = merge_nsums,
+    .sum = merge_sum,
     .from_sums = merge_from_sums,
 };

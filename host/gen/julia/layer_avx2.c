@@ -164,9 +164,32 @@ AVX2 static inline __m256 clamp8(__m256 x, float lo, float hi)
 
 /* ---- the start: k_julia_start_at --------------------------------------------------------------- */
 
+/* Environment maps: each lane's start from the portable kernel (a direction, its projection and the
+ * warp: a small part of a pixel's work next to its orbit), then the orbits on the lanes. */
+AVX2 static v8start start8_env(const fb_julia_avx2_ctx *cx, __m256 fx, __m256 fy)
+{
+    float x[8], y[8], zr[8], zi[8], dzr[8], dzi[8];
+    uint32_t ok[8];
+    _mm256_storeu_ps(x, fx);
+    _mm256_storeu_ps(y, fy);
+    for (int k = 0; k < 8; k++) {
+        K_JuliaStart s = k_julia_start_at(*cx->p, *cx->turb, x[k], y[k]);
+        zr[k] = s.o.zr, zi[k] = s.o.zi, dzr[k] = s.o.dzr, dzi[k] = s.o.dzi;
+        ok[k] = s.ok ? 0xffffffffu : 0u;
+    }
+    v8start st;
+    st.zr = _mm256_loadu_ps(zr);
+    st.zi = _mm256_loadu_ps(zi);
+    st.dzr = _mm256_loadu_ps(dzr);
+    st.dzi = _mm256_loadu_ps(dzi);
+    st.ok = _mm256_castsi256_ps(_mm256_loadu_si256((const __m256i *)ok));
+    return st;
+}
+
 AVX2 static v8start start8(const fb_julia_avx2_ctx *cx, __m256 fx, __m256 fy)
 {
     const K_JuliaParams *p = cx->p;
+    if (p->mapping >= K_JULIA_LATLONG) return start8_env(cx, fx, fy);
     __m256 u = _mm256_mul_ps(fx, _mm256_set1_ps(p->inv_width));
     __m256 v = _mm256_sub_ps(_mm256_set1_ps(1.0f), _mm256_mul_ps(fy, _mm256_set1_ps(p->inv_height)));
     __m256 x, y, dx, dy;
@@ -565,7 +588,7 @@ AVX2 static void rows8(const fb_julia_avx2_ctx *cx, int y0, int n, void *const *
 
 bool fb_julia_avx2_layer_supported(const K_JuliaParams *p)
 {
-    return __builtin_cpu_supports("avx2") && (p->mapping == K_JULIA_RECT || p->mapping == K_JULIA_POLAR);
+    return __builtin_cpu_supports("avx2") && p->mapping <= K_JULIA_CUBE;
 }
 
 void fb_julia_avx2_layer_rows(const fb_julia_avx2_ctx *c, int y0, int n, void *const *planes)

@@ -18,7 +18,8 @@ typedef struct fb_julia_avx2_ctx {
     uint32_t want;
 } fb_julia_avx2_ctx;
 
-/* True when this CPU has AVX2 and the grid is one the lanes implement (rect and polar, float). */
+/* True when this CPU has AVX2 and the grid is one the lanes implement (rect and polar; lat-long and
+ * cube with their starts from the portable kernel; float). */
 bool fb_julia_avx2_layer_supported(const K_JuliaParams *p);
 
 /* Rows [y0, y0 + n) into the kernel planes iter (uint32), n, inside, de, R, G, B (float; NULL: not

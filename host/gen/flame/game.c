@@ -1,0 +1,234 @@
+/*
+ * The flame's chaos game (game.h). Each thread computes a batch of a chain's points, turns them into
+ * records (histogram cell, palette entry, opacity), then scatters the records with the cells
+ * prefetched some records ahead: the histogram does not fit in the caches, and independent,
+ * prefetched increments keep many misses in flight where plotting inside the chain's dependent loop
+ * waits for each. Opaque genomes use 16-byte cells (one cache line holds four, none straddles two).
+ */
+#include "game.h"
+
+#include <math.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct cell16 {
+    uint32_t c[3]; /* red, green, blue */
+    uint32_t hits;
+} cell16;
+
+#define BATCH    1024 /* points computed before they are scattered */
+#define AHEAD    12   /* records prefetched ahead of the one added */
+#define OPAQUE_Q 4080u
+
+static bool compact(const fb_flame_setup *S)
+{
+    if (S->linear_palette) return false;
+    for (uint32_t i = 0; i < S->p.nxf; i++)
+        if (S->xf[i].visq != 32768u) return false;
+    for (int i = 0; i < 256; i++)
+        if (S->palq[i][3] != OPAQUE_Q) return false;
+    return true;
+}
+
+size_t fb_flame_cell_bytes(const fb_flame_setup *S)
+{
+    return compact(S) ? sizeof(cell16) : sizeof(fb_flame_cell32);
+}
+
+static void add64(uint64_t *to, uint64_t v)
+{
+    atomic_fetch_add_explicit((_Atomic uint64_t *)to, v, memory_order_relaxed);
+}
+
+/* A 16-byte cell into the 64-bit total (atomically: other threads may spill into it), cleared. */
+static void spill16(fb_flame_cell *total, cell16 *h)
+{
+    for (int k = 0; k < 3; k++) add64(&total->c[k], h->c[k]);
+    add64(&total->c[3], (uint64_t)OPAQUE_Q * h->hits);
+    add64(&total->c[4], (uint64_t)OPAQUE_Q * h->hits);
+    add64(&total->hits, h->hits);
+    memset(h, 0, sizeof *h);
+}
+
+/* One batch's records: the cell of each plotted point (outside or invisible ones dropped) and its
+ * colour (step mode: palette entry | visq << 8; linear mode: the point's index into pts). */
+typedef struct records {
+    uint32_t cell[BATCH];
+    uint32_t col[BATCH];
+    uint32_t n;
+} records;
+
+static void make_records(const fb_flame_setup *S, const K_FlameChain *pts, uint32_t n, records *r)
+{
+    uint32_t m = 0;
+    for (uint32_t t = 0; t < n; t++) {
+        uint32_t cell = k_flame_cell(S->p, pts[t]), visq = S->xf[pts[t].vis].visq;
+        r->cell[m] = cell;
+        r->col[m] = S->linear_palette ? t : k_flame_index(pts[t].pc) | visq << 8;
+        m += cell != K_FLAME_NONE && visq != 0;
+    }
+    r->n = m;
+}
+
+static void scatter16(const fb_flame_setup *S, const records *r, cell16 *h, fb_flame_cell *total)
+{
+    for (uint32_t t = 0; t < r->n; t++) {
+        if (t + AHEAD < r->n) __builtin_prefetch(&h[r->cell[t + AHEAD]], 1);
+        cell16 *c = &h[r->cell[t]];
+        const uint32_t *q = S->palq[r->col[t] & 255u];
+        c->c[0] += q[0], c->c[1] += q[1], c->c[2] += q[2];
+        if (++c->hits == 1u << 19) spill16(&total[r->cell[t]], c); /* 4080 x 2^19 < 2^31 */
+    }
+}
+
+/* The linear palette's colour of a point (flam3's interpolation between entries), 2^-4 units. */
+static void linear_colour(const fb_flame_setup *S, float pc, uint32_t visq, uint32_t out[4])
+{
+    double v = pc * 256.0, f;
+    int i = (int)v;
+    if (i < 0)
+        i = 0, f = 0;
+    else if (i >= 255)
+        i = 254, f = 1;
+    else
+        f = v - i;
+    double vis = visq / 32768.0;
+    for (int k = 0; k < 4; k++)
+        out[k] = (uint32_t)llround((S->pal255[i][k] * (1 - f) + S->pal255[i + 1][k] * f) * vis * 16.0);
+}
+
+static void scatter32(const fb_flame_setup *S, const records *r, const K_FlameChain *pts, fb_flame_cell32 *h,
+                      fb_flame_cell *total)
+{
+    for (uint32_t t = 0; t < r->n; t++) {
+        if (t + AHEAD < r->n) __builtin_prefetch(&h[r->cell[t + AHEAD]], 1);
+        fb_flame_cell32 *c = &h[r->cell[t]];
+        uint32_t add[4], visq;
+        if (S->linear_palette) {
+            const K_FlameChain *p = &pts[r->col[t]];
+            visq = S->xf[p->vis].visq;
+            linear_colour(S, p->pc, visq, add);
+        } else {
+            const uint32_t *q = S->palq[r->col[t] & 255u];
+            visq = r->col[t] >> 8;
+            for (int k = 0; k < 4; k++) add[k] = (q[k] * visq + 16384) >> 15;
+        }
+        for (int k = 0; k < 4; k++) c->c[k] += add[k];
+        c->c[4] += (OPAQUE_Q * visq + 16384) >> 15;
+        c->hits++;
+        if (c->c[4] >= 0x80000000u) fb_flame_spill(&total[r->cell[t]], c);
+    }
+}
+
+typedef struct game {
+    const fb_flame_setup *S;
+    void **hist; /* one per task */
+    bool compact;
+    fb_flame_cell *total;
+    size_t cells;
+    uint64_t *bad;
+    uint32_t c0, c1; /* the chains of this round */
+    int ntasks;
+} game;
+
+static void scatter(const game *G, int task, const K_FlameChain *pts, uint32_t n, records *rec)
+{
+    make_records(G->S, pts, n, rec);
+    if (G->compact)
+        scatter16(G->S, rec, G->hist[task], G->total);
+    else
+        scatter32(G->S, rec, pts, G->hist[task], G->total);
+}
+
+/* Chain i, of length len. */
+static uint64_t play(const game *G, int task, uint32_t i, uint32_t len, K_FlameChain *pts, records *rec)
+{
+    const fb_flame_setup *S = G->S;
+    const K_FlameParams P = S->p;
+    const K_FlameXform *k_flame_xf = S->xf;
+    const K_FlameVar *k_flame_var = S->var;
+    const uint *k_flame_dist = S->dist;
+    uint32_t key = k_flame_key(P.seed, i);
+    K_FlameChain s = k_flame_init(key);
+    for (uint32_t t = 0; t < P.fuse; t++) s = k_flame_step(P, s, key K_FLAME_TABLES);
+    for (uint32_t t0 = 0; t0 < len; t0 += BATCH) {
+        uint32_t n = len - t0 < BATCH ? len - t0 : BATCH;
+        for (uint32_t t = 0; t < n; t++) pts[t] = s = k_flame_step(P, s, key K_FLAME_TABLES);
+        scatter(G, task, pts, n, rec);
+    }
+    return s.bad;
+}
+
+/* Chains [c0, c1) of the round, the task's contiguous share, into its own histogram. */
+static void game_task(void *ctx, int task)
+{
+    game *G = ctx;
+    const K_FlameParams *P = &G->S->p;
+    uint64_t span = G->c1 - G->c0;
+    uint32_t a = G->c0 + (uint32_t)(span * (uint64_t)task / (uint64_t)G->ntasks);
+    uint32_t b = G->c0 + (uint32_t)(span * (uint64_t)(task + 1) / (uint64_t)G->ntasks);
+    uint64_t bad = 0;
+    K_FlameChain pts[BATCH];
+    records rec;
+    for (uint32_t i = a; i < b; i++) bad += play(G, task, i, i + 1 == P->chains ? P->last_len : P->len, pts, &rec);
+    G->bad[task] += bad;
+}
+
+/* The task's share of the cells of every task's histogram, folded into the total. */
+static void fold_task(void *ctx, int task)
+{
+    game *G = ctx;
+    size_t c0 = G->cells * (size_t)task / (size_t)G->ntasks, c1 = G->cells * (size_t)(task + 1) / (size_t)G->ntasks;
+    for (int t = 0; t < G->ntasks; t++) {
+        if (!G->compact) {
+            fb_flame_hist_fold(G->total, G->hist[t], c0, c1);
+            continue;
+        }
+        cell16 *h = G->hist[t];
+        for (size_t i = c0; i < c1; i++) {
+            fb_flame_cell *a = &G->total[i];
+            for (int k = 0; k < 3; k++) a->c[k] += h[i].c[k];
+            a->c[3] += (uint64_t)OPAQUE_Q * h[i].hits;
+            a->c[4] += (uint64_t)OPAQUE_Q * h[i].hits;
+            a->hits += h[i].hits;
+        }
+    }
+}
+
+static void run(fb_pool *pool, int threads, fb_task_fn fn, game *G)
+{
+    if (pool)
+        fb_pool_run(pool, threads, fn, G);
+    else
+        fn(G, 0);
+}
+
+fb_result fb_flame_play(const fb_flame_setup *S, fb_pool *pool, int threads, uint32_t cr0, uint32_t cr1,
+                        fb_flame_cell *total, uint64_t *bad, fb_progress *prog)
+{
+    size_t cells = (size_t)S->p.hist_w * S->p.hist_h, bytes = fb_flame_cell_bytes(S);
+    if (threads > 64) threads = 64;
+    if (!pool || threads < 1) threads = 1;
+    while (threads > 1 && (uint64_t)threads * cells * bytes > (1ull << 30)) threads--;
+    void *hist[64] = {0};
+    uint64_t nbad[64] = {0};
+    fb_result rc = FB_OK;
+    for (int t = 0; t < threads && !rc; t++)
+        if (!(hist[t] = calloc(cells, bytes))) rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
+    /* rounds of chains, for the progress bar; the 32-bit cells are folded once, at the end */
+    uint32_t per_round = 64u * (uint32_t)threads;
+    double all = (double)(cr1 - cr0) * S->p.len;
+    for (uint32_t c0 = cr0; c0 < cr1 && !rc; c0 += per_round) {
+        uint32_t c1 = cr1 - c0 > per_round ? c0 + per_round : cr1;
+        game G = {S, hist, bytes == sizeof(cell16), total, cells, nbad, c0, c1, threads};
+        run(pool, threads, game_task, &G);
+        if (prog) fb_progress_update(prog, (uint64_t)fmin((double)(c1 - cr0) * S->p.len, all), (uint64_t)all);
+    }
+    if (!rc) {
+        game G = {S, hist, bytes == sizeof(cell16), total, cells, nbad, 0, 0, threads};
+        run(pool, threads, fold_task, &G);
+    }
+    for (int t = 0; t < threads; t++) *bad += nbad[t], free(hist[t]);
+    return rc;
+}

@@ -1,0 +1,130 @@
+/*
+ * The flame's chaos game (host/gen/flame/game.c) against a plain reference: every chain stepped
+ * with the same kernel (kernels/flame.h) on one thread, each plotted point added straight into
+ * 64-bit sums by the rule of fb_flame_cell (colour times opacity, in 2^-4 units). The game's total
+ * histogram must equal it cell for cell on 1, 3 and 5 threads: the scattered 16-byte cells of opaque
+ * genomes, the 24-byte cells of others, and the spills of cells that pass 2^31 (a genome that sends
+ * every point to one cell). The plotted points and those outside the frame add up to the chains'
+ * points, and the filter's count channel sums exactly to the points plotted inside the image.
+ */
+#include "game.h"
+
+#include "testhelp.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PAL "<color index=\"0\" rgb=\"255 40 0\"/><color index=\"128\" rgb=\"0 200 90\"/>"
+
+/* opaque: the 16-byte cells */
+static const char *const k_opaque =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\">"
+    "<xform weight=\"0.5\" color=\"0\" linear=\"0.6\" spherical=\"0.4\" coefs=\"0.5 0.2 -0.3 0.6 0.2 0.1\"/>"
+    "<xform weight=\"0.3\" color=\"1\" julia=\"1\" coefs=\"0.8 0 0 0.8 0 0\"/>"
+    "<xform weight=\"0.2\" color=\"0.5\" ex=\"0.7\" blur=\"0.05\" coefs=\"0 1 -1 0 0.3 0\"/>" PAL "</flame>";
+/* an xform half transparent: the 24-byte cells */
+static const char *const k_translucent =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\">"
+    "<xform weight=\"0.5\" color=\"0\" opacity=\"0.5\" linear=\"0.6\" spherical=\"0.4\" coefs=\"0.5 0.2 -0.3 0.6 0.2 "
+    "0.1\"/>"
+    "<xform weight=\"0.5\" color=\"1\" swirl=\"0.3\" linear=\"0.5\" coefs=\"0.8 0 0 0.8 0 0\"/>" PAL "</flame>";
+/* every point to (0.01, 0.01): one cell takes them all, so its 32-bit sums spill */
+static const char *const k_point =
+    "<flame size=\"8 8\" scale=\"2\" estimator_radius=\"0\">"
+    "<xform weight=\"1\" color=\"0.2\" linear=\"1\" coefs=\"0 0 0 0 0.01 0.01\"/>" PAL "</flame>";
+static const char *const k_point_translucent =
+    "<flame size=\"8 8\" scale=\"2\" estimator_radius=\"0\">"
+    "<xform weight=\"1\" color=\"0.2\" opacity=\"0.9\" linear=\"1\" coefs=\"0 0 0 0 0.01 0.01\"/>" PAL "</flame>";
+
+/* The reference: chains [0, chains) on this thread into 64-bit cells; returns the points plotted,
+ * *outside the others. */
+static uint64_t reference(const fb_flame_setup *S, fb_flame_cell *ref, uint64_t *outside)
+{
+    const K_FlameParams P = S->p;
+    const K_FlameXform *k_flame_xf = S->xf;
+    const K_FlameVar *k_flame_var = S->var;
+    const uint *k_flame_dist = S->dist;
+    uint64_t plotted = 0;
+    *outside = 0;
+    for (uint32_t i = 0; i < P.chains; i++) {
+        uint32_t key = k_flame_key(P.seed, i), len = i + 1 == P.chains ? P.last_len : P.len;
+        K_FlameChain s = k_flame_init(key);
+        for (uint32_t t = 0; t < P.fuse; t++) s = k_flame_step(P, s, key K_FLAME_TABLES);
+        for (uint32_t t = 0; t < len; t++) {
+            s = k_flame_step(P, s, key K_FLAME_TABLES);
+            uint32_t cell = k_flame_cell(P, s), visq = S->xf[s.vis].visq;
+            if (cell == K_FLAME_NONE) {
+                ++*outside;
+                continue;
+            }
+            const uint32_t *q = S->palq[k_flame_index(s.pc)];
+            for (int k = 0; k < 4; k++) ref[cell].c[k] += (q[k] * visq + 16384) >> 15;
+            ref[cell].c[4] += (4080u * visq + 16384) >> 15;
+            ref[cell].hits++;
+            plotted++;
+        }
+    }
+    return plotted;
+}
+
+static void test_genome(const char *what, const char *xml, int w, int h, double quality, size_t want_bytes)
+{
+    fb_flame_genome g;
+    fb_flame_setup S;
+    REQUIRE(fb_flame_read(xml, strlen(xml), what, NULL, NULL, &g, NULL) == FB_OK);
+    REQUIRE(fb_flame_setup_init(&g, w, h, quality, 7, &S) == FB_OK);
+    CHECKF(fb_flame_cell_bytes(&S) == want_bytes, "%s: %zu-byte cells", what, fb_flame_cell_bytes(&S));
+    size_t cells = (size_t)S.p.hist_w * S.p.hist_h;
+    fb_flame_cell *ref = calloc(cells, sizeof *ref), *total = calloc(cells, sizeof *total);
+    REQUIRE(ref && total);
+    uint64_t outside, plotted = reference(&S, ref, &outside), points = 0;
+    for (uint32_t i = 0; i < S.p.chains; i++) points += i + 1 == S.p.chains ? S.p.last_len : S.p.len;
+    CHECKF(plotted + outside == points && points == (uint64_t)S.samples, "%s: %llu + %llu of %.0f", what,
+           (unsigned long long)plotted, (unsigned long long)outside, S.samples);
+    CHECKF(plotted > points / 2, "%s: only %llu of %llu points plotted", what, (unsigned long long)plotted,
+           (unsigned long long)points);
+    uint64_t most = 0;
+    for (size_t c = 0; c < cells; c++) most = ref[c].hits > most ? ref[c].hits : most;
+    for (int threads = 1; threads <= 5; threads += 2) {
+        fb_pool *pool = NULL;
+        REQUIRE(fb_pool_create(threads, &pool) == FB_OK);
+        memset(total, 0, cells * sizeof *total);
+        uint64_t bad = 0;
+        CHECK(fb_flame_play(&S, pool, threads, 0, S.p.chains, total, &bad, NULL) == FB_OK);
+        size_t diff = 0;
+        for (size_t c = 0; c < cells; c++) diff += memcmp(&total[c], &ref[c], sizeof ref[c]) != 0;
+        CHECKF(diff == 0, "%s, %d threads: %zu of %zu cells differ from the reference", what, threads, diff, cells);
+        fb_pool_destroy(&pool);
+    }
+    /* the count channel: the hits of each pixel's own cells, inside the filters' margin */
+    size_t npix = (size_t)w * h;
+    float *acc[4];
+    uint32_t *count = malloc(npix * 4);
+    for (int k = 0; k < 4; k++) acc[k] = malloc(npix * 4);
+    REQUIRE(count && acc[0] && acc[1] && acc[2] && acc[3]);
+    CHECK(fb_flame_filter(&S, total, acc, count) == FB_OK);
+    uint64_t counted = 0, inside = 0;
+    for (size_t p = 0; p < npix; p++) counted += count[p];
+    for (uint32_t y = (uint32_t)S.gutter; y < (uint32_t)(S.gutter + S.ss * h); y++)
+        for (uint32_t x = (uint32_t)S.gutter; x < (uint32_t)(S.gutter + S.ss * w); x++)
+            inside += ref[(size_t)y * S.p.hist_w + x].hits;
+    CHECKF(counted == inside && inside > 0, "%s: the count channel sums to %llu, the points inside the image %llu",
+           what, (unsigned long long)counted, (unsigned long long)inside);
+    printf("%s: %llu points, %llu plotted (%llu inside the image), the fullest cell %llu hits\n", what,
+           (unsigned long long)points, (unsigned long long)plotted, (unsigned long long)inside,
+           (unsigned long long)most);
+    for (int k = 0; k < 4; k++) free(acc[k]);
+    free(count), free(ref), free(total);
+    fb_flame_setup_fini(&S);
+}
+
+int main(void)
+{
+    test_genome("opaque", k_opaque, 64, 48, 100, 16);
+    test_genome("translucent", k_translucent, 64, 48, 100, 24);
+    /* 2^21 points into one cell: past 2^19 hits a 16-byte cell spills, past 2^31 / 4080 a 24-byte one */
+    test_genome("one cell, opaque", k_point, 8, 8, 32768, 16);
+    test_genome("one cell, translucent", k_point_translucent, 8, 8, 32768, 24);
+    TEST_REPORT();
+}
