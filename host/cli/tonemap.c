@@ -78,6 +78,7 @@ static fb_result apply_flags(const fb_gen_class *c, json_t *lj, int argc, char *
             return rc;
         }
         if (!strcmp(key, "palette") || !strcmp(key, "cosine") || !strcmp(key, "stops")) {
+            json_object_del(lj, "palette"); /* the one given replaces the stored colour map */
             json_object_del(lj, "cosine");
             json_object_del(lj, "stops");
         }

@@ -48,7 +48,7 @@ static const fb_keyspec julia_keys[] = {
     {"channels", FB_K_NAMES, 0, 0, false, "iter|n|inside|de|R|G|B",
      "[\"iter\", \"n\", \"inside\", \"de\", \"R\", \"G\", \"B\"]",
      "channels to store; what none of them needs is not computed (R, G, B go together)"},
-    {"palette", FB_K_ENUM, 0, 0, false, FB_PALETTE_NAMES, "\"night\"", "named colour map"},
+    {"palette", FB_K_ENUM, 0, 0, false, FB_PALETTE_NAMES, "\"night\"", "named colour map", 0, NULL, "cosine|stops"},
     {"cosine", FB_K_NUMLIST, -10, 10, false, NULL, NULL,
      "cosine palette a + b cos(2 pi (c t + d)): 12 numbers aR,aG,aB,bR,bG,bB,cR,cG,cB,dR,dG,dB", 12},
     {"stops", FB_K_STOPS, 0, 1e3, false, NULL, NULL,
