@@ -3,6 +3,7 @@
  * The output transaction. See output.h.
  */
 #include "output.h"
+#include "textin.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -51,17 +52,6 @@ static bool g_tmpfile = true; /* fb_outputs_use_tmpfile */
 enum { IDLE = 0, COMMITTING = 1, DYING = 2 };
 static atomic_int g_phase;
 static volatile sig_atomic_t g_deferred; /* the signal that came during the commit */
-
-static const char *kind_of(mode_t m)
-{
-    return S_ISDIR(m)    ? "a directory"
-           : S_ISLNK(m)  ? "a symbolic link"
-           : S_ISCHR(m)  ? "a character device"
-           : S_ISBLK(m)  ? "a block device"
-           : S_ISFIFO(m) ? "a FIFO"
-           : S_ISSOCK(m) ? "a socket"
-                         : "not a regular file";
-}
 
 /* The folder and the name of path: "a/b.exr" -> "a", "b.exr"; "b.exr" -> ".", "b.exr". */
 static void split(const char *path, char *dir, size_t dsize, const char **base)
@@ -240,7 +230,7 @@ static fb_result reserve_locked(const char *path, const char *what, entry **out)
     struct stat st;
     if (lstat(path, &st) == 0 && !S_ISREG(st.st_mode))
         return fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", path,
-                       kind_of(st.st_mode), what);
+                       fb_file_kind(st.st_mode), what);
     entry *e = free_entry();
     if (!e) return fb_fail(FB_ERR_USAGE, "%s: more than %d outputs", path, FB_MAX_OUTPUTS);
     e->live = 0;
@@ -353,7 +343,7 @@ static fb_result commit_locked(entry **list, int n)
     for (int i = 0; i < n && !rc; i++)
         if (!list[i]->std && lstat(list[i]->path, &st) == 0 && !S_ISREG(st.st_mode))
             rc = fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", list[i]->path,
-                         kind_of(st.st_mode), list[i]->what);
+                         fb_file_kind(st.st_mode), list[i]->what);
     if (rc) return rc;
     int lockfds[FB_MAX_OUTPUTS], nlock = lock_folders(list, n, lockfds);
     int idle = IDLE;

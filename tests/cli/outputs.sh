@@ -195,7 +195,7 @@ mkfifo fifo.csv
 timeout 20 "$FB" terrain $N --points fifo.csv --size 16x16 -o f.exr 2> fifo.txt
 rc=$?
 check "a FIFO as --points: exit $rc, wanted 2 at once" test $rc -eq 2
-check "... one line naming the FIFO: $(cat fifo.txt)" grep -q "fifo.csv: a FIFO with nothing written to it (no writer)" fifo.txt
+check "... one line naming the FIFO: $(cat fifo.txt)" grep -q "fifo.csv: is a FIFO with nothing written to it (expected the points file)" fifo.txt
 printf 'x,y,z\n0,0,0\n10,0,1\n0,10,2\n' > three.csv
 "$FB" terrain $N --points <(cat three.csv) --size 16x16 -o sub.exr
 check "a pipe with a writer (<(...)) is read" test $? -eq 0 -a -s sub.exr
