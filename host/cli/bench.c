@@ -291,6 +291,9 @@ static fb_result bench(const fb_env *env, const bench_opts *o)
     bool quiet = o->quiet;
     int nb = 0;
     for (int i = 0; fb_gen_list[i]; i++) nb += fb_gen_list[i]->bench != NULL;
+    if (o->device && o->backend == 2)
+        return fb_fail(FB_ERR_USAGE, "--device %s: only with a Vulkan backend (--backend native opens no device)",
+                       o->device);
     if (o->compare) {
         fb_result rc = read_before(o->compare, &ctx);
         if (rc) {

@@ -85,7 +85,7 @@ static fb_result from_file(render_opts *r, fb_scene *scene)
                dropped);
     if (!rc) rc = fb_scene_parse_sets(kept, origin, r->sets.v, r->sets.n, scene);
     free(kept);
-    if (o->backend == FB_BACKEND_AUTO) o->backend = stored;
+    if (o->backend == FB_BACKEND_AUTO) o->backend = stored, o->backend_from = stored != FB_BACKEND_AUTO;
     free(json);
     return rc;
 }

@@ -133,6 +133,20 @@ static fb_result count_kind(const part *p, int n, const char *attr, const char *
 }
 static fb_result merge_tasks(part *p, int n, const fb_merge_desc *d);
 
+/* --zip-level tunes zlib: refused where no part of the merged file (the first input's parts, as
+ * open_output and the tasks' stored scene give them) is ZIP-compressed. */
+static fb_result check_zip_level(const exrio_reader *first, const char *path, int level)
+{
+    for (int k = 0; k < exrio_nparts(first); k++) {
+        int c = exrio_compression_parse(exrio_part_compression(first, k));
+        if (c < 0 || c == EXRIO_ZIP) return FB_OK;
+    }
+    return fb_fail(FB_ERR_USAGE,
+                   "--zip-level %d: no part of %s is ZIP-compressed (%s), nor is the merged file: the level would "
+                   "change nothing",
+                   level, path, exrio_part_compression(first, 0));
+}
+
 fb_result fb_merge(const fb_merge_desc *d)
 {
     const char *const *paths = d->paths, *out = d->out;
@@ -146,6 +160,7 @@ fb_result fb_merge(const fb_merge_desc *d)
     int W = 0, H = 0, nch = 0;
     if (!p) return fb_fail(FB_ERR_NOMEM, "out of memory");
     for (int i = 0; i < n && !rc; i++) rc = exrio_open(paths[i], &p[i].r);
+    if (!rc && zip_level) rc = check_zip_level(p[0].r, paths[0], zip_level);
     int tasks = 0, points = 0;
     if (!rc) rc = count_kind(p, n, "fractalbake/task", "task files (render --task), the others not", &tasks);
     if (!rc && tasks) {

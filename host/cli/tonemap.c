@@ -214,6 +214,7 @@ static fb_result run(const fb_cli *cli, void *opts)
     if (!o->files.n)
         return fb_fail(FB_ERR_USAGE, "tonemap: expected an input EXR (fractalbake tonemap IN.exr -o OUT.exr)");
     if (!o->out) return fb_fail(FB_ERR_USAGE, "-o: missing output file (fractalbake tonemap IN.exr -o OUT.exr)");
+    if (cli_check_quiet_json(o->quiet, o->json)) return FB_ERR_USAGE;
     double t0 = fb_now();
     fb_result rc = tonemap(o->files.v[0], o->out, o->layer, o->flags.n, (char **)o->flags.v);
     if (!rc && o->json)

@@ -112,6 +112,7 @@ done
 $SETATTR pp1.exr fractalbake/ifs-outside plants=18446744073709551615 ppmax.exr
 $SETATTR pp1.exr fractalbake/ifs-outside plants=12x ppbad.exr
 $SETATTR pp1.exr fractalbake/ifs-outside plants=-1 ppneg.exr
+"$FB" render $N --set size=16x16 --set compression=piz -o piz.exr --quiet
 # a named palette beside a gradient or cosine one, in a file or through --set
 printf '{"size": [32, 16], "layers": [{"type": "julia", "name": "sky", "palette": "ice",\n "stops": [[0, 0, 0, 0], [1, 1, 1, 1]]}]}' > palstops.json
 printf '{"size": [32, 16], "layers": [{"type": "ifs", "name": "fern", "palette": "ice",\n "cosine": [0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 1, 1, 1, 0, 0.33, 0.67]}]}' > palcos.json
