@@ -289,7 +289,7 @@ static int cmp_str(const void *a, const void *b)
 /* Locks every folder the entries write into (flock, exclusive, in the folders' sorted order so that
  * two runs never wait for each other crosswise): concurrent runs committing into the same folders
  * put their sets in place one whole set at a time. Returns how many fds it opened in fds. A folder
- * that cannot be locked (a file system without flock) is committed unlocked. */
+ * that cannot be locked (a file system without flock) is committed unlocked, with a warning. */
 static int lock_folders(entry **list, int n, int *fds)
 {
     static char dirs[FB_MAX_OUTPUTS][PATH_MAX];
@@ -304,10 +304,15 @@ static int lock_folders(entry **list, int n, int *fds)
     qsort(sorted, (size_t)nd, sizeof sorted[0], cmp_str);
     for (int i = 0; i < nd; i++) {
         if (i > 0 && !strcmp(sorted[i], sorted[i - 1])) continue;
-        int fd = open(sorted[i], O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+        int fd = open(sorted[i], O_RDONLY | O_DIRECTORY | O_CLOEXEC), rc;
         if (fd < 0) continue;
-        while (flock(fd, LOCK_EX) != 0 && errno == EINTR) {
+        while ((rc = flock(fd, LOCK_EX)) != 0 && errno == EINTR) {
         }
+        if (rc != 0) /* a file system without flock (NFS with no lock manager: ENOLCK) */
+            fb_log(FB_LOG_WARN,
+                   "%s: cannot lock the folder for the commit (flock: %s): committing unlocked, so runs writing "
+                   "the same files into it at once may leave files of different runs",
+                   sorted[i], strerror(errno));
         fds[nfd++] = fd;
     }
     return nfd;
