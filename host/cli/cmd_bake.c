@@ -282,6 +282,7 @@ static void summary_json(json_t *sum, const fb_scene *scene, const fb_bake_opts 
     if (o->region[2])
         json_object_set_new(sum, "region", json_pack("[iiii]", o->region[0], o->region[1], o->region[2], o->region[3]));
     json_object_set_new(sum, "seconds", json_real(st->seconds));
+    json_object_set_new(sum, "backend", json_string(fb_backend_name(o->backend))); /* as fractalbake/backend */
     bool any_vk = false; /* "device": the Vulkan device where a layer ran on it, else native C */
     for (int i = 0; i < scene->nlayers; i++) any_vk = any_vk || st->layer_backend[i] == FB_BACKEND_VULKAN;
     json_object_set_new(sum, "device", json_string(any_vk ? device : "native C"));
@@ -393,7 +394,8 @@ fb_result fb_cli_bake(const fb_cli *cli, const char *command, fb_scene *scene, c
                                  .user = &ctx,
                                  .attrs = ts.attrs,
                                  .nattrs = o->task[1] > 0 ? 2 : 0,
-                                 .layer_backends = o->task[1] > 0},
+                                 .layer_backends = o->task[1] > 0,
+                                 .layer_kinds = o->layer_kinds},
                  &st);
     if (!rc && o->dry_run)
         print_plan(&plan, o->json);

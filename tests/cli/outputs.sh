@@ -236,6 +236,12 @@ if have_vulkan; then
   (ulimit -v 300000 && "$FB" julia --size 256x128 -o ja.exr --quiet 2> as.txt)
   check "--backend auto under ulimit -v 300000 bakes natively" test $? -eq 0 -a -s ja.exr
 fi
+# a Vulkan driver's address space cannot fit and the bake cannot either: the error alone, not the
+# fallback warning beside it (the warning comes once the bake is known to fit)
+(ulimit -v 200000 && "$FB" julia --size 1024x512 -o j2.exr 2> as.txt)
+rc=$?
+check "auto under ulimit -v 200000, too small for the bake too: exit $rc, wanted 2" test $rc -eq 2 -a ! -e j2.exr
+check "... one line, the error: $(cat as.txt)" test "$(wc -l < as.txt)" = 1 -a "$(grep -c 'more than --max-memory' as.txt)" = 1
 check "no temporary file after the faults" no_temp_files
 
 # ---- 12. a documented maximum runs, tells how far it is, and stops at once on Ctrl-C ----
