@@ -56,6 +56,9 @@ typedef struct fb_bake_desc {
     const exrio_attr *attrs;
     int nattrs;
     bool layer_backends;
+    /* render --from an auto bake's file: each layer on the backend it ran on there (its
+     * fractalbake/layer-backends), where this engine has that backend; NULL: the engine's choice */
+    const char *layer_kinds;
 } fb_bake_desc;
 
 /* A heightmap a bake wrote: its layer, file, format and the heights stored as 0 and 65535. */
