@@ -3,6 +3,7 @@
  * The output transaction. See output.h.
  */
 #include "output.h"
+#include "textin.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -51,17 +52,6 @@ static bool g_tmpfile = true; /* fb_outputs_use_tmpfile */
 enum { IDLE = 0, COMMITTING = 1, DYING = 2 };
 static atomic_int g_phase;
 static volatile sig_atomic_t g_deferred; /* the signal that came during the commit */
-
-static const char *kind_of(mode_t m)
-{
-    return S_ISDIR(m)    ? "a directory"
-           : S_ISLNK(m)  ? "a symbolic link"
-           : S_ISCHR(m)  ? "a character device"
-           : S_ISBLK(m)  ? "a block device"
-           : S_ISFIFO(m) ? "a FIFO"
-           : S_ISSOCK(m) ? "a socket"
-                         : "not a regular file";
-}
 
 /* The folder and the name of path: "a/b.exr" -> "a", "b.exr"; "b.exr" -> ".", "b.exr". */
 static void split(const char *path, char *dir, size_t dsize, const char **base)
@@ -240,7 +230,7 @@ static fb_result reserve_locked(const char *path, const char *what, entry **out)
     struct stat st;
     if (lstat(path, &st) == 0 && !S_ISREG(st.st_mode))
         return fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", path,
-                       kind_of(st.st_mode), what);
+                       fb_file_kind(st.st_mode), what);
     entry *e = free_entry();
     if (!e) return fb_fail(FB_ERR_USAGE, "%s: more than %d outputs", path, FB_MAX_OUTPUTS);
     e->live = 0;
@@ -299,7 +289,7 @@ static int cmp_str(const void *a, const void *b)
 /* Locks every folder the entries write into (flock, exclusive, in the folders' sorted order so that
  * two runs never wait for each other crosswise): concurrent runs committing into the same folders
  * put their sets in place one whole set at a time. Returns how many fds it opened in fds. A folder
- * that cannot be locked (a file system without flock) is committed unlocked. */
+ * that cannot be locked (a file system without flock) is committed unlocked, with a warning. */
 static int lock_folders(entry **list, int n, int *fds)
 {
     static char dirs[FB_MAX_OUTPUTS][PATH_MAX];
@@ -314,10 +304,15 @@ static int lock_folders(entry **list, int n, int *fds)
     qsort(sorted, (size_t)nd, sizeof sorted[0], cmp_str);
     for (int i = 0; i < nd; i++) {
         if (i > 0 && !strcmp(sorted[i], sorted[i - 1])) continue;
-        int fd = open(sorted[i], O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+        int fd = open(sorted[i], O_RDONLY | O_DIRECTORY | O_CLOEXEC), rc;
         if (fd < 0) continue;
-        while (flock(fd, LOCK_EX) != 0 && errno == EINTR) {
+        while ((rc = flock(fd, LOCK_EX)) != 0 && errno == EINTR) {
         }
+        if (rc != 0) /* a file system without flock (NFS with no lock manager: ENOLCK) */
+            fb_log(FB_LOG_WARN,
+                   "%s: cannot lock the folder for the commit (flock: %s): committing unlocked, so runs writing "
+                   "the same files into it at once may leave files of different runs",
+                   sorted[i], strerror(errno));
         fds[nfd++] = fd;
     }
     return nfd;
@@ -353,7 +348,7 @@ static fb_result commit_locked(entry **list, int n)
     for (int i = 0; i < n && !rc; i++)
         if (!list[i]->std && lstat(list[i]->path, &st) == 0 && !S_ISREG(st.st_mode))
             rc = fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", list[i]->path,
-                         kind_of(st.st_mode), list[i]->what);
+                         fb_file_kind(st.st_mode), list[i]->what);
     if (rc) return rc;
     int lockfds[FB_MAX_OUTPUTS], nlock = lock_folders(list, n, lockfds);
     int idle = IDLE;

@@ -11,42 +11,56 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-fb_result fb_input_open(const char *path, const char *what, FILE **out)
+const char *fb_file_kind(unsigned mode)
+{
+    return S_ISDIR(mode)    ? "a directory"
+           : S_ISLNK(mode)  ? "a symbolic link"
+           : S_ISCHR(mode)  ? "a character device"
+           : S_ISBLK(mode)  ? "a block device"
+           : S_ISFIFO(mode) ? "a FIFO"
+           : S_ISSOCK(mode) ? "a socket"
+                            : "not a regular file";
+}
+
+static fb_result open_stdin(const char *what, FILE **out)
+{
+    static bool taken; /* standard input, once: a second reader would find it empty */
+    if (taken) return fb_fail(FB_ERR_USAGE, "-: standard input named twice (for the %s too)", what);
+    int fd = dup(STDIN_FILENO);
+    FILE *f = fd >= 0 ? fdopen(fd, "rb") : NULL;
+    if (!f) {
+        if (fd >= 0) close(fd);
+        return fb_fail(FB_ERR_INPUT, "-: cannot read the %s from standard input: %s", what, strerror(errno));
+    }
+    taken = true;
+    *out = f;
+    return FB_OK;
+}
+
+/* Opens path (never blocking on a FIFO without a writer) if its kind is a regular file, or a FIFO
+ * where `fifo` allows one. */
+static fb_result open_input(const char *path, const char *what, bool fifo, FILE **out)
 {
     *out = NULL;
-    if (!strcmp(path, "-")) { /* standard input, once: a second reader would find it empty */
-        static bool taken;
-        if (taken) return fb_fail(FB_ERR_USAGE, "-: standard input named twice (for the %s too)", what);
-        int fd = dup(STDIN_FILENO);
-        FILE *f = fd >= 0 ? fdopen(fd, "rb") : NULL;
-        if (!f) {
-            if (fd >= 0) close(fd);
-            return fb_fail(FB_ERR_INPUT, "-: cannot read the %s from standard input: %s", what, strerror(errno));
-        }
-        taken = true;
-        *out = f;
-        return FB_OK;
-    }
-    /* O_NONBLOCK: a FIFO with no writer must not block the open (read, it then ends at once: nothing
-     * to read); regular files and FIFOs (a shell's <(...)) are read, devices and sockets refused. */
+    if (!strcmp(path, "-")) return open_stdin(what, out);
+    /* O_NONBLOCK: a FIFO with no writer must not block the open (read, it then ends at once) */
     int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) return fb_fail(FB_ERR_INPUT, "%s: cannot open %s: %s", path, what, strerror(errno));
     struct stat st;
-    if (fstat(fd, &st) != 0 || !(S_ISREG(st.st_mode) || S_ISFIFO(st.st_mode))) {
+    if (fstat(fd, &st) != 0) {
         int err = errno;
-        bool known = err == 0 || !S_ISREG(st.st_mode);
         close(fd);
-        if (known && S_ISDIR(st.st_mode))
-            return fb_fail(FB_ERR_INPUT, "%s: is a directory (expected the %s file)", path, what);
-        if (known)
-            return fb_fail(FB_ERR_INPUT, "%s: is %s, not a regular file or a pipe (expected the %s file)", path,
-                           S_ISFIFO(st.st_mode)   ? "a FIFO"
-                           : S_ISCHR(st.st_mode)  ? "a character device"
-                           : S_ISBLK(st.st_mode)  ? "a block device"
-                           : S_ISSOCK(st.st_mode) ? "a socket"
-                                                  : "not a regular file",
-                           what);
         return fb_fail(FB_ERR_INPUT, "%s: cannot open %s: %s", path, what, strerror(err));
+    }
+    if (!S_ISREG(st.st_mode) && !(S_ISFIFO(st.st_mode) && fifo)) {
+        close(fd);
+        if (S_ISFIFO(st.st_mode))
+            return fb_fail(FB_ERR_INPUT,
+                           "%s: is a FIFO, which cannot be read by offsets (expected the %s file; - reads "
+                           "standard input)",
+                           path, what);
+        return fb_fail(FB_ERR_INPUT, "%s: is %s%s (expected the %s file)", path, fb_file_kind(st.st_mode),
+                       S_ISDIR(st.st_mode) ? "" : ", not a regular file or a pipe", what);
     }
     FILE *f = NULL;
     if (fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) & ~O_NONBLOCK) != 0 || !(f = fdopen(fd, "rb"))) {
@@ -55,6 +69,66 @@ fb_result fb_input_open(const char *path, const char *what, FILE **out)
         return fb_fail(FB_ERR_INPUT, "%s: cannot open %s: %s", path, what, strerror(err));
     }
     *out = f;
+    return FB_OK;
+}
+
+fb_result fb_input_open(const char *path, const char *what, FILE **out)
+{
+    return open_input(path, what, true, out);
+}
+
+fb_result fb_input_open_seekable(const char *path, const char *what, FILE **out)
+{
+    return open_input(path, what, false, out);
+}
+
+bool fb_input_is_fifo(const char *path, FILE *f)
+{
+    struct stat st;
+    return strcmp(path, "-") && fstat(fileno(f), &st) == 0 && S_ISFIFO(st.st_mode);
+}
+
+fb_result fb_input_fifo_empty(const char *path, const char *what)
+{
+    return fb_fail(FB_ERR_INPUT, "%s: is a FIFO with nothing written to it (expected the %s file)", path, what);
+}
+
+fb_result fb_input_slurp(const char *path, const char *what, size_t limit, char **text, size_t *len)
+{
+    *text = NULL;
+    *len = 0;
+    FILE *f = NULL;
+    fb_result rc = fb_input_open(path, what, &f);
+    if (rc) return rc;
+    char *buf = NULL;
+    size_t n = 0, cap = 0;
+    for (;;) {
+        if (n + 4096 + 1 > cap) {
+            size_t grown = cap ? 2 * cap : 65536;
+            char *t = n <= limit ? realloc(buf, grown) : NULL;
+            if (!t) {
+                if (n <= limit) rc = fb_fail(FB_ERR_NOMEM, "%s: out of memory reading the %s file", path, what);
+                break;
+            }
+            buf = t;
+            cap = grown;
+        }
+        size_t got = fread(buf + n, 1, 4096, f);
+        n += got;
+        if (got < 4096) break;
+    }
+    if (!rc && ferror(f)) rc = fb_fail(FB_ERR_INPUT, "%s: cannot read the %s file: %s", path, what, strerror(errno));
+    if (!rc && n > limit)
+        rc = fb_fail(FB_ERR_INPUT, "%s: larger than %zu MiB (expected the %s file)", path, limit >> 20, what);
+    if (!rc && n == 0 && fb_input_is_fifo(path, f)) rc = fb_input_fifo_empty(path, what);
+    fclose(f);
+    if (rc) {
+        free(buf);
+        return rc;
+    }
+    buf[n] = 0;
+    *text = buf;
+    *len = n;
     return FB_OK;
 }
 
@@ -116,8 +190,7 @@ fb_result fb_lines_open(fb_lines *l, const char *path, const char *what)
     l->path = path;
     l->what = what;
     fb_result rc = fb_input_open(path, what, &l->f);
-    struct stat st;
-    l->fifo = !rc && fstat(fileno(l->f), &st) == 0 && S_ISFIFO(st.st_mode);
+    l->fifo = !rc && fb_input_is_fifo(path, l->f);
     return rc;
 }
 
@@ -161,8 +234,7 @@ int fb_lines_next(fb_lines *l, char **fields, int max, int *nf)
                 return -1;
             }
             if (!ferror(l->f) && l->lineno == 0 && l->fifo) {
-                fb_fail(FB_ERR_INPUT, "%s: a FIFO with nothing written to it (no writer): expected the %s file",
-                        l->path, l->what);
+                fb_input_fifo_empty(l->path, l->what);
                 return -1;
             }
             if (!ferror(l->f)) return 0;

@@ -13,6 +13,13 @@
  * - Regular files and pipes are read ("-" is standard input; a FIFO or a shell's <(...) too), and
  *   nothing waits on a FIFO that has no writer: it reads as nothing, which is bad input naming it.
  *   Devices and sockets (/dev/zero) are refused. A line too long for memory is bad input too.
+ *
+ * The same rule holds for every file a run reads (scenes, .ifs and .flame files, bench rows, EXR and
+ * PNG images), with one message form, "PATH: is WHAT IT IS ... (expected the ROLE file)":
+ * - a device, socket or directory: "is a character device, not a regular file or a pipe";
+ * - a FIFO where the reader seeks (an EXR is read by offsets): "is a FIFO, which cannot be read by
+ *   offsets" (those readers take "-" for standard input instead);
+ * - a FIFO that gives nothing (no writer, or an empty pipe): "is a FIFO with nothing written to it".
  */
 #ifndef FB_TEXTIN_H
 #define FB_TEXTIN_H
@@ -26,6 +33,22 @@
  * a device or a socket; failures logged as FB_ERR_INPUT.
  * "-" is standard input, which one run reads once (a second "-" is FB_ERR_USAGE). */
 fb_result fb_input_open(const char *path, const char *what, FILE **out);
+
+/* fb_input_open for a reader that seeks or reads a file twice: a FIFO is refused too. */
+fb_result fb_input_open_seekable(const char *path, const char *what, FILE **out);
+
+/* The whole of an input (fb_input_open's rule) as *len bytes and a NUL, malloc'ed into *text; larger
+ * than limit bytes, or a FIFO that gives nothing, is bad input naming it. */
+fb_result fb_input_slurp(const char *path, const char *what, size_t limit, char **text, size_t *len);
+
+/* What a file of this st_mode is, for "PATH: is KIND" messages ("a FIFO", "a character device"). */
+const char *fb_file_kind(unsigned mode);
+
+/* Whether f, opened from path, is a FIFO or pipe that is not standard input. */
+bool fb_input_is_fifo(const char *path, FILE *f);
+
+/* Logs "PATH: is a FIFO with nothing written to it" for a reader that found f empty. */
+fb_result fb_input_fifo_empty(const char *path, const char *what);
 
 typedef struct fb_lines {
     FILE *f;

@@ -3,6 +3,7 @@
  * fb_gen_class.bench, in the generators' folders) and prints their rows, for people or as JSON lines
  * (bench/run.sh appends those to bench/results.jsonl).
  */
+#include "textin.h"
 #include "command.h"
 
 #include "benchkit.h"
@@ -189,17 +190,20 @@ static fb_result read_before(const char *v, bench_ctx *ctx)
 {
     ctx->before = json_array();
     ctx->before_path = v;
-    FILE *f = fopen(v, "r");
-    if (!f) return fb_fail(FB_ERR_INPUT, "--compare: cannot open %s", v);
-    char line[4096];
+    char *text = NULL;
+    size_t len = 0;
+    fb_result rc = fb_input_slurp(v, "bench --json", (size_t)64 << 20, &text, &len);
+    if (rc) return rc;
     int lineno = 0;
-    while (fgets(line, sizeof line, f)) {
+    for (char *line = text, *next; line < text + len; line = next) {
+        next = line + strcspn(line, "\n");
+        if (*next) *next++ = 0;
         lineno++;
-        if (!line[strspn(line, " \t\r\n")]) continue;
+        if (!line[strspn(line, " \t\r")]) continue;
         json_t *o = json_loads(line, 0, NULL);
         if (!json_is_object(o) || !json_is_number(json_object_get(o, "rate"))) {
             json_decref(o);
-            fclose(f);
+            free(text);
             return fb_fail(FB_ERR_INPUT, "%s:%d: not a line of `fractalbake bench --json`", v, lineno);
         }
         const char *g = json_string_value(json_object_get(o, "generator")),
@@ -209,7 +213,7 @@ static fb_result read_before(const char *v, bench_ctx *ctx)
             ctx->before_gflops[strcmp(be, "vulkan") ? 1 : 0] = json_number_value(json_object_get(o, "rate"));
         json_array_append_new(ctx->before, o);
     }
-    fclose(f);
+    free(text);
     if (!json_array_size(ctx->before)) return fb_fail(FB_ERR_INPUT, "--compare: %s holds no bench rows", v);
     return FB_OK;
 }
@@ -287,6 +291,9 @@ static fb_result bench(const fb_env *env, const bench_opts *o)
     bool quiet = o->quiet;
     int nb = 0;
     for (int i = 0; fb_gen_list[i]; i++) nb += fb_gen_list[i]->bench != NULL;
+    if (o->device && o->backend == 2)
+        return fb_fail(FB_ERR_USAGE, "--device %s: only with a Vulkan backend (--backend native opens no device)",
+                       o->device);
     if (o->compare) {
         fb_result rc = read_before(o->compare, &ctx);
         if (rc) {

@@ -104,3 +104,11 @@ void cli_start(void)
     install(k_ending, sizeof k_ending / sizeof k_ending[0], on_signal, SA_RESTART);
     install(k_faults, sizeof k_faults / sizeof k_faults[0], on_fault, SA_RESETHAND | SA_NODEFER);
 }
+
+fb_result cli_check_quiet_json(bool quiet, bool json)
+{
+    if (quiet && json)
+        return fb_fail(FB_ERR_USAGE,
+                       "--quiet: not with --json (the JSON summary replaces the line --quiet leaves out)");
+    return FB_OK;
+}

@@ -34,4 +34,8 @@ void cli_after_flush(bool show);
  * was lost. */
 fb_result cli_stdout_finish(void);
 
+/* --quiet with --json, where --quiet only leaves out the summary line that --json replaces: the
+ * combination is refused (it would change nothing). */
+fb_result cli_check_quiet_json(bool quiet, bool json);
+
 #endif

@@ -175,9 +175,37 @@ static const char *heightmap_format_name(int f)
                                      : "float GeoTIFF";
 }
 
+/* Whether a part of the scene's file is ZIP-compressed (what --zip-level tunes). */
+static bool scene_has_zip(const fb_scene *scene)
+{
+    if (!scene->multipart) return scene->compression == EXRIO_ZIP;
+    for (int i = 0; i < scene->nlayers; i++)
+        if (scene->layers[i].compression == EXRIO_ZIP) return true;
+    return false;
+}
+
+/* Flags that would change nothing in this bake: refused rather than ignored. */
+static fb_result check_no_effect(const fb_scene *scene, const fb_bake_opts *o)
+{
+    if (o->backend == FB_BACKEND_NATIVE && (o->device || o->validation))
+        return fb_fail(FB_ERR_USAGE,
+                       "%s: only with --backend vulkan or auto (this bake runs natively%s, which opens no Vulkan "
+                       "device)",
+                       o->device ? "--device" : "--validation", o->backend_from ? ", as the --from file was" : "");
+    if (o->zip_level && !scene_has_zip(scene))
+        return fb_fail(FB_ERR_USAGE,
+                       "--zip-level %d: no part of this file is ZIP-compressed (compression %s), so the level "
+                       "would change nothing",
+                       o->zip_level,
+                       scene->multipart ? "per layer, none zip" : exrio_compression_name(scene->compression));
+    return FB_OK;
+}
+
 /* Options that cannot go together, before anything is baked. */
 static fb_result check_options(const fb_scene *scene, const fb_bake_opts *o)
 {
+    fb_result rc = check_no_effect(scene, o);
+    if (rc) return rc;
     if (o->json && !o->dry_run && o->out && !strcmp(o->out, "-"))
         return fb_fail(FB_ERR_USAGE, "--json: standard output holds the EXR (-o -): one or the other");
     if (o->preview_layer && !o->preview)
@@ -271,6 +299,7 @@ static void summary_json(json_t *sum, const fb_scene *scene, const fb_bake_opts 
     if (o->region[2])
         json_object_set_new(sum, "region", json_pack("[iiii]", o->region[0], o->region[1], o->region[2], o->region[3]));
     json_object_set_new(sum, "seconds", json_real(st->seconds));
+    json_object_set_new(sum, "backend", json_string(fb_backend_name(o->backend))); /* as fractalbake/backend */
     bool any_vk = false; /* "device": the Vulkan device where a layer ran on it, else native C */
     for (int i = 0; i < scene->nlayers; i++) any_vk = any_vk || st->layer_backend[i] == FB_BACKEND_VULKAN;
     json_object_set_new(sum, "device", json_string(any_vk ? device : "native C"));
@@ -383,7 +412,8 @@ fb_result fb_cli_bake(const fb_cli *cli, const char *command, fb_scene *scene, c
                                  .attrs = ts.attrs,
                                  .nattrs = o->task[1] > 0 ? 2 : 0,
                                  .layer_backends = o->task[1] > 0,
-                                 .cube_faces = o->cube_faces},
+                                 .cube_faces = o->cube_faces,
+                                 .layer_kinds = o->layer_kinds},
                  &st);
     if (!rc && o->dry_run)
         print_plan(&plan, o->json);

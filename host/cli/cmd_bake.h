@@ -17,7 +17,9 @@ typedef struct fb_bake_opts {
     int task[2];         /* render --task K/N (K from 0); N == 0: none */
     double task_startup; /* --task-startup S; < 0: not given */
     bool quiet, validation, help, json, dry_run;
-    uint64_t max_memory; /* 0: the default (80% of physical memory) */
+    bool backend_from;       /* render --from chose the backend (the one the file was baked on) */
+    const char *layer_kinds; /* render --from an auto file: where each layer ran (fb_bake_desc) */
+    uint64_t max_memory;     /* 0: the default (80% of physical memory) */
 } fb_bake_opts;
 
 /* The shared flags, for a command's table list; fb_bake_opts_init gives their defaults. */

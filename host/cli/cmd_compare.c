@@ -1,5 +1,6 @@
 /* `fractalbake compare A B`: two images channel by channel against thresholds (compare.h), in
  * idiff's vocabulary too. */
+#include "cliout.h"
 #include "command.h"
 
 #include "compare.h"
@@ -164,6 +165,7 @@ static fb_result run(const fb_cli *cli, void *opts)
     d->a = c->files.v[0];
     d->b = c->files.v[1];
     d->print = c->quiet && !d->json ? print_result_only : fb_cli_print_line;
+    if (cli_check_quiet_json(c->quiet, d->json)) return FB_ERR_USAGE;
     if (d->heat && !d->diff_png)
         return fb_fail(FB_ERR_USAGE, "--heat: only with --diff-png OUT.png (it chooses that picture's colours)");
     return fb_compare(d, &c->verdict);

@@ -31,6 +31,7 @@ static fb_result run(const fb_cli *cli, void *opts)
     if (!m->out) return fb_fail(FB_ERR_USAGE, "merge: -o OUT.exr is required (fractalbake merge PARTS... -o OUT.exr)");
     if (!m->parts.n)
         return fb_fail(FB_ERR_USAGE, "merge: no region files given (fractalbake merge PARTS... -o OUT.exr)");
+    if (cli_check_quiet_json(m->quiet, m->json)) return FB_ERR_USAGE;
     if (m->json && !strcmp(m->out, "-"))
         return fb_fail(FB_ERR_USAGE, "--json: standard output holds the EXR (-o -): one or the other");
     double t0 = fb_now();

@@ -11,13 +11,15 @@
 typedef struct render_opts {
     fb_bake_opts bake;
     fb_arg_list files, sets, from;
+    char *layer_kinds; /* --from an auto file: where its layers ran (bake.layer_kinds) */
 } render_opts;
 _Static_assert(offsetof(render_opts, bake) == 0, "fb_bake_flags' offsets are into fb_bake_opts");
 
-/* The scene stored in a file fractalbake wrote, its backend, and what part of a bake the file is: a
- * region, a points part, or task[0]/task[1] of a plan with *startup (render --task). */
-static fb_result stored_scene(const char *path, char **json, fb_backend *backend, int region[4], int points_part[2],
-                              int task[2], double *startup)
+/* The scene stored in a file fractalbake wrote, its backend (for auto, where each layer ran, in
+ * *kinds), and what part of a bake the file is: a region, a points part, or task[0]/task[1] of a plan
+ * with *startup (render --task). */
+static fb_result stored_scene(const char *path, char **json, fb_backend *backend, char **kinds, int region[4],
+                              int points_part[2], int task[2], double *startup)
 {
     exrio_reader *r = NULL;
     fb_result rc = exrio_open(path, &r);
@@ -55,6 +57,9 @@ static fb_result stored_scene(const char *path, char **json, fb_backend *backend
     *backend = be && !strcmp(be, "native")   ? FB_BACKEND_NATIVE
                : be && !strcmp(be, "vulkan") ? FB_BACKEND_VULKAN
                                              : FB_BACKEND_AUTO;
+    const char *per_layer = exrio_attr_string(r, "fractalbake/layer-backends");
+    if (!rc && *backend == FB_BACKEND_AUTO && per_layer && !(*kinds = strdup(per_layer)))
+        rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     exrio_close(&r);
     return rc;
 }
@@ -68,7 +73,7 @@ static fb_result from_file(render_opts *r, fb_scene *scene)
     int region[4] = {0}, part[2] = {0}, task[2] = {0};
     double startup = 0;
     const char *from = r->from.v[0];
-    fb_result rc = stored_scene(from, &json, &stored, region, part, task, &startup);
+    fb_result rc = stored_scene(from, &json, &stored, &r->layer_kinds, region, part, task, &startup);
     if (!rc && o->region[2] == 0 && o->points_part[1] == 0 && o->task[1] == 0) {
         memcpy(o->region, region, sizeof region);
         memcpy(o->points_part, part, sizeof part);
@@ -85,7 +90,10 @@ static fb_result from_file(render_opts *r, fb_scene *scene)
                dropped);
     if (!rc) rc = fb_scene_parse_sets(kept, origin, r->sets.v, r->sets.n, scene);
     free(kept);
-    if (o->backend == FB_BACKEND_AUTO) o->backend = stored;
+    if (o->backend == FB_BACKEND_AUTO) { /* the file's backend; for auto, each layer where it ran */
+        o->backend = stored, o->backend_from = stored != FB_BACKEND_AUTO;
+        o->layer_kinds = r->layer_kinds;
+    }
     free(json);
     return rc;
 }
@@ -111,6 +119,7 @@ static fb_result run(const fb_cli *cli, void *opts)
         rc = fb_scene_parse_sets(fb_scene_default_json(), "(default scene)", r->sets.v, r->sets.n, &scene);
     if (!rc) rc = fb_cli_bake(cli, "render", &scene, &r->bake);
     fb_scene_fini(&scene);
+    free(r->layer_kinds);
     return rc;
 }
 

@@ -1,30 +1,34 @@
 /* compare's images (compare_int.h): an EXR read in blocks of rows, or a PNG held whole. */
 #include "compare_int.h"
+#include "textin.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-static bool has_png_signature(const char *path)
+/* Whether path holds a PNG (else an EXR is read); "-" is an EXR on standard input. */
+static fb_result probe_png(const char *path, bool *png)
 {
     static const uint8_t sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    *png = false;
+    if (!strcmp(path, "-")) return FB_OK;
+    FILE *f = NULL;
+    fb_result rc = fb_input_open_seekable(path, "EXR or PNG image", &f); /* read twice: here, then by its reader */
+    if (rc) return rc;
     uint8_t b[8];
-    FILE *f = fopen(path, "rb");
-    if (!f) return false;
-    bool png = fread(b, 1, 8, f) == 8 && !memcmp(b, sig, 8);
+    *png = fread(b, 1, 8, f) == 8 && !memcmp(b, sig, 8);
     fclose(f);
-    return png;
+    return FB_OK;
 }
 
 fb_result image_open(const char *path, image *im)
 {
     memset(im, 0, sizeof *im);
     im->path = path;
-    if (has_png_signature(path)) {
-        im->is_png = true;
-        return fb_png_read(path, &im->png);
-    }
+    fb_result rc = probe_png(path, &im->is_png);
+    if (rc) return rc;
+    if (im->is_png) return fb_png_read(path, &im->png);
     return exrio_open(path, &im->exr);
 }
 

@@ -134,6 +134,20 @@ static fb_result count_kind(const part *p, int n, const char *attr, const char *
 }
 static fb_result merge_tasks(part *p, int n, const fb_merge_desc *d);
 
+/* --zip-level tunes zlib: refused where no part of the merged file (the first input's parts, as
+ * open_output and the tasks' stored scene give them) is ZIP-compressed. */
+static fb_result check_zip_level(const exrio_reader *first, const char *path, int level)
+{
+    for (int k = 0; k < exrio_nparts(first); k++) {
+        int c = exrio_compression_parse(exrio_part_compression(first, k));
+        if (c < 0 || c == EXRIO_ZIP) return FB_OK;
+    }
+    return fb_fail(FB_ERR_USAGE,
+                   "--zip-level %d: no part of %s is ZIP-compressed (%s), nor is the merged file: the level would "
+                   "change nothing",
+                   level, path, exrio_part_compression(first, 0));
+}
+
 fb_result fb_merge(const fb_merge_desc *d)
 {
     const char *const *paths = d->paths, *out = d->out;
@@ -147,6 +161,7 @@ fb_result fb_merge(const fb_merge_desc *d)
     int W = 0, H = 0, nch = 0;
     if (!p) return fb_fail(FB_ERR_NOMEM, "out of memory");
     for (int i = 0; i < n && !rc; i++) rc = exrio_open(paths[i], &p[i].r);
+    if (!rc && zip_level) rc = check_zip_level(p[0].r, paths[0], zip_level);
     int tasks = 0, points = 0;
     if (!rc) rc = count_kind(p, n, "fractalbake/task", "task files (render --task), the others not", &tasks);
     if (!rc && tasks) {
@@ -510,20 +525,6 @@ static int layer_of_channel(const fb_scene *sc, const exrio_reader *r, int c)
     return best;
 }
 
-/* The backend layer `name` ran on, from a task file's "fractalbake/layer-backends" ("a=vulkan;b=native"). */
-static const char *backend_of(const char *list, const char *name, char *out, size_t size)
-{
-    size_t len = strlen(name);
-    for (const char *q = list; q && *q; q = strchr(q, ';') ? strchr(q, ';') + 1 : NULL)
-        if (!strncmp(q, name, len) && q[len] == '=') {
-            const char *v = q + len + 1, *e = strchr(v, ';');
-            size_t n = e ? (size_t)(e - v) : strlen(v);
-            snprintf(out, size, "%.*s", (int)(n < size ? n : size - 1), v);
-            return out;
-        }
-    return NULL;
-}
-
 /* The state of merging the task files of one plan. */
 typedef struct task_merge {
     part *p;
@@ -691,8 +692,8 @@ static fb_result tasks_chaos(task_merge *m)
     return rc;
 }
 
-/* The output file, with the attributes a one-command bake writes: its backend composed from the
- * layers', and the strip buffers. */
+/* The output file, with the attributes a one-command bake writes: the backend the tasks were asked
+ * for, where each layer ran, and the strip buffers. */
 static fb_result tasks_open_output(task_merge *m, const char *scene_json, exrio_writer **wp)
 {
     part *p = m->p;
@@ -705,7 +706,7 @@ static fb_result tasks_open_output(task_merge *m, const char *scene_json, exrio_
     char backend[16], per_layer[FB_MAX_LAYERS * 80] = "", device[1024] = "native C", seed[16];
     int nvk = 0;
     for (int l = 0; l < sc->nlayers && !rc; l++) {
-        char b[32] = "";
+        fb_backend kind = FB_BACKEND_NATIVE;
         int holder = -1;
         for (int k = 0; k < plan->nactive && holder < 0; k++)
             if (plan->tasks[k].layers >> l & 1) holder = file_of[k];
@@ -713,20 +714,23 @@ static fb_result tasks_open_output(task_merge *m, const char *scene_json, exrio_
             rc = fb_fail(FB_ERR_INPUT, "%s: the stored plan gives layer %s to no task", paths[0], sc->layers[l].name);
             break;
         }
-        if (!backend_of(exrio_attr_string(p[holder].r, "fractalbake/layer-backends"), sc->layers[l].name, b, sizeof b))
+        if (!fb_layer_backend_of(exrio_attr_string(p[holder].r, "fractalbake/layer-backends"), sc->layers[l].name,
+                                 &kind))
             rc = fb_fail(FB_ERR_INPUT, "%s: no backend for layer %s (attribute fractalbake/layer-backends)",
                          paths[holder], sc->layers[l].name);
-        bool vk = !strcmp(b, fb_backend_name(FB_BACKEND_VULKAN));
+        bool vk = kind == FB_BACKEND_VULKAN;
         nvk += vk;
         if (vk) snprintf(device, sizeof device, "%s", exrio_attr_string(p[holder].r, "fractalbake/device"));
         snprintf(per_layer + strlen(per_layer), sizeof per_layer - strlen(per_layer), "%s%s=%s", l ? ";" : "",
-                 sc->layers[l].name, b);
+                 sc->layers[l].name, fb_backend_name(kind));
     }
-    if (!rc) {
-        snprintf(backend, sizeof backend, "%s",
-                 nvk == sc->nlayers ? "vulkan"
-                 : nvk == 0         ? "native"
-                                    : fb_backend_name(FB_BACKEND_AUTO));
+    if (!rc) { /* what the tasks were asked for, as the one-command bake records it */
+        const char *asked = exrio_attr_string(p[0].r, "fractalbake/backend");
+        for (int i = 1; i < m->n && asked; i++) {
+            const char *b = exrio_attr_string(p[i].r, "fractalbake/backend");
+            if (!b || strcmp(b, asked)) asked = fb_backend_name(FB_BACKEND_AUTO);
+        }
+        snprintf(backend, sizeof backend, "%s", asked ? asked : fb_backend_name(FB_BACKEND_AUTO));
         snprintf(seed, sizeof seed, "%u", sc->seed);
         exrio_attr attrs[6] = {{"fractalbake/scene", scene_json},
                                {"fractalbake/seed", seed},
@@ -734,7 +738,8 @@ static fb_result tasks_open_output(task_merge *m, const char *scene_json, exrio_
                                {"fractalbake/device", device},
                                {"fractalbake/version", exrio_attr_string(p[0].r, "fractalbake/version")}};
         int nattrs = attrs[4].value ? 5 : 4;
-        if (nvk > 0 && nvk < sc->nlayers) attrs[nattrs++] = (exrio_attr){"fractalbake/layer-backends", per_layer};
+        if ((nvk > 0 && nvk < sc->nlayers) || !strcmp(backend, fb_backend_name(FB_BACKEND_AUTO)))
+            attrs[nattrs++] = (exrio_attr){"fractalbake/layer-backends", per_layer};
         const char *part_names[FB_MAX_LAYERS];
         exrio_compression part_comp[FB_MAX_LAYERS];
         for (int l = 0; l < sc->nlayers; l++)

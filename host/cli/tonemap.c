@@ -78,6 +78,7 @@ static fb_result apply_flags(const fb_gen_class *c, json_t *lj, int argc, char *
             return rc;
         }
         if (!strcmp(key, "palette") || !strcmp(key, "cosine") || !strcmp(key, "stops")) {
+            json_object_del(lj, "palette"); /* the one given replaces the stored colour map */
             json_object_del(lj, "cosine");
             json_object_del(lj, "stops");
         }
@@ -214,6 +215,7 @@ static fb_result run(const fb_cli *cli, void *opts)
     if (!o->files.n)
         return fb_fail(FB_ERR_USAGE, "tonemap: expected an input EXR (fractalbake tonemap IN.exr -o OUT.exr)");
     if (!o->out) return fb_fail(FB_ERR_USAGE, "-o: missing output file (fractalbake tonemap IN.exr -o OUT.exr)");
+    if (cli_check_quiet_json(o->quiet, o->json)) return FB_ERR_USAGE;
     double t0 = fb_now();
     fb_result rc = tonemap(o->files.v[0], o->out, o->layer, o->flags.n, (char **)o->flags.v);
     if (!rc && o->json)

@@ -603,16 +603,18 @@ static fb_result bake_window(const fb_engine *e, const fb_bake_desc *d, int regi
     return FB_OK;
 }
 
-/* The file's backend: one name, or "auto" when the layers ran on different ones, listed in per_layer
- * ("a=vulkan;b=native"; also when d asks for the list). Returns how many layers ran on Vulkan. */
-static int file_backend(const fb_bake_desc *d, const layer_run *runs, char backend[16], char *per_layer, size_t size)
+/* The file's backend: the one asked for (auto, vulkan, native); where each layer ran goes in
+ * per_layer ("a=vulkan;b=native") for auto, where the layers ran on different ones (a layer with no
+ * Vulkan path), or when d asks for the list. Returns how many layers ran on Vulkan. */
+static int file_backend(const fb_engine *e, const fb_bake_desc *d, const layer_run *runs, char backend[16],
+                        char *per_layer, size_t size)
 {
     const fb_scene *s = d->scene;
     int nvk = 0;
     for (int i = 0; i < s->nlayers; i++) nvk += runs[i].e.kind == FB_BACKEND_VULKAN;
-    snprintf(backend, 16, "%s", nvk == s->nlayers ? "vulkan" : nvk == 0 ? "native" : fb_backend_name(FB_BACKEND_AUTO));
+    snprintf(backend, 16, "%s", fb_backend_name(e->asked));
     per_layer[0] = 0;
-    bool list = d->layer_backends || (nvk > 0 && nvk < s->nlayers); /* only where they differ, unless asked */
+    bool list = d->layer_backends || e->asked == FB_BACKEND_AUTO || (nvk > 0 && nvk < s->nlayers);
     for (int i = 0; i < s->nlayers && list; i++)
         snprintf(per_layer + strlen(per_layer), size - strlen(per_layer), "%s%s=%s", i ? ";" : "", s->layers[i].name,
                  fb_backend_name(runs[i].e.kind));
@@ -626,7 +628,7 @@ static fb_result open_writer(const fb_engine *e, const fb_bake_desc *d, const la
 {
     const fb_scene *s = d->scene;
     char backend[16], per_layer[FB_MAX_LAYERS * 80], seed[16], reg[64];
-    int nvk = file_backend(d, runs, backend, per_layer, sizeof per_layer);
+    int nvk = file_backend(e, d, runs, backend, per_layer, sizeof per_layer);
     snprintf(seed, sizeof seed, "%u", s->seed);
     snprintf(reg, sizeof reg, "%d,%d,%d,%d", region[0], region[1], region[2], region[3]);
     bool partial = d->region[2] > 0;
@@ -787,6 +789,9 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         runs[i].e = *e;
         if (e->per_layer) /* auto on a CPU device: each layer where it runs faster (engine.h) */
             runs[i].e.kind = runs[i].gen.lavapipe_faster ? FB_BACKEND_VULKAN : FB_BACKEND_NATIVE;
+        fb_backend was;
+        if (fb_layer_backend_of(d->layer_kinds, s->layers[i].name, &was) && (was == FB_BACKEND_NATIVE || e->vk))
+            runs[i].e.kind = was; /* where it ran in the file baked again */
         for (int c = 0; c < runs[i].gen.nchannels && !rc; c++)
             channels[nch++] =
                 (exrio_channel){runs[i].gen.channel_names[c], runs[i].gen.channel_types[c], s->multipart ? i : 0};
@@ -794,6 +799,8 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     /* Memory is predicted, not discovered: the whole bake's peak, before anything large exists. */
     fb_bake_plan plan_local, *plan = d->plan ? d->plan : &plan_local;
     if (!rc) rc = plan_memory(e, d, runs, strip, nch, region[2], plan);
+    fb_log_context(NULL);
+    if (!rc) fb_engine_say_fallback(e); /* only now: a refused bake gives one line */
     if (!rc && d->dry_run) goto out;
     if (!rc && d->cube_faces) rc = faces_create(e, d, runs, channels, nch, &faces);
     for (int i = 0; i < s->nlayers && !rc; i++) {

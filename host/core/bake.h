@@ -59,6 +59,9 @@ typedef struct fb_bake_desc {
     /* A cube environment map's six faces as engine face sets (faces.h: render --cube-faces); NULL:
      * none. The whole image, no region. */
     const char *cube_faces;
+    /* render --from an auto bake's file: each layer on the backend it ran on there (its
+     * fractalbake/layer-backends), where this engine has that backend; NULL: the engine's choice */
+    const char *layer_kinds;
 } fb_bake_desc;
 
 /* A heightmap a bake wrote: its layer, file, format and the heights stored as 0 and 65535. */

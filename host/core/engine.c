@@ -30,6 +30,7 @@ static uint64_t vulkan_overhead(int threads)
 fb_result fb_engine_open(const fb_engine_desc *d, fb_engine *e)
 {
     memset(e, 0, sizeof *e);
+    e->asked = d->backend;
     e->threads = d->threads > 0 ? d->threads : fb_cpu_count();
     e->overhead = native_overhead(e->threads);
     uint64_t as = fb_address_space_limit(), need = vulkan_overhead(e->threads);
@@ -42,10 +43,10 @@ fb_result fb_engine_open(const fb_engine_desc *d, fb_engine *e)
                            "--backend vulkan: the address-space limit (ulimit -v) is %s; a Vulkan driver needs "
                            "about %s of it at %d threads: raise the limit, or use --backend native",
                            have, want, e->threads);
-        fb_log(FB_LOG_WARN,
-               "the address-space limit (ulimit -v) %s is below the about %s a Vulkan driver needs: using the "
-               "native backend (%d threads)",
-               have, want, e->threads);
+        snprintf(e->fallback, sizeof e->fallback,
+                 "the address-space limit (ulimit -v) %s is below the about %s a Vulkan driver needs: using the "
+                 "native backend (%d threads)",
+                 have, want, e->threads);
     } else if (d->backend != FB_BACKEND_NATIVE) {
         /* lavapipe runs compute on a pool of its own, LP_NUM_THREADS threads (by default one per
          * core), read when the device is created: --threads bounds it too. */
@@ -72,13 +73,34 @@ fb_result fb_engine_open(const fb_engine_desc *d, fb_engine *e)
         }
         /* Only a missing loader or device falls back, and only when vulkan was not asked for. */
         if (d->backend == FB_BACKEND_VULKAN || rc != FB_ERR_NODEVICE) return rc;
-        fb_log(FB_LOG_WARN, "no Vulkan device available: using the native backend (%d threads)", e->threads);
+        snprintf(e->fallback, sizeof e->fallback, "no Vulkan device available: using the native backend (%d threads)",
+                 e->threads);
     }
     e->kind = FB_BACKEND_NATIVE;
     e->scalar = d->scalar;
     /* No thread count here: it is stored in the file, which must not depend on it. */
     snprintf(e->device, sizeof e->device, "native C");
     return fb_pool_create(e->threads, &e->pool);
+}
+
+bool fb_layer_backend_of(const char *list, const char *name, fb_backend *out)
+{
+    size_t len = strlen(name);
+    for (const char *q = list; q && *q; q = strchr(q, ';') ? strchr(q, ';') + 1 : NULL)
+        if (!strncmp(q, name, len) && q[len] == '=') {
+            const char *v = q + len + 1;
+            size_t n = strcspn(v, ";");
+            for (fb_backend b = FB_BACKEND_VULKAN; b <= FB_BACKEND_NATIVE; b++)
+                if (n == strlen(fb_backend_name(b)) && !strncmp(v, fb_backend_name(b), n)) return *out = b, true;
+            return false;
+        }
+    return false;
+}
+
+void fb_engine_say_fallback(fb_engine *e)
+{
+    if (e->fallback[0]) fb_log(FB_LOG_WARN, "%s", e->fallback);
+    e->fallback[0] = 0;
 }
 
 void fb_engine_close(fb_engine *e)

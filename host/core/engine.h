@@ -13,6 +13,7 @@ typedef enum fb_backend { FB_BACKEND_AUTO = 0, FB_BACKEND_VULKAN, FB_BACKEND_NAT
 /* The compute backend in use: a Vulkan context, or a thread pool for the native kernels. */
 typedef struct fb_engine {
     fb_backend kind;
+    fb_backend asked; /* the desc's backend (AUTO, VULKAN, NATIVE): what the file records */
     vkc_context *vk;
     fb_pool *pool;
     int threads;
@@ -22,6 +23,10 @@ typedef struct fb_engine {
      * same bits as that backend alone. */
     bool per_layer;
     char device[256];
+    /* Why --backend auto runs natively (no Vulkan device; an address-space limit too small for a
+     * driver): the first bake says it once its memory is known to fit (fb_engine_say_fallback), so
+     * that a bake refused at once gives its one line only. */
+    char fallback[256];
     /* The address space this engine maps beyond the data a bake predicts (its threads' stacks and
      * arenas, a Vulkan driver's mappings): fb_memory.overhead of the bakes it runs. */
     uint64_t overhead;
@@ -37,6 +42,13 @@ typedef struct fb_engine_desc {
 } fb_engine_desc;
 
 fb_result fb_engine_open(const fb_engine_desc *desc, fb_engine *out);
+
+/* The backend layer `name` ran on, from a "fractalbake/layer-backends" list ("a=vulkan;b=native"):
+ * false when the list names no such layer or gives it no backend this version knows. */
+bool fb_layer_backend_of(const char *list, const char *name, fb_backend *out);
+
+/* Logs the engine's fallback note as a warning, once (then clears it). */
+void fb_engine_say_fallback(fb_engine *e);
 void fb_engine_close(fb_engine *e);
 const char *fb_backend_name(fb_backend b);
 

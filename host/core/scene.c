@@ -323,38 +323,10 @@ fb_result fb_scene_load(const char *path, fb_scene *out)
 fb_result fb_scene_load_sets(const char *path, const char *const *sets, int nsets, fb_scene *out)
 {
     memset(out, 0, sizeof *out);
-    FILE *f = NULL;
-    fb_result orc = fb_input_open(path, "scene", &f);
-    if (orc) return orc;
     char *text = NULL;
-    size_t len = 0, cap = 0;
-    for (;;) {
-        if (len + 4096 + 1 > cap) {
-            cap = cap ? 2 * cap : 8192;
-            if (cap > (16u << 20)) {
-                free(text);
-                fclose(f);
-                return fb_fail(FB_ERR_INPUT, "%s: scene file larger than 16 MiB", path);
-            }
-            char *t = realloc(text, cap);
-            if (!t) {
-                free(text);
-                fclose(f);
-                return fb_fail(FB_ERR_NOMEM, "out of memory");
-            }
-            text = t;
-        }
-        size_t n = fread(text + len, 1, 4096, f);
-        len += n;
-        if (n < 4096) break;
-    }
-    bool bad = ferror(f);
-    fclose(f);
-    if (bad) {
-        free(text);
-        return fb_fail(FB_ERR_INPUT, "%s: cannot read scene: %s", path, strerror(errno));
-    }
-    text[len] = 0;
+    size_t len = 0;
+    fb_result orc = fb_input_slurp(path, "scene", (size_t)16 << 20, &text, &len);
+    if (orc) return orc;
     if (strlen(text) != len) {
         free(text);
         return fb_fail(FB_ERR_INPUT, "%s: scene contains a NUL byte (not a JSON text file)", path);

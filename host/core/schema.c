@@ -520,6 +520,22 @@ void fb_json_vec2(const json_t *obj, const char *key, double out[2])
     out[1] = json_number_value(json_array_get(a, 1));
 }
 
+/* A named palette beside a cosine or gradient one, which would be ignored: reported at the key a
+ * --set gave (either), else at the gradient's key in the file. */
+static fb_result palette_twice(const fb_vctx *v, const char *path, const json_t *obj, const char *other)
+{
+    char sub[256], at_palette[256];
+    snprintf(sub, sizeof sub, "%s.%s", path, other);
+    snprintf(at_palette, sizeof at_palette, "%s.palette", path);
+    for (int i = 0; i < v->nsets; i++)
+        if (!strcmp(v->set_paths[i], at_palette)) snprintf(sub, sizeof sub, "%s", at_palette);
+    const char *name = json_string_value(json_object_get(obj, "name"));
+    return fb_schema_error(v, sub,
+                           "layer \"%s\" gives palette and %s: the named palette would be ignored; give one "
+                           "of them",
+                           name ? name : "?", other);
+}
+
 /* The colour map keys shared by julia and ifs layers: palette, cosine, stops. */
 fb_result fb_schema_palette(const fb_vctx *v, const char *path, const json_t *obj, fb_palette_spec *pal)
 {
@@ -532,6 +548,7 @@ fb_result fb_schema_palette(const fb_vctx *v, const char *path, const json_t *ob
         snprintf(sub, sizeof sub, "%s.stops", path);
         return fb_schema_error(v, sub, "give cosine or stops, not both");
     }
+    if (named && (cos_j || stops_j)) return palette_twice(v, path, obj, cos_j ? "cosine" : "stops");
     pal->has_cosine = cos_j != NULL;
     for (size_t i = 0; cos_j && i < 12; i++) pal->cosine[i] = json_number_value(json_array_get(cos_j, i));
     pal->nstops = stops_j ? (int)json_array_size(stops_j) : 0;

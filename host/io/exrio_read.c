@@ -188,15 +188,10 @@ fb_result exrio_open(const char *path, exrio_reader **out)
     bool std_in = !strcmp(path, "-");
     uint64_t file_size = UINT64_MAX;
     if (!std_in) {
-        if ((rc = fb_input_open(path, "EXR", &probe))) return rc;
+        if ((rc = fb_input_open_seekable(path, "EXR", &probe))) return rc; /* OpenEXR reads by offsets */
         struct stat fst;
-        file_size = fstat(fileno(probe), &fst) == 0 && S_ISREG(fst.st_mode) ? (uint64_t)fst.st_size : UINT64_MAX;
+        if (fstat(fileno(probe), &fst) == 0) file_size = (uint64_t)fst.st_size;
         fclose(probe);
-        if (file_size == UINT64_MAX) /* a FIFO: OpenEXR reads by offsets, and would wait for a writer */
-            return fb_fail(FB_ERR_INPUT,
-                           "%s: is a FIFO or pipe, not a regular file: an EXR is read by offsets (use - for "
-                           "standard input)",
-                           path);
     }
     exrio_reader *r = calloc(1, sizeof *r);
     if (!r) return fb_fail(FB_ERR_NOMEM, "out of memory");

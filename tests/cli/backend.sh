@@ -34,12 +34,20 @@ if [ $cpu -eq 1 ]; then
   check "--backend vulkan: every layer on the device" grep -q 'fractalbake/backend (type string): "vulkan"' <(exrheader vk.exr)
   check "--from an auto file reproduces it byte for byte" "$FB" render --from auto.exr --quiet -o again.exr
   check "(the same bytes)" cmp -s auto.exr again.exr
-  # all native: the file is the native backend's, byte for byte
-  "$FB" render --set size=256x128 --set layers.plants.points=300000 --quiet -o d-auto.exr
+  # all native: the native backend's pixels, bit for bit; the file says auto was asked, and where
+  # each layer ran; --json agrees; --from bakes each layer where it ran again
+  "$FB" render --set size=256x128 --set layers.plants.points=300000 --json -o d-auto.exr > d-auto.json
   "$FB" render --set size=256x128 --set layers.plants.points=300000 --backend native --quiet -o d-native.exr
-  check "the default scene on lavapipe: the native file, byte for byte" cmp -s d-auto.exr d-native.exr
+  check "the default scene on lavapipe: the native pixels, bit for bit" "$FB" compare d-auto.exr d-native.exr --quiet
+  check "... the file records auto, as asked" grep -q 'fractalbake/backend (type string): "auto"' <(exrheader d-auto.exr)
+  check "... and each layer on native" grep -q '"detail=native;sky=native;terrain=native;ground=native;snow=native;gentle=native;plants=native"' <(exrheader d-auto.exr)
+  check "... the native file records native and no list" test "$(exrheader d-native.exr | grep -c 'fractalbake/backend (type string): "native"\|layer-backends')" = 1
+  check "... --json: backend auto, every layer native" test "$(python3 -c "import json; r = json.load(open('d-auto.json')); print(r['backend'], sorted({l['backend'] for l in r['layers']}))")" = "auto ['native']"
+  "$FB" render --from d-auto.exr --quiet -o d-from.exr
+  check "... --from it: the same bytes (each layer where it ran)" cmp -s d-auto.exr d-from.exr
 else
-  check "a GPU runs every layer" grep -q 'fractalbake/backend (type string): "vulkan"' <(exrheader auto.exr)
+  check "a GPU runs every layer" grep -q '"sky=vulkan;rock=vulkan;ground=vulkan;fern=vulkan"' <(exrheader auto.exr)
+  check "the file: backend auto, as asked" grep -q 'fractalbake/backend (type string): "auto"' <(exrheader auto.exr)
 fi
 expect_fail 2 "--backend: expected auto, vulkan or native" o.exr -- fbm --size 8x8 --backend gpu -o o.exr
 cli_finish

@@ -67,7 +67,7 @@ printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "er
 printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": "h.Z"}]}' > echan.json
 printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": "h", "talus": 90}]}' > etal.json
 mkdir -p unreadable.json adir adir.ply adir.png
-mkfifo afifo
+mkfifo afifo afifo.exr
 echo precious > victim.txt
 ln -s victim.txt alink
 ln -s victim.txt alink.png
@@ -112,6 +112,12 @@ done
 $SETATTR pp1.exr fractalbake/ifs-outside plants=18446744073709551615 ppmax.exr
 $SETATTR pp1.exr fractalbake/ifs-outside plants=12x ppbad.exr
 $SETATTR pp1.exr fractalbake/ifs-outside plants=-1 ppneg.exr
+"$FB" render $N --set size=16x16 --set compression=piz -o piz.exr --quiet
+# a named palette beside a gradient or cosine one, in a file or through --set
+printf '{"size": [32, 16], "layers": [{"type": "julia", "name": "sky", "palette": "ice",\n "stops": [[0, 0, 0, 0], [1, 1, 1, 1]]}]}' > palstops.json
+printf '{"size": [32, 16], "layers": [{"type": "ifs", "name": "fern", "palette": "ice",\n "cosine": [0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 1, 1, 1, 0, 0.33, 0.67]}]}' > palcos.json
+printf '{"size": [32, 16], "layers": [{"type": "lsystem", "name": "tree", "palette": "ice"}]}' > palonly.json
+printf '{"size": [32, 16], "layers": [{"type": "julia", "name": "sky", "stops": [[0, 0, 0, 0], [1, 1, 1, 1]]}]}' > stopsonly.json
 before=$(ls -A | sort)
 vk=0
 have_vulkan && vk=1
@@ -124,7 +130,7 @@ while IFS=$'\t' read -r code needs pat args; do
   rows=$((rows + 1))
   if [ "$needs" = vk ] && [ $vk -eq 0 ]; then skipped=$((skipped + 1)); continue; fi
   eval "set -- $args"
-  "$FB" "$@" > stdout.txt 2> stderr.txt < /dev/null
+  timeout 60 "$FB" "$@" > stdout.txt 2> stderr.txt < /dev/null # a row that hangs fails (124)
   rc=$?
   lines=$(wc -l < stderr.txt)
   err=$(cat stderr.txt)

@@ -67,6 +67,18 @@ check "scene default is one compact line" test "$(wc -l < sd.json)" = 1 -a -z "$
 check "scene FILE --set: the override in the printed scene" grep -q '"size":\[32,16\]' <("$FB" scene in.json --set size=32x16)
 check "scene - reads standard input" cmp -s <("$FB" scene in.json) <("$FB" scene - < in.json)
 check "scene --pretty: indented" grep -q '^  "layers": \[' <("$FB" scene default --pretty)
+# stored scenes never give a named palette beside a gradient or cosine one (the named one would be
+# ignored, and is refused when a scene is read): the default, the gallery, a bake's stored scene
+palettes_() { python3 -c "import json, sys; t = sys.stdin.read(); s = json.loads(t[t.find('{', t.find('stored scene:')):] if 'stored scene:' in t else t); print(sum('palette' in l and ('stops' in l or 'cosine' in l) for l in s['layers']), sum('stops' in l or 'cosine' in l for l in s['layers']))"; }
+for sc in default "$ROOT"/docs/examples/gallery-*.json; do
+  n=$(cd "$ROOT" && "$FB" scene "$sc" | palettes_)
+  check "scene $(basename "$sc"): no palette beside stops or cosine (both, gradients: $n)" test "${n% *}" = 0
+  [ "$sc" = default ] && check "... the default scene has gradient layers to test" test "${n#* }" -ge 2
+done
+"$FB" julia --size 32x16 --backend native --stops '0,0,0,0;1,1,1,1' -q -o pst.exr
+check "a bake with --stops stores no palette beside them" test "$("$FB" info pst.exr | palettes_)" = "0 1"
+check "... and its stored scene bakes again" "$FB" render --from pst.exr --backend native -q -o pst2.exr
+check "... the same pixels" "$FB" compare pst.exr pst2.exr --quiet
 # --json: one JSON object on stdout, the same keys everywhere a command writes files
 jq_() { python3 -c "import json,sys; r = json.load(open('$1')); print($2)"; }
 "$FB" fbm $S --backend native -o j.exr --preview j.png --json > j.json

@@ -4,6 +4,7 @@
  * unknown variation or attribute) is refused here, so that a genome never renders silently different.
  */
 #include "genome.h"
+#include "textin.h"
 
 #include <libxml/parser.h>
 #include <libxml/tree.h>
@@ -751,34 +752,7 @@ static fb_result parse_flame(reader *r, xmlNodePtr node, const char *palettes, f
 
 fb_result fb_flame_slurp(const char *path, char **text, size_t *len)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) return fb_fail(FB_ERR_INPUT, "%s: cannot open", path);
-    size_t cap = 1 << 16, n = 0;
-    char *buf = malloc(cap);
-    while (buf) {
-        size_t got = fread(buf + n, 1, cap - n - 1, f);
-        n += got;
-        if (n < cap - 1) break;
-        char *nb = realloc(buf, cap * 2);
-        if (!nb) {
-            free(buf);
-            buf = NULL;
-            break;
-        }
-        buf = nb;
-        cap *= 2;
-    }
-    bool err = ferror(f);
-    fclose(f);
-    if (!buf) return fb_fail(FB_ERR_NOMEM, "%s: out of memory", path);
-    if (err) {
-        free(buf);
-        return fb_fail(FB_ERR_INPUT, "%s: read error", path);
-    }
-    buf[n] = 0;
-    *text = buf;
-    *len = n;
-    return FB_OK;
+    return fb_input_slurp(path, "flame", (size_t)1 << 30, text, len);
 }
 
 static void find_flames(xmlNodePtr n, xmlNodePtr *out, int *count, int max)

@@ -213,38 +213,10 @@ fb_result fb_ifs_parse_text(const char *text, const char *origin, const char *en
 
 fb_result fb_ifs_read_file(const char *path, const char *entry, fb_ifs *out)
 {
-    FILE *f = NULL;
-    fb_result orc = fb_input_open(path, ".ifs", &f);
-    if (orc) return orc;
     char *text = NULL;
-    size_t len = 0, cap = 0;
-    for (;;) {
-        if (len + 4096 + 1 > cap) {
-            cap = cap ? cap * 2 : 65536;
-            if (cap > (64u << 20)) {
-                free(text);
-                fclose(f);
-                return fb_fail(FB_ERR_INPUT, "%s: larger than 64 MiB; not an .ifs file", path);
-            }
-            char *t = realloc(text, cap);
-            if (!t) {
-                free(text);
-                fclose(f);
-                return fb_fail(FB_ERR_NOMEM, "out of memory reading %s", path);
-            }
-            text = t;
-        }
-        size_t got = fread(text + len, 1, 4096, f);
-        len += got;
-        if (got < 4096) break;
-    }
-    bool bad = ferror(f);
-    fclose(f);
-    if (bad) {
-        free(text);
-        return fb_fail(FB_ERR_INPUT, "%s: read error", path);
-    }
-    text[len] = 0;
+    size_t len = 0;
+    fb_result orc = fb_input_slurp(path, ".ifs", (size_t)64 << 20, &text, &len);
+    if (orc) return orc;
     if (strlen(text) != len) {
         free(text);
         return fb_fail(FB_ERR_INPUT, "%s: contains a NUL byte; not an .ifs text file", path);

@@ -41,7 +41,7 @@ const fb_keyspec fb_ifs_keys[] = {
     {"bounds", FB_K_BOUNDS, -1e9, 1e9, false, NULL, "\"auto\"",
      "frame XMIN,XMAX,YMIN,YMAX, or auto (from a short pre-run, square units)"},
     {"oversample", FB_K_INT, 1, 4, false, NULL, "1", "histogram at K x K the resolution, box-filtered down"},
-    {"palette", FB_K_ENUM, 0, 0, false, FB_PALETTE_NAMES, "\"foliage\"", "named colour map"},
+    {"palette", FB_K_ENUM, 0, 0, false, FB_PALETTE_NAMES, "\"foliage\"", "named colour map", 0, NULL, "cosine|stops"},
     {"cosine", FB_K_NUMLIST, -10, 10, false, NULL, NULL,
      "cosine palette a + b cos(2 pi (c t + d)): 12 numbers aR,aG,aB,bR,bG,bB,cR,cG,cB,dR,dG,dB", 12},
     {"stops", FB_K_STOPS, 0, 1e3, false, NULL, NULL,

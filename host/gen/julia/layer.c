@@ -50,7 +50,7 @@ static const fb_keyspec julia_keys[] = {
     {"channels", FB_K_NAMES, 0, 0, false, "iter|n|inside|de|R|G|B",
      "[\"iter\", \"n\", \"inside\", \"de\", \"R\", \"G\", \"B\"]",
      "channels to store; what none of them needs is not computed (R, G, B go together)"},
-    {"palette", FB_K_ENUM, 0, 0, false, FB_PALETTE_NAMES, "\"night\"", "named colour map"},
+    {"palette", FB_K_ENUM, 0, 0, false, FB_PALETTE_NAMES, "\"night\"", "named colour map", 0, NULL, "cosine|stops"},
     {"cosine", FB_K_NUMLIST, -10, 10, false, NULL, NULL,
      "cosine palette a + b cos(2 pi (c t + d)): 12 numbers aR,aG,aB,bR,bG,bB,cR,cG,cB,dR,dG,dB", 12},
     {"stops", FB_K_STOPS, 0, 1e3, false, NULL, NULL,
@@ -68,11 +68,31 @@ static const fb_keyspec julia_keys[] = {
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
 };
 
+/* The keys that shape only R, G and B. */
+static const char *const k_colour_keys[] = {"palette",        "cosine",       "stops",   "period",
+                                            "palette-offset", "brightness",   "gamma",   "density",
+                                            "density-count",  "inside-color", "samples", NULL};
+
+/* A colour key the user gave on the command line or by --set (a file's may be a stored default). */
+static const char *given_colour_key(const fb_vctx *v, const char *path, const json_t *obj)
+{
+    for (int i = 0; k_colour_keys[i]; i++) {
+        if (!json_object_get(obj, k_colour_keys[i])) continue;
+        if (!v->origin) return k_colour_keys[i];
+        char sub[256];
+        snprintf(sub, sizeof sub, "%s.%s", path, k_colour_keys[i]);
+        for (int k = 0; k < v->nsets; k++)
+            if (!strcmp(v->set_paths[k], sub)) return k_colour_keys[i];
+    }
+    return NULL;
+}
+
 static fb_result parse_julia(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
 {
     /* The default grid is 3 units wide with square pixels, so it depends on the image size. */
     if (!json_object_get(obj, "scale") && s->width > 0)
         json_object_set_new(obj, "scale", json_pack("[ff]", 3.0, 3.0 * s->height / s->width));
+    const char *colour = given_colour_key(v, path, obj); /* before the defaults fill them in */
     fb_result rc = fb_schema_check(v, path, obj, julia_keys, FB_NKEYS(julia_keys), "a julia layer");
     if (rc) return rc;
     fb_julia_params *j = (void *)L->params;
@@ -122,6 +142,12 @@ static fb_result parse_julia(const fb_vctx *v, const char *path, json_t *obj, co
         char sub[256];
         snprintf(sub, sizeof sub, "%s.channels", path);
         return fb_schema_error(v, sub, "R, G and B go together: list all three or none");
+    }
+    if (!rgb && colour) {
+        char sub[256];
+        snprintf(sub, sizeof sub, "%s.%s", path, colour);
+        return fb_schema_error(v, sub,
+                               "shapes only R, G and B, which the layer does not store (add them to its channels)");
     }
     if (!(j->scale[0] > 0 && j->scale[1] > 0)) {
         char sub[256];
