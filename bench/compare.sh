@@ -2,10 +2,12 @@
 # compare's speed: two 20-layer 1024 x 1024 files (fBm, one float Y a layer, 6 octaves against 5),
 # every statistic (max, RMSE, PSNR, the share beyond, SSIM, idiff's block) without and with FLIP,
 # beside OpenImageIO's idiff on the same pair, one run each, side by side. Prints one line per tool:
-# seconds of wall time and of CPU. Usage: bench/compare.sh PATH/TO/fractalbake [SIZE]
+# seconds of wall time and of CPU. With BEFORE (an earlier build), its every-statistic run too.
+# Usage: bench/compare.sh PATH/TO/fractalbake [SIZE [BEFORE]]
 set -euo pipefail
 FB=$(realpath "${1:-build/fractalbake}")
 S=${2:-1024}
+BEFORE=${3:+$(realpath "$3")}
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 cd "$T"
@@ -37,3 +39,8 @@ run_inner "idiff (max, mean, RMS, PSNR, counts)" idiff -fail 0.01 a.exr b.exr
 run_inner "compare: max, RMSE, PSNR, share beyond" "$FB" compare a.exr b.exr --fail 0.01
 run_inner "compare: + SSIM + idiff's block" "$FB" compare a.exr b.exr --fail 0.01 --ssim 0.5 --idiff-stats
 run_inner "compare: + SSIM + idiff's block + FLIP" "$FB" compare a.exr b.exr --fail 0.01 --ssim 0.5 --idiff-stats --flip
+run_inner "  the same on one thread (--threads 1)" "$FB" compare a.exr b.exr --fail 0.01 --ssim 0.5 --idiff-stats --flip \
+  --threads 1
+[ -z "$BEFORE" ] || run_inner "  the same, the build before" "$BEFORE" compare a.exr b.exr --fail 0.01 --ssim 0.5 \
+  --idiff-stats --flip
+echo "# load afterwards $(cut -d' ' -f1-3 /proc/loadavg)"

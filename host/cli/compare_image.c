@@ -2,22 +2,56 @@
 #include "compare_int.h"
 #include "textin.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
-/* Whether path holds a PNG (else an EXR is read); "-" is an EXR on standard input. */
+static const uint8_t PNG_SIG[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+
+/* Standard input made seekable, so that its first bytes can be looked at and then read again by the
+ * reader of the format they name: a file as it is, a pipe copied to an unlinked temporary file that
+ * becomes file descriptor 0. */
+static fb_result stdin_seekable(void)
+{
+    struct stat st;
+    if (fstat(STDIN_FILENO, &st) == 0 && S_ISREG(st.st_mode) && lseek(STDIN_FILENO, 0, SEEK_CUR) >= 0) return FB_OK;
+    FILE *t = tmpfile();
+    if (!t) return fb_fail(FB_ERR_IO, "-: cannot make a temporary file for standard input: %s", strerror(errno));
+    char buf[1 << 16];
+    ssize_t n;
+    fb_result rc = FB_OK;
+    while (!rc && (n = read(STDIN_FILENO, buf, sizeof buf)) != 0) {
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) rc = fb_fail(FB_ERR_INPUT, "-: cannot read standard input: %s", strerror(errno));
+        if (!rc && fwrite(buf, 1, (size_t)n, t) != (size_t)n)
+            rc = fb_fail(FB_ERR_IO, "-: cannot keep standard input in a temporary file: %s", strerror(errno));
+    }
+    if (!rc && (fflush(t) || dup2(fileno(t), STDIN_FILENO) < 0 || lseek(STDIN_FILENO, 0, SEEK_SET) != 0))
+        rc = fb_fail(FB_ERR_IO, "-: cannot keep standard input in a temporary file: %s", strerror(errno));
+    fclose(t); /* descriptor 0 keeps the file */
+    return rc;
+}
+
+/* Whether path holds a PNG (else an EXR is read); "-", standard input made seekable, is looked at
+ * from where it stands. */
 static fb_result probe_png(const char *path, bool *png)
 {
-    static const uint8_t sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    uint8_t b[8];
     *png = false;
-    if (!strcmp(path, "-")) return FB_OK;
+    if (!strcmp(path, "-")) {
+        fb_result rc = stdin_seekable();
+        off_t at = rc ? 0 : lseek(STDIN_FILENO, 0, SEEK_CUR);
+        if (!rc) *png = pread(STDIN_FILENO, b, 8, at) == 8 && !memcmp(b, PNG_SIG, 8);
+        return rc;
+    }
     FILE *f = NULL;
     fb_result rc = fb_input_open_seekable(path, "EXR or PNG image", &f); /* read twice: here, then by its reader */
     if (rc) return rc;
-    uint8_t b[8];
-    *png = fread(b, 1, 8, f) == 8 && !memcmp(b, sig, 8);
+    *png = fread(b, 1, 8, f) == 8 && !memcmp(b, PNG_SIG, 8);
     fclose(f);
     return FB_OK;
 }

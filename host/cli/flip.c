@@ -206,23 +206,6 @@ static void filters_fini(flip_filters *f)
     for (int q = 0; q < F_N; q++) free(f->tap[q]);
 }
 
-/* out = the filter c (taps 0..r) along a row p, read from p[-r] to p[w - 1 + r] */
-FB_CLONES static void hfilter(const float *p, const float *c, int r, bool anti, int w, float *out)
-{
-    if (anti)
-        for (int x = 0; x < w; x++) out[x] = 0.0f;
-    else
-        for (int x = 0; x < w; x++) out[x] = c[0] * p[x];
-    for (int i = 1; i <= r; i++) {
-        float ci = c[i];
-        const float *a = p + i, *b = p - i;
-        if (anti)
-            for (int x = 0; x < w; x++) out[x] += ci * (a[x] - b[x]);
-        else
-            for (int x = 0; x < w; x++) out[x] += ci * (a[x] + b[x]);
-    }
-}
-
 #pragma GCC diagnostic ignored "-Wpsabi" /* v8f passed between inlined helpers only */
 typedef float v8f __attribute__((vector_size(32)));
 
@@ -269,6 +252,27 @@ FB_CLONES static void vfilter4(const float *const *Ry, const float *const *Rx, c
                                const float *const c[4], int r0, int r1, int w, float *const o[4])
 {
     int x = 0;
+    for (; x + 16 <= w; x += 16) { /* two vectors a sum: the rows' pointers and the taps loaded once for both */
+        int y = x + 8;
+        v8f a0 = c[0][0] * ld8(Ry[0] + x), a1 = c[1][0] * ld8(Rx[0] + x), a2 = {0}, a3 = c[3][0] * ld8(Rg[0] + x);
+        v8f b0 = c[0][0] * ld8(Ry[0] + y), b1 = c[1][0] * ld8(Rx[0] + y), b2 = {0}, b3 = c[3][0] * ld8(Rg[0] + y);
+        for (int i = 1; i <= r1; i++) {
+            const float *yp = Ry[i], *ym = Ry[-i], *xp = Rx[i], *xm = Rx[-i], *gp = Rg[i], *gm = Rg[-i];
+            float c0 = c[0][i], c1 = c[1][i], c2 = c[2][i], c3 = c[3][i];
+            v8f u = ld8(gp + x), v = ld8(gm + x), uu = ld8(gp + y), vv = ld8(gm + y);
+            a0 += c0 * (ld8(yp + x) + ld8(ym + x)), b0 += c0 * (ld8(yp + y) + ld8(ym + y));
+            a1 += c1 * (ld8(xp + x) + ld8(xm + x)), b1 += c1 * (ld8(xp + y) + ld8(xm + y));
+            a2 += c2 * (u - v), b2 += c2 * (uu - vv), a3 += c3 * (u + v), b3 += c3 * (uu + vv);
+        }
+        for (int i = r1 + 1; i <= r0; i++) {
+            a0 += c[0][i] * (ld8(Ry[i] + x) + ld8(Ry[-i] + x));
+            b0 += c[0][i] * (ld8(Ry[i] + y) + ld8(Ry[-i] + y));
+        }
+        memcpy(o[0] + x, &a0, sizeof a0), memcpy(o[1] + x, &a1, sizeof a1);
+        memcpy(o[2] + x, &a2, sizeof a2), memcpy(o[3] + x, &a3, sizeof a3);
+        memcpy(o[0] + y, &b0, sizeof b0), memcpy(o[1] + y, &b1, sizeof b1);
+        memcpy(o[2] + y, &b2, sizeof b2), memcpy(o[3] + y, &b3, sizeof b3);
+    }
     for (; x + 8 <= w; x += 8) {
         v8f m = ld8(Rg[0] + x), a0 = c[0][0] * ld8(Ry[0] + x), a1 = c[1][0] * ld8(Rx[0] + x), a2 = {0};
         v8f a3 = c[3][0] * m;
@@ -310,6 +314,15 @@ FB_CLONES static void vfilter(const float *const *rows, const float *c, int r, b
         else
             for (int x = 0; x < w; x++) out[x] += ci * (a[x] + b[x]);
     }
+}
+
+/* out = the filter c (taps 0..r) along a row p, read from p[-r] to p[w - 1 + r]: vfilter over the
+ * row shifted by each tap */
+static void hfilter(const float *p, const float *c, int r, bool anti, int w, float *out)
+{
+    const float *rows[2 * 64 + 1];
+    for (int i = -r; i <= r; i++) rows[64 + i] = p + i;
+    vfilter(rows + 64, c, r, anti, w, out);
 }
 
 /* ---- one row to linear YCxCz ----------------------------------------------------------------- */

@@ -37,4 +37,18 @@ check "info names a mip-map's storage" sh -c "'$FB' info mip.exr | grep -q 'stor
 check "info names each part's tiles" sh -c "'$FB' info tparts.exr | grep -q 'part 1  apart        compression zip, tiled 40 x 24'"
 check "info --json gives the storage" sh -c "'$FB' info t40.exr --json | python3 -c \"import json,sys; assert json.load(sys.stdin)['storage'] == 'tiled 40 x 24'\""
 check "a scanline file says so" sh -c "'$FB' info o.exr | grep -q 'storage:     scanline'"
+# a PNG on standard input, from a pipe and from a file: the same report as the file named
+P="$ROOT/tests/data/flip"
+"$FB" compare "$P/j4_rgb.png" "$P/j1_rgb.png" --max-abs 0.5 --flip --json > named.json
+cat "$P/j4_rgb.png" | "$FB" compare - "$P/j1_rgb.png" --max-abs 0.5 --flip --json > piped.json
+"$FB" compare "$P/j4_rgb.png" - --max-abs 0.5 --flip --json < "$P/j1_rgb.png" > redirected.json
+check "compare - takes a PNG from a pipe" python3 -c "
+import json
+a, b = json.load(open('named.json')), json.load(open('piped.json'))
+assert b['a'] == '-' and a['result'] == b['result'] and a['channels'] == b['channels'] and a['flip'] == b['flip'], b"
+check "  and from a redirected file, as B" python3 -c "
+import json
+a, b = json.load(open('named.json')), json.load(open('redirected.json'))
+assert b['b'] == '-' and a['channels'] == b['channels'] and a['flip'] == b['flip'], b"
+check "an EXR from a pipe still works" sh -c "cat o.exr | '$FB' compare - t40.exr --quiet"
 cli_finish
