@@ -183,6 +183,9 @@ got = sorted((round(r["x"], 3), round(-r["z"], 3), round(r["pscale"], 4), r["var
 check("terrain: positions (east, north), pscale and generations match the population", got == want,
       str([(a, b) for a, b in zip(got, want) if a != b][:3]))
 check("terrain: ids are 0..n-1 in order", [r["id"] for r in rows] == list(range(len(rows))))
+summary = json.loads(run("render", "t.json", "--json", "-o", "t.exr").stdout)["layers"][1]["summary"]
+check("terrain: the --json summary counts the instances written", summary["instances"] == len(rows) and
+      summary["instances_left_out"] == 0, str(summary))
 Hgt = read_exr_channel("t.exr", "ground.Y")
 worst = 0
 for r in rows:

@@ -554,7 +554,7 @@ static fb_result ifs_resolve(fb_gen *g, const fb_gen *const *gens, const int *pl
 }
 
 /* Writes the instances (prepare, after the surface's own prepare: layers prepare in dependency order). */
-static fb_result write_instances(const fb_gen *g)
+static fb_result write_instances(fb_gen *g)
 {
     const fb_ifs_params *f = fb_layer_params(g->layer);
     const ifs_state *st = state(g);
@@ -572,8 +572,12 @@ static fb_result write_instances(const fb_gen *g)
     size_t written, skipped;
     fb_result rc = fb_ifs_write_instances(f->instances, &pl, st->plants, st->nplants, &written, &skipped);
     if (rc) return rc;
-    fb_log(FB_LOG_INFO, "%s: %zu plant instances for %s%s%s", g->layer->name, written, f->instances,
-           st->surface ? " on " : "", st->surface ? st->surface->channel_names[st->surface_channel] : "");
+    snprintf(g->summary, sizeof g->summary, "layer %s (ifs): %zu plant instances in %.200s%s%.80s", g->layer->name,
+             written, f->instances, st->surface ? " on " : "",
+             st->surface ? st->surface->channel_names[st->surface_channel] : "");
+    snprintf(g->summary_json, sizeof g->summary_json,
+             "{\"layer\": \"%s\", \"generator\": \"ifs\", \"instances\": %zu, \"instances_left_out\": %zu}",
+             g->layer->name, written, skipped);
     if (skipped)
         fb_log(FB_LOG_WARN, "%s: %zu plants stand where %s has no height (NaN) and are not written", g->layer->name,
                skipped, st->surface->channel_names[st->surface_channel]);
