@@ -30,6 +30,13 @@ typedef struct fb_ifs_params {
     int oversample;
     fb_palette_spec palette;
     double brightness, gamma, gamma_threshold, vibrancy, highlight_power;
+    /* plant instances (instances.h): the file ("" none), the height layer they stand on (or a
+     * constant height), the smallest plant written (pixels tall) and the up axis ('y' or 'z') */
+    char instances[1024];
+    fb_ref surface;
+    bool has_surface;
+    double inst_min_pixels;
+    char inst_up;
 } fb_ifs_params;
 
 extern const fb_gen_class fb_gen_ifs;
@@ -46,7 +53,7 @@ const struct fb_ifs_stats *fb_gen_ifs_stats(const fb_gen *g);
 fb_result fb_gen_ifs_from_sums(fb_gen *g, const uint64_t *hits, const uint64_t *sums, uint64_t outside);
 
 /* Its scene keys and their parser (parse.c). */
-#define FB_IFS_NKEYS 24
+#define FB_IFS_NKEYS 28
 extern const fb_keyspec fb_ifs_keys[FB_IFS_NKEYS];
 fb_result fb_ifs_parse(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L);
 

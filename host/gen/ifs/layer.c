@@ -10,6 +10,7 @@
 #include "gen_ifs.h"
 #include "ifs.h"
 #include "ifs_avx2.h"
+#include "instances.h"
 #include "lsys.h"
 #include "palette.h"
 #include "pool.h"
@@ -49,6 +50,11 @@ typedef struct ifs_state {
     float *density, *colour;
     uint64_t *sum; /* a points part: each pixel's colour sum (channels colour_sum_lo/hi) */
     fb_ifs_tone tone;
+    /* plant instances (instances.h): the population's plants, and the height layer they stand on */
+    fb_ifs_plant *plants;
+    size_t nplants;
+    const fb_gen *surface;
+    int surface_plane, surface_channel;
 } ifs_state;
 
 static ifs_state *state(const fb_gen *g)
@@ -515,6 +521,69 @@ static fb_result prepare_vulkan(fb_gen *g, fb_engine *e, fb_progress *prog, doub
     return rc;
 }
 
+/* ---- plant instances --------------------------------------------------------------------------- */
+
+/* The population's plants at least instances-min-size pixels tall, in the frame (init). */
+static fb_result enumerate_plants(const fb_gen *g, ifs_state *st)
+{
+    const fb_ifs_params *f = fb_layer_params(g->layer);
+    const double *b = st->stats.bounds;
+    double cond = f->cond_lsys ? f->cond_height : fb_ifs_cond_extent(&f->cond, g->scene->seed);
+    double px = sqrt(g->scene->width / (b[1] - b[0]) * (g->scene->height / (b[3] - b[2]))); /* pixels a unit */
+    return fb_ifs_plants(&f->maps, cond, b, f->inst_min_pixels / px, &st->plants, &st->nplants);
+}
+
+/* The height layer the instances stand on: a float channel of a layer with native rows. */
+static fb_result ifs_resolve(fb_gen *g, const fb_gen *const *gens, const int *plane_offset)
+{
+    (void)plane_offset;
+    const fb_ifs_params *f = fb_layer_params(g->layer);
+    if (!f->has_surface || f->surface.layer < 0) return FB_OK;
+    const fb_gen *src = gens[f->surface.layer];
+    int c = fb_gen_channel_of(src, f->surface.channel, g->layer->name, "instances-surface");
+    if (c < 0) return FB_ERR_INPUT;
+    if (src->host_op || !src->native_rows || src->channel_types[c] == EXRIO_UINT)
+        return fb_fail(FB_ERR_INPUT,
+                       "layer %s: instances-surface %s is %s; name a height layer (terrain, fbm, constrain...)",
+                       g->layer->name, src->channel_names[c],
+                       src->host_op ? "an op layer, computed strip by strip" : "not a height");
+    state(g)->surface = src;
+    state(g)->surface_plane = fb_gen_plane_of(src, c);
+    state(g)->surface_channel = c;
+    return FB_OK;
+}
+
+/* Writes the instances (prepare, after the surface's own prepare: layers prepare in dependency order). */
+static fb_result write_instances(fb_gen *g)
+{
+    const fb_ifs_params *f = fb_layer_params(g->layer);
+    const ifs_state *st = state(g);
+    if (!f->instances[0]) return FB_OK;
+    fb_ifs_place pl = {.width = g->scene->width,
+                       .height = g->scene->height,
+                       .src = st->surface,
+                       .plane = st->surface_plane,
+                       .constant = f->has_surface && f->surface.layer < 0 ? f->surface.value : 0,
+                       .up = f->inst_up,
+                       .seed = g->scene->seed};
+    memcpy(pl.frame, st->stats.bounds, sizeof pl.frame);
+    if (st->surface && st->surface->has_world)
+        pl.has_world = true, memcpy(pl.world, st->surface->world, sizeof pl.world);
+    size_t written, skipped;
+    fb_result rc = fb_ifs_write_instances(f->instances, &pl, st->plants, st->nplants, &written, &skipped);
+    if (rc) return rc;
+    snprintf(g->summary, sizeof g->summary, "layer %s (ifs): %zu plant instances in %.200s%s%.80s", g->layer->name,
+             written, f->instances, st->surface ? " on " : "",
+             st->surface ? st->surface->channel_names[st->surface_channel] : "");
+    snprintf(g->summary_json, sizeof g->summary_json,
+             "{\"layer\": \"%s\", \"generator\": \"ifs\", \"instances\": %zu, \"instances_left_out\": %zu}",
+             g->layer->name, written, skipped);
+    if (skipped)
+        fb_log(FB_LOG_WARN, "%s: %zu plants stand where %s has no height (NaN) and are not written", g->layer->name,
+               skipped, st->surface->channel_names[st->surface_channel]);
+    return FB_OK;
+}
+
 static fb_result ifs_prepare(fb_gen *g, fb_engine *e, bool progress)
 {
     ifs_state *st = state(g);
@@ -548,7 +617,7 @@ static fb_result ifs_prepare(fb_gen *g, fb_engine *e, bool progress)
     if (x->saturated)
         fb_log(FB_LOG_WARN, "%s: %llu pixels had more than 2^32 hits; their count is saturated", g->layer->name,
                (unsigned long long)x->saturated);
-    return FB_OK;
+    return write_instances(g);
 }
 
 /* ---- rows ------------------------------------------------------------------------------------- */
@@ -578,6 +647,7 @@ static void ifs_fini(fb_gen *g)
     free(st->colour);
     free(st->sum);
     free(st->table);
+    free(st->plants);
 }
 
 const fb_ifs_stats *fb_gen_ifs_stats(const fb_gen *g)
@@ -601,8 +671,8 @@ static uint64_t ifs_memory(const fb_gen *g, const struct fb_engine *e, uint64_t 
         bool priv = threads > 1 && (uint64_t)threads * cells * 12 <= (1ull << 30);
         hist = (priv ? (uint64_t)threads : 1) * cells * 12 + 48ull * st->p.chains;
     }
-    *hold = keep;
-    return hist + 16 * n + keep;
+    *hold = keep + 40 * (uint64_t)st->nplants;                 /* the plants */
+    return hist + 16 * n + keep + 120 * (uint64_t)st->nplants; /* ... their instances as they are written */
 }
 
 static fb_result ifs_init(fb_gen *g)
@@ -720,7 +790,24 @@ static fb_result ifs_init(fb_gen *g)
     g->native_rows = ifs_rows;
     g->prepare = ifs_prepare;
     g->memory = ifs_memory;
-    return FB_OK;
+    g->resolve = ifs_resolve;
+    return f->instances[0] ? enumerate_plants(g, st) : FB_OK;
+}
+
+static int ifs_refs(fb_layer *L, fb_ref_slot *out)
+{
+    fb_ifs_params *f = (void *)L->params;
+    if (!f->has_surface) return 0;
+    out[0] = (fb_ref_slot){&f->surface, "instances-surface", NULL};
+    return 1;
+}
+
+static int ifs_outputs(const fb_layer *L, const char **paths, const char **what, int max)
+{
+    const fb_ifs_params *f = fb_layer_params(L);
+    if (!f->instances[0] || max < 1) return 0;
+    paths[0] = f->instances, what[0] = "instances";
+    return 1;
 }
 
 /* The plan's cost model: seconds of one core of the reference machine (docs/scenes.md). */
@@ -742,6 +829,8 @@ const fb_gen_class fb_gen_ifs = {
     .nkeys = FB_IFS_NKEYS,
     .params_size = sizeof(fb_ifs_params),
     .parse = fb_ifs_parse,
+    .refs = ifs_refs,
+    .outputs = ifs_outputs,
     .init = ifs_init,
     .share = FB_SHARE_POINTS,
     .cost = ifs_cost,

@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 /* ---- the scene keys and their parser ---------------------------------------------------------- */
 
@@ -52,6 +53,15 @@ const fb_keyspec fb_ifs_keys[] = {
     {"vibrancy", FB_K_NUM, 0, 1, false, NULL, "1.0", "1: gamma on alpha (saturated); 0: gamma per channel"},
     {"highlight-power", FB_K_NUM, -1, 100, false, NULL, "1.0",
      "over-bright pixels: < 0 clip per channel, 0 keep hue, larger fade to white"},
+    {"instances", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
+     "also write one point per plant of the population: OUT.ply (binary) or OUT.csv (P, N, pscale, orient, id, "
+     "variant)"},
+    {"instances-surface", FB_K_REF, 0, 0, false, NULL, NULL,
+     "the height layer the instances stand on (\"terrain\" or \"layer.channel\"), or a constant height (default 0)"},
+    {"instances-min-size", FB_K_NUM, 0, 1e6, true, NULL, NULL,
+     "the smallest plant written, in pixels tall in the image (default 1: smaller ones are invisible)"},
+    {"instances-up", FB_K_ENUM, 0, 0, false, "y|z", NULL,
+     "the instances' up axis: y (default; Houdini: x east, z south) or z (x east, y north)"},
     {"half", FB_K_BOOL, 0, 0, false, NULL, "true", "store R, G, B, A as half (flags: --half, --float)"},
     {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
@@ -112,6 +122,38 @@ static void spread_colors(const json_t *given, int n, double *out)
 {
     for (int k = 0; k < n; k++)
         out[k] = given ? json_number_value(json_array_get(given, (size_t)k)) : n > 1 ? (double)k / (n - 1) : 0.5;
+}
+
+/* The instance keys: a file named .ply or .csv, of a population, the other keys only with it. */
+static fb_result parse_instances(const fb_vctx *v, const char *path, json_t *obj, fb_ifs_params *f)
+{
+    char sub[256];
+    static const char *const with[] = {"instances-surface", "instances-min-size", "instances-up"};
+    fb_json_string(obj, "instances", f->instances, sizeof f->instances);
+    for (int k = 0; k < 3 && !f->instances[0]; k++)
+        if (json_object_get(obj, with[k])) {
+            snprintf(sub, sizeof sub, "%s.%s", path, with[k]);
+            return fb_schema_error(v, sub, "only with instances (the file the plants are written to)");
+        }
+    if (!f->instances[0]) return FB_OK;
+    snprintf(sub, sizeof sub, "%s.instances", path);
+    const char *dot = strrchr(f->instances, '.');
+    if (strlen(f->instances) >= sizeof f->instances - 1)
+        return fb_schema_error(v, sub, "file name longer than %zu characters", sizeof f->instances - 2);
+    if (!dot || (strcasecmp(dot, ".ply") && strcasecmp(dot, ".csv")))
+        return fb_schema_error(v, sub, "\"%s\": the instances' format comes from the extension, .ply or .csv",
+                               f->instances);
+    if (!f->has_cond)
+        return fb_schema_error(v, sub,
+                               "instances need a plant population: a condensation set (preset population, "
+                               "or condensation)");
+    json_t *surf = json_object_get(obj, "instances-surface");
+    f->has_surface = surf != NULL;
+    if (surf) fb_json_ref(surf, &f->surface);
+    f->inst_min_pixels = json_object_get(obj, "instances-min-size") ? fb_json_num(obj, "instances-min-size") : 1.0;
+    const char *up = json_string_value(json_object_get(obj, "instances-up"));
+    f->inst_up = up && !strcmp(up, "z") ? 'z' : 'y';
+    return FB_OK;
 }
 
 fb_result fb_ifs_parse(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
@@ -191,6 +233,7 @@ fb_result fb_ifs_parse(const fb_vctx *v, const char *path, json_t *obj, const fb
     f->gamma_threshold = fb_json_num(obj, "gamma-threshold");
     f->vibrancy = fb_json_num(obj, "vibrancy");
     f->highlight_power = fb_json_num(obj, "highlight-power");
+    if ((rc = parse_instances(v, path, obj, f))) return rc;
     uint64_t cells = (uint64_t)s->width * s->height * (uint64_t)(f->oversample * f->oversample);
     if (cells > (1ull << 28)) {
         snprintf(sub, sizeof sub, "%s.oversample", path);
