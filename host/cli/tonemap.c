@@ -170,10 +170,12 @@ static fb_result tonemap(const char *in, const char *out, const char *layer, int
         chans[c] = (exrio_channel){exrio_channel_name(r, c), exrio_channel_type(r, c)};
     }
     if (!rc) {
-        const char *keys[] = {"fractalbake/seed", "fractalbake/backend", "fractalbake/device", "fractalbake/version"};
-        exrio_attr attrs[5] = {{"fractalbake/scene", scene.json}};
+        /* the bake's own attributes, in the bake's order, so that unchanged parameters give the same bytes */
+        const char *keys[] = {"fractalbake/seed",    "fractalbake/backend", "fractalbake/device",
+                              "fractalbake/version", "fractalbake/region",  "fractalbake/layer-backends"};
+        exrio_attr attrs[7] = {{"fractalbake/scene", scene.json}};
         int na = 1;
-        for (int k = 0; k < 4; k++) {
+        for (int k = 0; k < 6; k++) {
             const char *v = exrio_attr_string(r, keys[k]);
             if (v) attrs[na++] = (exrio_attr){keys[k], v};
         }
