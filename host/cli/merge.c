@@ -236,7 +236,7 @@ static bool parse_kn(const char *s, int k_lo, int n_max, int *k, int *n)
     return true;
 }
 
-/* The outside count of layer `name` in a part's "fractalbake/ifs-outside" ("a=12;b=0"). */
+/* The outside count of layer `name` in a part's "fractalbake/points-outside" ("a=12;b=0"). */
 static bool outside_of(const char *attr, const char *name, uint64_t *out)
 {
     size_t len = strlen(name);
@@ -350,11 +350,14 @@ static fb_result chaos_add(chaos_layer *cl, int ncl, const fb_scene *sc, exrio_r
     for (int k = 0; k < ncl; k++) {
         uint64_t o = 0;
         const char *name = sc->layers[cl[k].layer].name;
-        if (!outside_of(exrio_attr_string(r, "fractalbake/ifs-outside"), name, &o))
-            return fb_fail(FB_ERR_INPUT,
-                           "%s: no outside count for layer %s, or a malformed one (attribute fractalbake/ifs-outside: "
-                           "NAME=COUNT;..., counts 0..1e14)",
-                           path, name);
+        const char *counts = exrio_attr_string(r, "fractalbake/points-outside");
+        if (!counts) counts = exrio_attr_string(r, "fractalbake/ifs-outside"); /* its name before flames */
+        if (!outside_of(counts, name, &o))
+            return fb_fail(
+                FB_ERR_INPUT,
+                "%s: no outside count for layer %s, or a malformed one (attribute fractalbake/points-outside: "
+                "NAME=COUNT;..., counts 0..1e14)",
+                path, name);
         cl[k].outside += o;
         for (int s = 0, j = 0; s < cl[k].nsums; s++) /* the channels' indices in this file */
             for (int h = 0; h < (cl[k].wide[s] ? 2 : 1); h++, j++) {

@@ -642,7 +642,7 @@ static fb_result open_writer(const fb_engine *e, const fb_bake_desc *d, const la
     if (per_layer[0]) attrs[nattrs++] = (exrio_attr){"fractalbake/layer-backends", per_layer};
     for (int a = 0; a < d->nattrs && nattrs < 14; a++) attrs[nattrs++] = d->attrs[a];
     /* a points part: which, and each chaos-game layer's points outside the frame (merge needs them
-     * for the density; the attribute keeps its first name, so that older parts still merge) */
+     * for the density; merge also reads the attribute's first name, fractalbake/ifs-outside) */
     char part[32], outside[FB_MAX_LAYERS * 90] = "";
     if (d->points_part[1] > 0) {
         snprintf(part, sizeof part, "%d/%d", d->points_part[0], d->points_part[1]);
@@ -651,7 +651,7 @@ static fb_result open_writer(const fb_engine *e, const fb_bake_desc *d, const la
                 snprintf(outside + strlen(outside), sizeof outside - strlen(outside), "%s%s=%llu",
                          outside[0] ? ";" : "", s->layers[i].name, (unsigned long long)runs[i].gen.points_outside);
         attrs[nattrs++] = (exrio_attr){"fractalbake/points-part", part};
-        attrs[nattrs++] = (exrio_attr){"fractalbake/ifs-outside", outside};
+        attrs[nattrs++] = (exrio_attr){"fractalbake/points-outside", outside};
     }
     const char *part_names[FB_MAX_LAYERS];
     exrio_compression part_comp[FB_MAX_LAYERS];

@@ -109,9 +109,9 @@ for k in 0 1; do
   $SETATTR pl$k.tmp.exr fractalbake/task $k/4294967298 plan$k.exr
   rm pl$k.tmp.exr
 done
-$SETATTR pp1.exr fractalbake/ifs-outside plants=18446744073709551615 ppmax.exr
-$SETATTR pp1.exr fractalbake/ifs-outside plants=12x ppbad.exr
-$SETATTR pp1.exr fractalbake/ifs-outside plants=-1 ppneg.exr
+$SETATTR pp1.exr fractalbake/points-outside plants=18446744073709551615 ppmax.exr
+$SETATTR pp1.exr fractalbake/points-outside plants=12x ppbad.exr
+$SETATTR pp1.exr fractalbake/points-outside plants=-1 ppneg.exr
 "$FB" render $N --set size=16x16 --set compression=piz -o piz.exr --quiet
 # a named palette beside a gradient or cosine one, in a file or through --set
 printf '{"size": [32, 16], "layers": [{"type": "julia", "name": "sky", "palette": "ice",\n "stops": [[0, 0, 0, 0], [1, 1, 1, 1]]}]}' > palstops.json
