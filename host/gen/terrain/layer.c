@@ -492,12 +492,13 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
              P->mesh[0] ? " and mesh" : "", t_out, P->mesh[0] ? "; mesh " : "", P->mesh);
     snprintf(g->summary_json, sizeof g->summary_json,
              "{\"layer\": \"%s\", \"generator\": \"terrain\", \"input_points\": %u, \"duplicates\": %llu, "
-             "\"inserted\": %llu, \"clamped_variances\": %llu, \"rejected_sites\": %llu, \"variance_stages\": %u, "
+             "\"inserted\": %llu, \"hull_splits\": %llu, \"clamped_variances\": %llu, \"rejected_sites\": %llu, "
+             "\"variance_stages\": %u, "
              "\"vertices\": %u, \"triangles\": %u, \"sigma\": %.17g, \"triangulate_seconds\": %.6f, "
              "\"refine_seconds\": %.6f, \"output_seconds\": %.6f}",
              g->layer->name, st->input, (unsigned long long)st->duplicates, (unsigned long long)st->inserted,
-             (unsigned long long)st->clamped, (unsigned long long)st->rejected, st->stages, s->t.dt.nv, s->t.dt.nfinite,
-             st->sigma, st->build_seconds, st->refine_seconds, t_out);
+             (unsigned long long)st->hull_splits, (unsigned long long)st->clamped, (unsigned long long)st->rejected,
+             st->stages, s->t.dt.nv, s->t.dt.nfinite, st->sigma, st->build_seconds, st->refine_seconds, t_out);
     return FB_OK;
 }
 
