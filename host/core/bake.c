@@ -495,6 +495,11 @@ static fb_result heightmaps_create(const fb_scene *s, const layer_run *runs, con
 {
     for (int i = 0; i < s->nlayers; i++) {
         if (!s->layers[i].heightmap[0]) continue;
+        char msg[256];
+        fb_heightmap_format f = FB_HEIGHTMAP_PNG16;
+        fb_heightmap_format_of(s->layers[i].heightmap, &f);
+        if (!fb_heightmap_engine_check(s->layers[i].heightmap_engine, rw, rh, f, msg, sizeof msg)) /* a region's */
+            return fb_fail(FB_ERR_USAGE, "layer %s: %s (the region is %d x %d)", s->layers[i].name, msg, rw, rh);
         int c = fb_gen_channel_of(&runs[i].gen, "Y", s->layers[i].name, "heightmap");
         if (!ALWAYS(c >= 0)) return FB_ERR_INTERNAL;
         hm->plane[i] = offset[i] + c;
@@ -543,10 +548,12 @@ static fb_result heightmaps_write(const fb_scene *s, const layer_run *runs, heig
                                                      .lo = lo,
                                                      .hi = hi,
                                                      .world = world,
-                                                     .epsg = g->epsg});
+                                                     .epsg = g->epsg,
+                                                     .engine = (fb_heightmap_engine)L->heightmap_engine});
         if (!rc && stats && stats->nheightmaps < FB_MAX_LAYERS) {
             fb_bake_heightmap *h = &stats->heightmaps[stats->nheightmaps++];
             h->layer = L->name, h->path = L->heightmap, h->lo = lo, h->hi = hi;
+            h->sidecar = L->heightmap_sidecar[0] ? L->heightmap_sidecar : NULL;
             fb_heightmap_format f = FB_HEIGHTMAP_PNG16;
             fb_heightmap_format_of(L->heightmap, &f);
             h->format = (int)f;

@@ -16,6 +16,8 @@
 #include "smooth.h"
 #include "terrain_io.h"
 
+#include "heightmap.h"
+
 #include <jansson.h>
 #include <math.h>
 #include <stdio.h>
@@ -82,6 +84,9 @@ static const fb_keyspec terrain_keys[] = {
     {"heightmap", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
      "also write the heights for engines: OUT.png (16-bit grey) or OUT.r16 (16-bit raw, little-endian), or OUT.tif "
      "(float GeoTIFF with the geotransform)"},
+    {"heightmap-engine", FB_K_ENUM, 0, 0, false, FB_HEIGHTMAP_ENGINES, NULL,
+     "the heightmap for an engine: unreal (a landscape size, 16-bit PNG) or unity (2^n+1 square, RAW); writes "
+     "OUT.import.json, the import settings that reproduce the heights"},
     {"heightmap-range", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL,
      "heights stored as 0 and 65535 in a 16-bit heightmap (LO,HI; default: the image's lowest and highest)"},
     {"crs", FB_K_STRING, 0, 0, false, NULL, NULL,
