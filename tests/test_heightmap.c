@@ -2,7 +2,8 @@
  * Heightmaps: the heights a bake writes as a 16-bit PNG or RAW read back within one 16-bit step of the
  * EXR's Y channel (the range's ends exactly: the lowest height is 0, the highest 65535); an explicit
  * range clamps beyond it; a region's heightmap is the full one's crop; a terrain's float GeoTIFF holds
- * the EXR's heights bit for bit, with the geotransform of its frame and the CRS it was given. Engine
+ * the EXR's heights bit for bit, with the geotransform of its frame and the CRS it was given, and
+ * NoData (GDAL's tag, the lowest float) exactly where the pixel is outside the hull. Engine
  * presets accept exactly the sizes of the engines' tables (written out here), and their heightmap
  * read back as the engine reads it, through the sidecar's import settings, is within half a 16-bit
  * step of the EXR's heights; a region of another size is refused before anything is written.
@@ -20,6 +21,7 @@
 #include <geotiff/xtiffio.h>
 
 #include <jansson.h>
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -166,6 +168,7 @@ static void test_engine_sidecar(fb_engine *e, const char *engine, int n, const c
 
 int main(void)
 {
+    TIFFSetWarningHandler(NULL); /* libtiff's note on GDAL's tag, which it reads as an anonymous field */
     fb_engine e;
     CHECK(fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = 2}, &e) == FB_OK);
     fb_bake_stats st;
@@ -275,6 +278,32 @@ int main(void)
     if (gt) GTIFFree(gt);
     XTIFFClose(tif);
     free(row), free(y);
+    /* a triangle's hull: the GeoTIFF's pixels outside it are NoData, with GDAL's tag; inside, the EXR's */
+    snprintf(json, sizeof json,
+             "{\"size\": [90, 60], \"layers\": [{\"type\": \"terrain\", \"points\": [[0, 0, 10], [900, 0, 30], "
+             "[450, 600, 70]], \"insert\": 2000, \"heightmap\": \"%s\"}]}",
+             th_path("tri.tif"));
+    REQUIRE(bake(&e, json, th_path("tri.exr"), NULL, &st));
+    float *ty = read_y(th_path("tri.exr"), "terrain.Y", &w, &h), *ta = read_y(th_path("tri.exr"), "terrain.A", &w, &h);
+    tif = XTIFFOpen(th_path("tri.tif"), "r");
+    REQUIRE(ty && ta && tif);
+    char *nodata = NULL; /* an unknown tag to libtiff: read as an anonymous field, count and text */
+    uint32_t ncount = 0;
+    CHECK(TIFFGetField(tif, TIFFTAG_GDAL_NODATA, &ncount, &nodata) == 1 && nodata && strtod(nodata, NULL) == -FLT_MAX);
+    int right = 0, outside = 0;
+    row = malloc((size_t)w * 4);
+    for (int r = 0; r < h && row; r++) {
+        if (TIFFReadScanline(tif, row, (uint32_t)r, 0) != 1) continue;
+        for (int x = 0; x < w; x++) {
+            size_t i = (size_t)r * w + x;
+            outside += ta[i] == 0;
+            right += ta[i] == 0 ? row[x] == -FLT_MAX : memcmp(&row[x], &ty[i], 4) == 0;
+        }
+    }
+    CHECKF(right == w * h && outside > w * h / 4, "%d of %d pixels right, %d outside the hull", right, w * h, outside);
+    XTIFFClose(tif);
+    free(ty), free(ta), free(row);
+
     test_engine_sizes();
     test_engine_sidecar(&e, "unreal", 127, "png");
     test_engine_sidecar(&e, "unity", 129, "r16");

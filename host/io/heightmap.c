@@ -200,6 +200,7 @@ static void tiff_warning(const char *module, const char *fmt, va_list ap)
     X(TIFFSetErrorHandler);                                                                                            \
     X(TIFFSetWarningHandler);                                                                                          \
     X(TIFFSetField);                                                                                                   \
+    X(TIFFMergeFieldInfo);                                                                                             \
     X(TIFFWriteScanline);                                                                                              \
     X(TIFFFlush);                                                                                                      \
     X(XTIFFFdOpen);                                                                                                    \
@@ -258,6 +259,11 @@ static fb_result write_geotiff(const fb_heightmap_desc *d)
         g_tiff.TIFFSetField(tif, TIFFTAG_PREDICTOR, PREDICTOR_FLOATINGPOINT);
         g_tiff.TIFFSetField(tif, TIFFTAG_ROWSPERSTRIP, (uint32_t)rows);
         g_tiff.TIFFSetField(tif, TIFFTAG_SOFTWARE, "fractalbake " FB_VERSION);
+        /* libtiff does not know GDAL's tag: it is registered as GDAL registers it */
+        static const TIFFFieldInfo nodata = {TIFFTAG_GDAL_NODATA, -1, -1, TIFF_ASCII,
+                                             FIELD_CUSTOM,        1,  0,  "GDALNoDataValue"};
+        if (d->nodata && g_tiff.TIFFMergeFieldInfo(tif, &nodata, 1) == 0)
+            g_tiff.TIFFSetField(tif, TIFFTAG_GDAL_NODATA, "-3.4028234663852886e+38");
         /* the geotransform: pixel corner (0, 0) at (xmin, ymax), pixels (dx, dy) of the world apart */
         const double *w = d->world;
         double scale[3] = {(w[1] - w[0]) / d->width, (w[3] - w[2]) / d->height, 0};

@@ -48,7 +48,11 @@ typedef struct fb_heightmap_desc {
     const double *world;        /* GeoTIFF: the image's frame xmin, xmax, ymin, ymax (x right, y up) */
     int epsg;                   /* GeoTIFF: a projected CRS's EPSG code, or 0 for none stated */
     fb_heightmap_engine engine; /* FB_ENGINE_NONE, or the preset whose sidecar is written too */
+    bool nodata; /* GeoTIFF: heights equal to FB_HEIGHTMAP_NODATA are no data (outside a terrain's hull) */
 } fb_heightmap_desc;
+
+/* The GeoTIFF's NoData value (GDAL's GDAL_NODATA tag): the lowest float, written as "-3.4028234663852886e+38". */
+#define FB_HEIGHTMAP_NODATA (-3.4028234663852886e+38f)
 
 /* Writes the height field (and an engine's sidecar) through the output transaction (output.h). 16 bits: each height h
  * is stored as round((h - lo) / (hi - lo) * 65535), clamped, so it reads back within half a step
