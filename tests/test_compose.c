@@ -36,7 +36,7 @@ static const char *k_scene =
     "{\"type\": \"op\", \"name\": \"free\", \"op\": \"remap\", \"inputs\": [\"terrain\"], \"from\": [0, 80], "
     "\"clamp\": false},"
     "{\"type\": \"op\", \"name\": \"prod\", \"op\": \"multiply\", \"inputs\": [\"detail.Y\", \"plants.count\", 0.5]},"
-    "{\"type\": \"terrain\", \"name\": \"terrain\", \"points\": [[0,0,0],[100,0,10],[0,50,20],[100,50,40],[50,25,95]],"
+    "{\"type\": \"terrain\", \"name\": \"terrain\", \"points\": [[0,0,0],[100,0,10],[0,50,20],[100,50,40],[50,25,45]],"
     " \"insert\": 2000, \"bounds\": [0, 100, 0, 50]},"
     "{\"type\": \"fbm\", \"name\": \"detail\", \"octaves\": 5, \"frequency\": 8},"
     "{\"type\": \"ifs\", \"name\": \"plants\", \"preset\": \"fern\", \"points\": 300000, \"half\": false}]}";

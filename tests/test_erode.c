@@ -4,10 +4,16 @@
  * on a V-valley's floor; thermal erosion leaves no step above the talus step once converged; the
  * native result has the same bits for 1, 2 and 3 threads. With the argument `gpu`: the Vulkan
  * device (lavapipe) gives the same bits as the native path, under a silent validation layer;
- * 77 (not run) without a device.
+ * 77 (not run) without a device. The masks' PNGs are their channels scaled to full scale at each one's
+ * maximum, within half a step, at 8 and 16 bits.
  */
+#include "bake.h"
 #include "engine.h"
 #include "erode.h"
+#include "exrio.h"
+#include "output.h"
+#include "pngio.h"
+#include "scene.h"
 
 #include "testhelp.h"
 
@@ -221,6 +227,59 @@ static int test_gpu(void)
     TEST_REPORT();
 }
 
+/* The masks as PNGs ("masks", "mask-bits"): each is the EXR's channel scaled from 0 at 0 to full
+ * scale at the channel's maximum, within half a step (8 and 16 bits), and written with the EXR. */
+static void test_masks(int bits)
+{
+    const int W = 48, H = 40;
+    char json[512], prefix[600], exr[600];
+    snprintf(prefix, sizeof prefix, "%s", th_path(bits == 8 ? "m8" : "m16"));
+    snprintf(exr, sizeof exr, "%s", th_path(bits == 8 ? "m8.exr" : "m16.exr"));
+    snprintf(json, sizeof json,
+             "{\"size\": [%d, %d], \"layers\": [{\"type\": \"fbm\", \"name\": \"h\", \"octaves\": 5}, "
+             "{\"type\": \"erode\", \"name\": \"e\", \"input\": \"h\", \"extent\": 8, \"iterations\": 30, "
+             "\"duration\": 10, \"masks\": \"%s\", \"mask-bits\": %d}]}",
+             W, H, prefix, bits);
+    fb_scene sc;
+    REQUIRE(fb_scene_parse(json, "masks", &sc) == FB_OK);
+    fb_engine e;
+    REQUIRE(fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = 2}, &e) == FB_OK);
+    fb_outputs_begin();
+    REQUIRE(fb_outputs_end(fb_bake(&e, &(fb_bake_desc){.scene = &sc, .out = exr}, NULL)) == FB_OK);
+    fb_engine_close(&e);
+    fb_scene_fini(&sc);
+    exrio_reader *r;
+    REQUIRE(exrio_open(exr, &r) == FB_OK);
+    static const char *const names[4] = {"flow", "wear", "deposition", "sediment"};
+    for (int k = 0; k < 4; k++) {
+        char ch[32], png_path[700];
+        snprintf(ch, sizeof ch, "e.%s", names[k]);
+        snprintf(png_path, sizeof png_path, "%s.%s.png", prefix, names[k]);
+        float *v = malloc((size_t)W * H * sizeof *v);
+        void *planes[16] = {0};
+        int c = exrio_find_channel(r, ch);
+        REQUIRE(v && c >= 0 && c < 16);
+        planes[c] = v;
+        REQUIRE(exrio_read_rows(r, 0, H, planes) == FB_OK);
+        fb_png png;
+        REQUIRE(fb_png_read(png_path, &png) == FB_OK);
+        CHECK(png.width == W && png.height == H && png.channels == 1 && png.depth == bits);
+        double top = 0, worst = 0, full = bits == 16 ? 65535 : 255;
+        for (int i = 0; i < W * H; i++) top = fmax(top, v[i]);
+        int at_full = 0;
+        for (int i = 0; i < W * H; i++) {
+            double q = round(png.plane[0][i] * full);
+            worst = fmax(worst, fabs(q / full * top - fmax(v[i], 0)));
+            at_full += q == full;
+        }
+        CHECKF(top > 0 && worst <= 0.5 * top / full * (1 + 1e-6) && at_full >= 1,
+               "%s, %d bits: %g off (half a step %g)", names[k], bits, worst, 0.5 * top / full);
+        fb_png_fini(&png);
+        free(v);
+    }
+    exrio_close(&r);
+}
+
 int main(int argc, char **argv)
 {
     if (argc > 1 && !strcmp(argv[1], "gpu")) return test_gpu();
@@ -229,5 +288,7 @@ int main(int argc, char **argv)
     test_valley();
     test_thermal();
     test_threads();
+    test_masks(8);
+    test_masks(16);
     TEST_REPORT();
 }

@@ -2,7 +2,11 @@
  * Heightmaps: the heights a bake writes as a 16-bit PNG or RAW read back within one 16-bit step of the
  * EXR's Y channel (the range's ends exactly: the lowest height is 0, the highest 65535); an explicit
  * range clamps beyond it; a region's heightmap is the full one's crop; a terrain's float GeoTIFF holds
- * the EXR's heights bit for bit, with the geotransform of its frame and the CRS it was given.
+ * the EXR's heights bit for bit, with the geotransform of its frame and the CRS it was given, and
+ * NoData (GDAL's tag, the lowest float) exactly where the pixel is outside the hull. Engine
+ * presets accept exactly the sizes of the engines' tables (written out here), and their heightmap
+ * read back as the engine reads it, through the sidecar's import settings, is within half a 16-bit
+ * step of the EXR's heights; a region of another size is refused before anything is written.
  */
 #include "bake.h"
 #include "exrio.h"
@@ -16,6 +20,8 @@
 #include <geotiff/geovalues.h>
 #include <geotiff/xtiffio.h>
 
+#include <jansson.h>
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -63,8 +69,106 @@ static bool bake(fb_engine *e, const char *json, const char *out, const int regi
     return rc == FB_OK;
 }
 
+/* The engines' tables, written out here: Unreal's recommended landscape sizes, Unity's 2^n + 1. */
+static bool in_list(const int *t, int n, int v)
+{
+    for (int i = 0; i < n; i++)
+        if (t[i] == v) return true;
+    return false;
+}
+
+static void test_engine_sizes(void)
+{
+    static const int unreal[] = {8129, 4033, 2017, 1009, 505, 253, 127};
+    static const int unity[] = {33, 65, 129, 257, 513, 1025, 2049, 4097};
+    char msg[256];
+    int nu = 0, ny = 0, wrong = 0;
+    for (int n = 1; n <= 9000; n++) {
+        bool u = fb_heightmap_engine_check(FB_ENGINE_UNREAL, n, n, FB_HEIGHTMAP_PNG16, msg, sizeof msg);
+        bool y = fb_heightmap_engine_check(FB_ENGINE_UNITY, n, n, FB_HEIGHTMAP_RAW16, msg, sizeof msg);
+        nu += u, ny += y;
+        wrong += u != in_list(unreal, 7, n) || y != in_list(unity, 8, n);
+    }
+    CHECKF(nu == 7 && ny == 8 && wrong == 0, "accepted %d unreal and %d unity sizes, %d wrong", nu, ny, wrong);
+    CHECK(fb_heightmap_engine_check(FB_ENGINE_UNREAL, 2017, 1009, FB_HEIGHTMAP_PNG16, msg, sizeof msg));
+    CHECK(!fb_heightmap_engine_check(FB_ENGINE_UNITY, 129, 257, FB_HEIGHTMAP_RAW16, msg, sizeof msg));
+    CHECK(!fb_heightmap_engine_check(FB_ENGINE_UNREAL, 127, 127, FB_HEIGHTMAP_RAW16, msg, sizeof msg));
+    CHECK(!fb_heightmap_engine_check(FB_ENGINE_UNITY, 129, 129, FB_HEIGHTMAP_PNG16, msg, sizeof msg));
+    CHECK(!fb_heightmap_engine_check(FB_ENGINE_UNREAL, 1000, 1000, FB_HEIGHTMAP_PNG16, msg, sizeof msg) &&
+          strstr(msg, "the nearest are 505 and 1009"));
+    CHECK(!fb_heightmap_engine_check(FB_ENGINE_UNITY, 5000, 5000, FB_HEIGHTMAP_RAW16, msg, sizeof msg) &&
+          strstr(msg, "the nearest is 4097"));
+}
+
+static double num_at(const json_t *o, const char *key, int i)
+{
+    const json_t *v = json_object_get(o, key);
+    return json_number_value(i >= 0 ? json_array_get(v, (size_t)i) : v);
+}
+
+/* An engine preset's heightmap read back through its sidecar's import settings, as the engine reads
+ * it: every height within half a 16-bit step of the EXR's. */
+static void test_engine_sidecar(fb_engine *e, const char *engine, int n, const char *ext)
+{
+    char json[1024], hm[600], side[600], exr[600];
+    snprintf(hm, sizeof hm, "%s", th_path(strcmp(ext, "png") ? "eng.r16" : "eng.png"));
+    snprintf(side, sizeof side, "%s", th_path("eng.import.json"));
+    snprintf(exr, sizeof exr, "%s", th_path("eng.exr"));
+    snprintf(json, sizeof json,
+             "{\"size\": [%d, %d], \"seed\": 2, \"layers\": [{\"type\": \"terrain\", \"name\": \"t\", "
+             "\"insert\": 3000, \"points\": [[0, 0, 3], [500, 0, 40], [0, 400, 25], [500, 400, 9], [250, 200, 120]], "
+             "\"heightmap\": \"%s\", \"heightmap-engine\": \"%s\"}]}",
+             n, n, hm, engine);
+    fb_bake_stats st;
+    REQUIRE(bake(e, json, exr, NULL, &st));
+    CHECK(st.nheightmaps == 1); /* (its strings were the scene's, freed by bake) */
+    int w, h;
+    float *y = read_y(exr, "t.Y", &w, &h);
+    json_t *sc = json_load_file(side, 0, NULL);
+    REQUIRE(y && sc && w == n && h == n);
+    CHECK(!strcmp(json_string_value(json_object_get(sc, "engine")), engine));
+    double lo = num_at(sc, "height_range", 0), hi = num_at(sc, "height_range", 1), half = (hi - lo) / 131070;
+    double *v = malloc((size_t)n * n * sizeof *v), worst = 0;
+    REQUIRE(v);
+    if (!strcmp(ext, "png")) {
+        fb_png png;
+        REQUIRE(fb_png_read(hm, &png) == FB_OK);
+        CHECK(png.depth == 16 && png.channels == 1 && png.width == n && png.height == n);
+        for (int i = 0; i < n * n; i++) v[i] = round(png.plane[0][i] * 65535.0);
+        fb_png_fini(&png);
+    } else {
+        uint16_t *q = read_r16(hm, (size_t)n * n);
+        REQUIRE(q);
+        for (int i = 0; i < n * n; i++) v[i] = q[i];
+        free(q);
+    }
+    const json_t *u = json_object_get(sc, "unreal"), *un = json_object_get(sc, "unity");
+    for (int i = 0; i < n * n; i++) {
+        double z = u ? (num_at(u, "location", 2) + (v[i] - 32768) * num_at(u, "scale", 2) / 128) / 100 /* cm */
+                     : num_at(un, "position", 1) + v[i] / 65535 * num_at(un, "terrain_height", -1);
+        worst = fmax(worst, fabs(z - y[i]));
+    }
+    CHECKF(worst <= half * (1 + 1e-6) + 1e-12 * fabs(hi),
+           "%s: heights from the file and sidecar %g off; half a step %g", engine, worst, half);
+    if (u) { /* the sample spacing, in centimetres: the frame over n pixels */
+        CHECK(fabs(num_at(u, "scale", 0) - 100 * 500.0 / n) < 1e-9 &&
+              fabs(num_at(u, "scale", 1) - 100 * 400.0 / n) < 1e-9);
+    } else {
+        CHECK(fabs(num_at(un, "terrain_width", -1) - 500.0 * (n - 1) / n) < 1e-9 &&
+              fabs(num_at(un, "terrain_length", -1) - 400.0 * (n - 1) / n) < 1e-9 && num_at(un, "resolution", -1) == n);
+    }
+    /* a region of another size is refused before anything is written */
+    remove(hm), remove(side), remove(exr);
+    int region[4] = {0, 0, n - 1, n};
+    CHECK(!bake(e, json, exr, region, &st));
+    CHECK(access(hm, F_OK) != 0 && access(side, F_OK) != 0 && access(exr, F_OK) != 0);
+    free(v), free(y);
+    json_decref(sc);
+}
+
 int main(void)
 {
+    TIFFSetWarningHandler(NULL); /* libtiff's note on GDAL's tag, which it reads as an anonymous field */
     fb_engine e;
     CHECK(fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = 2}, &e) == FB_OK);
     fb_bake_stats st;
@@ -174,6 +278,35 @@ int main(void)
     if (gt) GTIFFree(gt);
     XTIFFClose(tif);
     free(row), free(y);
+    /* a triangle's hull: the GeoTIFF's pixels outside it are NoData, with GDAL's tag; inside, the EXR's */
+    snprintf(json, sizeof json,
+             "{\"size\": [90, 60], \"layers\": [{\"type\": \"terrain\", \"points\": [[0, 0, 10], [900, 0, 30], "
+             "[450, 600, 70]], \"insert\": 2000, \"heightmap\": \"%s\"}]}",
+             th_path("tri.tif"));
+    REQUIRE(bake(&e, json, th_path("tri.exr"), NULL, &st));
+    float *ty = read_y(th_path("tri.exr"), "terrain.Y", &w, &h), *ta = read_y(th_path("tri.exr"), "terrain.A", &w, &h);
+    tif = XTIFFOpen(th_path("tri.tif"), "r");
+    REQUIRE(ty && ta && tif);
+    char *nodata = NULL; /* an unknown tag to libtiff: read as an anonymous field, count and text */
+    uint32_t ncount = 0;
+    CHECK(TIFFGetField(tif, TIFFTAG_GDAL_NODATA, &ncount, &nodata) == 1 && nodata && strtod(nodata, NULL) == -FLT_MAX);
+    int right = 0, outside = 0;
+    row = malloc((size_t)w * 4);
+    for (int r = 0; r < h && row; r++) {
+        if (TIFFReadScanline(tif, row, (uint32_t)r, 0) != 1) continue;
+        for (int x = 0; x < w; x++) {
+            size_t i = (size_t)r * w + x;
+            outside += ta[i] == 0;
+            right += ta[i] == 0 ? row[x] == -FLT_MAX : memcmp(&row[x], &ty[i], 4) == 0;
+        }
+    }
+    CHECKF(right == w * h && outside > w * h / 4, "%d of %d pixels right, %d outside the hull", right, w * h, outside);
+    XTIFFClose(tif);
+    free(ty), free(ta), free(row);
+
+    test_engine_sizes();
+    test_engine_sidecar(&e, "unreal", 127, "png");
+    test_engine_sidecar(&e, "unity", 129, "r16");
     fb_engine_close(&e);
     TEST_REPORT();
 }

@@ -313,6 +313,7 @@ static void summary_json(json_t *sum, const fb_scene *scene, const fb_bake_opts 
             json_object_set_new(j, "height_at_0", json_real(h->lo));
             json_object_set_new(j, "height_at_65535", json_real(h->hi));
         }
+        if (h->sidecar) json_object_set_new(j, "sidecar", json_string(h->sidecar));
         json_array_append_new(hms, j);
     }
     if (st->nheightmaps)
@@ -347,6 +348,7 @@ static void summary_text(const fb_scene *scene, const fb_bake_opts *o, const fb_
         else
             cli_after("fractalbake: heightmap %s: layer %s's heights %s (0) to %s (65535), %s", h->path, h->layer, lo,
                       hi, heightmap_format_name(h->format));
+        if (h->sidecar) cli_after("fractalbake: heightmap %s: the engine's import settings", h->sidecar);
     }
 }
 

@@ -490,6 +490,7 @@ static int auto_strip_rows(const fb_scene *s, int height)
 typedef struct heightmaps {
     float *z[FB_MAX_LAYERS];  /* region width x height, or NULL */
     int plane[FB_MAX_LAYERS]; /* the Y channel among all planes of a strip */
+    int alpha[FB_MAX_LAYERS]; /* a GeoTIFF's: the A channel (0 outside a terrain's hull: no data), or -1 */
 } heightmaps;
 
 static fb_result heightmaps_create(const fb_scene *s, const layer_run *runs, const int *offset, int rw, int rh,
@@ -497,9 +498,19 @@ static fb_result heightmaps_create(const fb_scene *s, const layer_run *runs, con
 {
     for (int i = 0; i < s->nlayers; i++) {
         if (!s->layers[i].heightmap[0]) continue;
+        char msg[256];
+        fb_heightmap_format f = FB_HEIGHTMAP_PNG16;
+        fb_heightmap_format_of(s->layers[i].heightmap, &f);
+        if (!fb_heightmap_engine_check(s->layers[i].heightmap_engine, rw, rh, f, msg, sizeof msg)) /* a region's */
+            return fb_fail(FB_ERR_USAGE, "layer %s: %s (the region is %d x %d)", s->layers[i].name, msg, rw, rh);
         int c = fb_gen_channel_of(&runs[i].gen, "Y", s->layers[i].name, "heightmap");
         if (!ALWAYS(c >= 0)) return FB_ERR_INTERNAL;
         hm->plane[i] = offset[i] + c;
+        char alpha[160];
+        snprintf(alpha, sizeof alpha, "%s.A", s->layers[i].name);
+        hm->alpha[i] = -1;
+        for (int k = 0; k < runs[i].gen.nchannels && f == FB_HEIGHTMAP_GEOTIFF; k++)
+            if (!strcmp(runs[i].gen.channel_names[k], alpha)) hm->alpha[i] = offset[i] + k;
         if (!(hm->z[i] = fb_malloc_large((size_t)rw * rh * sizeof(float))))
             return fb_fail(FB_ERR_NOMEM, "layer %s: out of memory for its heightmap", s->layers[i].name);
     }
@@ -510,9 +521,13 @@ static void heightmaps_add(const fb_scene *s, heightmaps *hm, const void *const 
 {
     for (int i = 0; i < s->nlayers; i++)
         if (hm->z[i])
-            for (int r = 0; r < n; r++)
-                memcpy(hm->z[i] + (size_t)(y0 + r) * rw, (const float *)planes[hm->plane[i]] + (size_t)r * s->width,
-                       (size_t)rw * sizeof(float));
+            for (int r = 0; r < n; r++) {
+                float *z = hm->z[i] + (size_t)(y0 + r) * rw;
+                memcpy(z, (const float *)planes[hm->plane[i]] + (size_t)r * s->width, (size_t)rw * sizeof(float));
+                const float *a = hm->alpha[i] >= 0 ? (const float *)planes[hm->alpha[i]] + (size_t)r * s->width : NULL;
+                for (int x = 0; a && x < rw; x++)
+                    if (a[x] < 0.5f) z[x] = FB_HEIGHTMAP_NODATA;
+            }
 }
 
 static fb_result heightmaps_write(const fb_scene *s, const layer_run *runs, heightmaps *hm, const int region[4],
@@ -545,10 +560,13 @@ static fb_result heightmaps_write(const fb_scene *s, const layer_run *runs, heig
                                                      .lo = lo,
                                                      .hi = hi,
                                                      .world = world,
-                                                     .epsg = g->epsg});
+                                                     .epsg = g->epsg,
+                                                     .engine = (fb_heightmap_engine)L->heightmap_engine,
+                                                     .nodata = hm->alpha[i] >= 0});
         if (!rc && stats && stats->nheightmaps < FB_MAX_LAYERS) {
             fb_bake_heightmap *h = &stats->heightmaps[stats->nheightmaps++];
             h->layer = L->name, h->path = L->heightmap, h->lo = lo, h->hi = hi;
+            h->sidecar = L->heightmap_sidecar[0] ? L->heightmap_sidecar : NULL;
             fb_heightmap_format f = FB_HEIGHTMAP_PNG16;
             fb_heightmap_format_of(L->heightmap, &f);
             h->format = (int)f;

@@ -67,6 +67,7 @@ typedef struct fb_bake_desc {
 /* A heightmap a bake wrote: its layer, file, format and the heights stored as 0 and 65535. */
 typedef struct fb_bake_heightmap {
     const char *layer, *path; /* the scene's strings */
+    const char *sidecar;      /* an engine preset's import settings (OUT.import.json), or NULL */
     int format;               /* fb_heightmap_format */
     double lo, hi;
 } fb_bake_heightmap;

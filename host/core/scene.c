@@ -103,10 +103,10 @@ static fb_result resolve_refs(const fb_vctx *v, fb_scene *s)
     return FB_OK;
 }
 
-/* The keys every height-producing generator shares (heightmap, heightmap-range), read into L; their
+/* The keys every height-producing generator shares (heightmap, heightmap-engine, heightmap-range), read into L; their
  * types were checked against the generator's table. A GeoTIFF needs world coordinates, which only a
  * generator with a "crs" key has (terrain). */
-static fb_result parse_heightmap(const fb_vctx *v, const char *path, const json_t *lj, fb_layer *L)
+static fb_result parse_heightmap(const fb_vctx *v, const char *path, const json_t *lj, const fb_scene *s, fb_layer *L)
 {
     char sub[96];
     const char *hm = json_string_value(json_object_get(lj, "heightmap"));
@@ -126,6 +126,18 @@ static fb_result parse_heightmap(const fb_vctx *v, const char *path, const json_
                                    "layer has): write .png or .r16",
                                    hm, L->cls->what);
         snprintf(L->heightmap, sizeof L->heightmap, "%s", hm);
+    }
+    const char *engine = json_string_value(json_object_get(lj, "heightmap-engine"));
+    if (engine) {
+        char msg[256];
+        fb_heightmap_format f = FB_HEIGHTMAP_PNG16;
+        snprintf(sub, sizeof sub, "%s.heightmap-engine", path);
+        if (!hm) return fb_schema_error(v, sub, "a preset for a heightmap, and no \"heightmap\" is written");
+        fb_heightmap_format_of(hm, &f);
+        L->heightmap_engine = (int)fb_heightmap_engine_parse(engine);
+        if (!fb_heightmap_engine_check(L->heightmap_engine, s->width, s->height, f, msg, sizeof msg))
+            return fb_schema_error(v, sub, "%s (the image is %d x %d)", msg, s->width, s->height);
+        fb_heightmap_sidecar_path(hm, L->heightmap_sidecar, sizeof L->heightmap_sidecar);
     }
     if (json_object_get(lj, "heightmap-range")) {
         fb_json_vec2(lj, "heightmap-range", L->heightmap_range);
@@ -258,7 +270,7 @@ static fb_result parse_root(const fb_vctx *v, json_t *root, fb_scene *s)
         if (rc) return rc;
         snprintf(L->name, sizeof L->name, "%s", json_string_value(json_object_get(lj, "name")));
         L->half = fb_json_bool(lj, "half");
-        if ((rc = parse_heightmap(v, path, lj, L))) return rc;
+        if ((rc = parse_heightmap(v, path, lj, s, L))) return rc;
         L->envmap = layer_envmap_key(L, lj);
         const json_t *lc = json_object_get(lj, "compression");
         L->compression = lc ? (exrio_compression)exrio_compression_parse(json_string_value(lc)) : s->compression;
@@ -350,6 +362,7 @@ int fb_scene_outputs(const fb_scene *s, const char **paths, const char **what, i
         const fb_layer *l = &s->layers[i];
         if (l->cls && l->cls->outputs) n += l->cls->outputs(l, paths + n, what + n, max - n);
         if (l->heightmap[0] && n < max) paths[n] = l->heightmap, what[n++] = "heightmap";
+        if (l->heightmap_sidecar[0] && n < max) paths[n] = l->heightmap_sidecar, what[n++] = "heightmap sidecar";
     }
     return n;
 }

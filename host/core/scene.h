@@ -38,6 +38,8 @@ typedef struct fb_layer {
     /* "heightmap" (fbm, terrain, constrain): its Y channel also written as OUT.png / OUT.r16 (16-bit,
      * normalised to heightmap_range or the image's own range) or OUT.tif (a float GeoTIFF); "" none */
     char heightmap[1024];
+    int heightmap_engine;         /* fb_heightmap_engine: a preset, whose sidecar is written too */
+    char heightmap_sidecar[1040]; /* the preset's sidecar (OUT.import.json), or "" */
     bool heightmap_range_set;
     double heightmap_range[2];
     /* What the layer is on the sphere: its "mapping" key when its class's table has one taking

@@ -32,6 +32,114 @@ bool fb_heightmap_format_of(const char *path, fb_heightmap_format *out)
     return true;
 }
 
+/* ---- engine presets ------------------------------------------------------------------------------ */
+
+static const int k_unreal[] = {127, 253, 505, 1009, 2017, 4033, 8129};
+static const int k_unity[] = {33, 65, 129, 257, 513, 1025, 2049, 4097};
+
+fb_heightmap_engine fb_heightmap_engine_parse(const char *name)
+{
+    return !name                     ? FB_ENGINE_NONE
+           : !strcmp(name, "unreal") ? FB_ENGINE_UNREAL
+           : !strcmp(name, "unity")  ? FB_ENGINE_UNITY
+                                     : FB_ENGINE_NONE;
+}
+
+/* Whether n is in the table; when not, the nearest entries below and above it in msg. */
+static bool size_in(const int *t, int nt, int n, const char *what, const char *engine, const char *takes, char *msg,
+                    size_t size)
+{
+    for (int i = 0; i < nt; i++)
+        if (t[i] == n) return true;
+    int below = 0, above = 0;
+    for (int i = 0; i < nt; i++) {
+        if (t[i] < n) below = t[i];
+        if (t[i] > n && !above) above = t[i];
+    }
+    char list[128] = "";
+    for (int i = nt; i-- > 0;)
+        snprintf(list + strlen(list), sizeof list - strlen(list), "%s%d", i < nt - 1 ? ", " : "", t[i]);
+    char near[64];
+    if (below && above)
+        snprintf(near, sizeof near, "the nearest are %d and %d", below, above);
+    else
+        snprintf(near, sizeof near, "the nearest is %d", below ? below : above);
+    snprintf(msg, size, "heightmap-engine %s takes %s of %s samples, and the %s %d is not one: %s", engine, takes, list,
+             what, n, near);
+    return false;
+}
+
+bool fb_heightmap_engine_check(fb_heightmap_engine e, int w, int h, fb_heightmap_format f, char *msg, size_t size)
+{
+    if (e == FB_ENGINE_UNREAL) {
+        if (f != FB_HEIGHTMAP_PNG16) {
+            snprintf(msg, size, "heightmap-engine unreal imports a 16-bit grey PNG: name the heightmap OUT.png");
+            return false;
+        }
+        return size_in(k_unreal, 7, w, "width", "unreal", "landscapes", msg, size) &&
+               size_in(k_unreal, 7, h, "height", "unreal", "landscapes", msg, size);
+    }
+    if (e == FB_ENGINE_UNITY) {
+        if (f != FB_HEIGHTMAP_RAW16) {
+            snprintf(msg, size, "heightmap-engine unity imports 16-bit RAW: name the heightmap OUT.r16 or OUT.raw");
+            return false;
+        }
+        if (w != h) {
+            snprintf(msg, size, "heightmap-engine unity takes a square heightmap, and this one is %d x %d", w, h);
+            return false;
+        }
+        return size_in(k_unity, 8, w, "size", "unity", "square terrains", msg, size);
+    }
+    return true;
+}
+
+void fb_heightmap_sidecar_path(const char *path, char *out, size_t size)
+{
+    const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
+    size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - path) : strlen(path);
+    snprintf(out, size, "%.*s.import.json", (int)stem, path);
+}
+
+/* The sidecar: the heightmap's range and the engine's import settings that reproduce it, in world
+ * units taken as metres. Sample v of the 16-bit file stands for h = lo + v (hi - lo) / 65535; the
+ * samples sit at the pixel centres, dx and dy apart. */
+static fb_result write_sidecar(const fb_heightmap_desc *d)
+{
+    char path[1100], lo[40], hi[40], buf[2048];
+    fb_heightmap_sidecar_path(d->path, path, sizeof path);
+    const double *w = d->world, dx = (w[1] - w[0]) / d->width, dy = (w[3] - w[2]) / d->height, r = d->hi - d->lo;
+    fb_format_shortest(d->lo, lo, sizeof lo);
+    fb_format_shortest(d->hi, hi, sizeof hi);
+    const char *file = strrchr(d->path, '/') ? strrchr(d->path, '/') + 1 : d->path;
+    int n = snprintf(buf, sizeof buf,
+                     "{\n  \"engine\": \"%s\",\n  \"heightmap\": \"%s\",\n  \"samples\": [%d, %d],\n"
+                     "  \"height_range\": [%s, %s],\n  \"sample_spacing\": [%.17g, %.17g],\n",
+                     d->engine == FB_ENGINE_UNREAL ? "unreal" : "unity", file, d->width, d->height, lo, hi, dx, dy);
+    if (d->engine == FB_ENGINE_UNREAL) {
+        double zs = 12800.0 * r / 65535, locz = 100 * d->lo + 32768 * zs / 128;
+        n += snprintf(buf + n, sizeof buf - n,
+                      "  \"unreal\": {\"location\": [%.17g, %.17g, %.17g], \"scale\": [%.17g, %.17g, %.17g]},\n"
+                      "  \"height_of_sample\": \"(location.z + (v - 32768) * scale.z / 128) / 100\",\n"
+                      "  \"note\": \"centimetres; X east, Y south (the image's rows), Z up\"\n}\n",
+                      100 * (w[0] + dx / 2), -100 * (w[3] - dy / 2), locz, 100 * dx, 100 * dy, zs);
+    } else {
+        n += snprintf(buf + n, sizeof buf - n,
+                      "  \"unity\": {\"depth\": 16, \"byte_order\": \"Windows\", \"resolution\": %d, "
+                      "\"terrain_width\": %.17g, \"terrain_length\": %.17g, \"terrain_height\": %.17g, "
+                      "\"position\": [%.17g, %.17g, %.17g]},\n"
+                      "  \"height_of_sample\": \"position.y + v / 65535 * terrain_height\",\n"
+                      "  \"note\": \"metres; the file's first row is the north edge (z largest)\"\n}\n",
+                      d->width, (d->width - 1) * dx, (d->height - 1) * dy, r, w[0] + dx / 2, d->lo, w[2] + dy / 2);
+    }
+    FILE *f = NULL;
+    fb_result rc = fb_output_fopen(path, "heightmap sidecar", (void **)&f);
+    if (rc) return rc;
+    bool bad = fwrite(buf, 1, (size_t)n, f) != (size_t)n;
+    if (fclose(f) != 0) bad = true;
+    return fb_output_done(path,
+                          bad ? fb_fail(FB_ERR_IO, "%s: cannot write the sidecar: %s", path, strerror(errno)) : FB_OK);
+}
+
 static fb_result write_16(const fb_heightmap_desc *d, bool png)
 {
     size_t n = (size_t)d->width * d->height;
@@ -92,6 +200,7 @@ static void tiff_warning(const char *module, const char *fmt, va_list ap)
     X(TIFFSetErrorHandler);                                                                                            \
     X(TIFFSetWarningHandler);                                                                                          \
     X(TIFFSetField);                                                                                                   \
+    X(TIFFMergeFieldInfo);                                                                                             \
     X(TIFFWriteScanline);                                                                                              \
     X(TIFFFlush);                                                                                                      \
     X(XTIFFFdOpen);                                                                                                    \
@@ -150,6 +259,11 @@ static fb_result write_geotiff(const fb_heightmap_desc *d)
         g_tiff.TIFFSetField(tif, TIFFTAG_PREDICTOR, PREDICTOR_FLOATINGPOINT);
         g_tiff.TIFFSetField(tif, TIFFTAG_ROWSPERSTRIP, (uint32_t)rows);
         g_tiff.TIFFSetField(tif, TIFFTAG_SOFTWARE, "fractalbake " FB_VERSION);
+        /* libtiff does not know GDAL's tag: it is registered as GDAL registers it */
+        static const TIFFFieldInfo nodata = {TIFFTAG_GDAL_NODATA, -1, -1, TIFF_ASCII,
+                                             FIELD_CUSTOM,        1,  0,  "GDALNoDataValue"};
+        if (d->nodata && g_tiff.TIFFMergeFieldInfo(tif, &nodata, 1) == 0)
+            g_tiff.TIFFSetField(tif, TIFFTAG_GDAL_NODATA, "-3.4028234663852886e+38");
         /* the geotransform: pixel corner (0, 0) at (xmin, ymax), pixels (dx, dy) of the world apart */
         const double *w = d->world;
         double scale[3] = {(w[1] - w[0]) / d->width, (w[3] - w[2]) / d->height, 0};
@@ -184,5 +298,9 @@ fb_result fb_heightmap_write(const fb_heightmap_desc *d)
     if (!fb_heightmap_format_of(d->path, &f))
         return fb_fail(FB_ERR_USAGE, "%s: a heightmap is .png, .r16 or .tif", d->path);
     if (f == FB_HEIGHTMAP_GEOTIFF) return write_geotiff(d);
-    return write_16(d, f == FB_HEIGHTMAP_PNG16);
+    char msg[256];
+    if (!fb_heightmap_engine_check(d->engine, d->width, d->height, f, msg, sizeof msg))
+        return fb_fail(FB_ERR_INPUT, "%s: %s", d->path, msg);
+    fb_result rc = write_16(d, f == FB_HEIGHTMAP_PNG16);
+    return rc || d->engine == FB_ENGINE_NONE ? rc : write_sidecar(d);
 }

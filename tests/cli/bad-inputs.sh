@@ -62,6 +62,9 @@ printf 'halves { .5 0 0 .5 0 0 .5 .5 0 0 .5 1 0 .5 }\nthirds {\n .33 0 0 .33 0 0
 printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode"}]}' > enoin.json
 printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": 3}]}' > enum.json
 printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": "hill"}]}' > ename.json
+printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": "h", "iterations": 2, "masks": "m", "mask-bits": 12}]}' > emb.json
+printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": "h", "iterations": 2, "mask-bits": 8}]}' > emb2.json
+printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": "h", "iterations": 2, "masks": "nodir/m"}]}' > emnd.json
 printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "op", "name": "o", "op": "remap", "inputs": ["h"], "from": [0, 1]}, {"type": "erode", "input": "o"}]}' > eop.json
 printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": "h", "extent": 0}]}' > eext.json
 printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": "h.Z"}]}' > echan.json

@@ -11,6 +11,9 @@
 #include "exrio.h"
 #include "gen_erode.h"
 
+#include "heightmap.h"
+#include "pngio.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -40,8 +43,15 @@ static const fb_keyspec erode_keys[] = {
     {"thermal", FB_K_NUM, 0, 1e6, false, NULL, "0.5", "thermal erosion rate, per time unit (0: none)"},
     {"heightmap", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
      "also write the eroded heights (Y) for engines: OUT.png (16-bit grey) or OUT.r16 (16-bit raw, little-endian)"},
+    {"heightmap-engine", FB_K_ENUM, 0, 0, false, FB_HEIGHTMAP_ENGINES, NULL,
+     "the heightmap for an engine: unreal (a landscape size, 16-bit PNG) or unity (2^n+1 square, RAW); writes "
+     "OUT.import.json, the import settings that reproduce the heights"},
     {"heightmap-range", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL,
      "heights stored as 0 and 65535 in a 16-bit heightmap (LO,HI; default: the image's lowest and highest)"},
+    {"masks", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
+     "also write the masks for texturing as grey PNGs: PREFIX.flow.png, PREFIX.wear.png, PREFIX.deposition.png, "
+     "PREFIX.sediment.png, each from 0 to its own maximum (kept in the text chunk fractalbake/mask-max)"},
+    {"mask-bits", FB_K_INT, 8, 16, false, NULL, "16", "the masks' PNG depth: 8 or 16 bits"},
     {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store the channels as half (flags: --half, --float)"},
     {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
@@ -74,7 +84,32 @@ static fb_result parse_erode(const fb_vctx *v, const char *path, json_t *obj, co
     P->depth = fb_json_num(obj, "depth");
     P->talus = fb_json_num(obj, "talus");
     P->thermal = fb_json_num(obj, "thermal");
+    P->mask_bits = (int)json_integer_value(json_object_get(obj, "mask-bits"));
+    if (P->mask_bits != 8 && P->mask_bits != 16) {
+        snprintf(sub, sizeof sub, "%s.mask-bits", path);
+        return fb_schema_error(v, sub, "a PNG's depth: expected 8 or 16, found %d", P->mask_bits);
+    }
+    const char *masks = json_string_value(json_object_get(obj, "masks"));
+    if (masks) {
+        static const char *const names[4] = {"flow", "wear", "deposition", "sediment"};
+        snprintf(sub, sizeof sub, "%s.masks", path);
+        if (strlen(masks) >= sizeof P->masks[0] - 16)
+            return fb_schema_error(v, sub, "file name longer than %zu characters", sizeof P->masks[0] - 16);
+        for (int k = 0; k < 4; k++) snprintf(P->masks[k], sizeof P->masks[k], "%s.%s.png", masks, names[k]);
+    } else if (json_object_get(obj, "mask-bits") && P->mask_bits != 16) {
+        snprintf(sub, sizeof sub, "%s.mask-bits", path);
+        return fb_schema_error(v, sub, "the masks' depth, and no \"masks\" are written");
+    }
     return FB_OK;
+}
+
+/* The masks an erode layer writes (reserved with the other outputs before any work). */
+static int erode_outputs(const fb_layer *L, const char **paths, const char **what, int max)
+{
+    const fb_erode_layer_params *P = fb_layer_params(L);
+    int n = 0;
+    for (int k = 0; k < 4 && P->masks[k][0] && n < max; k++) paths[n] = P->masks[k], what[n++] = "mask";
+    return n;
 }
 
 /* ---- the layer --------------------------------------------------------------------------------- */
@@ -134,6 +169,37 @@ static fb_result read_input(const fb_gen *g, float *bed)
     return rc;
 }
 
+/* The four masks as grey PNGs of P->mask_bits, each 0 at 0 and full scale at its own maximum. */
+static fb_result write_masks(const fb_gen *g, const fb_erode_layer_params *P)
+{
+    const erode_state *s = state(g);
+    const int w = g->scene->width, h = g->scene->height, full = P->mask_bits == 16 ? 65535 : 255;
+    const size_t n = (size_t)w * h;
+    const float *planes[4] = {s->out.flow, s->out.wear, s->out.deposit, s->out.sediment};
+    void *pix = malloc(n * (P->mask_bits / 8));
+    if (!pix) return fb_fail(FB_ERR_NOMEM, "layer %s: out of memory for its masks", g->layer->name);
+    fb_result rc = FB_OK;
+    for (int k = 0; k < 4 && !rc; k++) {
+        float top = 0;
+        for (size_t i = 0; i < n; i++) top = planes[k][i] > top ? planes[k][i] : top;
+        for (size_t i = 0; i < n; i++) {
+            double q = top > 0 && planes[k][i] > 0 ? (double)planes[k][i] / top * full + 0.5 : 0;
+            unsigned v = q >= full ? (unsigned)full : (unsigned)q;
+            if (P->mask_bits == 16)
+                ((uint16_t *)pix)[i] = (uint16_t)v;
+            else
+                ((uint8_t *)pix)[i] = (uint8_t)v;
+        }
+        char mx[40];
+        fb_format_shortest(top, mx, sizeof mx);
+        const char *kv[2][2] = {{"fractalbake/mask-max", mx},
+                                {"Description", "0 at 0, full scale at mask-max, linear between"}};
+        rc = fb_png_write(P->masks[k], "mask", w, h, 1, P->mask_bits, pix, (const char *const(*)[2])kv, 2);
+    }
+    free(pix);
+    return rc;
+}
+
 static fb_result erode_prepare(fb_gen *g, struct fb_engine *e, bool progress)
 {
     erode_state *s = state(g);
@@ -182,7 +248,8 @@ static fb_result erode_prepare(fb_gen *g, struct fb_engine *e, bool progress)
         total1 += (double)s->out.bed[i] + s->out.sediment[i];
     }
     free(bed);
-    free(s->out.bed), s->out.bed = NULL; /* the strips need only the settled height */
+    free(s->out.bed), s->out.bed = NULL;                       /* the strips need only the settled height */
+    if (P->masks[0][0] && (rc = write_masks(g, P))) return rc; /* committed with the EXR */
     g->prepare_gpu_seconds = s->out.gpu_seconds;
     if (s->src->has_world) {
         g->has_world = true;
@@ -295,6 +362,7 @@ const fb_gen_class fb_gen_erode = {
     .params_size = sizeof(fb_erode_layer_params),
     .parse = parse_erode,
     .refs = erode_refs,
+    .outputs = erode_outputs,
     .init = erode_init,
     .share = FB_SHARE_WHOLE,
     .cost = erode_cost,

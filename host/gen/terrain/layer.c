@@ -16,6 +16,8 @@
 #include "smooth.h"
 #include "terrain_io.h"
 
+#include "heightmap.h"
+
 #include <jansson.h>
 #include <math.h>
 #include <stdio.h>
@@ -81,7 +83,10 @@ static const fb_keyspec terrain_keys[] = {
     {"mesh", FB_K_OUTPUT, 0, 0, false, NULL, NULL, "also write the refined mesh: OUT.ply (binary) or OUT.obj"},
     {"heightmap", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
      "also write the heights for engines: OUT.png (16-bit grey) or OUT.r16 (16-bit raw, little-endian), or OUT.tif "
-     "(float GeoTIFF with the geotransform)"},
+     "(float GeoTIFF with the geotransform; pixels outside the hull are NoData, -3.4028234663852886e+38)"},
+    {"heightmap-engine", FB_K_ENUM, 0, 0, false, FB_HEIGHTMAP_ENGINES, NULL,
+     "the heightmap for an engine: unreal (a landscape size, 16-bit PNG) or unity (2^n+1 square, RAW); writes "
+     "OUT.import.json, the import settings that reproduce the heights"},
     {"heightmap-range", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL,
      "heights stored as 0 and 65535 in a 16-bit heightmap (LO,HI; default: the image's lowest and highest)"},
     {"crs", FB_K_STRING, 0, 0, false, NULL, NULL,
@@ -492,12 +497,13 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
              P->mesh[0] ? " and mesh" : "", t_out, P->mesh[0] ? "; mesh " : "", P->mesh);
     snprintf(g->summary_json, sizeof g->summary_json,
              "{\"layer\": \"%s\", \"generator\": \"terrain\", \"input_points\": %u, \"duplicates\": %llu, "
-             "\"inserted\": %llu, \"clamped_variances\": %llu, \"rejected_sites\": %llu, \"variance_stages\": %u, "
+             "\"inserted\": %llu, \"hull_splits\": %llu, \"clamped_variances\": %llu, \"rejected_sites\": %llu, "
+             "\"variance_stages\": %u, "
              "\"vertices\": %u, \"triangles\": %u, \"sigma\": %.17g, \"triangulate_seconds\": %.6f, "
              "\"refine_seconds\": %.6f, \"output_seconds\": %.6f}",
              g->layer->name, st->input, (unsigned long long)st->duplicates, (unsigned long long)st->inserted,
-             (unsigned long long)st->clamped, (unsigned long long)st->rejected, st->stages, s->t.dt.nv, s->t.dt.nfinite,
-             st->sigma, st->build_seconds, st->refine_seconds, t_out);
+             (unsigned long long)st->hull_splits, (unsigned long long)st->clamped, (unsigned long long)st->rejected,
+             st->stages, s->t.dt.nv, s->t.dt.nfinite, st->sigma, st->build_seconds, st->refine_seconds, t_out);
     return FB_OK;
 }
 

@@ -3,7 +3,7 @@
  */
 #include "terrain.h"
 
-#include "predicates.h"
+#include "terrain_hull.h"
 
 #include "kernels/hash.h"
 
@@ -134,24 +134,11 @@ static double stage_variance(const fb_terrain *t)
     return m ? sum / (double)m : 0.0;
 }
 
-/* Local: over the triangle, its finite neighbours and theirs (at most 10 triangles). */
+/* Local: over the triangle's neighbourhood. */
 static double local_variance(const fb_terrain *t, uint32_t tr)
 {
-    const fb_dt *d = &t->dt;
     uint32_t list[16];
-    size_t n = 0, head = 0;
-    list[n++] = tr;
-    for (int ring = 0; ring < 2; ring++) {
-        size_t end = n;
-        for (; head < end; head++)
-            for (int i = 0; i < 3; i++) {
-                uint32_t nb = d->tn[3 * (size_t)list[head] + i];
-                if (fb_dt_is_ghost(d, nb)) continue;
-                bool seen = false;
-                for (size_t k = 0; k < n && !seen; k++) seen = list[k] == nb;
-                if (!seen && n < 16) list[n++] = nb;
-            }
-    }
+    size_t n = fb_terrain_neighbourhood(&t->dt, tr, list);
     return diff_variance(t, list, n);
 }
 
@@ -459,7 +446,16 @@ fb_result fb_terrain_refine(fb_terrain *t, const fb_terrain_opts *o, const char 
         }
         const uint32_t *v = d->tv + 3 * (size_t)tr;
         const double *a = d->xy + 2 * (size_t)v[0], *b = d->xy + 2 * (size_t)v[1], *c = d->xy + 2 * (size_t)v[2];
-        double p[2] = {(a[0] + b[0] + c[0]) / 3, (a[1] + b[1] + c[1]) / 3};
+        double p[2] = {(a[0] + b[0] + c[0]) / 3, (a[1] + b[1] + c[1]) / 3}, mid[2];
+        uint32_t owner;
+        int he = fb_terrain_encroached(d, tr, p, &owner);
+        const uint32_t *ov = d->tv + 3 * (size_t)owner;
+        bool split = he >= 0 && fb_terrain_hull_midpoint(d, owner, d->xy + 2 * (size_t)ov[(he + 1) % 3],
+                                                         d->xy + 2 * (size_t)ov[(he + 2) % 3], mid);
+        if (split) { /* the hull edge's midpoint instead, from its triangle's corners */
+            tr = owner, v = ov, p[0] = mid[0], p[1] = mid[1];
+            a = d->xy + 2 * (size_t)v[0], b = d->xy + 2 * (size_t)v[1], c = d->xy + 2 * (size_t)v[2];
+        }
         if (d->nv >= 2 * (uint64_t)stage_nv && !o->local_variance && !o->additions) {
             V = stage_variance(t);
             stage_nv = d->nv;
@@ -472,19 +468,25 @@ fb_result fb_terrain_refine(fb_terrain *t, const fb_terrain_opts *o, const char 
             ci = (uint32_t)(cc - o->centers);
             H = cc->hurst, s2 = csig2[ci];
         }
-        double z = (t->z[v[0]] + t->z[v[1]] + t->z[v[2]]) / 3, res = 0;
+        fb_hull_weights hw; /* on a hull edge: the neighbourhood's weights in the new height */
+        if (split && !fb_terrain_hull_krige(d, tr, p, H, &hw)) split = false; /* then the plain mean */
+        double z = (t->z[v[0]] + t->z[v[1]] + t->z[v[2]]) / 3,
+               res = resid ? (resid[v[0]] + resid[v[1]] + resid[v[2]]) / 3 : 0;
+        if (split) {
+            z = res = 0;
+            for (int k = 0; k < hw.n; k++) z += hw.w[k] * t->z[hw.v[k]], res += resid ? hw.w[k] * resid[hw.v[k]] : 0;
+        }
         if (o->additions) {
-            res = (resid[v[0]] + resid[v[1]] + resid[v[2]]) / 3;
             int c = o->ncenters ? (int)ci : 0;
             z = res + fbm_at(&field, c, p) + field.nugget_sd[c] * fb_terrain_gauss(o->seed, i);
-        } else { /* equations IV to VI */
+        } else { /* equations IV to VI; on a hull edge, a third of the kriging variance (terrain_hull.h) */
             double var_abc = o->local_variance ? local_variance(t, tr) : V, var = 0;
             for (int k = 0; k < 3; k++) {
                 const double *x = d->xy + 2 * (size_t)v[k];
                 double dx = p[0] - x[0], dy = p[1] - x[1];
                 var += pow(dx * dx + dy * dy, H) * s2 - var_abc; /* |p - x|^(2H) sigma^2 */
             }
-            var /= 9;
+            var = split ? s2 * hw.kvar / 6 : var / 9; /* split: a third of (sigma^2 / 2) kvar */
             if (var < 0) {
                 st->clamped++;
                 var = 0;
@@ -507,6 +509,7 @@ fb_result fb_terrain_refine(fb_terrain *t, const fb_terrain_opts *o, const char 
         }
         t->z[nvx] = z;
         if (resid) resid[nvx] = res;
+        st->hull_splits += split;
         i++;
         st->inserted = i;
         if (!o->sweep) {
