@@ -120,16 +120,18 @@ static void test_julia_channels(fb_engine *gpu, fb_engine *cpu)
                                     "[\"B\", \"iter\", \"G\", \"R\"]"};
     static const char *all[] = {"sky.iter", "sky.n", "sky.inside", "sky.de", "sky.R", "sky.G", "sky.B"};
     static const int counts[] = {1, 1, 3, 2, 4};
-    const char *fmt =
-        "{\"size\": [95, 40], \"layers\": [{\"type\": \"julia\", \"alpha\": [0.5, 0.25], \"samples\": 2%s%s}]}";
+    const char *fmt = "{\"size\": [95, 40], \"layers\": [{\"type\": \"julia\", \"alpha\": [0.5, 0.25]%s%s}]}";
     const int N = 95 * 40;
     for (int b = 0; b < 2; b++) {
         fb_engine *e = b ? cpu : gpu;
         char json[512];
-        snprintf(json, sizeof json, fmt, "", "");
+        snprintf(json, sizeof json, fmt, ", \"samples\": 2", "");
         for (int k = 0; k < 5; k++) {
+            /* anti-aliasing samples shape R, G and B only (a layer without them refuses the key), so
+             * the other channels must come out the same without it */
             char sub[512], extra[128];
-            snprintf(extra, sizeof extra, ", \"channels\": %s", subsets[k]);
+            snprintf(extra, sizeof extra, "%s, \"channels\": %s", strstr(subsets[k], "\"R\"") ? ", \"samples\": 2" : "",
+                     subsets[k]);
             snprintf(sub, sizeof sub, fmt, extra, "");
             int found = 0, bad = 0;
             for (int c = 0; c < 7; c++) {
