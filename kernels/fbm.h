@@ -9,8 +9,11 @@
 #ifndef FB_KERNELS_FBM_H
 #define FB_KERNELS_FBM_H
 
+#include "noise.h"
+#if K_WITH_ENVMAP
 #include "noise3.h"
 #include "sincos.h"
+#endif
 
 #define K_FBM_RIDGED   1u
 #define K_FBM_BILLOW   2u
@@ -111,6 +114,7 @@ K_FN float k_fbm_pixel(K_FbmParams p, uint px, uint py)
     return k_fbm_uv(p, 0u, u, v);
 }
 
+#if K_WITH_ENVMAP
 /*
  * fBm on the unit sphere (environment maps), for one random stream: the octaves of 3D noise
  * (noise3.h) at x_0 = d fx / (2 pi) + offset, so that fx octave-0 cells go round the equator as
@@ -160,5 +164,12 @@ K_FN float k_fbm_map_pixel(K_FbmParams p, uint px, uint py)
     if (p.mapping == K_ENV_RECT) return k_fbm_pixel(p, px, py);
     return k_fbm_dir(p, k_env_dir_exact(p.mapping, K_F(px), K_F(py), p.width, p.height));
 }
+
+#else
+K_FN float k_fbm_map_pixel(K_FbmParams p, uint px, uint py)
+{
+    return k_fbm_pixel(p, px, py);
+}
+#endif
 
 #endif

@@ -16,7 +16,9 @@
 #define FB_KERNELS_JULIA_H
 
 #include "fbm.h"
+#if K_WITH_ENVMAP
 #include "sincos.h"
+#endif
 #include "hash.h"
 
 #define K_JULIA_RECT    0u
@@ -185,6 +187,7 @@ K_FN K_JuliaStart k_julia_begin(K_JuliaParams p, float px, float py, float dpx, 
 
 /* ---- environment maps: the grid from directions ---------------------------------------------- */
 
+#if K_WITH_ENVMAP
 /* A pixel's point of the plane in homogeneous form, p = N / D (D = 0: the point at infinity), with
  * G = N' D - N D' (the derivative along the image's columns, per pixel of y: p' = G / D^2), and its
  * unit direction d (for the turbulence). On a lat-long map the column is a meridian, whose pixels
@@ -275,6 +278,8 @@ K_FN K_JuliaStart k_julia_env_start(K_JuliaParams p, K_FbmParams turb, float ex,
     k_vec2 w = k_julia_turbulence3(p, turb, e.dir);
     return k_julia_env_begin(p, e, w.x, w.y);
 }
+
+#endif
 
 /* The result of an orbit that took n steps (escaped: it reached the bailout; else it stayed
  * inside for max_iter steps). */
@@ -390,7 +395,9 @@ K_FN k_vec2 k_julia_turbulence(K_JuliaParams p, K_FbmParams t, float u, float v)
  * +0.5), turbulence included. */
 K_FN K_JuliaStart k_julia_start_at(K_JuliaParams p, K_FbmParams turb, float fx, float fy)
 {
+#if K_WITH_ENVMAP
     if (p.mapping >= K_JULIA_LATLONG) return k_julia_env_start(p, turb, fx - 0.5f, fy - 0.5f);
+#endif
     K_PRECISE float u = fx * p.inv_width;
     K_PRECISE float v = 1.0f - fy * p.inv_height;
     k_vec2 s = k_julia_start(p, u, v);

@@ -1,6 +1,7 @@
 // Warped Julia sets: one invocation per two neighbouring pixels of a row, their orbits iterated in
 // one loop (two dependency chains in flight). The math is kernels/julia.h. Included by julia.comp
-// (float) and julia64.comp (K_JULIA_F64: the grid and orbit in double; needs shaderFloat64).
+// (float), julia_env.comp (K_ENVMAP: float, lat-long and cube maps) and julia64.comp (K_JULIA_F64:
+// the grid and orbit in double; needs shaderFloat64).
 #define K_GLSL 1
 #include "../kernels/julia.h"
 #include "../kernels/palette.h"

@@ -146,7 +146,7 @@ static int test_shader(void)
             fb_gen g;
             REQUIRE(fb_scene_parse(json, NULL, &s) == FB_OK);
             REQUIRE(fb_gen_init(&g, &s, &s.layers[0]) == FB_OK);
-            REQUIRE(g.nspec == 3);
+            REQUIRE(g.nspec == 4);
             bool small = fb_fbm_lattice_bound((const K_FbmParams *)(const void *)g.params) < 16777216.0;
             CHECKF(g.spec[2] == (small ? 1u : 0u), "%s: spec 2 is %u", json, g.spec[2]);
             if (small) {

@@ -55,7 +55,8 @@ static void test_keys(void)
     CHECK(p.width == 200 && p.height == 100 && p.inv_width == 1.0f / 200.0f);
     CHECK(g.nchannels == 1 && !strcmp(g.channel_names[0], "h.Y") && g.channel_types[0] == EXRIO_HALF);
     /* 6 cells x 1.99^12 at the finest octave: far under 2^24, so the small-coordinate shader */
-    CHECK(g.nspec == 3 && g.spec[0] == K_NOISE_CELLULAR_F2 && g.spec[1] == K_FBM_RIDGED && g.spec[2] == 1u);
+    CHECK(g.nspec == 4 && g.spec[0] == K_NOISE_CELLULAR_F2 && g.spec[1] == K_FBM_RIDGED && g.spec[2] == 1u &&
+          g.spec[3] == K_ENV_RECT);
     fb_scene_fini(&s);
 
     /* defaults, filled into the stored scene */

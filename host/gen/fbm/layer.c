@@ -6,6 +6,7 @@
 
 #include "kernels/fbm.h"
 #include "fbm_comp.h"
+#include "fbm_env_comp.h"
 
 #include "heightmap.h"
 
@@ -262,14 +263,16 @@ static fb_result fbm_init(fb_gen *g)
     g->channel_types[0] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
     g->native_rows = fbm_rows;
     g->lavapipe_faster = !avx2_applies(params(g)); /* the AVX2 loop beats lavapipe 1.6x; C does not */
-    g->spv = fbm_comp;
-    g->spv_size = sizeof fbm_comp;
+    bool env = params(g)->mapping != K_ENV_RECT;   /* only the sphere's shader carries 3D noise */
+    g->spv = env ? fbm_env_comp : fbm_comp;
+    g->spv_size = env ? sizeof fbm_env_comp : sizeof fbm_comp;
     g->params_size = sizeof(K_FbmParams);
     g->push_size = sizeof(fbm_push);
     g->spec[0] = params(g)->noise;
     g->spec[1] = params(g)->flags;
     g->spec[2] = fb_fbm_lattice_bound(params(g)) < 16777216.0 ? 1u : 0u;
-    g->nspec = 3;
+    g->spec[3] = params(g)->mapping;
+    g->nspec = 4;
     return FB_OK;
 }
 

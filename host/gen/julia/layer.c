@@ -11,6 +11,7 @@
 #include "palette.h"
 #include "julia64_comp.h"
 #include "julia_comp.h"
+#include "julia_env_comp.h"
 #include "layer_avx2.h"
 
 #include <math.h>
@@ -376,8 +377,10 @@ static fb_result julia_init(fb_gen *g)
     }
     g->native_rows = julia_rows;
     g->needs_float64 = j->double_precision;
-    g->spv = j->double_precision ? julia64_comp : julia_comp;
-    g->spv_size = j->double_precision ? sizeof julia64_comp : sizeof julia_comp;
+    /* the plane's shader carries no environment-map code (kernels/common.h, K_WITH_ENVMAP) */
+    bool env = p->mapping >= K_JULIA_LATLONG;
+    g->spv = j->double_precision ? julia64_comp : env ? julia_env_comp : julia_comp;
+    g->spv_size = j->double_precision ? sizeof julia64_comp : env ? sizeof julia_env_comp : sizeof julia_comp;
     g->params_size = sizeof(K_JuliaParams);
     g->push_size = sizeof(julia_push);
     g->spec[0] = p->mapping;
