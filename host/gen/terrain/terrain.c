@@ -369,15 +369,12 @@ static fb_result additions_init(const fb_terrain *t, const fb_terrain_opts *o, d
     return FB_OK;
 }
 
-fb_result fb_terrain_refine(fb_terrain *t, const fb_terrain_opts *o, const char *who, fb_terrain_stats *st)
+/* sigma^2 of each centre (given, the global one, or estimated from its Hurst exponent) in *out
+ * (NULL without centres); refuses variances that overflowed (heights or distances too large for
+ * their squares), given or estimated, which would turn the mesh into NaN or infinities. */
+static fb_result center_variances(const fb_terrain *t, const fb_terrain_opts *o, double sigma2, const char *who,
+                                  double **out)
 {
-    double t0 = fb_now();
-    fb_dt *d = &t->dt;
-    fb_terrain_stats local_st = {0};
-    if (!st) st = &local_st;
-    /* sigma^2 per centre (or the one global value), estimated where not given */
-    double sigma2 = o->sigma >= 0 ? o->sigma * o->sigma : fb_terrain_sigma2_estimate(t, o->hurst);
-    st->sigma = sqrt(sigma2);
     double *csig2 = NULL;
     if (o->ncenters) {
         csig2 = malloc((size_t)o->ncenters * sizeof *csig2);
@@ -389,8 +386,6 @@ fb_result fb_terrain_refine(fb_terrain *t, const fb_terrain_opts *o, const char 
                                        : fb_terrain_sigma2_estimate(t, c->hurst);
         }
     }
-    /* Refuse what would turn the mesh into NaN or infinities: a variance that overflowed (heights or
-     * distances too large for their squares), given or estimated. */
     bool finite = isfinite(sigma2);
     for (int i = 0; i < o->ncenters && csig2; i++) finite = finite && isfinite(csig2[i]);
     if (!finite) {
@@ -400,12 +395,27 @@ fb_result fb_terrain_refine(fb_terrain *t, const fb_terrain_opts *o, const char 
                        "points' heights or distances are too large",
                        who, sigma2);
     }
+    *out = csig2;
+    return FB_OK;
+}
+
+fb_result fb_terrain_refine(fb_terrain *t, const fb_terrain_opts *o, const char *who, fb_terrain_stats *st)
+{
+    double t0 = fb_now();
+    fb_dt *d = &t->dt;
+    fb_terrain_stats local_st = {0};
+    if (!st) st = &local_st;
+    /* sigma^2 per centre (or the one global value), estimated where not given */
+    double sigma2 = o->sigma >= 0 ? o->sigma * o->sigma : fb_terrain_sigma2_estimate(t, o->hurst);
+    st->sigma = sqrt(sigma2);
+    double *csig2 = NULL;
+    fb_result rc = center_variances(t, o, sigma2, who, &csig2);
+    if (rc) return rc;
     hint_grid g = {0};
     if (!o->sweep && !grid_rebuild(&g, t)) {
         free(csig2);
         return fb_fail(FB_ERR_NOMEM, "%s: out of memory", who);
     }
-    fb_result rc = FB_OK;
     double V = o->additions ? 0 : stage_variance(t);
     uint32_t stage_nv = d->nv;
     st->stages = o->additions ? 0 : 1;
