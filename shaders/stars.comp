@@ -15,12 +15,32 @@ layout(push_constant) uniform Push
 }
 pc;
 
-layout(std430, set = 0, binding = 0) writeonly buffer Red { float v[]; } o_r;
-layout(std430, set = 0, binding = 1) writeonly buffer Green { float v[]; } o_g;
-layout(std430, set = 0, binding = 2) writeonly buffer Blue { float v[]; } o_b;
-layout(std430, set = 0, binding = 3) writeonly buffer Mag { float v[]; } o_m;
+layout(std430, set = 0, binding = 0) writeonly buffer Red
+{
+    float v[];
+}
+o_r;
+layout(std430, set = 0, binding = 1) writeonly buffer Green
+{
+    float v[];
+}
+o_g;
+layout(std430, set = 0, binding = 2) writeonly buffer Blue
+{
+    float v[];
+}
+o_b;
+layout(std430, set = 0, binding = 3) writeonly buffer Mag
+{
+    float v[];
+}
+o_m;
 // tile_start[tiles + 1], the records from rec_off (8 words each), each row's 1/omega from row_off
-layout(std430, set = 0, binding = 4) readonly buffer Input { uint w[]; } inp;
+layout(std430, set = 0, binding = 4) readonly buffer Input
+{
+    uint w[];
+}
+inp;
 
 K_StarsRec record(uint i)
 {

@@ -17,7 +17,11 @@ layout(push_constant) uniform Push
 }
 pc;
 
-layout(std430, set = 0, binding = 0) writeonly buffer Out { float v[]; } dst;
+layout(std430, set = 0, binding = 0) writeonly buffer Out
+{
+    float v[];
+}
+dst;
 
 uint hash(uint x)
 {
@@ -37,7 +41,10 @@ float grad(uint h, float x, float y)
     return ((b & 1u) != 0u ? -u : u) + ((b & 2u) != 0u ? -2.0 * v : 2.0 * v);
 }
 
-float fade(float t) { return t * t * t * (t * (t * 6.0 - 15.0) + 10.0); }
+float fade(float t)
+{
+    return t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
+}
 
 void main()
 {

@@ -43,11 +43,11 @@ typedef struct fb_terrain_stats {
     uint32_t input;      /* distinct input points (vertices 0 .. input-1 of the mesh) */
     uint64_t duplicates; /* input points equal to an earlier one, left out */
     uint64_t inserted;
-    uint64_t clamped;  /* negative displacement variances set to zero */
-    uint64_t rejected; /* random sites outside the hull, or barycentres equal to a vertex */
+    uint64_t clamped;     /* negative displacement variances set to zero */
+    uint64_t rejected;    /* random sites outside the hull, or barycentres equal to a vertex */
     uint64_t hull_splits; /* of the inserted points, those at a hull edge's midpoint (terrain.c) */
-    uint32_t stages;   /* stage-variance recomputations */
-    double sigma;      /* sigma used without centres (estimated or given) */
+    uint32_t stages;      /* stage-variance recomputations */
+    double sigma;         /* sigma used without centres (estimated or given) */
     double build_seconds, refine_seconds;
 } fb_terrain_stats;
 
