@@ -203,6 +203,7 @@ typedef struct previews {
     int layer[FB_MAX_LAYERS], first[FB_MAX_LAYERS], alpha[FB_MAX_LAYERS]; /* channel indices; alpha -1: none */
     int offset[FB_MAX_LAYERS]; /* the layer's first plane among all planes of a strip */
     bool uint[FB_MAX_LAYERS];  /* a scalar uint channel (a julia layer's iter alone): shown as float */
+    bool light[FB_MAX_LAYERS]; /* colour added in the composite (fb_gen.preview_light) */
     float *conv;               /* its rows as float: region width x strip rows */
     int width, stride;         /* the region's width; the planes' row stride */
 } previews;
@@ -255,6 +256,8 @@ static fb_result previews_create(const fb_scene *s, const layer_run *runs, const
             pv->uint[k] = g->preview_rgb < 0 && g->channel_types[g->preview_channel] == EXRIO_UINT;
             if (g->preview_rgb < 0 && g->preview_shade[0] > 0)
                 fb_preview_set_hillshade(pv->p[k], g->preview_shade[0], g->preview_shade[1]);
+            pv->light[k] = pv->over && g->preview_rgb >= 0 && g->preview_light;
+            if (pv->light[k]) fb_preview_set_light(pv->p[k]);
         }
         at += g->nchannels;
     }
@@ -280,8 +283,13 @@ static fb_result previews_create(const fb_scene *s, const layer_run *runs, const
                 snprintf(left + strlen(left), sizeof left - strlen(left), "%s%s", left[0] ? ", " : "",
                          s->layers[i].name);
         }
+        char added[FB_MAX_LAYERS * 70] = "";
+        for (int k = 0; k < pv->n; k++)
+            if (pv->light[k])
+                snprintf(added + strlen(added), sizeof added - strlen(added), "%s%s", added[0] ? ", " : "",
+                         s->layers[pv->layer[k]].name);
         for (int k = pv->n - 1; k > 0; k--) /* the frontmost opaque layer hides every layer behind it */
-            if (pv->alpha[k] < 0) {
+            if (pv->alpha[k] < 0 && !pv->light[k]) {
                 char behind[FB_MAX_LAYERS * 70] = "";
                 for (int j = 0; j < k; j++)
                     snprintf(behind + strlen(behind), sizeof behind - strlen(behind), "%s%s", j ? ", " : "",
@@ -290,7 +298,8 @@ static fb_result previews_create(const fb_scene *s, const layer_run *runs, const
                          behind);
                 break;
             }
-        snprintf(note, note_size, "%s composited back to front by their coverage%s%s%s%s", list, hid,
+        snprintf(note, note_size, "%s composited back to front by their coverage%s%s%s%s%s%s%s", list,
+                 added[0] ? " (light added: " : "", added, added[0] ? ")" : "", hid,
                  left[0] ? "; op layers not drawn: " : "", left,
                  pv->n > 1 || left[0] ? " (--preview-layer NAME shows one, all a sheet of every layer)" : "");
     }

@@ -68,6 +68,8 @@ struct fb_gen {
      * (output.h), which renames them with the EXR when the whole run succeeds. */
     double preview_shade[2]; /* > 0: the preview shows preview_channel as a hillshade (world units per
                                 pixel in x and y) */
+    bool preview_light;      /* its R, G, B are light without coverage (a star field): the over composite
+                                adds them to the layers behind instead of hiding those */
     bool has_world;          /* set by prepare: the image covers world[] = xmin, xmax, ymin, ymax (y up) */
     double world[4];
     int epsg;                /* ... in this projected CRS (EPSG code; 0: not stated) */

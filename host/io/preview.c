@@ -18,6 +18,7 @@ struct fb_preview {
     int pw, ph;
     int channels; /* 1 (grey or hillshade) or 3 (RGB), plus 1 when `alpha` */
     bool alpha;   /* the last channel is a coverage in [0, 1] (used by the over composite) */
+    bool light;   /* colour without coverage, added in the over composite */
     double *sum;  /* channels values per preview pixel */
     uint32_t *count;
     double shade_dx, shade_dy; /* > 0: one channel drawn as a hillshade; world units per source pixel */
@@ -26,6 +27,11 @@ struct fb_preview {
 void fb_preview_set_row_stride(fb_preview *p, int stride)
 {
     p->stride = stride;
+}
+
+void fb_preview_set_light(fb_preview *p)
+{
+    p->light = true;
 }
 
 void fb_preview_set_hillshade(fb_preview *p, double dx, double dy)
@@ -282,7 +288,7 @@ fb_result fb_preview_write_over(const fb_preview *const *layers, int n, const ch
                 if (!p->count[i]) continue;
                 const double *s = p->sum + i * p->channels;
                 double inv = 1.0 / p->count[i];
-                double a = p->alpha ? s[p->channels - 1] * inv : 1.0;
+                double a = p->light ? 0.0 : p->alpha ? s[p->channels - 1] * inv : 1.0;
                 a = a < 0 ? 0 : a > 1 ? 1 : a;
                 double c[3];
                 if (p->channels - (p->alpha ? 1 : 0) == 3) {

@@ -22,6 +22,9 @@ void fb_preview_destroy(fb_preview **p);
 void fb_preview_set_hillshade(fb_preview *p, double dx, double dy);
 /* The rows given to fb_preview_add_rows are `stride` values apart (default: the width). */
 void fb_preview_set_row_stride(fb_preview *p, int stride);
+/* The colour is light with no coverage (a star field): the over composite adds it to what lies behind
+ * (premultiplied colour with alpha 0) instead of covering it. */
+void fb_preview_set_light(fb_preview *p);
 /* Adds rows [y0, y0 + n) of the preview's 1 or 3 float channels, then its coverage if it has one
  * (n * width values each). */
 void fb_preview_add_rows(fb_preview *p, int y0, int n, const float *const *rows);
@@ -29,7 +32,7 @@ fb_result fb_preview_write_png(const fb_preview *p, const char *path, const char
 /* Composites previews of the same size back to front (layers[0] at the back) with the "over"
  * operator and writes an RGB PNG. Per layer: 3 channels are colour (premultiplied when the preview
  * has a coverage), 1 channel a hillshade (tinted) or grey levels of its own range; the coverage is
- * the alpha, 1 without one. */
+ * the alpha, 1 without one, 0 for light (fb_preview_set_light). */
 fb_result fb_preview_write_over(const fb_preview *const *layers, int n, const char *path);
 
 /* A contact sheet: each preview a tile of its own (colour, grey or hillshade, as fb_preview_write_png

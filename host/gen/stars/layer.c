@@ -364,8 +364,9 @@ static fb_result stars_init(fb_gen *g)
         snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
         g->channel_types[c] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
     }
-    g->preview_channel = 1; /* G */
-    g->preview_rgb = 0;     /* R, G, B */
+    g->preview_channel = 1;  /* G */
+    g->preview_rgb = 0;      /* R, G, B */
+    g->preview_light = true; /* starlight: added over the sky behind it */
     g->native_rows = stars_rows;
     g->memory = stars_memory;
     g->spv = stars_comp;
