@@ -388,6 +388,14 @@ fb_result fb_scene_drop_outputs(const char *text, char **out, char *dropped, siz
                      name ? name : "?", keys[k].key, v);
             json_object_del(l, keys[k].key);
         }
+        /* what only says how to write the heightmap goes with it (it is refused without one) */
+        static const char *const qualifiers[] = {"heightmap-engine", "heightmap-range"};
+        for (int q = 0, n = 0; q < 2 && !json_object_get(l, "heightmap"); q++)
+            if (json_object_get(l, qualifiers[q])) {
+                snprintf(dropped + strlen(dropped), size - strlen(dropped), "%s%s", n++ ? ", " : " with its ",
+                         qualifiers[q]);
+                json_object_del(l, qualifiers[q]);
+            }
     }
     *out = json_dumps(root, JSON_COMPACT);
     json_decref(root);

@@ -98,7 +98,8 @@ int fb_scene_outputs(const fb_scene *s, const char **paths, const char **what, i
 
 /* A stored scene (JSON text) without the output paths of its layers: a file baked elsewhere must not
  * choose which files this run writes. *out is the new text (free()); `dropped` lists what was removed
- * as "layers.NAME.KEY=PATH, ..." ("" if nothing). */
+ * as "layers.NAME.KEY=PATH, ..." ("" if nothing); a heightmap's engine and range go with it
+ * ("layers.NAME.heightmap=PATH with its heightmap-engine, heightmap-range"). */
 fb_result fb_scene_drop_outputs(const char *text, char **out, char *dropped, size_t size);
 
 /* The scene's own keys (size, seed, compression, parts, layers), for the command line's flags. */

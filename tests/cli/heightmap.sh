@@ -37,7 +37,8 @@ check "--json: the heightmap, its format and range" test "$(python3 -c "import j
 check "--json: the heightmap among the outputs" test "$(python3 -c "import json; print([o['bytes'] for o in json.load(open('g.json'))['outputs'] if o['what'] == 'heightmap'])")" = "[3072]"
 # --from does not write the stored scene's heightmap (as with every side output), --set names it back
 "$FB" render --from g.exr -o g2.exr 2> from.txt
-check "--from leaves the heightmap out, saying so" grep -q "not writing the stored scene's outputs (layers.ground.heightmap=g.r16)" from.txt
+check "--from leaves the heightmap (and its range) out, saying so" grep -q "not writing the stored scene's outputs (layers.ground.heightmap=g.r16 with its heightmap-range)" from.txt
+check "--from bakes without the heightmap" test -s g2.exr -a "$(ls g*.r16 | wc -l)" = 1
 # a terrain's GeoTIFF, read by the GeoTIFF library's own tool
 printf 'x,y,z\n500000,4600000,100\n500600,4600000,130\n500000,4600400,90\n500600,4600400,150\n500300,4600200,240\n' > utm.csv
 "$FB" terrain $N --points utm.csv --size 120x80 --insert 2000 --crs EPSG:32633 -o t.exr --heightmap t.tif --quiet
