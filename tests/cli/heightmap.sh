@@ -91,6 +91,11 @@ PY
 check "--json: the tiles and their files" test "$(python3 -c "import json; h = json.load(open('ft.json'))['heightmaps'][0]; print(h['tiles'], h['tile_files'])")" = \
   "[2, 2] ['f_x0_y0.png', 'f_x1_y0.png', 'f_x0_y1.png', 'f_x1_y1.png']"
 check "--json: every tile among the outputs" test "$(python3 -c "import json; print(sum(o['what'] == 'heightmap tile' for o in json.load(open('ft.json'))['outputs']))")" = 4
+# a split bake (--task): the task that computes the layer writes its tiles, the whole bake's
+printf '{"size": [65, 65], "layers": [{"type": "fbm", "name": "a", "heightmap": "a.png", "tiles": [2, 2]}, {"type": "fbm", "name": "b", "hurst": 0.3}]}' > tt.json
+"$FB" render tt.json $N --task 0/2 -o tt0.exr --quiet && "$FB" render tt.json $N --task 1/2 -o tt1.exr --quiet
+"$FB" render tt.json $N -o tw.exr --quiet --set layers.a.heightmap=w.png
+check "--task: the tiles of a split bake are the whole bake's" sh -c 'for t in x0_y0 x1_y0 x0_y1 x1_y1; do cmp -s a_$t.png w_$t.png || exit 1; done'
 "$FB" render --from f.exr -o f2.exr 2> from2.txt
 check "--from leaves the tiles out with the heightmap" grep -q "(layers.fbm.heightmap=f.png with its tiles)" from2.txt
 # bad inputs: one line, exit 2, nothing written
