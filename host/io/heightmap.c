@@ -173,7 +173,7 @@ bool fb_heightmap_tiles_check(fb_heightmap_engine e, int w, int h, int cols, int
     return true;
 }
 
-/* The stem of a path (up to its extension's dot) and the extension ("" when none). */
+/* The length of a path's stem: up to its extension's dot, or the whole path when it has none. */
 static size_t path_stem(const char *path)
 {
     const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
