@@ -7,6 +7,10 @@
  * presets accept exactly the sizes of the engines' tables (written out here), and their heightmap
  * read back as the engine reads it, through the sidecar's import settings, is within half a 16-bit
  * step of the EXR's heights; a region of another size is refused before anything is written.
+ * Tiles: each preset accepts exactly the whole sizes whose tiles are in its table; the tiles, named by
+ * the engine's convention, hold one range (the whole bake's), neighbours hold their shared row or
+ * column byte for byte, the tiles put together are the single-file heightmap of the same bake
+ * exactly, and the sidecar's offsets put every tile where its samples lie; a region is refused.
  */
 #include "bake.h"
 #include "exrio.h"
@@ -166,6 +170,191 @@ static void test_engine_sidecar(fb_engine *e, const char *engine, int n, const c
     json_decref(sc);
 }
 
+/* Each preset's tiles: exactly the whole sizes cols (t - 1) + 1 with t in the engine's table (without
+ * an engine, any t >= 2), and Unity's only square. */
+static void test_tile_sizes(void)
+{
+    static const int unreal[] = {8129, 4033, 2017, 1009, 505, 253, 127};
+    static const int unity[] = {33, 65, 129, 257, 513, 1025, 2049, 4097};
+    char msg[512];
+    for (int cols = 1; cols <= 4; cols++) {
+        int nu = 0, ny = 0, nn = 0, wrong = 0;
+        for (int n = 1; n <= 4 * 8128 + 2; n++) {
+            bool u = fb_heightmap_tiles_check(FB_ENGINE_UNREAL, n, 127, cols, 1, FB_HEIGHTMAP_PNG16, msg, sizeof msg);
+            bool y = fb_heightmap_tiles_check(FB_ENGINE_UNITY, n, n, cols, cols, FB_HEIGHTMAP_RAW16, msg, sizeof msg);
+            bool none = fb_heightmap_tiles_check(FB_ENGINE_NONE, n, 9, cols, 2, FB_HEIGHTMAP_RAW16, msg, sizeof msg);
+            bool whole = (n - 1) % cols == 0;
+            int t = (n - 1) / cols + 1;
+            nu += u, ny += y, nn += none;
+            wrong += u != (whole && in_list(unreal, 7, t)) || y != (whole && in_list(unity, 8, t)) ||
+                     none != (whole && t >= 2);
+        }
+        CHECKF(nu == 7 && ny == 8 && nn == (4 * 8128 + 1) / cols && wrong == 0,
+               "%d columns: accepted %d unreal, %d unity, %d engine-free widths, %d wrong", cols, nu, ny, nn, wrong);
+    }
+    CHECK(!fb_heightmap_tiles_check(FB_ENGINE_UNREAL, 1201, 253, 4, 1, FB_HEIGHTMAP_PNG16, msg, sizeof msg) &&
+          strstr(msg, "would be 301 samples: the nearest are 1009 (tiles of 253) and 2017 (tiles of 505)"));
+    CHECK(!fb_heightmap_tiles_check(FB_ENGINE_NONE, 64, 9, 2, 2, FB_HEIGHTMAP_PNG16, msg, sizeof msg) &&
+          strstr(msg, "the nearest are 63 (tiles of 32) and 65 (tiles of 33)"));
+    CHECK(!fb_heightmap_tiles_check(FB_ENGINE_UNITY, 129, 65, 1, 1, FB_HEIGHTMAP_RAW16, msg, sizeof msg) &&
+          strstr(msg, "square tiles"));
+    CHECK(fb_heightmap_tiles_check(FB_ENGINE_UNITY, 257, 129, 2, 1, FB_HEIGHTMAP_RAW16, msg, sizeof msg));
+    CHECK(!fb_heightmap_tiles_check(FB_ENGINE_NONE, 65, 65, 2, 2, FB_HEIGHTMAP_GEOTIFF, msg, sizeof msg));
+    CHECK(!fb_heightmap_tiles_check(FB_ENGINE_UNREAL, 253, 253, 2, 2, FB_HEIGHTMAP_RAW16, msg, sizeof msg));
+    /* the names: Unreal's x east, y south from the north-west; Unity's X index, then Z (north) index */
+    char name[64];
+    fb_heightmap_tile_path("out/land.png", FB_ENGINE_UNREAL, 1, 0, 2, name, sizeof name);
+    CHECKF(!strcmp(name, "out/land_x1_y0.png"), "%s", name);
+    fb_heightmap_tile_path("land.r16", FB_ENGINE_UNITY, 1, 0, 2, name, sizeof name);
+    CHECKF(!strcmp(name, "land_1_1.r16"), "%s", name);
+    fb_heightmap_tile_path("a.b/land", FB_ENGINE_NONE, 3, 2, 4, name, sizeof name);
+    CHECKF(!strcmp(name, "a.b/land_x3_y2"), "%s", name);
+}
+
+/* The 16-bit samples of a heightmap file (PNG or RAW) of w x h, or NULL. */
+static uint16_t *read_16(const char *path, int w, int h)
+{
+    if (strcmp(path + strlen(path) - 4, ".png")) return read_r16(path, (size_t)w * h);
+    fb_png png;
+    if (fb_png_read(path, &png) != FB_OK) return NULL;
+    uint16_t *q = png.width == w && png.height == h && png.depth == 16 ? malloc((size_t)w * h * 2) : NULL;
+    for (int i = 0; q && i < w * h; i++) q[i] = (uint16_t)lround(png.plane[0][i] * 65535.0);
+    fb_png_fini(&png);
+    return q;
+}
+
+/* Whether the PNG at path has the tEXt chunk key=value (the bytes as written). */
+static bool png_text(const char *path, const char *key, const char *value)
+{
+    FILE *f = fopen(path, "rb");
+    static char buf[1 << 20];
+    size_t n = f ? fread(buf, 1, sizeof buf, f) : 0;
+    if (f) fclose(f);
+    char want[160];
+    int len = snprintf(want, sizeof want, "tEXt%s%c%s", key, 0, value);
+    for (size_t i = 0; i + len <= n; i++)
+        if (!memcmp(buf + i, want, (size_t)len)) return true;
+    return false;
+}
+
+/* A heightmap in cols x rows tiles of an engine: the same bake's single heightmap cut up exactly, the
+ * shared rows and columns byte for byte, one range, the sidecar's offsets and settings. */
+static void test_tiles(fb_engine *e, const char *engine, int cols, int rows, int t)
+{
+    int w = cols * (t - 1) + 1, h = rows * (t - 1) + 1;
+    bool unreal = !strcmp(engine, "unreal");
+    char json[1024], whole[600], pattern[600], exr[600], side[600];
+    snprintf(whole, sizeof whole, "%s", th_path(unreal ? "whole.png" : "whole.r16"));
+    snprintf(pattern, sizeof pattern, "%s", th_path(unreal ? "land.png" : "land.r16"));
+    snprintf(side, sizeof side, "%s", th_path("land.import.json"));
+    snprintf(exr, sizeof exr, "%s", th_path("tiles.exr"));
+    const char *fmt = "{\"size\": [%d, %d], \"seed\": 5, \"layers\": [{\"type\": \"terrain\", \"name\": \"t\", "
+                      "\"insert\": 4000, \"points\": [[0, 0, 3], [600, 0, 40], [0, 500, 25], [600, 500, 9], "
+                      "[300, 250, 120]], \"heightmap\": \"%s\"%s}]}";
+    fb_bake_stats st;
+    snprintf(json, sizeof json, fmt, w, h, whole, "");
+    REQUIRE(bake(e, json, th_path("whole.exr"), NULL, &st));
+    char extra[128];
+    snprintf(extra, sizeof extra, ", \"heightmap-engine\": \"%s\", \"tiles\": [%d, %d]", engine, cols, rows);
+    snprintf(json, sizeof json, fmt, w, h, pattern, extra);
+    REQUIRE(bake(e, json, exr, NULL, &st));
+    CHECK(st.nheightmaps == 1);
+    uint16_t *all = read_16(whole, w, h);
+    float *y = read_y(exr, "t.Y", &w, &h);
+    json_t *sc = json_load_file(side, 0, NULL);
+    REQUIRE(all && y && sc);
+    const json_t *tl = json_object_get(sc, "tiles"), *files = json_object_get(tl, "files");
+    CHECK(num_at(tl, "columns", -1) == cols && num_at(tl, "rows", -1) == rows && num_at(tl, "samples", 0) == t &&
+          num_at(tl, "samples", 1) == t && (int)json_array_size(files) == cols * rows);
+    double lo = num_at(sc, "height_range", 0), hi = num_at(sc, "height_range", 1), half = (hi - lo) / 131070;
+    char slo[40], shi[40];
+    fb_format_shortest(lo, slo, sizeof slo);
+    fb_format_shortest(hi, shi, sizeof shi);
+    const json_t *set = json_object_get(sc, unreal ? "unreal" : "unity");
+    const char *key = unreal ? "location" : "position";
+    double sx = unreal ? num_at(set, "scale", 0) : num_at(sc, "sample_spacing", 0);
+    double sy = unreal ? num_at(set, "scale", 1) : num_at(sc, "sample_spacing", 1);
+    uint16_t *back = calloc((size_t)w * h, 2), **tile = calloc((size_t)cols * rows, sizeof *tile);
+    int named = 0, placed = 0, ranged = 0, worst_tile = 0;
+    double worst = 0;
+    for (int r = 0; r < rows; r++)
+        for (int c = 0; c < cols; c++) {
+            const json_t *f = json_array_get(files, (size_t)(r * cols + c));
+            char want[64], path[600];
+            if (unreal)
+                snprintf(want, sizeof want, "land_x%d_y%d.png", c, r); /* x east, y south */
+            else
+                snprintf(want, sizeof want, "land_%d_%d.r16", c, rows - 1 - r); /* X, then Z (north) */
+            named += f && !strcmp(json_string_value(json_object_get(f, "file")), want);
+            snprintf(path, sizeof path, "%s", th_path(want));
+            uint16_t *q = tile[r * cols + c] = read_16(path, t, t);
+            REQUIRE(q);
+            int px = (int)num_at(f, "pixels", 0), py = (int)num_at(f, "pixels", 1);
+            /* the sidecar's place of the tile: its first sample where the whole's sample (px, py) is */
+            double ex = num_at(set, key, 0) + px * sx;
+            double ez = unreal ? num_at(set, key, 1) + py * sy                      /* Y: south */
+                               : num_at(set, key, 2) + (h - 1 - (py + t - 1)) * sy; /* z of its south row */
+            placed += px == c * (t - 1) && py == r * (t - 1) && fabs(num_at(f, key, 0) - ex) < 1e-6 &&
+                      fabs(num_at(f, key, unreal ? 1 : 2) - ez) < 1e-6 &&
+                      num_at(f, key, unreal ? 2 : 1) == num_at(set, key, unreal ? 2 : 1);
+            if (unreal)
+                ranged +=
+                    png_text(path, "fractalbake/height-min", slo) && png_text(path, "fractalbake/height-max", shi);
+            for (int j = 0; j < t; j++)
+                for (int i = 0; i < t; i++) {
+                    uint16_t v = q[j * t + i];
+                    back[(size_t)(py + j) * w + px + i] = v;
+                    double z = unreal ? (num_at(f, key, 2) + (v - 32768.0) * num_at(set, "scale", 2) / 128) / 100
+                                      : num_at(f, key, 1) + v / 65535.0 * num_at(set, "terrain_height", -1);
+                    double off = fabs(z - y[(size_t)(py + j) * w + px + i]);
+                    if (off > worst) worst = off, worst_tile = r * cols + c;
+                }
+        }
+    if (!unreal) /* the whole grid, for Unity's Terrain Toolbox */
+        CHECK(num_at(set, "tiles_x", -1) == cols && num_at(set, "tiles_z", -1) == rows &&
+              fabs(num_at(set, "total_width", -1) - cols * num_at(set, "terrain_width", -1)) < 1e-9 &&
+              fabs(num_at(set, "total_length", -1) - rows * num_at(set, "terrain_length", -1)) < 1e-9);
+    CHECKF(named == cols * rows, "%s: %d of %d tiles named by the convention", engine, named, cols * rows);
+    CHECKF(placed == cols * rows, "%s: %d of %d tiles placed by the sidecar where their samples lie", engine, placed,
+           cols * rows);
+    if (unreal)
+        CHECKF(ranged == cols * rows, "%d of %d tiles store the whole's range %s..%s", ranged, cols * rows, slo, shi);
+    CHECKF(worst <= half * (1 + 1e-6) + 1e-12 * fabs(hi),
+           "%s: tile %d's heights through the sidecar %g off; half a step %g", engine, worst_tile, worst, half);
+    /* neighbours' shared columns and rows, byte for byte */
+    int shared = 0, expect = 0;
+    for (int r = 0; r < rows; r++)
+        for (int c = 0; c < cols; c++) {
+            const uint16_t *q = tile[r * cols + c];
+            if (c + 1 < cols) {
+                const uint16_t *east = tile[r * cols + c + 1];
+                for (int j = 0; j < t; j++) shared += q[j * t + t - 1] == east[j * t], expect++;
+            }
+            if (r + 1 < rows) {
+                const uint16_t *south = tile[(r + 1) * cols + c];
+                shared += !memcmp(q + (size_t)(t - 1) * t, south, (size_t)t * 2), expect++;
+            }
+        }
+    CHECKF(shared == expect && expect > 0, "%s: %d of %d shared edge samples (columns) and rows equal", engine, shared,
+           expect);
+    CHECKF(!memcmp(back, all, (size_t)w * h * 2), "%s: the tiles put together differ from the single heightmap",
+           engine);
+    /* a region of the image is refused before anything is written */
+    for (int k = 0; k < cols * rows; k++) {
+        const json_t *f = json_array_get(files, (size_t)k);
+        remove(th_path(json_string_value(json_object_get(f, "file"))));
+        free(tile[k]);
+    }
+    remove(side), remove(exr);
+    int region[4] = {0, 0, w, t};
+    CHECK(!bake(e, json, exr, region, &st));
+    char first[600];
+    snprintf(first, sizeof first, "%s", th_path(unreal ? "land_x0_y0.png" : "land_0_0.r16"));
+    CHECK(access(first, F_OK) != 0 && access(side, F_OK) != 0 && access(exr, F_OK) != 0);
+    free(tile), free(back), free(all), free(y);
+    json_decref(sc);
+}
+
 int main(void)
 {
     TIFFSetWarningHandler(NULL); /* libtiff's note on GDAL's tag, which it reads as an anonymous field */
@@ -307,6 +496,9 @@ int main(void)
     test_engine_sizes();
     test_engine_sidecar(&e, "unreal", 127, "png");
     test_engine_sidecar(&e, "unity", 129, "r16");
+    test_tile_sizes();
+    test_tiles(&e, "unreal", 3, 2, 127);
+    test_tiles(&e, "unity", 2, 2, 65);
     fb_engine_close(&e);
     TEST_REPORT();
 }

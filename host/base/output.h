@@ -31,7 +31,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#define FB_MAX_OUTPUTS 64
+#define FB_MAX_OUTPUTS 300 /* room for a heightmap in 16 x 16 tiles beside the other outputs */
 
 /* Opens a transaction (or a nested level of one). */
 void fb_outputs_begin(void);

@@ -314,6 +314,13 @@ static void summary_json(json_t *sum, const fb_scene *scene, const fb_bake_opts 
             json_object_set_new(j, "height_at_65535", json_real(h->hi));
         }
         if (h->sidecar) json_object_set_new(j, "sidecar", json_string(h->sidecar));
+        if (h->tiles[0]) {
+            json_t *files = json_array();
+            for (int t = 0; t < h->tiles[0] * h->tiles[1]; t++)
+                json_array_append_new(files, json_string(h->tile_paths + (size_t)t * FB_TILE_PATH));
+            json_object_set_new(j, "tiles", json_pack("[ii]", h->tiles[0], h->tiles[1]));
+            json_object_set_new(j, "tile_files", files);
+        }
         json_array_append_new(hms, j);
     }
     if (st->nheightmaps)
@@ -345,7 +352,16 @@ static void summary_text(const fb_scene *scene, const fb_bake_opts *o, const fb_
         if (h->format == FB_HEIGHTMAP_GEOTIFF)
             cli_after("fractalbake: heightmap %s: layer %s's heights as float, with its geotransform", h->path,
                       h->layer);
-        else
+        else if (h->tiles[0]) { /* the tiles named 0, 0 and last by the engine's convention */
+            char first[FB_TILE_PATH], last[FB_TILE_PATH];
+            int cols = h->tiles[0], rows = h->tiles[1], unity = h->engine == FB_ENGINE_UNITY;
+            fb_heightmap_tile_path(h->path, h->engine, 0, unity ? rows - 1 : 0, rows, first, sizeof first);
+            fb_heightmap_tile_path(h->path, h->engine, cols - 1, unity ? 0 : rows - 1, rows, last, sizeof last);
+            cli_after("fractalbake: heightmap %s to %s: %d x %d tiles of %d x %d sharing their edges, layer %s's "
+                      "heights %s (0) to %s (65535) in every one, %s",
+                      first, last, cols, rows, (scene->width - 1) / cols + 1, (scene->height - 1) / rows + 1, h->layer,
+                      lo, hi, heightmap_format_name(h->format));
+        } else
             cli_after("fractalbake: heightmap %s: layer %s's heights %s (0) to %s (65535), %s", h->path, h->layer, lo,
                       hi, heightmap_format_name(h->format));
         if (h->sidecar) cli_after("fractalbake: heightmap %s: the engine's import settings", h->sidecar);

@@ -502,15 +502,22 @@ typedef struct heightmaps {
     int alpha[FB_MAX_LAYERS]; /* a GeoTIFF's: the A channel (0 outside a terrain's hull: no data), or -1 */
 } heightmaps;
 
-static fb_result heightmaps_create(const fb_scene *s, const layer_run *runs, const int *offset, int rw, int rh,
+static fb_result heightmaps_create(const fb_scene *s, const layer_run *runs, const int *offset, const int *region,
                                    heightmaps *hm)
 {
+    int rw = region[2] > 0 ? region[2] : s->width, rh = region[2] > 0 ? region[3] : s->height;
     for (int i = 0; i < s->nlayers; i++) {
         if (!s->layers[i].heightmap[0]) continue;
         char msg[256];
         fb_heightmap_format f = FB_HEIGHTMAP_PNG16;
         fb_heightmap_format_of(s->layers[i].heightmap, &f);
-        if (!fb_heightmap_engine_check(s->layers[i].heightmap_engine, rw, rh, f, msg, sizeof msg)) /* a region's */
+        if (s->layers[i].tiles[0] && region[2] > 0)
+            return fb_fail(FB_ERR_USAGE,
+                           "layer %s: its heightmap's tiles (%dx%d) cut the whole image, and this bake is a region of "
+                           "it: bake the whole image, or leave the tiles out",
+                           s->layers[i].name, s->layers[i].tiles[0], s->layers[i].tiles[1]);
+        if (!s->layers[i].tiles[0] && /* a region's size (the scene checked the whole image's, and the tiles') */
+            !fb_heightmap_engine_check(s->layers[i].heightmap_engine, rw, rh, f, msg, sizeof msg))
             return fb_fail(FB_ERR_USAGE, "layer %s: %s (the region is %d x %d)", s->layers[i].name, msg, rw, rh);
         int c = fb_gen_channel_of(&runs[i].gen, "Y", s->layers[i].name, "heightmap");
         if (!ALWAYS(c >= 0)) return FB_ERR_INTERNAL;
@@ -571,11 +578,15 @@ static fb_result heightmaps_write(const fb_scene *s, const layer_run *runs, heig
                                                      .world = world,
                                                      .epsg = g->epsg,
                                                      .engine = (fb_heightmap_engine)L->heightmap_engine,
-                                                     .nodata = hm->alpha[i] >= 0});
+                                                     .nodata = hm->alpha[i] >= 0,
+                                                     .cols = L->tiles[0],
+                                                     .rows = L->tiles[1]});
         if (!rc && stats && stats->nheightmaps < FB_MAX_LAYERS) {
             fb_bake_heightmap *h = &stats->heightmaps[stats->nheightmaps++];
             h->layer = L->name, h->path = L->heightmap, h->lo = lo, h->hi = hi;
             h->sidecar = L->heightmap_sidecar[0] ? L->heightmap_sidecar : NULL;
+            h->engine = L->heightmap_engine, h->tiles[0] = L->tiles[0], h->tiles[1] = L->tiles[1];
+            h->tile_paths = L->tile_paths;
             fb_heightmap_format f = FB_HEIGHTMAP_PNG16;
             fb_heightmap_format_of(L->heightmap, &f);
             h->format = (int)f;
@@ -598,8 +609,8 @@ static fb_result reserve_outputs(const fb_bake_desc *d, const fb_scene *s)
     fb_result rc = FB_OK;
     if (d->out) rc = fb_output_reserve(d->out, "output");
     if (!rc && d->preview) rc = fb_output_reserve(d->preview, "preview");
-    const char *side[FB_MAX_OUTPUTS], *side_what[FB_MAX_OUTPUTS];
-    int nside = fb_scene_outputs(s, side, side_what, FB_MAX_OUTPUTS);
+    const char *side[FB_MAX_OUTPUTS + 1], *side_what[FB_MAX_OUTPUTS + 1]; /* one more: too many fail here */
+    int nside = fb_scene_outputs(s, side, side_what, FB_MAX_OUTPUTS + 1);
     for (int i = 0; i < nside && !rc; i++) rc = fb_output_reserve(side[i], side_what[i]);
     return rc;
 }
@@ -840,7 +851,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     for (int i = 0, at = 0; i < s->nlayers; at += runs[i].gen.nchannels, i++) offset[i] = at, gens[i] = &runs[i].gen;
     for (int i = 0; i < s->nlayers && !rc; i++)
         if (runs[i].gen.resolve) rc = runs[i].gen.resolve(&runs[i].gen, gens, offset);
-    if (!rc) rc = heightmaps_create(s, runs, offset, region[2], region[3], &hm);
+    if (!rc) rc = heightmaps_create(s, runs, offset, d->region, &hm);
     /* Layers computed as a whole (the chaos game) run before the first strip. */
     for (int j = 0; j < s->nlayers && !rc; j++) { /* in dependency order: a macro's source first */
         int i = s->order[j];

@@ -70,6 +70,9 @@ typedef struct fb_bake_heightmap {
     const char *sidecar;      /* an engine preset's import settings (OUT.import.json), or NULL */
     int format;               /* fb_heightmap_format */
     double lo, hi;
+    int engine;             /* fb_heightmap_engine */
+    int tiles[2];           /* columns, rows: written as tiles (path names none of them), or 0, 0 */
+    const char *tile_paths; /* the scene's tile names (FB_TILE_PATH bytes each), row by row from the north-west */
 } fb_bake_heightmap;
 
 typedef struct fb_bake_stats {

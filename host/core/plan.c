@@ -446,13 +446,16 @@ fb_result fb_scene_subset(const fb_scene *s, uint32_t mask, fb_scene *out)
         if (map[i] < 0) continue;
         fb_layer *L = &out->layers[map[i]];
         memcpy(L, &s->layers[i], sizeof *L);
-        /* its own parameters: the references in them are renumbered below */
+        /* its own parameters (the references in them are renumbered below) and tile names */
+        size_t ntiles = (size_t)L->tiles[0] * L->tiles[1];
         L->params = malloc(L->cls->params_size ? L->cls->params_size : 1);
-        if (!L->params) {
+        L->tile_paths = ntiles ? malloc(ntiles * FB_TILE_PATH) : NULL;
+        if (!L->params || (ntiles && !L->tile_paths)) {
             fb_scene_fini(out);
             return fb_fail(FB_ERR_NOMEM, "out of memory");
         }
         memcpy(L->params, s->layers[i].params, L->cls->params_size);
+        if (ntiles) memcpy(L->tile_paths, s->layers[i].tile_paths, ntiles * FB_TILE_PATH);
         fb_ref_slot slots[FB_MAX_REFS];
         int nr = L->cls->refs ? L->cls->refs(L, slots) : 0;
         for (int k = 0; k < nr; k++) {

@@ -103,9 +103,67 @@ static fb_result resolve_refs(const fb_vctx *v, fb_scene *s)
     return FB_OK;
 }
 
-/* The keys every height-producing generator shares (heightmap, heightmap-engine, heightmap-range), read into L; their
- * types were checked against the generator's table. A GeoTIFF needs world coordinates, which only a
- * generator with a "crs" key has (terrain). */
+/* "tiles": [columns, rows], each a whole number in the key's range; the flag's "NxM". */
+static fb_result check_tiles(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j)
+{
+    char shown[64];
+    fb_json_show(j, shown, sizeof shown);
+    bool good = json_is_array(j) && json_array_size(j) == 2;
+    for (size_t i = 0; good && i < 2; i++) {
+        const json_t *e = json_array_get(j, i);
+        good = json_is_integer(e) && json_integer_value(e) >= k->lo && json_integer_value(e) <= k->hi;
+    }
+    if (!good)
+        return fb_schema_error(v, path, "expected [columns, rows], each a whole number in %g..%g, found %s", k->lo,
+                               k->hi, shown);
+    return FB_OK;
+}
+
+static json_t *tiles_from_flag(const fb_keyspec *k, const char *flag, const char *text)
+{
+    char *end;
+    long c = strtol(text, &end, 10), r = 0;
+    bool good = end != text && (*end == 'x' || *end == 'X');
+    if (good) {
+        const char *rs = end + 1;
+        r = strtol(rs, &end, 10);
+        good = end != rs && !*end && c >= k->lo && c <= k->hi && r >= k->lo && r <= k->hi;
+    }
+    if (!good) {
+        fb_fail(FB_ERR_USAGE, "--%s: expected COLUMNSxROWS such as 4x4, each 1 to %g, found \"%s\"", flag, k->hi, text);
+        return NULL;
+    }
+    return json_pack("[ii]", (int)c, (int)r);
+}
+
+const fb_kvalue fb_tiles_value = {.check = check_tiles, .from_flag = tiles_from_flag};
+
+/* "tiles": the heightmap's split, checked against its size and the engine's sizes, and the names of
+ * its files. */
+static fb_result parse_tiles(const fb_vctx *v, const char *path, const json_t *lj, const fb_scene *s, fb_layer *L)
+{
+    const json_t *t = json_object_get(lj, "tiles");
+    if (!t) return FB_OK;
+    char sub[96], msg[512];
+    snprintf(sub, sizeof sub, "%s.tiles", path);
+    if (!L->heightmap[0]) return fb_schema_error(v, sub, "tiles of a heightmap, and no \"heightmap\" is written");
+    int cols = (int)json_integer_value(json_array_get(t, 0)), rows = (int)json_integer_value(json_array_get(t, 1));
+    fb_heightmap_format f = FB_HEIGHTMAP_PNG16;
+    fb_heightmap_format_of(L->heightmap, &f);
+    if (!fb_heightmap_tiles_check(L->heightmap_engine, s->width, s->height, cols, rows, f, msg, sizeof msg))
+        return fb_schema_error(v, sub, "%s (the image is %d x %d)", msg, s->width, s->height);
+    if (!(L->tile_paths = malloc((size_t)cols * rows * FB_TILE_PATH))) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    for (int r = 0; r < rows; r++)
+        for (int c = 0; c < cols; c++)
+            fb_heightmap_tile_path(L->heightmap, L->heightmap_engine, c, r, rows,
+                                   L->tile_paths + ((size_t)r * cols + c) * FB_TILE_PATH, FB_TILE_PATH);
+    L->tiles[0] = cols, L->tiles[1] = rows;
+    return FB_OK;
+}
+
+/* The keys every height-producing generator shares (heightmap, heightmap-engine, heightmap-range, tiles), read into L;
+ * their types were checked against the generator's table. A GeoTIFF needs world coordinates, which only a generator
+ * with a "crs" key has (terrain). */
 static fb_result parse_heightmap(const fb_vctx *v, const char *path, const json_t *lj, const fb_scene *s, fb_layer *L)
 {
     char sub[96];
@@ -135,7 +193,8 @@ static fb_result parse_heightmap(const fb_vctx *v, const char *path, const json_
         if (!hm) return fb_schema_error(v, sub, "a preset for a heightmap, and no \"heightmap\" is written");
         fb_heightmap_format_of(hm, &f);
         L->heightmap_engine = (int)fb_heightmap_engine_parse(engine);
-        if (!fb_heightmap_engine_check(L->heightmap_engine, s->width, s->height, f, msg, sizeof msg))
+        if (!json_object_get(lj, "tiles") && /* with tiles, each tile's size is the engine's */
+            !fb_heightmap_engine_check(L->heightmap_engine, s->width, s->height, f, msg, sizeof msg))
             return fb_schema_error(v, sub, "%s (the image is %d x %d)", msg, s->width, s->height);
         fb_heightmap_sidecar_path(hm, L->heightmap_sidecar, sizeof L->heightmap_sidecar);
     }
@@ -148,7 +207,7 @@ static fb_result parse_heightmap(const fb_vctx *v, const char *path, const json_
                                    L->heightmap_range[1]);
         if (!hm) return fb_schema_error(v, sub, "a range for a heightmap, and no \"heightmap\" is written");
     }
-    return FB_OK;
+    return parse_tiles(v, path, lj, s, L);
 }
 
 /* The mapping a layer declares with its "mapping" key, where its class's table has one (gen.h). */
@@ -361,7 +420,9 @@ int fb_scene_outputs(const fb_scene *s, const char **paths, const char **what, i
     for (int i = 0; i < s->nlayers; i++) {
         const fb_layer *l = &s->layers[i];
         if (l->cls && l->cls->outputs) n += l->cls->outputs(l, paths + n, what + n, max - n);
-        if (l->heightmap[0] && n < max) paths[n] = l->heightmap, what[n++] = "heightmap";
+        for (int t = 0; t < l->tiles[0] * l->tiles[1] && n < max; t++)
+            paths[n] = l->tile_paths + (size_t)t * FB_TILE_PATH, what[n++] = "heightmap tile";
+        if (l->heightmap[0] && !l->tiles[0] && n < max) paths[n] = l->heightmap, what[n++] = "heightmap";
         if (l->heightmap_sidecar[0] && n < max) paths[n] = l->heightmap_sidecar, what[n++] = "heightmap sidecar";
     }
     return n;
@@ -388,6 +449,14 @@ fb_result fb_scene_drop_outputs(const char *text, char **out, char *dropped, siz
                      name ? name : "?", keys[k].key, v);
             json_object_del(l, keys[k].key);
         }
+        /* what only says how to write the heightmap goes with it (it is refused without one) */
+        static const char *const qualifiers[] = {"heightmap-engine", "heightmap-range", "tiles"};
+        for (int q = 0, n = 0; q < 3 && !json_object_get(l, "heightmap"); q++)
+            if (json_object_get(l, qualifiers[q])) {
+                snprintf(dropped + strlen(dropped), size - strlen(dropped), "%s%s", n++ ? ", " : " with its ",
+                         qualifiers[q]);
+                json_object_del(l, qualifiers[q]);
+            }
     }
     *out = json_dumps(root, JSON_COMPACT);
     json_decref(root);
@@ -397,7 +466,7 @@ fb_result fb_scene_drop_outputs(const char *text, char **out, char *dropped, siz
 void fb_scene_fini(fb_scene *s)
 {
     if (!s) return;
-    for (int i = 0; i < FB_MAX_LAYERS; i++) free(s->layers[i].params);
+    for (int i = 0; i < FB_MAX_LAYERS; i++) free(s->layers[i].params), free(s->layers[i].tile_paths);
     free(s->json);
     memset(s, 0, sizeof *s);
 }

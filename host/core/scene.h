@@ -42,6 +42,11 @@ typedef struct fb_layer {
     char heightmap_sidecar[1040]; /* the preset's sidecar (OUT.import.json), or "" */
     bool heightmap_range_set;
     double heightmap_range[2];
+    /* "tiles" [columns, rows] (0, 0: none): the heightmap written as tiles sharing their edges, whose
+     * files (fb_heightmap_tile_path) are tile_paths, row by row from the north-west, FB_TILE_PATH bytes
+     * each (allocated; fb_scene_fini frees them) */
+    int tiles[2];
+    char *tile_paths;
     /* What the layer is on the sphere: its "mapping" key when its class's table has one taking
      * "latlong" or "cube" (kernels/envmap.h's conventions); for a class that combines its inputs pixel
      * by pixel (fb_gen_class.envmap_of_refs), its inputs' mapping; otherwise a plane (NONE). */
@@ -50,6 +55,23 @@ typedef struct fb_layer {
      * owned by the scene: fb_scene_fini frees them), read with fb_layer_params */
     void *params;
 } fb_layer;
+
+#define FB_TILE_PATH 1100
+
+/* The heightmap's keys every height-producing generator lists in its table, after "heightmap". */
+struct fb_kvalue;
+extern const struct fb_kvalue fb_tiles_value;
+/* clang-format off */
+#define FB_HEIGHTMAP_KEYS                                                                                              \
+    {"heightmap-engine", FB_K_ENUM, 0, 0, false, FB_HEIGHTMAP_ENGINES, NULL,                                           \
+     "the heightmap for an engine: unreal (a landscape size, 16-bit PNG) or unity (2^n+1 square, RAW); writes "        \
+     "OUT.import.json, the import settings that reproduce the heights"},                                               \
+    {"heightmap-range", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL,                                                     \
+     "heights stored as 0 and 65535 in a 16-bit heightmap (LO,HI; default: the image's lowest and highest)"},          \
+    {"tiles", FB_K_CUSTOM, 1, FB_HEIGHTMAP_MAX_TILES, false, NULL, NULL,                                               \
+     "the heightmap as COLSxROWS tiles sharing their edge samples, one height range for all, named by the engine's "   \
+     "convention (OUT_x0_y0.png; unity: OUT_0_0.r16) (flag: --tiles NxM)", .value = &fb_tiles_value}
+/* clang-format on */
 
 static inline const void *fb_layer_params(const fb_layer *L)
 {
@@ -98,7 +120,8 @@ int fb_scene_outputs(const fb_scene *s, const char **paths, const char **what, i
 
 /* A stored scene (JSON text) without the output paths of its layers: a file baked elsewhere must not
  * choose which files this run writes. *out is the new text (free()); `dropped` lists what was removed
- * as "layers.NAME.KEY=PATH, ..." ("" if nothing). */
+ * as "layers.NAME.KEY=PATH, ..." ("" if nothing); a heightmap's engine, range and tiles go with it
+ * ("layers.NAME.heightmap=PATH with its heightmap-engine, tiles"). */
 fb_result fb_scene_drop_outputs(const char *text, char **out, char *dropped, size_t size);
 
 /* The scene's own keys (size, seed, compression, parts, layers), for the command line's flags. */

@@ -45,21 +45,33 @@ fb_heightmap_engine fb_heightmap_engine_parse(const char *name)
                                      : FB_ENGINE_NONE;
 }
 
+/* The table as text, largest first: "8129, 4033, ..." */
+static void table_list(const int *t, int nt, char *out, size_t size)
+{
+    out[0] = 0;
+    for (int i = nt; i-- > 0;) snprintf(out + strlen(out), size - strlen(out), "%s%d", i < nt - 1 ? ", " : "", t[i]);
+}
+
+/* The entries of the table (ascending) nearest to x strictly below and above it (0: none). */
+static void table_nearest(const int *t, int nt, double x, int *below, int *above)
+{
+    *below = *above = 0;
+    for (int i = 0; i < nt; i++) {
+        if (t[i] < x) *below = t[i];
+        if (t[i] > x && !*above) *above = t[i];
+    }
+}
+
 /* Whether n is in the table; when not, the nearest entries below and above it in msg. */
 static bool size_in(const int *t, int nt, int n, const char *what, const char *engine, const char *takes, char *msg,
                     size_t size)
 {
     for (int i = 0; i < nt; i++)
         if (t[i] == n) return true;
-    int below = 0, above = 0;
-    for (int i = 0; i < nt; i++) {
-        if (t[i] < n) below = t[i];
-        if (t[i] > n && !above) above = t[i];
-    }
-    char list[128] = "";
-    for (int i = nt; i-- > 0;)
-        snprintf(list + strlen(list), sizeof list - strlen(list), "%s%d", i < nt - 1 ? ", " : "", t[i]);
-    char near[64];
+    int below, above;
+    table_nearest(t, nt, n, &below, &above);
+    char list[128], near[64];
+    table_list(t, nt, list, sizeof list);
     if (below && above)
         snprintf(near, sizeof near, "the nearest are %d and %d", below, above);
     else
@@ -69,21 +81,27 @@ static bool size_in(const int *t, int nt, int n, const char *what, const char *e
     return false;
 }
 
+/* The file an engine imports; false with msg when f is not it. */
+static bool format_check(fb_heightmap_engine e, fb_heightmap_format f, char *msg, size_t size)
+{
+    if (e == FB_ENGINE_UNREAL && f != FB_HEIGHTMAP_PNG16) {
+        snprintf(msg, size, "heightmap-engine unreal imports a 16-bit grey PNG: name the heightmap OUT.png");
+        return false;
+    }
+    if (e == FB_ENGINE_UNITY && f != FB_HEIGHTMAP_RAW16) {
+        snprintf(msg, size, "heightmap-engine unity imports 16-bit RAW: name the heightmap OUT.r16 or OUT.raw");
+        return false;
+    }
+    return true;
+}
+
 bool fb_heightmap_engine_check(fb_heightmap_engine e, int w, int h, fb_heightmap_format f, char *msg, size_t size)
 {
-    if (e == FB_ENGINE_UNREAL) {
-        if (f != FB_HEIGHTMAP_PNG16) {
-            snprintf(msg, size, "heightmap-engine unreal imports a 16-bit grey PNG: name the heightmap OUT.png");
-            return false;
-        }
+    if (!format_check(e, f, msg, size)) return false;
+    if (e == FB_ENGINE_UNREAL)
         return size_in(k_unreal, 7, w, "width", "unreal", "landscapes", msg, size) &&
                size_in(k_unreal, 7, h, "height", "unreal", "landscapes", msg, size);
-    }
     if (e == FB_ENGINE_UNITY) {
-        if (f != FB_HEIGHTMAP_RAW16) {
-            snprintf(msg, size, "heightmap-engine unity imports 16-bit RAW: name the heightmap OUT.r16 or OUT.raw");
-            return false;
-        }
         if (w != h) {
             snprintf(msg, size, "heightmap-engine unity takes a square heightmap, and this one is %d x %d", w, h);
             return false;
@@ -93,86 +111,242 @@ bool fb_heightmap_engine_check(fb_heightmap_engine e, int w, int h, fb_heightmap
     return true;
 }
 
-void fb_heightmap_sidecar_path(const char *path, char *out, size_t size)
+/* One side of a tiling: n samples in `count` tiles sharing their edges, each t samples with
+ * count (t - 1) + 1 = n; t from the engine's table when it has one (t, nt), else any t >= 2. When not,
+ * msg names the nearest whole sides that split. */
+static bool tiles_side(const int *t, int nt, const char *engine, int n, int count, const char *what, char *msg,
+                       size_t size)
+{
+    double tile = (double)(n - 1) / count + 1;
+    bool whole = (n - 1) % count == 0;
+    for (int i = 0; i < nt && whole; i++)
+        if (t[i] == (int)tile) return true;
+    if (!nt && whole && tile >= 2) return true;
+    int below = 0, above = 0;
+    if (nt) {
+        table_nearest(t, nt, tile, &below, &above);
+    } else {
+        below = (n - 1) / count + 1, above = below + 1;
+        if (below < 2) below = 0;
+    }
+    char near[96] = "";
+    if (below) snprintf(near, sizeof near, "%d (tiles of %d)", count * (below - 1) + 1, below);
+    if (above)
+        snprintf(near + strlen(near), sizeof near - strlen(near), "%s%d (tiles of %d)", below ? " and " : "",
+                 count * (above - 1) + 1, above);
+    const char *nearest = below && above ? "the nearest are" : "the nearest is";
+    if (nt) {
+        char list[128];
+        table_list(t, nt, list, sizeof list);
+        snprintf(msg, size,
+                 "heightmap-engine %s takes tiles of %s samples, and %d tiles sharing their edges across the %s %d "
+                 "would be %.6g samples: %s %s",
+                 engine, list, count, what, n, tile, nearest, near);
+    } else {
+        snprintf(msg, size,
+                 "%d tiles sharing their edges need a %s of %d (t - 1) + 1 samples for a whole t of 2 or more, and "
+                 "%d is not one: %s %s",
+                 count, what, count, n, nearest, near);
+    }
+    return false;
+}
+
+bool fb_heightmap_tiles_check(fb_heightmap_engine e, int w, int h, int cols, int rows, fb_heightmap_format f, char *msg,
+                              size_t size)
+{
+    if (f == FB_HEIGHTMAP_GEOTIFF) {
+        snprintf(msg, size, "tiles are 16-bit heightmaps: name the heightmap OUT.png or OUT.r16");
+        return false;
+    }
+    if (!format_check(e, f, msg, size)) return false;
+    const char *name = e == FB_ENGINE_UNREAL ? "unreal" : "unity";
+    const int *t = e == FB_ENGINE_UNREAL ? k_unreal : e == FB_ENGINE_UNITY ? k_unity : NULL;
+    int nt = e == FB_ENGINE_UNREAL ? 7 : e == FB_ENGINE_UNITY ? 8 : 0;
+    if (!tiles_side(t, nt, name, w, cols, "width", msg, size) || !tiles_side(t, nt, name, h, rows, "height", msg, size))
+        return false;
+    int tw = (w - 1) / cols + 1, th = (h - 1) / rows + 1;
+    if (e == FB_ENGINE_UNITY && tw != th) {
+        snprintf(msg, size, "heightmap-engine unity takes square tiles, and %d x %d tiles of this image are %d x %d",
+                 cols, rows, tw, th);
+        return false;
+    }
+    return true;
+}
+
+/* The length of a path's stem: up to its extension's dot, or the whole path when it has none. */
+static size_t path_stem(const char *path)
 {
     const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
-    size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - path) : strlen(path);
-    snprintf(out, size, "%.*s.import.json", (int)stem, path);
+    return dot && (!slash || dot > slash) ? (size_t)(dot - path) : strlen(path);
+}
+
+void fb_heightmap_tile_path(const char *path, fb_heightmap_engine e, int col, int row, int rows, char *out, size_t size)
+{
+    size_t stem = path_stem(path);
+    if (e == FB_ENGINE_UNITY)
+        snprintf(out, size, "%.*s_%d_%d%s", (int)stem, path, col, rows - 1 - row, path + stem);
+    else
+        snprintf(out, size, "%.*s_x%d_y%d%s", (int)stem, path, col, row, path + stem);
+}
+
+void fb_heightmap_sidecar_path(const char *path, char *out, size_t size)
+{
+    snprintf(out, size, "%.*s.import.json", (int)path_stem(path), path);
+}
+
+/* A growing text (the sidecar); a failed allocation is remembered and reported once. */
+typedef struct text {
+    char *p;
+    size_t n, cap;
+    bool bad;
+} text;
+
+__attribute__((format(printf, 2, 3))) static void add(text *t, const char *fmt, ...)
+{
+    for (int tries = 0; tries < 2 && !t->bad; tries++) {
+        va_list ap;
+        va_start(ap, fmt);
+        int n = vsnprintf(t->p ? t->p + t->n : NULL, t->p ? t->cap - t->n : 0, fmt, ap);
+        va_end(ap);
+        if (n < 0) t->bad = true;
+        if (t->bad || (t->p && (size_t)n < t->cap - t->n)) {
+            t->n += t->bad ? 0 : (size_t)n;
+            return;
+        }
+        size_t cap = (t->cap + (size_t)n + 1) * 2;
+        char *p = realloc(t->p, cap);
+        if (!p)
+            t->bad = true;
+        else
+            t->p = p, t->cap = cap;
+    }
+}
+
+/* Where a piece of the image goes in the engine's import settings: Unreal's location (centimetres, X
+ * east, Y south) of its top-left sample (x, y) (x right, y down from the image's top-left), or Unity's
+ * position (metres, x east, z north) of its south-west sample, in column x and image row south_row. */
+static void engine_place(text *t, const fb_heightmap_desc *d, int x, int y, int south_row)
+{
+    const double *w = d->world, dx = (w[1] - w[0]) / d->width, dy = (w[3] - w[2]) / d->height;
+    if (d->engine == FB_ENGINE_UNREAL) {
+        double zs = 12800.0 * (d->hi - d->lo) / 65535, locz = 100 * d->lo + 32768 * zs / 128;
+        add(t, "\"location\": [%.17g, %.17g, %.17g]", 100 * (w[0] + dx / 2 + x * dx), -100 * (w[3] - dy / 2 - y * dy),
+            locz);
+    } else {
+        add(t, "\"position\": [%.17g, %.17g, %.17g]", w[0] + dx / 2 + x * dx, d->lo,
+            w[2] + dy / 2 + (d->height - 1 - south_row) * dy);
+    }
 }
 
 /* The sidecar: the heightmap's range and the engine's import settings that reproduce it, in world
- * units taken as metres. Sample v of the 16-bit file stands for h = lo + v (hi - lo) / 65535; the
- * samples sit at the pixel centres, dx and dy apart. */
+ * units taken as metres; with tiles, each tile's file and where it goes. Sample v of the 16-bit file
+ * stands for h = lo + v (hi - lo) / 65535; the samples sit at the pixel centres, dx and dy apart. */
 static fb_result write_sidecar(const fb_heightmap_desc *d)
 {
-    char path[1100], lo[40], hi[40], buf[2048];
+    char path[1100], lo[40], hi[40], name[1100];
     fb_heightmap_sidecar_path(d->path, path, sizeof path);
     const double *w = d->world, dx = (w[1] - w[0]) / d->width, dy = (w[3] - w[2]) / d->height, r = d->hi - d->lo;
+    int tw = d->cols ? (d->width - 1) / d->cols + 1 : d->width,
+        th = d->rows ? (d->height - 1) / d->rows + 1 : d->height;
     fb_format_shortest(d->lo, lo, sizeof lo);
     fb_format_shortest(d->hi, hi, sizeof hi);
     const char *file = strrchr(d->path, '/') ? strrchr(d->path, '/') + 1 : d->path;
-    int n = snprintf(buf, sizeof buf,
-                     "{\n  \"engine\": \"%s\",\n  \"heightmap\": \"%s\",\n  \"samples\": [%d, %d],\n"
-                     "  \"height_range\": [%s, %s],\n  \"sample_spacing\": [%.17g, %.17g],\n",
-                     d->engine == FB_ENGINE_UNREAL ? "unreal" : "unity", file, d->width, d->height, lo, hi, dx, dy);
+    text t = {0};
+    add(&t, "{\n  \"engine\": \"%s\",\n", d->engine == FB_ENGINE_UNREAL ? "unreal" : "unity");
+    if (!d->cols) add(&t, "  \"heightmap\": \"%s\",\n", file);
+    add(&t, "  \"samples\": [%d, %d],\n  \"height_range\": [%s, %s],\n  \"sample_spacing\": [%.17g, %.17g],\n",
+        d->width, d->height, lo, hi, dx, dy);
     if (d->engine == FB_ENGINE_UNREAL) {
-        double zs = 12800.0 * r / 65535, locz = 100 * d->lo + 32768 * zs / 128;
-        n += snprintf(buf + n, sizeof buf - n,
-                      "  \"unreal\": {\"location\": [%.17g, %.17g, %.17g], \"scale\": [%.17g, %.17g, %.17g]},\n"
-                      "  \"height_of_sample\": \"(location.z + (v - 32768) * scale.z / 128) / 100\",\n"
-                      "  \"note\": \"centimetres; X east, Y south (the image's rows), Z up\"\n}\n",
-                      100 * (w[0] + dx / 2), -100 * (w[3] - dy / 2), locz, 100 * dx, 100 * dy, zs);
+        add(&t, "  \"unreal\": {");
+        engine_place(&t, d, 0, 0, d->height - 1);
+        add(&t, ", \"scale\": [%.17g, %.17g, %.17g]},\n", 100 * dx, 100 * dy, 12800.0 * r / 65535);
+        add(&t, "  \"height_of_sample\": \"(location.z + (v - 32768) * scale.z / 128) / 100\",\n");
     } else {
-        n += snprintf(buf + n, sizeof buf - n,
-                      "  \"unity\": {\"depth\": 16, \"byte_order\": \"Windows\", \"resolution\": %d, "
-                      "\"terrain_width\": %.17g, \"terrain_length\": %.17g, \"terrain_height\": %.17g, "
-                      "\"position\": [%.17g, %.17g, %.17g]},\n"
-                      "  \"height_of_sample\": \"position.y + v / 65535 * terrain_height\",\n"
-                      "  \"note\": \"metres; the file's first row is the north edge (z largest)\"\n}\n",
-                      d->width, (d->width - 1) * dx, (d->height - 1) * dy, r, w[0] + dx / 2, d->lo, w[2] + dy / 2);
+        add(&t,
+            "  \"unity\": {\"depth\": 16, \"byte_order\": \"Windows\", \"resolution\": %d, \"terrain_width\": %.17g, "
+            "\"terrain_length\": %.17g, \"terrain_height\": %.17g, ",
+            tw, (tw - 1) * dx, (th - 1) * dy, r);
+        engine_place(&t, d, 0, 0, d->height - 1);
+        if (d->cols) /* the Terrain Toolbox's whole grid */
+            add(&t, ", \"tiles_x\": %d, \"tiles_z\": %d, \"total_width\": %.17g, \"total_length\": %.17g", d->cols,
+                d->rows, (d->width - 1) * dx, (d->height - 1) * dy);
+        add(&t, "},\n  \"height_of_sample\": \"position.y + v / 65535 * terrain_height\",\n");
+    }
+    if (d->cols) {
+        add(&t, "  \"tiles\": {\"columns\": %d, \"rows\": %d, \"samples\": [%d, %d], \"files\": [", d->cols, d->rows,
+            tw, th);
+        for (int row = 0; row < d->rows; row++)
+            for (int col = 0; col < d->cols; col++) {
+                fb_heightmap_tile_path(file, d->engine, col, row, d->rows, name, sizeof name);
+                int x = col * (tw - 1), y = row * (th - 1);
+                add(&t, "%s\n    {\"file\": \"%s\", \"pixels\": [%d, %d], ", row || col ? "," : "", name, x, y);
+                engine_place(&t, d, x, y, y + th - 1);
+                add(&t, "}");
+            }
+        add(&t, "\n  ]},\n");
+    }
+    if (d->engine == FB_ENGINE_UNREAL)
+        add(&t, "  \"note\": \"centimetres; X east, Y south (the image's rows), Z up%s\"\n}\n",
+            d->cols ? "; tile _x0_y0 is the north-west one, x counts east and y south; neighbours share a row or "
+                      "column of samples"
+                    : "");
+    else
+        add(&t, "  \"note\": \"metres; the file's first row is the north edge (z largest)%s\"\n}\n",
+            d->cols ? "; tile _0_0 is the south-west one, the first index counts east (x) and the second north (z); "
+                      "neighbours share a row or column of samples"
+                    : "");
+    if (t.bad) {
+        free(t.p);
+        return fb_fail(FB_ERR_NOMEM, "out of memory for the heightmap sidecar");
     }
     FILE *f = NULL;
     fb_result rc = fb_output_fopen(path, "heightmap sidecar", (void **)&f);
-    if (rc) return rc;
-    bool bad = fwrite(buf, 1, (size_t)n, f) != (size_t)n;
+    if (rc) {
+        free(t.p);
+        return rc;
+    }
+    bool bad = fwrite(t.p, 1, t.n, f) != t.n;
     if (fclose(f) != 0) bad = true;
+    free(t.p);
     return fb_output_done(path,
                           bad ? fb_fail(FB_ERR_IO, "%s: cannot write the sidecar: %s", path, strerror(errno)) : FB_OK);
 }
 
-static fb_result write_16(const fb_heightmap_desc *d, bool png)
+/* A w x h piece of the heights (rows `stride` floats apart) as a 16-bit PNG or RAW at path. */
+static fb_result write_16(const char *path, const float *z, int w, int h, size_t stride, double lo, double hi, bool png)
 {
-    size_t n = (size_t)d->width * d->height;
+    size_t n = (size_t)w * h;
     uint16_t *q = malloc(n * sizeof *q);
     if (!q) return fb_fail(FB_ERR_NOMEM, "out of memory for the heightmap");
-    for (size_t i = 0; i < n; i++) q[i] = fb_heightmap_quantise(d->z[i], d->lo, d->hi);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) q[(size_t)y * w + x] = fb_heightmap_quantise(z[y * stride + x], lo, hi);
     fb_result rc;
     if (png) {
-        char lo[40], hi[40];
-        fb_format_shortest(d->lo, lo, sizeof lo);
-        fb_format_shortest(d->hi, hi, sizeof hi);
-        const char *kv[3][2] = {{"fractalbake/height-min", lo},
-                                {"fractalbake/height-max", hi},
+        char slo[40], shi[40];
+        fb_format_shortest(lo, slo, sizeof slo);
+        fb_format_shortest(hi, shi, sizeof shi);
+        const char *kv[3][2] = {{"fractalbake/height-min", slo},
+                                {"fractalbake/height-max", shi},
                                 {"Description", "heights: height-min at 0, height-max at 65535, linear between"}};
-        rc = fb_png_write(d->path, "heightmap", d->width, d->height, 1, 16, q, (const char *const(*)[2])kv, 3);
+        rc = fb_png_write(path, "heightmap", w, h, 1, 16, q, (const char *const(*)[2])kv, 3);
     } else {
         FILE *f = NULL;
-        rc = fb_output_fopen(d->path, "heightmap", (void **)&f);
+        rc = fb_output_fopen(path, "heightmap", (void **)&f);
         if (!rc) {
             bool bad = false;
-            uint8_t *row = malloc((size_t)d->width * 2);
+            uint8_t *row = malloc((size_t)w * 2);
             if (!row) rc = fb_fail(FB_ERR_NOMEM, "out of memory for the heightmap");
-            for (int y = 0; y < d->height && !rc && !bad; y++) { /* little-endian, whatever this machine is */
-                for (int x = 0; x < d->width; x++) {
-                    uint16_t v = q[(size_t)y * d->width + x];
+            for (int y = 0; y < h && !rc && !bad; y++) { /* little-endian, whatever this machine is */
+                for (int x = 0; x < w; x++) {
+                    uint16_t v = q[(size_t)y * w + x];
                     row[2 * x] = (uint8_t)v, row[2 * x + 1] = (uint8_t)(v >> 8);
                 }
-                bad = fwrite(row, 2, (size_t)d->width, f) != (size_t)d->width;
+                bad = fwrite(row, 2, (size_t)w, f) != (size_t)w;
             }
             free(row);
             if (fclose(f) != 0) bad = true;
-            if (bad && !rc) rc = fb_fail(FB_ERR_IO, "%s: cannot write the heightmap: %s", d->path, strerror(errno));
-            rc = fb_output_done(d->path, rc);
+            if (bad && !rc) rc = fb_fail(FB_ERR_IO, "%s: cannot write the heightmap: %s", path, strerror(errno));
+            rc = fb_output_done(path, rc);
         }
     }
     free(q);
@@ -297,10 +471,25 @@ fb_result fb_heightmap_write(const fb_heightmap_desc *d)
     fb_heightmap_format f;
     if (!fb_heightmap_format_of(d->path, &f))
         return fb_fail(FB_ERR_USAGE, "%s: a heightmap is .png, .r16 or .tif", d->path);
-    if (f == FB_HEIGHTMAP_GEOTIFF) return write_geotiff(d);
-    char msg[256];
-    if (!fb_heightmap_engine_check(d->engine, d->width, d->height, f, msg, sizeof msg))
+    char msg[512];
+    if (d->cols ? !fb_heightmap_tiles_check(d->engine, d->width, d->height, d->cols, d->rows, f, msg, sizeof msg)
+                : f != FB_HEIGHTMAP_GEOTIFF &&
+                      !fb_heightmap_engine_check(d->engine, d->width, d->height, f, msg, sizeof msg))
         return fb_fail(FB_ERR_INPUT, "%s: %s", d->path, msg);
-    fb_result rc = write_16(d, f == FB_HEIGHTMAP_PNG16);
+    if (f == FB_HEIGHTMAP_GEOTIFF) return write_geotiff(d);
+    bool png = f == FB_HEIGHTMAP_PNG16;
+    fb_result rc = FB_OK;
+    if (!d->cols) {
+        rc = write_16(d->path, d->z, d->width, d->height, (size_t)d->width, d->lo, d->hi, png);
+    } else { /* every tile from the one range: neighbours store their shared samples alike */
+        int tw = (d->width - 1) / d->cols + 1, th = (d->height - 1) / d->rows + 1;
+        char tile[1100];
+        for (int row = 0; row < d->rows && !rc; row++)
+            for (int col = 0; col < d->cols && !rc; col++) {
+                fb_heightmap_tile_path(d->path, d->engine, col, row, d->rows, tile, sizeof tile);
+                const float *z = d->z + (size_t)row * (th - 1) * d->width + (size_t)col * (tw - 1);
+                rc = write_16(tile, z, tw, th, (size_t)d->width, d->lo, d->hi, png);
+            }
+    }
     return rc || d->engine == FB_ENGINE_NONE ? rc : write_sidecar(d);
 }

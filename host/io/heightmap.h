@@ -33,6 +33,24 @@ fb_heightmap_engine fb_heightmap_engine_parse(const char *name);
  * the engine takes, and the nearest valid sizes). */
 bool fb_heightmap_engine_check(fb_heightmap_engine e, int w, int h, fb_heightmap_format f, char *msg, size_t size);
 
+/* Tiles (--tiles NxM): the heightmap cut into cols x rows tiles of tw x th samples that share their
+ * edge rows and columns, so the image is cols (tw - 1) + 1 by rows (th - 1) + 1 samples; every tile
+ * stores the one range of the whole. At most FB_HEIGHTMAP_MAX_TILES a side. */
+#define FB_HEIGHTMAP_MAX_TILES 16
+
+/* Whether a w x h heightmap in format f splits into cols x rows such tiles, each of a size engine e
+ * takes; when not, one line in msg naming the nearest whole sizes that do. */
+bool fb_heightmap_tiles_check(fb_heightmap_engine e, int w, int h, int cols, int rows, fb_heightmap_format f, char *msg,
+                              size_t size);
+
+/* The file of the tile in column col (0: west, the image's left) and row row (0: north, the image's
+ * top) of rows, named by the engine's convention: PATH's stem + "_x<col>_y<row>" (Unreal, and without
+ * an engine: x east, y south, as Unreal's landscape importer reads them) or "_<col>_<rows-1-row>"
+ * (Unity's Terrain Toolbox: the index along X, then along Z, which points north), then PATH's
+ * extension. */
+void fb_heightmap_tile_path(const char *path, fb_heightmap_engine e, int col, int row, int rows, char *out,
+                            size_t size);
+
 /* The sidecar's path for a heightmap's: its extension replaced by ".import.json" (out: size bytes). */
 void fb_heightmap_sidecar_path(const char *path, char *out, size_t size);
 
@@ -48,14 +66,15 @@ typedef struct fb_heightmap_desc {
     const double *world;        /* GeoTIFF: the image's frame xmin, xmax, ymin, ymax (x right, y up) */
     int epsg;                   /* GeoTIFF: a projected CRS's EPSG code, or 0 for none stated */
     fb_heightmap_engine engine; /* FB_ENGINE_NONE, or the preset whose sidecar is written too */
-    bool nodata; /* GeoTIFF: heights equal to FB_HEIGHTMAP_NODATA are no data (outside a terrain's hull) */
+    bool nodata;    /* GeoTIFF: heights equal to FB_HEIGHTMAP_NODATA are no data (outside a terrain's hull) */
+    int cols, rows; /* 16 bits: the tiles (fb_heightmap_tile_path names them; path is never written); 0: one file */
 } fb_heightmap_desc;
 
 /* The GeoTIFF's NoData value (GDAL's GDAL_NODATA tag): the lowest float, written as "-3.4028234663852886e+38". */
 #define FB_HEIGHTMAP_NODATA (-3.4028234663852886e+38f)
 
-/* Writes the height field (and an engine's sidecar) through the output transaction (output.h). 16 bits: each height h
- * is stored as round((h - lo) / (hi - lo) * 65535), clamped, so it reads back within half a step
+/* Writes the height field, or its tiles (and an engine's sidecar) through the output transaction (output.h). 16 bits:
+ * each height h is stored as round((h - lo) / (hi - lo) * 65535), clamped, so it reads back within half a step
  * ((hi - lo) / 131070); the PNG also holds lo and hi as text chunks "fractalbake/height-min" and
  * "fractalbake/height-max". */
 fb_result fb_heightmap_write(const fb_heightmap_desc *d);

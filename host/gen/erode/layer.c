@@ -43,11 +43,7 @@ static const fb_keyspec erode_keys[] = {
     {"thermal", FB_K_NUM, 0, 1e6, false, NULL, "0.5", "thermal erosion rate, per time unit (0: none)"},
     {"heightmap", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
      "also write the eroded heights (Y) for engines: OUT.png (16-bit grey) or OUT.r16 (16-bit raw, little-endian)"},
-    {"heightmap-engine", FB_K_ENUM, 0, 0, false, FB_HEIGHTMAP_ENGINES, NULL,
-     "the heightmap for an engine: unreal (a landscape size, 16-bit PNG) or unity (2^n+1 square, RAW); writes "
-     "OUT.import.json, the import settings that reproduce the heights"},
-    {"heightmap-range", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL,
-     "heights stored as 0 and 65535 in a 16-bit heightmap (LO,HI; default: the image's lowest and highest)"},
+    FB_HEIGHTMAP_KEYS,
     {"masks", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
      "also write the masks for texturing as grey PNGs: PREFIX.flow.png, PREFIX.wear.png, PREFIX.deposition.png, "
      "PREFIX.sediment.png, each from 0 to its own maximum (kept in the text chunk fractalbake/mask-max)"},

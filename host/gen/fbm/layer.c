@@ -40,11 +40,7 @@ static const fb_keyspec fbm_keys[] = {
      "pixel's direction, no seam and no pinch (docs/sky.md)"},
     {"heightmap", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
      "also write the heights for engines: OUT.png (16-bit grey) or OUT.r16 (16-bit raw, little-endian)"},
-    {"heightmap-engine", FB_K_ENUM, 0, 0, false, FB_HEIGHTMAP_ENGINES, NULL,
-     "the heightmap for an engine: unreal (a landscape size, 16-bit PNG) or unity (2^n+1 square, RAW); writes "
-     "OUT.import.json, the import settings that reproduce the heights"},
-    {"heightmap-range", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL,
-     "heights stored as 0 and 65535 in a 16-bit heightmap (LO,HI; default: the image's lowest and highest)"},
+    FB_HEIGHTMAP_KEYS,
     {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store as half instead of float (flags: --half, --float)"},
     {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},

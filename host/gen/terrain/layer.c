@@ -84,11 +84,7 @@ static const fb_keyspec terrain_keys[] = {
     {"heightmap", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
      "also write the heights for engines: OUT.png (16-bit grey) or OUT.r16 (16-bit raw, little-endian), or OUT.tif "
      "(float GeoTIFF with the geotransform; pixels outside the hull are NoData, -3.4028234663852886e+38)"},
-    {"heightmap-engine", FB_K_ENUM, 0, 0, false, FB_HEIGHTMAP_ENGINES, NULL,
-     "the heightmap for an engine: unreal (a landscape size, 16-bit PNG) or unity (2^n+1 square, RAW); writes "
-     "OUT.import.json, the import settings that reproduce the heights"},
-    {"heightmap-range", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL,
-     "heights stored as 0 and 65535 in a 16-bit heightmap (LO,HI; default: the image's lowest and highest)"},
+    FB_HEIGHTMAP_KEYS,
     {"crs", FB_K_STRING, 0, 0, false, NULL, NULL,
      "the points' projected CRS, EPSG:N (a GeoTIFF heightmap records it; default: not stated)"},
     {"palette", FB_K_ENUM, 0, 0, false, FB_PALETTE_NAMES, NULL,
