@@ -20,8 +20,8 @@
  *  - every filter is symmetric or antisymmetric, so each pair of taps costs one multiply;
  *  - every loop runs along a row of planes, and is compiled twice (AVX2 and the SSE2 baseline),
  *    the same operations per pixel in both, so the same bits;
- *  - powers, cube roots and exponentials are float log2/exp2 polynomials (a few 1e-7 relative),
- *    which vectorise where libm's powf does not;
+ *  - powers and exponentials are float log2/exp2 polynomials (a few 1e-7 relative), cube roots
+ *    Newton's steps from the bits (1e-7), which vectorise where libm's powf and cbrtf do not;
  *  - a grey image (one plane passed three times) has Cx = Cz = 0: only Y is filtered, and CIELAB's
  *    a, b are 0 (the published tool gets a few 1e-5 of rounding there: 2e-5 in a quartile at most).
  * Bands are independent, so the result is the same bits for any thread count.
@@ -109,12 +109,31 @@ static inline __attribute__((always_inline)) float clamp01(float v)
     return v < 1.0f ? v : 1.0f;
 }
 
+/* The cube root of x > 0 (normal) without log2 and exp2: x^(-1/3) from the bits (3.9% at most), two
+ * of Newton's steps on it, division-free (4e-5), then one on the root itself, with that inverse for
+ * the derivative. Within 9.8e-8 relative of the true root over [216/24389, 2), every float there
+ * tried (fexp2(flog2(x) / 3): 2.3e-7). */
+static inline __attribute__((always_inline)) float fcbrt(float x)
+{
+    uint32_t u;
+    memcpy(&u, &x, sizeof u);
+    u = 0x54a2fa8cu - u / 3u;
+    float r;
+    memcpy(&r, &u, sizeof r);
+    for (int k = 0; k < 2; k++) {
+        float e = 1.0f - x * (r * r * r);
+        r = r + r * e * (1.0f / 3.0f);
+    }
+    float y = x * r * r;
+    return y + (x - y * y * y) * (r * r) * (1.0f / 3.0f);
+}
+
 /* CIELAB's f of t >= 0 */
 static inline __attribute__((always_inline)) float lab_f(float t)
 {
     const float delta = 6.0f / 29.0f, d2 = delta * delta, d3 = delta * d2;
     const float factor = 1.0f / (3.0f * d2), term = 4.0f / 29.0f;
-    float c = fexp2(flog2(t > d3 ? t : d3) * (1.0f / 3.0f));
+    float c = fcbrt(t > d3 ? t : d3);
     return t > d3 ? c : factor * t + term;
 }
 
