@@ -264,24 +264,28 @@ FB_CLONES static void hfilter4(const float *p, const float *const c[4], int r0, 
     }
 }
 
-/* Down the rows, four filters at once the same way: o[0] the symmetric c[0] over the rows Ry (radius
- * r0), o[1] the symmetric c[1] over Rx, o[2] the antisymmetric c[2] and o[3] the symmetric c[3], both
- * over Rg (radius r1 <= r0); vfilter's order, the same bits. */
-FB_CLONES static void vfilter4(const float *const *Ry, const float *const *Rx, const float *const *Rg,
-                               const float *const c[4], int r0, int r1, int w, float *const o[4])
+/* Down the rows, five filters at once the same way: o[0] the symmetric c[0] over the rows Ry (radius
+ * r0), o[1] the symmetric c[1] over Rx and o[4] the same over Rd, o[2] the antisymmetric c[2] and
+ * o[3] the symmetric c[3], both over Rg (radius r1 <= r0); vfilter's order, the same bits. */
+FB_CLONES static void vfilter5(const float *const *Ry, const float *const *Rx, const float *const *Rg,
+                               const float *const *Rd, const float *const c[4], int r0, int r1, int w,
+                               float *const o[5])
 {
     int x = 0;
     for (; x + 16 <= w; x += 16) { /* two vectors a sum: the rows' pointers and the taps loaded once for both */
         int y = x + 8;
         v8f a0 = c[0][0] * ld8(Ry[0] + x), a1 = c[1][0] * ld8(Rx[0] + x), a2 = {0}, a3 = c[3][0] * ld8(Rg[0] + x);
         v8f b0 = c[0][0] * ld8(Ry[0] + y), b1 = c[1][0] * ld8(Rx[0] + y), b2 = {0}, b3 = c[3][0] * ld8(Rg[0] + y);
+        v8f a4 = c[1][0] * ld8(Rd[0] + x), b4 = c[1][0] * ld8(Rd[0] + y);
         for (int i = 1; i <= r1; i++) {
             const float *yp = Ry[i], *ym = Ry[-i], *xp = Rx[i], *xm = Rx[-i], *gp = Rg[i], *gm = Rg[-i];
+            const float *dp = Rd[i], *dm = Rd[-i];
             float c0 = c[0][i], c1 = c[1][i], c2 = c[2][i], c3 = c[3][i];
             v8f u = ld8(gp + x), v = ld8(gm + x), uu = ld8(gp + y), vv = ld8(gm + y);
             a0 += c0 * (ld8(yp + x) + ld8(ym + x)), b0 += c0 * (ld8(yp + y) + ld8(ym + y));
             a1 += c1 * (ld8(xp + x) + ld8(xm + x)), b1 += c1 * (ld8(xp + y) + ld8(xm + y));
             a2 += c2 * (u - v), b2 += c2 * (uu - vv), a3 += c3 * (u + v), b3 += c3 * (uu + vv);
+            a4 += c1 * (ld8(dp + x) + ld8(dm + x)), b4 += c1 * (ld8(dp + y) + ld8(dm + y));
         }
         for (int i = r1 + 1; i <= r0; i++) {
             a0 += c[0][i] * (ld8(Ry[i] + x) + ld8(Ry[-i] + x));
@@ -291,29 +295,33 @@ FB_CLONES static void vfilter4(const float *const *Ry, const float *const *Rx, c
         memcpy(o[2] + x, &a2, sizeof a2), memcpy(o[3] + x, &a3, sizeof a3);
         memcpy(o[0] + y, &b0, sizeof b0), memcpy(o[1] + y, &b1, sizeof b1);
         memcpy(o[2] + y, &b2, sizeof b2), memcpy(o[3] + y, &b3, sizeof b3);
+        memcpy(o[4] + x, &a4, sizeof a4), memcpy(o[4] + y, &b4, sizeof b4);
     }
     for (; x + 8 <= w; x += 8) {
         v8f m = ld8(Rg[0] + x), a0 = c[0][0] * ld8(Ry[0] + x), a1 = c[1][0] * ld8(Rx[0] + x), a2 = {0};
-        v8f a3 = c[3][0] * m;
+        v8f a3 = c[3][0] * m, a4 = c[1][0] * ld8(Rd[0] + x);
         for (int i = 1; i <= r1; i++) {
             v8f u = ld8(Rg[i] + x), v = ld8(Rg[-i] + x);
             a0 += c[0][i] * (ld8(Ry[i] + x) + ld8(Ry[-i] + x));
             a1 += c[1][i] * (ld8(Rx[i] + x) + ld8(Rx[-i] + x));
             a2 += c[2][i] * (u - v), a3 += c[3][i] * (u + v);
+            a4 += c[1][i] * (ld8(Rd[i] + x) + ld8(Rd[-i] + x));
         }
         for (int i = r1 + 1; i <= r0; i++) a0 += c[0][i] * (ld8(Ry[i] + x) + ld8(Ry[-i] + x));
         memcpy(o[0] + x, &a0, sizeof a0), memcpy(o[1] + x, &a1, sizeof a1);
         memcpy(o[2] + x, &a2, sizeof a2), memcpy(o[3] + x, &a3, sizeof a3);
+        memcpy(o[4] + x, &a4, sizeof a4);
     }
     for (; x < w; x++) { /* the last few, one at a time */
         float a0 = c[0][0] * Ry[0][x], a1 = c[1][0] * Rx[0][x], a2 = 0.0f, a3 = c[3][0] * Rg[0][x];
+        float a4 = c[1][0] * Rd[0][x];
         for (int i = 1; i <= r1; i++) {
             float u = Rg[i][x], v = Rg[-i][x];
             a0 += c[0][i] * (Ry[i][x] + Ry[-i][x]), a1 += c[1][i] * (Rx[i][x] + Rx[-i][x]);
-            a2 += c[2][i] * (u - v), a3 += c[3][i] * (u + v);
+            a2 += c[2][i] * (u - v), a3 += c[3][i] * (u + v), a4 += c[1][i] * (Rd[i][x] + Rd[-i][x]);
         }
         for (int i = r1 + 1; i <= r0; i++) a0 += c[0][i] * (Ry[i][x] + Ry[-i][x]);
-        o[0][x] = a0, o[1][x] = a1, o[2][x] = a2, o[3][x] = a3;
+        o[0][x] = a0, o[1][x] = a1, o[2][x] = a2, o[3][x] = a3, o[4][x] = a4;
     }
 }
 
@@ -624,16 +632,16 @@ static void band_vrow(band *b, const fb_flip_job *j, int s, int y)
     }
     float *const *v = b->v[s];
     if (f->rf <= f->rs) {
-        vfilter4(c[H_Y], c[H_DX], c[H_G],
+        vfilter5(c[H_Y], c[H_DX], c[H_G], c[H_DDX],
                  (const float *const[4]){f->tap[F_Y], f->tap[F_G], f->tap[F_DG], f->tap[F_DDG]}, f->rs, f->rf, w,
-                 (float *const[4]){v[V_Y], v[V_DX], v[V_DY], v[V_DDY]});
+                 (float *const[5]){v[V_Y], v[V_DX], v[V_DY], v[V_DDY], v[V_DDX]});
     } else {
         vfilter(c[H_Y], f->tap[F_Y], f->rs, false, w, v[V_Y]);
         vfilter(c[H_DX], f->tap[F_G], f->rf, false, w, v[V_DX]);
         vfilter(c[H_G], f->tap[F_DG], f->rf, true, w, v[V_DY]);
         vfilter(c[H_G], f->tap[F_DDG], f->rf, false, w, v[V_DDY]);
+        vfilter(c[H_DDX], f->tap[F_G], f->rf, false, w, v[V_DDX]);
     }
-    vfilter(c[H_DDX], f->tap[F_G], f->rf, false, w, v[V_DDX]);
     if (j->grey) return;
     vfilter(c[H_CX], f->tap[F_CX], f->rs, false, w, v[V_CX]);
     vfilter(c[H_CZ1], f->tap[F_CZ1], f->rs, false, w, v[V_CZ]);
