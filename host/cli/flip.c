@@ -538,7 +538,7 @@ fb_result fb_flip_job_create(const float *const ref[3], const float *const test[
     fb_result rc = filters_init(&j->f, ppd);
     if (!rc && hdr) {
         fb_flip_result *r = &j->r;
-        rc = fb_flip_exposures(ref, n, &r->start_exposure, &r->stop_exposure, &r->nexp, &r->zero_median);
+        rc = fb_flip_exposures(ref, n, map, &r->start_exposure, &r->stop_exposure, &r->nexp, &r->zero_median);
         j->nexp = r->nexp, j->start = r->start_exposure;
         j->step = (r->stop_exposure - r->start_exposure) / (float)(r->nexp - 1);
     }
