@@ -625,10 +625,14 @@ static void band_vrow(band *b, const fb_flip_job *j, int s, int y)
     const flip_filters *f = &j->f;
     int w = b->w, r = b->r;
     const float *rows[H_N][64 * 2 + 1], **c[H_N];
+    size_t off[64 * 2 + 1]; /* the ring's rows y - r .. y + r: the slots from y - r's on, wrapping */
+    for (int i = 0, slot = ((y - r) % b->nring + b->nring) % b->nring; i < b->nring; i++) {
+        off[i] = (size_t)slot * b->stride;
+        slot = slot + 1 == b->nring ? 0 : slot + 1;
+    }
     for (int q = 0; q < H_N; q++) {
         c[q] = rows[q] + r;
-        for (int i = -r; i <= r; i++)
-            c[q][i] = b->ring[s][q] + (size_t)(((y + i) % b->nring + b->nring) % b->nring) * b->stride;
+        for (int i = 0; i < b->nring; i++) rows[q][i] = b->ring[s][q] + off[i];
     }
     float *const *v = b->v[s];
     if (f->rf <= f->rs) {
