@@ -18,8 +18,8 @@
  *  - the work is cut in bands of rows; a band's rows are filtered horizontally once per exposure
  *    into a ring of 2r + 1 rows, from which each output row is filtered vertically;
  *  - every filter is symmetric or antisymmetric, so each pair of taps costs one multiply;
- *  - every loop runs along a row of planes, and is compiled twice (AVX2 and the SSE2 baseline),
- *    the same operations per pixel in both, so the same bits;
+ *  - every loop runs along a row of planes, and is compiled three times (AVX-512, AVX2 and the SSE2
+ *    baseline: clones.h), the same operations per pixel in each, so the same bits;
  *  - powers and exponentials are float log2/exp2 polynomials (a few 1e-7 relative), cube roots
  *    Newton's steps from the bits (1e-7), which vectorise where libm's powf and cbrtf do not;
  *  - a grey image (one plane passed three times) has Cx = Cz = 0: only Y is filtered, and CIELAB's
