@@ -99,7 +99,7 @@ static void flip_prepare_task(void *ctx, int t)
     const float *pa[3], *pb[3];
     size_t n = (size_t)k->W * k->H;
     u->rc = flip_planes(k, u, pa, pb);
-    if (!u->rc && !(u->map = malloc((n ? n : 1) * sizeof(float))))
+    if (!u->rc && !(u->map = fb_malloc_large((n ? n : 1) * sizeof(float))))
         u->rc = fb_fail(FB_ERR_NOMEM, "out of memory for FLIP of %s (%d x %d)", u->name, k->W, k->H);
     if (!u->rc) u->rc = fb_flip_job_create(pa, pb, k->W, k->H, u->hdr, fb_flip_default_ppd(), u->map, &u->job);
 }

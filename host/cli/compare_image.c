@@ -143,7 +143,7 @@ fb_result cmp_read_whole(cmp *k)
     if (!k->ba || !k->bb) return fb_fail(FB_ERR_NOMEM, "out of memory");
     for (int s = 0; s < k->nst; s++) {
         const chan_stats *c = &k->st[s];
-        if (!(k->pa[c->ia] = malloc(n ? n * 4 : 1)) || !(k->pb[c->ib] = malloc(n ? n * 4 : 1)))
+        if (!(k->pa[c->ia] = fb_malloc_large(n ? n * 4 : 1)) || !(k->pb[c->ib] = fb_malloc_large(n ? n * 4 : 1)))
             return fb_fail(FB_ERR_NOMEM,
                            "out of memory for the compared channels whole (%d of %d x %d, for FLIP or the report)",
                            k->nst, k->W, k->H);

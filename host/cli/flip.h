@@ -51,8 +51,9 @@ int fb_flip_job_bands(const fb_flip_job *j);
 void fb_flip_job_band(fb_flip_job *j, int band);
 fb_result fb_flip_job_finish(fb_flip_job **j, fb_flip_result *out);
 
-/* The automatic exposure range from the reference's linear RGB (as fb_flip uses). */
-fb_result fb_flip_exposures(const float *const ref[3], size_t n, float *start, float *stop, int *nexp,
+/* The automatic exposure range from the reference's linear RGB (as fb_flip uses). scratch: room for
+ * n floats that it may overwrite (the map, before the bands write it), or NULL to allocate its own. */
+fb_result fb_flip_exposures(const float *const ref[3], size_t n, float *scratch, float *start, float *stop, int *nexp,
                             bool *zero_median);
 
 /* The statistics of an error map of n values (mean, weighted median and quartiles, min, max). */

@@ -127,13 +127,13 @@ static float luminance(float r, float g, float b)
     return 0.2126f * r + 0.7152f * g + 0.0722f * b;
 }
 
-fb_result fb_flip_exposures(const float *const ref[3], size_t n, float *start, float *stop, int *nexp,
+fb_result fb_flip_exposures(const float *const ref[3], size_t n, float *scratch, float *start, float *stop, int *nexp,
                             bool *zero_median)
 {
     /* the larger root of (c0 - t c3) x^2 + (c1 - t c4) x + (c2 - t c5) = 0: where ACES reaches t = 0.85 */
     float t = 0.85f, a = ACES[0] - t * ACES[3], b = ACES[1] - t * ACES[4], c = ACES[2] - t * ACES[5];
     float d1 = -0.5f * (b / a), d2 = sqrtf(d1 * d1 - c / a), xmax = d1 + d2;
-    float *lum = calloc(n ? n : 1, sizeof *lum);
+    float *lum = scratch ? scratch : malloc((n ? n : 1) * sizeof *lum);
     if (!lum) return fb_fail(FB_ERR_NOMEM, "out of memory for HDR-FLIP's exposures");
     float ymax = -1e30f, ymed = 0;
     size_t nonpos = 0;
@@ -152,7 +152,7 @@ fb_result fb_flip_exposures(const float *const ref[3], size_t n, float *start, f
         rc = median_from(lum, n, &bk, nonpos, &ymed);
     }
     buckets_fini(&bk);
-    free(lum);
+    if (lum != scratch) free(lum);
     if (rc) return rc;
     if (ymax > 0 && isfinite(ymax) && ymed > 0) {
         *start = log2f(xmax / ymax);
@@ -167,14 +167,15 @@ fb_result fb_flip_exposures(const float *const ref[3], size_t n, float *start, f
 
 fb_result fb_flip_pool(const float *map, size_t n, fb_flip_result *out)
 {
-    float *v = malloc((n ? n : 1) * sizeof *v);
-    if (!v) return fb_fail(FB_ERR_NOMEM, "out of memory for FLIP's statistics");
+    bool nan = false; /* a NaN counts as 1: in a copy, where there is one */
+    for (size_t i = 0; i < n; i++) nan = nan || isnan(map[i]);
+    float *own = nan ? malloc(n * sizeof *own) : NULL;
+    if (nan && !own) return fb_fail(FB_ERR_NOMEM, "out of memory for FLIP's statistics");
+    for (size_t i = 0; i < n && own; i++) own[i] = isnan(map[i]) ? 1.0f : map[i];
+    const float *v = own ? own : map;
     double sum = 0;
     float lo = INFINITY, hi = -INFINITY;
-    for (size_t i = 0; i < n; i++) {
-        v[i] = isnan(map[i]) ? 1.0f : map[i], sum += v[i];
-        lo = v[i] < lo ? v[i] : lo, hi = v[i] > hi ? v[i] : hi;
-    }
+    for (size_t i = 0; i < n; i++) sum += v[i], lo = v[i] < lo ? v[i] : lo, hi = v[i] > hi ? v[i] : hi;
     out->mean = n ? sum / (double)n : 0;
     out->min = n ? lo : 0;
     out->max = n ? hi : 0;
@@ -202,6 +203,6 @@ fb_result fb_flip_pool(const float *map, size_t n, fb_flip_result *out)
         free(in), in = NULL;
     }
     buckets_fini(&b);
-    free(v);
+    free(own);
     return rc;
 }
