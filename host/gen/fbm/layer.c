@@ -1,6 +1,7 @@
 /*
  * The fBm generator: kernels/fbm.h, driven natively or by shaders/fbm.comp.
  */
+#include "fbm3_avx2.h"
 #include "fbm_avx2.h"
 #include "gen_fbm.h"
 
@@ -157,19 +158,30 @@ FBM_ROWS(K_NOISE_CELLULAR)
 FBM_ROWS(K_NOISE_CELLULAR_F2)
 FBM_ROWS(K_NOISE_SINE)
 
-/* The AVX2 loop is the plane's (environment maps run the portable kernel). */
+/* The plane's AVX2 loop (gradient noise, plain shape, no warp). */
 static bool avx2_applies(const K_FbmParams *p)
 {
     return p->mapping == K_ENV_RECT && fb_fbm_avx2_supported(p);
+}
+
+/* The sphere's AVX2 lanes (environment maps: gradient, value, simplex and sine noise, any shape, warp
+ * or not; cellular noise runs the portable kernel). */
+static bool avx2_env_applies(const K_FbmParams *p)
+{
+    return p->mapping != K_ENV_RECT && fb_fbm3_avx2_supported(p);
 }
 
 static void fbm_rows(const fb_gen *g, int y0, int n, void *const *planes)
 {
     const K_FbmParams *p = params(g);
     float *out = planes[0];
-    /* Bit-exact with the kernel (tests/test_avx2.c), so using it changes no result. */
+    /* Both bit-exact with the kernel (tests/test_avx2.c), so using them changes no result. */
     if (!g->scalar && avx2_applies(p)) {
         fb_fbm_avx2_rows(p, y0, n, out);
+        return;
+    }
+    if (!g->scalar && avx2_env_applies(p)) {
+        fb_fbm3_avx2_rows(p, y0, n, out);
         return;
     }
     switch (p->noise) {
