@@ -208,6 +208,14 @@ int main(void)
         "\"alpha\": [-0.3, 0.1], \"turbulence\": 0.2, \"samples\": 3, \"rotation\": 15}]}",
         "{\"size\": [21, 126], \"seed\": 2, \"layers\": [{\"type\": \"julia\", \"mapping\": \"cube\", "
         "\"alpha\": [0.5, 0], \"radius\": 1.1, \"max-iter\": 40}]}",
+        /* the turbulence's 3D fBm on the lanes (fbm3_avx2.c): lat-long and cube, other octaves, Hurst
+         * exponents and frequencies, jittered samples */
+        "{\"size\": [98, 49], \"seed\": 12, \"layers\": [{\"type\": \"julia\", \"mapping\": \"latlong\", "
+        "\"alpha\": [-0.3, 0], \"c\": [-0.76, 0.2], \"radius\": 1.2, \"turbulence\": 0.6, \"turbulence-octaves\": "
+        "9, \"turbulence-hurst\": 0.3, \"turbulence-frequency\": 7.5, \"samples\": 2}]}",
+        "{\"size\": [19, 114], \"seed\": 13, \"layers\": [{\"type\": \"julia\", \"mapping\": \"cube\", "
+        "\"alpha\": [0.2, 0.3], \"turbulence\": 1.5, \"turbulence-octaves\": 3, \"turbulence-frequency\": 2, "
+        "\"samples\": 3, \"max-iter\": 60}]}",
     };
     const int nlayers = (int)(sizeof layers / sizeof layers[0]);
     int seen_inside = 0, seen_pole = 0, seen_de = 0;
