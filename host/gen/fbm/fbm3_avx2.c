@@ -1,12 +1,12 @@
 /*
- * fBm on the sphere on eight AVX2 lanes: k_fbm3 of kernels/fbm.h over the 3D noises of
- * kernels/noise3.h (gradient, value, simplex and sine), and k_fbm_dir with its warp, eight
- * directions at a time. The same operations in the same order as the kernel, no FMA (the build's
- * -ffp-contract=off, and no FMA target here), the same hashes: every value is the scalar kernel's
- * to the bit (tests/test_avx2.c). The simplex's choice of simplex and its corners' cut-off are
- * masks, each lane taking the branch the kernel takes. Cellular noise searches cells that differ
- * lane by lane: it stays scalar (fb_fbm3_avx2_supported says no, and the lanes function runs the
- * kernel per lane for it).
+ * fBm on the sphere on eight AVX2 lanes: k_fbm3 of kernels/fbm.h over every 3D noise of
+ * kernels/noise3.h, and k_fbm_dir with its warp, eight directions at a time. The same operations in
+ * the same order as the kernel, no FMA (the build's -ffp-contract=off, and no FMA target here), the
+ * same hashes: every value is the scalar kernel's to the bit (tests/test_avx2.c). Where the kernel
+ * branches per point, each lane takes the kernel's branch through masks: the simplex's six
+ * orderings and its corners' cut-off, and the cellular search's skipped cells (against each lane's
+ * own F2 so far; a cell that no lane needs is not computed). k_sincos's polynomial is on the lanes
+ * for sine noise.
  *
  * Used by the fbm layer's lat-long and cube rows (layer.c) and by the Julia layer's turbulence on
  * the sphere (julia/layer_avx2.c).
@@ -208,12 +208,77 @@ AVX2 static AI __m256 sine3_8(v3 q)
                          sin8(_mm256_mul_ps(tau, zr)));
 }
 
+/* k_cell_gap2(d, t): the squared distance from offset t to cell d along one axis (d a constant) */
+AVX2 static inline __m256 gap2_8(int d, __m256 t)
+{
+    __m256 g = d > 0   ? _mm256_sub_ps(_mm256_set1_ps(K_F(d)), t)
+               : d < 0 ? _mm256_sub_ps(t, _mm256_set1_ps(K_F(d + 1)))
+                       : _mm256_setzero_ps();
+    return _mm256_mul_ps(g, g);
+}
+
+/* k_cellular3: F1 and F2 over the 5 x 5 x 5 neighbourhood. Each lane skips the cells the kernel
+ * skips for it (its own F2 so far: a lane takes a cell where the kernel's `>= f2` is false, NaN
+ * included, and its F1 and F2 move only then); a cell no lane takes is not computed. Returns F1 and
+ * F2 squared (the kernel's f1, f2 before their square roots). */
+AVX2 static AI void cellular3_8(uint32_t seed, v3 q, __m256 *f1out, __m256 *f2out)
+{
+    __m256 fx = _mm256_floor_ps(q.x), fy = _mm256_floor_ps(q.y), fz = _mm256_floor_ps(q.z);
+    __m256 tx = _mm256_sub_ps(q.x, fx), ty = _mm256_sub_ps(q.y, fy), tz = _mm256_sub_ps(q.z, fz);
+    __m256i cx = wrap8(fx), cy = wrap8(fy), cz = wrap8(fz);
+    const __m256i m = _mm256_set1_epi32((int)(K_NOISE_PERIOD - 1u));
+    __m256 f1 = _mm256_set1_ps(1.0e9f), f2 = _mm256_set1_ps(1.0e9f);
+    __m256 gx[5];
+    for (int dx = -2; dx <= 2; dx++) gx[dx + 2] = gap2_8(dx, tx);
+    for (int dz = -2; dz <= 2; dz++) {
+        __m256 gz = gap2_8(dz, tz);
+        __m256i layer = layer8(seed, _mm256_and_si256(_mm256_add_epi32(cz, _mm256_set1_epi32(dz)), m));
+        for (int dy = -2; dy <= 2; dy++) {
+            __m256 gyz = _mm256_add_ps(gz, gap2_8(dy, ty));
+            if (_mm256_movemask_ps(_mm256_cmp_ps(gyz, f2, _CMP_NGE_UQ)) == 0) continue;
+            __m256i row = row8(layer, _mm256_and_si256(_mm256_add_epi32(cy, _mm256_set1_epi32(dy)), m));
+            for (int dx = -2; dx <= 2; dx++) {
+                /* the kernel's two tests, gyz >= f2 and gyz + gap >= f2, against this lane's f2 now */
+                __m256 take = _mm256_and_ps(_mm256_cmp_ps(gyz, f2, _CMP_NGE_UQ),
+                                            _mm256_cmp_ps(_mm256_add_ps(gyz, gx[dx + 2]), f2, _CMP_NGE_UQ));
+                if (_mm256_movemask_ps(take) == 0) continue;
+                __m256i h = cell_hash8(_mm256_and_si256(_mm256_add_epi32(cx, _mm256_set1_epi32(dx)), m), row);
+                __m256i h2 = hash8(h);
+                __m256 ox = _mm256_sub_ps(_mm256_add_ps(_mm256_set1_ps(K_F(dx)), u01_8(h)), tx);
+                __m256 oy = _mm256_sub_ps(_mm256_add_ps(_mm256_set1_ps(K_F(dy)), u01_8(h2)), ty);
+                __m256 oz = _mm256_sub_ps(_mm256_add_ps(_mm256_set1_ps(K_F(dz)), u01_8(hash8(h2))), tz);
+                __m256 d2 =
+                    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ox, ox), _mm256_mul_ps(oy, oy)), _mm256_mul_ps(oz, oz));
+                __m256 lt1 = _mm256_and_ps(take, _mm256_cmp_ps(d2, f1, _CMP_LT_OQ));
+                __m256 lt2 = _mm256_andnot_ps(lt1, _mm256_and_ps(take, _mm256_cmp_ps(d2, f2, _CMP_LT_OQ)));
+                f2 = _mm256_blendv_ps(f2, f1, lt1);
+                f1 = _mm256_blendv_ps(f1, d2, lt1);
+                f2 = _mm256_blendv_ps(f2, d2, lt2);
+            }
+        }
+    }
+    *f1out = f1, *f2out = f2;
+}
+
+/* k_noise3's cellular kinds: F1 mapped from [0, sqrt(3)], F2 - F1 from [0, 1] (clamped), to [-1, 1] */
+AVX2 static AI __m256 cellular_noise3_8(const uint32_t kind, uint32_t seed, v3 q)
+{
+    __m256 f1, f2;
+    cellular3_8(seed, q, &f1, &f2);
+    __m256 a = _mm256_sqrt_ps(f1), one = _mm256_set1_ps(1.0f);
+    if (kind == K_NOISE_CELLULAR)
+        return _mm256_min_ps(_mm256_sub_ps(_mm256_mul_ps(a, _mm256_set1_ps(1.15470054f)), one), one);
+    __m256 e = _mm256_min_ps(_mm256_sub_ps(_mm256_sqrt_ps(f2), a), one);
+    return _mm256_sub_ps(_mm256_mul_ps(_mm256_set1_ps(2.0f), e), one);
+}
+
 /* k_noise3 for the kinds the lanes implement (a constant in each clone of fbm3_t below) */
 AVX2 static AI __m256 noise3_8(const uint32_t kind, uint32_t seed, v3 q)
 {
     if (kind == K_NOISE_VALUE) return value3_8(seed, q);
     if (kind == K_NOISE_SIMPLEX) return simplex3_8(seed, q);
     if (kind == K_NOISE_SINE) return sine3_8(q);
+    if (kind == K_NOISE_CELLULAR || kind == K_NOISE_CELLULAR_F2) return cellular_noise3_8(kind, seed, q);
     return gradient3_8(seed, q);
 }
 
@@ -256,7 +321,7 @@ AVX2 static AI __m256 fbm3_t(const uint32_t kind, const K_FbmParams *p, uint32_t
     return sum;
 }
 
-/* k_fbm3 for any kind: the lanes' clones, or the kernel per lane (cellular) */
+/* k_fbm3: the lanes' clone of each kind (the kernel per lane for a kind unknown here) */
 AVX2 static __m256 fbm3_8(const K_FbmParams *p, uint32_t stream, v3 d)
 {
     switch (p->noise) {
@@ -268,6 +333,10 @@ AVX2 static __m256 fbm3_8(const K_FbmParams *p, uint32_t stream, v3 d)
         return fbm3_t(K_NOISE_SIMPLEX, p, stream, d);
     case K_NOISE_SINE:
         return fbm3_t(K_NOISE_SINE, p, stream, d);
+    case K_NOISE_CELLULAR:
+        return fbm3_t(K_NOISE_CELLULAR, p, stream, d);
+    case K_NOISE_CELLULAR_F2:
+        return fbm3_t(K_NOISE_CELLULAR_F2, p, stream, d);
     default: {
         float x[8], y[8], z[8], r[8];
         _mm256_storeu_ps(x, d.x);
@@ -331,9 +400,7 @@ AVX2 static void rows_avx2(const K_FbmParams *p, int y0, int n, float *out)
 
 bool fb_fbm3_avx2_supported(const K_FbmParams *p)
 {
-    bool kind = p->noise == K_NOISE_GRADIENT || p->noise == K_NOISE_VALUE || p->noise == K_NOISE_SIMPLEX ||
-                p->noise == K_NOISE_SINE;
-    return kind && __builtin_cpu_supports("avx2");
+    return p->noise < K_NOISE_COUNT && __builtin_cpu_supports("avx2");
 }
 
 void fb_fbm3_avx2_lanes(const K_FbmParams *p, uint32_t stream, const float d[3][8], float out[8])

@@ -9,9 +9,7 @@
 
 #include <stdbool.h>
 
-/* True when this CPU has AVX2 and the lanes implement p's noise kind: gradient, value, simplex and
- * sine (any shape, warp or not). Cellular F1 and F2 - F1 (a search whose cells differ lane by lane)
- * stay with the scalar kernel. */
+/* True when this CPU has AVX2 (the lanes implement every noise kind, every shape, warp or not). */
 bool fb_fbm3_avx2_supported(const K_FbmParams *p);
 
 /* out[k] = k_fbm3(*p, stream, (d[0][k], d[1][k], d[2][k])) for the eight lanes k. */
