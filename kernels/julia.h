@@ -185,6 +185,15 @@ K_FN K_JuliaStart k_julia_begin(K_JuliaParams p, float px, float py, float dpx, 
     return k_julia_quotient(p, nr, ni, dr, di, dpx, dpy, tw_re, tw_im);
 }
 
+/* lambda W from the turbulence's two fBm values f1, f2 (streams 1 and 2, each a sum of octaves
+ * that turb_norm maps to [-1, 1]): W = clamp(0.5 + 0.5 turb_norm f, 0, 1) in each component. */
+K_FN k_vec2 k_julia_turbulence_of(K_JuliaParams p, float f1, float f2)
+{
+    float wr = k_clamp(0.5f + 0.5f * p.turb_norm * f1, 0.0f, 1.0f);
+    float wi = k_clamp(0.5f + 0.5f * p.turb_norm * f2, 0.0f, 1.0f);
+    return k_vec2(p.lambda * wr, p.lambda * wi);
+}
+
 /* ---- environment maps: the grid from directions ---------------------------------------------- */
 
 #if K_WITH_ENVMAP
@@ -266,9 +275,7 @@ K_FN K_JuliaStart k_julia_env_begin(K_JuliaParams p, K_JuliaHom e, float tw_re, 
 K_FN k_vec2 k_julia_turbulence3(K_JuliaParams p, K_FbmParams t, k_vec3 d)
 {
     if (p.lambda == 0.0f) return k_vec2(0.0f, 0.0f);
-    float wr = k_clamp(0.5f + 0.5f * p.turb_norm * k_fbm3(t, 1u, d), 0.0f, 1.0f);
-    float wi = k_clamp(0.5f + 0.5f * p.turb_norm * k_fbm3(t, 2u, d), 0.0f, 1.0f);
-    return k_vec2(p.lambda * wr, p.lambda * wi);
+    return k_julia_turbulence_of(p, k_fbm3(t, 1u, d), k_fbm3(t, 2u, d));
 }
 
 /* The start of the orbit at environment-map position (ex, ey) (envmap.h: pixel centres at integers). */
@@ -386,9 +393,7 @@ K_FN K_JuliaPair k_julia_orbit2(K_JuliaParams p, K_JuliaStart sa, K_JuliaStart s
 K_FN k_vec2 k_julia_turbulence(K_JuliaParams p, K_FbmParams t, float u, float v)
 {
     if (p.lambda == 0.0f) return k_vec2(0.0f, 0.0f);
-    float wr = k_clamp(0.5f + 0.5f * p.turb_norm * k_fbm_uv(t, 1u, u, v), 0.0f, 1.0f);
-    float wi = k_clamp(0.5f + 0.5f * p.turb_norm * k_fbm_uv(t, 2u, u, v), 0.0f, 1.0f);
-    return k_vec2(p.lambda * wr, p.lambda * wi);
+    return k_julia_turbulence_of(p, k_fbm_uv(t, 1u, u, v), k_fbm_uv(t, 2u, u, v));
 }
 
 /* The start of the orbit of the point at continuous pixel coordinates (fx, fy) (pixel centres at

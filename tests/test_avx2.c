@@ -3,6 +3,7 @@
  * chaos-game histograms, is bit-identical to the scalar kernel's (the layer with `scalar` set). */
 #include "../kernels/fbm.h"
 #include "../kernels/ifs.h"
+#include "fbm3_avx2.h"
 #include "fbm_avx2.h"
 #include "ifs_avx2.h"
 #include "julia_avx2.h"
@@ -42,6 +43,102 @@ int main(void)
         free(a);
         free(b);
         fb_scene_fini(&s);
+    }
+    /* fBm on the sphere: the lat-long and cube rows on AVX2 lanes are the scalar kernel's to the bit
+     * (memcmp) for every noise kind the lanes implement, plain, ridged and billow, with and without
+     * the warp, whole and in strips of 1, 2, 3, ... rows; widths that are not multiples of 8 leave a
+     * partial last block. */
+    static const char *const kinds[] = {"gradient", "value", "simplex", "sine", "cellular", "cellular-f2"};
+    static const char *const shapes[] = {"", ", \"ridged\": true", ", \"billow\": true"};
+    int env_scenes = 0;
+    for (int kind = 0; kind < 6; kind++)
+        for (int cube = 0; cube < 2; cube++)
+            for (int warp = 0; warp < 2; warp++)
+                for (int shape = 0; shape < 3; shape++) {
+                    int v = ((kind * 2 + cube) * 2 + warp) * 3 + shape;
+                    char json[512];
+                    snprintf(json, sizeof json,
+                             "{\"size\": [%s], \"seed\": %d, \"layers\": [{\"type\": \"fbm\", \"mapping\": "
+                             "\"%s\", \"noise\": \"%s\", \"octaves\": %d, \"hurst\": %.2f, \"lacunarity\": %.2f, "
+                             "\"rotation\": %d, \"frequency\": %.1f, \"offset\": [%d, %.2f], \"warp\": %.2f%s}]}",
+                             cube ? "13, 78" : "58, 29", 1000 + 7 * v, cube ? "cube" : "latlong", kinds[kind],
+                             3 + v % 5, 0.3 + 0.1 * (v % 7), 1.7 + 0.3 * (v % 4), -170 + (37 * v) % 340,
+                             2.0 + 1.3 * (v % 9), -100 + 13 * v, 0.25 * (v % 5), warp ? 0.2 + 0.3 * (v % 3) : 0.0,
+                             shapes[shape]);
+                    fb_scene s;
+                    CHECKF(fb_scene_parse(json, NULL, &s) == FB_OK, "%s", json);
+                    fb_gen g;
+                    CHECK(fb_gen_init(&g, &s, &s.layers[0]) == FB_OK);
+                    const K_FbmParams *p = (const K_FbmParams *)(const void *)g.params;
+                    if (!__builtin_cpu_supports("avx2")) TEST_SKIP("this CPU has no AVX2");
+                    CHECKF(fb_fbm3_avx2_supported(p), "%s: the lanes are not used", kinds[kind]);
+                    size_t n = (size_t)s.width * s.height;
+                    float *a = malloc(n * 4), *b = malloc(n * 4), *c = malloc(n * 4);
+                    g.scalar = true;
+                    g.native_rows(&g, 0, s.height, (void *[]){a});
+                    g.scalar = false;
+                    g.native_rows(&g, 0, s.height, (void *[]){b});
+                    for (int y0 = 0, h = 1; y0 < s.height; y0 += h, h++) {
+                        int rows = y0 + h <= s.height ? h : s.height - y0;
+                        g.native_rows(&g, y0, rows, (void *[]){c + (size_t)y0 * s.width});
+                    }
+                    int diff = 0, split = 0, moved = 0;
+                    for (size_t i = 0; i < n; i++) {
+                        diff += memcmp(&a[i], &b[i], 4) != 0;
+                        split += memcmp(&b[i], &c[i], 4) != 0;
+                        moved += i > 0 && a[i] != a[i - 1];
+                    }
+                    CHECKF(diff == 0, "fbm %s %s warp %d shape %d: %d of %zu pixels differ from the scalar kernel",
+                           kinds[kind], cube ? "cube" : "latlong", warp, shape, diff, n);
+                    CHECKF(split == 0, "fbm %s %s warp %d shape %d: %d pixels differ between strip splits", kinds[kind],
+                           cube ? "cube" : "latlong", warp, shape, split);
+                    /* a field, not a constant (the comparison would then say little) */
+                    CHECKF(moved > (int)n / 2, "fbm %s %s: only %d of %zu neighbours differ", kinds[kind],
+                           cube ? "cube" : "latlong", moved, n);
+                    env_scenes++;
+                    free(a), free(b), free(c);
+                    fb_gen_fini(&g);
+                    fb_scene_fini(&s);
+                }
+    CHECK(env_scenes == 72);
+    /* The lanes function alone (what the Julia turbulence calls): directions of any length and far
+     * from the unit sphere, every stream, against k_fbm3 lane by lane; with offset 1e5 and lacunarity
+     * 2.9 the lattice coordinates pass 2^24 from the seventh octave on (the wrap's float path). */
+    for (int kind = 0; kind < 6; kind++) {
+        static const uint32_t kk[] = {K_NOISE_GRADIENT, K_NOISE_VALUE,    K_NOISE_SIMPLEX,
+                                      K_NOISE_SINE,     K_NOISE_CELLULAR, K_NOISE_CELLULAR_F2};
+        K_FbmParams p = {.seed = 99u + (uint32_t)kind,
+                         .noise = kk[kind],
+                         .octaves = 32,
+                         .gain = 0.6f,
+                         .lacunarity = 2.9f,
+                         .rot_c = 0.8f,
+                         .rot_s = 0.6f,
+                         .freq_x = 7.0f,
+                         .offset_x = -3.5f,
+                         .offset_y = 1e5f,
+                         .flags = kind == 1 ? K_FBM_RIDGED : 0u};
+        int diff = 0, moved = 0;
+        float last = 0.0f;
+        for (int t = 0; t < 64; t++) {
+            float d[3][8], out[8];
+            for (int k = 0; k < 8; k++)
+                for (int j = 0; j < 3; j++)
+                    d[j][k] = (float)((k_hash((uint32_t)(t * 24 + k * 3 + j)) >> 8) * (1.0 / 16777216.0) - 0.5) *
+                              (t < 32 ? 2.0f : 3000.0f);
+            for (uint32_t stream = 0; stream < 4; stream++) {
+                fb_fbm3_avx2_lanes(&p, stream, d, out);
+                for (int k = 0; k < 8; k++) {
+                    float want = k_fbm3(p, stream, k_vec3(d[0][k], d[1][k], d[2][k]));
+                    diff += memcmp(&want, &out[k], 4) != 0;
+                    moved += want != last;
+                    last = want;
+                }
+            }
+        }
+        CHECKF(diff == 0, "fb_fbm3_avx2_lanes, noise %u: %d of %d lanes differ from k_fbm3", kk[kind], diff,
+               64 * 8 * 4);
+        CHECKF(moved > 64 * 8 * 4 / 2, "noise %u: only %d values differ from the one before", kk[kind], moved);
     }
     /* Julia: the escape counts of the AVX2 loop are the kernel's, pole and warp included. */
     const char *julias[] = {
@@ -111,6 +208,14 @@ int main(void)
         "\"alpha\": [-0.3, 0.1], \"turbulence\": 0.2, \"samples\": 3, \"rotation\": 15}]}",
         "{\"size\": [21, 126], \"seed\": 2, \"layers\": [{\"type\": \"julia\", \"mapping\": \"cube\", "
         "\"alpha\": [0.5, 0], \"radius\": 1.1, \"max-iter\": 40}]}",
+        /* the turbulence's 3D fBm on the lanes (fbm3_avx2.c): lat-long and cube, other octaves, Hurst
+         * exponents and frequencies, jittered samples */
+        "{\"size\": [98, 49], \"seed\": 12, \"layers\": [{\"type\": \"julia\", \"mapping\": \"latlong\", "
+        "\"alpha\": [-0.3, 0], \"c\": [-0.76, 0.2], \"radius\": 1.2, \"turbulence\": 0.6, \"turbulence-octaves\": "
+        "9, \"turbulence-hurst\": 0.3, \"turbulence-frequency\": 7.5, \"samples\": 2}]}",
+        "{\"size\": [19, 114], \"seed\": 13, \"layers\": [{\"type\": \"julia\", \"mapping\": \"cube\", "
+        "\"alpha\": [0.2, 0.3], \"turbulence\": 1.5, \"turbulence-octaves\": 3, \"turbulence-frequency\": 2, "
+        "\"samples\": 3, \"max-iter\": 60}]}",
     };
     const int nlayers = (int)(sizeof layers / sizeof layers[0]);
     int seen_inside = 0, seen_pole = 0, seen_de = 0;

@@ -11,23 +11,7 @@
 #include <stdbool.h>
 
 #if defined(__x86_64__) || defined(__i386__)
-#include "avx2_hash.h"
-
-/* k_wrap_cell(i, 4096) for 8 lanes: integer path below 2^24, the float path above, blended. */
-AVX2 static inline __m256i wrap8(__m256 i)
-{
-    const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
-    __m256 small = _mm256_cmp_ps(_mm256_and_ps(i, absmask), _mm256_set1_ps(16777216.0f), _CMP_LT_OQ);
-    __m256i mask = _mm256_set1_epi32(4095);
-    __m256i a = _mm256_and_si256(_mm256_cvttps_epi32(i), mask);
-    /* every lane's lattice index is exact (an image's coarse octaves): the integer path alone */
-    if (__builtin_expect(_mm256_movemask_ps(small) == 0xff, 1)) return a;
-    __m256 fp = _mm256_set1_ps(4096.0f);
-    __m256 r = _mm256_sub_ps(i, _mm256_mul_ps(fp, _mm256_floor_ps(_mm256_mul_ps(i, _mm256_set1_ps(1.0f / 4096.0f)))));
-    r = _mm256_min_ps(_mm256_max_ps(r, _mm256_setzero_ps()), _mm256_set1_ps(4095.0f));
-    __m256i b = _mm256_and_si256(_mm256_cvttps_epi32(r), mask);
-    return _mm256_blendv_epi8(b, a, _mm256_castps_si256(small));
-}
+#include "fbm_avx2_ops.h"
 
 AVX2 static inline __m256 grad8(__m256i h, __m256 x, __m256 y)
 {
@@ -43,33 +27,12 @@ AVX2 static inline __m256 grad8(__m256i h, __m256 x, __m256 y)
     return _mm256_add_ps(su, sv);
 }
 
-AVX2 static inline __m256 fade8(__m256 t)
-{
-    __m256 inner =
-        _mm256_add_ps(_mm256_mul_ps(t, _mm256_sub_ps(_mm256_mul_ps(t, _mm256_set1_ps(6.0f)), _mm256_set1_ps(15.0f))),
-                      _mm256_set1_ps(10.0f));
-    return _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(t, t), t), inner);
-}
-
-AVX2 static inline __m256 mix8(__m256 a, __m256 b, __m256 t)
-{
-    return _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), t));
-}
-
-/* k_hash2i(seed, ix, iy) = hash((ix * 0x9e3779b1) ^ hash(iy ^ seed ^ 0x632be5ab)) */
-AVX2 static inline __m256i cell_hash8(__m256i ix, __m256i row)
-{
-    return hash8(_mm256_xor_si256(_mm256_mullo_epi32(ix, _mm256_set1_epi32((int)0x9e3779b1u)), row));
-}
-
 AVX2 static inline __m256 gradient8(uint32_t seed, __m256 x, __m256 y)
 {
     __m256 fx = _mm256_floor_ps(x), fy = _mm256_floor_ps(y);
     __m256 tx = _mm256_sub_ps(x, fx), ty = _mm256_sub_ps(y, fy);
-    __m256i m = _mm256_set1_epi32(4095), one = _mm256_set1_epi32(1);
     __m256i ix0 = wrap8(fx), iy0 = wrap8(fy);
-    __m256i ix1 = _mm256_and_si256(_mm256_add_epi32(ix0, one), m);
-    __m256i iy1 = _mm256_and_si256(_mm256_add_epi32(iy0, one), m);
+    __m256i ix1 = next8(ix0), iy1 = next8(iy0);
     __m256i s = _mm256_set1_epi32((int)(seed ^ 0x632be5abu));
     __m256i r0 = hash8(_mm256_xor_si256(iy0, s)), r1 = hash8(_mm256_xor_si256(iy1, s));
     __m256 onef = _mm256_set1_ps(1.0f);

@@ -19,6 +19,7 @@
 
 #if defined(__x86_64__) || defined(__i386__)
 #include "avx2_hash.h"
+#include "fbm3_avx2.h"
 
 typedef struct v8 {
     __m256 zr, zi, dzr, dzi;
@@ -164,16 +165,29 @@ AVX2 static inline __m256 clamp8(__m256 x, float lo, float hi)
 
 /* ---- the start: k_julia_start_at --------------------------------------------------------------- */
 
-/* Environment maps: each lane's start from the portable kernel (a direction, its projection and the
- * warp: a small part of a pixel's work next to its orbit), then the orbits on the lanes. */
+/* Environment maps: each lane's point and direction, projection and warp from the portable kernel
+ * (k_julia_env_start: a small part of a pixel's work next to its orbit), its turbulence's 3D fBm on
+ * the lanes (fbm3_avx2.c, bit-exact with k_fbm3), then the orbits on the lanes. */
 AVX2 static v8start start8_env(const fb_julia_avx2_ctx *cx, __m256 fx, __m256 fy)
 {
-    float x[8], y[8], zr[8], zi[8], dzr[8], dzi[8];
+    const K_JuliaParams *p = cx->p;
+    float x[8], y[8], zr[8], zi[8], dzr[8], dzi[8], d[3][8], w1[8], w2[8];
     uint32_t ok[8];
+    K_JuliaHom e[8];
     _mm256_storeu_ps(x, fx);
     _mm256_storeu_ps(y, fy);
     for (int k = 0; k < 8; k++) {
-        K_JuliaStart s = k_julia_start_at(*cx->p, *cx->turb, x[k], y[k]);
+        e[k] = k_julia_env_point(*p, x[k] - 0.5f, y[k] - 0.5f); /* k_julia_start_at's env position */
+        d[0][k] = e[k].dir.x, d[1][k] = e[k].dir.y, d[2][k] = e[k].dir.z;
+    }
+    const bool lanes = p->lambda != 0.0f && fb_fbm3_avx2_supported(cx->turb);
+    if (lanes) {
+        fb_fbm3_avx2_lanes(cx->turb, 1u, d, w1);
+        fb_fbm3_avx2_lanes(cx->turb, 2u, d, w2);
+    }
+    for (int k = 0; k < 8; k++) {
+        k_vec2 w = lanes ? k_julia_turbulence_of(*p, w1[k], w2[k]) : k_julia_turbulence3(*p, *cx->turb, e[k].dir);
+        K_JuliaStart s = k_julia_env_begin(*p, e[k], w.x, w.y);
         zr[k] = s.o.zr, zi[k] = s.o.zi, dzr[k] = s.o.dzr, dzi[k] = s.o.dzi;
         ok[k] = s.ok ? 0xffffffffu : 0u;
     }
