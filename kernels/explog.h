@@ -83,23 +83,24 @@ K_FN float k_exp2_poly(float x)
     return k_exp2_split(r, k);
 }
 
-/* x^y for x >= 0 and y > 0: exp2(y (e + t)), y e = a + b exactly (y split into two 12-bit halves,
- * e has at most 8 bits), the integer part of a taken out exactly before the rest is rounded. */
+/* x^y for x >= 0 and 0 < y <= 10^4: exp2(y (e + t)), y e = a + b exactly (y split into two 12-bit
+ * halves, e has at most 8 bits), the integer part of a taken out exactly before the rest is
+ * rounded. x = 0 by a select, not a branch (a shader runs both sides of a branch in every lane). */
 K_FN float k_pow_poly(float x, float y)
 {
-    if (x == 0.0f) return 0.0f;
     k_vec2 l = k_log2_parts(x);
     K_PRECISE float c = 4097.0f * y;
     K_PRECISE float yh = c - (c - y);
     K_PRECISE float yl = y - yh;
-    K_PRECISE float a = yh * l.x;                               /* exact */
-    K_PRECISE float b = yl * l.x + y * l.y;                     /* yl e exact */
-    K_PRECISE float k1 = k_floor(a + 0.5f);                     /* |a| < 2^23 */
-    K_PRECISE float s = k_clamp((a - k1) + b, -160.0f, 160.0f); /* a - k1 exact */
+    K_PRECISE float a = yh * l.x;           /* exact */
+    K_PRECISE float b = yl * l.x + y * l.y; /* yl e exact; |b| < y */
+    K_PRECISE float k1 = k_floor(a + 0.5f); /* |a| < 2^23 */
+    K_PRECISE float s = (a - k1) + b;       /* a - k1 exact */
     K_PRECISE float k2 = k_floor(s + 0.5f);
     K_PRECISE float r = s - k2; /* exact */
     K_PRECISE float k = k_clamp(k1 + k2, -151.0f, 129.0f);
-    return k_exp2_split(r, k);
+    float v = k_exp2_split(r, k);
+    return x == 0.0f ? 0.0f : v;
 }
 
 #endif

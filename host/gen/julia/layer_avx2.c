@@ -415,7 +415,7 @@ AVX2 static inline __m256 powp8(__m256 x, float y)
     __m256 a = _mm256_mul_ps(_mm256_set1_ps(yh), e);
     __m256 b = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(yl), e), _mm256_mul_ps(_mm256_set1_ps(y), t));
     __m256 k1 = _mm256_floor_ps(_mm256_add_ps(a, half));
-    __m256 s = clamp8(_mm256_add_ps(_mm256_sub_ps(a, k1), b), -160.0f, 160.0f);
+    __m256 s = _mm256_add_ps(_mm256_sub_ps(a, k1), b);
     __m256 k2 = _mm256_floor_ps(_mm256_add_ps(s, half));
     __m256 r = _mm256_sub_ps(s, k2);
     __m256 k = clamp8(_mm256_add_ps(k1, k2), -151.0f, 129.0f);
