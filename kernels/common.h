@@ -37,11 +37,16 @@
  * that the device rounds every operation as C built with -ffp-contract=off does. */
 #define K_PRECISE precise
 
+/* A float's bits and back. */
+#define k_float_bits(x) floatBitsToUint(x)
+#define k_bits_float(u) uintBitsToFloat(u)
+
 #else /* C11 */
 
 #include <math.h>
 #include <stdbool.h>
 #include <stdint.h>
+#include <string.h>
 
 typedef uint32_t uint;
 
@@ -65,6 +70,20 @@ typedef uint32_t uint;
 #define K_END(n)    n;
 #define K_MAKE(n)   (n)
 #define K_PRECISE
+
+/* A float's bits and back (GLSL's floatBitsToUint and uintBitsToFloat). */
+static inline uint k_float_bits(float x)
+{
+    uint u;
+    memcpy(&u, &x, sizeof u);
+    return u;
+}
+static inline float k_bits_float(uint u)
+{
+    float x;
+    memcpy(&x, &u, sizeof x);
+    return x;
+}
 
 #endif
 

@@ -15,6 +15,7 @@
 #ifndef FB_KERNELS_JULIA_H
 #define FB_KERNELS_JULIA_H
 
+#include "explog.h"
 #include "fbm.h"
 #if K_WITH_ENVMAP
 #include "sincos.h"
@@ -312,8 +313,9 @@ K_FN K_JuliaResult k_julia_end(K_JuliaParams p, K_JuliaZ o, uint n, bool escaped
         m++;
     }
     float r2 = o.zr * o.zr + o.zi * o.zi;
-    float lnr = 0.5f * k_log2(r2) * 0.69314718f; /* ln |z| */
-    if ((want & K_JULIA_WANT_SMOOTH) != 0u) res.nsmooth = K_F(m) + 1.0f - k_log2(lnr);
+    /* log2 as kernels/explog.h computes it: the same bits in C, on AVX2 lanes and on a device */
+    float lnr = 0.5f * k_log2_poly(r2) * 0.69314718f; /* ln |z| */
+    if ((want & K_JULIA_WANT_SMOOTH) != 0u) res.nsmooth = K_F(m) + 1.0f - k_log2_poly(lnr);
     if ((want & K_JULIA_WANT_DE) != 0u) {
         float dz = k_sqrt(o.dzr * o.dzr + o.dzi * o.dzi);
         /* an overflowed derivative (inf or NaN) gives 0, never a non-finite value */
@@ -622,8 +624,8 @@ K_FN K_JuliaResult k_julia_run_d(K_JuliaParams p, K_JuliaD d, K_FbmParams turb, 
         m++;
     }
     float r2 = K_F(o.zr * o.zr + o.zi * o.zi);
-    float lnr = 0.5f * k_log2(r2) * 0.69314718f;
-    if ((want & K_JULIA_WANT_SMOOTH) != 0u) res.nsmooth = K_F(m) + 1.0f - k_log2(lnr);
+    float lnr = 0.5f * k_log2_poly(r2) * 0.69314718f;
+    if ((want & K_JULIA_WANT_SMOOTH) != 0u) res.nsmooth = K_F(m) + 1.0f - k_log2_poly(lnr);
     if ((want & K_JULIA_WANT_DE) != 0u) {
         float dz = K_F(k_sqrt_d(o.dzr * o.dzr + o.dzi * o.dzi));
         res.de = (dz > 0.0f && dz < 3.0e38f) ? k_sqrt(r2) * lnr / dz : 0.0f;

@@ -8,6 +8,7 @@
 #define FB_KERNELS_PALETTE_H
 
 #include "common.h"
+#include "explog.h"
 
 #define K_PALETTE_SIZE 256u
 
@@ -37,18 +38,19 @@ K_FN float k_palette_pos(K_SkyColour c, float n)
 }
 
 /* Brightness weight: far from the set (small counts) dark, near it bright. A larger density keeps
- * only the pixels nearest the set bright: clusters of stars rather than a flat fill. */
+ * only the pixels nearest the set bright: clusters of stars rather than a flat fill. pow is
+ * kernels/explog.h's (here and below): the same bits in C, on AVX2 lanes and on a device. */
 K_FN float k_sky_weight(K_SkyColour c, float n)
 {
     float w = k_clamp(n * c.inv_n_ref, 0.0f, 1.0f);
-    return c.density > 0.0f ? k_pow(w, c.density) : 1.0f;
+    return c.density > 0.0f ? k_pow_poly(w, c.density) : 1.0f;
 }
 
 /* The final channel value from a palette value and the weight. */
 K_FN float k_sky_channel(K_SkyColour c, float palette_value, float weight)
 {
     float v = c.brightness * weight * palette_value;
-    return c.gamma != 1.0f ? k_pow(k_max(v, 0.0f), c.gamma) : v;
+    return c.gamma != 1.0f ? k_pow_poly(k_max(v, 0.0f), c.gamma) : v;
 }
 
 /* The two palette entries around a smooth count's position: the caller fetches entries[k_sky_i0]

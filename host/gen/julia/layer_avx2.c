@@ -4,8 +4,10 @@
  * count, the distance estimate, and the colour through the palette with its jittered samples. The
  * same operations in the same order as kernels/julia.h and kernels/palette.h, no FMA, so every
  * channel is bit-identical to the scalar kernel's (tests/test_avx2.c). Only correctly rounded
- * operations run on the lanes (+, -, *, /, sqrt, floor, min/max, conversions); log2, pow, sin and
- * cos are the scalar C library's, called per lane, so they give the scalar loop's bits.
+ * operations run on the lanes (+, -, *, /, sqrt, floor, min/max, conversions, bit operations): log2
+ * and pow are kernels/explog.h's polynomials, the kernel's own, restated eight lanes at a time; sin
+ * and cos (the polar grid) are the scalar C library's, called per lane, so they give the scalar
+ * loop's bits.
  *
  * The orbit loop runs the eight orbits in one loop on a shared step counter i: a lane that reaches
  * the bailout records n = i and goes on to the big radius (at most K_JULIA_EXTRA_ITER more steps)
@@ -25,11 +27,6 @@ typedef struct v8 {
     __m256 zr, zi, dzr, dzi;
     __m256 ok; /* all ones: the orbit starts (not at the pole, z0 finite) */
 } v8start;
-
-AVX2 static inline __m256 ones8(void)
-{
-    return _mm256_castsi256_ps(_mm256_set1_epi32(-1));
-}
 
 /* ---- turbulence: k_fbm_uv of gradient noise, tileable or not -------------------------------------- */
 
@@ -359,6 +356,87 @@ AVX2 static AI void orbit_step(orbit8 *o, __m256 cre, __m256 cim, const uint32_t
     o->zi = _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(two, zr), zi), cim);
 }
 
+/* ---- kernels/explog.h on eight lanes: the same operations in the same order ------------------- */
+
+/* a x + b */
+AVX2 static inline __m256 lin8(__m256 x, float a, float b)
+{
+    return _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(a), x), _mm256_set1_ps(b));
+}
+
+/* k_log2_parts: *e the integer part, *t the rest */
+AVX2 static inline void log2_parts8(__m256 x, __m256 *e_out, __m256 *t_out)
+{
+    const __m256 one = _mm256_set1_ps(1.0f);
+    __m256 sub = _mm256_cmp_ps(x, _mm256_set1_ps(1.17549435e-38f), _CMP_LT_OQ);
+    __m256i b = _mm256_castps_si256(_mm256_blendv_ps(x, _mm256_mul_ps(x, _mm256_set1_ps(16777216.0f)), sub));
+    __m256i bias = _mm256_blendv_epi8(_mm256_set1_epi32(126), _mm256_set1_epi32(150), _mm256_castps_si256(sub));
+    __m256i e = _mm256_sub_epi32(_mm256_srli_epi32(b, 23), bias);
+    __m256 m = _mm256_castsi256_ps(
+        _mm256_or_si256(_mm256_and_si256(b, _mm256_set1_epi32(0x007fffff)), _mm256_set1_epi32(0x3f000000)));
+    __m256 low = _mm256_cmp_ps(m, _mm256_set1_ps(0.70710678f), _CMP_LT_OQ);
+    __m256 f = _mm256_blendv_ps(_mm256_sub_ps(m, one), _mm256_sub_ps(_mm256_add_ps(m, m), one), low);
+    e = _mm256_add_epi32(e, _mm256_castps_si256(low)); /* all ones: -1 */
+    __m256 z = _mm256_mul_ps(f, f);
+    __m256 z2 = _mm256_mul_ps(z, z);
+    __m256 p01 = lin8(f, 7.0376836292e-2f, -1.1514610310e-1f), p23 = lin8(f, 1.1676998740e-1f, -1.2420140846e-1f);
+    __m256 p45 = lin8(f, 1.4249322787e-1f, -1.6668057665e-1f), p67 = lin8(f, 2.0000714765e-1f, -2.4999993993e-1f);
+    __m256 q = _mm256_add_ps(_mm256_mul_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_add_ps(_mm256_mul_ps(p01, z), p23), z2),
+                                                         _mm256_add_ps(_mm256_mul_ps(p45, z), p67)),
+                                           f),
+                             _mm256_set1_ps(3.3333331174e-1f));
+    __m256 y = _mm256_mul_ps(f, _mm256_mul_ps(z, q));
+    y = _mm256_add_ps(y, _mm256_mul_ps(_mm256_set1_ps(-0.5f), z));
+    const __m256 l2ea = _mm256_set1_ps(0.44269504f);
+    __m256 t = _mm256_mul_ps(y, l2ea);
+    t = _mm256_add_ps(t, _mm256_mul_ps(f, l2ea));
+    t = _mm256_add_ps(t, y);
+    *t_out = _mm256_add_ps(t, f);
+    *e_out = _mm256_cvtepi32_ps(e);
+}
+
+/* k_log2_poly */
+AVX2 static inline __m256 log2p8(__m256 x)
+{
+    __m256 e, t;
+    log2_parts8(x, &e, &t);
+    return _mm256_add_ps(t, e);
+}
+
+/* k_exp2_split: 2^(r + k) */
+AVX2 static inline __m256 exp2_split8(__m256 r, __m256 k)
+{
+    __m256 r2 = _mm256_mul_ps(r, r);
+    __m256 pa = lin8(r, 1.535336188e-4f, 1.339887440e-3f), pb = lin8(r, 9.618437357e-3f, 5.550332471e-2f);
+    __m256 pc = lin8(r, 2.402264791e-1f, 6.931472028e-1f);
+    __m256 p =
+        _mm256_add_ps(_mm256_mul_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_add_ps(_mm256_mul_ps(pa, r2), pb), r2), pc), r),
+                      _mm256_set1_ps(1.0f));
+    __m256 k1 = _mm256_floor_ps(_mm256_mul_ps(k, _mm256_set1_ps(0.5f))), k2 = _mm256_sub_ps(k, k1);
+    const __m256i bias = _mm256_set1_epi32(127);
+    __m256 s1 = _mm256_castsi256_ps(_mm256_slli_epi32(_mm256_add_epi32(_mm256_cvttps_epi32(k1), bias), 23));
+    __m256 s2 = _mm256_castsi256_ps(_mm256_slli_epi32(_mm256_add_epi32(_mm256_cvttps_epi32(k2), bias), 23));
+    return _mm256_mul_ps(_mm256_mul_ps(p, s1), s2);
+}
+
+/* k_pow_poly(x, y) on every lane (x >= 0, y > 0) */
+AVX2 static inline __m256 powp8(__m256 x, float y)
+{
+    const __m256 half = _mm256_set1_ps(0.5f);
+    const float c = 4097.0f * y, yh = c - (c - y), yl = y - yh;
+    __m256 e, t;
+    log2_parts8(x, &e, &t);
+    __m256 a = _mm256_mul_ps(_mm256_set1_ps(yh), e);
+    __m256 b = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(yl), e), _mm256_mul_ps(_mm256_set1_ps(y), t));
+    __m256 k1 = _mm256_floor_ps(_mm256_add_ps(a, half));
+    __m256 s = _mm256_add_ps(_mm256_sub_ps(a, k1), b);
+    __m256 k2 = _mm256_floor_ps(_mm256_add_ps(s, half));
+    __m256 r = _mm256_sub_ps(s, k2);
+    __m256 k = clamp8(_mm256_add_ps(k1, k2), -151.0f, 129.0f);
+    __m256 v = exp2_split8(r, k);
+    return _mm256_andnot_ps(_mm256_cmp_ps(x, _mm256_setzero_ps(), _CMP_EQ_OQ), v); /* x = 0: +0 */
+}
+
 /* k_julia_end */
 AVX2 static AI void orbit_end(const orbit8 *o, const K_JuliaParams *p, const uint32_t want, v8result *out)
 {
@@ -368,19 +446,10 @@ AVX2 static AI void orbit_end(const orbit8 *o, const K_JuliaParams *p, const uin
     __m256 dev = zero;
     int live = want ? _mm256_movemask_ps(o->escaped) : 0;
     if (live) {
-        float r2[8], l1[8], ln[8], l2[8];
-        /* lanes not escaped take log2(1) = 0 (not log2(0), which goes through libm's error path) */
-        const __m256 one = _mm256_set1_ps(1.0f);
-        _mm256_storeu_ps(r2, _mm256_blendv_ps(one, o->r2_at, o->escaped));
-        /* every lane (a branch per lane costs more than a call; lanes not escaped are not used) */
-        for (int k = 0; k < 8; k++) l1[k] = k_log2(r2[k]);
-        __m256 lnr =
-            _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(0.5f), _mm256_loadu_ps(l1)), _mm256_set1_ps(0.69314718f));
+        /* every lane (lanes not escaped are not used; their r2 of 0 gives a finite log2) */
+        __m256 lnr = _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(0.5f), log2p8(o->r2_at)), _mm256_set1_ps(0.69314718f));
         if (want & K_JULIA_WANT_SMOOTH) {
-            _mm256_storeu_ps(ln, _mm256_blendv_ps(one, lnr, o->escaped));
-            for (int k = 0; k < 8; k++) l2[k] = k_log2(ln[k]);
-            __m256 s =
-                _mm256_sub_ps(_mm256_add_ps(_mm256_cvtepi32_ps(o->m_at), _mm256_set1_ps(1.0f)), _mm256_loadu_ps(l2));
+            __m256 s = _mm256_sub_ps(_mm256_add_ps(_mm256_cvtepi32_ps(o->m_at), _mm256_set1_ps(1.0f)), log2p8(lnr));
             ns = _mm256_blendv_ps(ns, s, o->escaped);
         }
         if (want & K_JULIA_WANT_DE) {
@@ -467,27 +536,6 @@ AVX2 static void run8(const K_JuliaParams *p, const v8start *st, int nb, uint32_
 
 /* ---- colour: k_sky_rgb with the table's entries ---------------------------------------------- */
 
-/* k_pow(x, y) per lane where `need` is set and x is neither +0 (bits 0) nor 1: pow(+0, y > 0) = +0
- * and pow(+1, y) = 1 exactly (C11 F.10.4.4), which are those lanes' x. */
-AVX2 static inline __m256 pow8(__m256 x, float y, __m256 need)
-{
-    __m256 trivial = _mm256_cmp_ps(x, _mm256_set1_ps(1.0f), _CMP_EQ_OQ);
-    if (y > 0.0f)
-        trivial = _mm256_or_ps(trivial,
-                               _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_castps_si256(x), _mm256_setzero_si256())));
-    need = _mm256_andnot_ps(trivial, need);
-    int m = _mm256_movemask_ps(need);
-    if (!m) return x;
-    float a[8];
-    _mm256_storeu_ps(a, x);
-    if (m == 0xff)
-        for (int k = 0; k < 8; k++) a[k] = k_pow(a[k], y);
-    else
-        for (int k = 0; k < 8; k++)
-            if (m >> k & 1) a[k] = k_pow(a[k], y);
-    return _mm256_loadu_ps(a);
-}
-
 /* Adds sample colours (k_sky_rgb) to rgb[3]; first: set them instead. */
 AVX2 static void colour8(const fb_julia_avx2_ctx *cx, const v8result *r, bool first, __m256 rgb[3])
 {
@@ -506,9 +554,8 @@ AVX2 static void colour8(const fb_julia_avx2_ctx *cx, const v8result *r, bool fi
     __m256 fr = _mm256_sub_ps(pos, _mm256_cvtepi32_ps(i0));
     /* k_sky_weight */
     __m256 w = clamp8(_mm256_mul_ps(n, _mm256_set1_ps(c->inv_n_ref)), 0.0f, 1.0f);
-    /* inside lanes take the inside colour: their weight is not needed */
-    const __m256 need = _mm256_xor_ps(in, ones8());
-    w = c->density > 0.0f ? pow8(w, c->density, need) : _mm256_set1_ps(1.0f);
+    /* (inside lanes take the inside colour: their weight is not used) */
+    w = c->density > 0.0f ? powp8(w, c->density) : _mm256_set1_ps(1.0f);
     __m256 bw = _mm256_mul_ps(_mm256_set1_ps(c->brightness), w);
     const float *base = &cx->entries[0][0];
     __m256i o0 = _mm256_slli_epi32(i0, 2), o1 = _mm256_slli_epi32(i1, 2);
@@ -516,7 +563,7 @@ AVX2 static void colour8(const fb_julia_avx2_ctx *cx, const v8result *r, bool fi
     for (int ch = 0; ch < 3; ch++) {
         __m256 e0 = _mm256_i32gather_ps(base + ch, o0, 4), e1 = _mm256_i32gather_ps(base + ch, o1, 4);
         __m256 v = _mm256_mul_ps(bw, mix8(e0, e1, fr)); /* k_sky_channel */
-        if (c->gamma != 1.0f) v = pow8(_mm256_max_ps(v, _mm256_setzero_ps()), c->gamma, need);
+        if (c->gamma != 1.0f) v = powp8(_mm256_max_ps(v, _mm256_setzero_ps()), c->gamma);
         v = _mm256_blendv_ps(v, _mm256_set1_ps(inside_rgb[ch]), in);
         rgb[ch] = first ? v : _mm256_add_ps(rgb[ch], v);
     }
