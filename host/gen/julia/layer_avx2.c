@@ -22,6 +22,7 @@
 #if defined(__x86_64__) || defined(__i386__)
 #include "avx2_hash.h"
 #include "fbm3_avx2.h"
+#include "fbm_avx2_ops.h"
 
 typedef struct v8 {
     __m256 zr, zi, dzr, dzi;
@@ -43,22 +44,9 @@ AVX2 static inline __m256 grad8(__m256i h, __m256 x, __m256 y)
     return _mm256_add_ps(su, sv);
 }
 
-AVX2 static inline __m256 fade8(__m256 t)
-{
-    __m256 inner =
-        _mm256_add_ps(_mm256_mul_ps(t, _mm256_sub_ps(_mm256_mul_ps(t, _mm256_set1_ps(6.0f)), _mm256_set1_ps(15.0f))),
-                      _mm256_set1_ps(10.0f));
-    return _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(t, t), t), inner);
-}
-
-AVX2 static inline __m256 mix8(__m256 a, __m256 b, __m256 t)
-{
-    return _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), t));
-}
-
 /* k_wrap_cell(i, p) for eight lanes: the mask while every lane is exact and p a power of two, else
  * the kernel's function per lane. */
-AVX2 static inline __m256i wrap8(__m256 i, uint32_t p)
+AVX2 static inline __m256i wrap8p(__m256 i, uint32_t p)
 {
     const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
     __m256 small = _mm256_cmp_ps(_mm256_and_ps(i, absmask), _mm256_set1_ps(16777216.0f), _CMP_LT_OQ);
@@ -82,18 +70,12 @@ AVX2 static inline __m256i next_cell8(__m256i c, uint32_t p)
     return _mm256_loadu_si256((const __m256i *)r);
 }
 
-/* k_hash2i(seed, ix, iy) = k_hash((ix * 0x9e3779b1) ^ k_hash(iy ^ seed ^ 0x632be5ab)), the row hash given */
-AVX2 static inline __m256i cell_hash8(__m256i ix, __m256i row)
-{
-    return hash8(_mm256_xor_si256(_mm256_mullo_epi32(ix, _mm256_set1_epi32((int)0x9e3779b1u)), row));
-}
-
 /* k_gradient_noise */
 AVX2 static __m256 gradient8(uint32_t seed, __m256 x, __m256 y, uint32_t px, uint32_t py)
 {
     __m256 fx = _mm256_floor_ps(x), fy = _mm256_floor_ps(y);
     __m256 tx = _mm256_sub_ps(x, fx), ty = _mm256_sub_ps(y, fy);
-    __m256i ix0 = wrap8(fx, px), iy0 = wrap8(fy, py);
+    __m256i ix0 = wrap8p(fx, px), iy0 = wrap8p(fy, py);
     __m256i ix1 = next_cell8(ix0, px), iy1 = next_cell8(iy0, py);
     __m256i s = _mm256_set1_epi32((int)(seed ^ 0x632be5abu));
     __m256i r0 = hash8(_mm256_xor_si256(iy0, s)), r1 = hash8(_mm256_xor_si256(iy1, s));
@@ -151,13 +133,6 @@ AVX2 static __m256 fbm8(const K_FbmParams *t, uint32_t stream, __m256 u, __m256 
         y = _mm256_add_ps(ny, _mm256_set1_ps(K_F(ho >> 16) * (64.0f / 65536.0f)));
     }
     return sum;
-}
-
-/* k_clamp(x, lo, hi) = fminf(fmaxf(x, lo), hi): maxps/minps return the second operand for a NaN, as
- * fmaxf and fminf return the number */
-AVX2 static inline __m256 clamp8(__m256 x, float lo, float hi)
-{
-    return _mm256_min_ps(_mm256_max_ps(x, _mm256_set1_ps(lo)), _mm256_set1_ps(hi));
 }
 
 /* ---- the start: k_julia_start_at --------------------------------------------------------------- */
