@@ -17,7 +17,7 @@
  * k_flame_dist[], emitted here once the structs exist) before including this header; C functions
  * take them through K_FLAME_TABLES_DECL.
  *
- * The transcendentals are kernels/kmath.h's and every sum and product that feeds a point is
+ * The transcendentals are kernels/kmath.h's, and every sum and product that feeds a point is
  * `precise`, so that C (built with -ffp-contract=off), lavapipe and a GPU round alike; what a GPU
  * may still do otherwise is divide and take square roots within Vulkan's tolerance (docs/flames.md).
  */
@@ -254,8 +254,8 @@ K_FLAME_INLINE K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint
     float atxy = 0.0f, atyx = 0.0f;
     if ((X.flags & K_FLAME_ATAN_XY) != 0u) atxy = k_atan2(tx, ty);
     if ((X.flags & K_FLAME_ATAN_YX) != 0u) atyx = k_atan2(ty, tx);
-    float p0 = 0.0f;
-    float p1 = 0.0f;
+    K_PRECISE float p0 = 0.0f;
+    K_PRECISE float p1 = 0.0f;
     for (uint k = 0u; k < X.nvar; k++) {
         K_FlameVar V = k_flame_var[X.var0 + k];
         float w = V.w;
