@@ -3,6 +3,8 @@
 # size, quality and thread count, side by side in one run: points per second of the whole render
 # (chaos game, density estimation, filter, tone map and writing the file), the median of 3 runs each,
 # alternated, in wall seconds and in CPU seconds (user + system: less sensitive to a loaded machine).
+# fractalbake runs twice: natively and on Vulkan (lavapipe on a machine without a GPU; its CPU
+# seconds are the driver's threads, its pipeline's compilation included).
 #
 #   bench/flame.sh [FRACTALBAKE] [THREADS] [QUALITY]    defaults: build/fractalbake, 2, 50
 #
@@ -28,10 +30,15 @@ median() { sort -g | sed -n 2p; }
 # run: "WALL CPU" seconds of one render (CPU: user + system, every thread's), the command after it
 run() { /usr/bin/time -f '%e %U %S' -o "$tmp/t" "$@" > /dev/null 2>&1; awk '{print $1, $2 + $3}' "$tmp/t"; }
 fb() { run "$FB" flame --file "$tmp/g.flame" --size 1024x1024 --threads "$threads" --backend native --quiet -o "$tmp/o.exr"; }
+# lavapipe's threads: LP_NUM_THREADS
+fv() { run env LP_NUM_THREADS="$threads" "$FB" flame --file "$tmp/g.flame" --size 1024x1024 --threads "$threads" \
+    --backend vulkan --quiet -o "$tmp/v.exr"; }
 f3() { run env nthreads="$threads" isaac_seed=bench out="$tmp/o.png" flam3-render < "$tmp/g.flame"; }
 # alternated, so that both see the same load; the medians of wall and of CPU seconds
-for i in 1 2 3; do fb >> "$tmp/fb"; f3 >> "$tmp/f3"; done
+for i in 1 2 3; do fb >> "$tmp/fb"; fv >> "$tmp/fv"; f3 >> "$tmp/f3"; done
+"$FB" compare "$tmp/o.exr" "$tmp/v.exr" --max-abs 0 --quiet > /dev/null || echo "bench/flame.sh: the Vulkan file differs from the native one" >&2
 t_fb=$(cut -d' ' -f1 "$tmp/fb" | median) c_fb=$(cut -d' ' -f2 "$tmp/fb" | median)
+t_fv=$(cut -d' ' -f1 "$tmp/fv" | median) c_fv=$(cut -d' ' -f2 "$tmp/fv" | median)
 t_f3=$(cut -d' ' -f1 "$tmp/f3" | median) c_f3=$(cut -d' ' -f2 "$tmp/f3" | median)
 printf 'flame 1024x1024 quality %s (%d points), %d threads, %s, load %s\n' "$q" "$points" "$threads" "$(date -u +%F)" \
     "$(cut -d' ' -f1 /proc/loadavg)"
@@ -39,5 +46,7 @@ printf '  %-20s %7s %9s %8s %12s\n' renderer "wall s" "Mpts/s" "CPU s" "Mpts/CPU
 line() { printf '  %-20s %7.2f %9.1f %8.2f %12.1f\n' "$1" "$2" "$(echo "$points / $2 / 1000000" | bc -l)" "$3" \
     "$(echo "$points / $3 / 1000000" | bc -l)"; }
 line "fractalbake native" "$t_fb" "$c_fb"
+line "fractalbake vulkan" "$t_fv" "$c_fv"
 line "flam3-render 3.1.1" "$t_f3" "$c_f3"
-printf '  ratio (flam3 / ours)        %6.2fx            %6.2fx\n' "$(echo "$t_f3 / $t_fb" | bc -l)" "$(echo "$c_f3 / $c_fb" | bc -l)"
+printf '  ratio native (flam3 / ours) %6.2fx            %6.2fx\n' "$(echo "$t_f3 / $t_fb" | bc -l)" "$(echo "$c_f3 / $c_fb" | bc -l)"
+printf '  ratio vulkan (flam3 / ours) %6.2fx            %6.2fx\n' "$(echo "$t_f3 / $t_fv" | bc -l)" "$(echo "$c_f3 / $c_fv" | bc -l)"

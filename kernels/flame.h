@@ -13,36 +13,33 @@
  * seed and i, so a chain gives the same points on any thread, points part or device.
  *
  * The xform, variation and xform-choice tables are storage buffers in GLSL and pointers in C: a
- * shader declares k_flame_xf[], k_flame_var[] and k_flame_dist[] before including this header; C
- * functions take them through K_FLAME_TABLES_DECL.
+ * shader defines K_FLAME_BUFFERS (their declarations, k_flame_xf[], k_flame_var[] and
+ * k_flame_dist[], emitted here once the structs exist) before including this header; C functions
+ * take them through K_FLAME_TABLES_DECL.
+ *
+ * The transcendentals are kernels/kmath.h's, and every sum and product that feeds a point is
+ * `precise`, so that C (built with -ffp-contract=off), lavapipe and a GPU round alike; what a GPU
+ * may still do otherwise is divide and take square roots within Vulkan's tolerance (docs/flames.md).
  */
 #ifndef FB_KERNELS_FLAME_H
 #define FB_KERNELS_FLAME_H
 
 #include "common.h"
 #include "hash.h"
+#include "kmath.h"
 
-#ifdef K_GLSL
-#define k_atan2(y, x) atan(y, x)
-#define k_tan(x)      tan(x)
-#define k_exp(x)      exp(x)
-#define k_log(x)      log(x)
-#define k_sinh(x)     sinh(x)
-#define k_cosh(x)     cosh(x)
-#define k_trunc(x)    trunc(x)
-#define k_fmod(x, y)  ((x) - (y)*trunc((x) / (y)))
-#define k_rint(x)     roundEven(x)
-#else
-#define k_atan2(y, x) atan2f(y, x)
-#define k_tan(x)      tanf(x)
-#define k_exp(x)      expf(x)
-#define k_log(x)      logf(x)
-#define k_sinh(x)     sinhf(x)
-#define k_cosh(x)     coshf(x)
-#define k_trunc(x)    truncf(x)
-#define k_fmod(x, y)  fmodf(x, y)
-#define k_rint(x)     rintf(x)
-#endif
+/* The transcendentals of kernels/kmath.h and sincos.h, the same bits in C and GLSL (libm and a
+ * device's built-ins differ in the last bits, and the chaos game amplifies that into other points). */
+#define k_fsin(x)     k_xsin(x)
+#define k_fcos(x)     k_xcos(x)
+#define k_atan2(y, x) k_xatan2(y, x)
+#define k_tan(x)      k_xtan(x)
+#define k_exp(x)      k_xexp(x)
+#define k_log(x)      k_xlog(x)
+#define k_fpow(x, y)  k_xpow(x, y)
+#define k_sinh(x)     k_xsinh(x)
+#define k_cosh(x)     k_xcosh(x)
+#define k_fmod(x, y)  k_xfmod(x, y)
 
 /* The step inlined into its caller in C: returned through memory, its state is otherwise stored
  * field by field and read back whole, which the processor cannot forward (a stall a point). */
@@ -177,6 +174,7 @@ K_STRUCT(K_FlameChain)
 K_END(K_FlameChain)
 
 #ifdef K_GLSL
+K_FLAME_BUFFERS
 #define K_FLAME_TABLES_DECL
 #define K_FLAME_TABLES
 #else
@@ -218,6 +216,21 @@ K_STRUCT(K_FlameOut)
 }
 K_END(K_FlameOut)
 
+/* Whether the variations' branch for variation v is compiled: in GLSL a shader may define
+ * K_FLAME_VMASK0 and K_FLAME_VMASK1 as specialisation constants, the genome's variations 0-31 and
+ * 32-54 as bits, so that a pipeline carries only the genome's variations (lavapipe runs every branch
+ * of an if chain that any of its 8 lanes takes, under a mask: with all 55 compiled, a step cost
+ * several times as much). In C every branch is there and the compiler's jump decides. */
+#ifdef K_GLSL
+#ifndef K_FLAME_VMASK0
+#define K_FLAME_VMASK0 0xffffffffu
+#define K_FLAME_VMASK1 0xffffffffu
+#endif
+#define K_FLAME_HAS(v) ((((v) < 32u ? (K_FLAME_VMASK0 >> (v)) : (K_FLAME_VMASK1 >> ((v)-32u))) & 1u) != 0u)
+#else
+#define K_FLAME_HAS(v) true
+#endif
+
 /* Draws inside k_flame_apply: n is its local counter. */
 #define K_FLAME_RAND() k_flame_u01(key, n++)
 
@@ -227,10 +240,11 @@ K_FLAME_INLINE K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint
     K_FlameXform X = k_flame_xf[fn];
     uint n = n0;
     K_FlameOut o;
-    o.c = X.speed * X.color + (1.0f - X.speed) * c;
-    float tx = X.ax * x + X.bx * y + X.cx;
-    float ty = X.ay * x + X.by * y + X.cy;
-    float sumsq = tx * tx + ty * ty;
+    K_PRECISE float oc = X.speed * X.color + (1.0f - X.speed) * c;
+    o.c = oc;
+    K_PRECISE float tx = X.ax * x + X.bx * y + X.cx;
+    K_PRECISE float ty = X.ay * x + X.by * y + X.cy;
+    K_PRECISE float sumsq = tx * tx + ty * ty;
     float sq = 0.0f, sina = 0.0f, cosa = 0.0f; /* sina, cosa: flam3's precalc_sina and precalc_cosa, its naming */
     if ((X.flags & K_FLAME_SQRT) != 0u) {
         sq = k_sqrt(sumsq);
@@ -240,169 +254,170 @@ K_FLAME_INLINE K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint
     float atxy = 0.0f, atyx = 0.0f;
     if ((X.flags & K_FLAME_ATAN_XY) != 0u) atxy = k_atan2(tx, ty);
     if ((X.flags & K_FLAME_ATAN_YX) != 0u) atyx = k_atan2(ty, tx);
-    float p0 = 0.0f, p1 = 0.0f;
+    K_PRECISE float p0 = 0.0f;
+    K_PRECISE float p1 = 0.0f;
     for (uint k = 0u; k < X.nvar; k++) {
         K_FlameVar V = k_flame_var[X.var0 + k];
         float w = V.w;
         uint id = V.id;
-        if (id == K_V_LINEAR) {
+        if (K_FLAME_HAS(K_V_LINEAR) && id == K_V_LINEAR) {
             p0 += w * tx;
             p1 += w * ty;
-        } else if (id == K_V_SINUSOIDAL) {
-            p0 += w * k_sin(tx);
-            p1 += w * k_sin(ty);
-        } else if (id == K_V_SPHERICAL) {
+        } else if (K_FLAME_HAS(K_V_SINUSOIDAL) && id == K_V_SINUSOIDAL) {
+            p0 += w * k_fsin(tx);
+            p1 += w * k_fsin(ty);
+        } else if (K_FLAME_HAS(K_V_SPHERICAL) && id == K_V_SPHERICAL) {
             float r2 = w / (sumsq + K_FLAME_EPS);
             p0 += r2 * tx;
             p1 += r2 * ty;
-        } else if (id == K_V_SWIRL) {
-            float c1 = k_sin(sumsq), c2 = k_cos(sumsq);
+        } else if (K_FLAME_HAS(K_V_SWIRL) && id == K_V_SWIRL) {
+            float c1 = k_fsin(sumsq), c2 = k_fcos(sumsq);
             p0 += w * (c1 * tx - c2 * ty);
             p1 += w * (c2 * tx + c1 * ty);
-        } else if (id == K_V_HORSESHOE) {
+        } else if (K_FLAME_HAS(K_V_HORSESHOE) && id == K_V_HORSESHOE) {
             float r = w / (sq + K_FLAME_EPS);
             p0 += (tx - ty) * (tx + ty) * r;
             p1 += 2.0f * tx * ty * r;
-        } else if (id == K_V_POLAR) {
+        } else if (K_FLAME_HAS(K_V_POLAR) && id == K_V_POLAR) {
             p0 += w * atxy * (1.0f / K_PI);
             p1 += w * (sq - 1.0f);
-        } else if (id == K_V_HANDKERCHIEF) {
-            p0 += w * sq * k_sin(atxy + sq);
-            p1 += w * sq * k_cos(atxy - sq);
-        } else if (id == K_V_HEART) {
+        } else if (K_FLAME_HAS(K_V_HANDKERCHIEF) && id == K_V_HANDKERCHIEF) {
+            p0 += w * sq * k_fsin(atxy + sq);
+            p1 += w * sq * k_fcos(atxy - sq);
+        } else if (K_FLAME_HAS(K_V_HEART) && id == K_V_HEART) {
             float a = sq * atxy, r = w * sq;
-            p0 += r * k_sin(a);
-            p1 += -r * k_cos(a);
-        } else if (id == K_V_DISC) {
+            p0 += r * k_fsin(a);
+            p1 += -r * k_fcos(a);
+        } else if (K_FLAME_HAS(K_V_DISC) && id == K_V_DISC) {
             float a = atxy * (1.0f / K_PI), r = K_PI * sq;
-            p0 += w * k_sin(r) * a;
-            p1 += w * k_cos(r) * a;
-        } else if (id == K_V_SPIRAL) {
+            p0 += w * k_fsin(r) * a;
+            p1 += w * k_fcos(r) * a;
+        } else if (K_FLAME_HAS(K_V_SPIRAL) && id == K_V_SPIRAL) {
             float r = sq + K_FLAME_EPS, r1 = w / r;
-            p0 += r1 * (cosa + k_sin(r));
-            p1 += r1 * (sina - k_cos(r));
-        } else if (id == K_V_HYPERBOLIC) {
+            p0 += r1 * (cosa + k_fsin(r));
+            p1 += r1 * (sina - k_fcos(r));
+        } else if (K_FLAME_HAS(K_V_HYPERBOLIC) && id == K_V_HYPERBOLIC) {
             float r = sq + K_FLAME_EPS;
             p0 += w * sina / r;
             p1 += w * cosa * r;
-        } else if (id == K_V_DIAMOND) {
-            p0 += w * sina * k_cos(sq);
-            p1 += w * cosa * k_sin(sq);
-        } else if (id == K_V_EX) {
-            float n0 = k_sin(atxy + sq), n1 = k_cos(atxy - sq);
+        } else if (K_FLAME_HAS(K_V_DIAMOND) && id == K_V_DIAMOND) {
+            p0 += w * sina * k_fcos(sq);
+            p1 += w * cosa * k_fsin(sq);
+        } else if (K_FLAME_HAS(K_V_EX) && id == K_V_EX) {
+            float n0 = k_fsin(atxy + sq), n1 = k_fcos(atxy - sq);
             float m0 = n0 * n0 * n0 * sq, m1 = n1 * n1 * n1 * sq;
             p0 += w * (m0 + m1);
             p1 += w * (m0 - m1);
-        } else if (id == K_V_JULIA) {
+        } else if (K_FLAME_HAS(K_V_JULIA) && id == K_V_JULIA) {
             float a = 0.5f * atxy;
             if ((k_hash(n++ ^ key) & 1u) != 0u) a += K_PI;
             float r = w * k_sqrt(sq);
-            p0 += r * k_cos(a);
-            p1 += r * k_sin(a);
-        } else if (id == K_V_BENT) {
+            p0 += r * k_fcos(a);
+            p1 += r * k_fsin(a);
+        } else if (K_FLAME_HAS(K_V_BENT) && id == K_V_BENT) {
             float nx = tx < 0.0f ? tx * 2.0f : tx;
             float ny = ty < 0.0f ? ty / 2.0f : ty;
             p0 += w * nx;
             p1 += w * ny;
-        } else if (id == K_V_WAVES) {
-            p0 += w * (tx + V.p0 * k_sin(ty * V.p2));
-            p1 += w * (ty + V.p1 * k_sin(tx * V.p3));
-        } else if (id == K_V_FISHEYE) {
+        } else if (K_FLAME_HAS(K_V_WAVES) && id == K_V_WAVES) {
+            p0 += w * (tx + V.p0 * k_fsin(ty * V.p2));
+            p1 += w * (ty + V.p1 * k_fsin(tx * V.p3));
+        } else if (K_FLAME_HAS(K_V_FISHEYE) && id == K_V_FISHEYE) {
             float r = 2.0f * w / (sq + 1.0f);
             p0 += r * ty; /* flam3 swaps x and y here */
             p1 += r * tx;
-        } else if (id == K_V_POPCORN) {
-            p0 += w * (tx + V.p0 * k_sin(k_tan(3.0f * ty)));
-            p1 += w * (ty + V.p1 * k_sin(k_tan(3.0f * tx)));
-        } else if (id == K_V_EXPONENTIAL) {
+        } else if (K_FLAME_HAS(K_V_POPCORN) && id == K_V_POPCORN) {
+            p0 += w * (tx + V.p0 * k_fsin(k_tan(3.0f * ty)));
+            p1 += w * (ty + V.p1 * k_fsin(k_tan(3.0f * tx)));
+        } else if (K_FLAME_HAS(K_V_EXPONENTIAL) && id == K_V_EXPONENTIAL) {
             float dx = w * k_exp(tx - 1.0f), dy = K_PI * ty;
-            p0 += dx * k_cos(dy);
-            p1 += dx * k_sin(dy);
-        } else if (id == K_V_POWER) {
-            float r = w * k_pow(sq, sina);
+            p0 += dx * k_fcos(dy);
+            p1 += dx * k_fsin(dy);
+        } else if (K_FLAME_HAS(K_V_POWER) && id == K_V_POWER) {
+            float r = w * k_fpow(sq, sina);
             p0 += r * cosa;
             p1 += r * sina;
-        } else if (id == K_V_COSINE) {
+        } else if (K_FLAME_HAS(K_V_COSINE) && id == K_V_COSINE) {
             float a = tx * K_PI;
-            p0 += w * k_cos(a) * k_cosh(ty);
-            p1 += w * -k_sin(a) * k_sinh(ty);
-        } else if (id == K_V_RINGS) {
+            p0 += w * k_fcos(a) * k_cosh(ty);
+            p1 += w * -k_fsin(a) * k_sinh(ty);
+        } else if (K_FLAME_HAS(K_V_RINGS) && id == K_V_RINGS) {
             float dx = V.p0;
             float r = w * (k_fmod(sq + dx, 2.0f * dx) - dx + sq * (1.0f - dx));
             p0 += r * cosa;
             p1 += r * sina;
-        } else if (id == K_V_FAN) {
+        } else if (K_FLAME_HAS(K_V_FAN) && id == K_V_FAN) {
             float dx = V.p0, dy = V.p1, dx2 = 0.5f * dx;
             float a = atxy + (k_fmod(atxy + dy, dx) > dx2 ? -dx2 : dx2);
             float r = w * sq;
-            p0 += r * k_cos(a);
-            p1 += r * k_sin(a);
-        } else if (id == K_V_BLOB) {
-            float r = sq * (V.p0 + V.p1 * (0.5f + 0.5f * k_sin(V.p2 * atxy)));
+            p0 += r * k_fcos(a);
+            p1 += r * k_fsin(a);
+        } else if (K_FLAME_HAS(K_V_BLOB) && id == K_V_BLOB) {
+            float r = sq * (V.p0 + V.p1 * (0.5f + 0.5f * k_fsin(V.p2 * atxy)));
             p0 += w * sina * r;
             p1 += w * cosa * r;
-        } else if (id == K_V_PDJ) {
-            p0 += w * (k_sin(V.p0 * ty) - k_cos(V.p1 * tx));
-            p1 += w * (k_sin(V.p2 * tx) - k_cos(V.p3 * ty));
-        } else if (id == K_V_FAN2) {
+        } else if (K_FLAME_HAS(K_V_PDJ) && id == K_V_PDJ) {
+            p0 += w * (k_fsin(V.p0 * ty) - k_fcos(V.p1 * tx));
+            p1 += w * (k_fsin(V.p2 * tx) - k_fcos(V.p3 * ty));
+        } else if (K_FLAME_HAS(K_V_FAN2) && id == K_V_FAN2) {
             float dx = V.p0, dy = V.p1, dx2 = 0.5f * dx;
             float t = atxy + dy - dx * k_flame_itrunc((atxy + dy) / dx);
             float a = t > dx2 ? atxy - dx2 : atxy + dx2;
             float r = w * sq;
-            p0 += r * k_sin(a);
-            p1 += r * k_cos(a);
-        } else if (id == K_V_RINGS2) {
+            p0 += r * k_fsin(a);
+            p1 += r * k_fcos(a);
+        } else if (K_FLAME_HAS(K_V_RINGS2) && id == K_V_RINGS2) {
             float dx = V.p0;
             float r = sq + (-2.0f * dx * k_flame_itrunc((sq + dx) / (2.0f * dx)) + sq * (1.0f - dx));
             p0 += w * sina * r;
             p1 += w * cosa * r;
-        } else if (id == K_V_EYEFISH) {
+        } else if (K_FLAME_HAS(K_V_EYEFISH) && id == K_V_EYEFISH) {
             float r = (w * 2.0f) / (sq + 1.0f);
             p0 += r * tx;
             p1 += r * ty;
-        } else if (id == K_V_BUBBLE) {
+        } else if (K_FLAME_HAS(K_V_BUBBLE) && id == K_V_BUBBLE) {
             float r = w / (0.25f * sumsq + 1.0f);
             p0 += r * tx;
             p1 += r * ty;
-        } else if (id == K_V_CYLINDER) {
-            p0 += w * k_sin(tx);
+        } else if (K_FLAME_HAS(K_V_CYLINDER) && id == K_V_CYLINDER) {
+            p0 += w * k_fsin(tx);
             p1 += w * ty;
-        } else if (id == K_V_PERSPECTIVE) {
+        } else if (K_FLAME_HAS(K_V_PERSPECTIVE) && id == K_V_PERSPECTIVE) {
             float t = 1.0f / (V.p0 - ty * V.p1);
             p0 += w * V.p0 * tx * t;
             p1 += w * V.p2 * ty * t;
-        } else if (id == K_V_NOISE) {
+        } else if (K_FLAME_HAS(K_V_NOISE) && id == K_V_NOISE) {
             float a = K_FLAME_RAND() * 2.0f * K_PI;
             float r = w * K_FLAME_RAND();
-            p0 += tx * r * k_cos(a);
-            p1 += ty * r * k_sin(a);
-        } else if (id == K_V_JULIAN) {
+            p0 += tx * r * k_fcos(a);
+            p1 += ty * r * k_fsin(a);
+        } else if (K_FLAME_HAS(K_V_JULIAN) && id == K_V_JULIAN) {
             float t = k_trunc(V.p2 * K_FLAME_RAND());
             float a = (atyx + 2.0f * K_PI * t) / V.p0;
-            float r = w * k_pow(sumsq, V.p1);
-            p0 += r * k_cos(a);
-            p1 += r * k_sin(a);
-        } else if (id == K_V_JULIASCOPE) {
+            float r = w * k_fpow(sumsq, V.p1);
+            p0 += r * k_fcos(a);
+            p1 += r * k_fsin(a);
+        } else if (K_FLAME_HAS(K_V_JULIASCOPE) && id == K_V_JULIASCOPE) {
             int t = K_I(k_trunc(V.p2 * K_FLAME_RAND()));
             float a = (t & 1) == 0 ? (2.0f * K_PI * K_F(t) + atyx) / V.p0 : (2.0f * K_PI * K_F(t) - atyx) / V.p0;
-            float r = w * k_pow(sumsq, V.p1);
-            p0 += r * k_cos(a);
-            p1 += r * k_sin(a);
-        } else if (id == K_V_BLUR) {
+            float r = w * k_fpow(sumsq, V.p1);
+            p0 += r * k_fcos(a);
+            p1 += r * k_fsin(a);
+        } else if (K_FLAME_HAS(K_V_BLUR) && id == K_V_BLUR) {
             float a = K_FLAME_RAND() * 2.0f * K_PI;
             float r = w * K_FLAME_RAND();
-            p0 += r * k_cos(a);
-            p1 += r * k_sin(a);
-        } else if (id == K_V_GAUSSIAN_BLUR) {
+            p0 += r * k_fcos(a);
+            p1 += r * k_fsin(a);
+        } else if (K_FLAME_HAS(K_V_GAUSSIAN_BLUR) && id == K_V_GAUSSIAN_BLUR) {
             float a = K_FLAME_RAND() * 2.0f * K_PI;
             float g = K_FLAME_RAND();
             g += K_FLAME_RAND();
             g += K_FLAME_RAND();
             g += K_FLAME_RAND();
             float r = w * (g - 2.0f);
-            p0 += r * k_cos(a);
-            p1 += r * k_sin(a);
-        } else if (id == K_V_RADIAL_BLUR) {
+            p0 += r * k_fcos(a);
+            p1 += r * k_fsin(a);
+        } else if (K_FLAME_HAS(K_V_RADIAL_BLUR) && id == K_V_RADIAL_BLUR) {
             float g = K_FLAME_RAND();
             g += K_FLAME_RAND();
             g += K_FLAME_RAND();
@@ -410,97 +425,97 @@ K_FLAME_INLINE K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint
             float rnd = w * (g - 2.0f);
             float a = atyx + V.p0 * rnd;
             float rz = V.p1 * rnd - 1.0f;
-            p0 += sq * k_cos(a) + rz * tx;
-            p1 += sq * k_sin(a) + rz * ty;
-        } else if (id == K_V_PIE) {
+            p0 += sq * k_fcos(a) + rz * tx;
+            p1 += sq * k_fsin(a) + rz * ty;
+        } else if (K_FLAME_HAS(K_V_PIE) && id == K_V_PIE) {
             float sl = K_F(K_I(K_FLAME_RAND() * V.p0 + 0.5f));
             float a = V.p1 + 2.0f * K_PI * (sl + K_FLAME_RAND() * V.p2) / V.p0;
             float r = w * K_FLAME_RAND();
-            p0 += r * k_cos(a);
-            p1 += r * k_sin(a);
-        } else if (id == K_V_NGON) {
-            float rf = k_pow(sumsq, V.p0);
+            p0 += r * k_fcos(a);
+            p1 += r * k_fsin(a);
+        } else if (K_FLAME_HAS(K_V_NGON) && id == K_V_NGON) {
+            float rf = k_fpow(sumsq, V.p0);
             float b = V.p1;
             float phi = atyx - b * k_floor(atyx / b);
             if (phi > b / 2.0f) phi -= b;
-            float amp = V.p2 * (1.0f / (k_cos(phi) + K_FLAME_EPS) - 1.0f) + V.p3;
+            float amp = V.p2 * (1.0f / (k_fcos(phi) + K_FLAME_EPS) - 1.0f) + V.p3;
             amp /= (rf + K_FLAME_EPS);
             p0 += w * tx * amp;
             p1 += w * ty * amp;
-        } else if (id == K_V_CURL) {
+        } else if (K_FLAME_HAS(K_V_CURL) && id == K_V_CURL) {
             float re = 1.0f + V.p0 * tx + V.p1 * (tx * tx - ty * ty);
             float im = V.p0 * ty + 2.0f * V.p1 * tx * ty;
             float r = w / (re * re + im * im);
             p0 += (tx * re + ty * im) * r;
             p1 += (ty * re - tx * im) * r;
-        } else if (id == K_V_RECTANGLES) {
+        } else if (K_FLAME_HAS(K_V_RECTANGLES) && id == K_V_RECTANGLES) {
             p0 += V.p0 == 0.0f ? w * tx : w * ((2.0f * k_floor(tx / V.p0) + 1.0f) * V.p0 - tx);
             p1 += V.p1 == 0.0f ? w * ty : w * ((2.0f * k_floor(ty / V.p1) + 1.0f) * V.p1 - ty);
-        } else if (id == K_V_ARCH) {
+        } else if (K_FLAME_HAS(K_V_ARCH) && id == K_V_ARCH) {
             float a = K_FLAME_RAND() * w * K_PI;
-            float s = k_sin(a), cs = k_cos(a);
+            float s = k_fsin(a), cs = k_fcos(a);
             p0 += w * s;
             p1 += w * (s * s) / cs;
-        } else if (id == K_V_TANGENT) {
-            p0 += w * k_sin(tx) / k_cos(ty);
+        } else if (K_FLAME_HAS(K_V_TANGENT) && id == K_V_TANGENT) {
+            p0 += w * k_fsin(tx) / k_fcos(ty);
             p1 += w * k_tan(ty);
-        } else if (id == K_V_SQUARE) {
+        } else if (K_FLAME_HAS(K_V_SQUARE) && id == K_V_SQUARE) {
             p0 += w * (K_FLAME_RAND() - 0.5f);
             p1 += w * (K_FLAME_RAND() - 0.5f);
-        } else if (id == K_V_RAYS) {
+        } else if (K_FLAME_HAS(K_V_RAYS) && id == K_V_RAYS) {
             float a = w * K_FLAME_RAND() * K_PI;
             float r = w / (sumsq + K_FLAME_EPS);
             float tr = w * k_tan(a) * r;
-            p0 += tr * k_cos(tx);
-            p1 += tr * k_sin(ty);
-        } else if (id == K_V_BLADE) {
+            p0 += tr * k_fcos(tx);
+            p1 += tr * k_fsin(ty);
+        } else if (K_FLAME_HAS(K_V_BLADE) && id == K_V_BLADE) {
             float r = K_FLAME_RAND() * w * sq;
-            float s = k_sin(r), cs = k_cos(r);
+            float s = k_fsin(r), cs = k_fcos(r);
             p0 += w * tx * (cs + s);
             p1 += w * tx * (cs - s);
-        } else if (id == K_V_SECANT2) {
-            float cr = k_cos(w * sq), icr = 1.0f / cr;
+        } else if (K_FLAME_HAS(K_V_SECANT2) && id == K_V_SECANT2) {
+            float cr = k_fcos(w * sq), icr = 1.0f / cr;
             p0 += w * tx;
             p1 += cr < 0.0f ? w * (icr + 1.0f) : w * (icr - 1.0f);
-        } else if (id == K_V_TWINTRIAN) {
+        } else if (K_FLAME_HAS(K_V_TWINTRIAN) && id == K_V_TWINTRIAN) {
             float r = K_FLAME_RAND() * w * sq;
-            float s = k_sin(r), cs = k_cos(r);
+            float s = k_fsin(r), cs = k_fcos(r);
             float diff = k_log(s * s) * 0.434294481903252f + cs; /* log10 */
             if (k_flame_bad(diff)) diff = -30.0f;
             p0 += w * tx * diff;
             p1 += w * tx * (diff - s * K_PI);
-        } else if (id == K_V_CROSS) {
+        } else if (K_FLAME_HAS(K_V_CROSS) && id == K_V_CROSS) {
             float s = tx * tx - ty * ty;
             float r = w * k_sqrt(1.0f / (s * s + K_FLAME_EPS));
             p0 += tx * r;
             p1 += ty * r;
-        } else if (id == K_V_DISC2) {
+        } else if (K_FLAME_HAS(K_V_DISC2) && id == K_V_DISC2) {
             float t = V.p0 * (tx + ty);
             float r = w * atxy / K_PI;
-            p0 += (k_sin(t) + V.p2) * r;
-            p1 += (k_cos(t) + V.p1) * r;
-        } else if (id == K_V_SUPER_SHAPE) {
+            p0 += (k_fsin(t) + V.p2) * r;
+            p1 += (k_fcos(t) + V.p1) * r;
+        } else if (K_FLAME_HAS(K_V_SUPER_SHAPE) && id == K_V_SUPER_SHAPE) {
             float th = V.p0 * atyx + 0.25f * K_PI;
-            float t1 = k_pow(k_abs(k_cos(th)), V.p1);
-            float t2 = k_pow(k_abs(k_sin(th)), V.p2);
+            float t1 = k_fpow(k_abs(k_fcos(th)), V.p1);
+            float t2 = k_fpow(k_abs(k_fsin(th)), V.p2);
             float rnd = V.p3;
-            float r = w * ((rnd * K_FLAME_RAND() + (1.0f - rnd) * sq) - V.p4) * k_pow(t1 + t2, V.p5) / sq;
+            float r = w * ((rnd * K_FLAME_RAND() + (1.0f - rnd) * sq) - V.p4) * k_fpow(t1 + t2, V.p5) / sq;
             p0 += r * tx;
             p1 += r * ty;
-        } else if (id == K_V_FLOWER) {
-            float r = w * (K_FLAME_RAND() - V.p1) * k_cos(V.p0 * atyx) / sq;
+        } else if (K_FLAME_HAS(K_V_FLOWER) && id == K_V_FLOWER) {
+            float r = w * (K_FLAME_RAND() - V.p1) * k_fcos(V.p0 * atyx) / sq;
             p0 += r * tx;
             p1 += r * ty;
-        } else if (id == K_V_CONIC) {
+        } else if (K_FLAME_HAS(K_V_CONIC) && id == K_V_CONIC) {
             float ct = tx / sq;
             float r = w * (K_FLAME_RAND() - V.p1) * V.p0 / (1.0f + V.p0 * ct) / sq;
             p0 += r * tx;
             p1 += r * ty;
-        } else if (id == K_V_PARABOLA) {
-            float s = k_sin(sq), cs = k_cos(sq);
+        } else if (K_FLAME_HAS(K_V_PARABOLA) && id == K_V_PARABOLA) {
+            float s = k_fsin(sq), cs = k_fcos(sq);
             p0 += V.p0 * w * s * s * K_FLAME_RAND();
             p1 += V.p1 * w * cs * K_FLAME_RAND();
-        } else if (id == K_V_BENT2) {
+        } else if (K_FLAME_HAS(K_V_BENT2) && id == K_V_BENT2) {
             float nx = tx < 0.0f ? tx * V.p0 : tx;
             float ny = ty < 0.0f ? ty * V.p1 : ty;
             p0 += w * nx;
@@ -508,8 +523,10 @@ K_FLAME_INLINE K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint
         }
     }
     if ((X.flags & K_FLAME_HAS_POST) != 0u) {
-        o.x = X.pax * p0 + X.pbx * p1 + X.pcx;
-        o.y = X.pay * p0 + X.pby * p1 + X.pcy;
+        K_PRECISE float qx = X.pax * p0 + X.pbx * p1 + X.pcx;
+        K_PRECISE float qy = X.pay * p0 + X.pby * p1 + X.pcy;
+        o.x = qx;
+        o.y = qy;
     } else {
         o.x = p0;
         o.y = p1;
@@ -538,6 +555,17 @@ K_FN K_FlameChain k_flame_init(uint key)
     s.pc = s.c;
     s.bad = 0u;
     return s;
+}
+
+/* The camera's rotation of a plotted point about (rcx, rcy). (A function of its own: glslang's
+ * propagation of `precise` through k_flame_step's loops takes minutes.) */
+K_FN k_vec2 k_flame_rotate(K_FlameParams P, float px, float py)
+{
+    K_PRECISE float qx = px - P.rcx;
+    K_PRECISE float qy = py - P.rcy;
+    K_PRECISE float rx = qx * P.rot00 + qy * P.rot01 + P.rcx;
+    K_PRECISE float ry = qx * P.rot10 + qy * P.rot11 + P.rcy;
+    return k_vec2(rx, ry);
 }
 
 /* One iteration of the chain (flam3_iterate's loop body): the xform chosen and applied, retried on
@@ -575,9 +603,9 @@ K_FLAME_INLINE K_FlameChain k_flame_step(K_FlameParams P, K_FlameChain s, uint k
         }
     }
     if (P.rotate != 0u) {
-        float qx = px - P.rcx, qy = py - P.rcy;
-        px = qx * P.rot00 + qy * P.rot01 + P.rcx;
-        py = qx * P.rot10 + qy * P.rot11 + P.rcy;
+        k_vec2 r = k_flame_rotate(P, px, py);
+        px = r.x;
+        py = r.y;
     }
     s.px = px;
     s.py = py;
@@ -589,7 +617,9 @@ K_FLAME_INLINE K_FlameChain k_flame_step(K_FlameParams P, K_FlameChain s, uint k
 K_FN uint k_flame_cell(K_FlameParams P, K_FlameChain s)
 {
     if (!(s.px >= P.b0 && s.py >= P.b1 && s.px <= P.b2 && s.py <= P.b3)) return K_FLAME_NONE;
-    int ix = K_I(P.ws0 * s.px - P.wb0s0), iy = K_I(P.hs1 * s.py - P.hb1s1);
+    K_PRECISE float fx = P.ws0 * s.px - P.wb0s0;
+    K_PRECISE float fy = P.hs1 * s.py - P.hb1s1;
+    int ix = K_I(fx), iy = K_I(fy);
     if (ix < 0 || iy < 0 || ix >= K_I(P.hist_w) || iy >= K_I(P.hist_h)) return K_FLAME_NONE;
     return K_U(iy) * P.hist_w + K_U(ix);
 }
@@ -600,5 +630,37 @@ K_FN uint k_flame_index(float c)
     int i = K_I(c * 256.0f);
     return K_U(i < 0 ? 0 : i > 255 ? 255 : i);
 }
+
+/* flam3's linear palette mode: colour coordinate c between entries i and i + 1 (i in 0 .. 254)
+ * with the weight of i + 1 in units of 2^-16 (0 below the palette, all of it past its end). */
+K_FN uint k_flame_lin_index(float c)
+{
+    int i = K_I(c * 256.0f);
+    return K_U(i < 0 ? 0 : i >= 255 ? 254 : i);
+}
+
+K_FN uint k_flame_lin_frac(float c)
+{
+    float v = c * 256.0f;
+    int i = K_I(v);
+    if (i < 0) return 0u;
+    if (i >= 255) return 65536u;
+    return K_U((v - K_F(i)) * 65536.0f); /* both exact */
+}
+
+/* The interpolated palette value (a and b in 2^-4 units, up to 4080: the sum fits 32 bits). */
+K_FN uint k_flame_lerp(uint a, uint b, uint frac)
+{
+    return (a * (65536u - frac) + b * frac + 32768u) >> 16u;
+}
+
+/* A palette value (up to 4080) times an opacity visq (2^-15 units), rounded. */
+K_FN uint k_flame_vis(uint q, uint visq)
+{
+    return (q * visq + 16384u) >> 15u;
+}
+
+/* The opacity sum of a point: 255 (4080 in 2^-4 units) times its opacity. */
+#define K_FLAME_OPAQUE 4080u
 
 #endif

@@ -57,18 +57,9 @@ print('%-12s flam3 a-b rmse %s ssim %s | ours-a rmse %s ssim %s %s' % (sys.argv[
 sys.exit(0 if ok else 1)" "$ref" "$ours" "$name"; then ok; else bad "$name: farther from flam3 than 1.5x flam3's own noise"; fi
 }
 
-# every variation we render (0 to 54), five a genome, each genome with one feature
-run_case post 1 0,1,2,3,4
-run_case xaos 2 5,6,7,8,9
-run_case final 3 10,11,12,13,14
-run_case palette-rgb 4 15,16,17,18,19
-run_case colors 5 20,21,22,23,24
-run_case library 6 25,26,27,28,29
-run_case opacity 7 30,31,32,33,34
-run_case linear 80 35,36,37,38,39
-run_case supersample 9 40,41,42,43,44
-run_case camera 10 45,46,47,48,49
-run_case tone 11 50,51,52,53,54
+# every variation we render (0 to 54), five a genome, each genome with one feature (flame-cases.txt:
+# name, flam3-genome's seed, variations)
+while read -r name seed vars <&3; do run_case "$name" "$seed" "$vars"; done 3< "$HERE/flame-cases.txt"
 
 # an unsupported variation: exit 2, one line naming it and the xform, no file
 sed 's/<xform weight="\([^"]*\)"/<xform weight="\1" escher="0.3"/' post.flame > escher.flame

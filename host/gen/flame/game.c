@@ -19,7 +19,7 @@ typedef struct cell16 {
 
 #define BATCH    1024 /* points computed before they are scattered */
 #define AHEAD    12   /* records prefetched ahead of the one added */
-#define OPAQUE_Q 4080u
+#define OPAQUE_Q K_FLAME_OPAQUE
 
 static bool compact(const fb_flame_setup *S)
 {
@@ -82,20 +82,12 @@ static void scatter16(const fb_flame_setup *S, const records *r, cell16 *h, fb_f
     }
 }
 
-/* The linear palette's colour of a point (flam3's interpolation between entries), 2^-4 units. */
+/* The linear palette's colour of a point (flam3's interpolation between entries, in the integer
+ * steps of kernels/flame.h that the shader takes too), 2^-4 units times the opacity. */
 static void linear_colour(const fb_flame_setup *S, float pc, uint32_t visq, uint32_t out[4])
 {
-    double v = pc * 256.0, f;
-    int i = (int)v;
-    if (i < 0)
-        i = 0, f = 0;
-    else if (i >= 255)
-        i = 254, f = 1;
-    else
-        f = v - i;
-    double vis = visq / 32768.0;
-    for (int k = 0; k < 4; k++)
-        out[k] = (uint32_t)llround((S->pal255[i][k] * (1 - f) + S->pal255[i + 1][k] * f) * vis * 16.0);
+    uint32_t i = k_flame_lin_index(pc), f = k_flame_lin_frac(pc);
+    for (int k = 0; k < 4; k++) out[k] = k_flame_vis(k_flame_lerp(S->palq[i][k], S->palq[i + 1][k], f), visq);
 }
 
 static void scatter32(const fb_flame_setup *S, const records *r, const K_FlameChain *pts, fb_flame_cell32 *h,
@@ -112,10 +104,10 @@ static void scatter32(const fb_flame_setup *S, const records *r, const K_FlameCh
         } else {
             const uint32_t *q = S->palq[r->col[t] & 255u];
             visq = r->col[t] >> 8;
-            for (int k = 0; k < 4; k++) add[k] = (q[k] * visq + 16384) >> 15;
+            for (int k = 0; k < 4; k++) add[k] = k_flame_vis(q[k], visq);
         }
         for (int k = 0; k < 4; k++) c->c[k] += add[k];
-        c->c[4] += (OPAQUE_Q * visq + 16384) >> 15;
+        c->c[4] += k_flame_vis(K_FLAME_OPAQUE, visq);
         c->hits++;
         if (c->c[4] >= 0x80000000u) fb_flame_spill(&total[r->cell[t]], c);
     }

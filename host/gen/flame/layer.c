@@ -1,7 +1,8 @@
 /*
  * The flame generator: a .flame genome (flam3's XML) rendered as flam3 3.1.1 renders it, with the
- * chaos game of kernels/flame.h on the native thread pool into a fixed-point histogram, then flam3's
- * density estimation, spatial filter and tone map (render.c; docs/flames.md).
+ * chaos game of kernels/flame.h on the native thread pool (game.c) or in a Vulkan shader
+ * (shaders/flame_body.glsl) into a fixed-point histogram, the same sums either way, then flam3's
+ * density estimation, spatial filter and tone map on the host (render.c; docs/flames.md).
  *
  * Channels: NAME.R, .G, .B (linear: the sRGB decoding of flam3's 8-bit output, the background
  * composited under), NAME.A (flam3's alpha), NAME.acc_R, .acc_G, .acc_B, .acc_A (the filtered
@@ -10,6 +11,9 @@
 #include "bake.h"
 #include "gen_flame.h"
 #include "game.h"
+
+#include "flame64_comp.h"
+#include "flame_comp.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -123,13 +127,166 @@ static fb_result finish(flame_state *st, fb_flame_cell *total)
     return rc;
 }
 
+/* ---- the chaos game on Vulkan ------------------------------------------------------------------ */
+
+_Static_assert(sizeof(K_FlameParams) == 108, "std430 struct of 27 words");
+_Static_assert(sizeof(K_FlameXform) == 80, "std430 struct of 20 words");
+_Static_assert(sizeof(K_FlameVar) == 32, "std430 struct of 8 words");
+_Static_assert(sizeof(K_FlameChain) == 40, "std430 struct of 10 words");
+
+/* Points per dispatch (all chains together): well under a second on lavapipe, so that the progress
+ * bar moves and no submission runs long. */
+#define FLAME_POINTS_PER_DISPATCH (1u << 22)
+#define FLAME_MAX_GROUPS          65535u /* Vulkan's least maxComputeWorkGroupCount[0] */
+/* lavapipe ends a loop nest after 65535 iterations in all (gallivm's LP_MAX_TGSI_LOOP_ITERATIONS,
+ * a guard against endless loops), silently: a dispatch's steps are kept under it (loop_steps). */
+#define FLAME_LOOP_ITERATIONS 60000u
+
+enum { FB_PARAMS, FB_XF, FB_VAR, FB_DIST, FB_PAL, FB_CHAINS, FB_HIST, FB_CARRY, FB_NBUF };
+
+typedef struct flame_push {
+    uint32_t c0, c1, step0, nsteps;
+} flame_push;
+
+/* Fields a histogram cell has on the device: hits, r, g, b for opaque genomes; else r, g, b, a,
+ * opacity, hits (flame_body.glsl). */
+static uint32_t device_fields(const fb_flame_setup *S)
+{
+    return fb_flame_cell_bytes(S) == 16 ? 4u : 6u;
+}
+
+/* Field f of cell i of the device's histogram as its exact 64-bit sum: the word (a 32-bit one, or
+ * a half of a 64-bit one) plus 2^32 for each carry out of it, less the carry into it from the low
+ * half. */
+static uint64_t device_field(const void *hist, const uint32_t *carry, bool wide, size_t at)
+{
+    uint64_t v = (uint64_t)carry[at] << 32;
+    if (!wide) return v + ((const uint32_t *)hist)[at];
+    uint64_t w = ((const uint64_t *)hist)[at >> 1];
+    return (at & 1) ? v + (w >> 32) - carry[at - 1] : v + (uint32_t)w;
+}
+
+/* Adds the device's histogram into total (64-bit cells). */
+static void device_to_total(const fb_flame_setup *S, const void *hist, const uint32_t *carry, bool wide,
+                            fb_flame_cell *total)
+{
+    size_t cells = (size_t)S->p.hist_w * S->p.hist_h;
+    uint32_t F = device_fields(S);
+    for (size_t i = 0; i < cells; i++) {
+        size_t at = i * F;
+        fb_flame_cell *c = &total[i];
+        if (F == 4) {
+            uint64_t hits = device_field(hist, carry, wide, at);
+            for (int k = 0; k < 3; k++) c->c[k] += device_field(hist, carry, wide, at + 1 + k);
+            c->c[3] += K_FLAME_OPAQUE * hits;
+            c->c[4] += K_FLAME_OPAQUE * hits;
+            c->hits += hits;
+        } else {
+            for (int k = 0; k < 5; k++) c->c[k] += device_field(hist, carry, wide, at + k);
+            c->hits += device_field(hist, carry, wide, at + 5);
+        }
+    }
+}
+
+/* The device's buffers: the histogram and its carries, and the chains' state of one batch. */
+static void device_bytes(const flame_state *st, uint64_t *hist, uint64_t *chains)
+{
+    uint64_t cells = (uint64_t)st->S.p.hist_w * st->S.p.hist_h, n = st->cr1 - st->cr0;
+    uint64_t batch = (uint64_t)FLAME_MAX_GROUPS * 64u;
+    *hist = 4ull * device_fields(&st->S) * cells;
+    *chains = sizeof(K_FlameChain) * (n < batch ? (n ? n : 1) : batch);
+}
+
+/* The steps a dispatch may run per chain within FLAME_LOOP_ITERATIONS: a step is one iteration of
+ * the steps' loop, up to five of the retries' loop each with the variations' loop of an xform, and
+ * the final xform's variations. */
+static uint32_t loop_steps(const fb_flame_setup *S)
+{
+    uint32_t most = 0, final = S->p.final_xf != K_FLAME_NONE ? S->xf[S->p.final_xf].nvar : 0;
+    for (uint32_t i = 0; i < S->p.nxf; i++)
+        if (S->xf[i].nvar > most) most = S->xf[i].nvar;
+    return FLAME_LOOP_ITERATIONS / (1 + 5 * (1 + most) + final);
+}
+
+/* Chains [cr0, cr1) in the shader, in batches of at most 65535 workgroups, each in dispatches of
+ * about FLAME_POINTS_PER_DISPATCH points (fewer where lavapipe's loop limit would cut a chain short);
+ * the histogram then added into total. */
+static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_progress *prog, double *gpu)
+{
+    flame_state *st = state(g);
+    const fb_flame_setup *S = &st->S;
+    vkc_context *vk = e->vk;
+    uint64_t hist_bytes, chain_bytes, range = vkc_info(vk)->max_storage_buffer_range;
+    device_bytes(st, &hist_bytes, &chain_bytes);
+    bool wide = vkc_info(vk)->int64_atomics;
+    if (hist_bytes > range || chain_bytes > range)
+        return fb_fail(FB_ERR_INPUT,
+                       "layer %s: the flame's histogram (%u x %u cells) needs %llu MiB in one buffer; this device "
+                       "allows %llu MiB (a smaller size or supersample, or --backend native)",
+                       g->layer->name, S->p.hist_w, S->p.hist_h, (unsigned long long)(hist_bytes >> 20),
+                       (unsigned long long)(range >> 20));
+    vkc_pipeline *pipe = NULL;
+    vkc_job *job = NULL;
+    vkc_buffer *buf[FB_NBUF] = {0};
+    uint32_t spec[4] = {device_fields(S) == 4, S->linear_palette, 0, 0};
+    for (uint32_t v = 0; v < S->nvar; v++) spec[2 + S->var[v].id / 32] |= 1u << (S->var[v].id % 32);
+    fb_result rc = vkc_pipeline_create(vk,
+                                       &(vkc_pipeline_desc){.spv = wide ? flame64_comp : flame_comp,
+                                                            .spv_size = wide ? sizeof flame64_comp : sizeof flame_comp,
+                                                            .push_size = sizeof(flame_push),
+                                                            .buffers = FB_NBUF,
+                                                            .spec = spec,
+                                                            .nspec = 4,
+                                                            .name = g->layer->name},
+                                       &pipe);
+    uint32_t nxf = S->p.nxf + (S->p.final_xf != K_FLAME_NONE);
+    const uint64_t sizes[FB_NBUF] = {sizeof S->p,
+                                     sizeof(K_FlameXform) * nxf,
+                                     sizeof(K_FlameVar) * (S->nvar ? S->nvar : 1),
+                                     4ull * S->ndist,
+                                     sizeof S->palq,
+                                     chain_bytes,
+                                     hist_bytes,
+                                     hist_bytes};
+    for (int b = 0; b < FB_NBUF && !rc; b++) rc = vkc_buffer_create(vk, sizes[b], &buf[b]);
+    const void *data[FB_PAL + 1] = {&S->p, S->xf, S->var, S->dist, S->palq};
+    for (int b = 0; b <= FB_PAL && !rc; b++) rc = vkc_buffer_upload(vk, buf[b], data[b], sizes[b]);
+    void *zero = rc ? NULL : calloc(1, hist_bytes);
+    if (!rc && !zero) rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
+    for (int b = FB_HIST; b <= FB_CARRY && !rc; b++) rc = vkc_buffer_upload(vk, buf[b], zero, hist_bytes);
+    free(zero);
+    if (!rc) rc = vkc_job_create(vk, pipe, &job);
+    uint32_t steps = S->p.fuse + S->p.len, batch = FLAME_MAX_GROUPS * 64u;
+    double all = chain_points(st);
+    for (uint32_t b0 = st->cr0; b0 < st->cr1 && !rc; b0 += batch) {
+        uint32_t b1 = st->cr1 - b0 > batch ? b0 + batch : st->cr1, n = b1 - b0;
+        uint32_t per = FLAME_POINTS_PER_DISPATCH / n ? FLAME_POINTS_PER_DISPATCH / n : 1;
+        if (per > loop_steps(S)) per = loop_steps(S);
+        for (uint32_t t0 = 0; t0 < steps && !rc; t0 += per) {
+            flame_push push = {b0, b1, t0, per};
+            uint32_t groups[3] = {(n + 63) / 64, 1, 1};
+            double t = -1;
+            rc = vkc_job_submit(vk, job, buf, FB_NBUF, &push, groups);
+            if (!rc) rc = vkc_job_wait(vk, job, &t);
+            if (t > 0) *gpu += t;
+            double done = (double)(b0 - st->cr0) * S->p.len + (double)n * fmin(t0 + per, steps) / steps * S->p.len;
+            fb_progress_update(prog, (uint64_t)fmin(done, all), (uint64_t)all);
+        }
+        const K_FlameChain *ch = rc ? NULL : vkc_buffer_data(buf[FB_CHAINS]);
+        for (uint32_t i = 0; ch && i < n; i++) st->bad += ch[i].bad;
+    }
+    if (!rc) device_to_total(S, vkc_buffer_data(buf[FB_HIST]), vkc_buffer_data(buf[FB_CARRY]), wide, total);
+    vkc_job_destroy(vk, &job);
+    for (int b = 0; b < FB_NBUF; b++) vkc_buffer_destroy(vk, &buf[b]);
+    vkc_pipeline_destroy(vk, &pipe);
+    return rc;
+}
+
 static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
 {
     flame_state *st = state(g);
     const fb_flame_setup *S = &st->S;
     size_t cells = (size_t)S->p.hist_w * S->p.hist_h, npix = (size_t)g->scene->width * g->scene->height;
-    if (e->kind == FB_BACKEND_VULKAN)
-        fb_log(FB_LOG_INFO, "%s: the flame's chaos game runs on the native backend (no shader yet)", g->layer->name);
     fb_flame_cell *total = calloc(cells, sizeof *total);
     fb_result rc = total ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
     if (!rc) rc = alloc_image(st, npix);
@@ -139,7 +296,11 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
     fb_progress_init(&prog, progress, label, "pts");
     double t0 = fb_now();
     int threads = e->pool ? fb_pool_threads(e->pool) : 1;
-    if (!rc) rc = fb_flame_play(S, e->pool, threads, st->cr0, st->cr1, total, &st->bad, &prog);
+    double gpu = -1;
+    if (!rc && e->kind == FB_BACKEND_VULKAN)
+        gpu = 0, rc = play_vulkan(g, e, total, &prog, &gpu);
+    else if (!rc)
+        rc = fb_flame_play(S, e->pool, threads, st->cr0, st->cr1, total, &st->bad, &prog);
     fb_progress_finish(&prog);
     double t1 = fb_now(), points = chain_points(st);
     if (!rc)
@@ -147,7 +308,7 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
     else
         free(total);
     st->seconds = fb_now() - t0;
-    g->prepare_gpu_seconds = -1;
+    g->prepare_gpu_seconds = gpu;
     if (rc) return rc;
     fb_log(FB_LOG_INFO,
            "%s: %.0f points in %u chains, %.3g Mpts/s (chaos game %.2f s, filters %.2f s), %llu bad values",
@@ -248,6 +409,11 @@ static uint64_t flame_memory(const fb_gen *g, const struct fb_engine *e, uint64_
     int threads = e->pool ? fb_pool_threads(e->pool) : 1;
     if (threads > 64) threads = 64;
     *hold = 20 * n + (st->nsums ? cells * sizeof(fb_flame_cell) : 0); /* a points part keeps its histogram */
+    if (e->kind == FB_BACKEND_VULKAN) { /* the device's histogram, its carries and chains, then the total */
+        uint64_t hist, chains;
+        device_bytes(st, &hist, &chains);
+        return 2 * hist + chains + cells * sizeof(fb_flame_cell) + 32 * cells + 20 * n;
+    }
     return (uint64_t)threads * cells * fb_flame_cell_bytes(&st->S) + cells * sizeof(fb_flame_cell) + 32 * cells +
            20 * n;
 }

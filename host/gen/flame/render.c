@@ -416,7 +416,6 @@ fb_result fb_flame_setup_init(const fb_flame_genome *g, int width, int height, d
     for (int i = 0; i < 256; i++)
         for (int k = 0; k < 4; k++) {
             double v = g->palette[i][k] * 255.0;
-            s->pal255[i][k] = v;
             s->palq[i][k] = (uint32_t)llround(fmin(fmax(v, 0), 255.0) * 16.0);
         }
     s->tone =

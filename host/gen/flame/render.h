@@ -37,8 +37,7 @@ typedef struct fb_flame_setup {
     uint32_t nvar;
     uint32_t *dist; /* (nxf + 1) rows of K_FLAME_GRAIN xform numbers */
     uint32_t ndist;
-    uint32_t palq[256][4]; /* step mode: the palette times 255, in units of 2^-4 */
-    double pal255[256][4];
+    uint32_t palq[256][4]; /* the palette times 255, in units of 2^-4 (linear mode interpolates them) */
     bool linear_palette;
     int width, height, ss;
     int gutter, de_offset;

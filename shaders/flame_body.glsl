@@ -1,0 +1,159 @@
+// The flame's chaos game (kernels/flame.h): one invocation per chain, steps [step0, step0 + nsteps)
+// of it per dispatch (the first `fuse` not plotted), each plotted point added into the integer
+// histogram with atomics (order-independent sums, the same as the native path's cell for cell).
+// host/gen/flame/game.c runs the same chains natively. Included by flame.comp (32-bit atomics: a
+// field a word) and flame64.comp (FB_FLAME_INT64: two fields a 64-bit word, one add for both).
+//
+// A cell has F fields: opaque genomes (COMPACT) hits, red, green, blue (their alpha and opacity sums
+// are 4080 x hits); others red, green, blue, alpha, opacity, hits. A word that passes 2^32 (or a
+// 64-bit word 2^64) counts the carry in `carry`, one counter a field, so the host recovers the exact
+// 64-bit sums (host/gen/flame/layer.c).
+#define K_GLSL 1
+#include "../kernels/common.h"
+
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
+
+// 1: opaque xforms and palette, step mode: 4 fields a cell; 0: 6
+layout(constant_id = 0) const uint COMPACT = 0u;
+// 1: flam3's linear palette mode (interpolated entries)
+layout(constant_id = 1) const uint LINEAR = 0u;
+// the genome's variations, bits of 0-31 and 32-54: only their branches are compiled (kernels/flame.h)
+layout(constant_id = 2) const uint VMASK0 = 0xffffffffu;
+layout(constant_id = 3) const uint VMASK1 = 0xffffffffu;
+#define K_FLAME_VMASK0 VMASK0
+#define K_FLAME_VMASK1 VMASK1
+
+#define K_FLAME_BUFFERS                                                                                                \
+    layout(std430, set = 0, binding = 1) readonly buffer Xforms                                                        \
+    {                                                                                                                  \
+        K_FlameXform k_flame_xf[];                                                                                     \
+    };                                                                                                                 \
+    layout(std430, set = 0, binding = 2) readonly buffer Vars                                                          \
+    {                                                                                                                  \
+        K_FlameVar k_flame_var[];                                                                                      \
+    };                                                                                                                 \
+    layout(std430, set = 0, binding = 3) readonly buffer Dist                                                          \
+    {                                                                                                                  \
+        uint k_flame_dist[];                                                                                           \
+    };
+#include "../kernels/flame.h"
+
+layout(std430, set = 0, binding = 0) readonly buffer Params
+{
+    K_FlameParams p;
+}
+params;
+// the palette times 255 in 2^-4 units (r, g, b, a)
+layout(std430, set = 0, binding = 4) readonly buffer Palette
+{
+    uvec4 q[];
+}
+pal;
+// chain c0 + i's state between dispatches
+layout(std430, set = 0, binding = 5) buffer Chains
+{
+    K_FlameChain s[];
+}
+chains;
+#ifdef FB_FLAME_INT64
+layout(std430, set = 0, binding = 6) buffer Hist
+{
+    uint64_t v[];
+}
+hist;
+#else
+layout(std430, set = 0, binding = 6) buffer Hist
+{
+    uint v[];
+}
+hist;
+#endif
+layout(std430, set = 0, binding = 7) buffer Carry
+{
+    uint v[];
+}
+carry;
+
+layout(push_constant) uniform Push
+{
+    uint c0, c1;        // the chains of this run: [c0, c1)
+    uint step0, nsteps; // this dispatch's steps of each chain
+}
+pc;
+
+#ifdef FB_FLAME_INT64
+// fields f (low word) and f + 1 (high word) of a cell: one 64-bit add, carries counted
+void add2(uint cell, uint f, uint lo, uint hi)
+{
+    uint F = COMPACT != 0u ? 4u : 6u;
+    uint64_t add = (uint64_t(hi) << 32) | uint64_t(lo);
+    uint64_t old = atomicAdd(hist.v[(cell * F + f) >> 1], add);
+    if (uint(old) + lo < uint(old)) atomicAdd(carry.v[cell * F + f], 1u); // into the high word
+    if (old + add < old) atomicAdd(carry.v[cell * F + f + 1u], 1u);       // out of the word
+}
+#else
+void add1(uint cell, uint f, uint v)
+{
+    uint F = COMPACT != 0u ? 4u : 6u;
+    uint old = atomicAdd(hist.v[cell * F + f], v);
+    if (old + v < old) atomicAdd(carry.v[cell * F + f], 1u);
+}
+#endif
+
+void main()
+{
+    uint i = pc.c0 + gl_GlobalInvocationID.x;
+    if (i >= pc.c1) return;
+    K_FlameParams P = params.p;
+    uint len = P.fuse + (i + 1u == P.chains ? P.last_len : P.len);
+    uint end = min(len, pc.step0 + pc.nsteps);
+    if (pc.step0 >= end) return;
+    uint key = k_flame_key(P.seed, i);
+    // (not a ?: between a local and a buffer struct: glslang stores the wrong type for that)
+    K_FlameChain s;
+    if (pc.step0 == 0u)
+        s = k_flame_init(key);
+    else
+        s = chains.s[i - pc.c0];
+    for (uint t = pc.step0; t < end; t++) {
+        s = k_flame_step(P, s, key);
+        if (t < P.fuse) continue;
+        uint cell = k_flame_cell(P, s);
+        uint visq = k_flame_xf[s.vis].visq;
+        if (cell == K_FLAME_NONE || visq == 0u) continue;
+        uvec4 q;
+        if (LINEAR != 0u) {
+            uint e = k_flame_lin_index(s.pc), fr = k_flame_lin_frac(s.pc);
+            uvec4 a = pal.q[e], b = pal.q[e + 1u];
+            q = uvec4(k_flame_lerp(a.x, b.x, fr), k_flame_lerp(a.y, b.y, fr), k_flame_lerp(a.z, b.z, fr),
+                      k_flame_lerp(a.w, b.w, fr));
+        } else {
+            q = pal.q[k_flame_index(s.pc)];
+        }
+#ifdef FB_FLAME_INT64
+        if (COMPACT != 0u) {
+            add2(cell, 0u, 1u, q.x);
+            add2(cell, 2u, q.y, q.z);
+        } else {
+            add2(cell, 0u, k_flame_vis(q.x, visq), k_flame_vis(q.y, visq));
+            add2(cell, 2u, k_flame_vis(q.z, visq), k_flame_vis(q.w, visq));
+            add2(cell, 4u, k_flame_vis(K_FLAME_OPAQUE, visq), 1u);
+        }
+#else
+        if (COMPACT != 0u) {
+            add1(cell, 0u, 1u);
+            add1(cell, 1u, q.x);
+            add1(cell, 2u, q.y);
+            add1(cell, 3u, q.z);
+        } else {
+            add1(cell, 0u, k_flame_vis(q.x, visq));
+            add1(cell, 1u, k_flame_vis(q.y, visq));
+            add1(cell, 2u, k_flame_vis(q.z, visq));
+            add1(cell, 3u, k_flame_vis(q.w, visq));
+            add1(cell, 4u, k_flame_vis(K_FLAME_OPAQUE, visq));
+            add1(cell, 5u, 1u);
+        }
+#endif
+    }
+    chains.s[i - pc.c0] = s;
+}

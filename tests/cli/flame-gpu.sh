@@ -1,0 +1,66 @@
+#!/bin/bash
+# The flame's chaos game on Vulkan against the native path, bit for bit (issue 31): the random
+# genomes of tests/cli/flame.sh (flame-cases.txt: flam3-genome with fixed seeds, five variations
+# each, together all 55, each with its feature edited in: post, xaos, final xform, palettes,
+# opacity, linear palette, supersample, camera, tone map), baked as a points part 1/1 so that the
+# file carries the whole integer histogram (NAME.hist*), on both backends: every channel equal, the
+# histogram included. Then the device's 32-bit atomics (FB_VK_NO_INT64=1) on an opaque, a
+# translucent and a linear-palette genome, and a points part on Vulkan merged with one baked
+# natively. Under the validation layer (FB_VK_VALIDATION=1: any message fails the bake). Not run
+# (77) without a Vulkan device or flam3-utils.
+# Usage: flame-gpu.sh PATH/TO/fractalbake
+. "$(dirname "$0")/lib.sh"
+cli_init "$@"
+require_vulkan
+if ! command -v flam3-genome > /dev/null; then
+    echo "flam3-utils is not installed: not run"
+    exit 77
+fi
+NAMES='linear sinusoidal spherical swirl horseshoe polar handkerchief heart disc spiral hyperbolic diamond ex julia
+bent waves fisheye popcorn exponential power cosine rings fan blob pdj fan2 rings2 eyefish bubble cylinder
+perspective noise julian juliascope blur gaussian_blur radial_blur pie ngon curl rectangles arch tangent square
+rays blade secant2 twintrian cross disc2 super_shape flower conic parabola bent2'
+SIZE=${FB_FLAME_GPU_SIZE:-96x96}
+Q=${FB_FLAME_GPU_QUALITY:-12}
+
+# genome NAME SEED VARIATIONS: flam3-genome's genome for SEED over VARIATIONS, edited for NAME
+genome() {
+    local name=$1 seed=$2 ids=$3 vars
+    vars=$(python3 -c "import sys; n=sys.argv[1].split(); print(','.join(n[int(i)] for i in sys.argv[2].split(',')))" \
+        "$NAMES" "$ids")
+    env seed="$seed" isaac_seed="fb$seed" use_vars="$ids" flam3-genome > "r$seed.flame" 2> /dev/null
+    python3 "$HERE/flame-edit.py" "r$seed.flame" "$name.flame" "$name" "$Q" "$vars" || bad "$name: flame-edit failed"
+}
+
+# same NAME [ENV...]: the genome on both backends, every channel (the histogram's too) the same;
+# supersample 2's histogram is too large for a points part's channels: the image's (its count,
+# and the accumulations computed from every cell) only
+same() {
+    local name=$1 part="--points-part 1/1"
+    shift
+    [ "$name" = supersample ] && part=
+    "$FB" flame --file "$name.flame" --size "$SIZE" --seed 5 --backend native $part --quiet \
+        -o "$name-n.exr" || { bad "$name: native failed"; return; }
+    env "$@" "$FB" flame --file "$name.flame" --size "$SIZE" --seed 5 --backend vulkan --validation $part \
+        --quiet -o "$name-v.exr" || { bad "$name: vulkan failed"; return; }
+    [ -z "$part" ] || "$FB" info "$name-v.exr" | grep -q 'flame.hist0_lo' || { bad "$name: no histogram channels"; return; }
+    if "$FB" compare "$name-n.exr" "$name-v.exr" --max-abs 0 > "$name.cmp"; then ok; else
+        bad "$name ($*): Vulkan differs from native: $(grep -v ' ok$' "$name.cmp" | head -3)"
+    fi
+}
+
+while read -r name seed vars <&3; do genome "$name" "$seed" "$vars" && same "$name"; done 3< "$HERE/flame-cases.txt"
+# the 32-bit atomics: opaque (4 fields a cell), translucent (6) and the linear palette
+for g in post opacity linear; do same $g FB_VK_NO_INT64=1; done
+# the histogram is not trivially equal: another seed gives another one
+"$FB" flame --file post.flame --size "$SIZE" --seed 6 --backend vulkan --points-part 1/1 --quiet -o post-s6.exr
+"$FB" compare post-v.exr post-s6.exr --max-abs 0 > /dev/null
+[ $? -eq 1 ] && ok || bad "another seed gave the same histogram"
+
+# points parts from both backends merge to the one-backend bake
+"$FB" flame --file xaos.flame --size "$SIZE" --seed 5 --backend native --quiet -o xw.exr
+"$FB" flame --file xaos.flame --size "$SIZE" --seed 5 --backend vulkan --points-part 1/2 --quiet -o xp1.exr
+"$FB" flame --file xaos.flame --size "$SIZE" --seed 5 --backend native --points-part 2/2 --quiet -o xp2.exr
+"$FB" merge xp1.exr xp2.exr -o xm.exr --quiet && "$FB" compare xw.exr xm.exr --max-abs 0 > /dev/null && ok ||
+    bad "a Vulkan points part and a native one do not merge to the native bake"
+cli_finish
