@@ -9,6 +9,11 @@
  * through the float's bits, never through ldexp or frexp (whose edge cases the two languages spell
  * differently); subnormal results are flushed to zero and subnormal arguments read as zero, as a
  * device with denormals flushed does.
+ *
+ * explog.h has log2, exp2 and pow too, for the Julia layer: they keep subnormals and come in an
+ * AVX2 restatement, where these flush them (the flame's chaos game, scalar per chain). The two give
+ * different bits, and each backend's output depends on its own, so merging them is a change of
+ * output for one generator (its goldens and its tolerances), not a cleanup.
  */
 #ifndef FB_KERNELS_KMATH_H
 #define FB_KERNELS_KMATH_H
