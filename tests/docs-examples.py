@@ -6,7 +6,8 @@ that starts with a program the docs use (fractalbake, printf, listgeo, ...), wit
 lines. Each document's commands run in order, in a scratch folder of their own, through bash (so
 pipes, loops and redirections work as written), with `fractalbake` on PATH and `docs/` linked in,
 so that the example inputs resolve as they do from the repository's root. Sizes are reduced where
-a command gives one: --size and --set size= to at most 1024 pixels a side (the aspect kept),
+a command gives one: --size and --set size= to at most 1024 pixels a side (the aspect kept; not
+where it names a --heightmap-engine, whose sizes are the engine's),
 --points to 2e6, --insert to 20000. A few commands are not run, each for the reason listed below.
 
 Usage: docs-examples.py REPO_ROOT PATH/TO/fractalbake [DOC.md ...]
@@ -79,8 +80,11 @@ def shrink_size(m, least=16):
 
 def reduce(cmd):
     least = 64 if ' bench' in cmd else 16
-    cmd = re.sub(r'(--size[ =])(\d+)x(\d+)', lambda m: shrink_size(m, least), cmd)
-    cmd = re.sub(r'(size=)(\d+)x(\d+)', lambda m: shrink_size(m, least), cmd)
+    # an engine's heightmap takes only the sizes of its table (and a tiled one their sums): such a
+    # bake keeps its size, as a user runs it (a terrain of 2017 x 2017 takes about a second)
+    if '--heightmap-engine' not in cmd:
+        cmd = re.sub(r'(--size[ =])(\d+)x(\d+)', lambda m: shrink_size(m, least), cmd)
+        cmd = re.sub(r'(size=)(\d+)x(\d+)', lambda m: shrink_size(m, least), cmd)
 
     def cap(limit):
         def f(m):
