@@ -21,39 +21,20 @@
 #include "sincos.h"
 
 #ifdef K_GLSL
-#define k_f2u(x) floatBitsToUint(x)
-#define k_u2f(x) uintBitsToFloat(x)
-#else
-#include <string.h>
-K_FN uint k_f2u(float x)
-{
-    uint u;
-    memcpy(&u, &x, 4);
-    return u;
-}
-K_FN float k_u2f(uint u)
-{
-    float x;
-    memcpy(&x, &u, 4);
-    return x;
-}
-#endif
-
-#ifdef K_GLSL
 #define k_trunc(x) trunc(x)
 #else
 #define k_trunc(x) truncf(x)
 #endif
 
-#define K_INF      k_u2f(0x7f800000u)
-#define K_NAN      k_u2f(0x7fc00000u)
+#define K_INF      k_bits_float(0x7f800000u)
+#define K_NAN      k_bits_float(0x7fc00000u)
 #define K_HALF_PI  1.5707963267948966f
 #define K_QUART_PI 0.7853981633974483f
 
 /* 2^n for n in [-126, 127], from its bits. */
 K_FN float k_xexp2i(int n)
 {
-    return k_u2f(K_U(n + 127) << 23u);
+    return k_bits_float(K_U(n + 127) << 23u);
 }
 
 /* e^x (Cephes expf): x = n ln 2 + r, |r| <= ln 2 / 2, e^r by a polynomial, times 2^n. */
@@ -83,13 +64,13 @@ K_FN float k_xexp(float x)
 K_FN float k_xlog(float x)
 {
     if (k_isnan(x)) return x;
-    uint b = k_f2u(x);
+    uint b = k_float_bits(x);
     uint be = (b >> 23u) & 255u;
     if (be == 0u) return -K_INF; /* zero or subnormal (read as zero), either sign */
     if ((b >> 31u) != 0u) return K_NAN;
     if (be == 255u) return x; /* +inf */
     int e = K_I(be) - 126;
-    K_PRECISE float m = k_u2f((b & 0x007fffffu) | 0x3f000000u); /* [0.5, 1) */
+    K_PRECISE float m = k_bits_float((b & 0x007fffffu) | 0x3f000000u); /* [0.5, 1) */
     if (m < 0.707106781186547524f) {
         e -= 1;
         m = (m + m) - 1.0f;
