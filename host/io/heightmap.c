@@ -222,6 +222,23 @@ __attribute__((format(printf, 2, 3))) static void add(text *t, const char *fmt, 
     }
 }
 
+/* s as a JSON string, quotes included: a file name may hold a quote, a backslash or a control
+ * character, which JSON writes escaped. */
+static void add_string(text *t, const char *s)
+{
+    add(t, "\"");
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\')
+            add(t, "\\%c", c);
+        else if (c < 0x20)
+            add(t, "\\u%04x", c);
+        else
+            add(t, "%c", c);
+    }
+    add(t, "\"");
+}
+
 /* Where a piece of the image goes in the engine's import settings: Unreal's location (centimetres, X
  * east, Y south) of its top-left sample (x, y) (x right, y down from the image's top-left), or Unity's
  * position (metres, x east, z north) of its south-west sample, in column x and image row south_row. */
@@ -253,7 +270,11 @@ static fb_result write_sidecar(const fb_heightmap_desc *d)
     const char *file = strrchr(d->path, '/') ? strrchr(d->path, '/') + 1 : d->path;
     text t = {0};
     add(&t, "{\n  \"engine\": \"%s\",\n", d->engine == FB_ENGINE_UNREAL ? "unreal" : "unity");
-    if (!d->cols) add(&t, "  \"heightmap\": \"%s\",\n", file);
+    if (!d->cols) {
+        add(&t, "  \"heightmap\": ");
+        add_string(&t, file);
+        add(&t, ",\n");
+    }
     add(&t, "  \"samples\": [%d, %d],\n  \"height_range\": [%s, %s],\n  \"sample_spacing\": [%.17g, %.17g],\n",
         d->width, d->height, lo, hi, dx, dy);
     if (d->engine == FB_ENGINE_UNREAL) {
@@ -279,7 +300,9 @@ static fb_result write_sidecar(const fb_heightmap_desc *d)
             for (int col = 0; col < d->cols; col++) {
                 fb_heightmap_tile_path(file, d->engine, col, row, d->rows, name, sizeof name);
                 int x = col * (tw - 1), y = row * (th - 1);
-                add(&t, "%s\n    {\"file\": \"%s\", \"pixels\": [%d, %d], ", row || col ? "," : "", name, x, y);
+                add(&t, "%s\n    {\"file\": ", row || col ? "," : "");
+                add_string(&t, name);
+                add(&t, ", \"pixels\": [%d, %d], ", x, y);
                 engine_place(&t, d, x, y, y + th - 1);
                 add(&t, "}");
             }

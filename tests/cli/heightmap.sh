@@ -91,6 +91,19 @@ PY
 check "--json: the tiles and their files" test "$(python3 -c "import json; h = json.load(open('ft.json'))['heightmaps'][0]; print(h['tiles'], h['tile_files'])")" = \
   "[2, 2] ['f_x0_y0.png', 'f_x1_y0.png', 'f_x0_y1.png', 'f_x1_y1.png']"
 check "--json: every tile among the outputs" test "$(python3 -c "import json; print(sum(o['what'] == 'heightmap tile' for o in json.load(open('ft.json'))['outputs']))")" = 4
+# a name with a quote and a backslash: the sidecar is still JSON, and names the files written
+"$FB" fbm $N --size 253x253 -o q.exr --heightmap 'q"a\b.png' --heightmap-engine unreal --quiet &&
+  "$FB" fbm $N --size 505x505 -o q2.exr --heightmap 'q"t\b.png' --heightmap-engine unreal --tiles 2x2 --quiet && ok ||
+  bad "engine bakes with a quote in the heightmap's name"
+python3 - << 'PY' && ok || bad "a sidecar with an odd file name is not JSON naming its files"
+import json, os
+one = json.load(open('q"a\\b.import.json'))
+assert one['heightmap'] == 'q"a\\b.png' and os.path.exists(one['heightmap']), one['heightmap']
+tiles = json.load(open('q"t\\b.import.json'))['tiles']['files']
+assert [f['file'] for f in tiles] == ['q"t\\b_x%d_y%d.png' % (c, r) for r in (0, 1) for c in (0, 1)], tiles
+assert all(os.path.exists(f['file']) for f in tiles)
+PY
+
 # a split bake (--task): the task that computes the layer writes its tiles, the whole bake's
 printf '{"size": [65, 65], "layers": [{"type": "fbm", "name": "a", "heightmap": "a.png", "tiles": [2, 2]}, {"type": "fbm", "name": "b", "hurst": 0.3}]}' > tt.json
 "$FB" render tt.json $N --task 0/2 -o tt0.exr --quiet && "$FB" render tt.json $N --task 1/2 -o tt1.exr --quiet
