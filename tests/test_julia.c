@@ -209,6 +209,123 @@ static void test_distance_estimate(void)
     CHECKF(bad == 0, "%d distance estimates off by more than 0.1%%", bad);
 }
 
+/* z'_0 = dz0/dx in double at texture coordinates (u, v) and grid point pt: dp/dx of the grid (rect
+ * 3 / W; polar i 2 pi 1.5 v e^(i 2 pi u) / W), times the warp's A'(p) = (1 - |a|^2) / (1 - a p)^2. */
+static double complex reference_dstart(int mapping, double u, double v, double complex pt, uint W, double complex a)
+{
+    double complex dp = mapping ? I * 2 * M_PI * 1.5 * v * cexp(I * 2 * M_PI * u) / W : 3.0 / W;
+    double complex q = 1.0 - a * pt;
+    return (1.0 - creal(a * conj(a))) / (q * q) * dp;
+}
+
+/* The distance estimate |z| ln|z| / |z'| against references of its own, for every c, alpha and
+ * mapping of test_against_reference, with the derivative as a complex number in double,
+ * z'_{k+1} = 2 z_k z'_k (the kernel keeps only |z'|^2, a float running product of 4 |z_k|^2).
+ * Float: along the kernel's own float orbit (z stepped here with the same operations, so the same
+ * escape count and the same z), the derivative in double from z'_0 in double. Every rounding of the
+ * kernel's product is relative and nothing cancels (positive factors, |z|^2 a sum of squares): at
+ * most 3 roundings a step (two squares and their sum; times 4 is exact; the product) and about 20
+ * for |z'_0|^2 and the end (log2 within 1.31 ulp, sqrt, divide), so |z'| = sqrt(|z'|^2) and the
+ * distance are within (1.5 m + 20) ulp after m steps: checked at (2 m + 32) * 2^-24 on every pixel
+ * that escapes, where |z'| is in float's range; where it is beyond (|z'|^2 overflows), the distance
+ * must be 0. Double precision: against an orbit all in double from the reference's grid point, on
+ * the pixels where the orbit itself is well conditioned (2^-52 |z'_m| / |z'_0| < 1e-7: the two
+ * orbits agree to that), at 1e-5. */
+static void test_distance_reference(void)
+{
+    const double u = 0x1p-24;
+    double worst = 0, worst_d = 0;
+    int checked = 0, checked_d = 0, bad = 0, bad_zero = 0, bad_d = 0, mismatch = 0;
+    K_JuliaD d;
+    memset(&d, 0, sizeof d);
+    k_julia_d_constants(&d);
+    for (int mapping = 0; mapping < 2; mapping++)
+        for (int ci = 0; ci < 4; ci++)
+            for (int ai = 0; ai < 3; ai++) {
+                K_JuliaParams p = base(cs[ci][0], cs[ci][1], as[ai][0], as[ai][1], 256);
+                p.mapping = (uint)mapping;
+                p.width = 160, p.height = 120;
+                p.inv_width = 1.0f / 160, p.inv_height = 1.0f / 120;
+                d.c_re = cs[ci][0], d.c_im = cs[ci][1], d.a_re = as[ai][0], d.a_im = as[ai][1];
+                d.scale_u = d.scale_v = 3.0, d.radius = 1.5, d.rot_c = 1.0, d.rot_s = 0.0, d.bailout2 = 4.0;
+                double complex a = as[ai][0] + I * as[ai][1], c = cs[ci][0] + I * cs[ci][1];
+                for (uint y = 0; y < p.height; y++)
+                    for (uint x = 0; x < p.width; x++) {
+                        K_JuliaResult r = k_julia_pixel(p, g_turb, x, y);
+                        K_JuliaStart s = k_julia_start_at(p, g_turb, (float)x + 0.5f, (float)y + 0.5f);
+                        /* the orbit starts where the kernel's float grid puts it (v = 1 - y / H
+                         * loses bits near v = 0); the derivative there is the reference's */
+                        float uf = ((float)x + 0.5f) * p.inv_width, vf = 1.0f - ((float)y + 0.5f) * p.inv_height;
+                        k_vec2 pf = k_julia_start(p, uf, vf);
+                        double complex dz0 = reference_dstart(mapping, uf, vf, pf.x + I * (double)pf.y, p.width, a);
+                        double complex dz = dz0;
+                        /* float: the kernel's orbit, the derivative in double */
+                        float zr = s.o.zr, zi = s.o.zi;
+                        uint n = 0, m;
+                        while (n < p.max_iter && zr * zr + zi * zi < p.bailout2) {
+                            dz = 2.0 * ((double)zr + I * (double)zi) * dz;
+                            float t = zr * zr - zi * zi + p.c_re;
+                            zi = 2.0f * zr * zi + p.c_im;
+                            zr = t;
+                            n++;
+                        }
+                        bool escaped = zr * zr + zi * zi >= p.bailout2;
+                        if (!s.ok || !escaped) {
+                            mismatch += !s.ok ? r.iter != 0 : (r.inside != 1 || r.iter != n);
+                            continue;
+                        }
+                        mismatch += r.inside != 0 || r.iter != n;
+                        for (m = n; m < n + K_JULIA_EXTRA_ITER && zr * zr + zi * zi <= K_JULIA_BIG_RADIUS2; m++) {
+                            dz = 2.0 * ((double)zr + I * (double)zi) * dz;
+                            float t = zr * zr - zi * zi + p.c_re;
+                            zi = 2.0f * zr * zi + p.c_im;
+                            zr = t;
+                        }
+                        double r2 = (double)(zr * zr + zi * zi), adz = cabs(dz);
+                        double want = sqrt(r2) * 0.5 * log(r2) / adz;
+                        if (adz > 2e19) {
+                            bad_zero += r.de != 0.0f; /* |z'|^2 beyond float: 0, never inf or NaN */
+                        } else if (adz < 1e19 && adz > 1e-18) {
+                            double e = fabs(r.de - want) / want;
+                            checked++;
+                            worst = fmax(worst, e / ((2.0 * m + 32) * u));
+                            bad += !(e <= (2.0 * m + 32) * u);
+                        }
+                        /* double precision: the orbit in double too */
+                        K_JuliaResult rd = k_julia_run_d(p, d, g_turb, x + 0.5, y + 0.5, K_JULIA_WANT_ALL);
+                        double complex pt = reference_point(mapping, x, y, p.width, p.height);
+                        double complex z = (pt - conj(a)) / (1.0 - a * pt);
+                        dz = reference_dstart(mapping, (x + 0.5) / p.width, 1.0 - (y + 0.5) / p.height, pt, p.width, a);
+                        dz0 = dz;
+                        for (n = 0; n < p.max_iter && creal(z * conj(z)) < 4.0; n++) {
+                            dz = 2.0 * z * dz;
+                            z = z * z + c;
+                        }
+                        if (rd.inside || rd.iter != n || creal(z * conj(z)) < 4.0) continue;
+                        for (m = n; m < n + K_JULIA_EXTRA_ITER && creal(z * conj(z)) <= 4294967296.0; m++) {
+                            dz = 2.0 * z * dz;
+                            z = z * z + c;
+                        }
+                        adz = cabs(dz);
+                        if (!(0x1p-52 * adz / cabs(dz0) < 1e-7) || adz > 1e19) continue;
+                        want = cabs(z) * log(cabs(z)) / adz;
+                        double e = fabs(rd.de - want) / want;
+                        checked_d++;
+                        worst_d = fmax(worst_d, e);
+                        bad_d += !(e <= 1e-5);
+                    }
+            }
+    CHECKF(mismatch == 0, "%d pixels: the reference's float orbit is not the kernel's", mismatch);
+    CHECKF(bad == 0, "%d of %d distance estimates beyond (2 m + 32) ulp of the reference", bad, checked);
+    CHECKF(bad_zero == 0, "%d distance estimates not 0 where |z'|^2 overflows float", bad_zero);
+    CHECKF(checked > 100000, "only %d distance estimates checked", checked);
+    CHECKF(bad_d == 0, "double: %d of %d distance estimates beyond 1e-5 of the reference", bad_d, checked_d);
+    CHECKF(checked_d > 50000, "double: only %d distance estimates checked", checked_d);
+    printf("distance estimate: %d pixels within %.2f of their bound (2 m + 32) * 2^-24 of the double reference; "
+           "double precision: %d within %.2g\n",
+           checked, worst, checked_d, worst_d);
+}
+
 /* Polar mapping is exactly periodic in u: t(0, v) = t(1, v) bit for bit, and t(u, v) = t(u + 1, v)
  * to the rounding of u + 1. */
 static void test_polar_seam(void)
@@ -360,6 +477,7 @@ int main(void)
     test_against_reference();
     test_smooth();
     test_distance_estimate();
+    test_distance_reference();
     test_polar_seam();
     TEST_REPORT();
 }
