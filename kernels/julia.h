@@ -60,20 +60,30 @@ K_STRUCT(K_JuliaResult)
 }
 K_END(K_JuliaResult)
 
-/* An orbit's state: z and its derivative z' with respect to the pixel coordinate. */
+/* An orbit's state: z and the squared magnitude dz2 = |z'|^2 of its derivative z' with respect to
+ * the pixel coordinate. The distance estimate needs only |z'|, and since z'_{k+1} = 2 z_k z'_k,
+ * |z'_{k+1}|^2 = 4 |z_k|^2 |z'_k|^2: a real running product of the |z_k|^2 that the bailout test
+ * computes anyway (two multiplies a step instead of a complex multiply).
+ * Range: dz2 overflows to +inf where |z'| > 1.8e19, where the complex z' of before gave an
+ * infinite |z'|^2 = dzr^2 + dzi^2 at the end; inf stays inf (or NaN from inf * 0 if z is exactly 0),
+ * and the distance is then 0, never non-finite, as before. dz2 underflows where |z'| < 1.1e-19 (a
+ * subnormal below that): the end's dzr^2 + dzi^2 did too, but now a minimum of |z'| along the orbit
+ * counts as well, which takes an orbit within about 1e-8 of the critical point 0 (the distance
+ * there is ill-conditioned anyway). */
 K_STRUCT(K_JuliaZ)
 {
-    float zr, zi, dzr, dzi;
+    float zr, zi, dz2;
 }
 K_END(K_JuliaZ)
 
-/* One step: z' <- 2 z z', z <- z^2 + c. precise: an orbit is chaotic, so one fused rounding would
- * change the escape count of boundary pixels between a device and C. */
-K_FN K_JuliaZ k_julia_step(K_JuliaZ o, float c_re, float c_im)
+/* One step: |z'|^2 <- 4 |z|^2 |z'|^2, z <- z^2 + c, where r2 = |z|^2 = zr^2 + zi^2 of this z as the
+ * bailout test computes it (so the step multiplies by |z_k|^2 of the z it squares). precise: an
+ * orbit is chaotic, so one fused rounding would change the escape count of boundary pixels between
+ * a device and C. */
+K_FN K_JuliaZ k_julia_step(K_JuliaZ o, float r2, float c_re, float c_im)
 {
     K_PRECISE K_JuliaZ r;
-    r.dzr = 2.0f * (o.zr * o.dzr - o.zi * o.dzi);
-    r.dzi = 2.0f * (o.zr * o.dzi + o.zi * o.dzr);
+    r.dz2 = o.dz2 * (4.0f * r2);
     r.zr = o.zr * o.zr - o.zi * o.zi + c_re;
     r.zi = 2.0f * o.zr * o.zi + c_im;
     return r;
@@ -130,12 +140,13 @@ K_FN K_JuliaZ k_julia_step_z(K_JuliaZ o, float c_re, float c_im)
     return r;
 }
 
-K_FN K_JuliaZ k_julia_advance(K_JuliaZ o, float c_re, float c_im, uint want)
+/* r2: |z|^2 of o, zr^2 + zi^2 (used only for the distance) */
+K_FN K_JuliaZ k_julia_advance(K_JuliaZ o, float r2, float c_re, float c_im, uint want)
 {
-    return (want & K_JULIA_WANT_DE) != 0u ? k_julia_step(o, c_re, c_im) : k_julia_step_z(o, c_re, c_im);
+    return (want & K_JULIA_WANT_DE) != 0u ? k_julia_step(o, r2, c_re, c_im) : k_julia_step_z(o, c_re, c_im);
 }
 
-/* An orbit's start: z0 and dz0/dx; ok = 0 where it escapes before the first iteration. */
+/* An orbit's start: z0 and |dz0/dx|^2; ok = 0 where it escapes before the first iteration. */
 K_STRUCT(K_JuliaStart)
 {
     K_JuliaZ o;
@@ -145,9 +156,8 @@ K_END(K_JuliaStart)
 
 /* z0 = (nr + i ni) / (dr + i di) + tw and dz0 = (1 - |a|^2) (qr + i qi) / (dr + i di)^2: the allpass
  * warp's value and derivative from its numerator and denominator (q: the derivative of its argument,
- * times what the form needs). A zero denominator is the pole: the point at infinity, outside every
- * filled Julia set, so the pixel escapes before the first iteration and nothing non-finite reaches
- * the output. */
+ * times what the form needs); the orbit keeps |dz0|^2. A zero denominator is the pole: the point at infinity, outside
+ * every filled Julia set, so the pixel escapes before the first iteration and nothing non-finite reaches the output. */
 K_FN K_JuliaStart k_julia_quotient(K_JuliaParams p, float nr, float ni, float dr, float di, float qr, float qi,
                                    float tw_re, float tw_im)
 {
@@ -155,8 +165,7 @@ K_FN K_JuliaStart k_julia_quotient(K_JuliaParams p, float nr, float ni, float dr
     s.ok = 0u;
     s.o.zr = 0.0f;
     s.o.zi = 0.0f;
-    s.o.dzr = 0.0f;
-    s.o.dzi = 0.0f;
+    s.o.dz2 = 0.0f;
     K_PRECISE float den = dr * dr + di * di;
     if (!(den > 1.0e-30f)) return s;
     float inv = 1.0f / den;
@@ -167,10 +176,11 @@ K_FN K_JuliaStart k_julia_quotient(K_JuliaParams p, float nr, float ni, float dr
     float k = 1.0f - (p.a_re * p.a_re + p.a_im * p.a_im);
     float sr = (dr * dr - di * di) * inv * inv, si = -2.0f * dr * di * inv * inv; /* 1 / den^2 */
     float wr = k * sr, wi = k * si;
+    K_PRECISE float dzr = wr * qr - wi * qi;
+    K_PRECISE float dzi = wr * qi + wi * qr;
     s.o.zr = zr;
     s.o.zi = zi;
-    s.o.dzr = wr * qr - wi * qi;
-    s.o.dzi = wr * qi + wi * qr;
+    s.o.dz2 = dzr * dzr + dzi * dzi;
     s.ok = zr * zr + zi * zi < 1.0e30f ? 1u : 0u;
     return s;
 }
@@ -308,8 +318,9 @@ K_FN K_JuliaResult k_julia_end(K_JuliaParams p, K_JuliaZ o, uint n, bool escaped
      * doubly exponentially, so a handful suffice). */
     uint m = n;
     for (uint j = 0u; j < K_JULIA_EXTRA_ITER; j++) {
-        if (o.zr * o.zr + o.zi * o.zi > K_JULIA_BIG_RADIUS2) break;
-        o = k_julia_advance(o, p.c_re, p.c_im, want);
+        K_PRECISE float r2j = o.zr * o.zr + o.zi * o.zi;
+        if (r2j > K_JULIA_BIG_RADIUS2) break;
+        o = k_julia_advance(o, r2j, p.c_re, p.c_im, want);
         m++;
     }
     float r2 = o.zr * o.zr + o.zi * o.zi;
@@ -317,7 +328,7 @@ K_FN K_JuliaResult k_julia_end(K_JuliaParams p, K_JuliaZ o, uint n, bool escaped
     float lnr = 0.5f * k_log2_poly(r2) * 0.69314718f; /* ln |z| */
     if ((want & K_JULIA_WANT_SMOOTH) != 0u) res.nsmooth = K_F(m) + 1.0f - k_log2_poly(lnr);
     if ((want & K_JULIA_WANT_DE) != 0u) {
-        float dz = k_sqrt(o.dzr * o.dzr + o.dzi * o.dzi);
+        float dz = k_sqrt(o.dz2); /* |z'| */
         /* an overflowed derivative (inf or NaN) gives 0, never a non-finite value */
         res.de = (dz > 0.0f && dz < 3.0e38f) ? k_sqrt(r2) * lnr / dz : 0.0f;
     }
@@ -332,11 +343,12 @@ K_FN K_JuliaResult k_julia_run(K_JuliaParams p, K_JuliaStart s, uint want)
     uint n = 0u;
     bool escaped = false;
     for (uint i = 0u; i < p.max_iter; i++) {
-        if (o.zr * o.zr + o.zi * o.zi >= p.bailout2) {
+        K_PRECISE float r2 = o.zr * o.zr + o.zi * o.zi;
+        if (r2 >= p.bailout2) {
             escaped = true;
             break;
         }
-        o = k_julia_advance(o, p.c_re, p.c_im, want);
+        o = k_julia_advance(o, r2, p.c_re, p.c_im, want);
         n++;
     }
     if (!escaped && o.zr * o.zr + o.zi * o.zi >= p.bailout2) escaped = true;
@@ -364,21 +376,22 @@ K_FN K_JuliaPair k_julia_orbit2(K_JuliaParams p, K_JuliaStart sa, K_JuliaStart s
     bool ea = da, eb = db;                             /* escaped (the pole: before the first step) */
     uint na = 0u, nb = 0u;
     for (uint i = 0u; i < p.max_iter; i++) {
-        if (!da && a.zr * a.zr + a.zi * a.zi >= p.bailout2) {
+        K_PRECISE float ra = a.zr * a.zr + a.zi * a.zi, rb = b.zr * b.zr + b.zi * b.zi;
+        if (!da && ra >= p.bailout2) {
             da = true;
             ea = true;
         }
-        if (!db && b.zr * b.zr + b.zi * b.zi >= p.bailout2) {
+        if (!db && rb >= p.bailout2) {
             db = true;
             eb = true;
         }
         if (da && db) break;
         if (!da) {
-            a = k_julia_advance(a, p.c_re, p.c_im, want);
+            a = k_julia_advance(a, ra, p.c_re, p.c_im, want);
             na++;
         }
         if (!db) {
-            b = k_julia_advance(b, p.c_re, p.c_im, want);
+            b = k_julia_advance(b, rb, p.c_re, p.c_im, want);
             nb++;
         }
     }
@@ -531,20 +544,19 @@ K_FN K_JuliaSinCos k_julia_sincos_d(K_JuliaD d, double x)
     return o;
 }
 
-/* An orbit's state in double, and one step of it (z' <- 2 z z' only when the distance is wanted). */
+/* An orbit's state in double, and one step of it (|z'|^2 <- 4 |z|^2 |z'|^2, as K_JuliaZ, only when
+ * the distance is wanted; r2 = |z|^2 of o as the bailout test computes it). In double dz2 overflows
+ * where |z'| > 1.3e154, and the float |z'| of the end where |z'| > 3e38, as the complex z' did. */
 K_STRUCT(K_JuliaZD)
 {
-    double zr, zi, dzr, dzi;
+    double zr, zi, dz2;
 }
 K_END(K_JuliaZD)
 
-K_FN K_JuliaZD k_julia_step_d(K_JuliaZD o, K_JuliaD d, uint want)
+K_FN K_JuliaZD k_julia_step_d(K_JuliaZD o, double r2, K_JuliaD d, uint want)
 {
     K_PRECISE K_JuliaZD r = o;
-    if ((want & K_JULIA_WANT_DE) != 0u) {
-        r.dzr = 2.0 * (o.zr * o.dzr - o.zi * o.dzi);
-        r.dzi = 2.0 * (o.zr * o.dzi + o.zi * o.dzr);
-    }
+    if ((want & K_JULIA_WANT_DE) != 0u) r.dz2 = o.dz2 * (4.0 * r2);
     r.zr = o.zr * o.zr - o.zi * o.zi + d.c_re;
     r.zi = 2.0 * o.zr * o.zi + d.c_im;
     return r;
@@ -594,19 +606,21 @@ K_FN K_JuliaResult k_julia_run_d(K_JuliaParams p, K_JuliaD d, K_FbmParams turb, 
     K_PRECISE double kk = 1.0 - (d.a_re * d.a_re + d.a_im * d.a_im);
     K_PRECISE double wr = kk * ((dr * dr - di * di) * inv * inv), wi = kk * (-2.0 * dr * di * inv * inv);
     K_PRECISE K_JuliaZD o;
+    K_PRECISE double dzr = wr * dpx - wi * dpy;
+    K_PRECISE double dzi = wr * dpy + wi * dpx;
     o.zr = zr;
     o.zi = zi;
-    o.dzr = wr * dpx - wi * dpy;
-    o.dzi = wr * dpy + wi * dpx;
+    o.dz2 = dzr * dzr + dzi * dzi;
     if (!(zr * zr + zi * zi < d.huge)) return res;
     uint n = 0u;
     bool escaped = false;
     for (uint i = 0u; i < p.max_iter; i++) {
-        if (o.zr * o.zr + o.zi * o.zi >= d.bailout2) {
+        K_PRECISE double r2 = o.zr * o.zr + o.zi * o.zi;
+        if (r2 >= d.bailout2) {
             escaped = true;
             break;
         }
-        o = k_julia_step_d(o, d, want);
+        o = k_julia_step_d(o, r2, d, want);
         n++;
     }
     if (!escaped && o.zr * o.zr + o.zi * o.zi >= d.bailout2) escaped = true;
@@ -619,15 +633,16 @@ K_FN K_JuliaResult k_julia_run_d(K_JuliaParams p, K_JuliaD d, K_FbmParams turb, 
     if (want == 0u) return res;
     uint m = n;
     for (uint j = 0u; j < K_JULIA_EXTRA_ITER; j++) {
-        if (o.zr * o.zr + o.zi * o.zi > 4294967296.0) break;
-        o = k_julia_step_d(o, d, want);
+        K_PRECISE double r2j = o.zr * o.zr + o.zi * o.zi;
+        if (r2j > 4294967296.0) break;
+        o = k_julia_step_d(o, r2j, d, want);
         m++;
     }
     float r2 = K_F(o.zr * o.zr + o.zi * o.zi);
     float lnr = 0.5f * k_log2_poly(r2) * 0.69314718f;
     if ((want & K_JULIA_WANT_SMOOTH) != 0u) res.nsmooth = K_F(m) + 1.0f - k_log2_poly(lnr);
     if ((want & K_JULIA_WANT_DE) != 0u) {
-        float dz = K_F(k_sqrt_d(o.dzr * o.dzr + o.dzi * o.dzi));
+        float dz = K_F(k_sqrt_d(o.dz2));
         res.de = (dz > 0.0f && dz < 3.0e38f) ? k_sqrt(r2) * lnr / dz : 0.0f;
     }
     return res;

@@ -25,8 +25,8 @@
 #include "fbm_avx2_ops.h"
 
 typedef struct v8 {
-    __m256 zr, zi, dzr, dzi;
-    __m256 ok; /* all ones: the orbit starts (not at the pole, z0 finite) */
+    __m256 zr, zi, dz2; /* z0 and |dz0/dx|^2 (kernels/julia.h, K_JuliaZ) */
+    __m256 ok;          /* all ones: the orbit starts (not at the pole, z0 finite) */
 } v8start;
 
 /* ---- turbulence: k_fbm_uv of gradient noise, tileable or not -------------------------------------- */
@@ -143,7 +143,7 @@ AVX2 static __m256 fbm8(const K_FbmParams *t, uint32_t stream, __m256 u, __m256 
 AVX2 static v8start start8_env(const fb_julia_avx2_ctx *cx, __m256 fx, __m256 fy)
 {
     const K_JuliaParams *p = cx->p;
-    float x[8], y[8], zr[8], zi[8], dzr[8], dzi[8], d[3][8], w1[8], w2[8];
+    float x[8], y[8], zr[8], zi[8], dz2[8], d[3][8], w1[8], w2[8];
     uint32_t ok[8];
     K_JuliaHom e[8];
     _mm256_storeu_ps(x, fx);
@@ -160,14 +160,13 @@ AVX2 static v8start start8_env(const fb_julia_avx2_ctx *cx, __m256 fx, __m256 fy
     for (int k = 0; k < 8; k++) {
         k_vec2 w = lanes ? k_julia_turbulence_of(*p, w1[k], w2[k]) : k_julia_turbulence3(*p, *cx->turb, e[k].dir);
         K_JuliaStart s = k_julia_env_begin(*p, e[k], w.x, w.y);
-        zr[k] = s.o.zr, zi[k] = s.o.zi, dzr[k] = s.o.dzr, dzi[k] = s.o.dzi;
+        zr[k] = s.o.zr, zi[k] = s.o.zi, dz2[k] = s.o.dz2;
         ok[k] = s.ok ? 0xffffffffu : 0u;
     }
     v8start st;
     st.zr = _mm256_loadu_ps(zr);
     st.zi = _mm256_loadu_ps(zi);
-    st.dzr = _mm256_loadu_ps(dzr);
-    st.dzi = _mm256_loadu_ps(dzi);
+    st.dz2 = _mm256_loadu_ps(dz2);
     st.ok = _mm256_castsi256_ps(_mm256_loadu_si256((const __m256i *)ok));
     return st;
 }
@@ -229,8 +228,9 @@ AVX2 static v8start start8(const fb_julia_avx2_ctx *cx, __m256 fx, __m256 fy)
     v8start st;
     st.zr = zr;
     st.zi = zi;
-    st.dzr = _mm256_sub_ps(_mm256_mul_ps(wr, dpx), _mm256_mul_ps(wi, dpy));
-    st.dzi = _mm256_add_ps(_mm256_mul_ps(wr, dpy), _mm256_mul_ps(wi, dpx));
+    __m256 dzr = _mm256_sub_ps(_mm256_mul_ps(wr, dpx), _mm256_mul_ps(wi, dpy));
+    __m256 dzi = _mm256_add_ps(_mm256_mul_ps(wr, dpy), _mm256_mul_ps(wi, dpx));
+    st.dz2 = _mm256_add_ps(_mm256_mul_ps(dzr, dzr), _mm256_mul_ps(dzi, dzi));
     __m256 r2 = _mm256_add_ps(_mm256_mul_ps(zr, zr), _mm256_mul_ps(zi, zi));
     st.ok = _mm256_and_ps(ok, _mm256_cmp_ps(r2, _mm256_set1_ps(1.0e30f), _CMP_LT_OQ));
     return st;
@@ -252,11 +252,11 @@ typedef struct v8result {
 #define AI inline __attribute__((always_inline))
 
 typedef struct orbit8 {
-    __m256 zr, zi, dzr, dzi;
-    __m256 A, B; /* lanes iterating to the bailout; escaped, on to the big radius */
+    __m256 zr, zi, dz2; /* dz2: |z'|^2 */
+    __m256 A, B;        /* lanes iterating to the bailout; escaped, on to the big radius */
     __m256 inside, escaped, thr;
     __m256i deadline, n_at, m_at;
-    __m256 r2_at, dzr_at, dzi_at; /* at the end of the orbit */
+    __m256 r2_at, dz2_at; /* at the end of the orbit */
 } orbit8;
 
 /* r2 > 2^32 is r2 >= 2^32 + 512 (the next float), NaN failing both */
@@ -267,14 +267,14 @@ typedef struct orbit8 {
 AVX2 static AI void orbit_init(orbit8 *o, const K_JuliaParams *p, const v8start *st)
 {
     const __m256 nan = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fc00000));
-    o->zr = st->zr, o->zi = st->zi, o->dzr = st->dzr, o->dzi = st->dzi;
+    o->zr = st->zr, o->zi = st->zi, o->dz2 = st->dz2;
     o->A = st->ok;
     o->B = o->inside = o->escaped = _mm256_setzero_ps();
     o->thr = _mm256_blendv_ps(nan, _mm256_set1_ps(p->bailout2), o->A);
     o->deadline =
         _mm256_blendv_epi8(_mm256_set1_epi32(-1), _mm256_set1_epi32((int)p->max_iter), _mm256_castps_si256(o->A));
     o->n_at = o->m_at = _mm256_setzero_si256();
-    o->r2_at = o->dzr_at = o->dzi_at = _mm256_setzero_ps();
+    o->r2_at = o->dz2_at = _mm256_setzero_ps();
 }
 
 /* The slow path of one block at step iv, |z|^2 = r2; hit: r2 >= thr. */
@@ -308,8 +308,7 @@ AVX2 static AI void orbit_event(orbit8 *o, __m256 r2, __m256 hit, __m256 dl, __m
             __m256i f = _mm256_castps_si256(fin);
             o->m_at = _mm256_blendv_epi8(o->m_at, iv, f);
             o->r2_at = _mm256_blendv_ps(o->r2_at, r2, fin);
-            o->dzr_at = _mm256_blendv_ps(o->dzr_at, o->dzr, fin);
-            o->dzi_at = _mm256_blendv_ps(o->dzi_at, o->dzi, fin);
+            o->dz2_at = _mm256_blendv_ps(o->dz2_at, o->dz2, fin);
             o->B = _mm256_andnot_ps(fin, o->B);
             o->thr = _mm256_blendv_ps(o->thr, nan, fin);
             o->deadline = _mm256_blendv_epi8(o->deadline, never, f);
@@ -317,16 +316,12 @@ AVX2 static AI void orbit_event(orbit8 *o, __m256 r2, __m256 hit, __m256 dl, __m
     }
 }
 
-/* k_julia_step or k_julia_step_z, on every lane (finished lanes' values are not used) */
-AVX2 static AI void orbit_step(orbit8 *o, __m256 cre, __m256 cim, const uint32_t want)
+/* k_julia_step or k_julia_step_z, on every lane (finished lanes' values are not used); r2: |z|^2 */
+AVX2 static AI void orbit_step(orbit8 *o, __m256 r2, __m256 cre, __m256 cim, const uint32_t want)
 {
     const __m256 two = _mm256_set1_ps(2.0f);
     __m256 zr = o->zr, zi = o->zi;
-    if (want & K_JULIA_WANT_DE) {
-        __m256 tr = _mm256_mul_ps(two, _mm256_sub_ps(_mm256_mul_ps(zr, o->dzr), _mm256_mul_ps(zi, o->dzi)));
-        __m256 ti = _mm256_mul_ps(two, _mm256_add_ps(_mm256_mul_ps(zr, o->dzi), _mm256_mul_ps(zi, o->dzr)));
-        o->dzr = tr, o->dzi = ti;
-    }
+    if (want & K_JULIA_WANT_DE) o->dz2 = _mm256_mul_ps(o->dz2, _mm256_mul_ps(_mm256_set1_ps(4.0f), r2));
     o->zr = _mm256_add_ps(_mm256_sub_ps(_mm256_mul_ps(zr, zr), _mm256_mul_ps(zi, zi)), cre);
     o->zi = _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(two, zr), zi), cim);
 }
@@ -428,8 +423,7 @@ AVX2 static AI void orbit_end(const orbit8 *o, const K_JuliaParams *p, const uin
             ns = _mm256_blendv_ps(ns, s, o->escaped);
         }
         if (want & K_JULIA_WANT_DE) {
-            __m256 dz =
-                _mm256_sqrt_ps(_mm256_add_ps(_mm256_mul_ps(o->dzr_at, o->dzr_at), _mm256_mul_ps(o->dzi_at, o->dzi_at)));
+            __m256 dz = _mm256_sqrt_ps(o->dz2_at);
             __m256 good = _mm256_and_ps(_mm256_cmp_ps(dz, zero, _CMP_GT_OQ),
                                         _mm256_cmp_ps(dz, _mm256_set1_ps(3.0e38f), _CMP_LT_OQ));
             __m256 d = _mm256_div_ps(_mm256_mul_ps(_mm256_sqrt_ps(o->r2_at), lnr), dz);
@@ -475,8 +469,8 @@ AVX2 static AI void run_t(const K_JuliaParams *p, const v8start *st, const int n
                 __m256 live = nb == 2 ? _mm256_or_ps(live8(&o0), live8(&o1)) : live8(&o0);
                 if (_mm256_movemask_ps(live) == 0) break;
             }
-            orbit_step(&o0, cre, cim, want);
-            if (nb == 2) orbit_step(&o1, cre, cim, want);
+            orbit_step(&o0, r2a, cre, cim, want);
+            if (nb == 2) orbit_step(&o1, r2b, cre, cim, want);
             iv = _mm256_add_epi32(iv, one);
         }
     orbit_end(&o0, p, want, &out[0]);
