@@ -13,6 +13,8 @@
  * --spv NAME=FILE adds FILE (SPIR-V with the layer's interface, say the shader of an earlier build:
  * `glslangValidator -V --target-env vulkan1.1 -o old.spv shaders/fbm.comp`) as a variant of the
  * layer whose file name says which (fbm or julia in the name), so that before and after run side by side.
+ * It reads the layer's input (julia: the palette) as a storage buffer, as shaders before 2026-12-03
+ * did; --spv-ubo NAME=FILE for SPIR-V that reads it as a uniform buffer, as julia_body.glsl now does.
  *
  *     cmake --build build --target lavapipe_peers && build/lavapipe_peers [--size N] [--reps N]
  *         [--rows N] [--only fbm|julia] [--spv NAME=FILE ...]
@@ -36,6 +38,7 @@ typedef struct variant {
     const char *channels; /* the julia layer's channels (JSON), or NULL: the scene's default */
     uint32_t *spv;        /* NULL: the layer's own shader */
     size_t spv_size;
+    bool spv_ubo; /* the SPIR-V reads the layer's input as a uniform buffer (--spv-ubo) */
     fb_gen g;
     fb_scene s;
     vkc_pipeline *pipe;
@@ -52,6 +55,7 @@ typedef struct options {
     int nspv;
     char *spv_name[MAX_VARIANTS];
     char *spv_file[MAX_VARIANTS];
+    bool spv_ubo[MAX_VARIANTS];
     int nchannels;
     const char *channels[MAX_VARIANTS]; /* --channels: more julia variants, the layer storing these */
     bool validation;
@@ -127,6 +131,8 @@ static fb_result variant_init(vkc_context *vk, variant *v, const char *kind, con
                            .spv_size = v->spv ? v->spv_size : v->g.spv_size,
                            .push_size = v->g.push_size,
                            .buffers = (uint32_t)np + (v->g.input ? 1u : 0u),
+                           /* an earlier build's SPIR-V reads its input as a storage buffer unless --spv-ubo */
+                           .uniform = v->g.input && (v->spv ? v->spv_ubo : v->g.input_uniform) ? 1u << np : 0u,
                            .spec = v->g.spec,
                            .nspec = v->g.nspec,
                            .name = v->name};
@@ -233,11 +239,13 @@ static int make_variants(const char *kind, const options *o, variant *vs)
         char name[64];
         snprintf(name, sizeof name, "%s%s", o->spv_name[i], fbm ? "" : ", all seven channels");
         n = add_variant(vs, n, name, fbm ? NULL : all, w, size);
+        vs[n - 1].spv_ubo = o->spv_ubo[i];
         if (!fbm) {
             uint32_t *w2 = malloc(size);
             memcpy(w2, w, size);
             snprintf(name, sizeof name, "%s, iter only", o->spv_name[i]);
             n = add_variant(vs, n, name, "[\"iter\"]", w2, size);
+            vs[n - 1].spv_ubo = o->spv_ubo[i];
         }
     }
     return n;
@@ -290,7 +298,8 @@ static fb_result run_case(vkc_context *vk, const char *kind, const options *o)
 static int usage(const char *why)
 {
     fprintf(stderr, "lavapipe_peers: %s\n", why);
-    fprintf(stderr, "usage: lavapipe_peers [--size N] [--reps N] [--rows N] [--only fbm|julia] [--spv NAME=FILE ...]\n"
+    fprintf(stderr, "usage: lavapipe_peers [--size N] [--reps N] [--rows N] [--only fbm|julia] [--spv NAME=FILE ...] "
+                    "[--spv-ubo NAME=FILE ...]\n"
                     "       [--channels JSON-LIST ...]\n");
     return 2;
 }
@@ -310,7 +319,8 @@ static int parse(int argc, char **argv, options *o)
             o->rows = atoi(v);
         else if (!strcmp(a, "--only"))
             o->only = v;
-        else if (!strcmp(a, "--spv") && strchr(v, '=') && o->nspv < MAX_VARIANTS) {
+        else if ((!strcmp(a, "--spv") || !strcmp(a, "--spv-ubo")) && strchr(v, '=') && o->nspv < MAX_VARIANTS) {
+            o->spv_ubo[o->nspv] = !strcmp(a, "--spv-ubo");
             o->spv_name[o->nspv] = strndup(v, (size_t)(strchr(v, '=') - v));
             o->spv_file[o->nspv++] = strchr(v, '=') + 1;
         } else if (!strcmp(a, "--channels") && o->nchannels < MAX_VARIANTS)

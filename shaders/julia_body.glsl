@@ -36,11 +36,14 @@ layout(std430, set = 0, binding = 3) writeonly buffer De { float v[]; } o_de;
 layout(std430, set = 0, binding = 4) writeonly buffer Red { float v[]; } o_r;
 layout(std430, set = 0, binding = 5) writeonly buffer Green { float v[]; } o_g;
 layout(std430, set = 0, binding = 6) writeonly buffer Blue { float v[]; } o_b;
-layout(std430, set = 0, binding = 7) readonly buffer Palette
+// A uniform buffer: lavapipe gathers the palette entries that each lane indexes, where from a storage
+// buffer it loads them lane by lane and component by component behind two branches each. std140
+// gives the host's std430 offsets here: turb's 84 bytes round up to 96, so the entries still start
+// at 144 (host/gen/julia/layer.c, julia_palette, without its pad).
+layout(std140, set = 0, binding = 7) uniform Palette
 {
     K_SkyColour colour;
     K_FbmParams turb;
-    float pad0, pad1, pad2;
     vec4 entries[K_PALETTE_SIZE];
 #ifdef K_JULIA_F64
     K_JuliaD dp; // the double parameters and constants

@@ -79,6 +79,7 @@ static fb_result run_init(fb_engine *e, layer_run *lr, int strip_rows)
                                                       .spv_size = lr->gen.spv_size,
                                                       .push_size = lr->gen.push_size,
                                                       .buffers = (uint32_t)np + (lr->gen.input ? 1u : 0u),
+                                                      .uniform = lr->gen.input && lr->gen.input_uniform ? 1u << np : 0u,
                                                       .spec = lr->gen.spec,
                                                       .nspec = lr->gen.nspec,
                                                       .name = lr->gen.layer->name},

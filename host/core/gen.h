@@ -50,7 +50,8 @@ struct fb_gen {
     const void *input; /* read-only data for the kernel (bound after the kernel's planes: binding
                           fb_gen_nplanes(g)), or NULL */
     uint32_t input_size;
-    uint32_t spec[8]; /* specialization constants 0..nspec-1 */
+    bool input_uniform; /* the shader reads input as a uniform buffer (std140), not a storage buffer */
+    uint32_t spec[8];   /* specialization constants 0..nspec-1 */
     uint32_t nspec;
 
     /* Layers that are not a function of the pixel (the chaos game) compute everything here, once, on

@@ -67,7 +67,10 @@ typedef struct vkc_pipeline_desc {
     const uint32_t *spv;  /* SPIR-V words, embedded at build time */
     size_t spv_size;      /* bytes */
     uint32_t push_size;   /* bytes of push constants (<= 128) */
-    uint32_t buffers;     /* storage buffers at set 0, bindings 0..buffers-1 */
+    uint32_t buffers;     /* buffers at set 0, bindings 0..buffers-1: storage buffers, except... */
+    uint32_t uniform;     /* ... bit i set: binding i is a uniform buffer (read-only data that lanes
+                             index; lavapipe gathers those where it loads a storage buffer lane by
+                             lane); its size at most maxUniformBufferRange (16 KiB guaranteed) */
     const uint32_t *spec; /* specialization constants: constant_id i takes spec[i] (32-bit each) */
     uint32_t nspec;
     const char *name; /* for messages */

@@ -193,6 +193,9 @@ _Static_assert(sizeof(K_SkyColour) == 48 && offsetof(julia_palette, turb) == 48,
 _Static_assert(sizeof(K_FbmParams) == 84 && offsetof(julia_palette, entries) == 144, "std430: vec4 array at 144");
 _Static_assert(FB_PALETTE_ENTRIES == K_PALETTE_SIZE, "palette size");
 _Static_assert(offsetof(julia_palette, dp) == 144 + 16 * K_PALETTE_SIZE && sizeof(K_JuliaD) == 29 * 8, "std430");
+/* a uniform buffer (julia_body.glsl): std140 gives the same offsets (turb rounds up to 96 bytes, the
+ * entries at 144 without the pad), within the 16 KiB every Vulkan device binds */
+_Static_assert(48 + 96 == 144 && sizeof(julia_palette) <= 16384, "std140 uniform buffer");
 
 static const K_JuliaParams *params(const fb_gen *g)
 {
@@ -353,6 +356,7 @@ static fb_result julia_init(fb_gen *g)
     g->owned = pal;
     g->input = pal;
     g->input_size = sizeof *pal;
+    g->input_uniform = true; /* julia_body.glsl: the palette's lanes gather from a uniform buffer */
 
     static const char *const suffix[NPLANES] = {"iter", "n", "inside", "de", "R", "G", "B"};
     exrio_type colour = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
