@@ -20,6 +20,11 @@ layout(constant_id = 3) const uint COLOUR_FLAGS = 3u;
 // bit k: the layer stores channel k of iter, n, inside, de, R, G, B. What no stored channel needs
 // is not computed; a buffer not stored is bound but never written.
 layout(constant_id = 4) const uint OUTPUTS = 127u;
+// 1: the image width is even, so every invocation's two pixels are a whole, aligned vec2 of each
+// plane (i = row * width + x is even) and go out in one store: llvmpipe stores to a storage buffer
+// lane by lane, each lane behind an exec-mask branch, so a pair's store is one lane loop where two
+// stores were two (the same bits either way). 0: each pixel on its own.
+layout(constant_id = 5) const uint EVEN_WIDTH = 0u;
 
 layout(push_constant) uniform Push
 {
@@ -29,13 +34,14 @@ layout(push_constant) uniform Push
 }
 pc;
 
-layout(std430, set = 0, binding = 0) writeonly buffer Iter { uint v[]; } o_iter;
-layout(std430, set = 0, binding = 1) writeonly buffer Smooth { float v[]; } o_n;
-layout(std430, set = 0, binding = 2) writeonly buffer Inside { float v[]; } o_inside;
-layout(std430, set = 0, binding = 3) writeonly buffer De { float v[]; } o_de;
-layout(std430, set = 0, binding = 4) writeonly buffer Red { float v[]; } o_r;
-layout(std430, set = 0, binding = 5) writeonly buffer Green { float v[]; } o_g;
-layout(std430, set = 0, binding = 6) writeonly buffer Blue { float v[]; } o_b;
+// Each plane as pairs: pixel i is v[i / 2][i % 2], the same bytes as a plain array of 32-bit values.
+layout(std430, set = 0, binding = 0) writeonly buffer Iter { uvec2 v[]; } o_iter;
+layout(std430, set = 0, binding = 1) writeonly buffer Smooth { vec2 v[]; } o_n;
+layout(std430, set = 0, binding = 2) writeonly buffer Inside { vec2 v[]; } o_inside;
+layout(std430, set = 0, binding = 3) writeonly buffer De { vec2 v[]; } o_de;
+layout(std430, set = 0, binding = 4) writeonly buffer Red { vec2 v[]; } o_r;
+layout(std430, set = 0, binding = 5) writeonly buffer Green { vec2 v[]; } o_g;
+layout(std430, set = 0, binding = 6) writeonly buffer Blue { vec2 v[]; } o_b;
 // A uniform buffer: lavapipe gathers the palette entries that each lane indexes, where from a storage
 // buffer it loads them lane by lane and component by component behind two branches each. std140
 // gives the host's std430 offsets here: turb's 84 bytes round up to 96, so the entries still start
@@ -61,20 +67,48 @@ vec3 sky_colour(K_JuliaResult res)
     return k_sky_rgb(c, res.inside, res.nsmooth, pal.entries[i0], pal.entries[k_sky_i1(i0)]);
 }
 
+// Pixel i alone.
 void store(uint i, K_JuliaResult res)
 {
-    if ((OUTPUTS & 1u) != 0u) o_iter.v[i] = res.iter;
-    if ((OUTPUTS & 2u) != 0u) o_n.v[i] = res.nsmooth;
-    if ((OUTPUTS & 4u) != 0u) o_inside.v[i] = float(res.inside);
-    if ((OUTPUTS & 8u) != 0u) o_de.v[i] = res.de;
+    uint h = i >> 1u, c = i & 1u;
+    if ((OUTPUTS & 1u) != 0u) o_iter.v[h][c] = res.iter;
+    if ((OUTPUTS & 2u) != 0u) o_n.v[h][c] = res.nsmooth;
+    if ((OUTPUTS & 4u) != 0u) o_inside.v[h][c] = float(res.inside);
+    if ((OUTPUTS & 8u) != 0u) o_de.v[h][c] = res.de;
+}
+
+// Pixels i and i + 1, i even (EVEN_WIDTH).
+void store2(uint i, K_JuliaResult a, K_JuliaResult b)
+{
+    uint h = i >> 1u;
+    if ((OUTPUTS & 1u) != 0u) o_iter.v[h] = uvec2(a.iter, b.iter);
+    if ((OUTPUTS & 2u) != 0u) o_n.v[h] = vec2(a.nsmooth, b.nsmooth);
+    if ((OUTPUTS & 4u) != 0u) o_inside.v[h] = vec2(float(a.inside), float(b.inside));
+    if ((OUTPUTS & 8u) != 0u) o_de.v[h] = vec2(a.de, b.de);
+}
+
+vec3 mean_colour(vec3 sum)
+{
+    float s = pal.colour.inv_samples;
+    return SAMPLES == 1u ? sum : vec3(sum.r * s, sum.g * s, sum.b * s);
 }
 
 void store_colour(uint i, vec3 sum)
 {
-    float s = pal.colour.inv_samples;
-    o_r.v[i] = SAMPLES == 1u ? sum.r : sum.r * s;
-    o_g.v[i] = SAMPLES == 1u ? sum.g : sum.g * s;
-    o_b.v[i] = SAMPLES == 1u ? sum.b : sum.b * s;
+    uint h = i >> 1u, c = i & 1u;
+    vec3 m = mean_colour(sum);
+    o_r.v[h][c] = m.r;
+    o_g.v[h][c] = m.g;
+    o_b.v[h][c] = m.b;
+}
+
+void store_colour2(uint i, vec3 sa, vec3 sb)
+{
+    uint h = i >> 1u;
+    vec3 a = mean_colour(sa), b = mean_colour(sb);
+    o_r.v[h] = vec2(a.r, b.r);
+    o_g.v[h] = vec2(a.g, b.g);
+    o_b.v[h] = vec2(a.b, b.b);
 }
 
 void main()
@@ -98,8 +132,12 @@ void main()
     K_JuliaPair res = k_julia_sample2(p, pal.turb, pal.colour.seed, x, y, 0u, has_b, want);
 #endif
     uint i = r * p.width + x;
-    store(i, res.a);
-    if (has_b) store(i + 1u, res.b);
+    if (EVEN_WIDTH != 0u) {
+        store2(i, res.a, res.b);
+    } else {
+        store(i, res.a);
+        if (has_b) store(i + 1u, res.b);
+    }
     if ((OUTPUTS & 0x70u) == 0u) return;
     // Colour: the average of `samples` jittered samples in linear colour (sample 0 is the centre).
     vec3 sa = sky_colour(res.a), sb = sky_colour(res.b);
@@ -119,6 +157,10 @@ void main()
         sa += sky_colour(q.a);
         sb += sky_colour(q.b);
     }
-    store_colour(i, sa);
-    if (has_b) store_colour(i + 1u, sb);
+    if (EVEN_WIDTH != 0u) {
+        store_colour2(i, sa, sb);
+    } else {
+        store_colour(i, sa);
+        if (has_b) store_colour(i + 1u, sb);
+    }
 }

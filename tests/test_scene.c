@@ -158,8 +158,9 @@ static void test_julia_keys(void)
     /* the gradient's last stop is the table's last entry */
     const float *last = (const float *)((const char *)g.input + 144) + 4 * (K_PALETTE_SIZE - 1);
     CHECK(last[0] == 1.0f && last[1] == 0.5f && last[2] == 0.25f);
-    CHECK(g.nspec == 5 && g.spec[0] == K_JULIA_POLAR && g.spec[1] == 1 && g.spec[2] == 6 && g.spec[3] == 3);
+    CHECK(g.nspec == 6 && g.spec[0] == K_JULIA_POLAR && g.spec[1] == 1 && g.spec[2] == 6 && g.spec[3] == 3);
     CHECK(g.spec[4] == 127 && g.nkernel == 7 && g.per_invocation == 2); /* every channel by default */
+    CHECK(g.spec[5] == 1); /* width 300: even, each invocation's pair stored as one vec2 */
     CHECK(g.nchannels == 7 && !strcmp(g.channel_names[0], "night.iter") && g.channel_types[0] == EXRIO_UINT);
     CHECK(!strcmp(g.channel_names[4], "night.R") && g.channel_types[4] == EXRIO_FLOAT); /* half: false */
     fb_gen_fini(&g);

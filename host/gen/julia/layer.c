@@ -392,7 +392,8 @@ static fb_result julia_init(fb_gen *g)
     g->spec[2] = (uint32_t)j->samples;
     g->spec[3] = (pal->colour.gamma != 1.0f ? 1u : 0u) | (pal->colour.density > 0.0f ? 2u : 0u);
     g->spec[4] = stored;
-    g->nspec = 5;
+    g->spec[5] = p->width % 2u == 0u; /* each invocation's pair stored as one vec2 (julia_body.glsl) */
+    g->nspec = 6;
     g->per_invocation = 2;
     /* The AVX2 path (float grids on a CPU with AVX2) beats lavapipe's shader at every size, with or
      * without turbulence. The scalar loop (double precision, no AVX2): the shader beats it by 1.27x
