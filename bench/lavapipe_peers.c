@@ -4,9 +4,7 @@
  *   fbm:   the layer's shaders/fbm.comp against bench/peers/fbm_peer.comp, a minimal GLSL of the same
  *          formula (rotation, offsets and hashes), 8 octaves of gradient noise;
  *   julia: the layer's shaders/julia.comp with every channel against the same shader storing `iter`
- *          only (the escape loop alone), c = -0.8+0.156i, max-iter 256; and every channel one
- *          buffer a plane where the layer packs them into one (fb_gen.gpu_packed: the host's
- *          unpacking is in the packed variants' times).
+ *          only (the escape loop alone), c = -0.8+0.156i, max-iter 256.
  * Each variant's rate is given in wall-clock time and in process CPU time (lavapipe's threads
  * included: what other processes on a shared machine move least), the median of --reps passes, and
  * its outputs are hashed: a variant is listed with "same bits" only where every stored plane is
@@ -40,17 +38,15 @@ typedef struct variant {
     const char *channels; /* the julia layer's channels (JSON), or NULL: the scene's default */
     uint32_t *spv;        /* NULL: the layer's own shader */
     size_t spv_size;
-    bool spv_ubo;                    /* the SPIR-V reads the layer's input as a uniform buffer (--spv-ubo) */
-    bool planes;                     /* julia: one buffer a plane even where the layer packs them (fb_gen.gpu_packed) */
-    void *host[FB_GEN_MAX_CHANNELS]; /* packed: the stored planes the host unpacks a strip into */
+    bool spv_ubo; /* the SPIR-V reads the layer's input as a uniform buffer (--spv-ubo) */
     fb_gen g;
     fb_scene s;
     vkc_pipeline *pipe;
     vkc_job *job;
     vkc_buffer *buf[FB_GEN_MAX_CHANNELS + 1];
-    double wall[MAX_REPS], cpu[MAX_REPS], gpu[MAX_REPS], unpack[MAX_REPS]; /* unpack: its CPU time */
-    uint64_t hash[FB_GEN_MAX_CHANNELS];                                    /* of each stored plane, the whole image */
-    uint64_t iter_sum; /* julia: the sum of `iter` (iterations to the bailout) */
+    double wall[MAX_REPS], cpu[MAX_REPS], gpu[MAX_REPS];
+    uint64_t hash[FB_GEN_MAX_CHANNELS]; /* of each stored plane, the whole image */
+    uint64_t iter_sum;                  /* julia: the sum of `iter` (iterations to the bailout) */
 } variant;
 
 typedef struct options {
@@ -131,9 +127,6 @@ static fb_result variant_init(vkc_context *vk, variant *v, const char *kind, con
     if (!rc) rc = fb_gen_init(&v->g, &v->s, &v->s.layers[0]);
     if (rc) return rc;
     int np = fb_gen_nplanes(&v->g);
-    /* an earlier build's SPIR-V, or --planes: the shader's stores one plane a buffer */
-    if (v->spv || v->planes) v->g.gpu_packed = 0, v->g.spec[6] = 0;
-    size_t bytes = (size_t)o->size * (size_t)o->rows * 4;
     vkc_pipeline_desc d = {.spv = v->spv ? v->spv : v->g.spv,
                            .spv_size = v->spv ? v->spv_size : v->g.spv_size,
                            .push_size = v->g.push_size,
@@ -146,10 +139,7 @@ static fb_result variant_init(vkc_context *vk, variant *v, const char *kind, con
     rc = vkc_pipeline_create(vk, &d, &v->pipe);
     if (!rc) rc = vkc_job_create(vk, v->pipe, &v->job);
     for (int k = 0; k < np && !rc; k++)
-        rc = vkc_buffer_create(vk, v->g.gpu_packed ? (k == 0 ? bytes * (size_t)v->g.gpu_packed : 16) : bytes,
-                               &v->buf[k]);
-    for (int k = 0; k < np && !rc && v->g.gpu_packed; k++)
-        if (fb_gen_plane_stored(&v->g, k) && !(v->host[k] = malloc(bytes))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        rc = vkc_buffer_create(vk, (uint64_t)o->size * (uint64_t)o->rows * 4, &v->buf[k]);
     if (!rc && v->g.input) rc = vkc_buffer_create(vk, v->g.input_size, &v->buf[np]);
     if (!rc && v->g.input) rc = vkc_buffer_upload(vk, v->buf[np], v->g.input, v->g.input_size);
     return rc;
@@ -158,7 +148,6 @@ static fb_result variant_init(vkc_context *vk, variant *v, const char *kind, con
 static void variant_fini(vkc_context *vk, variant *v)
 {
     for (int k = 0; k <= FB_GEN_MAX_CHANNELS; k++) vkc_buffer_destroy(vk, &v->buf[k]);
-    for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(v->host[k]);
     vkc_job_destroy(vk, &v->job);
     vkc_pipeline_destroy(vk, &v->pipe);
     fb_gen_fini(&v->g);
@@ -166,13 +155,12 @@ static void variant_fini(vkc_context *vk, variant *v)
     free(v->spv);
 }
 
-/* One pass over the image in strips of o->rows: the clocks run only around submit and wait, and a
- * packed layer's unpacking into its planes (the bake's work too); the strips' stored planes are
- * hashed between them. */
+/* One pass over the image in strips of o->rows: the clocks run only around submit and wait; the
+ * strips' stored planes are hashed between them. */
 static fb_result variant_pass(vkc_context *vk, variant *v, const options *o, int rep)
 {
     int np = fb_gen_nplanes(&v->g), h = v->s.height;
-    double wall = 0, cpu = 0, gpu = 0, unpack = 0;
+    double wall = 0, cpu = 0, gpu = 0;
     for (int k = 0; k < np; k++) v->hash[k] = 0xcbf29ce484222325ull;
     v->iter_sum = 0;
     for (int y0 = 0; y0 < h; y0 += o->rows) {
@@ -185,17 +173,13 @@ static fb_result variant_pass(vkc_context *vk, variant *v, const options *o, int
         fb_result rc = vkc_job_submit(vk, v->job, v->buf, (uint32_t)np + (v->g.input ? 1u : 0u), push, groups);
         if (!rc) rc = vkc_job_wait(vk, v->job, &g);
         if (rc) return rc;
-        double u0 = process_cpu();
-        if (v->g.gpu_packed)
-            v->g.gpu_unpack(&v->g, (size_t)v->s.width * (size_t)n, vkc_buffer_data(v->buf[0]), v->host);
-        unpack += process_cpu() - u0;
         wall += fb_now() - t0;
         cpu += process_cpu() - c0;
         gpu += g;
         size_t bytes = (size_t)v->s.width * (size_t)n * 4;
         for (int k = 0; k < np; k++) {
             if (!fb_gen_plane_stored(&v->g, k)) continue;
-            const uint8_t *d = v->g.gpu_packed ? v->host[k] : vkc_buffer_data(v->buf[k]);
+            const uint8_t *d = vkc_buffer_data(v->buf[k]);
             v->hash[k] = fnv(v->hash[k], d, bytes);
             if (k == 0 && !strcmp(v->g.layer->cls->name, "julia"))
                 for (size_t i = 0; i < bytes / 4; i++) v->iter_sum += ((const uint32_t *)(const void *)d)[i];
@@ -204,7 +188,6 @@ static fb_result variant_pass(vkc_context *vk, variant *v, const options *o, int
     v->wall[rep] = wall;
     v->cpu[rep] = cpu;
     v->gpu[rep] = gpu;
-    v->unpack[rep] = unpack;
     return FB_OK;
 }
 
@@ -242,8 +225,6 @@ static int make_variants(const char *kind, const options *o, variant *vs)
     } else {
         n = add_variant(vs, n, "layer storing iter only", "[\"iter\"]", NULL, 0);
         n = add_variant(vs, n, "layer, all seven channels", all, NULL, 0);
-        n = add_variant(vs, n, "layer, seven channels, a buffer a plane", all, NULL, 0);
-        vs[n - 1].planes = true;
         for (int i = 0; i < o->nchannels && n < MAX_VARIANTS - 1; i++)
             n = add_variant(vs, n, o->channels[i], o->channels[i], NULL, 0);
     }
@@ -297,11 +278,6 @@ static void report(const char *kind, const options *o, variant *vs, int n)
                                          : "DIFFERENT BITS");
     }
     printf("  (CPU ratio: CPU-time rate over the first row's; every process CPU second lavapipe's threads spend)\n");
-    for (int k = 0; k < n; k++)
-        if (vs[k].g.gpu_packed)
-            printf("  %s: the host's unpacking of the interleaved strips %.2f ns a pixel, %.1f%% of its CPU time\n",
-                   vs[k].name, 1e9 * median(vs[k].unpack, o->reps) / pix,
-                   100 * median(vs[k].unpack, o->reps) / median(vs[k].cpu, o->reps));
 }
 
 static fb_result run_case(vkc_context *vk, const char *kind, const options *o)

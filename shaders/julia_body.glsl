@@ -25,13 +25,6 @@ layout(constant_id = 4) const uint OUTPUTS = 127u;
 // lane by lane, each lane behind an exec-mask branch, so a pair's store is one lane loop where two
 // stores were two (the same bits either way). 0: each pixel on its own.
 layout(constant_id = 5) const uint EVEN_WIDTH = 0u;
-// 0: each stored channel to its own plane (buffers 0..6). 6 (EVEN_WIDTH, every channel stored): the
-// pair of pixels i and i + 1 (i even) in buffer 0 as 12 words from 6 i on, the pair's values of a
-// channel side by side: iter (inside in its top bit: iter <= max-iter < 2^31), n, de, R, G, B; the
-// host splits them into the planes (host/gen/julia/layer.c, julia_unpack). The pair is then 3 uvec4
-// stores, 12 values, where it was 7 vec2 stores, 14: llvmpipe stores lane by lane, a loop a store
-// and a bounds branch a value.
-layout(constant_id = 6) const uint PACKED = 0u;
 
 layout(push_constant) uniform Push
 {
@@ -49,8 +42,6 @@ layout(std430, set = 0, binding = 3) writeonly buffer De { vec2 v[]; } o_de;
 layout(std430, set = 0, binding = 4) writeonly buffer Red { vec2 v[]; } o_r;
 layout(std430, set = 0, binding = 5) writeonly buffer Green { vec2 v[]; } o_g;
 layout(std430, set = 0, binding = 6) writeonly buffer Blue { vec2 v[]; } o_b;
-// PACKED: buffer 0 again, as the interleaved words (the same bits: floats by floatBitsToUint).
-layout(std430, set = 0, binding = 0) writeonly buffer Packed { uvec4 v[]; } o_packed;
 // A uniform buffer: lavapipe gathers the palette entries that each lane indexes, where from a storage
 // buffer it loads them lane by lane and component by component behind two branches each. std140
 // gives the host's std430 offsets here: turb's 84 bytes round up to 96, so the entries still start
@@ -120,17 +111,6 @@ void store_colour2(uint i, vec3 sa, vec3 sb)
     o_b.v[h] = vec2(a.b, b.b);
 }
 
-// PACKED: pixels i and i + 1, i even: words 6 i to 6 i + 11.
-void store_packed(uint i, K_JuliaResult a, K_JuliaResult b, vec3 sa, vec3 sb)
-{
-    uint at = 3u * (i >> 1u); // in uvec4s
-    vec3 ma = mean_colour(sa), mb = mean_colour(sb);
-    uint ia = a.iter | (a.inside << 31u), ib = b.iter | (b.inside << 31u);
-    o_packed.v[at] = uvec4(ia, ib, floatBitsToUint(a.nsmooth), floatBitsToUint(b.nsmooth));
-    o_packed.v[at + 1u] = uvec4(floatBitsToUint(a.de), floatBitsToUint(b.de), floatBitsToUint(ma.r), floatBitsToUint(mb.r));
-    o_packed.v[at + 2u] = uvec4(floatBitsToUint(ma.g), floatBitsToUint(mb.g), floatBitsToUint(ma.b), floatBitsToUint(mb.b));
-}
-
 void main()
 {
     uint x = 2u * gl_GlobalInvocationID.x;
@@ -152,9 +132,9 @@ void main()
     K_JuliaPair res = k_julia_sample2(p, pal.turb, pal.colour.seed, x, y, 0u, has_b, want);
 #endif
     uint i = r * p.width + x;
-    if (PACKED == 0u && EVEN_WIDTH != 0u) {
+    if (EVEN_WIDTH != 0u) {
         store2(i, res.a, res.b);
-    } else if (PACKED == 0u) {
+    } else {
         store(i, res.a);
         if (has_b) store(i + 1u, res.b);
     }
@@ -177,9 +157,7 @@ void main()
         sa += sky_colour(q.a);
         sb += sky_colour(q.b);
     }
-    if (PACKED != 0u) {
-        store_packed(i, res.a, res.b, sa, sb);
-    } else if (EVEN_WIDTH != 0u) {
+    if (EVEN_WIDTH != 0u) {
         store_colour2(i, sa, sb);
     } else {
         store_colour(i, sa);

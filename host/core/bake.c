@@ -84,20 +84,11 @@ static fb_result run_init(fb_engine *e, layer_run *lr, int strip_rows)
                                                       .nspec = lr->gen.nspec,
                                                       .name = lr->gen.layer->name},
                                  &lr->pipe);
-        const int packed = lr->gen.gpu_packed;
         for (int k = 0; k < SLOTS && !rc; k++) {
             rc = vkc_job_create(e->vk, lr->pipe, &lr->job[k]);
-            /* a plane the layer does not store is never written: a token buffer binds it; packed, buffer
-             * 0 holds every plane and the host unpacks them into its own strips */
+            /* a plane the layer does not store is never written: a token buffer binds it */
             for (int c = 0; c < np && !rc; c++)
-                rc = vkc_buffer_create(e->vk,
-                                       packed                             ? (c == 0 ? bytes * (size_t)packed : 16)
-                                       : fb_gen_plane_stored(&lr->gen, c) ? bytes
-                                                                          : 16,
-                                       &lr->buf[k][c]);
-            for (int c = 0; c < np && !rc && packed; c++)
-                if (fb_gen_plane_stored(&lr->gen, c) && !(lr->planes[k][c] = malloc(bytes)))
-                    rc = fb_fail(FB_ERR_NOMEM, "out of memory for a strip of rows");
+                rc = vkc_buffer_create(e->vk, fb_gen_plane_stored(&lr->gen, c) ? bytes : 16, &lr->buf[k][c]);
         }
         if (!rc && lr->gen.input) {
             int at = np;
@@ -143,19 +134,13 @@ static fb_result run_submit(fb_engine *e, layer_run *lr, int slot, int y0, int n
 
 /* Makes the strip [y0, y0+n) available in planes[]: waits for the GPU job, or points at the strip
  * the pool computed (strip_start, then fb_pool_wait). */
-static fb_result run_collect(fb_engine *e, layer_run *lr, int slot, int n, const void **planes, double *gpu_seconds)
+static fb_result run_collect(fb_engine *e, layer_run *lr, int slot, const void **planes, double *gpu_seconds)
 {
     if (run_on_gpu(e, lr)) {
         double t = -1;
         fb_result rc = vkc_job_wait(e->vk, lr->job[slot], &t);
         if (rc) return rc;
         if (t > 0) *gpu_seconds += t;
-        if (lr->gen.gpu_packed) { /* pixel-interleaved in buffer 0: into the host's planes */
-            lr->gen.gpu_unpack(&lr->gen, (size_t)n * (size_t)lr->gen.scene->width, vkc_buffer_data(lr->buf[slot][0]),
-                               lr->planes[slot]);
-            for (int c = 0; c < lr->gen.nchannels; c++) planes[c] = lr->planes[slot][fb_gen_plane_of(&lr->gen, c)];
-            return FB_OK;
-        }
         for (int c = 0; c < lr->gen.nchannels; c++)
             planes[c] = vkc_buffer_data(lr->buf[slot][fb_gen_plane_of(&lr->gen, c)]);
         return FB_OK;
@@ -426,7 +411,6 @@ static fb_result plan_memory(const fb_engine *e, const fb_bake_desc *d, const la
         bool gpu = run_on_gpu(&runs[i].e, &runs[i]);
         uint64_t planes = 0;
         for (int c = 0; c < fb_gen_nplanes(g); c++) planes += fb_gen_plane_stored(g, c);
-        if (gpu && g->gpu_packed) planes += (uint64_t)g->gpu_packed; /* the device's interleaved strip too */
         uint64_t strips = (g->host_op ? 1 : SLOTS) * planes * (uint64_t)s->width * (uint64_t)strip * 4 +
                           (gpu && g->input ? g->input_size : 0);
         hold_sum += hold;
@@ -772,7 +756,7 @@ static fb_result run_strips(fb_engine *e, const fb_bake_desc *d, layer_run *runs
         int at = 0;
         for (int i = 0; i < s->nlayers && !rc; i++) {
             fb_log_context("layer %s, rows %d-%d", s->layers[i].name, y0, y0 + n - 1);
-            if (!runs[i].gen.host_op) rc = run_collect(&runs[i].e, &runs[i], k % SLOTS, n, planes + at, gpu);
+            if (!runs[i].gen.host_op) rc = run_collect(&runs[i].e, &runs[i], k % SLOTS, planes + at, gpu);
             if (!rc && run_on_gpu(&runs[i].e, &runs[i])) fb_progress_add(&prog, (uint64_t)n * rw);
             at += runs[i].gen.nchannels;
         }

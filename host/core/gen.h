@@ -93,12 +93,6 @@ struct fb_gen {
     uint64_t points_outside;
 
     int per_invocation; /* vulkan: pixels of a row per invocation (0: 1) */
-    /* vulkan: > 0: the shader writes every plane of pixel i pixel-interleaved into buffer 0, words
-     * gpu_packed * i + k for plane k (the other planes' buffers bound but not written), and
-     * gpu_unpack copies `count` pixels of them into the stored planes (NULL for the others) on the
-     * host. 0: one buffer a plane. */
-    int gpu_packed;
-    void (*gpu_unpack)(const fb_gen *g, size_t count, const void *packed, void *const *planes);
     bool needs_float64; /* vulkan: the shader uses doubles (the device must have shaderFloat64) */
 
     bool scalar; /* native: the portable kernel only, no hand-vectorised path (benchmark reference) */

@@ -16,9 +16,6 @@
 
 #include <math.h>
 #include <stddef.h>
-#ifdef __SSE2__
-#include <emmintrin.h>
-#endif
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -277,42 +274,6 @@ static void julia_rows(const fb_gen *g, int y0, int n, void *const *planes)
         }
 }
 
-/* The shader's PACKED strip (julia_body.glsl), every channel, `count` even: the pair of pixels 2 h
- * and 2 h + 1 is words 12 h to 12 h + 11, each channel's two values side by side: iter with inside
- * in its top bit, n, de, R, G, B. Into the seven planes, the same bits as the shader's plane stores:
- * one read of the strip, one write of each plane, two pairs a step. */
-static void julia_unpack(const fb_gen *g, size_t count, const void *packed, void *const *planes)
-{
-    (void)g;
-    const uint32_t *w = packed;
-    uint32_t *it = planes[P_ITER], *n = planes[P_N], *de = planes[P_DE], *r = planes[P_R], *gr = planes[P_G],
-             *b = planes[P_B];
-    float *in = planes[P_INSIDE];
-    size_t i = 0;
-#ifdef __SSE2__
-    const __m128i low = _mm_set1_epi32(0x7fffffff);
-    for (; i + 4 <= count; i += 4, w += 24) {
-        const __m128i *v = (const __m128i *)(const void *)w;
-        __m128i v0 = _mm_loadu_si128(v), v1 = _mm_loadu_si128(v + 1), v2 = _mm_loadu_si128(v + 2);
-        __m128i v3 = _mm_loadu_si128(v + 3), v4 = _mm_loadu_si128(v + 4), v5 = _mm_loadu_si128(v + 5);
-        __m128i iv = _mm_unpacklo_epi64(v0, v3);
-        _mm_storeu_si128((__m128i *)(void *)(it + i), _mm_and_si128(iv, low));
-        _mm_storeu_ps(in + i, _mm_cvtepi32_ps(_mm_srli_epi32(iv, 31)));
-        _mm_storeu_si128((__m128i *)(void *)(n + i), _mm_unpackhi_epi64(v0, v3));
-        _mm_storeu_si128((__m128i *)(void *)(de + i), _mm_unpacklo_epi64(v1, v4));
-        _mm_storeu_si128((__m128i *)(void *)(r + i), _mm_unpackhi_epi64(v1, v4));
-        _mm_storeu_si128((__m128i *)(void *)(gr + i), _mm_unpacklo_epi64(v2, v5));
-        _mm_storeu_si128((__m128i *)(void *)(b + i), _mm_unpackhi_epi64(v2, v5));
-    }
-#endif
-    for (; i < count; i += 2, w += 12)
-        for (int c = 0; c < 2; c++) {
-            it[i + c] = w[c] & 0x7fffffffu;
-            in[i + c] = (float)(w[c] >> 31);
-            n[i + c] = w[2 + c], de[i + c] = w[4 + c], r[i + c] = w[6 + c], gr[i + c] = w[8 + c], b[i + c] = w[10 + c];
-        }
-}
-
 static fb_result julia_init(fb_gen *g)
 {
     const fb_scene *s = g->scene;
@@ -432,12 +393,7 @@ static fb_result julia_init(fb_gen *g)
     g->spec[3] = (pal->colour.gamma != 1.0f ? 1u : 0u) | (pal->colour.density > 0.0f ? 2u : 0u);
     g->spec[4] = stored;
     g->spec[5] = p->width % 2u == 0u; /* each invocation's pair stored as one vec2 (julia_body.glsl) */
-    /* Every channel of an even width: pixel-interleaved into one buffer, 6 words a pixel, and split
-     * into the planes on the host (julia_body.glsl, PACKED; max-iter < 2^31 leaves iter's top bit) */
-    g->gpu_packed = g->spec[5] && stored == (1u << NPLANES) - 1 ? 6 : 0;
-    g->gpu_unpack = julia_unpack;
-    g->spec[6] = (uint32_t)g->gpu_packed;
-    g->nspec = 7;
+    g->nspec = 6;
     g->per_invocation = 2;
     /* The AVX2 path (float grids on a CPU with AVX2) beats lavapipe's shader at every size, with or
      * without turbulence. The scalar loop (double precision, no AVX2): the shader beats it by 1.27x
