@@ -108,7 +108,22 @@ static void test_genome(const char *what, const char *xml, int w, int h, double 
     uint32_t *count = malloc(npix * 4);
     for (int k = 0; k < 4; k++) acc[k] = malloc(npix * 4);
     REQUIRE(count && acc[0] && acc[1] && acc[2] && acc[3]);
-    CHECK(fb_flame_filter(&S, total, acc, count) == FB_OK);
+    CHECK(fb_flame_filter(&S, total, acc, count, NULL) == FB_OK);
+    /* the filter on the pool, in bands: the same bits for any thread count */
+    for (int threads = 2; threads <= 7; threads += 5) {
+        fb_pool *pool = NULL;
+        float *acc2[4];
+        uint32_t *count2 = malloc(npix * 4);
+        for (int k = 0; k < 4; k++) acc2[k] = malloc(npix * 4);
+        REQUIRE(fb_pool_create(threads, &pool) == FB_OK && count2 && acc2[0] && acc2[1] && acc2[2] && acc2[3]);
+        CHECK(fb_flame_filter(&S, total, acc2, count2, pool) == FB_OK);
+        size_t diff = memcmp(count2, count, npix * 4) != 0;
+        for (int k = 0; k < 4; k++) diff += memcmp(acc2[k], acc[k], npix * 4) != 0;
+        CHECKF(diff == 0, "%s, the filter on %d threads: %zu planes differ from one thread's", what, threads, diff);
+        for (int k = 0; k < 4; k++) free(acc2[k]);
+        free(count2);
+        fb_pool_destroy(&pool);
+    }
     uint64_t counted = 0, inside = 0;
     for (size_t p = 0; p < npix; p++) counted += count[p];
     for (uint32_t y = (uint32_t)S.gutter; y < (uint32_t)(S.gutter + S.ss * h); y++)
