@@ -122,6 +122,7 @@ typedef struct game {
     uint64_t *bad;
     uint32_t c0, c1; /* the chains of this round */
     int ntasks;
+    const uint8_t *plain; /* plain_linear of each xform */
 } game;
 
 static void scatter(const game *G, int task, const K_FlameChain *pts, uint32_t n, records *rec)
@@ -133,6 +134,89 @@ static void scatter(const game *G, int task, const K_FlameChain *pts, uint32_t n
         scatter32(G->S, rec, pts, G->hist[task], G->total);
 }
 
+/* ---- the step, with a fast path for plain linear xforms -------------------------------------- */
+
+/* Whether xform `fn` is plain linear: its one variation `linear`, no post transform. A genome's
+ * symmetry xforms are (most of `gold`'s steps): they skip the variations' loop and its chain of
+ * tests, which the processor mispredicts whenever the random xform choice changes kind. */
+static bool plain_linear(const fb_flame_setup *S, uint32_t fn)
+{
+    const K_FlameXform *X = &S->xf[fn];
+    return X->nvar == 1u && S->var[X->var0].id == K_V_LINEAR && !(X->flags & K_FLAME_HAS_POST);
+}
+
+/* k_flame_apply for a plain linear xform: the same operations in the same order (so the same bits:
+ * the colour, the affine map, 0 + w t as the variations' sums start at 0, the bad-value rule). */
+static inline __attribute__((always_inline)) K_FlameOut apply_linear(uint fn, float x, float y, float c, uint key,
+                                                                     uint n0 K_FLAME_TABLES_DECL)
+{
+    K_FlameXform X = k_flame_xf[fn];
+    uint n = n0;
+    K_FlameOut o;
+    o.c = X.speed * X.color + (1.0f - X.speed) * c;
+    float tx = X.ax * x + X.bx * y + X.cx;
+    float ty = X.ay * x + X.by * y + X.cy;
+    float w = k_flame_var[X.var0].w;
+    o.x = 0.0f + w * tx;
+    o.y = 0.0f + w * ty;
+    o.bad = k_flame_bad(o.x) || k_flame_bad(o.y);
+    if (o.bad) {
+        o.x = K_FLAME_RAND() * 2.0f - 1.0f;
+        o.y = K_FLAME_RAND() * 2.0f - 1.0f;
+    }
+    o.n = n;
+    return o;
+}
+
+/* k_flame_step (kernels/flame.h), its xforms applied by apply_linear where plain[fn] says so and by
+ * k_flame_apply otherwise; the rest line for line the same. */
+static inline __attribute__((always_inline)) K_FlameChain step(K_FlameParams P, K_FlameChain s, uint key,
+                                                               const uint8_t *plain K_FLAME_TABLES_DECL)
+{
+    uint fn = 0u;
+    K_FlameOut o;
+    for (uint tries = 0u; tries < 5u; tries++) {
+        uint row = P.chaos != 0u ? s.last : 0u;
+        fn = k_flame_dist[row * K_FLAME_GRAIN + (k_hash(s.n ^ key) & (K_FLAME_GRAIN - 1u))];
+        if (plain[fn])
+            o = apply_linear(fn, s.x, s.y, s.c, key, s.n + 1u K_FLAME_TABLES);
+        else
+            o = k_flame_apply(fn, s.x, s.y, s.c, key, s.n + 1u K_FLAME_TABLES);
+        s.n = o.n;
+        s.x = o.x;
+        s.y = o.y;
+        s.c = o.c;
+        if (!o.bad) break;
+        s.bad++;
+    }
+    s.last = fn + 1u;
+    s.vis = fn;
+    float px = s.x, py = s.y, pc = s.c;
+    if (P.final_xf != K_FLAME_NONE) {
+        bool apply = P.final_always != 0u;
+        if (!apply) {
+            apply = k_flame_u01(key, s.n) < P.final_opacity;
+            s.n++;
+        }
+        if (apply) {
+            K_FlameOut f = k_flame_apply(P.final_xf, s.x, s.y, s.c, key, s.n K_FLAME_TABLES);
+            s.n = f.n;
+            px = f.x;
+            py = f.y;
+            pc = f.c;
+        }
+    }
+    if (P.rotate != 0u) {
+        k_vec2 r = k_flame_rotate(P, px, py);
+        px = r.x;
+        py = r.y;
+    }
+    s.px = px;
+    s.py = py;
+    s.pc = pc;
+    return s;
+}
+
 /* Chain i, of length len. */
 static uint64_t play(const game *G, int task, uint32_t i, uint32_t len, K_FlameChain *pts, records *rec)
 {
@@ -141,12 +225,13 @@ static uint64_t play(const game *G, int task, uint32_t i, uint32_t len, K_FlameC
     const K_FlameXform *k_flame_xf = S->xf;
     const K_FlameVar *k_flame_var = S->var;
     const uint *k_flame_dist = S->dist;
+    const uint8_t *plain = G->plain;
     uint32_t key = k_flame_key(P.seed, i);
     K_FlameChain s = k_flame_init(key);
-    for (uint32_t t = 0; t < P.fuse; t++) s = k_flame_step(P, s, key K_FLAME_TABLES);
+    for (uint32_t t = 0; t < P.fuse; t++) s = step(P, s, key, plain K_FLAME_TABLES);
     for (uint32_t t0 = 0; t0 < len; t0 += BATCH) {
         uint32_t n = len - t0 < BATCH ? len - t0 : BATCH;
-        for (uint32_t t = 0; t < n; t++) pts[t] = s = k_flame_step(P, s, key K_FLAME_TABLES);
+        for (uint32_t t = 0; t < n; t++) pts[t] = s = step(P, s, key, plain K_FLAME_TABLES);
         scatter(G, task, pts, n, rec);
     }
     return s.bad;
@@ -203,6 +288,8 @@ fb_result fb_flame_play(const fb_flame_setup *S, fb_pool *pool, int threads, uin
     if (threads > 64) threads = 64;
     if (!pool || threads < 1) threads = 1;
     while (threads > 1 && (uint64_t)threads * cells * bytes > (1ull << 30)) threads--;
+    uint8_t plain[FB_FLAME_MAX_XFORMS + 1] = {0};
+    for (uint32_t f = 0; f < S->p.nxf; f++) plain[f] = plain_linear(S, f);
     void *hist[64] = {0};
     uint64_t nbad[64] = {0};
     fb_result rc = FB_OK;
@@ -214,7 +301,7 @@ fb_result fb_flame_play(const fb_flame_setup *S, fb_pool *pool, int threads, uin
     double all = (double)(cr1 - cr0) * S->p.len;
     for (uint32_t c0 = cr0; c0 < cr1 && !rc; c0 += per_round) {
         uint32_t c1 = cr1 - c0 > per_round ? c0 + per_round : cr1;
-        game G = {S, hist, bytes == sizeof(cell16), total, cells, nbad, c0, c1, threads};
+        game G = {S, hist, bytes == sizeof(cell16), total, cells, nbad, c0, c1, threads, plain};
         run(pool, threads, game_task, &G);
         if (prog) fb_progress_update(prog, (uint64_t)fmin((double)(c1 - cr0) * S->p.len, all), (uint64_t)all);
     }
