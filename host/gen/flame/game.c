@@ -18,7 +18,7 @@ typedef struct cell16 {
 } cell16;
 
 #define BATCH    1024 /* points computed before they are scattered */
-#define AHEAD    12   /* records prefetched ahead of the one added */
+#define AHEAD    64   /* records prefetched ahead of the one added */
 #define OPAQUE_Q K_FLAME_OPAQUE
 
 static bool compact(const fb_flame_setup *S)
