@@ -110,8 +110,8 @@ static double chain_points(const flame_state *st)
 static fb_result alloc_image(flame_state *st, size_t npix)
 {
     for (int k = 0; k < 4; k++)
-        if (!(st->acc[k] = malloc(npix * sizeof(float)))) return fb_fail(FB_ERR_NOMEM, "out of memory");
-    if (!(st->count = malloc(npix * sizeof(uint32_t)))) return fb_fail(FB_ERR_NOMEM, "out of memory");
+        if (!(st->acc[k] = fb_malloc_large(npix * sizeof(float)))) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (!(st->count = fb_malloc_large(npix * sizeof(uint32_t)))) return fb_fail(FB_ERR_NOMEM, "out of memory");
     return FB_OK;
 }
 
