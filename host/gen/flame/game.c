@@ -294,7 +294,7 @@ fb_result fb_flame_play(const fb_flame_setup *S, fb_pool *pool, int threads, uin
     uint64_t nbad[64] = {0};
     fb_result rc = FB_OK;
     for (int t = 0; t < threads && !rc; t++)
-        if (!(hist[t] = fb_flame_zalloc(cells * bytes)))
+        if (!(hist[t] = fb_flame_zalloc(cells * bytes, pool)))
             rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
     /* rounds of chains, for the progress bar; the 32-bit cells are folded once, at the end */
     uint32_t per_round = 64u * (uint32_t)threads;

@@ -287,7 +287,7 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
     flame_state *st = state(g);
     const fb_flame_setup *S = &st->S;
     size_t cells = (size_t)S->p.hist_w * S->p.hist_h, npix = (size_t)g->scene->width * g->scene->height;
-    fb_flame_cell *total = fb_flame_zalloc(cells * sizeof *total);
+    fb_flame_cell *total = fb_flame_zalloc(cells * sizeof *total, e->pool);
     fb_result rc = total ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
     if (!rc) rc = alloc_image(st, npix);
     fb_progress prog;

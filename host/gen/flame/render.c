@@ -442,10 +442,30 @@ void fb_flame_spill(fb_flame_cell *total, fb_flame_cell32 *h)
     memset(h, 0, sizeof *h);
 }
 
-void *fb_flame_zalloc(size_t n)
+typedef struct zero_job {
+    uint8_t *p;
+    size_t n;
+} zero_job;
+
+#define ZERO_CHUNK ((size_t)2 << 20)
+
+static void zero_task(void *ctx, int t)
 {
-    void *p = fb_malloc_large(n);
-    if (p) memset(p, 0, n);
+    const zero_job *J = ctx;
+    size_t a = (size_t)t * ZERO_CHUNK, b = a + ZERO_CHUNK < J->n ? a + ZERO_CHUNK : J->n;
+    memset(J->p + a, 0, b - a);
+}
+
+void *fb_flame_zalloc(size_t n, fb_pool *pool)
+{
+    uint8_t *p = fb_malloc_large(n);
+    if (!p) return NULL;
+    zero_job J = {p, n};
+    size_t chunks = (n + ZERO_CHUNK - 1) / ZERO_CHUNK;
+    if (pool && chunks > 1 && chunks < (size_t)1 << 30)
+        fb_pool_run(pool, (int)chunks, zero_task, &J);
+    else
+        memset(p, 0, n);
     return p;
 }
 
@@ -594,7 +614,7 @@ fb_result fb_flame_filter(const fb_flame_setup *S, const fb_flame_cell *hist, fl
                           fb_pool *pool)
 {
     int W = (int)S->p.hist_w, H = (int)S->p.hist_h;
-    double(*acc)[4] = fb_flame_zalloc((size_t)W * H * sizeof *acc);
+    double(*acc)[4] = fb_flame_zalloc((size_t)W * H * sizeof *acc, pool);
     if (!acc) return fb_fail(FB_ERR_NOMEM, "out of memory for the flame's density estimation");
     int threads = pool ? fb_pool_threads(pool) : 1, reach = 0;
     for (int fi = 0; S->de_max_index > 0 && fi <= S->de_max_index; fi++) {

@@ -80,8 +80,9 @@ void fb_flame_tone_row(const fb_flame_tone *t, size_t n, const float *const acc[
                        float *A);
 
 /* n zeroed bytes for a histogram or an accumulation (fb_malloc_large: huge pages, so that the first
- * touch of tens of MiB costs a fault per 2 MiB rather than per 4 KiB); free() it. */
-void *fb_flame_zalloc(size_t n);
+ * touch of tens of MiB costs a fault per 2 MiB rather than per 4 KiB), zeroed in 2 MiB chunks on the
+ * threads of pool (NULL: this thread); free() it. */
+void *fb_flame_zalloc(size_t n, fb_pool *pool);
 
 /* Adds cells [c0, c1) of the 32-bit histogram b into a and zeroes them in b. */
 void fb_flame_hist_fold(fb_flame_cell *a, fb_flame_cell32 *b, size_t c0, size_t c1);
