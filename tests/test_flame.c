@@ -42,6 +42,13 @@ static const char *const k_mixed =
     "<xform weight=\"0.3\" color=\"1\" linear=\"0.9\" coefs=\"0.8 0 0 0.8 0.1 0\" post=\"1 0 0 1 0.1 0.2\"/>"
     "<xform weight=\"0.05\" color=\"0.5\" linear=\"1\" coefs=\"1e12 0 0 1e12 0 0\"/>"
     "<finalxform color=\"0.3\" color_speed=\"0.5\" linear=\"1\" coefs=\"0.9 0 0 0.9 0 0\"/>" PAL "</flame>";
+/* the same without the final xform: game.c's AVX2 lanes take it (plain linear steps on the lanes,
+ * the others and the bad values a lane at a time through the scalar step) */
+static const char *const k_lanes =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\"><symmetry kind=\"3\"/>"
+    "<xform weight=\"0.5\" color=\"0\" ex=\"0.7\" cosine=\"0.3\" coefs=\"0.5 0.2 -0.3 0.6 0.2 0.1\"/>"
+    "<xform weight=\"0.3\" color=\"1\" color_speed=\"0.3\" linear=\"0.9\" coefs=\"0.8 0 0 0.8 0.1 0\"/>"
+    "<xform weight=\"0.05\" color=\"0.5\" linear=\"1\" coefs=\"1e12 0 0 1e12 0 0\"/>" PAL "</flame>";
 /* every point to (0.01, 0.01): one cell takes them all, so its 32-bit sums spill */
 static const char *const k_point =
     "<flame size=\"8 8\" scale=\"2\" estimator_radius=\"0\">"
@@ -203,6 +210,7 @@ int main(void)
     test_genome("opaque", k_opaque, 64, 48, 100, 16);
     test_genome("translucent", k_translucent, 64, 48, 100, 24);
     test_genome("symmetry, post, bad values, final", k_mixed, 64, 48, 100, 16);
+    test_genome("symmetry, bad values (AVX2 lanes)", k_lanes, 64, 48, 100, 16);
     /* 2^21 points into one cell: past 2^19 hits a 16-byte cell spills, past 2^31 / 4080 a 24-byte one */
     test_genome("one cell, opaque", k_point, 8, 8, 32768, 16);
     test_genome("one cell, translucent", k_point_translucent, 8, 8, 32768, 24);
