@@ -451,6 +451,8 @@ fb_result fb_flame_play(const fb_flame_setup *S, fb_pool *pool, int threads, uin
     while (threads > 1 && (uint64_t)threads * cells * bytes > (1ull << 30)) threads--;
     uint8_t plain[FB_FLAME_MAX_XFORMS + 1] = {0};
     for (uint32_t f = 0; f < S->p.nxf; f++) plain[f] = plain_linear(S, f);
+    /* the AVX2 lanes where they apply; FB_FLAME_NO_LANES=1 plays every chain scalar (the same bits:
+     * for comparing the two paths and timing them) */
     lane_tables tables;
     const lane_tables *lanes = NULL;
     if (lanes_ok(S, plain) && !getenv("FB_FLAME_NO_LANES")) lane_tables_init(S, plain, &tables), lanes = &tables;
