@@ -33,12 +33,24 @@ fb() { run "$FB" flame --file "$tmp/g.flame" --size 1024x1024 --threads "$thread
 # lavapipe's threads: LP_NUM_THREADS
 fv() { run env LP_NUM_THREADS="$threads" "$FB" flame --file "$tmp/g.flame" --size 1024x1024 --threads "$threads" \
     --backend vulkan --quiet -o "$tmp/v.exr"; }
+fb0() { run "$FB_BEFORE" flame --file "$tmp/g.flame" --size 1024x1024 --threads "$threads" --backend native --quiet -o "$tmp/b.exr"; }
+pe() { run "$FLAME_PEER" "$threads" "$q"; }
 f3() { run env nthreads="$threads" isaac_seed=bench out="$tmp/o.png" flam3-render < "$tmp/g.flame"; }
 # alternated, so that both see the same load; the medians of wall and of CPU seconds
-for i in 1 2 3; do fb >> "$tmp/fb"; fv >> "$tmp/fv"; f3 >> "$tmp/f3"; done
-"$FB" compare "$tmp/o.exr" "$tmp/v.exr" --max-abs 0 --quiet > /dev/null || echo "bench/flame.sh: the Vulkan file differs from the native one" >&2
+vk=${FB_VULKAN:-1}
+for i in 1 2 3; do
+    fb >> "$tmp/fb"
+    [ "$vk" = 0 ] || fv >> "$tmp/fv"
+    [ -z "${FB_BEFORE:-}" ] || fb0 >> "$tmp/fb0"
+    [ -z "${FLAME_PEER:-}" ] || pe >> "$tmp/pe"
+    f3 >> "$tmp/f3"
+done
+[ "$vk" = 0 ] || "$FB" compare "$tmp/o.exr" "$tmp/v.exr" --max-abs 0 --quiet > /dev/null ||
+    echo "bench/flame.sh: the Vulkan file differs from the native one" >&2
+[ -z "${FB_BEFORE:-}" ] || "$FB" compare "$tmp/o.exr" "$tmp/b.exr" --max-abs 0 --quiet > /dev/null ||
+    echo "bench/flame.sh: the file of FB_BEFORE differs from this one" >&2
+[ "$vk" = 0 ] || { t_fv=$(cut -d' ' -f1 "$tmp/fv" | median) c_fv=$(cut -d' ' -f2 "$tmp/fv" | median); }
 t_fb=$(cut -d' ' -f1 "$tmp/fb" | median) c_fb=$(cut -d' ' -f2 "$tmp/fb" | median)
-t_fv=$(cut -d' ' -f1 "$tmp/fv" | median) c_fv=$(cut -d' ' -f2 "$tmp/fv" | median)
 t_f3=$(cut -d' ' -f1 "$tmp/f3" | median) c_f3=$(cut -d' ' -f2 "$tmp/f3" | median)
 printf 'flame 1024x1024 quality %s (%d points), %d threads, %s, load %s\n' "$q" "$points" "$threads" "$(date -u +%F)" \
     "$(cut -d' ' -f1 /proc/loadavg)"
@@ -46,7 +58,18 @@ printf '  %-20s %7s %9s %8s %12s\n' renderer "wall s" "Mpts/s" "CPU s" "Mpts/CPU
 line() { printf '  %-20s %7.2f %9.1f %8.2f %12.1f\n' "$1" "$2" "$(echo "$points / $2 / 1000000" | bc -l)" "$3" \
     "$(echo "$points / $3 / 1000000" | bc -l)"; }
 line "fractalbake native" "$t_fb" "$c_fb"
-line "fractalbake vulkan" "$t_fv" "$c_fv"
+[ "$vk" = 0 ] || line "fractalbake vulkan" "$t_fv" "$c_fv"
+if [ -n "${FB_BEFORE:-}" ]; then
+    t_fb0=$(cut -d' ' -f1 "$tmp/fb0" | median) c_fb0=$(cut -d' ' -f2 "$tmp/fb0" | median)
+    line "native, FB_BEFORE" "$t_fb0" "$c_fb0"
+fi
+if [ -n "${FLAME_PEER:-}" ]; then
+    t_pe=$(cut -d' ' -f1 "$tmp/pe" | median) c_pe=$(cut -d' ' -f2 "$tmp/pe" | median)
+    line "flame_peer (ceiling)" "$t_pe" "$c_pe"
+fi
 line "flam3-render 3.1.1" "$t_f3" "$c_f3"
-printf '  ratio native (flam3 / ours) %6.2fx            %6.2fx\n' "$(echo "$t_f3 / $t_fb" | bc -l)" "$(echo "$c_f3 / $c_fb" | bc -l)"
-printf '  ratio vulkan (flam3 / ours) %6.2fx            %6.2fx\n' "$(echo "$t_f3 / $t_fv" | bc -l)" "$(echo "$c_f3 / $c_fv" | bc -l)"
+ratio() { printf '  ratio %-22s %6.2fx            %6.2fx\n' "$1 (flam3 / it)" "$(echo "$t_f3 / $2" | bc -l)" "$(echo "$c_f3 / $3" | bc -l)"; }
+ratio native "$t_fb" "$c_fb"
+[ "$vk" = 0 ] || ratio vulkan "$t_fv" "$c_fv"
+[ -z "${FB_BEFORE:-}" ] || ratio "native before" "$t_fb0" "$c_fb0"
+[ -z "${FLAME_PEER:-}" ] || ratio flame_peer "$t_pe" "$c_pe"

@@ -34,6 +34,21 @@ static const char *const k_translucent =
     "<xform weight=\"0.5\" color=\"0\" opacity=\"0.5\" linear=\"0.6\" spherical=\"0.4\" coefs=\"0.5 0.2 -0.3 0.6 0.2 "
     "0.1\"/>"
     "<xform weight=\"0.5\" color=\"1\" swirl=\"0.3\" linear=\"0.5\" coefs=\"0.8 0 0 0.8 0 0\"/>" PAL "</flame>";
+/* symmetry (plain linear xforms, game.c's fast path) among others: a linear one with a post
+ * transform, one whose points fly off (bad values, retried), a final xform */
+static const char *const k_mixed =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\"><symmetry kind=\"3\"/>"
+    "<xform weight=\"0.5\" color=\"0\" ex=\"0.7\" cosine=\"0.3\" coefs=\"0.5 0.2 -0.3 0.6 0.2 0.1\"/>"
+    "<xform weight=\"0.3\" color=\"1\" linear=\"0.9\" coefs=\"0.8 0 0 0.8 0.1 0\" post=\"1 0 0 1 0.1 0.2\"/>"
+    "<xform weight=\"0.05\" color=\"0.5\" linear=\"1\" coefs=\"1e12 0 0 1e12 0 0\"/>"
+    "<finalxform color=\"0.3\" color_speed=\"0.5\" linear=\"1\" coefs=\"0.9 0 0 0.9 0 0\"/>" PAL "</flame>";
+/* the same without the final xform: game.c's AVX2 lanes take it (plain linear steps on the lanes,
+ * the others and the bad values a lane at a time through the scalar step) */
+static const char *const k_lanes =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\"><symmetry kind=\"3\"/>"
+    "<xform weight=\"0.5\" color=\"0\" ex=\"0.7\" cosine=\"0.3\" coefs=\"0.5 0.2 -0.3 0.6 0.2 0.1\"/>"
+    "<xform weight=\"0.3\" color=\"1\" color_speed=\"0.3\" linear=\"0.9\" coefs=\"0.8 0 0 0.8 0.1 0\"/>"
+    "<xform weight=\"0.05\" color=\"0.5\" linear=\"1\" coefs=\"1e12 0 0 1e12 0 0\"/>" PAL "</flame>";
 /* every point to (0.01, 0.01): one cell takes them all, so its 32-bit sums spill */
 static const char *const k_point =
     "<flame size=\"8 8\" scale=\"2\" estimator_radius=\"0\">"
@@ -108,7 +123,22 @@ static void test_genome(const char *what, const char *xml, int w, int h, double 
     uint32_t *count = malloc(npix * 4);
     for (int k = 0; k < 4; k++) acc[k] = malloc(npix * 4);
     REQUIRE(count && acc[0] && acc[1] && acc[2] && acc[3]);
-    CHECK(fb_flame_filter(&S, total, acc, count) == FB_OK);
+    CHECK(fb_flame_filter(&S, total, acc, count, NULL) == FB_OK);
+    /* the filter on the pool, in bands: the same bits for any thread count */
+    for (int threads = 2; threads <= 7; threads += 5) {
+        fb_pool *pool = NULL;
+        float *acc2[4];
+        uint32_t *count2 = malloc(npix * 4);
+        for (int k = 0; k < 4; k++) acc2[k] = malloc(npix * 4);
+        REQUIRE(fb_pool_create(threads, &pool) == FB_OK && count2 && acc2[0] && acc2[1] && acc2[2] && acc2[3]);
+        CHECK(fb_flame_filter(&S, total, acc2, count2, pool) == FB_OK);
+        size_t diff = memcmp(count2, count, npix * 4) != 0;
+        for (int k = 0; k < 4; k++) diff += memcmp(acc2[k], acc[k], npix * 4) != 0;
+        CHECKF(diff == 0, "%s, the filter on %d threads: %zu planes differ from one thread's", what, threads, diff);
+        for (int k = 0; k < 4; k++) free(acc2[k]);
+        free(count2);
+        fb_pool_destroy(&pool);
+    }
     uint64_t counted = 0, inside = 0;
     for (size_t p = 0; p < npix; p++) counted += count[p];
     for (uint32_t y = (uint32_t)S.gutter; y < (uint32_t)(S.gutter + S.ss * h); y++)
@@ -179,6 +209,8 @@ int main(void)
     test_kmath();
     test_genome("opaque", k_opaque, 64, 48, 100, 16);
     test_genome("translucent", k_translucent, 64, 48, 100, 24);
+    test_genome("symmetry, post, bad values, final", k_mixed, 64, 48, 100, 16);
+    test_genome("symmetry, bad values (AVX2 lanes)", k_lanes, 64, 48, 100, 16);
     /* 2^21 points into one cell: past 2^19 hits a 16-byte cell spills, past 2^31 / 4080 a 24-byte one */
     test_genome("one cell, opaque", k_point, 8, 8, 32768, 16);
     test_genome("one cell, translucent", k_point_translucent, 8, 8, 32768, 24);

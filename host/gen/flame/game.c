@@ -18,7 +18,7 @@ typedef struct cell16 {
 } cell16;
 
 #define BATCH    1024 /* points computed before they are scattered */
-#define AHEAD    12   /* records prefetched ahead of the one added */
+#define AHEAD    64   /* records prefetched ahead of the one added */
 #define OPAQUE_Q K_FLAME_OPAQUE
 
 static bool compact(const fb_flame_setup *S)
@@ -122,6 +122,8 @@ typedef struct game {
     uint64_t *bad;
     uint32_t c0, c1; /* the chains of this round */
     int ntasks;
+    const uint8_t *plain;            /* plain_linear of each xform */
+    const struct lane_tables *lanes; /* the AVX2 lanes' tables, or NULL: scalar chains only */
 } game;
 
 static void scatter(const game *G, int task, const K_FlameChain *pts, uint32_t n, records *rec)
@@ -133,6 +135,89 @@ static void scatter(const game *G, int task, const K_FlameChain *pts, uint32_t n
         scatter32(G->S, rec, pts, G->hist[task], G->total);
 }
 
+/* ---- the step, with a fast path for plain linear xforms -------------------------------------- */
+
+/* Whether xform `fn` is plain linear: its one variation `linear`, no post transform. A genome's
+ * symmetry xforms are (most of `gold`'s steps): they skip the variations' loop and its chain of
+ * tests, which the processor mispredicts whenever the random xform choice changes kind. */
+static bool plain_linear(const fb_flame_setup *S, uint32_t fn)
+{
+    const K_FlameXform *X = &S->xf[fn];
+    return X->nvar == 1u && S->var[X->var0].id == K_V_LINEAR && !(X->flags & K_FLAME_HAS_POST);
+}
+
+/* k_flame_apply for a plain linear xform: the same operations in the same order (so the same bits:
+ * the colour, the affine map, 0 + w t as the variations' sums start at 0, the bad-value rule). */
+static inline __attribute__((always_inline)) K_FlameOut apply_linear(uint fn, float x, float y, float c, uint key,
+                                                                     uint n0 K_FLAME_TABLES_DECL)
+{
+    K_FlameXform X = k_flame_xf[fn];
+    uint n = n0;
+    K_FlameOut o;
+    o.c = X.speed * X.color + (1.0f - X.speed) * c;
+    float tx = X.ax * x + X.bx * y + X.cx;
+    float ty = X.ay * x + X.by * y + X.cy;
+    float w = k_flame_var[X.var0].w;
+    o.x = 0.0f + w * tx;
+    o.y = 0.0f + w * ty;
+    o.bad = k_flame_bad(o.x) || k_flame_bad(o.y);
+    if (o.bad) {
+        o.x = K_FLAME_RAND() * 2.0f - 1.0f;
+        o.y = K_FLAME_RAND() * 2.0f - 1.0f;
+    }
+    o.n = n;
+    return o;
+}
+
+/* k_flame_step (kernels/flame.h), its xforms applied by apply_linear where plain[fn] says so and by
+ * k_flame_apply otherwise; the rest line for line the same. */
+static inline __attribute__((always_inline)) K_FlameChain step(K_FlameParams P, K_FlameChain s, uint key,
+                                                               const uint8_t *plain K_FLAME_TABLES_DECL)
+{
+    uint fn = 0u;
+    K_FlameOut o;
+    for (uint tries = 0u; tries < 5u; tries++) {
+        uint row = P.chaos != 0u ? s.last : 0u;
+        fn = k_flame_dist[row * K_FLAME_GRAIN + (k_hash(s.n ^ key) & (K_FLAME_GRAIN - 1u))];
+        if (plain[fn])
+            o = apply_linear(fn, s.x, s.y, s.c, key, s.n + 1u K_FLAME_TABLES);
+        else
+            o = k_flame_apply(fn, s.x, s.y, s.c, key, s.n + 1u K_FLAME_TABLES);
+        s.n = o.n;
+        s.x = o.x;
+        s.y = o.y;
+        s.c = o.c;
+        if (!o.bad) break;
+        s.bad++;
+    }
+    s.last = fn + 1u;
+    s.vis = fn;
+    float px = s.x, py = s.y, pc = s.c;
+    if (P.final_xf != K_FLAME_NONE) {
+        bool apply = P.final_always != 0u;
+        if (!apply) {
+            apply = k_flame_u01(key, s.n) < P.final_opacity;
+            s.n++;
+        }
+        if (apply) {
+            K_FlameOut f = k_flame_apply(P.final_xf, s.x, s.y, s.c, key, s.n K_FLAME_TABLES);
+            s.n = f.n;
+            px = f.x;
+            py = f.y;
+            pc = f.c;
+        }
+    }
+    if (P.rotate != 0u) {
+        k_vec2 r = k_flame_rotate(P, px, py);
+        px = r.x;
+        py = r.y;
+    }
+    s.px = px;
+    s.py = py;
+    s.pc = pc;
+    return s;
+}
+
 /* Chain i, of length len. */
 static uint64_t play(const game *G, int task, uint32_t i, uint32_t len, K_FlameChain *pts, records *rec)
 {
@@ -141,16 +226,174 @@ static uint64_t play(const game *G, int task, uint32_t i, uint32_t len, K_FlameC
     const K_FlameXform *k_flame_xf = S->xf;
     const K_FlameVar *k_flame_var = S->var;
     const uint *k_flame_dist = S->dist;
+    const uint8_t *plain = G->plain;
     uint32_t key = k_flame_key(P.seed, i);
     K_FlameChain s = k_flame_init(key);
-    for (uint32_t t = 0; t < P.fuse; t++) s = k_flame_step(P, s, key K_FLAME_TABLES);
+    for (uint32_t t = 0; t < P.fuse; t++) s = step(P, s, key, plain K_FLAME_TABLES);
     for (uint32_t t0 = 0; t0 < len; t0 += BATCH) {
         uint32_t n = len - t0 < BATCH ? len - t0 : BATCH;
-        for (uint32_t t = 0; t < n; t++) pts[t] = s = k_flame_step(P, s, key K_FLAME_TABLES);
+        for (uint32_t t = 0; t < n; t++) pts[t] = s = step(P, s, key, plain K_FLAME_TABLES);
         scatter(G, task, pts, n, rec);
     }
     return s.bad;
 }
+
+/* ---- eight chains on AVX2 lanes ------------------------------------------------------------------ */
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+
+#define LANES_AVX2 __attribute__((target("avx2")))
+
+/* The xforms' coefficients for the lanes' gathers: colour (speed x colour and 1 - speed, the
+ * products the step forms, made once), the affine map and the linear weight; plain: -1 or 0. */
+typedef struct lane_tables {
+    float sc[FB_FLAME_MAX_XFORMS + 1], oms[FB_FLAME_MAX_XFORMS + 1];
+    float ax[FB_FLAME_MAX_XFORMS + 1], bx[FB_FLAME_MAX_XFORMS + 1], cx[FB_FLAME_MAX_XFORMS + 1];
+    float ay[FB_FLAME_MAX_XFORMS + 1], by[FB_FLAME_MAX_XFORMS + 1], cy[FB_FLAME_MAX_XFORMS + 1];
+    float w[FB_FLAME_MAX_XFORMS + 1];
+    int32_t plain[FB_FLAME_MAX_XFORMS + 1];
+} lane_tables;
+
+/* Whether the lanes play S: plain linear xforms to take (the other steps are the scalar step's, a
+ * lane at a time), at most 8 xforms (their tables are registers, looked up by a permutation: AMD's
+ * gathers cost more than the scalar step saves), no xaos, final xform or camera rotation (the
+ * scalar path plays those), AVX2. */
+static bool lanes_ok(const fb_flame_setup *S, const uint8_t *plain)
+{
+    bool any = false;
+    for (uint32_t f = 0; f < S->p.nxf; f++) any |= plain[f] != 0;
+    return any && S->p.nxf <= 8 && !S->p.chaos && S->p.final_xf == K_FLAME_NONE && !S->p.rotate &&
+           __builtin_cpu_supports("avx2");
+}
+
+static void lane_tables_init(const fb_flame_setup *S, const uint8_t *plain, lane_tables *T)
+{
+    memset(T, 0, sizeof *T);
+    for (uint32_t f = 0; f < S->p.nxf; f++) {
+        const K_FlameXform *X = &S->xf[f];
+        T->sc[f] = X->speed * X->color, T->oms[f] = 1.0f - X->speed;
+        T->ax[f] = X->ax, T->bx[f] = X->bx, T->cx[f] = X->cx;
+        T->ay[f] = X->ay, T->by[f] = X->by, T->cy[f] = X->cy;
+        T->w[f] = plain[f] ? S->var[X->var0].w : 0.0f;
+        T->plain[f] = plain[f] ? -1 : 0;
+    }
+}
+
+LANES_AVX2 static inline __m256i hash8(__m256i x)
+{
+    x = _mm256_xor_si256(x, _mm256_srli_epi32(x, 16));
+    x = _mm256_mullo_epi32(x, _mm256_set1_epi32(0x7feb352d));
+    x = _mm256_xor_si256(x, _mm256_srli_epi32(x, 15));
+    x = _mm256_mullo_epi32(x, _mm256_set1_epi32((int)0x846ca68bu));
+    return _mm256_xor_si256(x, _mm256_srli_epi32(x, 16));
+}
+
+/* k_flame_bad on the lanes: NaN or beyond +-1e10. */
+LANES_AVX2 static inline __m256 bad8(__m256 v)
+{
+    __m256 nan = _mm256_cmp_ps(v, v, _CMP_UNORD_Q);
+    __m256 hi = _mm256_cmp_ps(v, _mm256_set1_ps(1e10f), _CMP_GT_OQ);
+    __m256 lo = _mm256_cmp_ps(v, _mm256_set1_ps(-1e10f), _CMP_LT_OQ);
+    return _mm256_or_ps(nan, _mm256_or_ps(hi, lo));
+}
+
+/* Chains i .. i + 7, each of P.len points (none the last chain), on the lanes: each step the lanes
+ * whose chosen xform is plain linear and gives no bad value take apply_linear's operations (the
+ * same, in the same order: add and multiply, no FMA), the others the scalar step from the same
+ * state, so every chain's points are the scalar path's. Points are scattered a batch at a time as
+ * play does (their order within a batch changes no integer sum). */
+LANES_AVX2 static uint64_t play8(const game *G, int task, uint32_t i, const lane_tables *T, K_FlameChain *pts,
+                                 records *rec)
+{
+    const fb_flame_setup *S = G->S;
+    const K_FlameParams P = S->p;
+    const K_FlameXform *k_flame_xf = S->xf;
+    const K_FlameVar *k_flame_var = S->var;
+    const uint *k_flame_dist = S->dist;
+    const uint8_t *plain = G->plain;
+    K_FlameChain st[8];
+    uint32_t key[8];
+    uint64_t bad = 0;
+    for (int l = 0; l < 8; l++) {
+        key[l] = k_flame_key(P.seed, i + (uint32_t)l);
+        st[l] = k_flame_init(key[l]);
+        for (uint32_t t = 0; t < P.fuse; t++) st[l] = step(P, st[l], key[l], plain K_FLAME_TABLES);
+        bad += st[l].bad;
+    }
+    /* the lanes' state as planes */
+    float x[8], y[8], c[8];
+    uint32_t n[8];
+    for (int l = 0; l < 8; l++) x[l] = st[l].x, y[l] = st[l].y, c[l] = st[l].c, n[l] = st[l].n;
+    const __m256i vkey = _mm256_loadu_si256((const __m256i *)key), grain = _mm256_set1_epi32(K_FLAME_GRAIN - 1);
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256 t_sc = _mm256_loadu_ps(T->sc), t_oms = _mm256_loadu_ps(T->oms), t_w = _mm256_loadu_ps(T->w);
+    const __m256 t_ax = _mm256_loadu_ps(T->ax), t_bx = _mm256_loadu_ps(T->bx), t_cx = _mm256_loadu_ps(T->cx);
+    const __m256 t_ay = _mm256_loadu_ps(T->ay), t_by = _mm256_loadu_ps(T->by), t_cy = _mm256_loadu_ps(T->cy);
+    const __m256i t_plain = _mm256_loadu_si256((const __m256i *)T->plain);
+#define LOOK(t) _mm256_permutevar8x32_ps(t, fn)
+    const uint32_t per = BATCH / 8;
+    for (uint32_t t0 = 0; t0 < P.len; t0 += per) {
+        uint32_t m = P.len - t0 < per ? P.len - t0 : per;
+        for (uint32_t t = 0; t < m; t++) {
+            __m256 vx = _mm256_loadu_ps(x), vy = _mm256_loadu_ps(y), vc = _mm256_loadu_ps(c);
+            __m256i vn = _mm256_loadu_si256((const __m256i *)n);
+            __m256i h = hash8(_mm256_xor_si256(vn, vkey));
+            __m256i fn = _mm256_i32gather_epi32((const int *)k_flame_dist, _mm256_and_si256(h, grain), 4);
+            __m256 ok = _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(t_plain, fn));
+            __m256 oc = _mm256_add_ps(LOOK(t_sc), _mm256_mul_ps(LOOK(t_oms), vc));
+            __m256 tx =
+                _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(LOOK(t_ax), vx), _mm256_mul_ps(LOOK(t_bx), vy)), LOOK(t_cx));
+            __m256 ty =
+                _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(LOOK(t_ay), vx), _mm256_mul_ps(LOOK(t_by), vy)), LOOK(t_cy));
+            __m256 w = LOOK(t_w);
+            __m256 p0 = _mm256_add_ps(zero, _mm256_mul_ps(w, tx)), p1 = _mm256_add_ps(zero, _mm256_mul_ps(w, ty));
+            ok = _mm256_andnot_ps(_mm256_or_ps(bad8(p0), bad8(p1)), ok);
+            _mm256_storeu_ps(x, _mm256_blendv_ps(vx, p0, ok));
+            _mm256_storeu_ps(y, _mm256_blendv_ps(vy, p1, ok));
+            _mm256_storeu_ps(c, _mm256_blendv_ps(vc, oc, ok));
+            _mm256_storeu_si256((__m256i *)n, _mm256_add_epi32(vn, _mm256_set1_epi32(1)));
+            uint32_t f[8];
+            _mm256_storeu_si256((__m256i *)f, fn);
+            int lanes_ok = _mm256_movemask_ps(ok);
+            K_FlameChain *out = &pts[t * 8];
+            for (int l = 0; l < 8; l++) {
+                if (lanes_ok >> l & 1) {
+                    out[l].px = x[l], out[l].py = y[l], out[l].pc = c[l], out[l].vis = f[l];
+                    continue;
+                }
+                /* the scalar step from the lane's state before this step (n was advanced above) */
+                K_FlameChain s = st[l];
+                s.x = _mm256_cvtss_f32(_mm256_permutevar8x32_ps(vx, _mm256_set1_epi32(l)));
+                s.y = _mm256_cvtss_f32(_mm256_permutevar8x32_ps(vy, _mm256_set1_epi32(l)));
+                s.c = _mm256_cvtss_f32(_mm256_permutevar8x32_ps(vc, _mm256_set1_epi32(l)));
+                s.n = n[l] - 1u;
+                s.bad = 0;
+                s = step(P, s, key[l], plain K_FLAME_TABLES);
+                bad += s.bad;
+                x[l] = s.x, y[l] = s.y, c[l] = s.c, n[l] = s.n;
+                out[l].px = s.px, out[l].py = s.py, out[l].pc = s.pc, out[l].vis = s.vis;
+            }
+        }
+        scatter(G, task, pts, m * 8, rec);
+    }
+#undef LOOK
+    return bad;
+}
+#else
+typedef struct lane_tables {
+    int unused;
+} lane_tables;
+static bool lanes_ok(const fb_flame_setup *S, const uint8_t *plain)
+{
+    return false;
+}
+static void lane_tables_init(const fb_flame_setup *S, const uint8_t *plain, lane_tables *T) {}
+static uint64_t play8(const game *G, int task, uint32_t i, const lane_tables *T, K_FlameChain *pts, records *rec)
+{
+    return 0;
+}
+#endif
 
 /* Chains [c0, c1) of the round, the task's contiguous share, into its own histogram. */
 static void game_task(void *ctx, int task)
@@ -163,7 +406,10 @@ static void game_task(void *ctx, int task)
     uint64_t bad = 0;
     K_FlameChain pts[BATCH];
     records rec;
-    for (uint32_t i = a; i < b; i++) bad += play(G, task, i, i + 1 == P->chains ? P->last_len : P->len, pts, &rec);
+    uint32_t i = a;
+    if (G->lanes)
+        for (; i + 8 <= b && i + 8 < P->chains; i += 8) bad += play8(G, task, i, G->lanes, pts, &rec);
+    for (; i < b; i++) bad += play(G, task, i, i + 1 == P->chains ? P->last_len : P->len, pts, &rec);
     G->bad[task] += bad;
 }
 
@@ -203,17 +449,25 @@ fb_result fb_flame_play(const fb_flame_setup *S, fb_pool *pool, int threads, uin
     if (threads > 64) threads = 64;
     if (!pool || threads < 1) threads = 1;
     while (threads > 1 && (uint64_t)threads * cells * bytes > (1ull << 30)) threads--;
+    uint8_t plain[FB_FLAME_MAX_XFORMS + 1] = {0};
+    for (uint32_t f = 0; f < S->p.nxf; f++) plain[f] = plain_linear(S, f);
+    /* the AVX2 lanes where they apply; FB_FLAME_NO_LANES=1 plays every chain scalar (the same bits:
+     * for comparing the two paths and timing them) */
+    lane_tables tables;
+    const lane_tables *lanes = NULL;
+    if (lanes_ok(S, plain) && !getenv("FB_FLAME_NO_LANES")) lane_tables_init(S, plain, &tables), lanes = &tables;
     void *hist[64] = {0};
     uint64_t nbad[64] = {0};
     fb_result rc = FB_OK;
     for (int t = 0; t < threads && !rc; t++)
-        if (!(hist[t] = calloc(cells, bytes))) rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
+        if (!(hist[t] = fb_flame_zalloc(cells * bytes, pool)))
+            rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
     /* rounds of chains, for the progress bar; the 32-bit cells are folded once, at the end */
     uint32_t per_round = 64u * (uint32_t)threads;
     double all = (double)(cr1 - cr0) * S->p.len;
     for (uint32_t c0 = cr0; c0 < cr1 && !rc; c0 += per_round) {
         uint32_t c1 = cr1 - c0 > per_round ? c0 + per_round : cr1;
-        game G = {S, hist, bytes == sizeof(cell16), total, cells, nbad, c0, c1, threads};
+        game G = {S, hist, bytes == sizeof(cell16), total, cells, nbad, c0, c1, threads, plain, lanes};
         run(pool, threads, game_task, &G);
         if (prog) fb_progress_update(prog, (uint64_t)fmin((double)(c1 - cr0) * S->p.len, all), (uint64_t)all);
     }

@@ -110,16 +110,16 @@ static double chain_points(const flame_state *st)
 static fb_result alloc_image(flame_state *st, size_t npix)
 {
     for (int k = 0; k < 4; k++)
-        if (!(st->acc[k] = malloc(npix * sizeof(float)))) return fb_fail(FB_ERR_NOMEM, "out of memory");
-    if (!(st->count = malloc(npix * sizeof(uint32_t)))) return fb_fail(FB_ERR_NOMEM, "out of memory");
+        if (!(st->acc[k] = fb_malloc_large(npix * sizeof(float)))) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (!(st->count = fb_malloc_large(npix * sizeof(uint32_t)))) return fb_fail(FB_ERR_NOMEM, "out of memory");
     return FB_OK;
 }
 
 /* Density estimation and the spatial filter of the total histogram (taken over: a points part keeps
  * it for its sums channels, else it is freed). */
-static fb_result finish(flame_state *st, fb_flame_cell *total)
+static fb_result finish(flame_state *st, fb_flame_cell *total, fb_pool *pool)
 {
-    fb_result rc = fb_flame_filter(&st->S, total, st->acc, st->count);
+    fb_result rc = fb_flame_filter(&st->S, total, st->acc, st->count, pool);
     if (st->nsums && !rc)
         st->hist = total;
     else
@@ -287,7 +287,7 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
     flame_state *st = state(g);
     const fb_flame_setup *S = &st->S;
     size_t cells = (size_t)S->p.hist_w * S->p.hist_h, npix = (size_t)g->scene->width * g->scene->height;
-    fb_flame_cell *total = calloc(cells, sizeof *total);
+    fb_flame_cell *total = fb_flame_zalloc(cells * sizeof *total, e->pool);
     fb_result rc = total ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
     if (!rc) rc = alloc_image(st, npix);
     fb_progress prog;
@@ -304,7 +304,7 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
     fb_progress_finish(&prog);
     double t1 = fb_now(), points = chain_points(st);
     if (!rc)
-        rc = finish(st, total);
+        rc = finish(st, total, e->pool);
     else
         free(total);
     st->seconds = fb_now() - t0;
@@ -370,7 +370,7 @@ static fb_result flame_from_sums(fb_gen *g, const uint64_t *const *sums, uint64_
         free(total);
         return rc;
     }
-    return finish(st, total);
+    return finish(st, total, NULL);
 }
 
 static const fb_points_ops flame_points_ops = {

@@ -442,6 +442,33 @@ void fb_flame_spill(fb_flame_cell *total, fb_flame_cell32 *h)
     memset(h, 0, sizeof *h);
 }
 
+typedef struct zero_job {
+    uint8_t *p;
+    size_t n;
+} zero_job;
+
+#define ZERO_CHUNK ((size_t)2 << 20)
+
+static void zero_task(void *ctx, int t)
+{
+    const zero_job *J = ctx;
+    size_t a = (size_t)t * ZERO_CHUNK, b = a + ZERO_CHUNK < J->n ? a + ZERO_CHUNK : J->n;
+    memset(J->p + a, 0, b - a);
+}
+
+void *fb_flame_zalloc(size_t n, fb_pool *pool)
+{
+    uint8_t *p = fb_malloc_large(n);
+    if (!p) return NULL;
+    zero_job J = {p, n};
+    size_t chunks = (n + ZERO_CHUNK - 1) / ZERO_CHUNK;
+    if (pool && chunks > 1 && chunks < (size_t)1 << 30)
+        fb_pool_run(pool, (int)chunks, zero_task, &J);
+    else
+        memset(p, 0, n);
+    return p;
+}
+
 void fb_flame_hist_fold(fb_flame_cell *a, fb_flame_cell32 *b, size_t c0, size_t c1)
 {
     for (size_t i = c0; i < c1; i++) {
@@ -453,104 +480,162 @@ void fb_flame_hist_fold(fb_flame_cell *a, fb_flame_cell32 *b, size_t c0, size_t 
 
 /* ---- density estimation and the spatial filter ------------------------------------------------ */
 
-static inline void add_at(double (*acc)[4], int x, int y, int w, int h, const double *c)
+static inline void add_at(double (*acc)[4], int x, int y, int w, int y0, int y1, const double *c)
 {
-    if (x < 0 || y < 0 || x >= w || y >= h) return;
+    if (x < 0 || y < y0 || x >= w || y >= y1) return;
     double *a = acc[(size_t)y * w + x];
     a[0] += c[0], a[1] += c[1], a[2] += c[2], a[3] += c[3];
 }
 
-fb_result fb_flame_filter(const fb_flame_setup *S, const fb_flame_cell *hist, float *const acc_out[4], uint32_t *count)
+/* Density estimation and the filter on the pool: the accumulation's rows in bands, each band
+ * visiting every source cell whose kernel can reach it, in the one order of the whole image's
+ * pass (rows, then columns, then the kernel's taps), adding only into its own rows. So every
+ * accumulation cell receives the same terms in the same order for any banding, and the doubles
+ * are the same bits as one thread's. */
+typedef struct filter_job {
+    const fb_flame_setup *S;
+    const fb_flame_cell *hist;
+    double (*acc)[4];
+    float *const *out;
+    uint32_t *count;
+    int W, H, reach, nbands, nrows;
+} filter_job;
+
+/* Band `task` of the accumulation's rows: density estimation (or the plain log scale without it). */
+static void de_band(void *ctx, int task)
 {
-    int W = (int)S->p.hist_w, H = (int)S->p.hist_h, os = S->ss;
-    double(*acc)[4] = calloc((size_t)W * H, sizeof *acc);
-    if (!acc) return fb_fail(FB_ERR_NOMEM, "out of memory for the flame's density estimation");
+    const filter_job *J = ctx;
+    const fb_flame_setup *S = J->S;
+    const fb_flame_cell *hist = J->hist;
+    double(*acc)[4] = J->acc;
+    int W = J->W, H = J->H, os = S->ss;
+    int y0 = (int)((int64_t)H * task / J->nbands), y1 = (int)((int64_t)H * (task + 1) / J->nbands);
     const double k1 = S->k1, k2 = S->k2, q = 1.0 / 16.0;
     if (S->de_max_index == 0) {
-        for (size_t i = 0; i < (size_t)W * H; i++) {
+        for (size_t i = (size_t)y0 * W; i < (size_t)y1 * W; i++) {
             double c3 = hist[i].c[3] * q;
             if (c3 == 0.0) continue;
             double ls = k1 * log(1.0 + c3 * k2) / c3;
             for (int k = 0; k < 4; k++) acc[i][k] = hist[i].c[k] * q * ls;
         }
-    } else {
-        int half = os / 2, scf = !(os & 1);
-        double scfact = pow(os / (os + 1.0), 2.0), curve = S->estimator_curve;
-        for (int j = os - 1; j < H - (os - 1); j++)
-            for (int i = os - 1; i < W - (os - 1); i++) {
-                const fb_flame_cell *b = &hist[(size_t)j * W + i];
-                if (b->c[4] == 0 || b->c[3] == 0) continue;
-                double fs = 0;
-                for (int ii = -half; ii <= half; ii++)
-                    for (int jj = -half; jj <= half; jj++) {
-                        int x = i + ii, y = j + jj;
-                        if (x >= 0 && y >= 0 && x < W && y < H) fs += hist[(size_t)y * W + x].c[4] * q / 255.0;
-                    }
-                if (scf) fs *= scfact;
-                int fi;
-                if (fs > S->de_max_counts)
-                    fi = S->de_max_index;
-                else if (fs <= DE_THRESH)
-                    fi = (int)ceil(fs) - 1;
-                else
-                    fi = DE_THRESH + (int)floor(pow(fs - DE_THRESH, curve));
-                if (fi > S->de_max_index) fi = S->de_max_index;
-                if (fi < 0) fi = 0;
-                int at = fi * S->de_kernel_size, fw = (int)ceil(S->de_widths[fi]) - 1;
-                double c[4], cb[4] = {b->c[0] * q, b->c[1] * q, b->c[2] * q, b->c[3] * q};
-                double ls0 = k1 * log(1.0 + cb[3] * k2) / cb[3];
-                for (int jj = 0; jj <= fw; jj++)
-                    for (int ii = 0; ii <= jj; ii++, at++) {
-                        double f = S->de_coefs[at];
-                        if (f == 0.0) continue;
-                        double ls = f * ls0;
-                        for (int k = 0; k < 4; k++) c[k] = cb[k] * ls;
-                        if (jj == 0 && ii == 0) {
-                            add_at(acc, i, j, W, H, c);
-                        } else if (ii == 0) {
-                            add_at(acc, i + jj, j, W, H, c);
-                            add_at(acc, i - jj, j, W, H, c);
-                            add_at(acc, i, j + jj, W, H, c);
-                            add_at(acc, i, j - jj, W, H, c);
-                        } else if (jj == ii) {
-                            add_at(acc, i + ii, j + jj, W, H, c);
-                            add_at(acc, i - ii, j + jj, W, H, c);
-                            add_at(acc, i + ii, j - jj, W, H, c);
-                            add_at(acc, i - ii, j - jj, W, H, c);
-                        } else {
-                            add_at(acc, i + ii, j + jj, W, H, c);
-                            add_at(acc, i - ii, j + jj, W, H, c);
-                            add_at(acc, i + ii, j - jj, W, H, c);
-                            add_at(acc, i - ii, j - jj, W, H, c);
-                            add_at(acc, i + jj, j + ii, W, H, c);
-                            add_at(acc, i - jj, j + ii, W, H, c);
-                            add_at(acc, i + jj, j - ii, W, H, c);
-                            add_at(acc, i - jj, j - ii, W, H, c);
-                        }
-                    }
-            }
+        return;
     }
-    /* the spatial filter, one output pixel per os x os block (flam3 keeps de_offset cells of gutter) */
-    int fw = S->fwidth;
-    for (int j = 0; j < S->height; j++)
+    int half = os / 2, scf = !(os & 1);
+    double scfact = pow(os / (os + 1.0), 2.0), curve = S->estimator_curve;
+    int j0 = y0 - J->reach, j1 = y1 + J->reach;
+    if (j0 < os - 1) j0 = os - 1;
+    if (j1 > H - (os - 1)) j1 = H - (os - 1);
+    for (int j = j0; j < j1; j++)
+        for (int i = os - 1; i < W - (os - 1); i++) {
+            const fb_flame_cell *b = &hist[(size_t)j * W + i];
+            if (b->c[4] == 0 || b->c[3] == 0) continue;
+            double fs = 0;
+            for (int ii = -half; ii <= half; ii++)
+                for (int jj = -half; jj <= half; jj++) {
+                    int x = i + ii, y = j + jj;
+                    if (x >= 0 && y >= 0 && x < W && y < H) fs += hist[(size_t)y * W + x].c[4] * q / 255.0;
+                }
+            if (scf) fs *= scfact;
+            int fi;
+            if (fs > S->de_max_counts)
+                fi = S->de_max_index;
+            else if (fs <= DE_THRESH)
+                fi = (int)ceil(fs) - 1;
+            else
+                fi = DE_THRESH + (int)floor(pow(fs - DE_THRESH, curve));
+            if (fi > S->de_max_index) fi = S->de_max_index;
+            if (fi < 0) fi = 0;
+            int at = fi * S->de_kernel_size, fw = (int)ceil(S->de_widths[fi]) - 1;
+            if (j + fw < y0 || j - fw >= y1) continue; /* its kernel reaches none of the band's rows */
+            double c[4], cb[4] = {b->c[0] * q, b->c[1] * q, b->c[2] * q, b->c[3] * q};
+            double ls0 = k1 * log(1.0 + cb[3] * k2) / cb[3];
+            for (int jj = 0; jj <= fw; jj++)
+                for (int ii = 0; ii <= jj; ii++, at++) {
+                    double f = S->de_coefs[at];
+                    if (f == 0.0) continue;
+                    double ls = f * ls0;
+                    for (int k = 0; k < 4; k++) c[k] = cb[k] * ls;
+                    if (jj == 0 && ii == 0) {
+                        add_at(acc, i, j, W, y0, y1, c);
+                    } else if (ii == 0) {
+                        add_at(acc, i + jj, j, W, y0, y1, c);
+                        add_at(acc, i - jj, j, W, y0, y1, c);
+                        add_at(acc, i, j + jj, W, y0, y1, c);
+                        add_at(acc, i, j - jj, W, y0, y1, c);
+                    } else if (jj == ii) {
+                        add_at(acc, i + ii, j + jj, W, y0, y1, c);
+                        add_at(acc, i - ii, j + jj, W, y0, y1, c);
+                        add_at(acc, i + ii, j - jj, W, y0, y1, c);
+                        add_at(acc, i - ii, j - jj, W, y0, y1, c);
+                    } else {
+                        add_at(acc, i + ii, j + jj, W, y0, y1, c);
+                        add_at(acc, i - ii, j + jj, W, y0, y1, c);
+                        add_at(acc, i + ii, j - jj, W, y0, y1, c);
+                        add_at(acc, i - ii, j - jj, W, y0, y1, c);
+                        add_at(acc, i + jj, j + ii, W, y0, y1, c);
+                        add_at(acc, i - jj, j + ii, W, y0, y1, c);
+                        add_at(acc, i + jj, j - ii, W, y0, y1, c);
+                        add_at(acc, i - jj, j - ii, W, y0, y1, c);
+                    }
+                }
+        }
+}
+
+/* Band `task` of the image's rows: the spatial filter, one output pixel per os x os block (flam3
+ * keeps de_offset cells of gutter), and the pixel's hits. */
+static void filter_band(void *ctx, int task)
+{
+    const filter_job *J = ctx;
+    const fb_flame_setup *S = J->S;
+    int W = J->W, os = S->ss, fw = S->fwidth;
+    int r0 = (int)((int64_t)S->height * task / J->nrows), r1 = (int)((int64_t)S->height * (task + 1) / J->nrows);
+    for (int j = r0; j < r1; j++)
         for (int i = 0; i < S->width; i++) {
             int x = S->de_offset + i * os, y = S->de_offset + j * os;
             double t[4] = {0, 0, 0, 0};
             for (int jj = 0; jj < fw; jj++)
                 for (int ii = 0; ii < fw; ii++) {
                     double k = S->filter[ii + jj * fw];
-                    const double *a = acc[(size_t)(y + jj) * W + x + ii];
+                    const double *a = J->acc[(size_t)(y + jj) * W + x + ii];
                     t[0] += k * a[0], t[1] += k * a[1], t[2] += k * a[2], t[3] += k * a[3];
                 }
             size_t o = (size_t)j * S->width + i;
-            for (int k = 0; k < 4; k++) acc_out[k][o] = (float)t[k];
+            for (int k = 0; k < 4; k++) J->out[k][o] = (float)t[k];
             /* the hits of the pixel's own os x os cells (inside the gutter) */
             uint64_t n = 0;
             for (int jj = 0; jj < os; jj++)
                 for (int ii = 0; ii < os; ii++)
-                    n += hist[(size_t)(S->gutter + j * os + jj) * W + S->gutter + i * os + ii].hits;
-            count[o] = n > 0xffffffffu ? 0xffffffffu : (uint32_t)n;
+                    n += J->hist[(size_t)(S->gutter + j * os + jj) * W + S->gutter + i * os + ii].hits;
+            J->count[o] = n > 0xffffffffu ? 0xffffffffu : (uint32_t)n;
         }
+}
+
+fb_result fb_flame_filter(const fb_flame_setup *S, const fb_flame_cell *hist, float *const acc_out[4], uint32_t *count,
+                          fb_pool *pool)
+{
+    int W = (int)S->p.hist_w, H = (int)S->p.hist_h;
+    double(*acc)[4] = fb_flame_zalloc((size_t)W * H * sizeof *acc, pool);
+    if (!acc) return fb_fail(FB_ERR_NOMEM, "out of memory for the flame's density estimation");
+    int threads = pool ? fb_pool_threads(pool) : 1, reach = 0;
+    for (int fi = 0; S->de_max_index > 0 && fi <= S->de_max_index; fi++) {
+        int fw = (int)ceil(S->de_widths[fi]) - 1;
+        if (fw > reach) reach = fw;
+    }
+    /* a few bands a thread (the cost of a row varies with its density), each at least 4 reaches tall
+     * so that the kernels its halo rows spill in are a small part of its work */
+    int nbands = threads < 2 ? 1 : 4 * threads, min_rows = 4 * (reach + 1);
+    while (nbands > 1 && H / nbands < min_rows) nbands--;
+    int nrows = threads < 2 ? 1 : 4 * threads;
+    if (nrows > S->height) nrows = S->height > 0 ? S->height : 1;
+    filter_job J = {S, hist, acc, acc_out, count, W, H, reach, nbands, nrows};
+    if (pool && nbands > 1)
+        fb_pool_run(pool, nbands, de_band, &J);
+    else
+        for (int t = 0; t < nbands; t++) de_band(&J, t);
+    if (pool && nrows > 1)
+        fb_pool_run(pool, nrows, filter_band, &J);
+    else
+        for (int t = 0; t < nrows; t++) filter_band(&J, t);
     free(acc);
     return FB_OK;
 }

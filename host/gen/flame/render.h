@@ -7,6 +7,7 @@
 #define FB_FLAME_RENDER_H
 
 #include "genome.h"
+#include "pool.h"
 
 /* One histogram cell: the sums of r, g, b, a (the palette's 0..255 scale times the point's opacity,
  * in units of 2^-4) and of the opacity (255 per opaque hit, the same units), and the hit count.
@@ -68,13 +69,20 @@ void fb_flame_spill(fb_flame_cell *total, fb_flame_cell32 *h);
 
 /* From the histogram (hist_w x hist_h cells) to the image: density estimation and the spatial filter
  * give each pixel's accumulation at brightness 1 (acc: 4 planes of width x height, r g b a) and its
- * hits (count). Single-threaded in a fixed order, so the floats are the same on every run. */
-fb_result fb_flame_filter(const fb_flame_setup *S, const fb_flame_cell *hist, float *const acc[4], uint32_t *count);
+ * hits (count). On the threads of pool (NULL: this thread) in bands, each cell's terms added in the
+ * one fixed order, so the floats are the same bits for any thread count and on every run. */
+fb_result fb_flame_filter(const fb_flame_setup *S, const fb_flame_cell *hist, float *const acc[4], uint32_t *count,
+                          fb_pool *pool);
 
 /* flam3's tone map of n pixels' accumulations (brightness 1) into linear R, G, B (the sRGB decoding
  * of flam3's 8-bit output, the background composited under) and alpha. */
 void fb_flame_tone_row(const fb_flame_tone *t, size_t n, const float *const acc[4], float *R, float *G, float *B,
                        float *A);
+
+/* n zeroed bytes for a histogram or an accumulation (fb_malloc_large: huge pages, so that the first
+ * touch of tens of MiB costs a fault per 2 MiB rather than per 4 KiB), zeroed in 2 MiB chunks on the
+ * threads of pool (NULL: this thread); free() it. */
+void *fb_flame_zalloc(size_t n, fb_pool *pool);
 
 /* Adds cells [c0, c1) of the 32-bit histogram b into a and zeroes them in b. */
 void fb_flame_hist_fold(fb_flame_cell *a, fb_flame_cell32 *b, size_t c0, size_t c1);
