@@ -20,8 +20,13 @@ layout(constant_id = 1) const uint LINEAR = 0u;
 // the genome's variations, bits of 0-31 and 32-54: only their branches are compiled (kernels/flame.h)
 layout(constant_id = 2) const uint VMASK0 = 0xffffffffu;
 layout(constant_id = 3) const uint VMASK1 = 0xffffffffu;
+// 1: the genome has a final xform (0: its code is compiled out; lavapipe would run it under a mask)
+layout(constant_id = 4) const uint FINAL = 1u;
+#define K_FLAME_FINAL (FINAL != 0u)
 #define K_FLAME_VMASK0 VMASK0
 #define K_FLAME_VMASK1 VMASK1
+// each of the genome's variations once a step, not once an xform's variation slot (kernels/flame.h)
+#define K_FLAME_ONCE 1
 
 #define K_FLAME_BUFFERS                                                                                                \
     layout(std430, set = 0, binding = 1) readonly buffer Xforms                                                        \

@@ -228,7 +228,7 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
     vkc_pipeline *pipe = NULL;
     vkc_job *job = NULL;
     vkc_buffer *buf[FB_NBUF] = {0};
-    uint32_t spec[4] = {device_fields(S) == 4, S->linear_palette, 0, 0};
+    uint32_t spec[5] = {device_fields(S) == 4, S->linear_palette, 0, 0, S->p.final_xf != K_FLAME_NONE};
     for (uint32_t v = 0; v < S->nvar; v++) spec[2 + S->var[v].id / 32] |= 1u << (S->var[v].id % 32);
     fb_result rc = vkc_pipeline_create(vk,
                                        &(vkc_pipeline_desc){.spv = wide ? flame64_comp : flame_comp,
@@ -236,7 +236,7 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
                                                             .push_size = sizeof(flame_push),
                                                             .buffers = FB_NBUF,
                                                             .spec = spec,
-                                                            .nspec = 4,
+                                                            .nspec = 5,
                                                             .name = g->layer->name},
                                        &pipe);
     uint32_t nxf = S->p.nxf + (S->p.final_xf != K_FLAME_NONE);
