@@ -28,14 +28,21 @@ layout(constant_id = 4) const uint FINAL = 1u;
 // each of the genome's variations once a step, not once an xform's variation slot (kernels/flame.h)
 #define K_FLAME_ONCE 1
 
+// the xform and variation tables' entries (their uniform buffers' arrays are this long)
+layout(constant_id = 5) const uint NXF = 1u;
+layout(constant_id = 6) const uint NVAR = 1u;
+
+// The xforms, variations and palette are uniform buffers: on lavapipe a read at an index that differs
+// by lane is then a gather, where a storage buffer's is a loop over the 8 lanes with a branch each
+// (a step reads some 20 fields of its xform and a few of each variation).
 #define K_FLAME_BUFFERS                                                                                                \
-    layout(std430, set = 0, binding = 1) readonly buffer Xforms                                                        \
+    layout(std140, set = 0, binding = 1) uniform Xforms                                                                \
     {                                                                                                                  \
-        K_FlameXform k_flame_xf[];                                                                                     \
+        K_FlameXform k_flame_xf[NXF];                                                                                  \
     };                                                                                                                 \
-    layout(std430, set = 0, binding = 2) readonly buffer Vars                                                          \
+    layout(std140, set = 0, binding = 2) uniform Vars                                                                  \
     {                                                                                                                  \
-        K_FlameVar k_flame_var[];                                                                                      \
+        K_FlameVar k_flame_var[NVAR];                                                                                  \
     };                                                                                                                 \
     layout(std430, set = 0, binding = 3) readonly buffer Dist                                                          \
     {                                                                                                                  \
@@ -43,15 +50,15 @@ layout(constant_id = 4) const uint FINAL = 1u;
     };
 #include "../kernels/flame.h"
 
-layout(std430, set = 0, binding = 0) readonly buffer Params
+layout(std140, set = 0, binding = 0) uniform Params
 {
     K_FlameParams p;
 }
 params;
 // the palette times 255 in 2^-4 units (r, g, b, a)
-layout(std430, set = 0, binding = 4) readonly buffer Palette
+layout(std140, set = 0, binding = 4) uniform Palette
 {
-    uvec4 q[];
+    uvec4 q[256];
 }
 pal;
 // chain c0 + i's state between dispatches

@@ -228,29 +228,41 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
     vkc_pipeline *pipe = NULL;
     vkc_job *job = NULL;
     vkc_buffer *buf[FB_NBUF] = {0};
-    uint32_t spec[5] = {device_fields(S) == 4, S->linear_palette, 0, 0, S->p.final_xf != K_FLAME_NONE};
+    uint32_t nxf = S->p.nxf + (S->p.final_xf != K_FLAME_NONE), nvar = S->nvar ? S->nvar : 1;
+    uint32_t spec[7] = {device_fields(S) == 4, S->linear_palette, 0, 0, S->p.final_xf != K_FLAME_NONE, nxf, nvar};
     for (uint32_t v = 0; v < S->nvar; v++) spec[2 + S->var[v].id / 32] |= 1u << (S->var[v].id % 32);
-    fb_result rc = vkc_pipeline_create(vk,
-                                       &(vkc_pipeline_desc){.spv = wide ? flame64_comp : flame_comp,
-                                                            .spv_size = wide ? sizeof flame64_comp : sizeof flame_comp,
-                                                            .push_size = sizeof(flame_push),
-                                                            .buffers = FB_NBUF,
-                                                            .spec = spec,
-                                                            .nspec = 5,
-                                                            .name = g->layer->name},
-                                       &pipe);
-    uint32_t nxf = S->p.nxf + (S->p.final_xf != K_FLAME_NONE);
-    const uint64_t sizes[FB_NBUF] = {sizeof S->p,
+    /* the parameters, xforms, variations and palette: uniform buffers (flame_body.glsl), their sizes
+     * in std140 (the parameters' block rounded up to 16 bytes) */
+    const uint64_t sizes[FB_NBUF] = {(sizeof S->p + 15) & ~(uint64_t)15,
                                      sizeof(K_FlameXform) * nxf,
-                                     sizeof(K_FlameVar) * (S->nvar ? S->nvar : 1),
+                                     sizeof(K_FlameVar) * nvar,
                                      4ull * S->ndist,
                                      sizeof S->palq,
                                      chain_bytes,
                                      hist_bytes,
                                      hist_bytes};
+    const uint32_t uniform = 1u << FB_PARAMS | 1u << FB_XF | 1u << FB_VAR | 1u << FB_PAL;
+    for (int b = 0; b < FB_NBUF; b++)
+        if ((uniform >> b & 1u) && sizes[b] > vkc_info(vk)->max_uniform_buffer_range)
+            return fb_fail(FB_ERR_INPUT,
+                           "layer %s: the flame's tables (%u xforms, %u variations) need %llu bytes in one uniform "
+                           "buffer; this device allows %llu (--backend native)",
+                           g->layer->name, nxf, S->nvar, (unsigned long long)sizes[b],
+                           (unsigned long long)vkc_info(vk)->max_uniform_buffer_range);
+    fb_result rc = vkc_pipeline_create(vk,
+                                       &(vkc_pipeline_desc){.spv = wide ? flame64_comp : flame_comp,
+                                                            .spv_size = wide ? sizeof flame64_comp : sizeof flame_comp,
+                                                            .push_size = sizeof(flame_push),
+                                                            .buffers = FB_NBUF,
+                                                            .uniform = uniform,
+                                                            .spec = spec,
+                                                            .nspec = 7,
+                                                            .name = g->layer->name},
+                                       &pipe);
     for (int b = 0; b < FB_NBUF && !rc; b++) rc = vkc_buffer_create(vk, sizes[b], &buf[b]);
     const void *data[FB_PAL + 1] = {&S->p, S->xf, S->var, S->dist, S->palq};
-    for (int b = 0; b <= FB_PAL && !rc; b++) rc = vkc_buffer_upload(vk, buf[b], data[b], sizes[b]);
+    for (int b = 0; b <= FB_PAL && !rc; b++)
+        rc = vkc_buffer_upload(vk, buf[b], data[b], b == FB_PARAMS ? sizeof S->p : sizes[b]);
     void *zero = rc ? NULL : calloc(1, hist_bytes);
     if (!rc && !zero) rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
     for (int b = FB_HIST; b <= FB_CARRY && !rc; b++) rc = vkc_buffer_upload(vk, buf[b], zero, hist_bytes);
