@@ -2,12 +2,13 @@
 // of it per dispatch (the first `fuse` not plotted), each plotted point added into the integer
 // histogram with atomics (order-independent sums, the same as the native path's cell for cell).
 // host/gen/flame/game.c runs the same chains natively. Included by flame.comp (32-bit atomics: a
-// field a word) and flame64.comp (FB_FLAME_INT64: two fields a 64-bit word, one add for both).
+// field a word) and flame64.comp (FB_FLAME_INT64: two fields a 64-bit word, one add for both; an
+// opaque genome's four fields in one word, add_packed).
 //
 // A cell has F fields: opaque genomes (COMPACT) hits, red, green, blue (their alpha and opacity sums
 // are 4080 x hits); others red, green, blue, alpha, opacity, hits. A word that passes 2^32 (or a
-// 64-bit word 2^64) counts the carry in `carry`, one counter a field, so the host recovers the exact
-// 64-bit sums (host/gen/flame/layer.c).
+// 64-bit word 2^64, or a packed field its width) counts the carry in `carry`, one counter a field,
+// so the host recovers the exact 64-bit sums (host/gen/flame/layer.c).
 #define K_GLSL 1
 #include "../kernels/common.h"
 
@@ -103,6 +104,22 @@ void add2(uint cell, uint f, uint lo, uint hi)
     if (uint(old) + lo < uint(old)) atomicAdd(carry.v[cell * F + f], 1u); // into the high word
     if (old + add < old) atomicAdd(carry.v[cell * F + f + 1u], 1u);       // out of the word
 }
+
+// Opaque genomes: a point's hit and colour in one 64-bit add into word `cell`, as fields of 7, 19,
+// 19 and 19 bits (hits, red, green, blue; a colour is at most 4080), the carries out of each field
+// counted in carry[4 cell + k] (rare: a field wraps once in 2^7 or some 2^19 / 4080 points), so
+// that the host recovers the exact sums (layer.c's device_to_total). One locked add a point in place
+// of two, each a loop over the lanes on lavapipe, and half the histogram's memory.
+void add_packed(uint cell, uvec4 q)
+{
+    uint64_t add = uint64_t(1u) | (uint64_t(q.x) << 7) | (uint64_t(q.y) << 26) | (uint64_t(q.z) << 45);
+    uint64_t old = atomicAdd(hist.v[cell], add);
+    uint64_t m26 = (uint64_t(1u) << 26) - uint64_t(1u), m45 = (uint64_t(1u) << 45) - uint64_t(1u);
+    if ((uint(old) & 0x7fu) == 0x7fu) atomicAdd(carry.v[cell * 4u], 1u);
+    if ((old & m26) + (add & m26) > m26) atomicAdd(carry.v[cell * 4u + 1u], 1u);
+    if ((old & m45) + (add & m45) > m45) atomicAdd(carry.v[cell * 4u + 2u], 1u);
+    if (old + add < old) atomicAdd(carry.v[cell * 4u + 3u], 1u);
+}
 #else
 void add1(uint cell, uint f, uint v)
 {
@@ -144,8 +161,7 @@ void main()
         }
 #ifdef FB_FLAME_INT64
         if (COMPACT != 0u) {
-            add2(cell, 0u, 1u, q.x);
-            add2(cell, 2u, q.y, q.z);
+            add_packed(cell, q);
         } else {
             add2(cell, 0u, k_flame_vis(q.x, visq), k_flame_vis(q.y, visq));
             add2(cell, 2u, k_flame_vis(q.z, visq), k_flame_vis(q.w, visq));

@@ -166,6 +166,19 @@ static uint64_t device_field(const void *hist, const uint32_t *carry, bool wide,
     return (at & 1) ? v + (w >> 32) - carry[at - 1] : v + (uint32_t)w;
 }
 
+/* Cell i of an opaque genome's histogram with 64-bit atomics (flame_body.glsl's add_packed): a
+ * word of fields of 7, 19, 19 and 19 bits (hits, red, green, blue) and the carries out of each, k. A
+ * carry out of field k left 2^bits(k) there and put 1 into field k + 1. */
+static void device_packed(const uint64_t *hist, const uint32_t *carry, size_t i, uint64_t out[4])
+{
+    static const int lo[4] = {0, 7, 26, 45}, bits[4] = {7, 19, 19, 19};
+    uint64_t w = hist[i];
+    for (int k = 0; k < 4; k++) {
+        uint64_t f = (w >> lo[k]) & ((1ull << bits[k]) - 1);
+        out[k] = f + ((uint64_t)carry[4 * i + k] << bits[k]) - (k ? carry[4 * i + k - 1] : 0);
+    }
+}
+
 /* Adds the device's histogram into total (64-bit cells). */
 static void device_to_total(const fb_flame_setup *S, const void *hist, const uint32_t *carry, bool wide,
                             fb_flame_cell *total)
@@ -175,7 +188,14 @@ static void device_to_total(const fb_flame_setup *S, const void *hist, const uin
     for (size_t i = 0; i < cells; i++) {
         size_t at = i * F;
         fb_flame_cell *c = &total[i];
-        if (F == 4) {
+        if (F == 4 && wide) {
+            uint64_t v[4];
+            device_packed(hist, carry, i, v);
+            for (int k = 0; k < 3; k++) c->c[k] += v[1 + k];
+            c->c[3] += K_FLAME_OPAQUE * v[0];
+            c->c[4] += K_FLAME_OPAQUE * v[0];
+            c->hits += v[0];
+        } else if (F == 4) {
             uint64_t hits = device_field(hist, carry, wide, at);
             for (int k = 0; k < 3; k++) c->c[k] += device_field(hist, carry, wide, at + 1 + k);
             c->c[3] += K_FLAME_OPAQUE * hits;
