@@ -108,7 +108,7 @@ void add2(uint cell, uint f, uint lo, uint hi)
 // Opaque genomes: a point's hit and colour in one 64-bit add into word `cell`, as fields of 7, 19,
 // 19 and 19 bits (hits, red, green, blue; a colour is at most 4080), the carries out of each field
 // counted in carry[4 cell + k] (rare: a field wraps once in 2^7 or some 2^19 / 4080 points), so
-// that the host recovers the exact sums (layer.c's device_to_total). One locked add a point in place
+// that the host recovers the exact sums (layer.c's device_packed). One locked add a point in place
 // of two, each a loop over the lanes on lavapipe, and half the histogram's memory.
 void add_packed(uint cell, uvec4 q)
 {

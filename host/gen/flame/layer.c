@@ -239,11 +239,14 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
     uint64_t hist_bytes, chain_bytes, range = vkc_info(vk)->max_storage_buffer_range;
     device_bytes(st, &hist_bytes, &chain_bytes);
     bool wide = vkc_info(vk)->int64_atomics;
-    if (hist_bytes > range || chain_bytes > range)
+    /* an opaque genome's cell with 64-bit atomics is one word (add_packed), its carries four counters */
+    uint64_t carry_bytes = hist_bytes;
+    if (wide && device_fields(S) == 4) hist_bytes /= 2;
+    if (carry_bytes > range || chain_bytes > range)
         return fb_fail(FB_ERR_INPUT,
                        "layer %s: the flame's histogram (%u x %u cells) needs %llu MiB in one buffer; this device "
                        "allows %llu MiB (a smaller size or supersample, or --backend native)",
-                       g->layer->name, S->p.hist_w, S->p.hist_h, (unsigned long long)(hist_bytes >> 20),
+                       g->layer->name, S->p.hist_w, S->p.hist_h, (unsigned long long)(carry_bytes >> 20),
                        (unsigned long long)(range >> 20));
     vkc_pipeline *pipe = NULL;
     vkc_job *job = NULL;
@@ -260,7 +263,7 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
                                      sizeof S->palq,
                                      chain_bytes,
                                      hist_bytes,
-                                     hist_bytes};
+                                     carry_bytes};
     const uint32_t uniform = 1u << FB_PARAMS | 1u << FB_XF | 1u << FB_VAR | 1u << FB_PAL;
     for (int b = 0; b < FB_NBUF; b++)
         if ((uniform >> b & 1u) && sizes[b] > vkc_info(vk)->max_uniform_buffer_range)
@@ -283,9 +286,9 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
     const void *data[FB_PAL + 1] = {&S->p, S->xf, S->var, S->dist, S->palq};
     for (int b = 0; b <= FB_PAL && !rc; b++)
         rc = vkc_buffer_upload(vk, buf[b], data[b], b == FB_PARAMS ? sizeof S->p : sizes[b]);
-    void *zero = rc ? NULL : calloc(1, hist_bytes);
+    void *zero = rc ? NULL : calloc(1, carry_bytes);
     if (!rc && !zero) rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
-    for (int b = FB_HIST; b <= FB_CARRY && !rc; b++) rc = vkc_buffer_upload(vk, buf[b], zero, hist_bytes);
+    for (int b = FB_HIST; b <= FB_CARRY && !rc; b++) rc = vkc_buffer_upload(vk, buf[b], zero, sizes[b]);
     free(zero);
     if (!rc) rc = vkc_job_create(vk, pipe, &job);
     uint32_t steps = S->p.fuse + S->p.len, batch = FLAME_MAX_GROUPS * 64u;
