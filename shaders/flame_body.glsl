@@ -23,7 +23,7 @@ layout(constant_id = 2) const uint VMASK0 = 0xffffffffu;
 layout(constant_id = 3) const uint VMASK1 = 0xffffffffu;
 // 1: the genome has a final xform (0: its code is compiled out; lavapipe would run it under a mask)
 layout(constant_id = 4) const uint FINAL = 1u;
-#define K_FLAME_FINAL (FINAL != 0u)
+#define K_FLAME_FINAL  (FINAL != 0u)
 #define K_FLAME_VMASK0 VMASK0
 #define K_FLAME_VMASK1 VMASK1
 // each of the genome's variations once a step, not once an xform's variation slot (kernels/flame.h)
@@ -110,15 +110,23 @@ void add2(uint cell, uint f, uint lo, uint hi)
 // counted in carry[4 cell + k] (rare: a field wraps once in 2^7 or some 2^19 / 4080 points), so
 // that the host recovers the exact sums (layer.c's device_packed). One locked add a point in place
 // of two, each a loop over the lanes on lavapipe, and half the histogram's memory.
+// Other genomes: word 2 cell the same for hits and the weighted red, green, blue (carries at
+// 6 cell + k), word 2 cell + 1 alpha and opacity as two 32-bit fields (carries at 6 cell + 4 and 5):
+// two adds a point in place of three.
+void add_packed_at(uint word, uint c0, uint hits, uint r, uint g, uint b)
+{
+    uint64_t add = uint64_t(hits) | (uint64_t(r) << 7) | (uint64_t(g) << 26) | (uint64_t(b) << 45);
+    uint64_t old = atomicAdd(hist.v[word], add);
+    uint64_t m7 = uint64_t(0x7fu), m26 = (uint64_t(1u) << 26) - uint64_t(1u), m45 = (uint64_t(1u) << 45) - uint64_t(1u);
+    if ((old & m7) + (add & m7) > m7) atomicAdd(carry.v[c0], 1u);
+    if ((old & m26) + (add & m26) > m26) atomicAdd(carry.v[c0 + 1u], 1u);
+    if ((old & m45) + (add & m45) > m45) atomicAdd(carry.v[c0 + 2u], 1u);
+    if (old + add < old) atomicAdd(carry.v[c0 + 3u], 1u);
+}
+
 void add_packed(uint cell, uvec4 q)
 {
-    uint64_t add = uint64_t(1u) | (uint64_t(q.x) << 7) | (uint64_t(q.y) << 26) | (uint64_t(q.z) << 45);
-    uint64_t old = atomicAdd(hist.v[cell], add);
-    uint64_t m26 = (uint64_t(1u) << 26) - uint64_t(1u), m45 = (uint64_t(1u) << 45) - uint64_t(1u);
-    if ((uint(old) & 0x7fu) == 0x7fu) atomicAdd(carry.v[cell * 4u], 1u);
-    if ((old & m26) + (add & m26) > m26) atomicAdd(carry.v[cell * 4u + 1u], 1u);
-    if ((old & m45) + (add & m45) > m45) atomicAdd(carry.v[cell * 4u + 2u], 1u);
-    if (old + add < old) atomicAdd(carry.v[cell * 4u + 3u], 1u);
+    add_packed_at(cell, cell * 4u, 1u, q.x, q.y, q.z);
 }
 #else
 void add1(uint cell, uint f, uint v)
@@ -163,9 +171,12 @@ void main()
         if (COMPACT != 0u) {
             add_packed(cell, q);
         } else {
-            add2(cell, 0u, k_flame_vis(q.x, visq), k_flame_vis(q.y, visq));
-            add2(cell, 2u, k_flame_vis(q.z, visq), k_flame_vis(q.w, visq));
-            add2(cell, 4u, k_flame_vis(K_FLAME_OPAQUE, visq), 1u);
+            add_packed_at(2u * cell, 6u * cell, 1u, k_flame_vis(q.x, visq), k_flame_vis(q.y, visq),
+                          k_flame_vis(q.z, visq));
+            uint a = k_flame_vis(q.w, visq), o = k_flame_vis(K_FLAME_OPAQUE, visq);
+            uint64_t old = atomicAdd(hist.v[2u * cell + 1u], (uint64_t(o) << 32) | uint64_t(a));
+            if (uint(old) + a < uint(old)) atomicAdd(carry.v[6u * cell + 4u], 1u);
+            if (old + ((uint64_t(o) << 32) | uint64_t(a)) < old) atomicAdd(carry.v[6u * cell + 5u], 1u);
         }
 #else
         if (COMPACT != 0u) {

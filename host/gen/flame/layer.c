@@ -175,7 +175,7 @@ static void device_packed(const uint64_t *hist, const uint32_t *carry, size_t i,
     uint64_t w = hist[i];
     for (int k = 0; k < 4; k++) {
         uint64_t f = (w >> lo[k]) & ((1ull << bits[k]) - 1);
-        out[k] = f + ((uint64_t)carry[4 * i + k] << bits[k]) - (k ? carry[4 * i + k - 1] : 0);
+        out[k] = f + ((uint64_t)carry[k] << bits[k]) - (k ? carry[k - 1] : 0);
     }
 }
 
@@ -190,7 +190,7 @@ static void device_to_total(const fb_flame_setup *S, const void *hist, const uin
         fb_flame_cell *c = &total[i];
         if (F == 4 && wide) {
             uint64_t v[4];
-            device_packed(hist, carry, i, v);
+            device_packed(hist, carry + 4 * i, i, v);
             for (int k = 0; k < 3; k++) c->c[k] += v[1 + k];
             c->c[3] += K_FLAME_OPAQUE * v[0];
             c->c[4] += K_FLAME_OPAQUE * v[0];
@@ -201,6 +201,13 @@ static void device_to_total(const fb_flame_setup *S, const void *hist, const uin
             c->c[3] += K_FLAME_OPAQUE * hits;
             c->c[4] += K_FLAME_OPAQUE * hits;
             c->hits += hits;
+        } else if (wide) { /* word 2i packed as above, word 2i + 1 alpha and opacity (32 bits each) */
+            uint64_t v[4], w = ((const uint64_t *)hist)[2 * i + 1];
+            device_packed(hist, carry + at, 2 * i, v);
+            for (int k = 0; k < 3; k++) c->c[k] += v[1 + k];
+            c->c[3] += (uint32_t)w + ((uint64_t)carry[at + 4] << 32);
+            c->c[4] += (w >> 32) + ((uint64_t)carry[at + 5] << 32) - carry[at + 4];
+            c->hits += v[0];
         } else {
             for (int k = 0; k < 5; k++) c->c[k] += device_field(hist, carry, wide, at + k);
             c->hits += device_field(hist, carry, wide, at + 5);
@@ -239,9 +246,9 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
     uint64_t hist_bytes, chain_bytes, range = vkc_info(vk)->max_storage_buffer_range;
     device_bytes(st, &hist_bytes, &chain_bytes);
     bool wide = vkc_info(vk)->int64_atomics;
-    /* an opaque genome's cell with 64-bit atomics is one word (add_packed), its carries four counters */
+    /* with 64-bit atomics a cell is one word (an opaque genome's) or two (add_packed, add_packed_at) */
     uint64_t carry_bytes = hist_bytes;
-    if (wide && device_fields(S) == 4) hist_bytes /= 2;
+    if (wide) hist_bytes = 8ull * (device_fields(S) == 4 ? 1 : 2) * S->p.hist_w * S->p.hist_h;
     if (carry_bytes > range || chain_bytes > range)
         return fb_fail(FB_ERR_INPUT,
                        "layer %s: the flame's histogram (%u x %u cells) needs %llu MiB in one buffer; this device "
