@@ -230,6 +230,36 @@ K_END(K_FlameOut)
 #else
 #define K_FLAME_HAS(v) true
 #endif
+/* Whether the final xform's code is there: a shader may define it false for a genome without one
+ * (lavapipe runs the code of an if whose condition no lane meets, under a mask). */
+#ifndef K_FLAME_FINAL
+#define K_FLAME_FINAL true
+#endif
+
+/* The variations' branches: `if (K_FLAME_IS(first)) { ... } K_FLAME_ELIF (next) { ... } ...`. In C (and
+ * GLSL by default) an else-if chain on the id of variation slot k, inside a loop over the xform's
+ * slots. A shader that defines K_FLAME_ONCE gets one pass of independent ifs instead, each taking
+ * the xform's next variation when it is that one (an xform's variations are in ascending order, the
+ * order of the chain): lavapipe runs every branch any of its 8 lanes takes, so a loop over slots ran
+ * each of the genome's variations once a slot, and this runs it once a step; the terms are added in
+ * the same order, so the sums are the same bits. */
+#ifdef K_FLAME_ONCE
+/* Whether xform X's variation k is v: then V and w are it, and k moves on to the next. */
+bool k_flame_take(K_FlameXform X, uint v, inout uint k, out K_FlameVar V, out float w)
+{
+    if (k >= X.nvar) return false;
+    V = k_flame_var[X.var0 + k];
+    w = V.w;
+    if (V.id != v) return false;
+    k++;
+    return true;
+}
+#define K_FLAME_IS(v)   (K_FLAME_HAS(v) && k_flame_take(X, v, k, V, w))
+#define K_FLAME_ELIF(v) if (K_FLAME_IS(v))
+#else
+#define K_FLAME_IS(v)   (K_FLAME_HAS(v) && id == (v))
+#define K_FLAME_ELIF(v) else if (K_FLAME_IS(v))
+#endif
 
 /* Draws inside k_flame_apply: n is its local counter. */
 #define K_FLAME_RAND() k_flame_u01(key, n++)
@@ -256,159 +286,201 @@ K_FLAME_INLINE K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint
     if ((X.flags & K_FLAME_ATAN_YX) != 0u) atyx = k_atan2(ty, tx);
     K_PRECISE float p0 = 0.0f;
     K_PRECISE float p1 = 0.0f;
+#ifdef K_FLAME_ONCE
+    uint k = 0u;
+    K_FlameVar V;
+    float w = 0.0f;
+    {
+#else
     for (uint k = 0u; k < X.nvar; k++) {
         K_FlameVar V = k_flame_var[X.var0 + k];
         float w = V.w;
         uint id = V.id;
-        if (K_FLAME_HAS(K_V_LINEAR) && id == K_V_LINEAR) {
+#endif
+        if (K_FLAME_IS(K_V_LINEAR)) {
             p0 += w * tx;
             p1 += w * ty;
-        } else if (K_FLAME_HAS(K_V_SINUSOIDAL) && id == K_V_SINUSOIDAL) {
+        }
+        K_FLAME_ELIF (K_V_SINUSOIDAL) {
             p0 += w * k_fsin(tx);
             p1 += w * k_fsin(ty);
-        } else if (K_FLAME_HAS(K_V_SPHERICAL) && id == K_V_SPHERICAL) {
+        }
+        K_FLAME_ELIF (K_V_SPHERICAL) {
             float r2 = w / (sumsq + K_FLAME_EPS);
             p0 += r2 * tx;
             p1 += r2 * ty;
-        } else if (K_FLAME_HAS(K_V_SWIRL) && id == K_V_SWIRL) {
+        }
+        K_FLAME_ELIF (K_V_SWIRL) {
             float c1 = k_fsin(sumsq), c2 = k_fcos(sumsq);
             p0 += w * (c1 * tx - c2 * ty);
             p1 += w * (c2 * tx + c1 * ty);
-        } else if (K_FLAME_HAS(K_V_HORSESHOE) && id == K_V_HORSESHOE) {
+        }
+        K_FLAME_ELIF (K_V_HORSESHOE) {
             float r = w / (sq + K_FLAME_EPS);
             p0 += (tx - ty) * (tx + ty) * r;
             p1 += 2.0f * tx * ty * r;
-        } else if (K_FLAME_HAS(K_V_POLAR) && id == K_V_POLAR) {
+        }
+        K_FLAME_ELIF (K_V_POLAR) {
             p0 += w * atxy * (1.0f / K_PI);
             p1 += w * (sq - 1.0f);
-        } else if (K_FLAME_HAS(K_V_HANDKERCHIEF) && id == K_V_HANDKERCHIEF) {
+        }
+        K_FLAME_ELIF (K_V_HANDKERCHIEF) {
             p0 += w * sq * k_fsin(atxy + sq);
             p1 += w * sq * k_fcos(atxy - sq);
-        } else if (K_FLAME_HAS(K_V_HEART) && id == K_V_HEART) {
+        }
+        K_FLAME_ELIF (K_V_HEART) {
             float a = sq * atxy, r = w * sq;
             p0 += r * k_fsin(a);
             p1 += -r * k_fcos(a);
-        } else if (K_FLAME_HAS(K_V_DISC) && id == K_V_DISC) {
+        }
+        K_FLAME_ELIF (K_V_DISC) {
             float a = atxy * (1.0f / K_PI), r = K_PI * sq;
             p0 += w * k_fsin(r) * a;
             p1 += w * k_fcos(r) * a;
-        } else if (K_FLAME_HAS(K_V_SPIRAL) && id == K_V_SPIRAL) {
+        }
+        K_FLAME_ELIF (K_V_SPIRAL) {
             float r = sq + K_FLAME_EPS, r1 = w / r;
             p0 += r1 * (cosa + k_fsin(r));
             p1 += r1 * (sina - k_fcos(r));
-        } else if (K_FLAME_HAS(K_V_HYPERBOLIC) && id == K_V_HYPERBOLIC) {
+        }
+        K_FLAME_ELIF (K_V_HYPERBOLIC) {
             float r = sq + K_FLAME_EPS;
             p0 += w * sina / r;
             p1 += w * cosa * r;
-        } else if (K_FLAME_HAS(K_V_DIAMOND) && id == K_V_DIAMOND) {
+        }
+        K_FLAME_ELIF (K_V_DIAMOND) {
             p0 += w * sina * k_fcos(sq);
             p1 += w * cosa * k_fsin(sq);
-        } else if (K_FLAME_HAS(K_V_EX) && id == K_V_EX) {
+        }
+        K_FLAME_ELIF (K_V_EX) {
             float n0 = k_fsin(atxy + sq), n1 = k_fcos(atxy - sq);
             float m0 = n0 * n0 * n0 * sq, m1 = n1 * n1 * n1 * sq;
             p0 += w * (m0 + m1);
             p1 += w * (m0 - m1);
-        } else if (K_FLAME_HAS(K_V_JULIA) && id == K_V_JULIA) {
+        }
+        K_FLAME_ELIF (K_V_JULIA) {
             float a = 0.5f * atxy;
             if ((k_hash(n++ ^ key) & 1u) != 0u) a += K_PI;
             float r = w * k_sqrt(sq);
             p0 += r * k_fcos(a);
             p1 += r * k_fsin(a);
-        } else if (K_FLAME_HAS(K_V_BENT) && id == K_V_BENT) {
+        }
+        K_FLAME_ELIF (K_V_BENT) {
             float nx = tx < 0.0f ? tx * 2.0f : tx;
             float ny = ty < 0.0f ? ty / 2.0f : ty;
             p0 += w * nx;
             p1 += w * ny;
-        } else if (K_FLAME_HAS(K_V_WAVES) && id == K_V_WAVES) {
+        }
+        K_FLAME_ELIF (K_V_WAVES) {
             p0 += w * (tx + V.p0 * k_fsin(ty * V.p2));
             p1 += w * (ty + V.p1 * k_fsin(tx * V.p3));
-        } else if (K_FLAME_HAS(K_V_FISHEYE) && id == K_V_FISHEYE) {
+        }
+        K_FLAME_ELIF (K_V_FISHEYE) {
             float r = 2.0f * w / (sq + 1.0f);
             p0 += r * ty; /* flam3 swaps x and y here */
             p1 += r * tx;
-        } else if (K_FLAME_HAS(K_V_POPCORN) && id == K_V_POPCORN) {
+        }
+        K_FLAME_ELIF (K_V_POPCORN) {
             p0 += w * (tx + V.p0 * k_fsin(k_tan(3.0f * ty)));
             p1 += w * (ty + V.p1 * k_fsin(k_tan(3.0f * tx)));
-        } else if (K_FLAME_HAS(K_V_EXPONENTIAL) && id == K_V_EXPONENTIAL) {
+        }
+        K_FLAME_ELIF (K_V_EXPONENTIAL) {
             float dx = w * k_exp(tx - 1.0f), dy = K_PI * ty;
             p0 += dx * k_fcos(dy);
             p1 += dx * k_fsin(dy);
-        } else if (K_FLAME_HAS(K_V_POWER) && id == K_V_POWER) {
+        }
+        K_FLAME_ELIF (K_V_POWER) {
             float r = w * k_fpow(sq, sina);
             p0 += r * cosa;
             p1 += r * sina;
-        } else if (K_FLAME_HAS(K_V_COSINE) && id == K_V_COSINE) {
+        }
+        K_FLAME_ELIF (K_V_COSINE) {
             float a = tx * K_PI;
             p0 += w * k_fcos(a) * k_cosh(ty);
             p1 += w * -k_fsin(a) * k_sinh(ty);
-        } else if (K_FLAME_HAS(K_V_RINGS) && id == K_V_RINGS) {
+        }
+        K_FLAME_ELIF (K_V_RINGS) {
             float dx = V.p0;
             float r = w * (k_fmod(sq + dx, 2.0f * dx) - dx + sq * (1.0f - dx));
             p0 += r * cosa;
             p1 += r * sina;
-        } else if (K_FLAME_HAS(K_V_FAN) && id == K_V_FAN) {
+        }
+        K_FLAME_ELIF (K_V_FAN) {
             float dx = V.p0, dy = V.p1, dx2 = 0.5f * dx;
             float a = atxy + (k_fmod(atxy + dy, dx) > dx2 ? -dx2 : dx2);
             float r = w * sq;
             p0 += r * k_fcos(a);
             p1 += r * k_fsin(a);
-        } else if (K_FLAME_HAS(K_V_BLOB) && id == K_V_BLOB) {
+        }
+        K_FLAME_ELIF (K_V_BLOB) {
             float r = sq * (V.p0 + V.p1 * (0.5f + 0.5f * k_fsin(V.p2 * atxy)));
             p0 += w * sina * r;
             p1 += w * cosa * r;
-        } else if (K_FLAME_HAS(K_V_PDJ) && id == K_V_PDJ) {
+        }
+        K_FLAME_ELIF (K_V_PDJ) {
             p0 += w * (k_fsin(V.p0 * ty) - k_fcos(V.p1 * tx));
             p1 += w * (k_fsin(V.p2 * tx) - k_fcos(V.p3 * ty));
-        } else if (K_FLAME_HAS(K_V_FAN2) && id == K_V_FAN2) {
+        }
+        K_FLAME_ELIF (K_V_FAN2) {
             float dx = V.p0, dy = V.p1, dx2 = 0.5f * dx;
             float t = atxy + dy - dx * k_flame_itrunc((atxy + dy) / dx);
             float a = t > dx2 ? atxy - dx2 : atxy + dx2;
             float r = w * sq;
             p0 += r * k_fsin(a);
             p1 += r * k_fcos(a);
-        } else if (K_FLAME_HAS(K_V_RINGS2) && id == K_V_RINGS2) {
+        }
+        K_FLAME_ELIF (K_V_RINGS2) {
             float dx = V.p0;
             float r = sq + (-2.0f * dx * k_flame_itrunc((sq + dx) / (2.0f * dx)) + sq * (1.0f - dx));
             p0 += w * sina * r;
             p1 += w * cosa * r;
-        } else if (K_FLAME_HAS(K_V_EYEFISH) && id == K_V_EYEFISH) {
+        }
+        K_FLAME_ELIF (K_V_EYEFISH) {
             float r = (w * 2.0f) / (sq + 1.0f);
             p0 += r * tx;
             p1 += r * ty;
-        } else if (K_FLAME_HAS(K_V_BUBBLE) && id == K_V_BUBBLE) {
+        }
+        K_FLAME_ELIF (K_V_BUBBLE) {
             float r = w / (0.25f * sumsq + 1.0f);
             p0 += r * tx;
             p1 += r * ty;
-        } else if (K_FLAME_HAS(K_V_CYLINDER) && id == K_V_CYLINDER) {
+        }
+        K_FLAME_ELIF (K_V_CYLINDER) {
             p0 += w * k_fsin(tx);
             p1 += w * ty;
-        } else if (K_FLAME_HAS(K_V_PERSPECTIVE) && id == K_V_PERSPECTIVE) {
+        }
+        K_FLAME_ELIF (K_V_PERSPECTIVE) {
             float t = 1.0f / (V.p0 - ty * V.p1);
             p0 += w * V.p0 * tx * t;
             p1 += w * V.p2 * ty * t;
-        } else if (K_FLAME_HAS(K_V_NOISE) && id == K_V_NOISE) {
+        }
+        K_FLAME_ELIF (K_V_NOISE) {
             float a = K_FLAME_RAND() * 2.0f * K_PI;
             float r = w * K_FLAME_RAND();
             p0 += tx * r * k_fcos(a);
             p1 += ty * r * k_fsin(a);
-        } else if (K_FLAME_HAS(K_V_JULIAN) && id == K_V_JULIAN) {
+        }
+        K_FLAME_ELIF (K_V_JULIAN) {
             float t = k_trunc(V.p2 * K_FLAME_RAND());
             float a = (atyx + 2.0f * K_PI * t) / V.p0;
             float r = w * k_fpow(sumsq, V.p1);
             p0 += r * k_fcos(a);
             p1 += r * k_fsin(a);
-        } else if (K_FLAME_HAS(K_V_JULIASCOPE) && id == K_V_JULIASCOPE) {
+        }
+        K_FLAME_ELIF (K_V_JULIASCOPE) {
             int t = K_I(k_trunc(V.p2 * K_FLAME_RAND()));
             float a = (t & 1) == 0 ? (2.0f * K_PI * K_F(t) + atyx) / V.p0 : (2.0f * K_PI * K_F(t) - atyx) / V.p0;
             float r = w * k_fpow(sumsq, V.p1);
             p0 += r * k_fcos(a);
             p1 += r * k_fsin(a);
-        } else if (K_FLAME_HAS(K_V_BLUR) && id == K_V_BLUR) {
+        }
+        K_FLAME_ELIF (K_V_BLUR) {
             float a = K_FLAME_RAND() * 2.0f * K_PI;
             float r = w * K_FLAME_RAND();
             p0 += r * k_fcos(a);
             p1 += r * k_fsin(a);
-        } else if (K_FLAME_HAS(K_V_GAUSSIAN_BLUR) && id == K_V_GAUSSIAN_BLUR) {
+        }
+        K_FLAME_ELIF (K_V_GAUSSIAN_BLUR) {
             float a = K_FLAME_RAND() * 2.0f * K_PI;
             float g = K_FLAME_RAND();
             g += K_FLAME_RAND();
@@ -417,7 +489,8 @@ K_FLAME_INLINE K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint
             float r = w * (g - 2.0f);
             p0 += r * k_fcos(a);
             p1 += r * k_fsin(a);
-        } else if (K_FLAME_HAS(K_V_RADIAL_BLUR) && id == K_V_RADIAL_BLUR) {
+        }
+        K_FLAME_ELIF (K_V_RADIAL_BLUR) {
             float g = K_FLAME_RAND();
             g += K_FLAME_RAND();
             g += K_FLAME_RAND();
@@ -427,13 +500,15 @@ K_FLAME_INLINE K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint
             float rz = V.p1 * rnd - 1.0f;
             p0 += sq * k_fcos(a) + rz * tx;
             p1 += sq * k_fsin(a) + rz * ty;
-        } else if (K_FLAME_HAS(K_V_PIE) && id == K_V_PIE) {
+        }
+        K_FLAME_ELIF (K_V_PIE) {
             float sl = K_F(K_I(K_FLAME_RAND() * V.p0 + 0.5f));
             float a = V.p1 + 2.0f * K_PI * (sl + K_FLAME_RAND() * V.p2) / V.p0;
             float r = w * K_FLAME_RAND();
             p0 += r * k_fcos(a);
             p1 += r * k_fsin(a);
-        } else if (K_FLAME_HAS(K_V_NGON) && id == K_V_NGON) {
+        }
+        K_FLAME_ELIF (K_V_NGON) {
             float rf = k_fpow(sumsq, V.p0);
             float b = V.p1;
             float phi = atyx - b * k_floor(atyx / b);
@@ -442,59 +517,71 @@ K_FLAME_INLINE K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint
             amp /= (rf + K_FLAME_EPS);
             p0 += w * tx * amp;
             p1 += w * ty * amp;
-        } else if (K_FLAME_HAS(K_V_CURL) && id == K_V_CURL) {
+        }
+        K_FLAME_ELIF (K_V_CURL) {
             float re = 1.0f + V.p0 * tx + V.p1 * (tx * tx - ty * ty);
             float im = V.p0 * ty + 2.0f * V.p1 * tx * ty;
             float r = w / (re * re + im * im);
             p0 += (tx * re + ty * im) * r;
             p1 += (ty * re - tx * im) * r;
-        } else if (K_FLAME_HAS(K_V_RECTANGLES) && id == K_V_RECTANGLES) {
+        }
+        K_FLAME_ELIF (K_V_RECTANGLES) {
             p0 += V.p0 == 0.0f ? w * tx : w * ((2.0f * k_floor(tx / V.p0) + 1.0f) * V.p0 - tx);
             p1 += V.p1 == 0.0f ? w * ty : w * ((2.0f * k_floor(ty / V.p1) + 1.0f) * V.p1 - ty);
-        } else if (K_FLAME_HAS(K_V_ARCH) && id == K_V_ARCH) {
+        }
+        K_FLAME_ELIF (K_V_ARCH) {
             float a = K_FLAME_RAND() * w * K_PI;
             float s = k_fsin(a), cs = k_fcos(a);
             p0 += w * s;
             p1 += w * (s * s) / cs;
-        } else if (K_FLAME_HAS(K_V_TANGENT) && id == K_V_TANGENT) {
+        }
+        K_FLAME_ELIF (K_V_TANGENT) {
             p0 += w * k_fsin(tx) / k_fcos(ty);
             p1 += w * k_tan(ty);
-        } else if (K_FLAME_HAS(K_V_SQUARE) && id == K_V_SQUARE) {
+        }
+        K_FLAME_ELIF (K_V_SQUARE) {
             p0 += w * (K_FLAME_RAND() - 0.5f);
             p1 += w * (K_FLAME_RAND() - 0.5f);
-        } else if (K_FLAME_HAS(K_V_RAYS) && id == K_V_RAYS) {
+        }
+        K_FLAME_ELIF (K_V_RAYS) {
             float a = w * K_FLAME_RAND() * K_PI;
             float r = w / (sumsq + K_FLAME_EPS);
             float tr = w * k_tan(a) * r;
             p0 += tr * k_fcos(tx);
             p1 += tr * k_fsin(ty);
-        } else if (K_FLAME_HAS(K_V_BLADE) && id == K_V_BLADE) {
+        }
+        K_FLAME_ELIF (K_V_BLADE) {
             float r = K_FLAME_RAND() * w * sq;
             float s = k_fsin(r), cs = k_fcos(r);
             p0 += w * tx * (cs + s);
             p1 += w * tx * (cs - s);
-        } else if (K_FLAME_HAS(K_V_SECANT2) && id == K_V_SECANT2) {
+        }
+        K_FLAME_ELIF (K_V_SECANT2) {
             float cr = k_fcos(w * sq), icr = 1.0f / cr;
             p0 += w * tx;
             p1 += cr < 0.0f ? w * (icr + 1.0f) : w * (icr - 1.0f);
-        } else if (K_FLAME_HAS(K_V_TWINTRIAN) && id == K_V_TWINTRIAN) {
+        }
+        K_FLAME_ELIF (K_V_TWINTRIAN) {
             float r = K_FLAME_RAND() * w * sq;
             float s = k_fsin(r), cs = k_fcos(r);
             float diff = k_log(s * s) * 0.434294481903252f + cs; /* log10 */
             if (k_flame_bad(diff)) diff = -30.0f;
             p0 += w * tx * diff;
             p1 += w * tx * (diff - s * K_PI);
-        } else if (K_FLAME_HAS(K_V_CROSS) && id == K_V_CROSS) {
+        }
+        K_FLAME_ELIF (K_V_CROSS) {
             float s = tx * tx - ty * ty;
             float r = w * k_sqrt(1.0f / (s * s + K_FLAME_EPS));
             p0 += tx * r;
             p1 += ty * r;
-        } else if (K_FLAME_HAS(K_V_DISC2) && id == K_V_DISC2) {
+        }
+        K_FLAME_ELIF (K_V_DISC2) {
             float t = V.p0 * (tx + ty);
             float r = w * atxy / K_PI;
             p0 += (k_fsin(t) + V.p2) * r;
             p1 += (k_fcos(t) + V.p1) * r;
-        } else if (K_FLAME_HAS(K_V_SUPER_SHAPE) && id == K_V_SUPER_SHAPE) {
+        }
+        K_FLAME_ELIF (K_V_SUPER_SHAPE) {
             float th = V.p0 * atyx + 0.25f * K_PI;
             float t1 = k_fpow(k_abs(k_fcos(th)), V.p1);
             float t2 = k_fpow(k_abs(k_fsin(th)), V.p2);
@@ -502,20 +589,24 @@ K_FLAME_INLINE K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint
             float r = w * ((rnd * K_FLAME_RAND() + (1.0f - rnd) * sq) - V.p4) * k_fpow(t1 + t2, V.p5) / sq;
             p0 += r * tx;
             p1 += r * ty;
-        } else if (K_FLAME_HAS(K_V_FLOWER) && id == K_V_FLOWER) {
+        }
+        K_FLAME_ELIF (K_V_FLOWER) {
             float r = w * (K_FLAME_RAND() - V.p1) * k_fcos(V.p0 * atyx) / sq;
             p0 += r * tx;
             p1 += r * ty;
-        } else if (K_FLAME_HAS(K_V_CONIC) && id == K_V_CONIC) {
+        }
+        K_FLAME_ELIF (K_V_CONIC) {
             float ct = tx / sq;
             float r = w * (K_FLAME_RAND() - V.p1) * V.p0 / (1.0f + V.p0 * ct) / sq;
             p0 += r * tx;
             p1 += r * ty;
-        } else if (K_FLAME_HAS(K_V_PARABOLA) && id == K_V_PARABOLA) {
+        }
+        K_FLAME_ELIF (K_V_PARABOLA) {
             float s = k_fsin(sq), cs = k_fcos(sq);
             p0 += V.p0 * w * s * s * K_FLAME_RAND();
             p1 += V.p1 * w * cs * K_FLAME_RAND();
-        } else if (K_FLAME_HAS(K_V_BENT2) && id == K_V_BENT2) {
+        }
+        K_FLAME_ELIF (K_V_BENT2) {
             float nx = tx < 0.0f ? tx * V.p0 : tx;
             float ny = ty < 0.0f ? ty * V.p1 : ty;
             p0 += w * nx;
@@ -588,7 +679,7 @@ K_FLAME_INLINE K_FlameChain k_flame_step(K_FlameParams P, K_FlameChain s, uint k
     s.last = fn + 1u;
     s.vis = fn;
     float px = s.x, py = s.y, pc = s.c;
-    if (P.final_xf != K_FLAME_NONE) {
+    if (K_FLAME_FINAL && P.final_xf != K_FLAME_NONE) {
         bool apply = P.final_always != 0u;
         if (!apply) {
             apply = k_flame_u01(key, s.n) < P.final_opacity;

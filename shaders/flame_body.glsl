@@ -2,12 +2,13 @@
 // of it per dispatch (the first `fuse` not plotted), each plotted point added into the integer
 // histogram with atomics (order-independent sums, the same as the native path's cell for cell).
 // host/gen/flame/game.c runs the same chains natively. Included by flame.comp (32-bit atomics: a
-// field a word) and flame64.comp (FB_FLAME_INT64: two fields a 64-bit word, one add for both).
+// field a word) and flame64.comp (FB_FLAME_INT64: two fields a 64-bit word, one add for both; an
+// opaque genome's four fields in one word, add_packed).
 //
 // A cell has F fields: opaque genomes (COMPACT) hits, red, green, blue (their alpha and opacity sums
 // are 4080 x hits); others red, green, blue, alpha, opacity, hits. A word that passes 2^32 (or a
-// 64-bit word 2^64) counts the carry in `carry`, one counter a field, so the host recovers the exact
-// 64-bit sums (host/gen/flame/layer.c).
+// 64-bit word 2^64, or a packed field its width) counts the carry in `carry`, one counter a field,
+// so the host recovers the exact 64-bit sums (host/gen/flame/layer.c).
 #define K_GLSL 1
 #include "../kernels/common.h"
 
@@ -20,17 +21,29 @@ layout(constant_id = 1) const uint LINEAR = 0u;
 // the genome's variations, bits of 0-31 and 32-54: only their branches are compiled (kernels/flame.h)
 layout(constant_id = 2) const uint VMASK0 = 0xffffffffu;
 layout(constant_id = 3) const uint VMASK1 = 0xffffffffu;
+// 1: the genome has a final xform (0: its code is compiled out; lavapipe would run it under a mask)
+layout(constant_id = 4) const uint FINAL = 1u;
+#define K_FLAME_FINAL  (FINAL != 0u)
 #define K_FLAME_VMASK0 VMASK0
 #define K_FLAME_VMASK1 VMASK1
+// each of the genome's variations once a step, not once an xform's variation slot (kernels/flame.h)
+#define K_FLAME_ONCE 1
 
+// the xform and variation tables' entries (their uniform buffers' arrays are this long)
+layout(constant_id = 5) const uint NXF = 1u;
+layout(constant_id = 6) const uint NVAR = 1u;
+
+// The xforms, variations and palette are uniform buffers: on lavapipe a read at an index that differs
+// by lane is then a gather, where a storage buffer's is a loop over the 8 lanes with a branch each
+// (a step reads some 20 fields of its xform and a few of each variation).
 #define K_FLAME_BUFFERS                                                                                                \
-    layout(std430, set = 0, binding = 1) readonly buffer Xforms                                                        \
+    layout(std140, set = 0, binding = 1) uniform Xforms                                                                \
     {                                                                                                                  \
-        K_FlameXform k_flame_xf[];                                                                                     \
+        K_FlameXform k_flame_xf[NXF];                                                                                  \
     };                                                                                                                 \
-    layout(std430, set = 0, binding = 2) readonly buffer Vars                                                          \
+    layout(std140, set = 0, binding = 2) uniform Vars                                                                  \
     {                                                                                                                  \
-        K_FlameVar k_flame_var[];                                                                                      \
+        K_FlameVar k_flame_var[NVAR];                                                                                  \
     };                                                                                                                 \
     layout(std430, set = 0, binding = 3) readonly buffer Dist                                                          \
     {                                                                                                                  \
@@ -38,15 +51,15 @@ layout(constant_id = 3) const uint VMASK1 = 0xffffffffu;
     };
 #include "../kernels/flame.h"
 
-layout(std430, set = 0, binding = 0) readonly buffer Params
+layout(std140, set = 0, binding = 0) uniform Params
 {
     K_FlameParams p;
 }
 params;
 // the palette times 255 in 2^-4 units (r, g, b, a)
-layout(std430, set = 0, binding = 4) readonly buffer Palette
+layout(std140, set = 0, binding = 4) uniform Palette
 {
-    uvec4 q[];
+    uvec4 q[256];
 }
 pal;
 // chain c0 + i's state between dispatches
@@ -91,6 +104,30 @@ void add2(uint cell, uint f, uint lo, uint hi)
     if (uint(old) + lo < uint(old)) atomicAdd(carry.v[cell * F + f], 1u); // into the high word
     if (old + add < old) atomicAdd(carry.v[cell * F + f + 1u], 1u);       // out of the word
 }
+
+// Opaque genomes: a point's hit and colour in one 64-bit add into word `cell`, as fields of 7, 19,
+// 19 and 19 bits (hits, red, green, blue; a colour is at most 4080), the carries out of each field
+// counted in carry[4 cell + k] (rare: a field wraps once in 2^7 or some 2^19 / 4080 points), so
+// that the host recovers the exact sums (layer.c's device_packed). One locked add a point in place
+// of two, each a loop over the lanes on lavapipe, and half the histogram's memory.
+// Other genomes: word 2 cell the same for hits and the weighted red, green, blue (carries at
+// 6 cell + k), word 2 cell + 1 alpha and opacity as two 32-bit fields (carries at 6 cell + 4 and 5):
+// two adds a point in place of three.
+void add_packed_at(uint word, uint c0, uint hits, uint r, uint g, uint b)
+{
+    uint64_t add = uint64_t(hits) | (uint64_t(r) << 7) | (uint64_t(g) << 26) | (uint64_t(b) << 45);
+    uint64_t old = atomicAdd(hist.v[word], add);
+    uint64_t m7 = uint64_t(0x7fu), m26 = (uint64_t(1u) << 26) - uint64_t(1u), m45 = (uint64_t(1u) << 45) - uint64_t(1u);
+    if ((old & m7) + (add & m7) > m7) atomicAdd(carry.v[c0], 1u);
+    if ((old & m26) + (add & m26) > m26) atomicAdd(carry.v[c0 + 1u], 1u);
+    if ((old & m45) + (add & m45) > m45) atomicAdd(carry.v[c0 + 2u], 1u);
+    if (old + add < old) atomicAdd(carry.v[c0 + 3u], 1u);
+}
+
+void add_packed(uint cell, uvec4 q)
+{
+    add_packed_at(cell, cell * 4u, 1u, q.x, q.y, q.z);
+}
 #else
 void add1(uint cell, uint f, uint v)
 {
@@ -132,12 +169,14 @@ void main()
         }
 #ifdef FB_FLAME_INT64
         if (COMPACT != 0u) {
-            add2(cell, 0u, 1u, q.x);
-            add2(cell, 2u, q.y, q.z);
+            add_packed(cell, q);
         } else {
-            add2(cell, 0u, k_flame_vis(q.x, visq), k_flame_vis(q.y, visq));
-            add2(cell, 2u, k_flame_vis(q.z, visq), k_flame_vis(q.w, visq));
-            add2(cell, 4u, k_flame_vis(K_FLAME_OPAQUE, visq), 1u);
+            add_packed_at(2u * cell, 6u * cell, 1u, k_flame_vis(q.x, visq), k_flame_vis(q.y, visq),
+                          k_flame_vis(q.z, visq));
+            uint a = k_flame_vis(q.w, visq), o = k_flame_vis(K_FLAME_OPAQUE, visq);
+            uint64_t old = atomicAdd(hist.v[2u * cell + 1u], (uint64_t(o) << 32) | uint64_t(a));
+            if (uint(old) + a < uint(old)) atomicAdd(carry.v[6u * cell + 4u], 1u);
+            if (old + ((uint64_t(o) << 32) | uint64_t(a)) < old) atomicAdd(carry.v[6u * cell + 5u], 1u);
         }
 #else
         if (COMPACT != 0u) {

@@ -247,6 +247,7 @@ static void describe(const vkc_fns *vk, VkPhysicalDevice pd, vkc_device_info *in
     info->type = type_name(props.deviceType);
     info->api_version = props.apiVersion;
     info->max_storage_buffer_range = props.limits.maxStorageBufferRange;
+    info->max_uniform_buffer_range = props.limits.maxUniformBufferRange;
     VkPhysicalDeviceSubgroupProperties sub = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
     VkPhysicalDeviceDriverProperties drv = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
     /* VkPhysicalDeviceDriverProperties is core in 1.2; only chain it where the device has 1.2. */

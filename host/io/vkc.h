@@ -27,6 +27,7 @@ typedef struct vkc_device_info {
     uint32_t subgroup_size;
     uint32_t api_version;
     uint64_t max_storage_buffer_range;
+    uint64_t max_uniform_buffer_range;
     bool int64_atomics; /* 64-bit storage-buffer atomics enabled (VK_KHR_shader_atomic_int64); FB_VK_NO_INT64=1: off */
     bool float64;       /* shaderFloat64 enabled (double arithmetic in shaders); FB_VK_NO_FLOAT64=1: off */
     bool chosen;
@@ -67,10 +68,10 @@ typedef struct vkc_pipeline_desc {
     const uint32_t *spv;  /* SPIR-V words, embedded at build time */
     size_t spv_size;      /* bytes */
     uint32_t push_size;   /* bytes of push constants (<= 128) */
-    uint32_t buffers;     /* buffers at set 0, bindings 0..buffers-1: storage buffers, except... */
-    uint32_t uniform;     /* ... bit i set: binding i is a uniform buffer (read-only data that lanes
-                             index; lavapipe gathers those where it loads a storage buffer lane by
-                             lane); its size at most maxUniformBufferRange (16 KiB guaranteed) */
+    uint32_t buffers;     /* storage buffers at set 0, bindings 0..buffers-1 */
+    uint32_t uniform;     /* bit i: binding i is a uniform buffer instead (read-only, at most the device's
+                             maxUniformBufferRange bytes; on lavapipe a read at an index that differs by
+                             lane is a gather, where a storage buffer's is a loop over the lanes) */
     const uint32_t *spec; /* specialization constants: constant_id i takes spec[i] (32-bit each) */
     uint32_t nspec;
     const char *name; /* for messages */

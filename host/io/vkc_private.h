@@ -145,7 +145,7 @@ struct vkc_pipeline {
     VkPipeline pipeline;
     uint32_t push_size;
     uint32_t buffers;
-    uint32_t uniform; /* vkc_pipeline_desc's */
+    uint32_t uniform; /* bit i: binding i is a uniform buffer */
     const uint32_t *spv;
     size_t spv_size;
     uint32_t spec[8], nspec;

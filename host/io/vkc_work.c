@@ -18,6 +18,12 @@ void vkc_pipeline_free(vkc_context *ctx, vkc_pipeline *p)
     free(p);
 }
 
+/* The descriptor type of binding i: bit i of `uniform`, a uniform buffer; else a storage buffer. */
+static VkDescriptorType desc_type(uint32_t uniform, uint32_t i)
+{
+    return (uniform >> i) & 1u ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+}
+
 /* ---- pipelines ------------------------------------------------------------------------------ */
 
 fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, vkc_pipeline **out)
@@ -48,8 +54,7 @@ fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, v
     for (uint32_t i = 0; i < desc->buffers; i++)
         bindings[i] = (VkDescriptorSetLayoutBinding){
             .binding = i,
-            .descriptorType =
-                (desc->uniform >> i) & 1u ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+            .descriptorType = desc_type(desc->uniform, i),
             .descriptorCount = 1,
             .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT,
         };
@@ -183,6 +188,7 @@ fb_result vkc_buffer_create(vkc_context *ctx, uint64_t size, vkc_buffer **out)
     if (!b) return fb_fail(FB_ERR_NOMEM, "out of memory");
     b->size = size;
     VkMemoryPropertyFlags got = 0;
+    /* (any buffer may be bound as a uniform buffer: vkc_pipeline_desc.uniform) */
     const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT |
                                        VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
     if (ctx->direct_map) {
@@ -303,17 +309,19 @@ fb_result vkc_job_create(vkc_context *ctx, vkc_pipeline *pipe, vkc_job **out)
     VkFenceCreateInfo fci = {.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
     VKC_CHECK(ctx->vk.vkCreateFence(ctx->device, &fci, NULL, &job->fence), fail);
     if (pipe->buffers) {
-        uint32_t nu = (uint32_t)__builtin_popcount(pipe->uniform);
+        uint32_t nuni = 0;
+        for (uint32_t i = 0; i < pipe->buffers; i++) nuni += (pipe->uniform >> i) & 1u;
         VkDescriptorPoolSize ps[2] = {
-            {.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .descriptorCount = pipe->buffers - nu},
-            {.type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, .descriptorCount = nu}};
+            {.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .descriptorCount = pipe->buffers - nuni},
+            {.type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, .descriptorCount = nuni},
+        };
         VkDescriptorPoolCreateInfo dpci = {
             .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO,
             .maxSets = 1,
-            .poolSizeCount = nu == 0               ? 1u
-                             : nu == pipe->buffers ? 1u
-                                                   : 2u,
-            .pPoolSizes = nu == pipe->buffers ? &ps[1] : ps,
+            .poolSizeCount = nuni == 0               ? 1u
+                             : nuni == pipe->buffers ? 1u
+                                                     : 2u,
+            .pPoolSizes = nuni == pipe->buffers ? &ps[1] : ps,
         };
         VKC_CHECK(ctx->vk.vkCreateDescriptorPool(ctx->device, &dpci, NULL, &job->dpool), fail);
         VkDescriptorSetAllocateInfo dsai = {
@@ -370,8 +378,7 @@ fb_result vkc_job_submit(vkc_context *ctx, vkc_job *job, vkc_buffer *const *bufs
             .dstSet = job->set,
             .dstBinding = i,
             .descriptorCount = 1,
-            .descriptorType =
-                (p->uniform >> i) & 1u ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+            .descriptorType = desc_type(p->uniform, i),
             .pBufferInfo = &infos[i],
         };
         job->bufs[i] = bufs[i];

@@ -166,6 +166,19 @@ static uint64_t device_field(const void *hist, const uint32_t *carry, bool wide,
     return (at & 1) ? v + (w >> 32) - carry[at - 1] : v + (uint32_t)w;
 }
 
+/* Cell i of an opaque genome's histogram with 64-bit atomics (flame_body.glsl's add_packed): a
+ * word of fields of 7, 19, 19 and 19 bits (hits, red, green, blue) and the carries out of each, k. A
+ * carry out of field k left 2^bits(k) there and put 1 into field k + 1. */
+static void device_packed(const uint64_t *hist, const uint32_t *carry, size_t i, uint64_t out[4])
+{
+    static const int lo[4] = {0, 7, 26, 45}, bits[4] = {7, 19, 19, 19};
+    uint64_t w = hist[i];
+    for (int k = 0; k < 4; k++) {
+        uint64_t f = (w >> lo[k]) & ((1ull << bits[k]) - 1);
+        out[k] = f + ((uint64_t)carry[k] << bits[k]) - (k ? carry[k - 1] : 0);
+    }
+}
+
 /* Adds the device's histogram into total (64-bit cells). */
 static void device_to_total(const fb_flame_setup *S, const void *hist, const uint32_t *carry, bool wide,
                             fb_flame_cell *total)
@@ -175,12 +188,26 @@ static void device_to_total(const fb_flame_setup *S, const void *hist, const uin
     for (size_t i = 0; i < cells; i++) {
         size_t at = i * F;
         fb_flame_cell *c = &total[i];
-        if (F == 4) {
+        if (F == 4 && wide) {
+            uint64_t v[4];
+            device_packed(hist, carry + 4 * i, i, v);
+            for (int k = 0; k < 3; k++) c->c[k] += v[1 + k];
+            c->c[3] += K_FLAME_OPAQUE * v[0];
+            c->c[4] += K_FLAME_OPAQUE * v[0];
+            c->hits += v[0];
+        } else if (F == 4) {
             uint64_t hits = device_field(hist, carry, wide, at);
             for (int k = 0; k < 3; k++) c->c[k] += device_field(hist, carry, wide, at + 1 + k);
             c->c[3] += K_FLAME_OPAQUE * hits;
             c->c[4] += K_FLAME_OPAQUE * hits;
             c->hits += hits;
+        } else if (wide) { /* word 2i packed as above, word 2i + 1 alpha and opacity (32 bits each) */
+            uint64_t v[4], w = ((const uint64_t *)hist)[2 * i + 1];
+            device_packed(hist, carry + at, 2 * i, v);
+            for (int k = 0; k < 3; k++) c->c[k] += v[1 + k];
+            c->c[3] += (uint32_t)w + ((uint64_t)carry[at + 4] << 32);
+            c->c[4] += (w >> 32) + ((uint64_t)carry[at + 5] << 32) - carry[at + 4];
+            c->hits += v[0];
         } else {
             for (int k = 0; k < 5; k++) c->c[k] += device_field(hist, carry, wide, at + k);
             c->hits += device_field(hist, carry, wide, at + 5);
@@ -219,41 +246,56 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
     uint64_t hist_bytes, chain_bytes, range = vkc_info(vk)->max_storage_buffer_range;
     device_bytes(st, &hist_bytes, &chain_bytes);
     bool wide = vkc_info(vk)->int64_atomics;
-    if (hist_bytes > range || chain_bytes > range)
+    /* with 64-bit atomics a cell is one word (an opaque genome's) or two (add_packed, add_packed_at) */
+    uint64_t carry_bytes = hist_bytes;
+    if (wide) hist_bytes = 8ull * (device_fields(S) == 4 ? 1 : 2) * S->p.hist_w * S->p.hist_h;
+    if (carry_bytes > range || chain_bytes > range)
         return fb_fail(FB_ERR_INPUT,
                        "layer %s: the flame's histogram (%u x %u cells) needs %llu MiB in one buffer; this device "
                        "allows %llu MiB (a smaller size or supersample, or --backend native)",
-                       g->layer->name, S->p.hist_w, S->p.hist_h, (unsigned long long)(hist_bytes >> 20),
+                       g->layer->name, S->p.hist_w, S->p.hist_h, (unsigned long long)(carry_bytes >> 20),
                        (unsigned long long)(range >> 20));
     vkc_pipeline *pipe = NULL;
     vkc_job *job = NULL;
     vkc_buffer *buf[FB_NBUF] = {0};
-    uint32_t spec[4] = {device_fields(S) == 4, S->linear_palette, 0, 0};
+    uint32_t nxf = S->p.nxf + (S->p.final_xf != K_FLAME_NONE), nvar = S->nvar ? S->nvar : 1;
+    uint32_t spec[7] = {device_fields(S) == 4, S->linear_palette, 0, 0, S->p.final_xf != K_FLAME_NONE, nxf, nvar};
     for (uint32_t v = 0; v < S->nvar; v++) spec[2 + S->var[v].id / 32] |= 1u << (S->var[v].id % 32);
+    /* the parameters, xforms, variations and palette: uniform buffers (flame_body.glsl), their sizes
+     * in std140 (the parameters' block rounded up to 16 bytes) */
+    const uint64_t sizes[FB_NBUF] = {(sizeof S->p + 15) & ~(uint64_t)15,
+                                     sizeof(K_FlameXform) * nxf,
+                                     sizeof(K_FlameVar) * nvar,
+                                     4ull * S->ndist,
+                                     sizeof S->palq,
+                                     chain_bytes,
+                                     hist_bytes,
+                                     carry_bytes};
+    const uint32_t uniform = 1u << FB_PARAMS | 1u << FB_XF | 1u << FB_VAR | 1u << FB_PAL;
+    for (int b = 0; b < FB_NBUF; b++)
+        if ((uniform >> b & 1u) && sizes[b] > vkc_info(vk)->max_uniform_buffer_range)
+            return fb_fail(FB_ERR_INPUT,
+                           "layer %s: the flame's tables (%u xforms, %u variations) need %llu bytes in one uniform "
+                           "buffer; this device allows %llu (--backend native)",
+                           g->layer->name, nxf, S->nvar, (unsigned long long)sizes[b],
+                           (unsigned long long)vkc_info(vk)->max_uniform_buffer_range);
     fb_result rc = vkc_pipeline_create(vk,
                                        &(vkc_pipeline_desc){.spv = wide ? flame64_comp : flame_comp,
                                                             .spv_size = wide ? sizeof flame64_comp : sizeof flame_comp,
                                                             .push_size = sizeof(flame_push),
                                                             .buffers = FB_NBUF,
+                                                            .uniform = uniform,
                                                             .spec = spec,
-                                                            .nspec = 4,
+                                                            .nspec = 7,
                                                             .name = g->layer->name},
                                        &pipe);
-    uint32_t nxf = S->p.nxf + (S->p.final_xf != K_FLAME_NONE);
-    const uint64_t sizes[FB_NBUF] = {sizeof S->p,
-                                     sizeof(K_FlameXform) * nxf,
-                                     sizeof(K_FlameVar) * (S->nvar ? S->nvar : 1),
-                                     4ull * S->ndist,
-                                     sizeof S->palq,
-                                     chain_bytes,
-                                     hist_bytes,
-                                     hist_bytes};
     for (int b = 0; b < FB_NBUF && !rc; b++) rc = vkc_buffer_create(vk, sizes[b], &buf[b]);
     const void *data[FB_PAL + 1] = {&S->p, S->xf, S->var, S->dist, S->palq};
-    for (int b = 0; b <= FB_PAL && !rc; b++) rc = vkc_buffer_upload(vk, buf[b], data[b], sizes[b]);
-    void *zero = rc ? NULL : calloc(1, hist_bytes);
+    for (int b = 0; b <= FB_PAL && !rc; b++)
+        rc = vkc_buffer_upload(vk, buf[b], data[b], b == FB_PARAMS ? sizeof S->p : sizes[b]);
+    void *zero = rc ? NULL : calloc(1, carry_bytes);
     if (!rc && !zero) rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
-    for (int b = FB_HIST; b <= FB_CARRY && !rc; b++) rc = vkc_buffer_upload(vk, buf[b], zero, hist_bytes);
+    for (int b = FB_HIST; b <= FB_CARRY && !rc; b++) rc = vkc_buffer_upload(vk, buf[b], zero, sizes[b]);
     free(zero);
     if (!rc) rc = vkc_job_create(vk, pipe, &job);
     uint32_t steps = S->p.fuse + S->p.len, batch = FLAME_MAX_GROUPS * 64u;
