@@ -659,25 +659,11 @@ K_FN k_vec2 k_flame_rotate(K_FlameParams P, float px, float py)
     return k_vec2(rx, ry);
 }
 
-/* One iteration of the chain (flam3_iterate's loop body): the xform chosen and applied, retried on
- * a bad value at most four times, then the final xform and the camera's rotation for the plot. */
-K_FLAME_INLINE K_FlameChain k_flame_step(K_FlameParams P, K_FlameChain s, uint key K_FLAME_TABLES_DECL)
+/* The end of a step, once its xform is applied: the final xform (when the genome has one, at its
+ * opacity) and the camera's rotation give the point plotted (px, py, pc); the chain goes on from
+ * (x, y, c). Shared by k_flame_step and the native game's step with its linear fast path. */
+K_FLAME_INLINE K_FlameChain k_flame_plot(K_FlameParams P, K_FlameChain s, uint key K_FLAME_TABLES_DECL)
 {
-    uint fn = 0u;
-    K_FlameOut o;
-    for (uint tries = 0u; tries < 5u; tries++) {
-        uint row = P.chaos != 0u ? s.last : 0u;
-        fn = k_flame_dist[row * K_FLAME_GRAIN + (k_hash(s.n ^ key) & (K_FLAME_GRAIN - 1u))];
-        o = k_flame_apply(fn, s.x, s.y, s.c, key, s.n + 1u K_FLAME_TABLES);
-        s.n = o.n;
-        s.x = o.x;
-        s.y = o.y;
-        s.c = o.c;
-        if (!o.bad) break;
-        s.bad++;
-    }
-    s.last = fn + 1u;
-    s.vis = fn;
     float px = s.x, py = s.y, pc = s.c;
     if (K_FLAME_FINAL && P.final_xf != K_FLAME_NONE) {
         bool apply = P.final_always != 0u;
@@ -702,6 +688,28 @@ K_FLAME_INLINE K_FlameChain k_flame_step(K_FlameParams P, K_FlameChain s, uint k
     s.py = py;
     s.pc = pc;
     return s;
+}
+
+/* One iteration of the chain (flam3_iterate's loop body): the xform chosen and applied, retried on
+ * a bad value at most four times, then the final xform and the camera's rotation for the plot. */
+K_FLAME_INLINE K_FlameChain k_flame_step(K_FlameParams P, K_FlameChain s, uint key K_FLAME_TABLES_DECL)
+{
+    uint fn = 0u;
+    K_FlameOut o;
+    for (uint tries = 0u; tries < 5u; tries++) {
+        uint row = P.chaos != 0u ? s.last : 0u;
+        fn = k_flame_dist[row * K_FLAME_GRAIN + (k_hash(s.n ^ key) & (K_FLAME_GRAIN - 1u))];
+        o = k_flame_apply(fn, s.x, s.y, s.c, key, s.n + 1u K_FLAME_TABLES);
+        s.n = o.n;
+        s.x = o.x;
+        s.y = o.y;
+        s.c = o.c;
+        if (!o.bad) break;
+        s.bad++;
+    }
+    s.last = fn + 1u;
+    s.vis = fn;
+    return k_flame_plot(P, s, key K_FLAME_TABLES);
 }
 
 /* The histogram cell the plotted point falls in, or K_FLAME_NONE outside the frame (or invisible). */

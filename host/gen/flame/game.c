@@ -192,30 +192,7 @@ static inline __attribute__((always_inline)) K_FlameChain step(K_FlameParams P, 
     }
     s.last = fn + 1u;
     s.vis = fn;
-    float px = s.x, py = s.y, pc = s.c;
-    if (P.final_xf != K_FLAME_NONE) {
-        bool apply = P.final_always != 0u;
-        if (!apply) {
-            apply = k_flame_u01(key, s.n) < P.final_opacity;
-            s.n++;
-        }
-        if (apply) {
-            K_FlameOut f = k_flame_apply(P.final_xf, s.x, s.y, s.c, key, s.n K_FLAME_TABLES);
-            s.n = f.n;
-            px = f.x;
-            py = f.y;
-            pc = f.c;
-        }
-    }
-    if (P.rotate != 0u) {
-        k_vec2 r = k_flame_rotate(P, px, py);
-        px = r.x;
-        py = r.y;
-    }
-    s.px = px;
-    s.py = py;
-    s.pc = pc;
-    return s;
+    return k_flame_plot(P, s, key K_FLAME_TABLES);
 }
 
 /* Chain i, of length len. */
