@@ -128,6 +128,23 @@ static bool unstable(double complex pt, double complex a, double complex c, int 
 static const double cs[4][2] = {{-0.8, 0.156}, {-0.4, 0.6}, {0.285, 0.01}, {-1.0, 0.0}};
 static const double as[3][2] = {{0, 0}, {0.5, 0.25}, {-0.3, 0}};
 
+/* The reference cases' float parameters: c = cs[ci], alpha = as[ai], a 160 x 120 grid. */
+static K_JuliaParams case_params(int mapping, int ci, int ai)
+{
+    K_JuliaParams p = base(cs[ci][0], cs[ci][1], as[ai][0], as[ai][1], 256);
+    p.mapping = (uint)mapping;
+    p.width = 160, p.height = 120;
+    p.inv_width = 1.0f / 160, p.inv_height = 1.0f / 120;
+    return p;
+}
+
+/* The same case's double-precision parameters (the rest of d as k_julia_d_constants left it). */
+static void case_d(K_JuliaD *d, int ci, int ai)
+{
+    d->c_re = cs[ci][0], d->c_im = cs[ci][1], d->a_re = as[ai][0], d->a_im = as[ai][1];
+    d->scale_u = d->scale_v = 3.0, d->radius = 1.5, d->rot_c = 1.0, d->rot_s = 0.0, d->bailout2 = 4.0;
+}
+
 /* The reference's starting point of pixel (x, y), in double: the rect grid 3 wide, or polar r = 1.5. */
 static double complex reference_point(int mapping, uint x, uint y, uint W, uint H)
 {
@@ -140,10 +157,7 @@ static void test_against_reference(void)
     for (int mapping = 0; mapping < 2; mapping++)
         for (int ci = 0; ci < 4; ci++)
             for (int ai = 0; ai < 3; ai++) {
-                K_JuliaParams p = base(cs[ci][0], cs[ci][1], as[ai][0], as[ai][1], 256);
-                p.mapping = (uint)mapping;
-                p.width = 160, p.height = 120;
-                p.inv_width = 1.0f / 160, p.inv_height = 1.0f / 120;
+                K_JuliaParams p = case_params(mapping, ci, ai);
                 double complex a = as[ai][0] + I * as[ai][1], c = cs[ci][0] + I * cs[ci][1];
                 int agree = 0, total = 0, stable = 0, stable_agree = 0;
                 for (uint y = 0; y < p.height; y++)
@@ -242,12 +256,8 @@ static void test_distance_reference(void)
     for (int mapping = 0; mapping < 2; mapping++)
         for (int ci = 0; ci < 4; ci++)
             for (int ai = 0; ai < 3; ai++) {
-                K_JuliaParams p = base(cs[ci][0], cs[ci][1], as[ai][0], as[ai][1], 256);
-                p.mapping = (uint)mapping;
-                p.width = 160, p.height = 120;
-                p.inv_width = 1.0f / 160, p.inv_height = 1.0f / 120;
-                d.c_re = cs[ci][0], d.c_im = cs[ci][1], d.a_re = as[ai][0], d.a_im = as[ai][1];
-                d.scale_u = d.scale_v = 3.0, d.radius = 1.5, d.rot_c = 1.0, d.rot_s = 0.0, d.bailout2 = 4.0;
+                K_JuliaParams p = case_params(mapping, ci, ai);
+                case_d(&d, ci, ai);
                 double complex a = as[ai][0] + I * as[ai][1], c = cs[ci][0] + I * cs[ci][1];
                 for (uint y = 0; y < p.height; y++)
                     for (uint x = 0; x < p.width; x++) {
@@ -400,8 +410,7 @@ static void test_double(void)
                 K_JuliaParams p = base(cs[ci][0], cs[ci][1], as[ai][0], as[ai][1], 256);
                 p.mapping = (uint)mapping;
                 p.width = 160, p.height = 120;
-                d.c_re = cs[ci][0], d.c_im = cs[ci][1], d.a_re = as[ai][0], d.a_im = as[ai][1];
-                d.scale_u = d.scale_v = 3.0, d.radius = 1.5, d.rot_c = 1.0, d.rot_s = 0.0, d.bailout2 = 4.0;
+                case_d(&d, ci, ai);
                 double complex a = as[ai][0] + I * as[ai][1], c = cs[ci][0] + I * cs[ci][1];
                 int agree = 0, total = 0;
                 for (uint y = 0; y < p.height; y++)
