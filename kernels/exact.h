@@ -34,6 +34,12 @@
 #define K_SPEC_EXACT_NATIVE 127
 
 #ifdef K_GLSL
+#define K_DOUBLE(x) double(x)
+#else
+#define K_DOUBLE(x) ((double)(x))
+#endif
+
+#ifdef K_GLSL
 layout(constant_id = K_SPEC_EXACT_NATIVE) const bool K_EXACT_NATIVE = false;
 #define kx_msb(x) findMSB(x)
 #else
@@ -95,8 +101,8 @@ K_FN uint kx_round(uint s, uint q, int E, uint rem2, uint den)
     int k = 1 - E; /* the subnormal's shift */
     if (k > 24) return s;
     uint m = q >> K_U(k);
-    uint low = q & ((1u << K_U(k)) - 1u), half = 1u << K_U(k - 1);
-    bool up = low > half || (low == half && (rem2 != 0u || (m & 1u) != 0u));
+    uint low = q & ((1u << K_U(k)) - 1u), halfway = 1u << K_U(k - 1);
+    bool up = low > halfway || (low == halfway && (rem2 != 0u || (m & 1u) != 0u));
     return s | (m + (up ? 1u : 0u)); /* m + 1 = 2^23 is the smallest normal's bits: right */
 }
 
@@ -165,6 +171,118 @@ K_FN float kx_sqrt_soft(float x)
     }
     return k_bits_float((K_U(E) << 23u) | (q & 0x7fffffu));
 }
+
+/* ---- double precision (shaders that define K_F64: a julia layer's "precision": "double") -------
+ * kx_ddiv(a, b): a / b in double, correctly rounded. A device's double operations are only required
+ * to be as precise as its single ones, but add, subtract and multiply are correctly rounded on every
+ * device with shaderFloat64 we know of; division is not. The portable path scales both significands
+ * into [1, 2), refines the device's quotient twice with Dekker's exact product (Veltkamp's split:
+ * no fma, whose fusion Vulkan leaves open), then settles the last ulp from the exact remainder
+ * a - q b against half an ulp of b: the nearest double, ties to even. Subnormal quotients (below
+ * 2^-1022) are the one case it may round twice; no kernel divides into that range. */
+#if !defined(K_GLSL) || defined(K_F64)
+
+#ifdef K_GLSL
+#define kx_dhi(d)        unpackDouble2x32(d).y
+#define kx_dlo(d)        unpackDouble2x32(d).x
+#define kx_dbits(hi, lo) packDouble2x32(uvec2(lo, hi))
+#define kx_destimate(v)  (v)
+#else
+static inline uint kx_dhi(double d)
+{
+    uint64_t u;
+    memcpy(&u, &d, 8);
+    return (uint)(u >> 32);
+}
+static inline uint kx_dlo(double d)
+{
+    uint64_t u;
+    memcpy(&u, &d, 8);
+    return (uint)u;
+}
+static inline double kx_dbits(uint hi, uint lo)
+{
+    uint64_t u = ((uint64_t)hi << 32) | lo;
+    double d;
+    memcpy(&d, &u, 8);
+    return d;
+}
+#ifdef KX_TEST_DESTIMATE
+#define kx_destimate(v) KX_TEST_DESTIMATE(v)
+#else
+#define kx_destimate(v) (v)
+#endif
+#endif
+
+/* x y - p exactly, for p the rounded product x y (Dekker's TwoProduct, |x|, |y| < 2^900). */
+K_FN double kx_dprod_err(double x, double y, double p)
+{
+    K_PRECISE double c = K_DOUBLE(134217728.0f) + K_DOUBLE(1.0f); /* 2^27 + 1 */
+    K_PRECISE double t = c * x;
+    K_PRECISE double xh = t - (t - x);
+    K_PRECISE double xl = x - xh;
+    t = c * y;
+    K_PRECISE double yh = t - (t - y);
+    K_PRECISE double yl = y - yh;
+    K_PRECISE double e = (((xh * yh - p) + xh * yl) + xl * yh) + xl * yl;
+    return e;
+}
+
+/* a - q b exactly, where q b is within a factor 2 of a and the difference is a double. */
+K_FN double kx_dremainder(double a, double q, double b)
+{
+    K_PRECISE double p = q * b;
+    K_PRECISE double r = (a - p) - kx_dprod_err(q, b, p);
+    return r;
+}
+
+K_FN double kx_ddiv_soft(double a, double b)
+{
+    uint ha = kx_dhi(a), hb = kx_dhi(b);
+    uint ea = (ha >> 20u) & 2047u, eb = (hb >> 20u) & 2047u;
+    /* zero, subnormal, infinite or NaN operands: the device's own answer (exact for these) */
+    if (ea == 0u || eb == 0u || ea == 2047u || eb == 2047u) return a / b;
+    /* A = |a| and B = |b| scaled into [1, 2): a / b = +-(A / B) 2^(ea - eb) */
+    K_PRECISE double A = kx_dbits((ha & 0xfffffu) | 0x3ff00000u, kx_dlo(a));
+    K_PRECISE double B = kx_dbits((hb & 0xfffffu) | 0x3ff00000u, kx_dlo(b));
+    K_PRECISE double q = kx_destimate(A / B);
+    q = q + kx_destimate(kx_dremainder(A, q, B) / B);
+    q = q + kx_destimate(kx_dremainder(A, q, B) / B);
+    /* q is now within an ulp of A / B, in [1/2, 2]: the remainders below are exact */
+    for (int i = 0; i < 2; i++) {
+        uint hq = kx_dhi(q), lq = kx_dlo(q);
+        uint eq = (hq >> 20u) & 2047u;
+        K_PRECISE double hu = kx_dbits((eq - 53u) << 20u, 0u) * B; /* half an ulp of q, times B */
+        bool pow2 = (hq & 0xfffffu) == 0u && lq == 0u;
+        K_PRECISE double hd = pow2 ? hu * K_DOUBLE(0.5f) : hu;
+        K_PRECISE double r = kx_dremainder(A, q, B);
+        bool odd = (lq & 1u) != 0u;
+        if (r > hu || (r == hu && odd)) /* the next double up */
+            q = kx_dbits(hq + (lq == 0xffffffffu ? 1u : 0u), lq + 1u);
+        else if (-r > hd || (-r == hd && odd)) /* the next one down */
+            q = kx_dbits(hq - (lq == 0u ? 1u : 0u), lq - 1u);
+    }
+    /* the exponent back: q 2^(ea - eb), as long as the result stays normal */
+    int e = K_I((kx_dhi(q) >> 20u) & 2047u) + K_I(ea) - K_I(eb);
+    if (e <= 0 || e >= 2047) return a / b;
+    uint s = (ha ^ hb) & 0x80000000u;
+    return kx_dbits(s | (K_U(e) << 20u) | (kx_dhi(q) & 0xfffffu), kx_dlo(q));
+}
+
+#ifdef K_GLSL
+K_FN double kx_ddiv(double a, double b)
+{
+    if (K_EXACT_NATIVE) return a / b;
+    return kx_ddiv_soft(a, b);
+}
+#else
+K_FN double kx_ddiv(double a, double b)
+{
+    return a / b;
+}
+#endif
+
+#endif
 
 #ifdef K_GLSL
 K_FN float kx_div(float a, float b)
