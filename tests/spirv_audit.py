@@ -37,6 +37,9 @@ INEXACT_GLSL = {"Sqrt", "InverseSqrt", "Exp", "Exp2", "Log", "Log2", "Pow", "Sin
 NEVER_GLSL = {"FMin", "FMax", "FClamp", "PackHalf2x16", "PackSnorm2x16", "PackUnorm2x16", "PackSnorm4x8",
               "PackUnorm4x8"}
 EXEMPT = ("ceiling_",)
+# Modules known to fail while their kernel is rewritten on a branch of its own (issue 42: every
+# flam3 variation as an exact function): strict, so that the list must shrink the day they pass.
+PENDING = {"flame.spv", "flame64.spv"}
 HELPER = "kx_"
 
 
@@ -101,6 +104,13 @@ def audit_dir(spv_dir, quiet=False):
     failed = 0
     for f in mods:
         bad = audit_module(os.path.join(spv_dir, f))
+        if f in PENDING:
+            if not bad:
+                failed += 1
+                print(f"{f}: passes the audit now: take it off PENDING")
+            elif not quiet:
+                print(f"{f}: pending, {len(bad)} violation(s) (expected until its branch lands)")
+            continue
         if bad:
             failed += 1
             if not quiet:
@@ -110,7 +120,9 @@ def audit_dir(spv_dir, quiet=False):
                 if len(bad) > 20:
                     print(f"  ... {len(bad) - 20} more")
     if not quiet:
-        print(f"spirv_audit: {len(mods) - failed} of {len(mods)} modules exact")
+        pend = len(PENDING & set(mods))
+        print(f"spirv_audit: {len(mods) - pend - failed} of {len(mods) - pend} modules exact"
+              + (f" ({pend} pending)" if pend else ""))
     return 1 if failed else 0
 
 
