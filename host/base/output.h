@@ -15,9 +15,9 @@
  * Only regular files are replaced: a target that exists and is anything else (a directory, a device
  * node, a symbolic link, a FIFO) is refused before anything is computed, as is one path named twice.
  *
- * The path "-" is standard output: its data goes to an anonymous temporary file and is copied to
- * standard output at the commit (so a failed run writes nothing there either); it is refused when
- * standard output is a terminal.
+ * The path "-" is standard output: its data goes to an anonymous temporary file (in the folder of
+ * fb_outputs_tmpdir) and is copied to standard output at the commit (so a failed run writes nothing there either); it
+ * is refused when standard output is a terminal.
  *
  * Transactions nest: fb_outputs_begin() / fb_outputs_end() pairs may be called inside one another
  * (main() around a command, fb_bake() around a bake); only the outermost end commits, and any
@@ -83,6 +83,10 @@ bool fb_outputs_signal(int sig);
 /* Whether outputs may be anonymous (O_TMPFILE) files (default true). false: always the hidden named
  * temporary file, as on a file system without O_TMPFILE (for tests of that path). */
 void fb_outputs_use_tmpfile(bool on);
+
+/* The folder where standard output's data ("-") waits for the commit (the command line passes
+ * $TMPDIR); NULL or "": /tmp. A folder that cannot hold it fails the reservation (FB_ERR_IO). */
+void fb_outputs_tmpdir(const char *dir);
 
 /* A file named for one image format (".png") where another is written (ext, ".exr") is refused:
  * FB_ERR_USAGE naming the flag. Names without an image extension (a mesh, /dev/null, "out") are

@@ -11,6 +11,14 @@ static bool env_true(const char *name)
     return v && *v && strcmp(v, "0") != 0;
 }
 
+void fb_env_lavapipe_threads(int threads)
+{
+    if (threads <= 0) return;
+    char n[16];
+    snprintf(n, sizeof n, "%d", threads);
+    setenv("LP_NUM_THREADS", n, 1);
+}
+
 void fb_env_read(fb_env *env)
 {
     memset(env, 0, sizeof *env);
@@ -30,4 +38,6 @@ void fb_env_read(fb_env *env)
     snprintf(env->lp_num_threads, sizeof env->lp_num_threads, "%s", lp ? lp : "");
     lp = getenv("LP_NATIVE_VECTOR_WIDTH");
     snprintf(env->lp_vector_width, sizeof env->lp_vector_width, "%s", lp ? lp : "");
+    const char *tmp = getenv("TMPDIR");
+    snprintf(env->tmpdir, sizeof env->tmpdir, "%s", tmp ? tmp : "");
 }

@@ -10,6 +10,8 @@
  *   LP_NUM_THREADS, LP_NATIVE_VECTOR_WIDTH   lavapipe's own (read by it; recorded by the bench)
  *   XDG_CACHE_HOME, HOME   the pipeline cache's folder: $XDG_CACHE_HOME/fractalbake, else
  *                          $HOME/.cache/fractalbake
+ *   TMPDIR                 where standard output's data ("-o -") waits for the commit (/tmp
+ *                          when unset: output.h)
  */
 #ifndef FB_ENV_H
 #define FB_ENV_H
@@ -23,9 +25,15 @@ typedef struct fb_env {
      * (LP_NATIVE_VECTOR_WIDTH: 256 gives subgroups of 8, 128 of 4), as given ("" when unset); the
      * bench records them on every line */
     char lp_num_threads[32], lp_vector_width[32];
+    char tmpdir[1024]; /* TMPDIR as given ("" when unset) */
 } fb_env;
 
 /* Reads the variables above into *env. */
 void fb_env_read(fb_env *env);
+
+/* lavapipe runs compute on a pool of its own, LP_NUM_THREADS threads (by default one per core), read
+ * when it creates a device: a command with --threads N sets it to N before it opens a Vulkan engine,
+ * so that N bounds lavapipe's threads too. threads <= 0: left as it is. */
+void fb_env_lavapipe_threads(int threads);
 
 #endif

@@ -201,7 +201,8 @@ static void fbm_rows(const fb_gen *g, int y0, int n, void *const *planes)
     }
 }
 
-/* Fills K_FbmParams from a validated layer. */
+/* The frame fields of *p for a width x height image: the size, its reciprocals and those of the
+ * frequencies (freq_x, freq_y already set). */
 void fb_fbm_params_frame(K_FbmParams *p, int width, int height)
 {
     p->width = (uint32_t)width;
