@@ -4,6 +4,7 @@
  *   FB_VK_VALIDATION=1     the Vulkan validation layer on every context (the test suite sets it)
  *   FB_VK_STAGING=1        a discrete GPU's path on any device: device-local memory and staging copies,
  *                          and the portable exact division and square root (kernels/exact.h)
+ *   FB_VK_PORTABLE=1       the portable exact division and square root alone
  *   FB_VK_NO_INT64=1       as if the device had no 64-bit buffer atomics
  *   FB_VK_NO_FLOAT64=1     as if the device had no shaderFloat64
  *   FB_NO_PIPELINE_CACHE=1 no pipeline cache on disk
