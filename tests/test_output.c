@@ -228,6 +228,25 @@ int main(void)
     CHECK(has("in.txt", "input") && has("late.txt", "input") && count_files(".tmp") == 0);
     unlink(at("in.txt")), unlink(at("in-link.txt")), unlink(at("late.txt"));
 
+    /* Standard output carries one document: a claim (--json) and "-" exclude each other, either
+     * order; the claim goes with the transaction. (Not where standard output is a terminal, which
+     * "-" refuses anyway.) */
+    if (!isatty(STDOUT_FILENO)) {
+        fb_outputs_begin();
+        CHECK(fb_output_claim_stdout("--json") == FB_OK);
+        CHECK(fb_output_reserve("-", "JUnit report") == FB_ERR_USAGE);
+        CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
+        fb_outputs_begin();
+        CHECK(fb_output_reserve("-", "output") == FB_OK);
+        CHECK(fb_output_claim_stdout("--json") == FB_ERR_USAGE);
+        CHECK(fb_output_reserve("-", "preview") == FB_ERR_USAGE);
+        CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
+        fb_outputs_begin();
+        CHECK(fb_output_reserve("-", "output") == FB_OK);
+        fb_output_discard("-");
+        CHECK(fb_outputs_end(FB_OK) == FB_OK);
+    }
+
     /* The signal handler's clean-up removes every temporary file. */
     fb_outputs_begin();
     CHECK(fb_output_reserve(at("i.txt"), "output") == FB_OK);

@@ -67,6 +67,8 @@ typedef struct input {
 } input;
 static input *g_in;
 static int g_nin, g_capin;
+/* A document the run prints on standard output itself (fb_output_claim_stdout): no "-" output then. */
+static char g_stdout_claim[32];
 
 /* The folder and the name of path: "a/b.exr" -> "a", "b.exr"; "b.exr" -> ".", "b.exr". */
 static void split(const char *path, char *dir, size_t dsize, const char **base)
@@ -161,8 +163,15 @@ static entry *free_entry(void)
 static fb_result reserve_stdout(const char *what, entry **out)
 {
     if (find("-"))
-        return fb_fail(FB_ERR_USAGE, "-: standard output named for two outputs (the %s and the %s)", find("-")->what,
-                       what);
+        return fb_fail(FB_ERR_USAGE,
+                       "-: standard output named for two outputs (the %s and the %s): it carries one document; "
+                       "name a file for one of them",
+                       find("-")->what, what);
+    if (g_stdout_claim[0])
+        return fb_fail(FB_ERR_USAGE,
+                       "-: standard output carries what %s prints: name a file for the %s (standard output "
+                       "carries one document)",
+                       g_stdout_claim, what);
     if (isatty(STDOUT_FILENO))
         return fb_fail(FB_ERR_USAGE, "-: the %s would go to a terminal: redirect standard output to a file or a pipe",
                        what);
@@ -477,7 +486,7 @@ fb_result fb_outputs_end(fb_result rc)
         if (!rc) rc = commit_locked(list, n);
         abort_locked(); /* after a failed rename: the rest are removed */
     }
-    if (g_depth == 0) forget_inputs_locked();
+    if (g_depth == 0) forget_inputs_locked(), g_stdout_claim[0] = 0;
     pthread_mutex_unlock(&g_mu);
     deliver_deferred();
     return rc;
@@ -578,6 +587,22 @@ void fb_output_discard(const char *path)
     entry *e = path && key_of(path, key) ? find(key) : NULL;
     if (e) drop(e);
     pthread_mutex_unlock(&g_mu);
+}
+
+fb_result fb_output_claim_stdout(const char *what)
+{
+    fb_result rc = FB_OK;
+    pthread_mutex_lock(&g_mu);
+    const entry *e = find("-");
+    if (e)
+        rc = fb_fail(FB_ERR_USAGE,
+                     "%s: standard output carries the %s (-): name a file for it (standard output carries one "
+                     "document)",
+                     what, e->what);
+    else if (g_depth > 0)
+        snprintf(g_stdout_claim, sizeof g_stdout_claim, "%s", what);
+    pthread_mutex_unlock(&g_mu);
+    return rc;
 }
 
 fb_result fb_input_note(const char *path, const char *what, int fd)

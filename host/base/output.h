@@ -23,7 +23,8 @@
  *
  * The path "-" is standard output: its data goes to an anonymous temporary file and is copied to
  * standard output at the commit (so a failed run writes nothing there either); it is refused when
- * standard output is a terminal.
+ * standard output is a terminal. Standard output carries one document: a second "-" is refused, and
+ * so is one beside a document the run prints there itself (a --json summary, fb_output_claim_stdout).
  *
  * Transactions nest: fb_outputs_begin() / fb_outputs_end() pairs may be called inside one another
  * (main() around a command, fb_bake() around a bake); only the outermost end commits, and any
@@ -93,6 +94,11 @@ void fb_outputs_use_tmpfile(bool on);
 /* A file the flag writes in one format (ext, ".exr") must be named so (any case), or be "-": any other
  * name (x.png, g.flame, out, /dev/null) is FB_ERR_USAGE naming the flag. */
 fb_result fb_output_format(const char *flag, const char *path, const char *ext);
+
+/* Claims standard output for a document the run prints there itself (what: the flag, "--json"), for
+ * the transaction: an output "-" is then refused, and the claim is refused (FB_ERR_USAGE, logged)
+ * when one was reserved. Outside any transaction it has no effect. */
+fb_result fb_output_claim_stdout(const char *what);
 
 /* Notes path as an input of the run (what: its role in messages, "scene", "points"; fd: the open file,
  * or -1 to look the path up): from now until the outermost fb_outputs_end, an output that names the

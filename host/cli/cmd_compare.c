@@ -167,6 +167,10 @@ static fb_result run(const fb_cli *cli, void *opts)
     d->a = c->files.v[0];
     d->b = c->files.v[1];
     d->print = c->quiet && !d->json ? print_result_only : fb_cli_print_line;
+    /* a document written to standard output (--junit -) is all it carries: the lines go to stderr */
+    const char *outs[] = {d->diff, d->diff_png, d->flip_png, d->report, d->junit};
+    for (size_t k = 0; k < sizeof outs / sizeof outs[0]; k++)
+        if (outs[k] && !strcmp(outs[k], "-")) d->user = stderr;
     if (cli_check_quiet_json(c->quiet, d->json)) return FB_ERR_USAGE;
     if (d->heat && !d->diff_png)
         return fb_fail(FB_ERR_USAGE, "--heat: only with --diff-png OUT.png (it chooses that picture's colours)");
@@ -207,7 +211,7 @@ static const fb_arg flags[] = {
     {FB_ARG_VALUE, "--warnrelative", NULL, D(warnrelative), .parse = arg_relative},
     {FB_ARG_BOOL, "--ignore-missing", NULL, D(ignore_missing)},
     {FB_ARG_BOOL, "--heat", NULL, D(heat)},
-    {FB_ARG_BOOL, "--json", NULL, D(json)},
+    {FB_ARG_DOCUMENT, "--json", NULL, D(json)},
     {FB_ARG_BOOL, "--quiet", NULL, offsetof(compare_opts, quiet)},
     {FB_ARG_INT, "--threads", NULL, D(threads), 1, 1024},
     {FB_ARG_BOOL, "--help", "-h", offsetof(compare_opts, help)},
