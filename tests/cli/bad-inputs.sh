@@ -130,9 +130,11 @@ ln small.exr hard.exr && ln -s small.exr lsmall.exr
 "$FB" ifs $N --size 32x32 --points 10000 -o if.exr --quiet
 printf '{"size": [65, 1], "layers": [{"type": "constrain", "profile": "prof.csv", "csv": "scene.csv"}]}' > scene.csv
 before=$(ls -A | sort)
-# every regular file's bytes, to check that no row changed one
-sums() { find . -maxdepth 1 -type f -exec md5sum {} + | sort; }
+# every regular file's inode, size and time, to check that no row replaced or changed one (and its
+# bytes, checked once after the table)
+sums() { find . -maxdepth 1 -type f -printf '%i %s %T@ %p\n' | sort; }
 sums_before=$(sums)
+bytes_before=$(find . -maxdepth 1 -type f -exec md5sum {} + | sort -k2)
 vk=0
 have_vulkan && vk=1
 
@@ -166,6 +168,7 @@ while IFS=$'\t' read -r code needs pat args; do
   fi
   [ "$after" = "$before" ] || comm -13 <(echo "$before") <(echo "$after") | xargs -r rm -rf # the next row starts clean
 done < "$TABLE"
+check "every fixture byte-identical after the table" test "$(find . -maxdepth 1 -type f -exec md5sum {} + | sort -k2)" = "$bytes_before"
 check "the fixtures were not written through" test "$(cat victim.txt)" = precious -a -c /dev/null -a -p afifo
 echo "$rows rows ($skipped need Vulkan and were not run)"
 [ "$rows" -ge 120 ] && ok || bad "the table has $rows rows, fewer than 120"
