@@ -2,16 +2,13 @@
 # Blender as the client of plant instances (docs/plants.md, "Loading them"): a population of an ifs
 # layer stands on a terrain layer; its instances (PLY, Z up) and the terrain's heightmap go into
 # Blender through the recipes docs/examples/blender/plants.py and terrain.py, and
-# tests/blender/plants.py checks the count and places of the points and of their Geometry Nodes
+# tests/blender/test_plants.py checks the count and places of the points and of their Geometry Nodes
 # instances against the population it enumerates itself, and that each plant stands on the terrain
 # as Blender displaced it. Not run (77) where blender is not installed.
 # Usage: blender-plants.sh PATH/TO/fractalbake
 . "$(dirname "$0")/lib.sh"
 cli_init "$@"
-if ! command -v blender > /dev/null; then
-  echo "no blender: not run"
-  exit 77
-fi
+require_blender
 
 cat > scene.json << 'EOF2'
 {"size": [128, 64], "seed": 5, "layers": [
@@ -25,9 +22,5 @@ cat > scene.json << 'EOF2'
 EOF2
 "$FB" render scene.json --quiet -o scene.exr && ok || bad "the scene does not bake"
 
-blender -b --factory-startup --python-exit-code 1 -P "$ROOT/tests/blender/plants.py" -- "$ROOT" "$T/plants.ply" \
-  "$T/ground.png" "$T/scene.json" > blender.log 2>&1
-rc=$?
-grep -E '^(ok|FAIL) ' blender.log
-[ $rc -eq 0 ] && ok || bad "tests/blender/plants.py: exit $rc: $(grep -E 'FAIL|Error' blender.log | head -5)"
+blender_test plants "$T/plants.ply" "$T/ground.png" "$T/scene.json"
 cli_finish

@@ -2,16 +2,13 @@
 # Blender as the client of a lat-long sky (docs/sky.md, "Blender"): a julia layer whose only bright
 # pixels are a spherical cap at a direction computed from the mapping's formula (zenith angle T0 and
 # azimuth PSI0 of p = r (d.x + i d.z) / (1 + d.y)) becomes the World of a Blender scene through the
-# recipe docs/examples/blender/sky.py; Cycles renders a probe frame, and tests/blender/sky.py finds the
+# recipe docs/examples/blender/sky.py; Cycles renders a probe frame, and tests/blender/test_sky.py finds the
 # cap within 2 degrees of where OpenEXR's convention, turned into Blender's frame, puts it, and not
 # where a mirrored or upside-down sky would. Not run (77) where blender is not installed.
 # Usage: blender-sky.sh PATH/TO/fractalbake
 . "$(dirname "$0")/lib.sh"
 cli_init "$@"
-if ! command -v blender > /dev/null; then
-  echo "no blender: not run"
-  exit 77
-fi
+require_blender
 
 R=10 T0=60 PSI0=15 FOV=40
 # the centre -R tan(T0/2) exp(i PSI0), so that z0 = p + centre is inside |z0| <= 1 around (T0, PSI0)
@@ -20,9 +17,5 @@ center=$(awk -v r=$R -v t=$T0 -v p=$PSI0 'BEGIN { d = atan2(0, -1) / 180; k = -r
 "$FB" julia --mapping latlong --size 1024x512 --c 0,0 --alpha 0,0 --radius $R --center="$center" --max-iter 64 \
   --stops '0,0,0,0;1,0,0,0' --inside-color 20,20,20 --channels R,G,B --quiet -o sky.exr && ok || bad "the sky does not bake"
 
-blender -b --factory-startup --python-exit-code 1 -P "$ROOT/tests/blender/sky.py" -- "$ROOT" "$T/sky.exr" $R $T0 $PSI0 $FOV \
-  > blender.log 2>&1
-rc=$?
-grep -E '^(ok|FAIL|cap) ' blender.log
-[ $rc -eq 0 ] && ok || bad "tests/blender/sky.py: exit $rc: $(grep -E 'FAIL|Error' blender.log | head -5)"
+blender_test sky "$T/sky.exr" $R $T0 $PSI0 $FOV
 cli_finish

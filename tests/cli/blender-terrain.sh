@@ -1,17 +1,14 @@
 #!/usr/bin/env bash
 # Blender as the client of a heightmap (docs/terrain.md, "Blender"): a terrain of survey points with
 # two plateaus at known heights and places writes its 16-bit PNG heightmap; the recipe
-# docs/examples/blender/terrain.py displaces a plane by it, and tests/blender/terrain.py reads the
+# docs/examples/blender/terrain.py displaces a plane by it, and tests/blender/test_terrain.py reads the
 # heights back from Blender's mesh: every vertex against the PNG decoded by the test (its first row
 # north), the plateaus at their heights where the survey put them and not at their mirror images.
 # Not run (77) where blender is not installed.
 # Usage: blender-terrain.sh PATH/TO/fractalbake
 . "$(dirname "$0")/lib.sh"
 cli_init "$@"
-if ! command -v blender > /dev/null; then
-  echo "no blender: not run"
-  exit 77
-fi
+require_blender
 
 cat > survey.txt << 'EOF2'
 # corners at 0; a plateau at 40 in the north-east, one at 10 in the south-west
@@ -31,9 +28,5 @@ EOF2
 "$FB" terrain --points survey.txt --insert 0 --size 256x128 --quiet -o t.exr --heightmap t.png && ok ||
   bad "the terrain does not bake"
 
-blender -b --factory-startup --python-exit-code 1 -P "$ROOT/tests/blender/terrain.py" -- "$ROOT" "$T/t.png" 0,200,0,100 \
-  > blender.log 2>&1
-rc=$?
-grep -E '^(ok|FAIL) ' blender.log
-[ $rc -eq 0 ] && ok || bad "tests/blender/terrain.py: exit $rc: $(grep -E 'FAIL|Error' blender.log | head -5)"
+blender_test terrain "$T/t.png" 0,200,0,100
 cli_finish

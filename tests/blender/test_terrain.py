@@ -1,6 +1,6 @@
 """Run by tests/cli/blender-terrain.sh inside Blender: a heightmap PNG displaces a plane as docs/terrain.md says.
 
-    blender -b --factory-startup -P tests/blender/terrain.py -- REPO HEIGHTS.png XMIN,XMAX,YMIN,YMAX
+    blender -b --factory-startup -P tests/blender/test_terrain.py -- REPO HEIGHTS.png XMIN,XMAX,YMIN,YMAX
 
 HEIGHTS.png is the heightmap of a terrain of survey points with no insertions (a plane of triangles):
 corners at height 0 over XMIN..XMAX x YMIN..YMAX, a square plateau at 40 in the north-east (140..170
@@ -18,20 +18,12 @@ import zlib
 import bpy
 import numpy as np
 
-args = sys.argv[sys.argv.index("--") + 1:]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from checks import ARGS as args, check, finish  # noqa: E402 (it puts the recipes on sys.path)
+
 ROOT, PNG = args[0], args[1]
 XMIN, XMAX, YMIN, YMAX = (float(v) for v in args[2].split(","))
-sys.path.insert(0, os.path.join(ROOT, "docs", "examples", "blender"))
 import terrain as recipe  # noqa: E402
-
-failures = 0
-
-
-def check(what, cond, detail=""):
-    global failures
-    print(("ok    " if cond else "FAIL  ") + what + (": " + detail if detail else ""))
-    failures += 0 if cond else 1
-
 
 def read_png16(path):
     """A 16-bit grey PNG's samples, rows top first, and its text chunks: a reader of its own."""
@@ -116,5 +108,4 @@ for (x0, x1, y0, y1, z) in ((140, 170, 60, 90, 40.0), (20, 60, 10, 40, 10.0)):
         check("the plateau at %g is not at its %s mirror image (%g, %g)" % (z, what, mx, my), abs(h - z) > 10,
               "height %.3f there" % h)
 
-print("%d failed" % failures)
-sys.exit(1 if failures else 0)
+finish()

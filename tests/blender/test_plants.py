@@ -1,6 +1,6 @@
 """Run by tests/cli/blender-plants.sh inside Blender: the plant instances stand where docs/plants.md says.
 
-    blender -b --factory-startup -P tests/blender/plants.py -- REPO PLANTS.ply HEIGHTS.png SCENE.json
+    blender -b --factory-startup -P tests/blender/test_plants.py -- REPO PLANTS.ply HEIGHTS.png SCENE.json
 
 SCENE.json bakes a terrain layer (its heightmap HEIGHTS.png) and an ifs population over it whose
 instances (PLANTS.ply, Z up) stand on it. Blender loads both through the recipes of docs/examples/blender/
@@ -20,20 +20,12 @@ import bpy
 import numpy as np
 from mathutils import Vector
 
-args = sys.argv[sys.argv.index("--") + 1:]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from checks import ARGS as args, check, finish  # noqa: E402 (it puts the recipes on sys.path)
+
 ROOT, PLY, PNG, SCENE = args[:4]
-sys.path.insert(0, os.path.join(ROOT, "docs", "examples", "blender"))
 import plants as recipe  # noqa: E402
 import terrain  # noqa: E402
-
-failures = 0
-
-
-def check(what, cond, detail=""):
-    global failures
-    print(("ok    " if cond else "FAIL  ") + what + (": " + detail if detail else ""))
-    failures += 0 if cond else 1
-
 
 scene = json.load(open(SCENE))
 W, H = scene["size"]
@@ -115,5 +107,4 @@ mirrored = sum(on_ground(p, TB[2] + TB[3] - p[1]) for p in inside)
 check("north-south mirrored, most plants would float or sink", mirrored < len(inside) / 2,
       "%d of %d would stand on the ground" % (mirrored, len(inside)))
 
-print("%d failed" % failures)
-sys.exit(1 if failures else 0)
+finish()

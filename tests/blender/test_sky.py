@@ -1,6 +1,6 @@
 """Run by tests/cli/blender-sky.sh inside Blender: the lat-long sky lights Blender where docs/sky.md says.
 
-    blender -b --factory-startup -P tests/blender/sky.py -- REPO SKY.exr R T0 PSI0 FOV
+    blender -b --factory-startup -P tests/blender/test_sky.py -- REPO SKY.exr R T0 PSI0 FOV
 
 SKY.exr is a julia layer, latlong, c = 0 and no warp (the orbit z -> z^2: inside exactly where
 |z0| <= 1), black outside and bright inside, radius R, centre -R tan(T0/2) exp(i PSI0) (degrees).
@@ -26,21 +26,13 @@ import bpy
 import numpy as np
 from mathutils import Vector
 
-args = sys.argv[sys.argv.index("--") + 1:]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from checks import ARGS as args, check, finish  # noqa: E402 (it puts the recipes on sys.path)
+
 ROOT, SKY = args[0], args[1]
 R, T0, PSI0, FOV = (float(v) for v in args[2:6])
 OUT = os.path.dirname(os.path.abspath(SKY))
-sys.path.insert(0, os.path.join(ROOT, "docs", "examples", "blender"))
 import sky as recipe  # noqa: E402
-
-failures = 0
-
-
-def check(what, cond, detail=""):
-    global failures
-    print(("ok    " if cond else "FAIL  ") + what + (": " + detail if detail else ""))
-    failures += 0 if cond else 1
-
 
 def angle(a, b):
     return math.degrees(a.angle(b))
@@ -105,5 +97,4 @@ for lo, la, what in ((-lon, lat, "a mirrored sky (longitude negated, EXR +X = Bl
     check("the cap is not where %s would put it (%.1f degrees away)" % (what, angle(recipe.blender_direction(lo, la), claim)),
           frame(lo, la, "wrong.exr", 2)[0].max() < peak / 10)
 
-print("%d failed" % failures)
-sys.exit(1 if failures else 0)
+finish()
