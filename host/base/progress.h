@@ -1,4 +1,4 @@
-/* Progress, through a sink the program installs (the command line's writes to stderr). On a
+/* Progress, through the sink of the calling thread's scope (fb.h: the command line's writes to stderr). On a
  * terminal, a bar redrawn five times a second by a thread of its own once the work has lasted half a
  * second, with the rate and the time left; for a log, a line after 10 s and then one a minute, so that
  * short runs and logs stay clean and long ones are never silent. Workers report from any thread
@@ -12,7 +12,14 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+typedef struct fb_progress_sink {
+    bool terminal;                               /* redraw a bar in place ("\r"), else write log lines */
+    void (*write)(const char *text, void *user); /* shows text as it is */
+    void *user;
+} fb_progress_sink;
+
 typedef struct fb_progress {
+    fb_progress_sink sink; /* the scope's when it started */
     bool enabled, tty, steps;
     double start;
     double scale; /* units shown per unit counted (1 unless fb_progress_set_scale) */
@@ -27,13 +34,8 @@ typedef struct fb_progress {
     pthread_mutex_t mu; /* guards detail */
 } fb_progress;
 
-typedef struct fb_progress_sink {
-    bool terminal;                               /* redraw a bar in place ("\r"), else write log lines */
-    void (*write)(const char *text, void *user); /* shows text as it is */
-    void *user;
-} fb_progress_sink;
-
-/* Installs the sink (copied; NULL: none). Call it before any progress starts. */
+/* Installs the sink (copied; NULL: none) as the calling thread's scope's (fb.h), for progress started
+ * on this thread from now on. */
 void fb_progress_set_sink(const fb_progress_sink *sink);
 
 /* Starts the progress of `total` units of `unit` (pixels, points): nothing at all unless enabled. */
