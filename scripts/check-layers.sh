@@ -1,51 +1,64 @@
 #!/bin/bash
 # Checks that host/ includes only downwards: every folder may include its own headers and those of
-# the folders below it, never above or beside (docs/architecture.md):
+# the folders its library links (CMakeLists.txt), never above or beside (docs/architecture.md):
 #   base <- geom, io <- core <- gen/NAME <- gen (the list) <- cli
-# A generator may use another generator's header only where CMakeLists.txt links the two (listed
-# below). Exit 1 naming each include that breaks the order.
+# A generator may use another generator's header, or geom's, only where CMakeLists.txt links the
+# two (listed below; tests/rules.py checks that the lists are the same). Exit 1 naming each include
+# that breaks the order.
+#   scripts/check-layers.sh [HOST]             check HOST (host/ of this tree by default)
+#   scripts/check-layers.sh --allowed [HOST]   print each folder and the folders it may include
 set -u
+print=0
+[ "${1:-}" = --allowed ] && print=1 && shift
 host=${1:-$(dirname "$0")/../host}
 cd "$host" || exit 2
-# rank of a folder, and the folders each may include
+gens=$(for d in gen/*/; do printf '%s ' "${d%/}"; done)
+# the folders each may include, its own first
 allowed() {
     case $1 in
     base) echo "base" ;;
-    geom) echo "base geom" ;;
-    io) echo "base io" ;;
-    core) echo "base io core" ;;
-    gen/julia) echo "base io geom core gen/julia gen/fbm" ;;
-    gen/ifs) echo "base io geom core gen/ifs gen/lsystem" ;;
-    gen/terrain) echo "base io geom core gen/terrain" ;;
-    gen/*) echo "base io geom core $1" ;;
-    gen) echo "base io geom core gen" ;;
-    cli) echo "base io geom core gen $(cd gen && ls -d */ | sed 's@/$@@; s@^@gen/@' | tr '\n' ' ') cli" ;;
+    geom) echo "geom base" ;;
+    io) echo "io base" ;;
+    core) echo "core base io" ;;
+    gen/julia) echo "gen/julia base io core gen/fbm" ;;
+    gen/ifs) echo "gen/ifs base io core gen/lsystem" ;;
+    gen/terrain) echo "gen/terrain base io core geom" ;;
+    gen/*) echo "$1 base io core" ;;
+    gen) echo "gen base io core geom $gens" ;;
+    cli) echo "cli base io core" ;;
     *) echo "" ;;
     esac
 }
-# where each header lives
-declare -A home
-while read -r f; do
-    home[$(basename "$f")]=$(dirname "$f")
-done < <(find . -name '*.h' | sed 's@^\./@@')
+mapfile -t files < <(find . -name '*.[ch]' | sed 's@^\./@@' | sort)
+declare -A home ok
+for f in "${files[@]}"; do
+    dir=${f%/*}
+    [ "$dir" = "$f" ] && dir=.
+    [[ $f == *.h ]] && home[${f##*/}]=$dir
+    [ -n "${ok[$dir]+x}" ] || ok[$dir]=" $(allowed "$dir") "
+done
+if [ $print -eq 1 ]; then
+    for d in $(printf '%s\n' "${!ok[@]}" | sort); do echo "$d:${ok[$d]% }"; done
+    exit 0
+fi
 bad=0
-while read -r f; do
-    dir=$(dirname "$f")
-    ok=" $(allowed "$dir") "
-    while IFS= read -r inc; do
-        h=${inc#*\"}
-        h=${h%\"*}
-        # generated at build time: SPIR-V (NAME_comp.h) and the embedded default scene (core only)
-        case $h in kernels/* | *_comp.h) continue ;; esac
-        [ "$h" = default_scene.h ] && [ "$dir" = core ] && continue
-        where=${home[$(basename "$h")]:-}
-        if [ -z "$where" ] || [ "$h" != "$(basename "$h")" ]; then
-            echo "check-layers: host/$f: #include \"$h\": not a header of host/ by its name" >&2
-            bad=1
-        elif [[ $ok != *" $where "* ]]; then
-            echo "check-layers: host/$f: #include \"$h\" (host/$where) goes against the order of folders" >&2
-            bad=1
-        fi
-    done < <(grep -h '^#include "' "$f")
-done < <(find . -name '*.[ch]' | sed 's@^\./@@')
+# every #include "..." of host/, as FILE:#include "HEADER"
+while IFS= read -r line; do
+    f=${line%%:*}
+    f=${f#./}
+    dir=${f%/*}
+    h=${line#*\"}
+    h=${h%\"*}
+    # generated at build time: SPIR-V (NAME_comp.h) and the embedded default scene (core only)
+    case $h in kernels/* | *_comp.h) continue ;; esac
+    [ "$h" = default_scene.h ] && [ "$dir" = core ] && continue
+    where=${home[${h##*/}]:-}
+    if [ -z "$where" ] || [ "$h" != "${h##*/}" ]; then
+        echo "check-layers: host/$f: #include \"$h\": not a header of host/ by its name" >&2
+        bad=1
+    elif [[ ${ok[$dir]} != *" $where "* ]]; then
+        echo "check-layers: host/$f: #include \"$h\" (host/$where) goes against the order of folders" >&2
+        bad=1
+    fi
+done < <(grep -H '^#include "' "${files[@]}")
 exit $bad

@@ -21,6 +21,8 @@ plant io/exrio_read.c scene.h "host/core) goes against"         # io may not inc
 plant base/log.c exrio.h "host/io) goes against"           # base includes nothing above it
 plant core/bake.c gen_ifs.h "host/gen/ifs) goes against"   # core knows no generator
 plant gen/fbm/layer.c gen_ifs.h "host/gen/ifs) goes against" # a generator another it does not link
+plant gen/fbm/layer.c delaunay.h "host/geom) goes against"   # geom only where linked (terrain)
+plant cli/main.c gen_fbm.h "host/gen/fbm) goes against"      # the commands name no generator
 plant geom/delaunay.c vkc.h "host/io) goes against"        # geom and io are side by side
 plant core/scene.c ../io/exrio.h "not a header of host/ by its name" # no paths around the rule
 plant gen/julia/layer.c cli.h "not a header of host/ by its name"    # no header of that name
