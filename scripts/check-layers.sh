@@ -1,10 +1,11 @@
 #!/bin/bash
-# Checks that host/ includes only downwards: every folder may include its own headers and those of
-# the folders its library links (CMakeLists.txt), never above or beside (docs/architecture.md):
-#   base <- geom, io <- core <- gen/NAME <- gen (the list) <- cli
-# A generator may use another generator's header, or geom's, only where CMakeLists.txt links the
-# two (listed below; tests/rules.py checks that the lists are the same). Exit 1 naming each include
-# that breaks the order.
+# Checks the structure of host/ (docs/architecture.md), naming each breach, exit 1 on any:
+# - every include goes down: a folder may include its own headers and those of the folders its
+#   library links (CMakeLists.txt), never one above or beside it:
+#     base <- geom, io <- core <- gen/NAME <- gen (the list); core <- cli
+#   A generator may use another generator's header, or geom's, only where CMakeLists.txt links the
+#   two (listed below; tests/rules.py checks that the lists are the same);
+# - no loop of includes: no header includes itself through others.
 #   scripts/check-layers.sh [HOST]             check HOST (host/ of this tree by default)
 #   scripts/check-layers.sh --allowed [HOST]   print each folder and the folders it may include
 set -u
@@ -42,6 +43,7 @@ if [ $print -eq 1 ]; then
     exit 0
 fi
 bad=0
+declare -A edges # FILE -> the headers of host/ it includes
 # every #include "..." of host/, as FILE:#include "HEADER"
 while IFS= read -r line; do
     f=${line%%:*}
@@ -59,6 +61,32 @@ while IFS= read -r line; do
     elif [[ ${ok[$dir]} != *" $where "* ]]; then
         echo "check-layers: host/$f: #include \"$h\" (host/$where) goes against the order of folders" >&2
         bad=1
+    else
+        edges[$f]+=" $where/${h##*/}"
     fi
 done < <(grep -H '^#include "' "${files[@]}")
+# loops: a depth-first walk from every file; a header met again on the current path closes one
+declare -A state # 1: on the path, 2: done
+path=()
+visit() {
+    local f=$1 g k loop
+    state[$f]=1
+    path+=("$f")
+    for g in ${edges[$f]:-}; do
+        if [ "${state[$g]:-0}" = 1 ]; then
+            loop=""
+            for ((k = ${#path[@]} - 1; k >= 0; k--)); do
+                loop="host/${path[k]} -> $loop"
+                [ "${path[k]}" = "$g" ] && break
+            done
+            echo "check-layers: an include loop: ${loop}host/$g" >&2
+            bad=1
+        elif [ "${state[$g]:-0}" = 0 ]; then
+            visit "$g"
+        fi
+    done
+    unset 'path[${#path[@]}-1]'
+    state[$f]=2
+}
+for f in "${files[@]}"; do [ "${state[$f]:-0}" = 0 ] && visit "$f"; done
 exit $bad

@@ -26,5 +26,12 @@ plant cli/main.c gen_fbm.h "host/gen/fbm) goes against"      # the commands name
 plant geom/delaunay.c vkc.h "host/io) goes against"        # geom and io are side by side
 plant core/scene.c ../io/exrio.h "not a header of host/ by its name" # no paths around the rule
 plant gen/julia/layer.c cli.h "not a header of host/ by its name"    # no header of that name
+# a loop of includes: scene.h -> gen.h -> scene.h
+rm -rf "$tmp/host"
+cp -r "$src/host" "$tmp/host"
+printf '#include "gen.h"\n' >> "$tmp/host/core/scene.h"
+bash "$src/scripts/check-layers.sh" "$tmp/host" 2> "$tmp/err"
+rc=$?
+check "a loop of includes fails" "[ $rc -eq 1 ] && grep -q 'an include loop: host/core/scene.h -> host/core/gen.h -> host/core/scene.h' '$tmp/err'"
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]
