@@ -20,6 +20,8 @@
            exactly the folders that its library links, directly or through others.
   paths    Every path of the repository that a comment of host/ or kernels/ names exists (NAME
            stands for any generator; a * is a pattern), but those of PATH_ALLOWED.
+  picture  docs/img/architecture.svg is what scripts/architecture-svg.py draws from the code: every
+           folder, every generator, the arrows that check-layers.sh allows.
   tests    Tests are added with fb_test (cmake/fb_test.cmake) alone: no add_test or
            set_tests_properties elsewhere, so that the tiers are the labels.
 
@@ -30,6 +32,7 @@ Usage: rules.py [ROOT]   with ROOT: check that tree and print what breaks a rule
 """
 import functools
 import glob
+import importlib.util
 import os
 import re
 import shutil
@@ -212,7 +215,7 @@ def check_table(root, bad):
 
 
 def check_gens(root, bad):
-    listed = re.findall(r"^\s*X\((\w+)\)", read(root, "host/gen/list.c"), re.M)
+    listed = re.findall(r"\bX\((\w+)\)", read(root, "host/gen/list.c"))
     folders = generators(root)
     for g in sorted(set(folders) - set(listed)):
         bad.append(f"gens: host/gen/{g}/ is not in host/gen/list.c's FB_GENERATORS")
@@ -315,6 +318,23 @@ def check_paths(root, bad):
                 bad.append(f"paths: {rel}: a comment names {path}, which is not in the repository")
 
 
+def check_picture(root, bad):
+    rc, out, _ = allowed_by_script(root, read(root, "scripts/check-layers.sh"), tuple(host_folders(root)))
+    if rc != 0:
+        return  # check_layers names it
+    spec = importlib.util.spec_from_file_location("architecture_svg", os.path.join(root, "scripts/architecture-svg.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    try:
+        svg = module.draw(root, out)
+    except SystemExit as e:
+        bad.append(f"picture: scripts/architecture-svg.py: {e}")
+        return
+    if svg != read(root, "docs/img/architecture.svg"):
+        bad.append("picture: docs/img/architecture.svg is not what scripts/architecture-svg.py draws from the code "
+                   "(scripts/architecture-svg.py > docs/img/architecture.svg)")
+
+
 def check_tests(root, bad):
     for rel in ["CMakeLists.txt"] + sorted(
         os.path.relpath(p, root) for p in glob.glob(os.path.join(root, "tests/**/CMakeLists.txt"), recursive=True)
@@ -324,7 +344,8 @@ def check_tests(root, bad):
             bad.append(f"tests: {rel}:{line_of(text, m.start())}: {m.group(1)}: add tests with fb_test")
 
 
-CHECKS = [check_env, check_print, check_length, check_table, check_gens, check_layers, check_paths, check_tests]
+CHECKS = [check_env, check_print, check_length, check_table, check_gens, check_layers, check_picture, check_paths,
+          check_tests]
 
 
 def check(root):
@@ -336,8 +357,8 @@ def check(root):
 
 def scratch(src, dst):
     """A copy of src at dst for planting: the files the rules read copied, the rest linked."""
-    copy = {"host", "kernels", "scripts", "cmake", "CMakeLists.txt", "docs/architecture.md", "tests/CMakeLists.txt",
-            "tests/golden/scenes", "tests/golden/thresholds.txt"}
+    copy = {"host", "kernels", "scripts", "cmake", "CMakeLists.txt", "docs/architecture.md", "docs/img/architecture.svg",
+            "tests/CMakeLists.txt", "tests/golden/scenes", "tests/golden/thresholds.txt"}
 
     def walk(rel):
         for name in sorted(os.listdir(os.path.join(src, rel))):
@@ -434,6 +455,12 @@ def self_test(src):
         plant("a generator's include of geom that CMake does not link",
               add("CMakeLists.txt", "target_link_libraries(fb_gen_fbm PUBLIC fb_geom)\n"),
               "layers:", "host/gen/fbm", "not geom")
+        svg = "docs/img/architecture.svg"
+        plant("a picture drawn by hand", {svg: read(tmp, svg).replace(">julia<", ">juliet<")},
+              "picture:", "architecture.svg")
+        plant("a generator that the picture does not show",
+              {"host/gen/list.c": read(tmp, "host/gen/list.c").replace("X(op)", "X(op) X(planted)"),
+               "host/gen/planted/layer.c": "const fb_gen_class fb_gen_planted = {0};\n"}, "picture:")
         plant("a stale path in a comment", add("host/core/plan.c", "/* see tests/planted.py */\n"),
               "paths:", "host/core/plan.c", "tests/planted.py")
         plant("a test outside fb_test", add("tests/CMakeLists.txt", "add_test(NAME planted COMMAND true)\n"),
