@@ -6,7 +6,10 @@
 #                                # libraries it tests, and run with ARGS
 #           LABELS label...      # at least one: unit, cli, build or fuzz; and quick for the quick tier
 #           [GPU]                # it needs a Vulkan device: label gpu, the validation layer on, and exit
-#                                # 77 reported as not run where no device exists
+#                                # 77 reported as not run where no device exists; and a twin,
+#                                # NAME-staging, that runs it again on a discrete GPU's path
+#                                # (FB_VK_STAGING=1: device-local memory, staging copies and the
+#                                # portable exact arithmetic), so that lavapipe tests that path too
 #           [VULKAN]             # it may open a Vulkan device (it runs without one too): the validation
 #                                # layer on, no gpu label
 #           [SKIPPABLE]          # exit 77 reported as not run (it cannot run here: no AVX2, no clang,
@@ -62,5 +65,13 @@ function(fb_test)
   endif()
   if(T_TIMEOUT)
     set_tests_properties(${T_NAME} PROPERTIES TIMEOUT ${T_TIMEOUT})
+  endif()
+  if(T_GPU)
+    add_test(NAME ${T_NAME}-staging COMMAND ${T_COMMAND})
+    set_tests_properties(${T_NAME}-staging PROPERTIES LABELS "gpu;staging" SKIP_RETURN_CODE 77
+                                                      ENVIRONMENT "${env};FB_VK_STAGING=1")
+    if(T_TIMEOUT)
+      set_tests_properties(${T_NAME}-staging PROPERTIES TIMEOUT ${T_TIMEOUT})
+    endif()
   endif()
 endfunction()

@@ -13,7 +13,8 @@
 #
 # A scene names its input files (a flame genome) relative to the repository.
 #
-# FRACTALBAKE defaults to build/fractalbake; OUTDIR to build/golden.
+# FRACTALBAKE defaults to build/fractalbake; OUTDIR to build/golden. FB_GOLDEN_BACKEND=native or
+# vulkan checks that backend (default: auto); every backend must give the reference's bits.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 mode=${1:-check}
@@ -51,6 +52,10 @@ update)
   done
   ;;
 check)
+  if [ "${FB_GOLDEN_BACKEND:-auto}" = vulkan ] && "$fb" devices 2> /dev/null | grep -q '^no Vulkan device'; then
+    echo "golden: no Vulkan device: not run"
+    exit 77
+  fi
   failed=0 n=0
   while read -r name args; do
     [ -n "$name" ] || continue
@@ -58,7 +63,7 @@ check)
     args=$(echo $args)
     [ "$args" = "-" ] && args=""
     n=$((n + 1))
-    if ! render "$name" "$out/$name.exr"; then
+    if ! render "$name" "$out/$name.exr" --backend "${FB_GOLDEN_BACKEND:-auto}"; then
       echo "golden $name: render failed"
       failed=$((failed + 1))
       continue

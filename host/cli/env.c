@@ -23,7 +23,9 @@ void fb_env_read(fb_env *env)
 {
     memset(env, 0, sizeof *env);
     env->vk.validation = env_true("FB_VK_VALIDATION");
-    env->vk.staging = env_true("FB_VK_STAGING");
+    /* a discrete GPU's path on any device: its memory, and the portable exact arithmetic */
+    env->vk.staging = env->vk.portable = env_true("FB_VK_STAGING");
+    env->vk.portable = env->vk.portable || env_true("FB_VK_PORTABLE"); /* the arithmetic alone */
     env->vk.no_int64 = env_true("FB_VK_NO_INT64");
     env->vk.no_float64 = env_true("FB_VK_NO_FLOAT64");
     env->vk.no_pipeline_cache = env_true("FB_NO_PIPELINE_CACHE");

@@ -2,7 +2,9 @@
  * The environment, read in this one place (the command line's) and passed down in descriptors:
  * nothing below host/cli reads an environment variable.
  *   FB_VK_VALIDATION=1     the Vulkan validation layer on every context (the test suite sets it)
- *   FB_VK_STAGING=1        device-local memory and staging copies even on lavapipe (a GPU's path)
+ *   FB_VK_STAGING=1        a discrete GPU's path on any device: device-local memory and staging copies,
+ *                          and the portable exact division and square root (kernels/exact.h)
+ *   FB_VK_PORTABLE=1       the portable exact division and square root alone
  *   FB_VK_NO_INT64=1       as if the device had no 64-bit buffer atomics
  *   FB_VK_NO_FLOAT64=1     as if the device had no shaderFloat64
  *   FB_NO_PIPELINE_CACHE=1 no pipeline cache on disk
@@ -18,7 +20,7 @@
 #include "vkc.h"
 
 typedef struct fb_env {
-    vkc_desc vk;          /* validation, staging, no_int64, no_float64, no_pipeline_cache, cache_dir */
+    vkc_desc vk;          /* validation, staging, portable, no_int64, no_float64, no_pipeline_cache, cache_dir */
     char cache_dir[1024]; /* vk.cache_dir points here ("" and NULL: none) */
     /* lavapipe's own settings, which change its speed (LP_NUM_THREADS: its threads) or its results
      * (LP_NATIVE_VECTOR_WIDTH: 256 gives subgroups of 8, 128 of 4), as given ("" when unset); the

@@ -310,6 +310,6 @@ const fb_gen_class fb_gen_fbm = {
     .init = fbm_init,
     .share = FB_SHARE_BAND,
     .cost = fbm_cost,
-    .tolerance = {1e-5, 0}, /* float fBm: the backends agree to < 1e-5 (0 measured) */
+    .tolerance = {0, 0}, /* exact arithmetic (kernels/exact.h): the same bits on every backend */
     .bench = fb_fbm_bench,
 };
