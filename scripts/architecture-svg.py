@@ -20,7 +20,7 @@ W = 900
 # a folder's place: (row, left, right) and what it holds, in a line
 PLACES = {
     "gen": (0, 20, 520, "the one list of generators, fb_gen_list[]"),
-    "cli": (0, 560, 880, "the commands; compare, merge, info"),
+    "cli": (0, 560, 880, "the commands; merge and info behind them"),
     "compare": (1, 560, 880, "images compared: statistics, FLIP, SSIM, reports"),
     "core": (2, 20, 620, "scene, schema, gen.h (fb_gen_class), engines, bake, plan, faces"),
     "geom": (2, 660, 880, "exact predicates, Delaunay"),

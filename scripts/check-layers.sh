@@ -2,7 +2,7 @@
 # Checks the structure of host/ (docs/architecture.md), naming each breach, exit 1 on any:
 # - every include goes down: a folder may include its own headers and those of the folders its
 #   library links (CMakeLists.txt), never one above or beside it:
-#     base <- geom, io <- core <- gen/NAME <- gen (the list); core <- cli
+#     base <- geom, io <- core <- gen/NAME <- gen (the list); core <- compare <- cli
 #   A generator may use another generator's header, or geom's, only where CMakeLists.txt links the
 #   two (listed below; tests/rules.py checks that the lists are the same);
 # - no loop of includes: no header includes itself through others.
@@ -26,7 +26,8 @@ allowed() {
     gen/terrain) echo "gen/terrain base io core geom" ;;
     gen/*) echo "$1 base io core" ;;
     gen) echo "gen base io core geom $gens" ;;
-    cli) echo "cli base io core" ;;
+    compare) echo "compare base io core" ;;
+    cli) echo "cli base io core compare" ;;
     *) echo "" ;;
     esac
 }
