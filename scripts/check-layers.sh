@@ -5,7 +5,8 @@
 #     base <- geom, io <- core <- gen/NAME <- gen (the list); core <- compare <- cli
 #   A generator may use another generator's header, or geom's, only where CMakeLists.txt links the
 #   two (listed below; tests/rules.py checks that the lists are the same);
-# - no loop of includes: no header includes itself through others.
+# - no loop of includes: no header includes itself through others;
+# - host/cli, the commands, under 4000 lines: the work behind a command lives in a library below.
 #   scripts/check-layers.sh [HOST]             check HOST (host/ of this tree by default)
 #   scripts/check-layers.sh --allowed [HOST]   print each folder and the folders it may include
 set -u
@@ -90,4 +91,15 @@ visit() {
     state[$f]=2
 }
 for f in "${files[@]}"; do [ "${state[$f]:-0}" = 0 ] && visit "$f"; done
+cli_max=4000
+cli_lines=0
+for f in cli/*.[ch]; do
+    mapfile -t lines < "$f"
+    cli_lines=$((cli_lines + ${#lines[@]}))
+done
+if [ "$cli_lines" -ge $cli_max ]; then
+    echo "check-layers: host/cli holds $cli_lines lines, $cli_max or more: move the work behind a command into" \
+        "a library below it" >&2
+    bad=1
+fi
 exit $bad

@@ -33,5 +33,15 @@ printf '#include "gen.h"\n' >> "$tmp/host/core/scene.h"
 bash "$src/scripts/check-layers.sh" "$tmp/host" 2> "$tmp/err"
 rc=$?
 check "a loop of includes fails" "[ $rc -eq 1 ] && grep -q 'an include loop: host/core/scene.h -> host/core/gen.h -> host/core/scene.h' '$tmp/err'"
+# host/cli at 4000 lines
+rm -rf "$tmp/host"
+cp -r "$src/host" "$tmp/host"
+n=$(cat "$tmp"/host/cli/*.[ch] | wc -l)
+yes '/* planted */' | head -n $((4000 - n)) > "$tmp/host/cli/planted.c"
+bash "$src/scripts/check-layers.sh" "$tmp/host" 2> "$tmp/err"
+rc=$?
+check "host/cli at 4000 lines fails" "[ $rc -eq 1 ] && grep -q 'host/cli holds 4000 lines' '$tmp/err'"
+sed -i 1d "$tmp/host/cli/planted.c"
+check "host/cli at 3999 lines passes" "bash '$src/scripts/check-layers.sh' '$tmp/host'"
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]
