@@ -1,8 +1,8 @@
 /*
  * The output transaction (host/base/output.c): exclusive temporary files, all-or-nothing renames, nesting,
  * refusal of non-regular targets and of one path named twice, names too long for the folder, the
- * signal handler's clean-up; anonymous (O_TMPFILE) files that nothing sees and SIGKILL leaves nothing
- * of; signals during a commit taken after the whole set is in place.
+ * signal handler's clean-up; outputs that would replace an input; anonymous (O_TMPFILE) files that nothing sees and
+ * SIGKILL leaves nothing of; signals during a commit taken after the whole set is in place.
  */
 #include "output.h"
 #include "testhelp.h"
@@ -37,6 +37,14 @@ static const char *at(const char *name)
     k = (k + 1) % 4;
     snprintf(buf[k], sizeof buf[k], "%s/%s", g_dir, name);
     return buf[k];
+}
+
+/* name, spelled through the folder's "." */
+static const char *alias_of(const char *name)
+{
+    static char buf[512];
+    snprintf(buf, sizeof buf, "%s/./%s", g_dir, name);
+    return buf;
 }
 
 static bool has(const char *name, const char *text)
@@ -189,6 +197,55 @@ int main(void)
     CHECK(fb_output_reserve(at("no/such/folder.txt"), "output") == FB_ERR_USAGE);
     CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
     CHECK(count_files(".tmp") == 0);
+
+    /* No output replaces an input: noted first (by device and inode, through another spelling or a
+     * hard link) or reserved first, the second of the two is refused; and a target that becomes an
+     * input's hard link after it was reserved is refused at the commit, the input untouched. */
+    REQUIRE(write_text("in.txt", "output", "input") == FB_OK);
+    REQUIRE(link(at("in.txt"), at("in-link.txt")) == 0);
+    fb_outputs_begin();
+    CHECK(fb_input_note(at("in.txt"), "scene", -1) == FB_OK);
+    CHECK(fb_input_note(at("in.txt"), "scene", -1) == FB_OK); /* the same input twice is one */
+    CHECK(fb_output_reserve(at("in.txt"), "output") == FB_ERR_USAGE);
+    CHECK(fb_output_reserve(alias_of("in.txt"), "output") == FB_ERR_USAGE);
+    CHECK(fb_output_reserve(at("in-link.txt"), "preview") == FB_ERR_USAGE);
+    CHECK(fb_input_note(at("not-yet.txt"), "points", -1) == FB_OK); /* by its resolved path */
+    CHECK(fb_output_reserve(alias_of("not-yet.txt"), "mesh") == FB_ERR_USAGE);
+    CHECK(fb_output_reserve(at("out.txt"), "output") == FB_OK);
+    CHECK(fb_input_note(at("out.txt"), "EXR", -1) == FB_ERR_USAGE); /* reserved first */
+    CHECK(fb_input_note("-", "scene", -1) == FB_OK);                /* standard input is no file */
+    CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
+    fb_outputs_begin(); /* the inputs went with the outermost end */
+    CHECK(fb_output_reserve(at("in.txt"), "output") == FB_OK);
+    fb_output_discard(at("in.txt"));
+    CHECK(fb_input_note(at("in.txt"), "scene", -1) == FB_OK);
+    fd = -1;
+    CHECK(fb_output_open(at("late.txt"), "output", &fd) == FB_OK && write(fd, "x", 1) == 1);
+    if (fd >= 0) close(fd);
+    CHECK(fb_output_done(at("late.txt"), FB_OK) == FB_OK);
+    CHECK(link(at("in.txt"), at("late.txt")) == 0); /* the target turns into the input since */
+    CHECK(fb_outputs_end(FB_OK) == FB_ERR_USAGE);
+    CHECK(has("in.txt", "input") && has("late.txt", "input") && count_files(".tmp") == 0);
+    unlink(at("in.txt")), unlink(at("in-link.txt")), unlink(at("late.txt"));
+
+    /* Standard output carries one document: a claim (--json) and "-" exclude each other, either
+     * order; the claim goes with the transaction. (Not where standard output is a terminal, which
+     * "-" refuses anyway.) */
+    if (!isatty(STDOUT_FILENO)) {
+        fb_outputs_begin();
+        CHECK(fb_output_claim_stdout("--json") == FB_OK);
+        CHECK(fb_output_reserve("-", "JUnit report") == FB_ERR_USAGE);
+        CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
+        fb_outputs_begin();
+        CHECK(fb_output_reserve("-", "output") == FB_OK);
+        CHECK(fb_output_claim_stdout("--json") == FB_ERR_USAGE);
+        CHECK(fb_output_reserve("-", "preview") == FB_ERR_USAGE);
+        CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
+        fb_outputs_begin();
+        CHECK(fb_output_reserve("-", "output") == FB_OK);
+        fb_output_discard("-");
+        CHECK(fb_outputs_end(FB_OK) == FB_OK);
+    }
 
     /* The signal handler's clean-up removes every temporary file. */
     fb_outputs_begin();

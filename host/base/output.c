@@ -25,10 +25,13 @@ enum { FREE = 0, RESERVED = 1, TAKEN = 2 };
 typedef struct entry {
     volatile sig_atomic_t live; /* the temporary file exists: the signal handler removes it */
     int state;
-    int fd;     /* RESERVED: the open temporary file, until taken */
-    int keepfd; /* an anonymous file (O_TMPFILE, or standard output's): kept open until the commit */
-    bool std;   /* "-": copied to standard output at the commit */
-    bool anon;  /* an O_TMPFILE file in the target's folder: linked to a hidden name at the commit */
+    int fd;      /* RESERVED: the open temporary file, until taken */
+    int keepfd;  /* an anonymous file (O_TMPFILE, or standard output's): kept open until the commit */
+    bool std;    /* "-": copied to standard output at the commit */
+    bool anon;   /* an O_TMPFILE file in the target's folder: linked to a hidden name at the commit */
+    bool has_id; /* the target existed when reserved: its device and inode, checked against the inputs */
+    dev_t dev;
+    ino_t ino;
     char what[32];
     char path[PATH_MAX]; /* as the user gave it */
     char key[PATH_MAX];  /* the folder resolved, then the name: two spellings of one file compare equal */
@@ -53,6 +56,20 @@ static char g_tmpdir[PATH_MAX]; /* fb_outputs_tmpdir: "" is /tmp */
 enum { IDLE = 0, COMMITTING = 1, DYING = 2 };
 static atomic_int g_phase;
 static volatile sig_atomic_t g_deferred; /* the signal that came during the commit */
+
+/* The inputs of the run (fb_input_note): no output may name one. */
+typedef struct input {
+    char *path; /* as the user gave it */
+    char *key;  /* resolved: realpath, or the folder resolved and the name where it does not exist */
+    char what[32];
+    bool has_id; /* it exists: its device and inode */
+    dev_t dev;
+    ino_t ino;
+} input;
+static input *g_in;
+static int g_nin, g_capin;
+/* A document the run prints on standard output itself (fb_output_claim_stdout): no "-" output then. */
+static char g_stdout_claim[32];
 
 /* The folder and the name of path: "a/b.exr" -> "a", "b.exr"; "b.exr" -> ".", "b.exr". */
 static void split(const char *path, char *dir, size_t dsize, const char **base)
@@ -110,6 +127,30 @@ static bool key_of(const char *path, char *key)
     return true;
 }
 
+/* The input that names `key`, or is the file st describes (NULL: it does not exist), or NULL. Called
+ * locked. */
+static const input *input_named(const char *key, const struct stat *st)
+{
+    for (int i = 0; i < g_nin; i++) {
+        const input *in = &g_in[i];
+        if ((st && in->has_id && in->dev == st->st_dev && in->ino == st->st_ino) || !strcmp(in->key, key)) return in;
+    }
+    return NULL;
+}
+
+/* An output that would replace an input: refused, with how to do it on purpose. */
+static fb_result clash(const char *path, const char *what, const char *in_path, const char *in_what)
+{
+    const char *how = !strcmp(what, "output") ? "write the output under another name, then mv it over the input"
+                                              : "name another file";
+    if (!strcmp(path, in_path))
+        return fb_fail(FB_ERR_USAGE, "%s: is an input of this run (read as the %s) and cannot also be the %s: %s", path,
+                       in_what, what, how);
+    return fb_fail(FB_ERR_USAGE,
+                   "%s: is the same file as %s, an input of this run (read as the %s), and cannot also be the %s: %s",
+                   path, in_path, in_what, what, how);
+}
+
 static entry *free_entry(void)
 {
     for (int i = 0; i < g_count; i++)
@@ -123,8 +164,15 @@ static entry *free_entry(void)
 static fb_result reserve_stdout(const char *what, entry **out)
 {
     if (find("-"))
-        return fb_fail(FB_ERR_USAGE, "-: standard output named for two outputs (the %s and the %s)", find("-")->what,
-                       what);
+        return fb_fail(FB_ERR_USAGE,
+                       "-: standard output named for two outputs (the %s and the %s): it carries one document; "
+                       "name a file for one of them",
+                       find("-")->what, what);
+    if (g_stdout_claim[0])
+        return fb_fail(FB_ERR_USAGE,
+                       "-: standard output carries what %s prints: name a file for the %s (standard output "
+                       "carries one document)",
+                       g_stdout_claim, what);
     if (isatty(STDOUT_FILENO))
         return fb_fail(FB_ERR_USAGE, "-: the %s would go to a terminal: redirect standard output to a file or a pipe",
                        what);
@@ -229,9 +277,12 @@ static fb_result reserve_locked(const char *path, const char *what, entry **out)
         return fb_fail(FB_ERR_USAGE, "%s: named as the %s and as the %s: two outputs cannot share one path", path,
                        twice->what, what);
     struct stat st;
-    if (lstat(path, &st) == 0 && !S_ISREG(st.st_mode))
+    bool exists = lstat(path, &st) == 0;
+    if (exists && !S_ISREG(st.st_mode))
         return fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", path,
                        fb_file_kind(st.st_mode), what);
+    const input *in = input_named(key, exists ? &st : NULL);
+    if (in) return clash(path, what, in->path, in->what);
     entry *e = free_entry();
     if (!e) return fb_fail(FB_ERR_USAGE, "%s: more than %d outputs", path, FB_MAX_OUTPUTS);
     e->live = 0;
@@ -252,6 +303,9 @@ static fb_result reserve_locked(const char *path, const char *what, entry **out)
     e->fd = fd;
     e->keepfd = keep;
     e->anon = anon;
+    e->has_id = exists;
+    e->dev = exists ? st.st_dev : 0;
+    e->ino = exists ? st.st_ino : 0;
     e->std = false;
     e->state = RESERVED;
     snprintf(e->what, sizeof e->what, "%s", what);
@@ -345,11 +399,17 @@ static fb_result commit_locked(entry **list, int n)
 {
     fb_result rc = FB_OK;
     struct stat st;
-    /* Checked again just before the renames: a target that became a non-regular file since. */
-    for (int i = 0; i < n && !rc; i++)
-        if (!list[i]->std && lstat(list[i]->path, &st) == 0 && !S_ISREG(st.st_mode))
+    /* Checked again just before the renames: a target that became a non-regular file, or an input,
+     * since. */
+    for (int i = 0; i < n && !rc; i++) {
+        const input *in;
+        if (list[i]->std || lstat(list[i]->path, &st) != 0) continue;
+        if (!S_ISREG(st.st_mode))
             rc = fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", list[i]->path,
                          fb_file_kind(st.st_mode), list[i]->what);
+        else if ((in = input_named(list[i]->key, &st)))
+            rc = clash(list[i]->path, list[i]->what, in->path, in->what);
+    }
     if (rc) return rc;
     int lockfds[FB_MAX_OUTPUTS], nlock = lock_folders(list, n, lockfds);
     int idle = IDLE;
@@ -400,6 +460,15 @@ static void deliver_deferred(void)
     }
 }
 
+/* The inputs noted go with the run's outermost transaction. Called locked. */
+static void forget_inputs_locked(void)
+{
+    for (int i = 0; i < g_nin; i++) free(g_in[i].path), free(g_in[i].key);
+    free(g_in);
+    g_in = NULL;
+    g_nin = g_capin = 0;
+}
+
 fb_result fb_outputs_end(fb_result rc)
 {
     pthread_mutex_lock(&g_mu);
@@ -418,6 +487,7 @@ fb_result fb_outputs_end(fb_result rc)
         if (!rc) rc = commit_locked(list, n);
         abort_locked(); /* after a failed rename: the rest are removed */
     }
+    if (g_depth == 0) forget_inputs_locked(), g_stdout_claim[0] = 0;
     pthread_mutex_unlock(&g_mu);
     deliver_deferred();
     return rc;
@@ -520,6 +590,63 @@ void fb_output_discard(const char *path)
     pthread_mutex_unlock(&g_mu);
 }
 
+fb_result fb_output_claim_stdout(const char *what)
+{
+    fb_result rc = FB_OK;
+    pthread_mutex_lock(&g_mu);
+    const entry *e = find("-");
+    if (e)
+        rc = fb_fail(FB_ERR_USAGE,
+                     "%s: standard output carries the %s (-): name a file for it (standard output carries one "
+                     "document)",
+                     what, e->what);
+    else if (g_depth > 0)
+        snprintf(g_stdout_claim, sizeof g_stdout_claim, "%s", what);
+    pthread_mutex_unlock(&g_mu);
+    return rc;
+}
+
+fb_result fb_input_note(const char *path, const char *what, int fd)
+{
+    if (!path || !*path || !strcmp(path, "-")) return FB_OK; /* standard input is no file an output can name */
+    struct stat st;
+    bool has = (fd >= 0 ? fstat(fd, &st) : stat(path, &st)) == 0;
+    char key[PATH_MAX];
+    if (!realpath(path, key) && !key_of(path, key)) snprintf(key, sizeof key, "%s", path);
+    fb_result rc = FB_OK;
+    pthread_mutex_lock(&g_mu);
+    for (int i = 0; i < g_count && !rc; i++) { /* an output reserved before the input was opened */
+        const entry *e = &g_out[i];
+        if (e->state != FREE && !e->std &&
+            ((has && e->has_id && e->dev == st.st_dev && e->ino == st.st_ino) || !strcmp(e->key, key)))
+            rc = clash(e->path, e->what, path, what);
+    }
+    /* outside a transaction there is no run for it to belong to (a library caller's reads between its
+     * bakes): nothing to remember */
+    bool known = !rc && (g_depth == 0 || input_named(key, has ? &st : NULL));
+    if (!rc && !known && g_nin == g_capin) {
+        int cap = g_capin ? 2 * g_capin : 16;
+        input *grown = realloc(g_in, (size_t)cap * sizeof *g_in);
+        if (grown)
+            g_in = grown, g_capin = cap;
+        else
+            rc = fb_fail(FB_ERR_NOMEM, "out of memory for the inputs' names");
+    }
+    if (!rc && !known) {
+        input *in = &g_in[g_nin];
+        *in = (input){.path = strdup(path), .key = strdup(key), .has_id = has};
+        snprintf(in->what, sizeof in->what, "%s", what);
+        in->dev = has ? st.st_dev : 0;
+        in->ino = has ? st.st_ino : 0;
+        if (in->path && in->key)
+            g_nin++;
+        else
+            free(in->path), free(in->key), rc = fb_fail(FB_ERR_NOMEM, "out of memory for the inputs' names");
+    }
+    pthread_mutex_unlock(&g_mu);
+    return rc;
+}
+
 void fb_outputs_unlink_all(void)
 {
     for (int i = 0; i < g_count; i++)
@@ -553,15 +680,20 @@ void fb_outputs_tmpdir(const char *dir)
 
 fb_result fb_output_format(const char *flag, const char *path, const char *ext)
 {
-    static const char *const images[] = {".exr", ".png", ".jpg",  ".jpeg", ".tif", ".tiff", ".bmp",
-                                         ".gif", ".hdr", ".webp", ".tga",  ".ppm", ".dpx"};
+    static const struct {
+        const char *ext, *format;
+    } formats[] = {{".exr", "OpenEXR"}, {".png", "PNG"}, {".html", "HTML"}, {".xml", "XML"}};
+    size_t n = strlen(path), e = strlen(ext);
+    if (!strcmp(path, "-") || (n > e && !strcasecmp(path + n - e, ext) && path[n - e - 1] != '/')) return FB_OK;
+    const char *format = ext;
+    for (size_t i = 0; i < sizeof formats / sizeof formats[0]; i++)
+        if (!strcmp(ext, formats[i].ext)) format = formats[i].format;
     const char *slash = strrchr(path, '/'), *dot = strrchr(path, '.');
-    if (!dot || (slash && dot < slash) || !strcasecmp(dot, ext)) return FB_OK;
-    for (size_t i = 0; i < sizeof images / sizeof images[0]; i++)
-        if (!strcasecmp(dot, images[i]))
-            return fb_fail(FB_ERR_USAGE, "%s %s: this writes %s (%s), not %s: name the file %s", flag, path,
-                           !strcmp(ext, ".exr") ? "OpenEXR" : "PNG", ext, dot, ext);
-    return FB_OK;
+    if (dot && (!slash || dot > slash) && dot[1])
+        return fb_fail(FB_ERR_USAGE, "%s %s: this writes %s (%s), not %s: name the file %s", flag, path, format, ext,
+                       dot, ext);
+    return fb_fail(FB_ERR_USAGE, "%s %s: this writes %s: name the file %s (or - for standard output)", flag, path,
+                   format, ext);
 }
 
 int fb_outputs_written(const char **paths, const char **whats, uint64_t *bytes, int max)

@@ -80,7 +80,7 @@ static const fb_arg flags[] = {
     {FB_ARG_OUTPUT, "--output", "-o", T(out), .ext = ".exr"},
     {FB_ARG_STRING, "--layer", NULL, T(layer)},
     {FB_ARG_BOOL, "--quiet", NULL, T(quiet)},
-    {FB_ARG_BOOL, "--json", NULL, T(json)},
+    {FB_ARG_DOCUMENT, "--json", NULL, T(json)},
     {FB_ARG_BOOL, "--help", "-h", T(help)},
     {FB_ARG_END},
 };

@@ -39,25 +39,26 @@ for m in 027 000 077; do
 done
 
 # ---- 3. only regular files are replaced ----
-mkdir adir adir.ply && mkfifo afifo && ln -s victim.txt alink
-expect_fail 2 "adir: exists and is a directory" "" -- fbm $N --size 16x16 -o adir
-expect_fail 2 "afifo: exists and is a FIFO" "" -- fbm $N --size 16x16 -o afifo
-expect_fail 2 "alink: exists and is a symbolic link" "" -- fbm $N --size 16x16 -o alink
-expect_fail 2 "alink: exists and is a symbolic link" p.exr -- fbm $N --size 16x16 -o p.exr --preview alink
+mkdir adir.exr adir.ply && mkfifo afifo.exr && ln -s victim.txt alink.exr && ln -s victim.txt alink.png
+expect_fail 2 "adir.exr: exists and is a directory" "" -- fbm $N --size 16x16 -o adir.exr
+expect_fail 2 "afifo.exr: exists and is a FIFO" "" -- fbm $N --size 16x16 -o afifo.exr
+expect_fail 2 "alink.exr: exists and is a symbolic link" "" -- fbm $N --size 16x16 -o alink.exr
+expect_fail 2 "alink.png: exists and is a symbolic link" p.exr -- fbm $N --size 16x16 -o p.exr --preview alink.png
 expect_fail 2 "adir.ply: exists and is a directory" p.exr -- terrain $N --points pts.csv --size 16x16 --mesh adir.ply -o p.exr
-expect_fail 2 "/dev/null: exists and is a character device" "" -- fbm $N --size 16x16 -o /dev/null
-check "the link's target is untouched" test "$(cat victim.txt)" = precious -a -L alink -a -p afifo
+expect_fail 2 "/dev/null: exists and is a character device" "" -- constrain $N --size 65x1 --csv /dev/null -o p.exr
+expect_fail 2 "-o /dev/null: this writes OpenEXR: name the file .exr" "" -- fbm $N --size 16x16 -o /dev/null
+check "the link's target is untouched" test "$(cat victim.txt)" = precious -a -L alink.exr -a -p afifo.exr
 check "/dev/null is still a device" test -c /dev/null
 
 # ---- 4. all outputs of a run commit together ----
-expect_fail 2 "x: named as the output and as the preview" x -- fbm $N --size 16x16 -o x --preview x
-expect_fail 2 "named as the output and as the preview" x -- fbm $N --size 16x16 -o x --preview ./x
+expect_fail 2 "x.png: named as the preview and as the heightmap" x.png -- fbm $N --size 16x16 -o x.exr --preview x.png --heightmap x.png
+expect_fail 2 "named as the preview and as the heightmap" x.png -- fbm $N --size 16x16 -o x.exr --preview x.png --heightmap ./x.png
 expect_fail 2 "x.exr: this writes PNG" x.exr -- fbm $N --size 16x16 -o x.exr --preview x.exr
 mkdir -p sub
-expect_fail 2 "m.ply: named as the preview and as the mesh" x.exr -- terrain $N --points pts.csv --size 16x16 --mesh m.ply --preview sub/../m.ply -o x.exr
+expect_fail 2 "m.png: named as the preview and as the heightmap" x.exr -- terrain $N --points pts.csv --size 16x16 --heightmap m.png --preview sub/../m.png -o x.exr
 "$FB" fbm $N --size 16x16 -o c1.exr && "$FB" fbm $N --size 16x16 --seed 2 -o c2.exr
-"$FB" compare c1.exr c2.exr --diff d.exr --diff-png d.exr > /dev/null 2> cmp.txt
-check "compare: --diff and --diff-png on one path is usage (exit 2)" test $? -eq 2 -a ! -e d.exr
+"$FB" compare c1.exr c2.exr --diff-png d.png --flip-png d.png > /dev/null 2> cmp.txt
+check "compare: --diff-png and --flip-png on one path is usage (exit 2)" test $? -eq 2 -a ! -e d.png
 # A target that turns into a directory while the bake runs: the EXR is not renamed either.
 echo old > late.exr
 "$FB" julia $N --size 3000x3000 -o late.exr --preview late.png 2> late.txt &
