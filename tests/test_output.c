@@ -333,6 +333,20 @@ int main(void)
     CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
     CHECK(count_files("nnnnnnnn") == 0);
 
+    /* Standard output's data waits in the folder the command line names ($TMPDIR, fb_outputs_tmpdir):
+     * one that does not exist fails the reservation, a real one takes it (where standard output is
+     * not a terminal, which "-" refuses). */
+    if (!isatty(STDOUT_FILENO)) {
+        fb_outputs_begin();
+        fb_outputs_tmpdir(at("no/such/folder"));
+        CHECK(fb_output_reserve("-", "output") == FB_ERR_IO);
+        fb_outputs_tmpdir(g_dir);
+        CHECK(fb_output_reserve("-", "output") == FB_OK);
+        fb_output_discard("-");
+        CHECK(fb_outputs_end(FB_OK) == FB_OK);
+        fb_outputs_tmpdir(NULL);
+    }
+
     /* Anonymous files (O_TMPFILE, tmpfs has it): nothing in the folder until the commit, then the
      * targets alone. */
     fb_outputs_use_tmpfile(true);

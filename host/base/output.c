@@ -50,7 +50,8 @@ static struct {
 static int g_ndone;
 static int g_depth;
 static pthread_mutex_t g_mu = PTHREAD_MUTEX_INITIALIZER;
-static bool g_tmpfile = true; /* fb_outputs_use_tmpfile */
+static bool g_tmpfile = true;   /* fb_outputs_use_tmpfile */
+static char g_tmpdir[PATH_MAX]; /* fb_outputs_tmpdir: "" is /tmp */
 
 /* The signal hand-off (fb_outputs_signal): IDLE, COMMITTING (a signal waits for the commit's end),
  * DYING (a handler is removing the temporary files; the commit must not start). */
@@ -184,11 +185,11 @@ static fb_result reserve_stdout(const char *what, entry **out)
                        what);
     entry *e = free_entry();
     if (!e) return fb_fail(FB_ERR_USAGE, "-: more than %d outputs", FB_MAX_OUTPUTS);
-    const char *tmpdir = getenv("TMPDIR");
-    int fd = open(tmpdir && *tmpdir ? tmpdir : "/tmp", O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
+    const char *tmpdir = g_tmpdir[0] ? g_tmpdir : "/tmp";
+    int fd = open(tmpdir, O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
     if (fd < 0) {
         char tmp[PATH_MAX];
-        snprintf(tmp, sizeof tmp, "%s/fractalbake-stdout.XXXXXX", tmpdir && *tmpdir ? tmpdir : "/tmp");
+        snprintf(tmp, sizeof tmp, "%s/fractalbake-stdout.XXXXXX", tmpdir);
         if ((fd = mkstemp(tmp)) >= 0) unlink(tmp);
     }
     int keep = fd >= 0 ? dup(fd) : -1;
@@ -801,6 +802,13 @@ void fb_outputs_use_tmpfile(bool on)
 {
     pthread_mutex_lock(&g_mu);
     g_tmpfile = on;
+    pthread_mutex_unlock(&g_mu);
+}
+
+void fb_outputs_tmpdir(const char *dir)
+{
+    pthread_mutex_lock(&g_mu);
+    snprintf(g_tmpdir, sizeof g_tmpdir, "%s", dir ? dir : "");
     pthread_mutex_unlock(&g_mu);
 }
 

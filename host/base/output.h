@@ -21,10 +21,11 @@
  * its extension and whichever comes first: reserving an output checks the inputs noted, noting an
  * input checks the outputs reserved, and the commit checks the targets once more.
  *
- * The path "-" is standard output: its data goes to an anonymous temporary file and is copied to
- * standard output at the commit (so a failed run writes nothing there either); it is refused when
- * standard output is a terminal. Standard output carries one document: a second "-" is refused, and
- * so is one beside a document the run prints there itself (a --json summary, fb_output_claim_stdout).
+ * The path "-" is standard output: its data goes to an anonymous temporary file (in the folder of
+ * fb_outputs_tmpdir) and is copied to standard output at the commit (so a failed run writes nothing
+ * there either); it is refused when standard output is a terminal. Standard output carries one
+ * document: a second "-" is refused, and so is one beside a document the run prints there itself (a
+ * --json summary, fb_output_claim_stdout).
  *
  * Transactions nest: fb_outputs_begin() / fb_outputs_end() pairs may be called inside one another
  * (main() around a command, fb_bake() around a bake); only the outermost end commits, and any
@@ -90,6 +91,10 @@ bool fb_outputs_signal(int sig);
 /* Whether outputs may be anonymous (O_TMPFILE) files (default true). false: always the hidden named
  * temporary file, as on a file system without O_TMPFILE (for tests of that path). */
 void fb_outputs_use_tmpfile(bool on);
+
+/* The folder where standard output's data ("-") waits for the commit (the command line passes
+ * $TMPDIR); NULL or "": /tmp. A folder that cannot hold it fails the reservation (FB_ERR_IO). */
+void fb_outputs_tmpdir(const char *dir);
 
 /* A file the flag writes in one format (ext, ".exr") must be named so (any case), or be "-": any other
  * name (x.png, g.flame, out, /dev/null) is FB_ERR_USAGE naming the flag. */

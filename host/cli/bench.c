@@ -287,6 +287,7 @@ static fb_result bench(const fb_env *env, const bench_opts *o)
                   .row = print_row};
     bench_ctx ctx = {.env = env};
     b.user = &ctx;
+    if (b.vulkan) fb_env_lavapipe_threads(o->threads);
     const fb_gen_class *only = o->only;
     bool quiet = o->quiet;
     int nb = 0;

@@ -400,6 +400,7 @@ fb_result fb_cli_bake(const fb_cli *cli, const char *command, fb_scene *scene, c
                                 json_pack("{sisiss}", "index", o->task[0], "of", o->task[1], "share", ts.share));
     }
     fb_engine e;
+    if (o->backend != FB_BACKEND_NATIVE) fb_env_lavapipe_threads(o->threads);
     rc = fb_engine_open(&(fb_engine_desc){.backend = o->backend,
                                           .device = o->device,
                                           .threads = o->threads,

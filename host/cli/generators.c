@@ -2,7 +2,7 @@
  * fractalbake generators [--json]: every generator class of host/gen/list.c with its command, what
  * it makes, how a plan shares it between tasks, its keys (type, range, default, flag), a small
  * example scene's layers and its stated Vulkan-against-native tolerance. The conformance test
- * (tests/cli/conformance.sh) reads the JSON form, so it covers a new generator with no other edit.
+ * (tests/conformance.py) reads the JSON form, so it covers a new generator with no other edit.
  */
 #include "command.h"
 
