@@ -11,6 +11,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <stdio.h>
@@ -75,6 +76,17 @@ static int count_all(void)
     for (struct dirent *e; d && (e = readdir(d));) n += strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
     if (d) closedir(d);
     return n;
+}
+
+/* The warnings logged, and the last one, for the sweep's line. */
+static int g_warnings;
+static char g_last_warning[1024];
+static void count_warnings(int level, const char *msg, void *user)
+{
+    (void)user;
+    if (level != FB_LOG_WARN) return;
+    g_warnings++;
+    snprintf(g_last_warning, sizeof g_last_warning, "%s", msg);
 }
 
 /* The signal handler of a run, as main's: outside a commit it ends the process. */
@@ -157,7 +169,8 @@ int main(void)
     CHECK(fb_outputs_end(FB_OK) == FB_OK); /* the outer level has nothing left to commit */
     CHECK(has("a.txt", "two") && access(at("c.txt"), F_OK) != 0 && count_files(".tmp") == 0);
 
-    /* The temporary name: hidden, beside the target, 16 random hex digits, different every time. */
+    /* The temporary name: hidden, beside the target, ".NAME.PID.SET.RAND.tmp": this process, the set's
+     * 16 random hex digits (one for the transaction), 8 more random ones of its own. */
     fb_outputs_begin();
     CHECK(fb_output_reserve(at("d.txt"), "output") == FB_OK);
     CHECK(fb_output_reserve(at("e.txt"), "output") == FB_OK);
@@ -168,14 +181,18 @@ int main(void)
         if (strstr(e->d_name, ".tmp") && k < 2) snprintf(names[k++], sizeof names[k], "%s", e->d_name);
     if (d) closedir(d);
     CHECK(k == 2);
+    char sets[2][17] = {{0}}, rands[2][9] = {{0}};
     for (int i = 0; i < k; i++) {
         const char *n = names[i];
-        size_t len = strlen(n);
-        bool form = len == strlen(".d.txt.") + 16 + 4 && n[0] == '.' && !strcmp(n + len - 4, ".tmp");
-        for (size_t j = len - 20; form && j < len - 4; j++) form = strchr("0123456789abcdef", n[j]) != NULL;
+        char tail[64];
+        int pid = 0, used = 0;
+        bool form = (!strncmp(n, ".d.txt.", 7) || !strncmp(n, ".e.txt.", 7)) &&
+                    sscanf(n + 7, "%d.%16[0-9a-f].%8[0-9a-f]%n", &pid, sets[i], rands[i], &used) == 3 &&
+                    pid == (int)getpid() && strlen(sets[i]) == 16 && strlen(rands[i]) == 8 &&
+                    snprintf(tail, sizeof tail, "%s", n + 7 + used) > 0 && !strcmp(tail, ".tmp");
         CHECKF(form, "temporary name %s", n);
     }
-    CHECK(strcmp(names[0] + 7, names[1] + 7) != 0);
+    CHECK(!strcmp(sets[0], sets[1]) && strcmp(rands[0], rands[1]) != 0);
     /* Reserved but never written is an internal error at commit, and leaves nothing. */
     CHECK(fb_outputs_end(FB_OK) == FB_ERR_INTERNAL);
     CHECK(count_files(".tmp") == 0 && access(at("d.txt"), F_OK) != 0);
@@ -256,6 +273,55 @@ int main(void)
     CHECK(count_files(".tmp") == 0);
     fb_outputs_end(FB_ERR_INTERNAL);
     CHECK(access(at("j.txt"), F_OK) != 0);
+
+    /* A dead run's temporary files are removed by the next run that writes into their folder, with
+     * one line naming the set; a live run's are not, nor a file its name calls dead that someone holds
+     * locked (a reused pid, another pid namespace). */
+    int up[2];
+    REQUIRE(pipe(up) == 0);
+    pid_t child = fork();
+    if (child == 0) {
+        fb_outputs_begin();
+        if (fb_output_reserve(at("s1.txt"), "output") || fb_output_reserve(at("s2.txt"), "preview")) _exit(1);
+        if (write(up[1], "r", 1) != 1) _exit(1);
+        pause();
+        _exit(0);
+    }
+    char r1;
+    REQUIRE(child > 0 && read(up[0], &r1, 1) == 1);
+    close(up[0]), close(up[1]);
+    fb_log_set_sink(count_warnings, NULL);
+    fb_outputs_begin();
+    CHECK(fb_output_reserve(at("t1.txt"), "output") == FB_OK);
+    CHECK(count_files(".s1.txt.") == 1 && count_files(".s2.txt.") == 1 && g_warnings == 0); /* alive: kept */
+    CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
+    int cst = 0;
+    CHECK(kill(child, SIGKILL) == 0 && waitpid(child, &cst, 0) == child);
+    char set[17] = {0}, planted[512];
+    d = opendir(g_dir);
+    for (struct dirent *e; d && (e = readdir(d));)
+        if (!strncmp(e->d_name, ".s1.txt.", 8)) sscanf(e->d_name + 8, "%*d.%16[0-9a-f]", set);
+    if (d) closedir(d);
+    /* a file whose name says the dead child, held locked by this process (as by a live run) */
+    snprintf(planted, sizeof planted, "%s/.held.txt.%d.%s.0badcafe.tmp", g_dir, (int)child, set);
+    int held = open(planted, O_WRONLY | O_CREAT | O_EXCL, 0666);
+    CHECK(held >= 0 && flock(held, LOCK_EX) == 0);
+    fb_outputs_begin();
+    CHECK(fb_output_reserve(at("t2.txt"), "output") == FB_OK);
+    CHECK(count_files(".s1.txt.") == 0 && count_files(".s2.txt.") == 0 && count_files(".t2.txt.") == 1);
+    CHECKF(g_warnings == 1 && strstr(g_last_warning, set) && strstr(g_last_warning, "s1.txt, s2.txt") &&
+               strstr(g_last_warning, "removed 2 temporary files of an incomplete set"),
+           "%d warnings: %s", g_warnings, g_last_warning);
+    CHECK(access(planted, F_OK) == 0); /* locked: alive, whatever its name says */
+    CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
+    close(held);
+    g_warnings = 0;
+    fb_outputs_begin();
+    CHECK(fb_output_reserve(at("t3.txt"), "output") == FB_OK);
+    CHECK(access(planted, F_OK) != 0 && g_warnings == 1 && strstr(g_last_warning, "held.txt was not replaced"));
+    CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
+    fb_log_set_sink(NULL, NULL);
+    CHECK(count_files(".tmp") == 0);
 
     /* A name longer than the folder allows is refused when reserved, before any work (not at the
      * rename after it). */

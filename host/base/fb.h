@@ -1,8 +1,14 @@
 /*
  * fractalbake: the types every host module shares: the result code, the logger, small helpers.
  *
- * Library code (everything but main.c) never prints and never exits: it returns an fb_result and
- * hands text to the logger of the calling thread's scope (fb_scope), which its caller chooses.
+ * Library code (every folder of host/ below host/cli, and kernels/) never prints, never exits and
+ * never reads the environment: it returns an fb_result, hands its text to the logger and its
+ * progress to the progress sink of the calling thread's scope (fb_scope, which its caller sets:
+ * main() for the command line, a library context for one call), and takes its settings in
+ * descriptors. It writes nothing on standard output or standard error (no printf, puts, perror,
+ * stdout or stderr); the files a run names it writes through output.h, where "-" is standard
+ * output as one of those files. host/cli is the user interface: its commands print their results
+ * and messages, and cli/env.c alone reads the environment. tests/rules.py checks these rules.
  */
 #ifndef FB_H
 #define FB_H
@@ -20,14 +26,14 @@ typedef int32_t fb_result;
 
 enum {
     FB_OK = 0,
-    FB_ERR_USAGE = 1,    /* bad flag or argument (exit 2) */
-    FB_ERR_INPUT = 2,    /* bad input data: scene, file contents, values (exit 2) */
-    FB_ERR_IO = 3,       /* file system: cannot open, write, rename (exit 3) */
-    FB_ERR_NOMEM = 4,    /* allocation failed (exit 3) */
-    FB_ERR_VULKAN = 5,   /* a Vulkan call failed (exit 3) */
-    FB_ERR_NODEVICE = 6, /* no Vulkan loader or no device (exit 3 when vulkan was asked for) */
-    FB_ERR_EXR = 7,      /* OpenEXRCore reported an error (exit 3) */
-    FB_ERR_INTERNAL = 8, /* an impossible state was reached (exit 3) */
+    FB_ERR_USAGE = 1,     /* bad flag or argument (exit 2) */
+    FB_ERR_INPUT = 2,     /* bad input data: scene, file contents, values (exit 2) */
+    FB_ERR_IO = 3,        /* file system: cannot open, write, rename (exit 3) */
+    FB_ERR_NOMEM = 4,     /* allocation failed (exit 3) */
+    FB_ERR_VULKAN = 5,    /* a Vulkan call failed (exit 3) */
+    FB_ERR_NODEVICE = 6,  /* no Vulkan loader or no device (exit 3 when vulkan was asked for) */
+    FB_ERR_EXR = 7,       /* OpenEXRCore reported an error (exit 3) */
+    FB_ERR_INTERNAL = 8,  /* an impossible state was reached (exit 3) */
     FB_ERR_CANCELLED = 9, /* the caller cancelled the work (a library's progress callback; exit 3) */
 };
 

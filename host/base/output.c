@@ -6,6 +6,7 @@
 #include "textin.h"
 
 #include <errno.h>
+#include <dirent.h>
 #include <fcntl.h>
 #include <limits.h>
 #include <pthread.h>
@@ -25,11 +26,12 @@ enum { FREE = 0, RESERVED = 1, TAKEN = 2 };
 typedef struct entry {
     volatile sig_atomic_t live; /* the temporary file exists: the signal handler removes it */
     int state;
-    int fd;      /* RESERVED: the open temporary file, until taken */
-    int keepfd;  /* an anonymous file (O_TMPFILE, or standard output's): kept open until the commit */
-    bool std;    /* "-": copied to standard output at the commit */
-    bool anon;   /* an O_TMPFILE file in the target's folder: linked to a hidden name at the commit */
-    bool has_id; /* the target existed when reserved: its device and inode, checked against the inputs */
+    int fd;       /* RESERVED: the open temporary file, until taken */
+    int keepfd;   /* the temporary file (or standard output's), kept open and locked until dropped */
+    bool std;     /* "-": copied to standard output at the commit */
+    bool anon;    /* an O_TMPFILE file in the target's folder: linked to a hidden name at the commit */
+    uint64_t set; /* the set of outputs it belongs to, named in its hidden temporary file with the pid */
+    bool has_id;  /* the target existed when reserved: its device and inode, checked against the inputs */
     dev_t dev;
     ino_t ino;
     char what[32];
@@ -60,19 +62,24 @@ typedef struct done_entry {
 
 struct fb_outputs {
     pthread_mutex_t mu;
-    entry *out;                   /* FB_MAX_OUTPUTS of them */
-    volatile sig_atomic_t count;  /* entries in use are below it */
-    done_entry *done;             /* FB_MAX_OUTPUTS of them */
+    entry *out;                  /* FB_MAX_OUTPUTS of them */
+    volatile sig_atomic_t count; /* entries in use are below it */
+    done_entry *done;            /* FB_MAX_OUTPUTS of them */
     int ndone;
     int depth;
-    bool tmpfile;              /* fb_outputs_use_tmpfile */
-    char tmpdir[PATH_MAX];     /* fb_outputs_tmpdir: "" is /tmp */
+    bool tmpfile;          /* fb_outputs_use_tmpfile */
+    char tmpdir[PATH_MAX]; /* fb_outputs_tmpdir: "" is /tmp */
     atomic_int phase;
     volatile sig_atomic_t deferred; /* the signal that came during the commit */
     input *in;
     int nin, capin;
     char stdout_claim[32]; /* a document the run prints on standard output itself: no "-" output then */
-    int slot;              /* in g_live */
+    /* the set of the outermost transaction (0: none drawn yet), and the folders swept of dead runs'
+     * temporary files in it (sweep_locked) */
+    uint64_t set;
+    char *swept[FB_MAX_OUTPUTS];
+    int nswept;
+    int slot; /* in g_live */
 };
 
 /* Every transaction that exists, for the signal handler alone (fb_outputs_signal, which must remove
@@ -158,7 +165,8 @@ static uint64_t random64(void)
     uint64_t r = 0;
     if (getrandom(&r, sizeof r, 0) != (ssize_t)sizeof r) { /* no entropy source: still unique, less secret */
         static _Atomic uint64_t n;
-        r = ((uint64_t)getpid() << 32) ^ (uint64_t)(fb_now() * 1e9) ^ ((atomic_fetch_add(&n, 1) + 1) * 0x9E3779B97F4A7C15ull);
+        r = ((uint64_t)getpid() << 32) ^ (uint64_t)(fb_now() * 1e9) ^
+            ((atomic_fetch_add(&n, 1) + 1) * 0x9E3779B97F4A7C15ull);
     }
     return r;
 }
@@ -290,14 +298,138 @@ static fb_result copy_to_stdout(entry *e)
     }
 }
 
-/* Creates the hidden named temporary file beside the target (".NAME.<16 hex>.tmp"), exclusively:
- * the fallback where the folder's file system has no O_TMPFILE. Returns the fd or -1 (errno). */
+/* A hidden temporary name beside the target, ".NAME.PID.SET.RAND.tmp": the process, the set of
+ * outputs it belongs to (16 hex digits, random) and 32 more random bits; what a later run needs to
+ * recognise the files of a dead run's set (sweep_locked), and more than anyone can predict. */
+static void temp_name(char *out, size_t size, const char *dir, const char *base, uint64_t set)
+{
+    snprintf(out, size, "%s/.%.180s.%ld.%016llx.%08x.tmp", dir, base, (long)getpid(), (unsigned long long)set,
+             (unsigned)random64());
+}
+
+/* The parts of a temporary name of temp_name's form; false for any other name. */
+static bool temp_parts(const char *name, char *base, size_t bsize, long *pid, uint64_t *set)
+{
+    char buf[NAME_MAX + 1];
+    size_t n = strlen(name);
+    if (n < 5 || n >= sizeof buf + 4 || name[0] != '.' || strcmp(name + n - 4, ".tmp")) return false;
+    memcpy(buf, name, n - 4);
+    buf[n - 4] = 0;
+    char *field[3]; /* RAND, SET, PID, from the end */
+    static const size_t len[3] = {8, 16, 0};
+    for (int k = 0; k < 3; k++) {
+        char *dot = strrchr(buf, '.');
+        if (!dot || dot == buf) return false;
+        field[k] = dot + 1;
+        size_t m = strlen(field[k]);
+        if (len[k] ? m != len[k] || strspn(field[k], "0123456789abcdef") != m
+                   : m == 0 || m > 9 || strspn(field[k], "0123456789") != m)
+            return false;
+        *dot = 0;
+    }
+    if (!buf[1]) return false;
+    snprintf(base, bsize, "%s", buf + 1);
+    *pid = strtol(field[2], NULL, 10);
+    *set = strtoull(field[1], NULL, 16);
+    return true;
+}
+
+/* Holds the temporary file locked (flock, exclusive) for as long as the entry keeps it open: a later
+ * run's sweep leaves a locked file alone whatever its name says (a pid reused, another pid
+ * namespace). The kernel drops the lock with the process. Where the file system has no flock, the
+ * pid alone tells. */
+static void lock_temp(int fd)
+{
+    while (flock(fd, LOCK_EX | LOCK_NB) != 0 && errno == EINTR) {
+    }
+}
+
+static int cmp_str(const void *a, const void *b)
+{
+    return strcmp(*(const char *const *)a, *(const char *const *)b);
+}
+
+/* A temporary file a sweep removed: its run, its set and its target's name. */
+typedef struct removed {
+    long pid;
+    uint64_t set;
+    char base[NAME_MAX + 1];
+} removed;
+
+static int cmp_removed(const void *a, const void *b)
+{
+    const removed *x = a, *y = b;
+    if (x->pid != y->pid) return x->pid < y->pid ? -1 : 1;
+    if (x->set != y->set) return x->set < y->set ? -1 : 1;
+    return strcmp(x->base, y->base);
+}
+
+/* One warning line for each set of n removed files (sorted), naming the targets it left as they were. */
+static void say_removed(const char *shown, const removed *r, size_t n)
+{
+    for (size_t i = 0, j; i < n; i = j) {
+        char targets[512] = "";
+        for (j = i; j < n && r[j].pid == r[i].pid && r[j].set == r[i].set; j++)
+            snprintf(targets + strlen(targets), sizeof targets - strlen(targets), "%s%s", j > i ? ", " : "", r[j].base);
+        fb_log(FB_LOG_WARN,
+               "removed %zu temporary file%s of an incomplete set of outputs in %s (set %016llx of process %ld, "
+               "which died before its commit was done): %s %s not replaced by that run",
+               j - i, j - i == 1 ? "" : "s", shown, (unsigned long long)r[i].set, r[i].pid, targets,
+               j - i == 1 ? "was" : "were");
+    }
+}
+
+/* Removes the temporary files a dead run left in dir (shown: the folder as the user spelled it),
+ * once per folder and transaction: those of temp_name's form whose process is gone and that no one
+ * holds locked, checked on the file itself before its name is removed; one warning line per set.
+ * Files of a live process, of another user's process, or of another form are left alone. Called
+ * locked. */
+static void sweep_locked(fb_outputs *o, const char *shown, const char *dir)
+{
+    for (int i = 0; i < o->nswept; i++)
+        if (!strcmp(o->swept[i], dir)) return;
+    if (o->nswept < FB_MAX_OUTPUTS && (o->swept[o->nswept] = strdup(dir))) o->nswept++;
+    DIR *d = opendir(dir);
+    if (!d) return;
+    removed *r = NULL;
+    size_t n = 0, cap = 0;
+    for (struct dirent *de; (de = readdir(d));) {
+        removed one;
+        if (de->d_name[0] != '.' || !temp_parts(de->d_name, one.base, sizeof one.base, &one.pid, &one.set)) continue;
+        if (one.pid <= 0 || one.pid == (long)getpid() || kill((pid_t)one.pid, 0) == 0 || errno != ESRCH) continue;
+        int fd = openat(dirfd(d), de->d_name, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+        if (fd < 0) continue;
+        struct stat a, b;
+        bool gone = fstat(fd, &a) == 0 && S_ISREG(a.st_mode) && flock(fd, LOCK_EX | LOCK_NB) == 0 &&
+                    fstatat(dirfd(d), de->d_name, &b, AT_SYMLINK_NOFOLLOW) == 0 && a.st_dev == b.st_dev &&
+                    a.st_ino == b.st_ino && unlinkat(dirfd(d), de->d_name, 0) == 0;
+        close(fd);
+        if (gone && n == cap) { /* out of memory: the file is gone all the same, its line shorter */
+            removed *grown = realloc(r, (cap ? 2 * cap : 16) * sizeof *r);
+            if (grown) r = grown, cap = cap ? 2 * cap : 16;
+        }
+        if (gone && n < cap) r[n++] = one;
+    }
+    closedir(d);
+    qsort(r, n, sizeof *r, cmp_removed);
+    say_removed(shown, r, n);
+    free(r);
+}
+
+static void forget_swept_locked(fb_outputs *o)
+{
+    for (int i = 0; i < o->nswept; i++) free(o->swept[i]);
+    o->nswept = 0;
+}
+
+/* Creates the hidden named temporary file beside the target (temp_name), exclusively: the fallback
+ * where the folder's file system has no O_TMPFILE. Returns the fd or -1 (errno). */
 static int create_named(entry *e, const char *dir, const char *base)
 {
     int fd = -1;
     for (int tries = 0; tries < 16 && fd < 0; tries++) {
         char tmp[PATH_MAX];
-        snprintf(tmp, sizeof tmp, "%s/.%.180s.%016llx.tmp", dir, base, (unsigned long long)random64());
+        temp_name(tmp, sizeof tmp, dir, base, e->set);
         /* The name is written before the file exists, so that a signal between the two removes
          * nothing else: unlink of a name that does not exist yet is harmless. */
         memcpy(e->tmp, tmp, sizeof tmp);
@@ -354,15 +486,22 @@ static fb_result reserve_locked(fb_outputs *o, const char *path, const char *wha
     if (in) return clash(path, what, in->path, in->what);
     entry *e = free_entry(o);
     if (!e) return fb_fail(FB_ERR_USAGE, "%s: more than %d outputs", path, FB_MAX_OUTPUTS);
+    char kdir[PATH_MAX];
+    snprintf(kdir, sizeof kdir, "%.*s", strrchr(key, '/') == key ? 1 : (int)(strrchr(key, '/') - key), key);
+    sweep_locked(o, dir, kdir);
+    if (!o->set || o->depth == 0) o->set = random64() | 1; /* outside a transaction an output is its own set */
     e->live = 0;
     e->tmp[0] = 0;
+    e->set = o->set;
     int fd = create_anonymous(o, dir), keep = -1;
     bool anon = fd >= 0;
     if (fd < 0 && (errno == EOPNOTSUPP || errno == EISDIR || errno == EINVAL || errno == ENOENT))
         fd = create_named(e, dir, base);
-    if (anon && (keep = dup(fd)) < 0) {
+    if (fd >= 0) lock_temp(fd); /* the lock goes with the file's description: dup'ed below, it stays */
+    if (fd >= 0 && (keep = dup(fd)) < 0) {
         close(fd);
         fd = -1;
+        if (!anon) unlink(e->tmp), e->live = 0;
     }
     if (fd < 0) {
         int err = errno;
@@ -390,7 +529,7 @@ void fb_outputs_begin(void)
     fb_outputs *o = current(true);
     if (!o) return; /* no memory for one: the first output says so */
     pthread_mutex_lock(&o->mu);
-    if (o->depth++ == 0) o->ndone = 0;
+    if (o->depth++ == 0) o->ndone = 0, o->set = 0;
     pthread_mutex_unlock(&o->mu);
 }
 
@@ -405,11 +544,6 @@ static void key_dir(const entry *e, char *dir, size_t size)
 {
     const char *slash = strrchr(e->key, '/');
     snprintf(dir, size, "%.*s", slash == e->key ? 1 : (int)(slash - e->key), e->key);
-}
-
-static int cmp_str(const void *a, const void *b)
-{
-    return strcmp(*(const char *const *)a, *(const char *const *)b);
 }
 
 /* Locks every folder the entries write into (flock, exclusive, in the folders' sorted order so that
@@ -458,7 +592,7 @@ static fb_result link_hidden(entry *e)
     snprintf(proc, sizeof proc, "/proc/self/fd/%d", e->keepfd);
     split(e->path, dir, sizeof dir, &base);
     for (int tries = 0; tries < 16; tries++) {
-        snprintf(e->tmp, sizeof e->tmp, "%s/.%.180s.%016llx.tmp", dir, base, (unsigned long long)random64());
+        temp_name(e->tmp, sizeof e->tmp, dir, base, e->set);
         e->live = 1; /* before the name exists: a signal then removes nothing else */
         if (linkat(AT_FDCWD, proc, AT_FDCWD, e->tmp, AT_SYMLINK_FOLLOW) == 0) return FB_OK;
         e->live = 0;
@@ -565,7 +699,7 @@ fb_result fb_outputs_end(fb_result rc)
         if (!rc) rc = commit_locked(o, list, n);
         abort_locked(o); /* after a failed rename: the rest are removed */
     }
-    if (o->depth == 0) forget_inputs_locked(o), o->stdout_claim[0] = 0;
+    if (o->depth == 0) forget_inputs_locked(o), forget_swept_locked(o), o->stdout_claim[0] = 0;
     pthread_mutex_unlock(&o->mu);
     deliver_deferred(o);
     return rc;
@@ -667,6 +801,7 @@ fb_result fb_output_done(const char *path, fb_result rc)
         o->ndone = 0;
         rc = commit_locked(o, &e, 1);
         drop(e);
+        forget_swept_locked(o);
     }
     pthread_mutex_unlock(&o->mu);
     deliver_deferred(o);
@@ -803,6 +938,7 @@ void fb_outputs_destroy(fb_outputs **po)
     pthread_mutex_lock(&o->mu);
     abort_locked(o);
     forget_inputs_locked(o);
+    forget_swept_locked(o);
     pthread_mutex_unlock(&o->mu);
     if (t_own == o) t_own = NULL;
     pthread_mutex_destroy(&o->mu);

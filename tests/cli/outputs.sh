@@ -204,6 +204,53 @@ else
   echo "no C compiler: the no-flock case was not run"
 fi
 
+# A KILL between the renames of a commit (a rename shim that stops the process before its second
+# rename of a temporary file): the EXR is new, the preview, mesh and heightmap old, their hidden
+# temporary files left. The next run that writes into the folder removes them, with one line naming
+# the incomplete set and the files it did not replace (that a live run's are left alone, whatever its
+# pid: tests/test_output.c).
+cat > stoprename.c << 'C'
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+int rename(const char *from, const char *to)
+{
+    static int n;
+    int (*real)(const char *, const char *) = (int (*)(const char *, const char *))dlsym(RTLD_NEXT, "rename");
+    const char *stop = getenv("STOP_BEFORE_RENAME");
+    size_t len = strlen(from);
+    if (stop && len > 4 && !strcmp(from + len - 4, ".tmp") && ++n == atoi(stop)) raise(SIGKILL);
+    return real(from, to);
+}
+C
+if ${CC:-cc} -shared -fPIC -o stoprename.so stoprename.c -ldl 2> /dev/null; then
+  mkdir kr
+  for f in k.exr k.png k.ply k.r16; do echo old > kr/$f; done
+  # (anonymous files too are given their hidden names before the first rename)
+  (cd kr && STOP_BEFORE_RENAME=2 LD_PRELOAD=$T/stoprename.so ASAN_OPTIONS=${ASAN_OPTIONS:+$ASAN_OPTIONS:}verify_asan_link_order=0 \
+    exec "$FB" terrain $N --points ../pts.csv --size 64x64 -o k.exr --preview k.png --mesh k.ply --heightmap k.r16)
+  rc=$?
+  check "KILL between renames: exit $rc, wanted 137" test $rc -eq 137
+  check "  the EXR is new, the rest old" sh -c '! grep -q old kr/k.exr && grep -q old kr/k.png && grep -q old kr/k.ply && grep -q old kr/k.r16'
+  left=$(ls -A kr | grep -c '\.tmp$')
+  check "  three temporary files left ($left)" test "$left" -eq 3
+  set_id=$(ls -A kr | sed -n 's/^\.k\.png\.[0-9]*\.\([0-9a-f]\{16\}\)\..*\.tmp$/\1/p')
+  "$FB" fbm --backend native --size 16x16 -o kr/next.exr 2> next.txt
+  check "  the next run into the folder bakes" test $? -eq 0 -a -s kr/next.exr
+  check "  and removed them: $(ls -A kr | tr '\n' ' ')" test "$(ls -A kr | grep -c '^\.k\..*\.tmp$')" -eq 0
+  check "  one line naming the set $set_id: $(cat next.txt)" \
+    test "$(grep -c "removed 3 temporary files of an incomplete set of outputs in kr (set $set_id of process" next.txt)" -eq 1
+  check "  and what was not replaced" grep -q "k.ply, k.png, k.r16 were not replaced by that run" next.txt
+  check "  no other warning" test "$(grep -c warning next.txt)" -eq 1
+  "$FB" fbm --backend native --size 16x16 -o kr/again.exr 2> again.txt
+  check "  a third run says nothing of it" test "$(grep -c warning again.txt)" -eq 0
+  check "  no temporary file at all" no_temp_files kr
+else
+  echo "no C compiler: the KILL between renames was not run"
+fi
+
 # ---- 10. inputs that are not regular files are refused at once; so are empty constraint sets ----
 mkfifo fifo.csv
 timeout 20 "$FB" terrain $N --points fifo.csv --size 16x16 -o f.exr 2> fifo.txt
