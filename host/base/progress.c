@@ -109,13 +109,13 @@ static void start(fb_progress *p, bool enabled, const char *label, const char *u
     const fb_progress_sink *sink = fb_scope_get().progress;
     if (sink) p->sink = *sink;
     p->tty = p->sink.terminal;
-    p->enabled = enabled && p->sink.write;
+    p->enabled = enabled && (p->sink.write || p->sink.poll);
     p->steps = steps;
     p->start = fb_now();
     p->label = label;
     p->unit = unit;
     pthread_mutex_init(&p->mu, NULL);
-    if (p->enabled) p->running = pthread_create(&p->thread, NULL, ticker, p) == 0;
+    if (p->enabled && p->sink.write) p->running = pthread_create(&p->thread, NULL, ticker, p) == 0;
 }
 
 void fb_progress_init(fb_progress *p, bool enabled, const char *label, const char *unit)
@@ -149,6 +149,14 @@ void fb_progress_detail(fb_progress *p, const char *text)
     pthread_mutex_lock(&p->mu);
     snprintf(p->detail, sizeof p->detail, "%s", text);
     pthread_mutex_unlock(&p->mu);
+}
+
+bool fb_progress_poll(fb_progress *p)
+{
+    if (!p->enabled || !p->sink.poll) return false;
+    uint64_t done = atomic_load(&p->done), total = atomic_load(&p->total);
+    double f = total ? (double)done / (double)total : 0;
+    return p->sink.poll(f > 1 ? 1 : f, p->sink.user) != 0;
 }
 
 void fb_progress_finish(fb_progress *p)

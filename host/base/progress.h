@@ -14,7 +14,10 @@
 
 typedef struct fb_progress_sink {
     bool terminal;                               /* redraw a bar in place ("\r"), else write log lines */
-    void (*write)(const char *text, void *user); /* shows text as it is */
+    void (*write)(const char *text, void *user); /* shows text as it is (NULL: nothing shown) */
+    /* Asked by fb_progress_poll with the fraction done (0 to 1): non-zero stops the work (a library
+     * caller's progress callback). NULL: the work never stops early. */
+    int (*poll)(double fraction, void *user);
     void *user;
 } fb_progress_sink;
 
@@ -51,6 +54,9 @@ void fb_progress_set_scale(fb_progress *p, double per);
 void fb_progress_add(fb_progress *p, uint64_t n);
 /* A short text after the bar (the benchmark's current case). */
 void fb_progress_detail(fb_progress *p, const char *text);
+/* Whether the work should stop: the sink's poll, asked with the fraction done, on the calling thread
+ * (the one that drives the work, between its steps). false without a poll or when not enabled. */
+bool fb_progress_poll(fb_progress *p);
 /* Stops the progress thread and clears the bar. */
 void fb_progress_finish(fb_progress *p);
 
