@@ -9,6 +9,7 @@
  */
 #include "fractalbake.h"
 
+#include <dirent.h>
 #include <pthread.h>
 #include <stdbool.h>
 #include <stdint.h>
@@ -196,6 +197,13 @@ static void test_native(void)
     CHECK(access(path, F_OK) != 0, "a cancelled bake left %s", path);
     CHECK(stop.calls == 1, "the callback was called %d times after it asked to stop", stop.calls);
     fractalbake_set_progress(ctx, NULL, NULL);
+
+    /* the bakes into planes left nothing in the context's tmpdir: their folders went with their files */
+    DIR *d = opendir(g_dir);
+    int left = 0;
+    for (struct dirent *e; d && (e = readdir(d));) left += !strncmp(e->d_name, "fractalbake-", 12);
+    if (d) closedir(d);
+    CHECK(left == 0, "%d temporary folders left in %s", left, g_dir);
 
     planes_free(&want), planes_free(&got), planes_free(&file), planes_free(&part);
     fractalbake_scene_destroy(scene);
