@@ -411,7 +411,7 @@ static void sweep_locked(fb_outputs *o, const char *shown, const char *dir)
         if (gone && n < cap) r[n++] = one;
     }
     closedir(d);
-    qsort(r, n, sizeof *r, cmp_removed);
+    if (n) qsort(r, n, sizeof *r, cmp_removed); /* r is NULL when nothing was removed */
     say_removed(shown, r, n);
     free(r);
 }
