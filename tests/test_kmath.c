@@ -2,7 +2,7 @@
  * kernels/kmath.h, the float-only exp, log, pow, atan2, tan, sinh, cosh, asin, acos (and fmod) that
  * the flame's kernel uses in C and in the shader alike: within a few ulp of libm in double over the
  * ranges a chain visits, and IEEE's answers at the edges (0, infinities, NaN, beyond [-1, 1]). And
- * every float literal of the flame's kernels (flame.h, kmath.h, sincos.h) reads the same
+ * every float literal of the flame's kernels (flame.h, flame_var.h, kmath.h, sincos.h) reads the same
  * in C (straight to float) as in glslang (a double first, then rounded to float), so that a shader
  * computes with the same constants.
  *
@@ -129,7 +129,7 @@ int main(int argc, char **argv)
     REQUIRE(argc == 2);
     accuracy();
     edges();
-    const char *files[] = {"flame.h", "kmath.h", "sincos.h"};
-    for (int k = 0; k < 3; k++) literals(argv[1], files[k]);
+    const char *files[] = {"flame.h", "flame_var.h", "kmath.h", "sincos.h"};
+    for (int k = 0; k < 4; k++) literals(argv[1], files[k]);
     TEST_REPORT();
 }

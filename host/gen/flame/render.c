@@ -156,10 +156,10 @@ static fb_result de_filters(double max_rad, double min_rad, double curve, int ss
 
 /* ---- the kernel's tables --------------------------------------------------------------------- */
 
-K_FlameVar fb_flame_var_params(const fb_flame_xform *x, int v)
+/* The parameters of the variations as kernels/flame_var.h reads them (its comments say which). */
+static void params_classic(const fb_flame_xform *x, int v, double q[8])
 {
     const double *P = x->par, EPS = 1e-10;
-    double q[6] = {0, 0, 0, 0, 0, 0};
     switch (v) {
     case K_V_WAVES:
         q[0] = x->c[1][0], q[1] = x->c[1][1];
@@ -240,63 +240,34 @@ K_FlameVar fb_flame_var_params(const fb_flame_xform *x, int v)
     default:
         break;
     }
-    return (K_FlameVar){(uint32_t)v, (float)x->var[v], (float)q[0], (float)q[1],
-                        (float)q[2], (float)q[3],      (float)q[4], (float)q[5]};
 }
 
+K_FlameVar fb_flame_var_params(const fb_flame_xform *x, int v)
+{
+    double q[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    params_classic(x, v, q);
+    return (K_FlameVar){(uint32_t)v, (float)x->var[v], (float)q[0], (float)q[1], (float)q[2], (float)q[3],
+                        (float)q[4], (float)q[5],      (float)q[6], (float)q[7], 0,           0};
+}
+
+/* What each variation reads of flam3's precalcs (prepare_precalc_flags, and precalc_sqrt where the
+ * variation reads it). */
 static uint32_t var_flags(int v)
 {
-    switch (v) {
-    case K_V_POLAR:
-    case K_V_HANDKERCHIEF:
-    case K_V_HEART:
-    case K_V_DISC:
-    case K_V_EX:
-    case K_V_JULIA:
-    case K_V_FAN:
-    case K_V_BLOB:
-    case K_V_FAN2:
-    case K_V_DISC2:
-        return K_FLAME_ATAN_XY | K_FLAME_SQRT;
-    case K_V_RADIAL_BLUR:
-    case K_V_SUPER_SHAPE:
-    case K_V_FLOWER:
-    case K_V_CONIC:
-        return K_FLAME_ATAN_YX | K_FLAME_SQRT;
-    case K_V_JULIAN:
-    case K_V_JULIASCOPE:
-    case K_V_NGON:
-        return K_FLAME_ATAN_YX;
-    /* the variations that use neither the length of (tx, ty) nor the angle */
-    case K_V_LINEAR:
-    case K_V_SINUSOIDAL:
-    case K_V_SPHERICAL:
-    case K_V_SWIRL:
-    case K_V_BENT:
-    case K_V_WAVES:
-    case K_V_POPCORN:
-    case K_V_EXPONENTIAL:
-    case K_V_COSINE:
-    case K_V_PDJ:
-    case K_V_BUBBLE:
-    case K_V_CYLINDER:
-    case K_V_PERSPECTIVE:
-    case K_V_NOISE:
-    case K_V_BLUR:
-    case K_V_GAUSSIAN_BLUR:
-    case K_V_PIE:
-    case K_V_CURL:
-    case K_V_RECTANGLES:
-    case K_V_ARCH:
-    case K_V_TANGENT:
-    case K_V_SQUARE:
-    case K_V_RAYS:
-    case K_V_CROSS:
-    case K_V_BENT2:
-        return 0;
-    default:
-        return K_FLAME_SQRT;
-    }
+    enum { XY = K_FLAME_ATAN_XY, YX = K_FLAME_ATAN_YX, SQ = K_FLAME_SQRT, AN = K_FLAME_ANGLES | K_FLAME_SQRT };
+    static const uint8_t flags[K_V_COUNT] = {
+        [K_V_HORSESHOE] = SQ,   [K_V_POLAR] = XY | SQ, [K_V_HANDKERCHIEF] = XY | SQ,
+        [K_V_HEART] = XY | SQ,  [K_V_DISC] = XY | SQ,  [K_V_SPIRAL] = AN,
+        [K_V_HYPERBOLIC] = AN,  [K_V_DIAMOND] = AN,    [K_V_EX] = XY | SQ,
+        [K_V_JULIA] = XY | SQ,  [K_V_FISHEYE] = SQ,    [K_V_POWER] = AN,
+        [K_V_RINGS] = AN,       [K_V_FAN] = XY | SQ,   [K_V_BLOB] = XY | AN,
+        [K_V_FAN2] = XY | SQ,   [K_V_RINGS2] = AN,     [K_V_EYEFISH] = SQ,
+        [K_V_JULIAN] = YX,      [K_V_JULIASCOPE] = YX, [K_V_RADIAL_BLUR] = YX | SQ,
+        [K_V_NGON] = YX,        [K_V_BLADE] = SQ,      [K_V_SECANT2] = SQ,
+        [K_V_TWINTRIAN] = SQ,   [K_V_DISC2] = XY,      [K_V_SUPER_SHAPE] = YX | SQ,
+        [K_V_FLOWER] = YX | SQ, [K_V_CONIC] = YX | SQ, [K_V_PARABOLA] = SQ,
+    };
+    return flags[v];
 }
 
 static void xform_table(fb_flame_setup *s, const fb_flame_xform *x, K_FlameXform *out)
