@@ -4,8 +4,8 @@
  *
  * A chain starts at a random point of [-1, 1]^2 with a random colour, runs `fuse` iterations that
  * are not plotted, then `len` that are. An iteration picks an xform by its weight (or, with xaos,
- * by the row of the xform used last), applies its affine coefficients, the weighted sum of its
- * variations (kernels/flame_var.h: one function each, picked by number in one switch) and
+ * by the row of the xform used last), applies its affine coefficients, pre_blur, the weighted sum
+ * of its variations (kernels/flame_var.h: one function each, picked by number in one switch) and
  * its post transform; a result that is NaN or beyond 1e10 is replaced by a random point and the
  * iteration retried, up to five times in a row (flam3's rule). The final xform, when there is one,
  * is applied to what is plotted, not to the chain.
@@ -32,17 +32,19 @@
  * memory, its state is otherwise stored field by field and read back whole, which the processor
  * cannot forward, a stall a point.) */
 
-#define K_FLAME_GRAIN    16384u /* entries of one row of the xform choice table (flam3's CHOOSE_XFORM_GRAIN) */
-#define K_FLAME_NONE     0xffffffffu
-#define K_FLAME_ATAN_XY  1u  /* flags: the xform's variations read atan2(x, y) */
-#define K_FLAME_ATAN_YX  2u  /* ... atan2(y, x) */
-#define K_FLAME_HAS_POST 4u  /* it has a post transform */
-#define K_FLAME_SQRT     8u  /* ... the length of (tx, ty) */
-#define K_FLAME_ANGLES   16u /* ... flam3's sina and cosa (tx and ty over the length) */
+#define K_FLAME_GRAIN         16384u /* entries of one row of the xform choice table (flam3's CHOOSE_XFORM_GRAIN) */
+#define K_FLAME_NONE          0xffffffffu
+#define K_FLAME_ATAN_XY       1u  /* flags: the xform's variations read atan2(x, y) */
+#define K_FLAME_ATAN_YX       2u  /* ... atan2(y, x) */
+#define K_FLAME_HAS_POST      4u  /* it has a post transform */
+#define K_FLAME_SQRT          8u  /* ... the length of (tx, ty) */
+#define K_FLAME_ANGLES        16u /* ... flam3's sina and cosa (tx and ty over the length) */
+#define K_FLAME_PREBLUR_DRAWS 5u
 
 /* An xform: tx = ax x + bx y + cx, ty = ay x + by y + cy (flam3's coefs c00 c01 c10 c11 c20 c21 are
  * ax ay bx by cx cy), its post transform the same way, colour, colour speed, adjusted opacity, its
- * variations k_flame_var[var0 .. var0 + nvar) in ascending order of their numbers. */
+ * variations k_flame_var[var0 .. var0 + nvar) in ascending order of their numbers, pre_blur's weight
+ * (0: none; pre_blur is not among the variations). */
 K_STRUCT(K_FlameXform)
 {
     float ax, bx, cx, ay, by, cy;
@@ -50,7 +52,7 @@ K_STRUCT(K_FlameXform)
     float color, speed, vis;
     uint var0, nvar, flags;
     uint visq; /* vis in units of 2^-15 (the fixed-point weight of its points) */
-    uint pad;
+    float preblur;
 }
 K_END(K_FlameXform)
 
@@ -143,11 +145,12 @@ K_FN K_FlamePt k_flame_point(float tx, float ty, uint flags)
 }
 
 #ifdef K_FLAME_ONCE
-/* The first of the genome's variations (K_FLAME_VMASK*) numbered v or more, or K_V_COUNT. */
+/* The first of the genome's variations (K_FLAME_VMASK*) numbered v or more, or K_V_COUNT; pre_blur
+ * is not among them. */
 K_FN uint k_flame_vnext(uint v)
 {
     for (uint w = v >> 5u; w < 4u; w++) {
-        uint m = K_FLAME_VWORD(w);
+        uint m = K_FLAME_VWORD(w) & (w == 2u ? ~(1u << (K_V_PRE_BLUR & 31u)) : 0xffffffffu);
         if (w == v >> 5u) m &= 0xffffffffu << (v & 31u);
         if (m != 0u) return 32u * w + K_U(findLSB(m));
     }
@@ -170,6 +173,12 @@ K_FLAME_INLINE K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint
     o.c = X.speed * X.color + (1.0f - X.speed) * c;
     float tx = X.ax * x + X.bx * y + X.cx;
     float ty = X.ay * x + X.by * y + X.cy;
+    if (K_FLAME_HAS(K_V_PRE_BLUR) && X.preblur != 0.0f) {
+        k_vec2 b = k_flame_preblur(tx, ty, X.preblur, key, n);
+        n += K_FLAME_PREBLUR_DRAWS;
+        tx = b.x;
+        ty = b.y;
+    }
     K_FlamePt t = k_flame_point(tx, ty, X.flags);
     float p0 = 0.0f, p1 = 0.0f;
 #ifdef K_FLAME_ONCE

@@ -1,18 +1,21 @@
 /*
- * flam3 3.1.1's variations (flam3.h's numbers) in the common subset of C11 and GLSL: one small
- * function each, with flam3's formula (variations.c) and its quirks, in single precision, and one
- * switch (k_flame_variation) that picks a variation by its number. A variation is a pure function of
- * the point after the xform's affine map with flam3's precalcs (K_FlamePt), its weight and
- * parameters (K_FlameVar, already combined as flam3's precalc functions combine them:
- * host/gen/flame/render.c's fb_flame_var_params), and, for the random ones, the position (key, n) of
- * its draws in the chain's counter-based stream: its i-th draw is k_flame_u01(key, n + i), and the
- * switch says how many it takes.
+ * The 99 variations of flam3 3.1.1 (flam3.h's VAR_LINEAR 0 .. VAR_MOBIUS 98), in the common subset of
+ * C11 and GLSL: one small function each, with flam3's formula (variations.c) and its quirks, in
+ * single precision, and one switch (k_flame_variation) that picks a variation by its number. A
+ * variation is a pure function of the point after the xform's affine map with flam3's precalcs
+ * (K_FlamePt), its weight and parameters (K_FlameVar, already combined as flam3's precalc functions
+ * combine them: host/gen/flame/render.c's fb_flame_var_params), and, for the random ones, the
+ * position (key, n) of its draws in the chain's counter-based stream: its i-th draw is
+ * k_flame_u01(key, n + i), and the switch says how many it takes.
  *
  * Exactness: the same bits in C and on any conformant Vulkan device. Float `/` and sqrt only
  * through kx_div and kx_sqrt (kernels/exact.h), the transcendentals kernels/kmath.h's float-only
- * ones, no fused multiply-add (C is built with -ffp-contract=off, the SPIR-V carries NoContraction on
- * every float operation), every float literal one that C and glslang read alike
- * (tests/test_kmath.c).
+ * ones (k_xsin ... k_xacos), no fused multiply-add (C is built with -ffp-contract=off, the SPIR-V
+ * carries NoContraction on every float operation), every float literal one that C and glslang read
+ * alike (tests/test_kmath.c). flam3 computes in double: where a float intermediate overflows while
+ * flam3's double stays finite and its result is bounded (foci, and the tangents, secants and
+ * cosecants of the complex family at a large imaginary part), the function returns flam3's limit
+ * instead of a bad value; elsewhere float's narrower range and precision are what they are.
  */
 #ifndef FB_KERNELS_FLAME_VAR_H
 #define FB_KERNELS_FLAME_VAR_H
@@ -23,6 +26,7 @@
 
 #define K_FLAME_EPS 1e-10f       /* flam3's EPS */
 #define K_1_PI      0.318309873f /* 1 / pi: the float nearest both 1 / K_PI and M_1_PI */
+#define K_2_PI      0.636619747f /* 2 / pi (M_2_PI) */
 
 /* flam3's variation numbers (flam3.h VAR_*). */
 #define K_V_LINEAR        0u
@@ -80,7 +84,51 @@
 #define K_V_CONIC         52u
 #define K_V_PARABOLA      53u
 #define K_V_BENT2         54u
-#define K_V_COUNT         55u
+#define K_V_BIPOLAR       55u
+#define K_V_BOARDERS      56u
+#define K_V_BUTTERFLY     57u
+#define K_V_CELL          58u
+#define K_V_CPOW          59u
+#define K_V_CURVE         60u
+#define K_V_EDISC         61u
+#define K_V_ELLIPTIC      62u
+#define K_V_ESCHER        63u
+#define K_V_FOCI          64u
+#define K_V_LAZYSUSAN     65u
+#define K_V_LOONIE        66u
+#define K_V_PRE_BLUR      67u /* applied to (tx, ty) before the precalcs: k_flame_preblur */
+#define K_V_MODULUS       68u
+#define K_V_OSCILLOSCOPE  69u
+#define K_V_POLAR2        70u
+#define K_V_POPCORN2      71u
+#define K_V_SCRY          72u
+#define K_V_SEPARATION    73u
+#define K_V_SPLIT         74u
+#define K_V_SPLITS        75u
+#define K_V_STRIPES       76u
+#define K_V_WEDGE         77u
+#define K_V_WEDGE_JULIA   78u
+#define K_V_WEDGE_SPH     79u
+#define K_V_WHORL         80u
+#define K_V_WAVES2        81u
+#define K_V_EXP           82u
+#define K_V_LOG           83u
+#define K_V_SIN           84u
+#define K_V_COS           85u
+#define K_V_TAN           86u
+#define K_V_SEC           87u
+#define K_V_CSC           88u
+#define K_V_COT           89u
+#define K_V_SINH          90u
+#define K_V_COSH          91u
+#define K_V_TANH          92u
+#define K_V_SECH          93u
+#define K_V_CSCH          94u
+#define K_V_COTH          95u
+#define K_V_AUGER         96u
+#define K_V_FLUX          97u
+#define K_V_MOBIUS        98u
+#define K_V_COUNT         99u
 
 /* One active variation of an xform: flam3's number, its weight and up to eight parameters, already
  * combined as flam3's precalc functions do (fb_flame_var_params). 12 words: a std140 array's stride. */
@@ -133,6 +181,13 @@ K_FN float k_flame_itrunc(float v)
 {
     return (v >= 2147483648.0f || v < -2147483648.0f || k_isnan(v)) ? -2147483648.0f : k_trunc(v);
 }
+
+/* rint: to the nearest integer, ties to even (flam3's rint in the default rounding mode). */
+#ifdef K_GLSL
+#define k_flame_rint(x) roundEven(x)
+#else
+#define k_flame_rint(x) rintf(x)
+#endif
 
 /* ---- 0 .. 54 ---------------------------------------------------------------------------------- */
 
@@ -542,10 +597,432 @@ K_FN k_vec2 k_flame_var_bent2(K_FlamePt t, K_FlameVar V)
     return k_vec2(V.w * nx, V.w * ny);
 }
 
+/* ---- 55 .. 98: the Apophysis plugin pack's and later ones that flam3 took in -------------------- */
+
+/* p0: -pi/2 shift */
+K_FN k_vec2 k_flame_var_bipolar(K_FlamePt t, K_FlameVar V)
+{
+    float tt = t.sumsq + 1.0f, x2 = 2.0f * t.tx;
+    float y = 0.5f * k_xatan2(2.0f * t.ty, t.sumsq - 1.0f) + V.p0;
+    if (y > K_HALF_PI || y < -K_HALF_PI) {
+        float f = k_xfmod(y > K_HALF_PI ? y + K_HALF_PI : K_HALF_PI - y, K_PI);
+        y = y > K_HALF_PI ? -K_HALF_PI + f : K_HALF_PI - f;
+    }
+    return k_vec2(V.w * 0.25f * K_2_PI * k_xlog(kx_div(tt + x2, tt - x2)), V.w * K_2_PI * y);
+}
+
+K_FN k_vec2 k_flame_var_boarders(K_FlamePt t, float w, uint key, uint n)
+{
+    float rx = k_flame_rint(t.tx), ry = k_flame_rint(t.ty);
+    float ox = t.tx - rx, oy = t.ty - ry;
+    if (K_FLAME_DRAW(0u) >= 0.75f) return k_vec2(w * (ox * 0.5f + rx), w * (oy * 0.5f + ry));
+    /* flam3's 0.25 oy / ox, or ox / oy then times 0.25: one division (a shader inlines each) */
+    bool xbig = k_abs(ox) >= k_abs(oy);
+    float q = kx_div(xbig ? 0.25f * oy : ox, xbig ? ox : oy);
+    if (!xbig) q = q * 0.25f;
+    if (xbig) {
+        if (ox >= 0.0f) return k_vec2(w * (ox * 0.5f + rx + 0.25f), w * (oy * 0.5f + ry + q));
+        return k_vec2(w * (ox * 0.5f + rx - 0.25f), w * (oy * 0.5f + ry - q));
+    }
+    if (oy >= 0.0f) return k_vec2(w * (ox * 0.5f + rx + q), w * (oy * 0.5f + ry + 0.25f));
+    return k_vec2(w * (ox * 0.5f + rx - q), w * (oy * 0.5f + ry - 0.25f));
+}
+
+/* the weight times 4 / sqrt(3 pi) */
+K_FN k_vec2 k_flame_var_butterfly(K_FlamePt t, float w)
+{
+    float wx = w * 1.30294001f;
+    float y2 = t.ty * 2.0f;
+    float r = wx * kx_sqrt(kx_div(k_abs(t.ty * t.tx), K_FLAME_EPS + t.tx * t.tx + y2 * y2));
+    return k_vec2(r * t.tx, r * y2);
+}
+
+/* p0: size; p1: 1 / size. flam3's int cells, their interleaving in wrapping int arithmetic */
+K_FN k_vec2 k_flame_var_cell(K_FlamePt t, K_FlameVar V)
+{
+    float fx = k_flame_itrunc(k_floor(t.tx * V.p1)), fy = k_flame_itrunc(k_floor(t.ty * V.p1));
+    float dx = t.tx - fx * V.p0, dy = t.ty - fy * V.p0;
+    uint ux = K_U(K_I(fx)), uy = K_U(K_I(fy));
+    uy = fy >= 0.0f ? 2u * uy : 0u - (2u * uy + 1u);
+    ux = fx >= 0.0f ? 2u * ux : 0u - (2u * ux + 1u);
+    return k_vec2(V.w * (dx + K_F(K_I(ux)) * V.p0), -(V.w * (dy + K_F(K_I(uy)) * V.p0)));
+}
+
+/* p0: 2 pi / power; p1: r / power; p2: i / power; p3: power */
+K_FN k_vec2 k_flame_var_cpow(K_FlamePt t, K_FlameVar V, uint key, uint n)
+{
+    float a = t.atyx, lnr = 0.5f * k_xlog(t.sumsq);
+    float ang = V.p1 * a + V.p2 * lnr + V.p0 * k_floor(V.p3 * K_FLAME_DRAW(0u));
+    float m = V.w * k_xexp(V.p1 * lnr - V.p2 * a);
+    k_vec2 sc = k_sincos(ang);
+    return k_vec2(m * sc.y, m * sc.x);
+}
+
+/* p0, p1: xamp, yamp; p2, p3: 1 / max(xlength^2, 1e-20), 1 / max(ylength^2, 1e-20) */
+K_FN k_vec2 k_flame_var_curve(K_FlamePt t, K_FlameVar V)
+{
+    return k_vec2(V.w * (t.tx + V.p0 * k_xexp(-t.ty * t.ty * V.p2)), V.w * (t.ty + V.p1 * k_xexp(-t.tx * t.tx * V.p3)));
+}
+
+/* p0: the weight / 11.57034632 */
+K_FN k_vec2 k_flame_var_edisc(K_FlamePt t, K_FlameVar V)
+{
+    float tmp = t.sumsq + 1.0f, tmp2 = 2.0f * t.tx;
+    float r1 = kx_sqrt(tmp + tmp2), r2 = kx_sqrt(tmp - tmp2);
+    float xmax = (r1 + r2) * 0.5f;
+    float a1 = k_xlog(xmax + kx_sqrt(xmax - 1.0f));
+    float a2 = -k_xacos(kx_div(t.tx, xmax));
+    k_vec2 sc = k_sincos(a1);
+    k_vec2 sh = k_xsinhcosh(a2);
+    float snv = t.ty > 0.0f ? -sc.x : sc.x;
+    return k_vec2(V.p0 * sh.y * sc.y, V.p0 * sh.x * snv);
+}
+
+/* p0: the weight / (pi / 2) */
+K_FN k_vec2 k_flame_var_elliptic(K_FlamePt t, K_FlameVar V)
+{
+    float tmp = t.sumsq + 1.0f, x2 = 2.0f * t.tx;
+    float xmax = 0.5f * (kx_sqrt(tmp + x2) + kx_sqrt(tmp - x2));
+    float a = kx_div(t.tx, xmax);
+    float b = 1.0f - a * a, ssx = xmax - 1.0f;
+    b = b < 0.0f ? 0.0f : kx_sqrt(b);
+    ssx = ssx < 0.0f ? 0.0f : kx_sqrt(ssx);
+    float l = V.p0 * k_xlog(xmax + ssx);
+    return k_vec2(V.p0 * k_xatan2(a, b), t.ty > 0.0f ? l : -l);
+}
+
+/* p0, p1: (1 + cos beta) / 2, sin(beta) / 2 */
+K_FN k_vec2 k_flame_var_escher(K_FlamePt t, K_FlameVar V)
+{
+    float a = t.atyx, lnr = 0.5f * k_xlog(t.sumsq);
+    float m = V.w * k_xexp(V.p0 * lnr - V.p1 * a);
+    k_vec2 sc = k_sincos(V.p0 * a + V.p1 * lnr);
+    return k_vec2(m * sc.y, m * sc.x);
+}
+
+/* where e^tx / 2 leaves float's range flam3's double gives (+-w, ~0) */
+K_FN k_vec2 k_flame_var_foci(K_FlamePt t, float w)
+{
+    float expx = k_xexp(t.tx) * 0.5f;
+    if (expx == 0.0f || k_isinf(expx)) return k_vec2(t.tx > 0.0f ? w : -w, 0.0f);
+    float expnx = kx_div(0.25f, expx);
+    k_vec2 sc = k_sincos(t.ty);
+    float tmp = kx_div(w, expx + expnx - sc.y);
+    return k_vec2(tmp * (expx - expnx), tmp * sc.x);
+}
+
+/* p0, p1: x, y; p2: spin; p3: space; p4: twist */
+K_FN k_vec2 k_flame_var_lazysusan(K_FlamePt t, K_FlameVar V)
+{
+    float w = V.w, x = t.tx - V.p0, y = t.ty + V.p1;
+    float r = kx_sqrt(x * x + y * y);
+    if (r < w) {
+        float a = k_xatan2(y, x) + V.p2 + V.p4 * (w - r);
+        k_vec2 sc = k_sincos(a);
+        r = w * r;
+        return k_vec2(r * sc.y + V.p0, r * sc.x - V.p1);
+    }
+    r = w * (1.0f + kx_div(V.p3, r));
+    return k_vec2(r * x + V.p0, r * y - V.p1);
+}
+
+/* the weight inside, as flam3 */
+K_FN k_vec2 k_flame_var_loonie(K_FlamePt t, float w)
+{
+    float w2 = w * w;
+    if (t.sumsq < w2) {
+        float r = w * kx_sqrt(kx_div(w2, t.sumsq) - 1.0f);
+        return k_vec2(r * t.tx, r * t.ty);
+    }
+    return k_vec2(w * t.tx, w * t.ty);
+}
+
+/* pre_blur: a pseudo-gaussian displacement of (tx, ty) itself, before the precalcs (flam3 applies
+ * it ahead of the xform's other variations, with the variation's weight) */
+K_FN k_vec2 k_flame_preblur(float tx, float ty, float w, uint key, uint n)
+{
+    float g = K_FLAME_DRAW(0u) + K_FLAME_DRAW(1u) + K_FLAME_DRAW(2u) + K_FLAME_DRAW(3u) - 2.0f;
+    float rg = w * g;
+    k_vec2 sc = k_sincos(K_FLAME_DRAW(4u) * 2.0f * K_PI);
+    return k_vec2(tx + rg * sc.y, ty + rg * sc.x);
+}
+
+/* one axis of modulus: m, its parameter (one fmod: a shader inlines each) */
+K_FN float k_flame_modulus1(float v, float m, float w)
+{
+    if (v > m || v < -m) {
+        float f = k_xfmod(v > m ? v + m : m - v, 2.0f * m);
+        return v > m ? w * (-m + f) : w * (m - f);
+    }
+    return w * v;
+}
+
+/* p0, p1: x, y */
+K_FN k_vec2 k_flame_var_modulus(K_FlamePt t, K_FlameVar V)
+{
+    return k_vec2(k_flame_modulus1(t.tx, V.p0, V.w), k_flame_modulus1(t.ty, V.p1, V.w));
+}
+
+/* p0: 2 pi frequency; p1: amplitude; p2: damping; p3: separation */
+K_FN k_vec2 k_flame_var_oscilloscope(K_FlamePt t, K_FlameVar V)
+{
+    float c = k_xcos(V.p0 * t.tx);
+    float tt = V.p2 == 0.0f ? V.p1 * c + V.p3 : V.p1 * k_xexp(-k_abs(t.tx) * V.p2) * c + V.p3;
+    return k_vec2(V.w * t.tx, k_abs(t.ty) <= tt ? -(V.w * t.ty) : V.w * t.ty);
+}
+
+/* p0: the weight / pi */
+K_FN k_vec2 k_flame_var_polar2(K_FlamePt t, K_FlameVar V)
+{
+    return k_vec2(V.p0 * t.atxy, V.p0 * 0.5f * k_xlog(t.sumsq));
+}
+
+/* p0, p1: x, y; p2: c */
+K_FN k_vec2 k_flame_var_popcorn2(K_FlamePt t, K_FlameVar V)
+{
+    return k_vec2(V.w * (t.tx + V.p0 * k_xsin(k_xtan(t.ty * V.p2))), V.w * (t.ty + V.p1 * k_xsin(k_xtan(t.tx * V.p2))));
+}
+
+/* p0: 1 / (weight + EPS); the weight used only there, as flam3 */
+K_FN k_vec2 k_flame_var_scry(K_FlamePt t, K_FlameVar V)
+{
+    float r = kx_div(1.0f, t.sq * (t.sumsq + V.p0));
+    return k_vec2(t.tx * r, t.ty * r);
+}
+
+/* one axis of separation: s2, its parameter squared; in, its inside */
+K_FN float k_flame_separation1(float v, float s2, float ins, float w)
+{
+    float r = kx_sqrt(v * v + s2);
+    return v > 0.0f ? w * (r - v * ins) : -(w * (r + v * ins));
+}
+
+/* p0, p1: x^2, xinside; p2, p3: y^2, yinside */
+K_FN k_vec2 k_flame_var_separation(K_FlamePt t, K_FlameVar V)
+{
+    return k_vec2(k_flame_separation1(t.tx, V.p0, V.p1, V.w), k_flame_separation1(t.ty, V.p2, V.p3, V.w));
+}
+
+/* p0, p1: xsize, ysize */
+K_FN k_vec2 k_flame_var_split(K_FlamePt t, K_FlameVar V)
+{
+    float y = k_xcos(t.tx * V.p0 * K_PI) >= 0.0f ? V.w * t.ty : -(V.w * t.ty);
+    float x = k_xcos(t.ty * V.p1 * K_PI) >= 0.0f ? V.w * t.tx : -(V.w * t.tx);
+    return k_vec2(x, y);
+}
+
+/* p0, p1: x, y */
+K_FN k_vec2 k_flame_var_splits(K_FlamePt t, K_FlameVar V)
+{
+    return k_vec2(t.tx >= 0.0f ? V.w * (t.tx + V.p0) : V.w * (t.tx - V.p0),
+                  t.ty >= 0.0f ? V.w * (t.ty + V.p1) : V.w * (t.ty - V.p1));
+}
+
+/* p0: 1 - space; p1: warp */
+K_FN k_vec2 k_flame_var_stripes(K_FlamePt t, K_FlameVar V)
+{
+    float rx = k_floor(t.tx + 0.5f), ox = t.tx - rx;
+    return k_vec2(V.w * (ox * V.p0 + rx), V.w * (t.ty + ox * ox * V.p1));
+}
+
+/* wedge's and wedge_sph's common end: the angle a folded into count wedges (comp, flam3's comp_fac)
+ * and the radius r */
+K_FN k_vec2 k_flame_wedge(float a, float r, float count, float angle, float comp)
+{
+    float c = k_floor((count * a + K_PI) * K_1_PI * 0.5f);
+    k_vec2 sc = k_sincos(a * comp + c * angle);
+    return k_vec2(r * sc.y, r * sc.x);
+}
+
+/* p0: angle; p1: hole; p2: count; p3: swirl; p4: 1 - angle count / (2 pi) */
+K_FN k_vec2 k_flame_var_wedge(K_FlamePt t, K_FlameVar V)
+{
+    return k_flame_wedge(t.atyx + V.p3 * t.sq, V.w * (t.sq + V.p1), V.p2, V.p0, V.p4);
+}
+
+/* p0: power; p1: dist / power / 2; p2: |power|; p3: count; p4: angle; p5: 1 - angle count / (2 pi) */
+K_FN k_vec2 k_flame_var_wedge_julia(K_FlamePt t, K_FlameVar V, uint key, uint n)
+{
+    float r = V.w * k_xpow(t.sumsq, V.p1);
+    float tr = k_flame_itrunc(V.p2 * K_FLAME_DRAW(0u));
+    float a = kx_div(t.atyx + 2.0f * K_PI * tr, V.p0);
+    return k_flame_wedge(a, r, V.p3, V.p4, V.p5);
+}
+
+/* as wedge */
+K_FN k_vec2 k_flame_var_wedge_sph(K_FlamePt t, K_FlameVar V)
+{
+    float r = kx_div(1.0f, t.sq + K_FLAME_EPS);
+    return k_flame_wedge(t.atyx + V.p3 * r, V.w * (r + V.p1), V.p2, V.p0, V.p4);
+}
+
+/* p0, p1: inside, outside; the weight as a radius too, as flam3 */
+K_FN k_vec2 k_flame_var_whorl(K_FlamePt t, K_FlameVar V)
+{
+    float r = t.sq;
+    float a = t.atyx + kx_div(r < V.w ? V.p0 : V.p1, V.w - r);
+    k_vec2 sc = k_sincos(a);
+    return k_vec2(V.w * r * sc.y, V.w * r * sc.x);
+}
+
+/* p0, p1: scalex, scaley; p2, p3: freqx, freqy */
+K_FN k_vec2 k_flame_var_waves2(K_FlamePt t, K_FlameVar V)
+{
+    return k_vec2(V.w * (t.tx + V.p0 * k_xsin(t.ty * V.p2)), V.w * (t.ty + V.p1 * k_xsin(t.tx * V.p3)));
+}
+
+/* ---- the complex functions (exp, log, sin ... coth) --------------------------------------------- */
+
+K_FN k_vec2 k_flame_var_exp(K_FlamePt t, float w)
+{
+    float e = k_xexp(t.tx);
+    k_vec2 sc = k_sincos(t.ty);
+    return k_vec2(w * e * sc.y, w * e * sc.x);
+}
+
+K_FN k_vec2 k_flame_var_log(K_FlamePt t, float w)
+{
+    return k_vec2(w * 0.5f * k_xlog(t.sumsq), w * t.atyx);
+}
+
+K_FN k_vec2 k_flame_var_sin(K_FlamePt t, float w)
+{
+    k_vec2 sc = k_sincos(t.tx), sh = k_xsinhcosh(t.ty);
+    return k_vec2(w * sc.x * sh.y, w * sc.y * sh.x);
+}
+
+K_FN k_vec2 k_flame_var_cos(K_FlamePt t, float w)
+{
+    k_vec2 sc = k_sincos(t.tx), sh = k_xsinhcosh(t.ty);
+    return k_vec2(w * sc.y * sh.y, -(w * sc.x * sh.x));
+}
+
+/* The parts of the complex tangents (tan and cot: a = x, b = y; tanh and coth: a = y, b = x):
+ * (sin 2a, sinh 2b, 1 / (cosh 2b + s cos 2a)), s = 1 for tan and tanh, -1 for cot and coth. The third
+ * is 0 where cosh 2b leaves float's range: there the functions tend to +-i or +-1, and the callers
+ * return flam3's double limit, not 0 x inf. */
+K_FN k_vec3 k_flame_tangents(float a, float b, float s)
+{
+    k_vec2 sc = k_sincos(2.0f * a), sh = k_xsinhcosh(2.0f * b);
+    return k_vec3(sc.x, sh.x, k_isinf(sh.y) ? 0.0f : kx_div(1.0f, sh.y + s * sc.y));
+}
+
+/* 2 / (cosh 2b + s cos 2a), the secants' (sec and csc: a = x, b = y; sech and csch: a = y, b = x;
+ * s = 1 for sec and sech, -1 for csc and csch); 0 where cosh 2b leaves float's range (the
+ * functions tend to 0 there, and the callers return 0, not 0 x inf). */
+K_FN float k_flame_secants(float a, float b, float s)
+{
+    float ch2 = k_xcosh(2.0f * b);
+    return k_isinf(ch2) ? 0.0f : kx_div(2.0f, ch2 + s * k_xcos(2.0f * a));
+}
+
+K_FN k_vec2 k_flame_var_tan(K_FlamePt t, float w)
+{
+    k_vec3 p = k_flame_tangents(t.tx, t.ty, 1.0f);
+    if (p.z == 0.0f) return k_vec2(0.0f, t.ty > 0.0f ? w : -w);
+    return k_vec2(w * p.z * p.x, w * p.z * p.y);
+}
+
+K_FN k_vec2 k_flame_var_sec(K_FlamePt t, float w)
+{
+    float den = k_flame_secants(t.tx, t.ty, 1.0f);
+    if (den == 0.0f) return k_vec2(0.0f, 0.0f);
+    k_vec2 sc = k_sincos(t.tx), sh = k_xsinhcosh(t.ty);
+    return k_vec2(w * den * sc.y * sh.y, w * den * sc.x * sh.x);
+}
+
+K_FN k_vec2 k_flame_var_csc(K_FlamePt t, float w)
+{
+    float den = k_flame_secants(t.tx, t.ty, -1.0f);
+    if (den == 0.0f) return k_vec2(0.0f, 0.0f);
+    k_vec2 sc = k_sincos(t.tx), sh = k_xsinhcosh(t.ty);
+    return k_vec2(w * den * sc.x * sh.y, -(w * den * sc.y * sh.x));
+}
+
+K_FN k_vec2 k_flame_var_cot(K_FlamePt t, float w)
+{
+    k_vec3 p = k_flame_tangents(t.tx, t.ty, -1.0f);
+    if (p.z == 0.0f) return k_vec2(0.0f, t.ty > 0.0f ? -w : w);
+    return k_vec2(w * p.z * p.x, w * p.z * -1.0f * p.y);
+}
+
+K_FN k_vec2 k_flame_var_sinh(K_FlamePt t, float w)
+{
+    k_vec2 sc = k_sincos(t.ty), sh = k_xsinhcosh(t.tx);
+    return k_vec2(w * sh.x * sc.y, w * sh.y * sc.x);
+}
+
+K_FN k_vec2 k_flame_var_cosh(K_FlamePt t, float w)
+{
+    k_vec2 sc = k_sincos(t.ty), sh = k_xsinhcosh(t.tx);
+    return k_vec2(w * sh.y * sc.y, w * sh.x * sc.x);
+}
+
+K_FN k_vec2 k_flame_var_tanh(K_FlamePt t, float w)
+{
+    k_vec3 p = k_flame_tangents(t.ty, t.tx, 1.0f);
+    if (p.z == 0.0f) return k_vec2(t.tx > 0.0f ? w : -w, 0.0f);
+    return k_vec2(w * p.z * p.y, w * p.z * p.x);
+}
+
+K_FN k_vec2 k_flame_var_sech(K_FlamePt t, float w)
+{
+    float den = k_flame_secants(t.ty, t.tx, 1.0f);
+    if (den == 0.0f) return k_vec2(0.0f, 0.0f);
+    k_vec2 sc = k_sincos(t.ty), sh = k_xsinhcosh(t.tx);
+    return k_vec2(w * den * sc.y * sh.y, -(w * den * sc.x * sh.x));
+}
+
+K_FN k_vec2 k_flame_var_csch(K_FlamePt t, float w)
+{
+    float den = k_flame_secants(t.ty, t.tx, -1.0f);
+    if (den == 0.0f) return k_vec2(0.0f, 0.0f);
+    k_vec2 sc = k_sincos(t.ty), sh = k_xsinhcosh(t.tx);
+    return k_vec2(w * den * sh.x * sc.y, -(w * den * sh.y * sc.x));
+}
+
+K_FN k_vec2 k_flame_var_coth(K_FlamePt t, float w)
+{
+    k_vec3 p = k_flame_tangents(t.ty, t.tx, -1.0f);
+    if (p.z == 0.0f) return k_vec2(t.tx > 0.0f ? w : -w, 0.0f);
+    return k_vec2(w * p.z * p.y, w * p.z * p.x);
+}
+
+/* ---- auger, flux, mobius ------------------------------------------------------------------------ */
+
+/* p0: freq; p1: weight (auger's own); p2: sym; p3: scale */
+K_FN k_vec2 k_flame_var_auger(K_FlamePt t, K_FlameVar V)
+{
+    float s = k_xsin(V.p0 * t.tx), u = k_xsin(V.p0 * t.ty);
+    float dy = t.ty + V.p1 * (V.p3 * s * 0.5f + k_abs(t.ty) * s);
+    float dx = t.tx + V.p1 * (V.p3 * u * 0.5f + k_abs(t.tx) * u);
+    return k_vec2(V.w * (t.tx + V.p2 * (dx - t.tx)), V.w * dy);
+}
+
+/* p0: 2 + spread; the weight as a distance too, as flam3 */
+K_FN k_vec2 k_flame_var_flux(K_FlamePt t, K_FlameVar V)
+{
+    float xpw = t.tx + V.w, xmw = t.tx - V.w;
+    float q = kx_div(kx_sqrt(t.ty * t.ty + xpw * xpw), kx_sqrt(t.ty * t.ty + xmw * xmw));
+    float avgr = V.w * V.p0 * kx_sqrt(q);
+    float avga = (k_xatan2(t.ty, xmw) - k_xatan2(t.ty, xpw)) * 0.5f;
+    k_vec2 sc = k_sincos(avga);
+    return k_vec2(avgr * sc.y, avgr * sc.x);
+}
+
+/* p0 .. p7: re_a, im_a, re_b, im_b, re_c, im_c, re_d, im_d: w (a z + b) / (c z + d) */
+K_FN k_vec2 k_flame_var_mobius(K_FlamePt t, K_FlameVar V)
+{
+    float re_u = V.p0 * t.tx - V.p1 * t.ty + V.p2, im_u = V.p0 * t.ty + V.p1 * t.tx + V.p3;
+    float re_v = V.p4 * t.tx - V.p5 * t.ty + V.p6, im_v = V.p4 * t.ty + V.p5 * t.tx + V.p7;
+    float rad_v = kx_div(V.w, re_v * re_v + im_v * im_v);
+    return k_vec2(rad_v * (re_u * re_v + im_u * im_v), rad_v * (im_u * re_v - re_u * im_v));
+}
+
 /* ---- the switch ----------------------------------------------------------------------------------- */
 
 /* Whether variation v's code is compiled: a shader may define K_FLAME_VMASK0 .. K_FLAME_VMASK3 as
- * specialisation constants, the genome's variations as bits (0-31, 32-63 ...), so that a
+ * specialisation constants, the genome's variations 0-31, 32-63, 64-95 and 96-98 as bits, so that a
  * pipeline carries only the genome's variations (lavapipe runs every branch that any of its 8
  * lanes takes, and compiles every branch it is given: pipeline creation time). In C every variation
  * is there. */
@@ -553,8 +1030,8 @@ K_FN k_vec2 k_flame_var_bent2(K_FlamePt t, K_FlameVar V)
 #ifndef K_FLAME_VMASK0
 #define K_FLAME_VMASK0 0xffffffffu
 #define K_FLAME_VMASK1 0xffffffffu
-#define K_FLAME_VMASK2 0u
-#define K_FLAME_VMASK3 0u
+#define K_FLAME_VMASK2 0xffffffffu
+#define K_FLAME_VMASK3 0x7u
 #endif
 #define K_FLAME_VWORD(w)                                                                                               \
     ((w) == 0u ? K_FLAME_VMASK0 : (w) == 1u ? K_FLAME_VMASK1 : (w) == 2u ? K_FLAME_VMASK2 : K_FLAME_VMASK3)
@@ -581,7 +1058,8 @@ K_END(K_FlameD)
         break;
 
 /* Variation number v (V's, or in a shader's pass over the genome's variations the pass's) at point
- * t, its draws from (key, n): flam3's apply_xform switch. */
+ * t, its draws from (key, n): flam3's apply_xform switch. pre_blur is not among them (it moves the
+ * point before the precalcs: k_flame_preblur). */
 K_FLAME_INLINE K_FlameD k_flame_variation(uint v, K_FlamePt t, K_FlameVar V, uint key, uint n)
 {
     K_FlameD r;
@@ -644,6 +1122,49 @@ K_FLAME_INLINE K_FlameD k_flame_variation(uint v, K_FlamePt t, K_FlameVar V, uin
         K_FLAME_CASE(K_V_CONIC, k_flame_var_conic(t, V, key, n), 1u)
         K_FLAME_CASE(K_V_PARABOLA, k_flame_var_parabola(t, V, key, n), 2u)
         K_FLAME_CASE(K_V_BENT2, k_flame_var_bent2(t, V), 0u)
+        K_FLAME_CASE(K_V_BIPOLAR, k_flame_var_bipolar(t, V), 0u)
+        K_FLAME_CASE(K_V_BOARDERS, k_flame_var_boarders(t, w, key, n), 1u)
+        K_FLAME_CASE(K_V_BUTTERFLY, k_flame_var_butterfly(t, w), 0u)
+        K_FLAME_CASE(K_V_CELL, k_flame_var_cell(t, V), 0u)
+        K_FLAME_CASE(K_V_CPOW, k_flame_var_cpow(t, V, key, n), 1u)
+        K_FLAME_CASE(K_V_CURVE, k_flame_var_curve(t, V), 0u)
+        K_FLAME_CASE(K_V_EDISC, k_flame_var_edisc(t, V), 0u)
+        K_FLAME_CASE(K_V_ELLIPTIC, k_flame_var_elliptic(t, V), 0u)
+        K_FLAME_CASE(K_V_ESCHER, k_flame_var_escher(t, V), 0u)
+        K_FLAME_CASE(K_V_FOCI, k_flame_var_foci(t, w), 0u)
+        K_FLAME_CASE(K_V_LAZYSUSAN, k_flame_var_lazysusan(t, V), 0u)
+        K_FLAME_CASE(K_V_LOONIE, k_flame_var_loonie(t, w), 0u)
+        K_FLAME_CASE(K_V_MODULUS, k_flame_var_modulus(t, V), 0u)
+        K_FLAME_CASE(K_V_OSCILLOSCOPE, k_flame_var_oscilloscope(t, V), 0u)
+        K_FLAME_CASE(K_V_POLAR2, k_flame_var_polar2(t, V), 0u)
+        K_FLAME_CASE(K_V_POPCORN2, k_flame_var_popcorn2(t, V), 0u)
+        K_FLAME_CASE(K_V_SCRY, k_flame_var_scry(t, V), 0u)
+        K_FLAME_CASE(K_V_SEPARATION, k_flame_var_separation(t, V), 0u)
+        K_FLAME_CASE(K_V_SPLIT, k_flame_var_split(t, V), 0u)
+        K_FLAME_CASE(K_V_SPLITS, k_flame_var_splits(t, V), 0u)
+        K_FLAME_CASE(K_V_STRIPES, k_flame_var_stripes(t, V), 0u)
+        K_FLAME_CASE(K_V_WEDGE, k_flame_var_wedge(t, V), 0u)
+        K_FLAME_CASE(K_V_WEDGE_JULIA, k_flame_var_wedge_julia(t, V, key, n), 1u)
+        K_FLAME_CASE(K_V_WEDGE_SPH, k_flame_var_wedge_sph(t, V), 0u)
+        K_FLAME_CASE(K_V_WHORL, k_flame_var_whorl(t, V), 0u)
+        K_FLAME_CASE(K_V_WAVES2, k_flame_var_waves2(t, V), 0u)
+        K_FLAME_CASE(K_V_EXP, k_flame_var_exp(t, w), 0u)
+        K_FLAME_CASE(K_V_LOG, k_flame_var_log(t, w), 0u)
+        K_FLAME_CASE(K_V_SIN, k_flame_var_sin(t, w), 0u)
+        K_FLAME_CASE(K_V_COS, k_flame_var_cos(t, w), 0u)
+        K_FLAME_CASE(K_V_TAN, k_flame_var_tan(t, w), 0u)
+        K_FLAME_CASE(K_V_SEC, k_flame_var_sec(t, w), 0u)
+        K_FLAME_CASE(K_V_CSC, k_flame_var_csc(t, w), 0u)
+        K_FLAME_CASE(K_V_COT, k_flame_var_cot(t, w), 0u)
+        K_FLAME_CASE(K_V_SINH, k_flame_var_sinh(t, w), 0u)
+        K_FLAME_CASE(K_V_COSH, k_flame_var_cosh(t, w), 0u)
+        K_FLAME_CASE(K_V_TANH, k_flame_var_tanh(t, w), 0u)
+        K_FLAME_CASE(K_V_SECH, k_flame_var_sech(t, w), 0u)
+        K_FLAME_CASE(K_V_CSCH, k_flame_var_csch(t, w), 0u)
+        K_FLAME_CASE(K_V_COTH, k_flame_var_coth(t, w), 0u)
+        K_FLAME_CASE(K_V_AUGER, k_flame_var_auger(t, V), 0u)
+        K_FLAME_CASE(K_V_FLUX, k_flame_var_flux(t, V), 0u)
+        K_FLAME_CASE(K_V_MOBIUS, k_flame_var_mobius(t, V), 0u)
     default:
         break;
     }

@@ -61,9 +61,9 @@ sys.exit(0 if ok else 1)" "$ref" "$ours" "$name"; then ok; else bad "$name: fart
 # name, flam3-genome's seed, variations)
 while read -r name seed vars <&3; do run_case "$name" "$seed" "$vars"; done 3< "$HERE/flame-cases.txt"
 
-# an unsupported variation: exit 2, one line naming it and the xform, no file
-sed 's/<xform weight="\([^"]*\)"/<xform weight="\1" escher="0.3"/' post.flame > escher.flame
-expect_fail 2 "xform [0-9]*: variation escher is not supported" u.exr -- flame --file escher.flame --size 64x64 -o u.exr
+# a variation outside flam3 (an Apophysis plugin): exit 2, one line naming it and the xform, no file
+sed 's/<xform weight="\([^"]*\)"/<xform weight="\1" hemisphere="0.3"/' post.flame > hemi.flame
+expect_fail 2 "xform [0-9]*: unknown variation or attribute .hemisphere" u.exr -- flame --file hemi.flame --size 64x64 -o u.exr
 sed 's/<xform weight="\([^"]*\)"/<xform weight="\1" linear3D="0.3"/' post.flame > l3d.flame
 expect_fail 2 "xform [0-9]*: unknown variation or attribute .linear3D" u.exr -- flame --file l3d.flame --size 64x64 -o u.exr
 expect_fail 2 "no <flame> named" u.exr -- flame --file post.flame --flame nosuch --size 64x64 -o u.exr

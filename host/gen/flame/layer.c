@@ -268,6 +268,8 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
     uint32_t spec[7] = {
         (device_fields(S) == 4) | S->linear_palette << 1 | (S->p.final_xf != K_FLAME_NONE) << 2, 0, 0, 0, 0, nxf, nvar};
     for (uint32_t v = 0; v < S->nvar; v++) spec[1 + S->var[v].id / 32] |= 1u << (S->var[v].id % 32);
+    for (uint32_t f = 0; f < nxf; f++)
+        if (S->xf[f].preblur != 0.0f) spec[1 + K_V_PRE_BLUR / 32] |= 1u << (K_V_PRE_BLUR % 32);
     /* the parameters, xforms, variations and palette: uniform buffers (flame_body.glsl), their sizes
      * in std140 (the parameters' block rounded up to 16 bytes) */
     const uint64_t sizes[FB_NBUF] = {(sizeof S->p + 15) & ~(uint64_t)15,
