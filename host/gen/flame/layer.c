@@ -88,9 +88,10 @@ typedef struct flame_state {
     uint32_t *count;
     uint64_t bad;
     double seconds;
-    uint32_t cr0, cr1;   /* the chains this run plays: all, or a points part's share */
-    int nsums;           /* a points part: the 64-bit sums its histogram is stored as (flame_sums) */
-    fb_flame_cell *hist; /* a points part: its histogram, kept for its sums channels */
+    fb_flame_stats stats; /* the last prepare's game: fb_gen_flame_stats */
+    uint32_t cr0, cr1;    /* the chains this run plays: all, or a points part's share */
+    int nsums;            /* a points part: the 64-bit sums its histogram is stored as (flame_sums) */
+    fb_flame_cell *hist;  /* a points part: its histogram, kept for its sums channels */
 } flame_state;
 
 static flame_state *state(const fb_gen *g)
@@ -360,6 +361,7 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
         free(total);
     st->seconds = fb_now() - t0;
     g->prepare_gpu_seconds = gpu;
+    st->stats = (fb_flame_stats){.points = chain_points(st), .game_seconds = t1 - t0, .gpu_seconds = gpu};
     if (rc) return rc;
     fb_log(FB_LOG_INFO,
            "%s: %.0f points in %u chains, %.3g Mpts/s (chaos game %.2f s, filters %.2f s), %llu bad values",
@@ -368,6 +370,11 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
     snprintf(g->summary, sizeof g->summary, "%s: flame %.0f points, %.3g Mpts/s", g->layer->name, points,
              points / (t1 - t0) * 1e-6);
     return FB_OK;
+}
+
+const fb_flame_stats *fb_gen_flame_stats(const fb_gen *g)
+{
+    return g->layer->cls == &fb_gen_flame && g->owned ? &state(g)->stats : NULL;
 }
 
 /* ---- points parts: the histogram as sums ------------------------------------------------------ */
@@ -546,4 +553,5 @@ const fb_gen_class fb_gen_flame = {
     .points = &flame_points_ops,
     .tone = &fb_flame_tone_ops,
     .example = "[{\"type\": \"flame\", \"file\": \"docs/examples/flames.flame\", \"flame\": \"gold\", \"quality\": 2}]",
+    .bench = fb_flame_bench,
 };
