@@ -14,8 +14,8 @@
  * least 98% of 3000 random points must agree (both bad values, or both good and within 1e-3 of
  * flam3's result relative to its size; the rest are points near a singularity, where float's
  * rounding moves a result far). Then xforms of several variations with pre_blur and a post
- * transform, where the variations' draws must line up one after another. Not run (77) without
- * libflam3.
+ * transform, where the variations' draws must line up one after another. Built where libflam3-dev
+ * is installed (tests/CMakeLists.txt), as it is for CI.
  */
 #include "render.h"
 
