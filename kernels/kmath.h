@@ -1,11 +1,12 @@
 /*
- * exp, log, pow, atan2, tan, sinh and cosh in float arithmetic only (with sin and cos from
+ * exp, log, pow, atan2, tan, sinh, cosh, asin and acos in float arithmetic only (with sin and cos from
  * sincos.h), so that a shader and C give the same bits: libm and a device's built-ins differ in the
  * last bits (Vulkan allows exp and log 3 ulp, atan 4096 ulp, pow and the hyperbolics "inherited"
  * from exp and log), and a chaotic orbit amplifies any difference into other points. The algorithms
  * and coefficients are Cephes' single-precision ones (Stephen Moshier: expf.c, logf.c, atanf.c,
- * sinhf.c): within a few ulp of the true values. Every intermediate is `precise` (no fused
- * multiply-add on either side: C is built with -ffp-contract=off). Exponents are taken and built
+ * sinhf.c, asinf.c): within a few ulp of the true values. Every intermediate is `precise` (no fused
+ * multiply-add on either side: C is built with -ffp-contract=off), and division and square root are
+ * kernels/exact.h's kx_div and kx_sqrt, correctly rounded on every device. Exponents are taken and built
  * through the float's bits, never through ldexp or frexp (whose edge cases the two languages spell
  * differently); subnormal results are flushed to zero and subnormal arguments read as zero, as a
  * device with denormals flushed does.
@@ -18,6 +19,7 @@
 #ifndef FB_KERNELS_KMATH_H
 #define FB_KERNELS_KMATH_H
 
+#include "exact.h"
 #include "sincos.h"
 
 #ifdef K_GLSL
@@ -112,13 +114,19 @@ K_FN float k_xatan(float x)
 {
     K_PRECISE float a = k_abs(x);
     K_PRECISE float base = 0.0f;
+    K_PRECISE float num = a;
+    K_PRECISE float den = 1.0f;
     if (a > 2.414213562373095f) {
         base = K_HALF_PI;
-        a = -1.0f / a;
+        num = -1.0f;
+        den = a;
     } else if (a > 0.4142135623730950f) {
         base = K_QUART_PI;
-        a = (a - 1.0f) / (a + 1.0f);
+        num = a - 1.0f;
+        den = a + 1.0f;
     }
+    /* one division for both reductions (a shader inlines each call of kx_div) */
+    if (base != 0.0f) a = kx_div(num, den);
     K_PRECISE float z = a * a;
     K_PRECISE float r =
         base +
@@ -137,7 +145,7 @@ K_FN float k_xatan2(float y, float x)
         if (k_isinf(y)) ax = k_isinf(x) ? (x > 0.0f ? K_QUART_PI : 3.0f * K_QUART_PI) : K_HALF_PI;
         return y < 0.0f ? -ax : ax;
     }
-    K_PRECISE float q = y / x;
+    K_PRECISE float q = kx_div(y, x);
     K_PRECISE float w = x < 0.0f ? (y < 0.0f ? -K_PI : K_PI) : 0.0f;
     K_PRECISE float r = w + k_xatan(q);
     return r;
@@ -147,7 +155,7 @@ K_FN float k_xatan2(float y, float x)
  * floors); the same bits in both languages. */
 K_FN float k_xfmod(float x, float y)
 {
-    K_PRECISE float r = x - y * k_trunc(x / y);
+    K_PRECISE float r = x - y * k_trunc(kx_div(x, y));
     return r;
 }
 
@@ -165,29 +173,69 @@ K_FN float k_xcos(float x)
 K_FN float k_xtan(float x)
 {
     k_vec2 sc = k_sincos(x);
-    K_PRECISE float t = sc.x / sc.y;
+    K_PRECISE float t = kx_div(sc.x, sc.y);
     return t;
 }
 
-/* sinh x: a polynomial for |x| <= 1 (Cephes sinhf), (e^|x| - e^-|x|) / 2 beyond (no division). */
-K_FN float k_xsinh(float x)
+/* (sinh x, cosh x): sinh by a polynomial for |x| <= 1 (Cephes sinhf), (e^|x| - e^-|x|) / 2 beyond
+ * (no division); cosh = (e^|x| + e^-|x|) / 2. */
+K_FN k_vec2 k_xsinhcosh(float x)
 {
     K_PRECISE float a = k_abs(x);
-    K_PRECISE float r;
+    K_PRECISE float ea = k_xexp(a);
+    K_PRECISE float ena = k_xexp(-a);
+    K_PRECISE float s;
     if (a <= 1.0f) {
         K_PRECISE float z = a * a;
-        r = ((2.03721912945e-4f * z + 8.33028376239e-3f) * z + 1.66667160211e-1f) * z * a + a;
+        s = ((2.03721912945e-4f * z + 8.33028376239e-3f) * z + 1.66667160211e-1f) * z * a + a;
     } else {
-        r = 0.5f * k_xexp(a) - 0.5f * k_xexp(-a);
+        s = 0.5f * ea - 0.5f * ena;
     }
+    K_PRECISE float c = 0.5f * ea + 0.5f * ena;
+    return k_vec2(x < 0.0f ? -s : s, c);
+}
+
+K_FN float k_xsinh(float x)
+{
+    return k_xsinhcosh(x).x;
+}
+
+K_FN float k_xcosh(float x)
+{
+    return k_xsinhcosh(x).y;
+}
+
+/* asin x (Cephes asinf): a polynomial in x^2 for |x| <= 1/2, pi/2 - 2 asin(sqrt((1 - |x|) / 2))
+ * beyond; NaN outside [-1, 1]. */
+K_FN float k_xasin(float x)
+{
+    K_PRECISE float a = k_abs(x);
+    if (!(a <= 1.0f)) return K_NAN;
+    bool big = a > 0.5f;
+    K_PRECISE float z = big ? 0.5f * (1.0f - a) : a * a;
+    K_PRECISE float v = big ? kx_sqrt(z) : a;
+    K_PRECISE float r = v;
+    if (a >= 1e-4f)
+        r = ((((4.2163199048e-2f * z + 2.4181311049e-2f) * z + 4.5470025998e-2f) * z + 7.4953002686e-2f) * z +
+             1.6666752422e-1f) *
+                z * v +
+            v;
+    if (big) r = K_HALF_PI - (r + r);
     return x < 0.0f ? -r : r;
 }
 
-/* cosh x = (e^|x| + e^-|x|) / 2. */
-K_FN float k_xcosh(float x)
+/* acos x (Cephes acosf): pi - 2 asin(sqrt((1 + x) / 2)) below -1/2, 2 asin(sqrt((1 - x) / 2)) above
+ * 1/2, pi/2 - asin x between; NaN outside [-1, 1]. */
+K_FN float k_xacos(float x)
 {
-    K_PRECISE float a = k_abs(x);
-    K_PRECISE float r = 0.5f * k_xexp(a) + 0.5f * k_xexp(-a);
+    if (!(x >= -1.0f && x <= 1.0f)) return K_NAN;
+    K_PRECISE float r;
+    if (x < -0.5f)
+        r = K_PI - 2.0f * k_xasin(kx_sqrt(0.5f * (1.0f + x)));
+    else if (x > 0.5f)
+        r = 2.0f * k_xasin(kx_sqrt(0.5f * (1.0f - x)));
+    else
+        r = K_HALF_PI - k_xasin(x);
     return r;
 }
 

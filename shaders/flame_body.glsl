@@ -14,18 +14,24 @@
 
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 
-// 1: opaque xforms and palette, step mode: 4 fields a cell; 0: 6
-layout(constant_id = 0) const uint COMPACT = 0u;
-// 1: flam3's linear palette mode (interpolated entries)
-layout(constant_id = 1) const uint LINEAR = 0u;
-// the genome's variations, bits of 0-31 and 32-54: only their branches are compiled (kernels/flame.h)
-layout(constant_id = 2) const uint VMASK0 = 0xffffffffu;
-layout(constant_id = 3) const uint VMASK1 = 0xffffffffu;
-// 1: the genome has a final xform (0: its code is compiled out; lavapipe would run it under a mask)
-layout(constant_id = 4) const uint FINAL = 1u;
+// bit 0: opaque xforms and palette, step mode: 4 fields a cell (else 6); bit 1: flam3's linear
+// palette mode (interpolated entries); bit 2: the genome has a final xform (without, its code is
+// compiled out: lavapipe would run it under a mask)
+layout(constant_id = 0) const uint FLAGS = 0u;
+const uint COMPACT = FLAGS & 1u;
+const uint LINEAR = (FLAGS >> 1) & 1u;
+const uint FINAL = (FLAGS >> 2) & 1u;
+// the genome's variations, bits of 0-31, 32-63, 64-95 and 96-98: only their code is compiled
+// (kernels/flame_var.h)
+layout(constant_id = 1) const uint VMASK0 = 0xffffffffu;
+layout(constant_id = 2) const uint VMASK1 = 0xffffffffu;
+layout(constant_id = 3) const uint VMASK2 = 0xffffffffu;
+layout(constant_id = 4) const uint VMASK3 = 0x7u;
 #define K_FLAME_FINAL  (FINAL != 0u)
 #define K_FLAME_VMASK0 VMASK0
 #define K_FLAME_VMASK1 VMASK1
+#define K_FLAME_VMASK2 VMASK2
+#define K_FLAME_VMASK3 VMASK3
 // each of the genome's variations once a step, not once an xform's variation slot (kernels/flame.h)
 #define K_FLAME_ONCE 1
 

@@ -37,9 +37,9 @@ INEXACT_GLSL = {"Sqrt", "InverseSqrt", "Exp", "Exp2", "Log", "Log2", "Pow", "Sin
 NEVER_GLSL = {"FMin", "FMax", "FClamp", "PackHalf2x16", "PackSnorm2x16", "PackUnorm2x16", "PackSnorm4x8",
               "PackUnorm4x8"}
 EXEMPT = ("ceiling_",)
-# Modules known to fail while their kernel is rewritten on a branch of its own (issue 42: every
-# flam3 variation as an exact function): strict, so that the list must shrink the day they pass.
-PENDING = {"flame.spv", "flame64.spv"}
+# Modules known to fail while their kernel is rewritten on a branch of its own: strict, so that the
+# list must shrink the day they pass (none now: the flame's passed with issue 42's variations).
+PENDING = set()
 HELPER = "kx_"
 
 

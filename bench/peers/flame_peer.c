@@ -10,7 +10,10 @@
  * cells prefetched ahead), the histograms summed and a plain log-density tone map into 8-bit RGBA
  * in memory, all on the threads.
  *
- *   flame_peer [THREADS] [QUALITY]     defaults 2, 20: prints points, seconds, Mpts/s (wall and CPU)
+ *   flame_peer [--json] [THREADS] [QUALITY]     defaults 2, 20: prints points, seconds, Mpts/s (wall
+ *                                               and CPU); --json: `fractalbake bench`'s rows instead
+ *                                               (generator flame, modes peer and peer-game: the whole
+ *                                               and the game alone; bench/run.sh)
  */
 #define _GNU_SOURCE
 #include <math.h>
@@ -200,9 +203,11 @@ static void run(job *J, void *(*fn)(void *))
 
 int main(int argc, char **argv)
 {
+    int json = argc > 1 && !strcmp(argv[1], "--json");
+    argc -= json, argv += json;
     int threads = argc > 1 ? atoi(argv[1]) : 2;
     double q = argc > 2 ? atof(argv[2]) : 20;
-    if (threads < 1 || threads > 64 || !(q > 0)) return fprintf(stderr, "flame_peer [THREADS] [QUALITY]\n"), 2;
+    if (threads < 1 || threads > 64 || !(q > 0)) return fprintf(stderr, "flame_peer [--json] [THREADS] [QUALITY]\n"), 2;
     /* the weights: xform 0 and 1 0.5 each, the 3 rotations 2 each (twice 1: the genome's and the symmetry's) */
     const double w[5] = {0.5, 0.5, 2, 2, 2};
     double sum = 0, acc = 0;
@@ -223,10 +228,19 @@ int main(int argc, char **argv)
     double t2 = now(CLOCK_MONOTONIC), c2 = now(CLOCK_PROCESS_CPUTIME_ID);
     uint64_t lit = 0, sum8 = 0;
     for (size_t i = 0; i < (size_t)W * H; i++) lit += J.img[4 * i + 3] != 0, sum8 += J.img[4 * i + 1];
-    printf("flame_peer: %llu points, %d threads: %.3f s wall (game %.3f, tone %.3f), %.3f CPU s: %.1f Mpts/s, "
-           "%.1f Mpts/CPU-s (%llu pixels lit, green sum %llu)\n",
-           (unsigned long long)J.points, threads, t2 - t0, t1 - t0, t2 - t1, c2 - c0, J.points / (t2 - t0) * 1e-6,
-           J.points / (c2 - c0) * 1e-6, (unsigned long long)lit, (unsigned long long)sum8);
+    if (json) {
+        const char *modes[2] = {"peer", "peer-game"};
+        double sec[2] = {t2 - t0, t1 - t0};
+        for (int k = 0; k < 2; k++)
+            printf("{\"generator\": \"flame\", \"backend\": \"native\", \"device\": \"minimal C peer "
+                   "(bench/peers/flame_peer.c)\", \"mode\": \"%s\", \"unit\": \"Mpts/s\", \"rate\": %.3f, "
+                   "\"threads\": %d, \"points\": %llu}\n",
+                   modes[k], J.points / sec[k] * 1e-6, threads, (unsigned long long)J.points);
+    } else
+        printf("flame_peer: %llu points, %d threads: %.3f s wall (game %.3f, tone %.3f), %.3f CPU s: %.1f Mpts/s, "
+               "%.1f Mpts/CPU-s (%llu pixels lit, green sum %llu)\n",
+               (unsigned long long)J.points, threads, t2 - t0, t1 - t0, t2 - t1, c2 - c0, J.points / (t2 - t0) * 1e-6,
+               J.points / (c2 - c0) * 1e-6, (unsigned long long)lit, (unsigned long long)sum8);
     for (int t = 0; t < threads; t++) free(J.hist[t]);
     free(J.img);
     return 0;

@@ -2,6 +2,7 @@
  * Benchmarks: the shared timing. See benchkit.h.
  */
 #include "benchkit.h"
+#include "gen.h"
 
 #include "bake.h"
 #include "pool.h"
@@ -45,6 +46,24 @@ fb_result fb_bench_timed(fb_engine *e, const fb_scene *s, const char *out, doubl
     }
     if (rc) return rc;
     *wall = fb_bench_median3(w);
+    *gpu = fb_bench_median3(g);
+    return FB_OK;
+}
+
+fb_result fb_bench_prepared(fb_engine *e, const fb_scene *s, void (*read)(const fb_gen *g, double *sec, double *gpu),
+                            double *sec, double *gpu)
+{
+    double w[3], g[3];
+    fb_result rc = FB_OK;
+    for (int i = -1; i < 3 && !rc; i++) {
+        fb_gen gen;
+        rc = fb_gen_init(&gen, s, &s->layers[0]);
+        if (!rc) rc = gen.prepare(&gen, e, false);
+        if (!rc && i >= 0) read(&gen, &w[i], &g[i]);
+        fb_gen_fini(&gen);
+    }
+    if (rc) return rc;
+    *sec = fb_bench_median3(w);
     *gpu = fb_bench_median3(g);
     return FB_OK;
 }

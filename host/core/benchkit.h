@@ -62,6 +62,13 @@ double fb_bench_median3(double t[3]);
 /* Median wall seconds (and GPU seconds) of three bakes after one warm-up. out NULL: no file. */
 fb_result fb_bench_timed(fb_engine *e, const fb_scene *s, const char *out, double *wall, double *gpu);
 
+/* Median seconds (and device seconds) of three prepares of the scene's first layer after a warm-up
+ * (a pipeline's compilation): the part of a bake that `read` reports from each prepared generator's
+ * own stats (a chaos game alone: no reduction, tone map or file). */
+struct fb_gen;
+fb_result fb_bench_prepared(fb_engine *e, const fb_scene *s,
+                            void (*read)(const struct fb_gen *g, double *sec, double *gpu), double *sec, double *gpu);
+
 /* Opens the Vulkan engine; *have is false (and the result FB_OK) when there is no device and the
  * native backend is benchmarked anyway. */
 fb_result fb_bench_open_vulkan(const fb_bench *b, fb_engine *e, bool *have);

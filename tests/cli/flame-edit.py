@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """Turns a random genome of flam3-genome into a test genome (tests/cli/flame.sh):
 
-    flame-edit.py IN.flame OUT.flame CASE QUALITY VAR,VAR,...
+    flame-edit.py IN.flame OUT.flame CASE QUALITY [VAR,VAR,...] [SIZE]
 
-512 x 512 (the same view: the scale follows the size), QUALITY samples per pixel, every variation
-of the list present (one the random genome lacks is added to an xform at weight 0.5), and the
-feature CASE exercises: post, xaos, final, palette-rgb (<palette format="RGB">), colors (<colors>),
+SIZE x SIZE (512 unless given; the same view: the scale follows the size), QUALITY samples per
+pixel, every variation of the list (flam3's numbers, VAR_LINEAR 0 .. VAR_MOBIUS 98) present (one
+the random genome lacks is added to an xform at weight 0.5), and the feature CASE exercises
+(`plain`: none, the genome as flam3-genome made it): post, xaos, final, palette-rgb (<palette format="RGB">), colors (<colors>),
 library (palette="N" with a hue), opacity (an xform at opacity 0.5 and the legacy symmetry), linear
 (palette_mode linear), supersample (2, the mitchell filter), camera (rotate, zoom), tone (DE,
 gamma threshold, highlight power, vibrancy, background)."""
@@ -13,16 +14,28 @@ import re
 import sys
 import xml.etree.ElementTree as ET
 
-src, dst, case, quality, vars_ = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5]
+# flam3 3.1.1's variations by number (flam3.h)
+NAMES = """linear sinusoidal spherical swirl horseshoe polar handkerchief heart disc spiral hyperbolic diamond
+ex julia bent waves fisheye popcorn exponential power cosine rings fan blob pdj fan2 rings2 eyefish bubble
+cylinder perspective noise julian juliascope blur gaussian_blur radial_blur pie ngon curl rectangles arch
+tangent square rays blade secant2 twintrian cross disc2 super_shape flower conic parabola bent2 bipolar
+boarders butterfly cell cpow curve edisc elliptic escher foci lazysusan loonie pre_blur modulus
+oscilloscope polar2 popcorn2 scry separation split splits stripes wedge wedge_julia wedge_sph whorl waves2
+exp log sin cos tan sec csc cot sinh cosh tanh sech csch coth auger flux mobius""".split()
+assert len(NAMES) == 99
+
+src, dst, case, quality = sys.argv[1:5]
+ids = sys.argv[5] if len(sys.argv) > 5 else ""
+size = int(sys.argv[6]) if len(sys.argv) > 6 else 512
 root = ET.parse(src).getroot()
 flame = root if root.tag == "flame" else root.find("flame")
 w, h = (int(v) for v in flame.get("size").split())
-flame.set("scale", "%.9g" % (float(flame.get("scale")) * 512 / w))
-flame.set("size", "512 512")
+flame.set("scale", "%.9g" % (float(flame.get("scale")) * size / w))
+flame.set("size", "%d %d" % (size, size))
 flame.set("quality", quality)
 flame.set("name", "test-" + case)
 xforms = flame.findall("xform")
-names = vars_.split(",")
+names = [NAMES[int(i)] for i in ids.split(",")] if ids else []
 for k, v in enumerate(names):
     if not any(x.get(v) for x in xforms):
         xforms[k % len(xforms)].set(v, "0.5")
@@ -80,4 +93,6 @@ elif case == "tone":
     flame.set("gamma", "3")
     flame.set("brightness", "6")
     flame.set("background", "0.1 0.05 0.2")
+elif case != "plain":
+    sys.exit("flame-edit.py: unknown case " + case)
 ET.ElementTree(flame).write(dst)

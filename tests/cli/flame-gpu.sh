@@ -1,8 +1,8 @@
 #!/bin/bash
 # The flame's chaos game on Vulkan against the native path, bit for bit (issue 31): the random
 # genomes of tests/cli/flame.sh (flame-cases.txt: flam3-genome with fixed seeds, five variations
-# each, together all 55, each with its feature edited in: post, xaos, final xform, palettes,
-# opacity, linear palette, supersample, camera, tone map), baked as a points part 1/1 so that the
+# each, together all 99 of flam3 3.1.1, each with its feature edited in: post, xaos, final xform,
+# palettes, opacity, linear palette, supersample, camera, tone map), baked as a points part 1/1 so that the
 # file carries the whole integer histogram (NAME.hist*), on both backends: every channel equal, the
 # histogram included. Then the device's 32-bit atomics (FB_VK_NO_INT64=1) on an opaque, a
 # translucent and a linear-palette genome, and a points part on Vulkan merged with one baked
@@ -16,20 +16,15 @@ if ! command -v flam3-genome > /dev/null; then
     echo "flam3-utils is not installed: not run"
     exit 77
 fi
-NAMES='linear sinusoidal spherical swirl horseshoe polar handkerchief heart disc spiral hyperbolic diamond ex julia
-bent waves fisheye popcorn exponential power cosine rings fan blob pdj fan2 rings2 eyefish bubble cylinder
-perspective noise julian juliascope blur gaussian_blur radial_blur pie ngon curl rectangles arch tangent square
-rays blade secant2 twintrian cross disc2 super_shape flower conic parabola bent2'
 SIZE=${FB_FLAME_GPU_SIZE:-96x96}
 Q=${FB_FLAME_GPU_QUALITY:-12}
 
-# genome NAME SEED VARIATIONS: flam3-genome's genome for SEED over VARIATIONS, edited for NAME
+# genome NAME SEED VARIATIONS: flam3-genome's genome for SEED over VARIATIONS, edited for NAME (its
+# feature: the name before any "_")
 genome() {
-    local name=$1 seed=$2 ids=$3 vars
-    vars=$(python3 -c "import sys; n=sys.argv[1].split(); print(','.join(n[int(i)] for i in sys.argv[2].split(',')))" \
-        "$NAMES" "$ids")
+    local name=$1 seed=$2 ids=$3
     env seed="$seed" isaac_seed="fb$seed" use_vars="$ids" flam3-genome > "r$seed.flame" 2> /dev/null
-    python3 "$HERE/flame-edit.py" "r$seed.flame" "$name.flame" "$name" "$Q" "$vars" || bad "$name: flame-edit failed"
+    python3 "$HERE/flame-edit.py" "r$seed.flame" "$name.flame" "${name%_*}" "$Q" "$ids" || bad "$name: flame-edit failed"
 }
 
 # same NAME [ENV...]: the genome on both backends, every channel (the histogram's too) the same;
@@ -38,7 +33,7 @@ genome() {
 same() {
     local name=$1 part="--points-part 1/1"
     shift
-    [ "$name" = supersample ] && part=
+    [ "${name%_*}" = supersample ] && part=
     "$FB" flame --file "$name.flame" --size "$SIZE" --seed 5 --backend native $part --quiet \
         -o "$name-n.exr" || { bad "$name: native failed"; return; }
     env "$@" "$FB" flame --file "$name.flame" --size "$SIZE" --seed 5 --backend vulkan --validation $part \

@@ -137,13 +137,13 @@ static void scatter(const game *G, int task, const K_FlameChain *pts, uint32_t n
 
 /* ---- the step, with a fast path for plain linear xforms -------------------------------------- */
 
-/* Whether xform `fn` is plain linear: its one variation `linear`, no post transform. A genome's
+/* Whether xform `fn` is plain linear: its one variation `linear`, no post transform, no pre_blur. A genome's
  * symmetry xforms are (most of `gold`'s steps): they skip the variations' loop and its chain of
  * tests, which the processor mispredicts whenever the random xform choice changes kind. */
 static bool plain_linear(const fb_flame_setup *S, uint32_t fn)
 {
     const K_FlameXform *X = &S->xf[fn];
-    return X->nvar == 1u && S->var[X->var0].id == K_V_LINEAR && !(X->flags & K_FLAME_HAS_POST);
+    return X->nvar == 1u && S->var[X->var0].id == K_V_LINEAR && !(X->flags & K_FLAME_HAS_POST) && X->preblur == 0.0f;
 }
 
 /* k_flame_apply for a plain linear xform: the same operations in the same order (so the same bits:

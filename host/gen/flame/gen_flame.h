@@ -14,7 +14,20 @@ typedef struct fb_flame_params {
     fb_flame_tone tone;     /* the genome's tone map, with the layer's tone keys applied */
 } fb_flame_params;
 
+/* The last prepare's chaos game: its points, wall seconds (the game alone: no density estimation,
+ * filter or file) and the device's seconds from its timestamps (<= 0: none, or native). */
+typedef struct fb_flame_stats {
+    double points, game_seconds, gpu_seconds;
+} fb_flame_stats;
+
 extern const fb_gen_class fb_gen_flame;
 extern const fb_tone_ops fb_flame_tone_ops; /* tone.c: fractalbake tonemap */
+
+/* The stats of a flame layer's generator after prepare; NULL for another class. */
+const fb_flame_stats *fb_gen_flame_stats(const fb_gen *g);
+
+/* fractalbake bench's flame rows (bench.c). */
+struct fb_bench;
+fb_result fb_flame_bench(struct fb_bench *b);
 
 #endif

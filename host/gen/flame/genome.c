@@ -43,131 +43,44 @@ const char *fb_flame_variation_name(int v)
     return v >= 0 && v < 99 ? var_names[v] : "?";
 }
 
-/* The parameters we render, with flam3's defaults (initialize_xforms). */
+/* The variations' parameters with flam3's defaults (initialize_xforms). */
 static const struct {
     const char *name;
     double def;
 } par_spec[FB_FP_COUNT] = {
-    {"blob_low", 0},
-    {"blob_high", 1},
-    {"blob_waves", 1},
-    {"pdj_a", 0},
-    {"pdj_b", 0},
-    {"pdj_c", 0},
-    {"pdj_d", 0},
-    {"fan2_x", 0},
-    {"fan2_y", 0},
-    {"rings2_val", 0},
-    {"perspective_angle", 0},
-    {"perspective_dist", 0},
-    {"julian_power", 1},
-    {"julian_dist", 1},
-    {"juliascope_power", 1},
-    {"juliascope_dist", 1},
-    {"radial_blur_angle", 0},
-    {"pie_slices", 6},
-    {"pie_rotation", 0},
-    {"pie_thickness", 0.5},
-    {"ngon_sides", 5},
-    {"ngon_power", 3},
-    {"ngon_circle", 1},
-    {"ngon_corners", 2},
-    {"curl_c1", 1},
-    {"curl_c2", 0},
-    {"rectangles_x", 1},
-    {"rectangles_y", 1},
-    {"disc2_rot", 0},
-    {"disc2_twist", 0},
-    {"super_shape_rnd", 0},
-    {"super_shape_m", 0},
-    {"super_shape_n1", 1},
-    {"super_shape_n2", 1},
-    {"super_shape_n3", 1},
-    {"super_shape_holes", 0},
-    {"flower_petals", 0},
-    {"flower_holes", 0},
-    {"conic_eccentricity", 1},
-    {"conic_holes", 0},
-    {"parabola_height", 0},
-    {"parabola_width", 0},
-    {"bent2_x", 1},
-    {"bent2_y", 1},
+#define FB_FLAME_PARAM_SPEC(e, name, def) {name, def},
+    FB_FLAME_PARAMS(FB_FLAME_PARAM_SPEC)
+#undef FB_FLAME_PARAM_SPEC
 };
 
-/* Parameters of the variations we do not render: accepted (flam3 reads them) and unused, since a
- * genome with such a variation at a non-zero weight is refused. */
-static const char *const other_params[] = {
-    "amw_amp",
-    "bipolar_shift",
-    "cell_size",
-    "cpow_i",
-    "cpow_r",
-    "cpow_power",
-    "curve_xamp",
-    "curve_yamp",
-    "curve_xlength",
-    "curve_ylength",
-    "escher_beta",
-    "lazysusan_x",
-    "lazysusan_y",
-    "lazysusan_spin",
-    "lazysusan_space",
-    "lazysusan_twist",
-    "modulus_x",
-    "modulus_y",
-    "oscilloscope_separation",
-    "oscilloscope_frequency",
-    "oscilloscope_amplitude",
-    "oscilloscope_damping",
-    "oscope_separation",
-    "oscope_frequency",
-    "oscope_amplitude",
-    "oscope_damping",
-    "popcorn2_x",
-    "popcorn2_y",
-    "popcorn2_c",
-    "separation_x",
-    "separation_xinside",
-    "separation_y",
-    "separation_yinside",
-    "split_xsize",
-    "split_ysize",
-    "splits_x",
-    "splits_y",
-    "stripes_space",
-    "stripes_warp",
-    "wedge_angle",
-    "wedge_hole",
-    "wedge_count",
-    "wedge_swirl",
-    "wedge_julia_angle",
-    "wedge_julia_count",
-    "wedge_julia_power",
-    "wedge_julia_dist",
-    "wedge_sph_angle",
-    "wedge_sph_count",
-    "wedge_sph_hole",
-    "wedge_sph_swirl",
-    "whorl_inside",
-    "whorl_outside",
-    "waves2_scalex",
-    "waves2_scaley",
-    "waves2_freqx",
-    "waves2_freqy",
-    "auger_sym",
-    "auger_weight",
-    "auger_freq",
-    "auger_scale",
-    "flux_spread",
-    "mobius_re_a",
-    "mobius_im_a",
-    "mobius_re_b",
-    "mobius_im_b",
-    "mobius_re_c",
-    "mobius_im_c",
-    "mobius_re_d",
-    "mobius_im_d",
+/* The other names flam3's parser gives some of them. */
+static const struct {
+    const char *alias;
+    int par;
+} par_alias[] = {
+    {"oscope_separation", FB_FP_OSCOPE_SEPARATION},
+    {"oscope_frequency", FB_FP_OSCOPE_FREQUENCY},
+    {"oscope_amplitude", FB_FP_OSCOPE_AMPLITUDE},
+    {"oscope_damping", FB_FP_OSCOPE_DAMPING},
+    {"Re_A", FB_FP_MOBIUS_RE_A},
+    {"Im_A", FB_FP_MOBIUS_IM_A},
+    {"Re_B", FB_FP_MOBIUS_RE_B},
+    {"Im_B", FB_FP_MOBIUS_IM_B},
+    {"Re_C", FB_FP_MOBIUS_RE_C},
+    {"Im_C", FB_FP_MOBIUS_IM_C},
+    {"Re_D", FB_FP_MOBIUS_RE_D},
+    {"Im_D", FB_FP_MOBIUS_IM_D},
 };
+
+/* The parameter named `name` (or an alias of it), or -1. */
+static int param_of(const char *name)
+{
+    for (int k = 0; k < FB_FP_COUNT; k++)
+        if (!strcmp(name, par_spec[k].name)) return k;
+    for (size_t k = 0; k < sizeof par_alias / sizeof *par_alias; k++)
+        if (!strcmp(name, par_alias[k].alias)) return par_alias[k].par;
+    return -1;
+}
 
 static const char *const filter_shapes[14] = {"gaussian", "hermite",  "box",      "triangle", "bell",
                                               "bspline",  "mitchell", "blackman", "catrom",   "hanning",
@@ -372,13 +285,6 @@ static fb_result library_palette(const reader *r, const char *palettes, int numb
     return rc;
 }
 
-static bool is_other_param(const char *name)
-{
-    for (size_t i = 0; i < sizeof other_params / sizeof *other_params; i++)
-        if (!strcmp(name, other_params[i])) return true;
-    return false;
-}
-
 static fb_result parse_xform(reader *r, xmlNodePtr node, fb_flame_xform *x, bool final, int stdindex)
 {
     for (xmlAttrPtr a = node->properties; a; a = a->next) {
@@ -441,22 +347,14 @@ static fb_result parse_xform(reader *r, xmlNodePtr node, fb_flame_xform *x, bool
         } else if (!strcmp(name, "var1") || !strcmp(name, "var")) {
             rc = bad(r, "attribute %s: the pre-2.0 variation syntax is not supported%s", name, "");
         } else if (v >= 0) {
-            if (!(rc = number(r, name, val, &d)) && d != 0.0) {
-                if (v >= (int)K_V_COUNT)
-                    rc = bad(r,
-                             "variation %s is not supported (fractalbake renders flam3's variations 0 to 54: "
-                             "linear ... bent2)%s",
-                             name, "");
-                else
-                    x->var[v] = d;
-            }
+            rc = number(r, name, val, &x->var[v]);
+        } else if (!strcmp(name, "amw_amp")) {
+            rc = number(r, name, val, &d); /* flam3 reads it; no variation of 3.1.1 uses it */
         } else {
-            int p = -1;
-            for (int k = 0; k < FB_FP_COUNT; k++)
-                if (!strcmp(name, par_spec[k].name)) p = k;
+            int p = param_of(name);
             if (p >= 0)
                 rc = number(r, name, val, &x->par[p]);
-            else if (!is_other_param(name) && !(numbers(val, 1, &d) && d == 0.0))
+            else if (!(numbers(val, 1, &d) && d == 0.0))
                 rc = bad(r,
                          "unknown variation or attribute '%s' (flam3 3.1.1 would ignore it and render the "
                          "flame differently)%s",

@@ -11,59 +11,123 @@
 
 #define FB_FLAME_MAX_XFORMS                                                                                            \
     24 /* ordinary xforms (flam3 has no limit; <symmetry> adds up to 25), plus one final xform */
-#define FB_FLAME_NPARAMS 28
+/* flam3 3.1.1's variation parameters: the enum's name, the attribute, flam3's default
+ * (initialize_xforms). */
+#define FB_FLAME_PARAMS(X)                                                                                             \
+    X(BLOB_LOW, "blob_low", 0)                                                                                         \
+    X(BLOB_HIGH, "blob_high", 1)                                                                                       \
+    X(BLOB_WAVES, "blob_waves", 1)                                                                                     \
+    X(PDJ_A, "pdj_a", 0)                                                                                               \
+    X(PDJ_B, "pdj_b", 0)                                                                                               \
+    X(PDJ_C, "pdj_c", 0)                                                                                               \
+    X(PDJ_D, "pdj_d", 0)                                                                                               \
+    X(FAN2_X, "fan2_x", 0)                                                                                             \
+    X(FAN2_Y, "fan2_y", 0)                                                                                             \
+    X(RINGS2_VAL, "rings2_val", 0)                                                                                     \
+    X(PERSPECTIVE_ANGLE, "perspective_angle", 0)                                                                       \
+    X(PERSPECTIVE_DIST, "perspective_dist", 0)                                                                         \
+    X(JULIAN_POWER, "julian_power", 1)                                                                                 \
+    X(JULIAN_DIST, "julian_dist", 1)                                                                                   \
+    X(JULIASCOPE_POWER, "juliascope_power", 1)                                                                         \
+    X(JULIASCOPE_DIST, "juliascope_dist", 1)                                                                           \
+    X(RADIAL_BLUR_ANGLE, "radial_blur_angle", 0)                                                                       \
+    X(PIE_SLICES, "pie_slices", 6)                                                                                     \
+    X(PIE_ROTATION, "pie_rotation", 0)                                                                                 \
+    X(PIE_THICKNESS, "pie_thickness", 0.5)                                                                             \
+    X(NGON_SIDES, "ngon_sides", 5)                                                                                     \
+    X(NGON_POWER, "ngon_power", 3)                                                                                     \
+    X(NGON_CIRCLE, "ngon_circle", 1)                                                                                   \
+    X(NGON_CORNERS, "ngon_corners", 2)                                                                                 \
+    X(CURL_C1, "curl_c1", 1)                                                                                           \
+    X(CURL_C2, "curl_c2", 0)                                                                                           \
+    X(RECTANGLES_X, "rectangles_x", 1)                                                                                 \
+    X(RECTANGLES_Y, "rectangles_y", 1)                                                                                 \
+    X(DISC2_ROT, "disc2_rot", 0)                                                                                       \
+    X(DISC2_TWIST, "disc2_twist", 0)                                                                                   \
+    X(SUPER_SHAPE_RND, "super_shape_rnd", 0)                                                                           \
+    X(SUPER_SHAPE_M, "super_shape_m", 0)                                                                               \
+    X(SUPER_SHAPE_N1, "super_shape_n1", 1)                                                                             \
+    X(SUPER_SHAPE_N2, "super_shape_n2", 1)                                                                             \
+    X(SUPER_SHAPE_N3, "super_shape_n3", 1)                                                                             \
+    X(SUPER_SHAPE_HOLES, "super_shape_holes", 0)                                                                       \
+    X(FLOWER_PETALS, "flower_petals", 0)                                                                               \
+    X(FLOWER_HOLES, "flower_holes", 0)                                                                                 \
+    X(CONIC_ECCENTRICITY, "conic_eccentricity", 1)                                                                     \
+    X(CONIC_HOLES, "conic_holes", 0)                                                                                   \
+    X(PARABOLA_HEIGHT, "parabola_height", 0)                                                                           \
+    X(PARABOLA_WIDTH, "parabola_width", 0)                                                                             \
+    X(BENT2_X, "bent2_x", 1)                                                                                           \
+    X(BENT2_Y, "bent2_y", 1)                                                                                           \
+    X(BIPOLAR_SHIFT, "bipolar_shift", 0)                                                                               \
+    X(CELL_SIZE, "cell_size", 1)                                                                                       \
+    X(CPOW_R, "cpow_r", 1)                                                                                             \
+    X(CPOW_I, "cpow_i", 0)                                                                                             \
+    X(CPOW_POWER, "cpow_power", 1)                                                                                     \
+    X(CURVE_XAMP, "curve_xamp", 0)                                                                                     \
+    X(CURVE_YAMP, "curve_yamp", 0)                                                                                     \
+    X(CURVE_XLENGTH, "curve_xlength", 1)                                                                               \
+    X(CURVE_YLENGTH, "curve_ylength", 1)                                                                               \
+    X(ESCHER_BETA, "escher_beta", 0)                                                                                   \
+    X(LAZYSUSAN_SPACE, "lazysusan_space", 0)                                                                           \
+    X(LAZYSUSAN_TWIST, "lazysusan_twist", 0)                                                                           \
+    X(LAZYSUSAN_SPIN, "lazysusan_spin", 0)                                                                             \
+    X(LAZYSUSAN_X, "lazysusan_x", 0)                                                                                   \
+    X(LAZYSUSAN_Y, "lazysusan_y", 0)                                                                                   \
+    X(MODULUS_X, "modulus_x", 0)                                                                                       \
+    X(MODULUS_Y, "modulus_y", 0)                                                                                       \
+    X(OSCOPE_SEPARATION, "oscilloscope_separation", 1)                                                                 \
+    X(OSCOPE_FREQUENCY, "oscilloscope_frequency", M_PI)                                                                \
+    X(OSCOPE_AMPLITUDE, "oscilloscope_amplitude", 1)                                                                   \
+    X(OSCOPE_DAMPING, "oscilloscope_damping", 0)                                                                       \
+    X(POPCORN2_X, "popcorn2_x", 0)                                                                                     \
+    X(POPCORN2_Y, "popcorn2_y", 0)                                                                                     \
+    X(POPCORN2_C, "popcorn2_c", 0)                                                                                     \
+    X(SEPARATION_X, "separation_x", 0)                                                                                 \
+    X(SEPARATION_XINSIDE, "separation_xinside", 0)                                                                     \
+    X(SEPARATION_Y, "separation_y", 0)                                                                                 \
+    X(SEPARATION_YINSIDE, "separation_yinside", 0)                                                                     \
+    X(SPLIT_XSIZE, "split_xsize", 0)                                                                                   \
+    X(SPLIT_YSIZE, "split_ysize", 0)                                                                                   \
+    X(SPLITS_X, "splits_x", 0)                                                                                         \
+    X(SPLITS_Y, "splits_y", 0)                                                                                         \
+    X(STRIPES_SPACE, "stripes_space", 0)                                                                               \
+    X(STRIPES_WARP, "stripes_warp", 0)                                                                                 \
+    X(WEDGE_ANGLE, "wedge_angle", 0)                                                                                   \
+    X(WEDGE_HOLE, "wedge_hole", 0)                                                                                     \
+    X(WEDGE_COUNT, "wedge_count", 1)                                                                                   \
+    X(WEDGE_SWIRL, "wedge_swirl", 0)                                                                                   \
+    X(WEDGE_JULIA_ANGLE, "wedge_julia_angle", 0)                                                                       \
+    X(WEDGE_JULIA_COUNT, "wedge_julia_count", 1)                                                                       \
+    X(WEDGE_JULIA_POWER, "wedge_julia_power", 1)                                                                       \
+    X(WEDGE_JULIA_DIST, "wedge_julia_dist", 0)                                                                         \
+    X(WEDGE_SPH_ANGLE, "wedge_sph_angle", 0)                                                                           \
+    X(WEDGE_SPH_HOLE, "wedge_sph_hole", 0)                                                                             \
+    X(WEDGE_SPH_COUNT, "wedge_sph_count", 1)                                                                           \
+    X(WEDGE_SPH_SWIRL, "wedge_sph_swirl", 0)                                                                           \
+    X(WHORL_INSIDE, "whorl_inside", 0)                                                                                 \
+    X(WHORL_OUTSIDE, "whorl_outside", 0)                                                                               \
+    X(WAVES2_SCALEX, "waves2_scalex", 0)                                                                               \
+    X(WAVES2_SCALEY, "waves2_scaley", 0)                                                                               \
+    X(WAVES2_FREQX, "waves2_freqx", 0)                                                                                 \
+    X(WAVES2_FREQY, "waves2_freqy", 0)                                                                                 \
+    X(AUGER_FREQ, "auger_freq", 1)                                                                                     \
+    X(AUGER_WEIGHT, "auger_weight", 0.5)                                                                               \
+    X(AUGER_SYM, "auger_sym", 0)                                                                                       \
+    X(AUGER_SCALE, "auger_scale", 1)                                                                                   \
+    X(FLUX_SPREAD, "flux_spread", 0)                                                                                   \
+    X(MOBIUS_RE_A, "mobius_re_a", 0)                                                                                   \
+    X(MOBIUS_IM_A, "mobius_im_a", 0)                                                                                   \
+    X(MOBIUS_RE_B, "mobius_re_b", 0)                                                                                   \
+    X(MOBIUS_IM_B, "mobius_im_b", 0)                                                                                   \
+    X(MOBIUS_RE_C, "mobius_re_c", 0)                                                                                   \
+    X(MOBIUS_IM_C, "mobius_im_c", 0)                                                                                   \
+    X(MOBIUS_RE_D, "mobius_re_d", 0)                                                                                   \
+    X(MOBIUS_IM_D, "mobius_im_d", 0)
 
-/* The parametric variations' parameters, by index into fb_flame_xform.par. */
-enum {
-    FB_FP_BLOB_LOW,
-    FB_FP_BLOB_HIGH,
-    FB_FP_BLOB_WAVES,
-    FB_FP_PDJ_A,
-    FB_FP_PDJ_B,
-    FB_FP_PDJ_C,
-    FB_FP_PDJ_D,
-    FB_FP_FAN2_X,
-    FB_FP_FAN2_Y,
-    FB_FP_RINGS2_VAL,
-    FB_FP_PERSPECTIVE_ANGLE,
-    FB_FP_PERSPECTIVE_DIST,
-    FB_FP_JULIAN_POWER,
-    FB_FP_JULIAN_DIST,
-    FB_FP_JULIASCOPE_POWER,
-    FB_FP_JULIASCOPE_DIST,
-    FB_FP_RADIAL_BLUR_ANGLE,
-    FB_FP_PIE_SLICES,
-    FB_FP_PIE_ROTATION,
-    FB_FP_PIE_THICKNESS,
-    FB_FP_NGON_SIDES,
-    FB_FP_NGON_POWER,
-    FB_FP_NGON_CIRCLE,
-    FB_FP_NGON_CORNERS,
-    FB_FP_CURL_C1,
-    FB_FP_CURL_C2,
-    FB_FP_RECTANGLES_X,
-    FB_FP_RECTANGLES_Y,
-};
-/* ... and those of variations 49 to 54, after them */
-enum {
-    FB_FP_DISC2_ROT = FB_FLAME_NPARAMS,
-    FB_FP_DISC2_TWIST,
-    FB_FP_SUPER_SHAPE_RND,
-    FB_FP_SUPER_SHAPE_M,
-    FB_FP_SUPER_SHAPE_N1,
-    FB_FP_SUPER_SHAPE_N2,
-    FB_FP_SUPER_SHAPE_N3,
-    FB_FP_SUPER_SHAPE_HOLES,
-    FB_FP_FLOWER_PETALS,
-    FB_FP_FLOWER_HOLES,
-    FB_FP_CONIC_ECCENTRICITY,
-    FB_FP_CONIC_HOLES,
-    FB_FP_PARABOLA_HEIGHT,
-    FB_FP_PARABOLA_WIDTH,
-    FB_FP_BENT2_X,
-    FB_FP_BENT2_Y,
-    FB_FP_COUNT
-};
+/* The parameters, by index into fb_flame_xform.par: FB_FP_BLOB_LOW ... */
+#define FB_FLAME_PARAM_ENUM(e, name, def) FB_FP_##e,
+enum { FB_FLAME_PARAMS(FB_FLAME_PARAM_ENUM) FB_FP_COUNT };
+#undef FB_FLAME_PARAM_ENUM
 
 typedef struct fb_flame_xform {
     double weight, color, color_speed, opacity;

@@ -88,9 +88,10 @@ typedef struct flame_state {
     uint32_t *count;
     uint64_t bad;
     double seconds;
-    uint32_t cr0, cr1;   /* the chains this run plays: all, or a points part's share */
-    int nsums;           /* a points part: the 64-bit sums its histogram is stored as (flame_sums) */
-    fb_flame_cell *hist; /* a points part: its histogram, kept for its sums channels */
+    fb_flame_stats stats; /* the last prepare's game: fb_gen_flame_stats */
+    uint32_t cr0, cr1;    /* the chains this run plays: all, or a points part's share */
+    int nsums;            /* a points part: the 64-bit sums its histogram is stored as (flame_sums) */
+    fb_flame_cell *hist;  /* a points part: its histogram, kept for its sums channels */
 } flame_state;
 
 static flame_state *state(const fb_gen *g)
@@ -131,7 +132,7 @@ static fb_result finish(flame_state *st, fb_flame_cell *total, fb_pool *pool)
 
 _Static_assert(sizeof(K_FlameParams) == 108, "std430 struct of 27 words");
 _Static_assert(sizeof(K_FlameXform) == 80, "std430 struct of 20 words");
-_Static_assert(sizeof(K_FlameVar) == 32, "std430 struct of 8 words");
+_Static_assert(sizeof(K_FlameVar) == 48, "std140 array of structs of 12 words");
 _Static_assert(sizeof(K_FlameChain) == 40, "std430 struct of 10 words");
 
 /* Points per dispatch (all chains together): well under a second on lavapipe, so that the progress
@@ -224,15 +225,20 @@ static void device_bytes(const flame_state *st, uint64_t *hist, uint64_t *chains
     *chains = sizeof(K_FlameChain) * (n < batch ? (n ? n : 1) : batch);
 }
 
-/* The steps a dispatch may run per chain within FLAME_LOOP_ITERATIONS: a step is one iteration of
- * the steps' loop, up to five of the retries' loop each with the variations' loop of an xform, and
- * the final xform's variations. */
-static uint32_t loop_steps(const fb_flame_setup *S)
+/* The steps a dispatch may run per chain within FLAME_LOOP_ITERATIONS (lavapipe ends a shader's
+ * loops after 65535 iterations in all): a step is one iteration of the steps' loop, up to five tries
+ * of an xform and the final xform. An xform (kernels/flame.h, K_FLAME_ONCE) is a pass over the
+ * genome's g variations (g + 1 iterations, and at most g + 4 more finding each next one in the
+ * masks) and the corrections of the portable division and square root (kernels/exact.h: at most 3
+ * iterations each; at most 7 of them in the precalcs and 8 in a variation, `most` variations). */
+static uint32_t loop_steps(const fb_flame_setup *S, const uint32_t mask[4])
 {
-    uint32_t most = 0, final = S->p.final_xf != K_FLAME_NONE ? S->xf[S->p.final_xf].nvar : 0;
-    for (uint32_t i = 0; i < S->p.nxf; i++)
+    uint32_t most = 0, g = 0;
+    for (uint32_t i = 0; i < S->p.nxf + (S->p.final_xf != K_FLAME_NONE); i++)
         if (S->xf[i].nvar > most) most = S->xf[i].nvar;
-    return FLAME_LOOP_ITERATIONS / (1 + 5 * (1 + most) + final);
+    for (int w = 0; w < 4; w++) g += (uint32_t)__builtin_popcount(mask[w]);
+    uint32_t apply = (g + 1) + (g + 4) + 3 * (7 + 8 * most);
+    return FLAME_LOOP_ITERATIONS / (1 + 5 * apply + (S->p.final_xf != K_FLAME_NONE ? apply : 0));
 }
 
 /* Chains [cr0, cr1) in the shader, in batches of at most 65535 workgroups, each in dispatches of
@@ -259,8 +265,12 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
     vkc_job *job = NULL;
     vkc_buffer *buf[FB_NBUF] = {0};
     uint32_t nxf = S->p.nxf + (S->p.final_xf != K_FLAME_NONE), nvar = S->nvar ? S->nvar : 1;
-    uint32_t spec[7] = {device_fields(S) == 4, S->linear_palette, 0, 0, S->p.final_xf != K_FLAME_NONE, nxf, nvar};
-    for (uint32_t v = 0; v < S->nvar; v++) spec[2 + S->var[v].id / 32] |= 1u << (S->var[v].id % 32);
+    /* flame_body.glsl's specialisation: flags, the genome's variations as 4 masks, the tables' sizes */
+    uint32_t spec[7] = {
+        (device_fields(S) == 4) | S->linear_palette << 1 | (S->p.final_xf != K_FLAME_NONE) << 2, 0, 0, 0, 0, nxf, nvar};
+    for (uint32_t v = 0; v < S->nvar; v++) spec[1 + S->var[v].id / 32] |= 1u << (S->var[v].id % 32);
+    for (uint32_t f = 0; f < nxf; f++)
+        if (S->xf[f].preblur != 0.0f) spec[1 + K_V_PRE_BLUR / 32] |= 1u << (K_V_PRE_BLUR % 32);
     /* the parameters, xforms, variations and palette: uniform buffers (flame_body.glsl), their sizes
      * in std140 (the parameters' block rounded up to 16 bytes) */
     const uint64_t sizes[FB_NBUF] = {(sizeof S->p + 15) & ~(uint64_t)15,
@@ -303,7 +313,7 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
     for (uint32_t b0 = st->cr0; b0 < st->cr1 && !rc; b0 += batch) {
         uint32_t b1 = st->cr1 - b0 > batch ? b0 + batch : st->cr1, n = b1 - b0;
         uint32_t per = FLAME_POINTS_PER_DISPATCH / n ? FLAME_POINTS_PER_DISPATCH / n : 1;
-        if (per > loop_steps(S)) per = loop_steps(S);
+        if (per > loop_steps(S, spec + 1)) per = loop_steps(S, spec + 1);
         for (uint32_t t0 = 0; t0 < steps && !rc; t0 += per) {
             flame_push push = {b0, b1, t0, per};
             uint32_t groups[3] = {(n + 63) / 64, 1, 1};
@@ -351,6 +361,7 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
         free(total);
     st->seconds = fb_now() - t0;
     g->prepare_gpu_seconds = gpu;
+    st->stats = (fb_flame_stats){.points = chain_points(st), .game_seconds = t1 - t0, .gpu_seconds = gpu};
     if (rc) return rc;
     fb_log(FB_LOG_INFO,
            "%s: %.0f points in %u chains, %.3g Mpts/s (chaos game %.2f s, filters %.2f s), %llu bad values",
@@ -359,6 +370,11 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
     snprintf(g->summary, sizeof g->summary, "%s: flame %.0f points, %.3g Mpts/s", g->layer->name, points,
              points / (t1 - t0) * 1e-6);
     return FB_OK;
+}
+
+const fb_flame_stats *fb_gen_flame_stats(const fb_gen *g)
+{
+    return g->layer->cls == &fb_gen_flame && g->owned ? &state(g)->stats : NULL;
 }
 
 /* ---- points parts: the histogram as sums ------------------------------------------------------ */
@@ -537,4 +553,5 @@ const fb_gen_class fb_gen_flame = {
     .points = &flame_points_ops,
     .tone = &fb_flame_tone_ops,
     .example = "[{\"type\": \"flame\", \"file\": \"docs/examples/flames.flame\", \"flame\": \"gold\", \"quality\": 2}]",
+    .bench = fb_flame_bench,
 };

@@ -156,10 +156,10 @@ static fb_result de_filters(double max_rad, double min_rad, double curve, int ss
 
 /* ---- the kernel's tables --------------------------------------------------------------------- */
 
-K_FlameVar fb_flame_var_params(const fb_flame_xform *x, int v)
+/* The parameters of variations 0 .. 54 as kernels/flame_var.h reads them (its comments say which). */
+static void params_classic(const fb_flame_xform *x, int v, double q[8])
 {
     const double *P = x->par, EPS = 1e-10;
-    double q[6] = {0, 0, 0, 0, 0, 0};
     switch (v) {
     case K_V_WAVES:
         q[0] = x->c[1][0], q[1] = x->c[1][1];
@@ -240,63 +240,139 @@ K_FlameVar fb_flame_var_params(const fb_flame_xform *x, int v)
     default:
         break;
     }
-    return (K_FlameVar){(uint32_t)v, (float)x->var[v], (float)q[0], (float)q[1],
-                        (float)q[2], (float)q[3],      (float)q[4], (float)q[5]};
 }
 
+/* ... and of variations 55 .. 98, combined as flam3's precalc functions and variations do in double
+ * (the weight's own combinations included: scry's 1 / (w + EPS) ...). */
+static void params_plugin(const fb_flame_xform *x, int v, double q[8])
+{
+    const double *P = x->par, w = x->var[v], EPS = 1e-10;
+    switch (v) {
+    case K_V_BIPOLAR:
+        q[0] = -M_PI_2 * P[FB_FP_BIPOLAR_SHIFT];
+        break;
+    case K_V_CELL:
+        q[0] = P[FB_FP_CELL_SIZE], q[1] = 1.0 / P[FB_FP_CELL_SIZE];
+        break;
+    case K_V_CPOW: {
+        double pw = P[FB_FP_CPOW_POWER];
+        q[0] = 2.0 * M_PI / pw, q[1] = P[FB_FP_CPOW_R] / pw, q[2] = P[FB_FP_CPOW_I] / pw, q[3] = pw;
+        break;
+    }
+    case K_V_CURVE:
+        q[0] = P[FB_FP_CURVE_XAMP], q[1] = P[FB_FP_CURVE_YAMP];
+        q[2] = 1.0 / fmax(P[FB_FP_CURVE_XLENGTH] * P[FB_FP_CURVE_XLENGTH], 1e-20);
+        q[3] = 1.0 / fmax(P[FB_FP_CURVE_YLENGTH] * P[FB_FP_CURVE_YLENGTH], 1e-20);
+        break;
+    case K_V_EDISC:
+        q[0] = w / 11.57034632;
+        break;
+    case K_V_ELLIPTIC:
+        q[0] = w / M_PI_2;
+        break;
+    case K_V_ESCHER:
+        q[0] = 0.5 * (1.0 + cos(P[FB_FP_ESCHER_BETA])), q[1] = 0.5 * sin(P[FB_FP_ESCHER_BETA]);
+        break;
+    case K_V_LAZYSUSAN:
+        q[0] = P[FB_FP_LAZYSUSAN_X], q[1] = P[FB_FP_LAZYSUSAN_Y], q[2] = P[FB_FP_LAZYSUSAN_SPIN];
+        q[3] = P[FB_FP_LAZYSUSAN_SPACE], q[4] = P[FB_FP_LAZYSUSAN_TWIST];
+        break;
+    case K_V_MODULUS:
+        q[0] = P[FB_FP_MODULUS_X], q[1] = P[FB_FP_MODULUS_Y];
+        break;
+    case K_V_OSCILLOSCOPE:
+        q[0] = 2 * M_PI * P[FB_FP_OSCOPE_FREQUENCY], q[1] = P[FB_FP_OSCOPE_AMPLITUDE];
+        q[2] = P[FB_FP_OSCOPE_DAMPING], q[3] = P[FB_FP_OSCOPE_SEPARATION];
+        break;
+    case K_V_POLAR2:
+        q[0] = w / M_PI;
+        break;
+    case K_V_POPCORN2:
+        q[0] = P[FB_FP_POPCORN2_X], q[1] = P[FB_FP_POPCORN2_Y], q[2] = P[FB_FP_POPCORN2_C];
+        break;
+    case K_V_SCRY:
+        q[0] = 1.0 / (w + EPS);
+        break;
+    case K_V_SEPARATION:
+        q[0] = P[FB_FP_SEPARATION_X] * P[FB_FP_SEPARATION_X], q[1] = P[FB_FP_SEPARATION_XINSIDE];
+        q[2] = P[FB_FP_SEPARATION_Y] * P[FB_FP_SEPARATION_Y], q[3] = P[FB_FP_SEPARATION_YINSIDE];
+        break;
+    case K_V_SPLIT:
+        q[0] = P[FB_FP_SPLIT_XSIZE], q[1] = P[FB_FP_SPLIT_YSIZE];
+        break;
+    case K_V_SPLITS:
+        q[0] = P[FB_FP_SPLITS_X], q[1] = P[FB_FP_SPLITS_Y];
+        break;
+    case K_V_STRIPES:
+        q[0] = 1.0 - P[FB_FP_STRIPES_SPACE], q[1] = P[FB_FP_STRIPES_WARP];
+        break;
+    case K_V_WEDGE:
+    case K_V_WEDGE_SPH: {
+        int o = v == K_V_WEDGE ? 0 : FB_FP_WEDGE_SPH_ANGLE - FB_FP_WEDGE_ANGLE;
+        q[0] = P[FB_FP_WEDGE_ANGLE + o], q[1] = P[FB_FP_WEDGE_HOLE + o], q[2] = P[FB_FP_WEDGE_COUNT + o];
+        q[3] = P[FB_FP_WEDGE_SWIRL + o], q[4] = 1 - q[0] * q[2] * M_1_PI * 0.5;
+        break;
+    }
+    case K_V_WEDGE_JULIA: {
+        double pw = P[FB_FP_WEDGE_JULIA_POWER], cnt = P[FB_FP_WEDGE_JULIA_COUNT], ang = P[FB_FP_WEDGE_JULIA_ANGLE];
+        q[0] = pw, q[1] = P[FB_FP_WEDGE_JULIA_DIST] / pw / 2.0, q[2] = fabs(pw);
+        q[3] = cnt, q[4] = ang, q[5] = 1.0 - ang * cnt * M_1_PI * 0.5;
+        break;
+    }
+    case K_V_WHORL:
+        q[0] = P[FB_FP_WHORL_INSIDE], q[1] = P[FB_FP_WHORL_OUTSIDE];
+        break;
+    case K_V_WAVES2:
+        q[0] = P[FB_FP_WAVES2_SCALEX], q[1] = P[FB_FP_WAVES2_SCALEY];
+        q[2] = P[FB_FP_WAVES2_FREQX], q[3] = P[FB_FP_WAVES2_FREQY];
+        break;
+    case K_V_AUGER:
+        q[0] = P[FB_FP_AUGER_FREQ], q[1] = P[FB_FP_AUGER_WEIGHT], q[2] = P[FB_FP_AUGER_SYM];
+        q[3] = P[FB_FP_AUGER_SCALE];
+        break;
+    case K_V_FLUX:
+        q[0] = 2 + P[FB_FP_FLUX_SPREAD];
+        break;
+    case K_V_MOBIUS:
+        for (int k = 0; k < 8; k++) q[k] = P[FB_FP_MOBIUS_RE_A + k];
+        break;
+    default:
+        break;
+    }
+}
+
+K_FlameVar fb_flame_var_params(const fb_flame_xform *x, int v)
+{
+    double q[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    if (v < (int)K_V_BIPOLAR)
+        params_classic(x, v, q);
+    else
+        params_plugin(x, v, q);
+    return (K_FlameVar){(uint32_t)v, (float)x->var[v], (float)q[0], (float)q[1], (float)q[2], (float)q[3],
+                        (float)q[4], (float)q[5],      (float)q[6], (float)q[7], 0,           0};
+}
+
+/* What each variation reads of flam3's precalcs (prepare_precalc_flags, and precalc_sqrt where the
+ * variation reads it). */
 static uint32_t var_flags(int v)
 {
-    switch (v) {
-    case K_V_POLAR:
-    case K_V_HANDKERCHIEF:
-    case K_V_HEART:
-    case K_V_DISC:
-    case K_V_EX:
-    case K_V_JULIA:
-    case K_V_FAN:
-    case K_V_BLOB:
-    case K_V_FAN2:
-    case K_V_DISC2:
-        return K_FLAME_ATAN_XY | K_FLAME_SQRT;
-    case K_V_RADIAL_BLUR:
-    case K_V_SUPER_SHAPE:
-    case K_V_FLOWER:
-    case K_V_CONIC:
-        return K_FLAME_ATAN_YX | K_FLAME_SQRT;
-    case K_V_JULIAN:
-    case K_V_JULIASCOPE:
-    case K_V_NGON:
-        return K_FLAME_ATAN_YX;
-    /* the variations that use neither the length of (tx, ty) nor the angle */
-    case K_V_LINEAR:
-    case K_V_SINUSOIDAL:
-    case K_V_SPHERICAL:
-    case K_V_SWIRL:
-    case K_V_BENT:
-    case K_V_WAVES:
-    case K_V_POPCORN:
-    case K_V_EXPONENTIAL:
-    case K_V_COSINE:
-    case K_V_PDJ:
-    case K_V_BUBBLE:
-    case K_V_CYLINDER:
-    case K_V_PERSPECTIVE:
-    case K_V_NOISE:
-    case K_V_BLUR:
-    case K_V_GAUSSIAN_BLUR:
-    case K_V_PIE:
-    case K_V_CURL:
-    case K_V_RECTANGLES:
-    case K_V_ARCH:
-    case K_V_TANGENT:
-    case K_V_SQUARE:
-    case K_V_RAYS:
-    case K_V_CROSS:
-    case K_V_BENT2:
-        return 0;
-    default:
-        return K_FLAME_SQRT;
-    }
+    enum { XY = K_FLAME_ATAN_XY, YX = K_FLAME_ATAN_YX, SQ = K_FLAME_SQRT, AN = K_FLAME_ANGLES | K_FLAME_SQRT };
+    static const uint8_t flags[K_V_COUNT] = {
+        [K_V_HORSESHOE] = SQ,      [K_V_POLAR] = XY | SQ, [K_V_HANDKERCHIEF] = XY | SQ,
+        [K_V_HEART] = XY | SQ,     [K_V_DISC] = XY | SQ,  [K_V_SPIRAL] = AN,
+        [K_V_HYPERBOLIC] = AN,     [K_V_DIAMOND] = AN,    [K_V_EX] = XY | SQ,
+        [K_V_JULIA] = XY | SQ,     [K_V_FISHEYE] = SQ,    [K_V_POWER] = AN,
+        [K_V_RINGS] = AN,          [K_V_FAN] = XY | SQ,   [K_V_BLOB] = XY | AN,
+        [K_V_FAN2] = XY | SQ,      [K_V_RINGS2] = AN,     [K_V_EYEFISH] = SQ,
+        [K_V_JULIAN] = YX,         [K_V_JULIASCOPE] = YX, [K_V_RADIAL_BLUR] = YX | SQ,
+        [K_V_NGON] = YX,           [K_V_BLADE] = SQ,      [K_V_SECANT2] = SQ,
+        [K_V_TWINTRIAN] = SQ,      [K_V_DISC2] = XY,      [K_V_SUPER_SHAPE] = YX | SQ,
+        [K_V_FLOWER] = YX | SQ,    [K_V_CONIC] = YX | SQ, [K_V_PARABOLA] = SQ,
+        [K_V_CPOW] = YX,           [K_V_ESCHER] = YX,     [K_V_POLAR2] = XY,
+        [K_V_SCRY] = SQ,           [K_V_WEDGE] = YX | SQ, [K_V_WEDGE_JULIA] = YX,
+        [K_V_WEDGE_SPH] = YX | SQ, [K_V_WHORL] = YX | SQ, [K_V_LOG] = YX,
+    };
+    return flags[v];
 }
 
 static void xform_table(fb_flame_setup *s, const fb_flame_xform *x, K_FlameXform *out)
@@ -321,9 +397,10 @@ static void xform_table(fb_flame_setup *s, const fb_flame_xform *x, K_FlameXform
                           .vis = (float)vis,
                           .var0 = s->nvar,
                           .flags = post ? K_FLAME_HAS_POST : 0u,
-                          .visq = (uint32_t)llround(fmin(fmax(vis, 0), 1) * 32768.0)};
+                          .visq = (uint32_t)llround(fmin(fmax(vis, 0), 1) * 32768.0),
+                          .preblur = (float)x->var[K_V_PRE_BLUR]};
     for (int v = 0; v < (int)K_V_COUNT; v++) {
-        if (x->var[v] == 0.0) continue;
+        if (x->var[v] == 0.0 || v == (int)K_V_PRE_BLUR) continue;
         s->var[s->nvar++] = fb_flame_var_params(x, v);
         out->nvar++;
         out->flags |= var_flags(v);

@@ -62,27 +62,12 @@ static void report(const fb_bench *b, const char *backend, const char *mode, con
     b->row(b, &r);
 }
 
-/* Median chaos-game seconds of three prepares after a warm-up (the game alone: no reduction to
- * pixels, no tone mapping, no file). */
-static fb_result time_game(fb_engine *e, const fb_scene *s, double *sec, double *gpu)
+/* The chaos game's seconds of a prepared generator (the game alone: no reduction to pixels, no tone
+ * mapping, no file). */
+static void game_seconds(const fb_gen *g, double *sec, double *gpu)
 {
-    double w[3], g[3];
-    fb_result rc = FB_OK;
-    for (int i = -1; i < 3 && !rc; i++) {
-        fb_gen gen;
-        rc = fb_gen_init(&gen, s, &s->layers[0]);
-        if (!rc) rc = gen.prepare(&gen, e, false);
-        if (!rc && i >= 0) {
-            const fb_ifs_stats *st = fb_gen_ifs_stats(&gen);
-            w[i] = st->game_seconds;
-            g[i] = st->gpu_seconds;
-        }
-        fb_gen_fini(&gen);
-    }
-    if (rc) return rc;
-    *sec = fb_bench_median3(w);
-    *gpu = fb_bench_median3(g);
-    return FB_OK;
+    const fb_ifs_stats *st = fb_gen_ifs_stats(g);
+    *sec = st->game_seconds, *gpu = st->gpu_seconds;
 }
 
 static fb_result run(const fb_bench *b, const fb_scene *s)
@@ -93,7 +78,7 @@ static fb_result run(const fb_bench *b, const fb_scene *s)
     fb_result rc = FB_OK;
     bool have_vulkan = false;
     if (b->vulkan && !(rc = fb_bench_open_vulkan(b, &e, &have_vulkan)) && have_vulkan) {
-        rc = time_game(&e, s, &sec, &gpu);
+        rc = fb_bench_prepared(&e, s, game_seconds, &sec, &gpu);
         if (!rc) report(b, "vulkan", "chaos-game", e.device, 0, pts / sec * 1e-6, gpu > 0 ? pts / gpu * 1e-6 : 0);
         double wall;
         if (!rc) rc = fb_bench_timed(&e, s, b->out, &wall, &gpu);
@@ -103,7 +88,7 @@ static fb_result run(const fb_bench *b, const fb_scene *s)
     if (!rc && b->native) {
         rc = fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = b->threads}, &e);
         if (!rc) {
-            rc = time_game(&e, s, &sec, &gpu);
+            rc = fb_bench_prepared(&e, s, game_seconds, &sec, &gpu);
             if (!rc) report(b, "native", "chaos-game", e.device, e.threads, pts / sec * 1e-6, 0);
             fb_engine_close(&e);
         }
