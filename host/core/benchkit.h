@@ -70,6 +70,12 @@ fb_result fb_bench_open_vulkan(const fb_bench *b, fb_engine *e, bool *have);
 void fb_bench_report(const fb_bench *b, const fb_bench_case *bc, const char *device, const char *backend,
                      const char *mode, int threads, double seconds, double gpu_seconds);
 
+/* The encoder alone: the file the last bake wrote (b->out) read into memory, then written again
+ * through the EXR writer with the same channels, types and compression on every core (or the
+ * bench's --threads), median of three: an "encode-only-COMPRESSION" row in the case's unit, with
+ * bake_vs_encode, the bake's `bake_seconds` over the encoder's (1: the bake as fast as encoding). */
+fb_result fb_bench_encode(const fb_bench *b, const fb_bench_case *bc, const char *compression, double bake_seconds);
+
 /* A per-pixel layer on every backend: generate-only and end-to-end (none, zip, piz) bakes, the
  * reference (seconds tref > 0, from the caller: a hand-vectorised loop) and the scalar kernel on one
  * thread. */

@@ -16,6 +16,20 @@ assert all('LP_NUM_THREADS' in r and 'LP_NATIVE_VECTOR_WIDTH' in r for r in rows
 g = [r for r in rows if r['generator'] == 'fbm']
 assert g and all(abs(r['per_peak_gflops'] - r['rate'] / c[('native', 'fma')]) < 1e-3 * r['per_peak_gflops'] for r in g), g
 "
+check "encode-only: a row after each end-to-end one, in its unit, bake_vs_encode their time ratio" python3 -c "
+import json
+rows = [json.loads(l) for l in open('a.json') if json.loads(l)['generator'] == 'fbm']
+for comp in ('none', 'zip', 'piz'):
+    e2e = [r for r in rows if r['mode'] == 'end-to-end-' + comp]
+    enc = [r for r in rows if r['mode'] == 'encode-only-' + comp]
+    assert len(e2e) == 1 and len(enc) == 1, (comp, rows)
+    e, n = e2e[0], enc[0]
+    assert n['unit'] == e['unit'] == 'Mpix/s' and n['rate'] > 0 and n['size'] == [64, 64], n
+    # the ratio of the times is the inverse ratio of the rates (both rounded to 3 decimals)
+    want = n['rate'] / e['rate']
+    assert abs(n['bake_vs_encode'] - want) <= 0.002 + 0.01 * want, (n, e)
+    assert rows.index(n) == rows.index(e) + 1, 'encode-only follows its bake'
+"
 LP_NUM_THREADS=1 "$FB" bench --json --quiet --size 64x64 --generator fbm --backend native --compare a.json > b.json
 check "LP_NUM_THREADS is recorded as given" python3 -c "
 import json

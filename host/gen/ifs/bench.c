@@ -85,7 +85,7 @@ static fb_result time_game(fb_engine *e, const fb_scene *s, double *sec, double 
     return FB_OK;
 }
 
-static fb_result run(const fb_bench *b, const fb_scene *s)
+static fb_result run(const fb_bench *b, const fb_bench_case *bc, const fb_scene *s)
 {
     int threads = b->threads > 0 ? b->threads : fb_cpu_count();
     double pts = b->points, sec, gpu;
@@ -98,6 +98,7 @@ static fb_result run(const fb_bench *b, const fb_scene *s)
         double wall;
         if (!rc) rc = fb_bench_timed(&e, s, b->out, &wall, &gpu);
         if (!rc) report(b, "vulkan", "end-to-end-zip", e.device, 0, pts / wall * 1e-6, 0);
+        if (!rc) rc = fb_bench_encode(b, bc, "zip", wall);
         fb_engine_close(&e);
     }
     if (!rc && b->native) {
@@ -156,7 +157,7 @@ fb_result fb_ifs_bench(fb_bench *b)
                          b->width, b->height, b->points);
         fb_bench_case bc = {"ifs", "Mpts/s", b->points, 1e6, NULL, 0};
         rc = fb_bench_auto_zip(b, &bc, &s);
-        if (!rc) rc = run(b, &s);
+        if (!rc) rc = run(b, &bc, &s);
     }
     fb_scene_fini(&s);
     return rc;
