@@ -88,6 +88,30 @@ fb_result fb_bench_auto_zip(const fb_bench *b, const fb_bench_case *bc, fb_scene
 /* The layer alone (no file) on each backend, under another mode name. */
 fb_result fb_bench_variant(const fb_bench *b, const fb_bench_case *bc, fb_scene *s, const char *mode);
 
+/* A minimal shader of a layer's formula: the simplest fast GLSL a GPU programmer would write for
+ * the bench's scene (bench/peers/), without the layer's generality, its values the layer's to the
+ * bit where practical. Its interface: binding 0, one plane of 4-byte values; binding 1, the layer's
+ * input as a storage buffer where `input`; the layer's push constants ({params; y0; rows}). */
+typedef struct fb_bench_peer {
+    const char *name; /* for people: "minimal GLSL (bench/peers/fbm_peer.comp)" */
+    const char *mode; /* the rows' suffix: "kernel" MODE and "peer" MODE ("-simplex"; NULL: none) */
+    const uint32_t *spv;
+    size_t spv_size;
+    const uint32_t *spec; /* its specialisation constants 0..nspec-1 */
+    uint32_t nspec;
+    int plane;          /* the layer's plane its output must equal */
+    int per_invocation; /* pixels an invocation along a row, in groups 64 wide (0: 1) */
+    bool input;         /* it reads the layer's input (binding 1) */
+} fb_bench_peer;
+
+/* The layer of s (its one layer) by its own shader as a bake dispatches it, beside `peer`, on the
+ * Vulkan device, in dispatches as large as a storage buffer allows (the whole image where it fits:
+ * a GPU's dispatch, not a lavapipe strip); a warm-up pass, then three, the two alternating; rates
+ * by the host clock and the device's timestamps. Rows "kernel" MODE, with vs_peer (its rate over
+ * the peer's, by the timestamps where the device has them), same_bits (1: the peer's plane is the
+ * layer's to the bit) and differing (pixels), and "peer" MODE. Nothing without a device. */
+fb_result fb_bench_peer_layer(const fb_bench *b, const fb_bench_case *bc, const fb_scene *s, const fb_bench_peer *peer);
+
 /* Median seconds of three runs after a warm-up of rows(ctx, y0, n, task) over `height` rows cut into
  * tasks on a pool of `threads`; *ntasks (optional) the number of tasks. -1 on failure. */
 double fb_bench_rows(int threads, int height, void (*rows)(void *ctx, int y0, int n, int task), void *ctx, int *ntasks);

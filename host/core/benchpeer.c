@@ -1,0 +1,179 @@
+/*
+ * Benchmarks: a layer's shader beside a minimal shader of its formula on the Vulkan device (see
+ * benchkit.h, fb_bench_peer_layer).
+ */
+#include "benchkit.h"
+
+#include "gen.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PASSES 3
+
+/* One side of the comparison: a pipeline, its job and buffers, and its timings. */
+typedef struct side {
+    vkc_pipeline *pipe;
+    vkc_job *job;
+    vkc_buffer *buf[FB_GEN_MAX_CHANNELS + 1];
+    uint32_t nbufs;
+    uint32_t per; /* pixels an invocation along the row */
+    double wall[PASSES], gpu[PASSES];
+} side;
+
+static void side_fini(vkc_context *vk, side *sd)
+{
+    for (uint32_t k = 0; k < sd->nbufs; k++) vkc_buffer_destroy(vk, &sd->buf[k]);
+    vkc_job_destroy(vk, &sd->job);
+    vkc_pipeline_destroy(vk, &sd->pipe);
+}
+
+/* The layer's side: its shader as a bake dispatches it (host/core/bake.c), strips of `rows`. */
+static fb_result layer_init(vkc_context *vk, const fb_gen *g, int rows, side *sd)
+{
+    int np = fb_gen_nplanes(g);
+    uint64_t bytes = (uint64_t)g->scene->width * (uint64_t)rows * 4;
+    fb_result rc = vkc_pipeline_create(vk,
+                                       &(vkc_pipeline_desc){.spv = g->spv,
+                                                            .spv_size = g->spv_size,
+                                                            .push_size = g->push_size,
+                                                            .buffers = (uint32_t)np + (g->input ? 1u : 0u),
+                                                            .uniform = g->input && g->input_uniform ? 1u << np : 0u,
+                                                            .spec = g->spec,
+                                                            .nspec = g->nspec,
+                                                            .name = g->layer->name},
+                                       &sd->pipe);
+    sd->per = g->per_invocation > 1 ? (uint32_t)g->per_invocation : 1u;
+    if (!rc) rc = vkc_job_create(vk, sd->pipe, &sd->job);
+    for (int c = 0; c < np && !rc; c++, sd->nbufs++)
+        rc = vkc_buffer_create(vk, fb_gen_plane_stored(g, c) ? bytes : 16, &sd->buf[c]);
+    if (!rc && g->input) rc = vkc_buffer_create(vk, g->input_size, &sd->buf[sd->nbufs++]);
+    if (!rc && g->input) rc = vkc_buffer_upload(vk, sd->buf[np], g->input, g->input_size);
+    return rc;
+}
+
+/* The peer's side: its output plane, then the layer's input where it reads it. */
+static fb_result peer_init(vkc_context *vk, const fb_gen *g, const fb_bench_peer *peer, int rows, side *sd)
+{
+    bool input = peer->input && g->input;
+    fb_result rc = vkc_pipeline_create(vk,
+                                       &(vkc_pipeline_desc){.spv = peer->spv,
+                                                            .spv_size = peer->spv_size,
+                                                            .push_size = g->push_size,
+                                                            .buffers = input ? 2u : 1u,
+                                                            .spec = peer->spec,
+                                                            .nspec = peer->nspec,
+                                                            .name = peer->name},
+                                       &sd->pipe);
+    sd->per = peer->per_invocation > 1 ? (uint32_t)peer->per_invocation : 1u;
+    if (!rc) rc = vkc_job_create(vk, sd->pipe, &sd->job);
+    if (!rc) rc = vkc_buffer_create(vk, (uint64_t)g->scene->width * (uint64_t)rows * 4, &sd->buf[sd->nbufs++]);
+    if (!rc && input) rc = vkc_buffer_create(vk, g->input_size, &sd->buf[sd->nbufs++]);
+    if (!rc && input) rc = vkc_buffer_upload(vk, sd->buf[1], g->input, g->input_size);
+    return rc;
+}
+
+/* One strip [y0, y0 + n) on one side; adds its host-clock and timestamp seconds to the pass's. */
+static fb_result side_strip(vkc_context *vk, const fb_gen *g, side *sd, int pass, int y0, int n)
+{
+    uint8_t push[FB_GEN_MAX_PUSH];
+    fb_gen_push(g, y0, n, push);
+    uint32_t w = (uint32_t)g->scene->width, groups[3] = {(w + 64 * sd->per - 1) / (64 * sd->per), (uint32_t)n, 1};
+    double t0 = fb_now(), gpu = -1;
+    fb_result rc = vkc_job_submit(vk, sd->job, sd->buf, sd->nbufs, push, groups);
+    if (!rc) rc = vkc_job_wait(vk, sd->job, &gpu);
+    if (!rc && pass >= 0) {
+        sd->wall[pass] += fb_now() - t0;
+        sd->gpu[pass] += gpu;
+    }
+    return rc;
+}
+
+/* The pixels of a strip where the two planes differ (the peer's and the layer's plane k). */
+static uint64_t differing(const side *layer, int k, const side *peer, size_t values)
+{
+    const uint32_t *a = vkc_buffer_data(layer->buf[k]), *b = vkc_buffer_data(peer->buf[0]);
+    uint64_t n = 0;
+    for (size_t i = 0; i < values; i++) n += a[i] != b[i];
+    return n;
+}
+
+/* The rows of one dispatch: the whole image where a plane of it fits one storage buffer. */
+static int strip_rows(vkc_context *vk, const fb_scene *s)
+{
+    uint64_t fit = vkc_info(vk)->max_storage_buffer_range / ((uint64_t)s->width * 4);
+    return fit >= (uint64_t)s->height ? s->height : fit > 0 ? (int)fit : 1;
+}
+
+fb_result fb_bench_peer_layer(const fb_bench *b, const fb_bench_case *bc, const fb_scene *s, const fb_bench_peer *peer)
+{
+    if (!b->vulkan) return FB_OK;
+    fb_engine e;
+    bool have = false;
+    fb_result rc = fb_bench_open_vulkan(b, &e, &have);
+    if (rc || !have) return rc;
+    vkc_context *vk = e.vk;
+    fb_gen g;
+    side sides[2] = {0}; /* the layer's, the peer's */
+    uint64_t diff = 0;
+    rc = fb_gen_init(&g, s, &s->layers[0]);
+    bool gen_ok = rc == FB_OK;
+    if (!rc && (peer->plane >= fb_gen_nplanes(&g) || !fb_gen_plane_stored(&g, peer->plane)))
+        rc = fb_fail(FB_ERR_INTERNAL, "bench: peer %s compares plane %d, which the layer does not store", peer->name,
+                     peer->plane);
+    int rows = rc ? 0 : strip_rows(vk, s);
+    if (!rc) rc = layer_init(vk, &g, rows, &sides[0]);
+    if (!rc) rc = peer_init(vk, &g, peer, rows, &sides[1]);
+    /* a warm-up pass (pipelines compiled, pages touched), then PASSES, the two sides alternating
+     * strip by strip and starting with the other each pass; the planes compared on the last */
+    for (int pass = -1; pass < PASSES && !rc; pass++)
+        for (int y0 = 0; y0 < s->height && !rc; y0 += rows) {
+            int n = s->height - y0 < rows ? s->height - y0 : rows, first = (pass + 2) % 2;
+            rc = side_strip(vk, &g, &sides[first], pass, y0, n);
+            if (!rc) rc = side_strip(vk, &g, &sides[1 - first], pass, y0, n);
+            if (!rc && pass == PASSES - 1) diff += differing(&sides[0], peer->plane, &sides[1], (size_t)n * s->width);
+        }
+    if (!rc) {
+        double rate[2], gpu[2];
+        for (int k = 0; k < 2; k++) {
+            rate[k] = bc->work / fb_bench_median3(sides[k].wall) / bc->unit_scale;
+            double gs = fb_bench_median3(sides[k].gpu);
+            gpu[k] = gs > 0 ? bc->work / gs / bc->unit_scale : 0;
+        }
+        /* the ratio by the device's clock where it has one: the host clock counts the readback */
+        double vs = gpu[0] > 0 && gpu[1] > 0 ? gpu[0] / gpu[1] : rate[0] / rate[1];
+        char mode[2][64];
+        snprintf(mode[0], sizeof mode[0], "kernel%s", peer->mode ? peer->mode : "");
+        snprintf(mode[1], sizeof mode[1], "peer%s", peer->mode ? peer->mode : "");
+        fb_bench_row r = {.generator = bc->generator,
+                          .backend = "vulkan",
+                          .device = e.device,
+                          .mode = mode[0],
+                          .unit = bc->unit,
+                          .rate = rate[0],
+                          .gpu_rate = gpu[0],
+                          .size = true,
+                          .nextra = 3,
+                          .extra = {{"vs_peer", vs, 3}, {"same_bits", diff == 0, 0}, {"differing", (double)diff, 0}}};
+        if (diff)
+            snprintf(r.note, sizeof r.note, "x%.3f of its peer; %llu pixels differ", vs, (unsigned long long)diff);
+        else
+            snprintf(r.note, sizeof r.note, "x%.3f of its peer, the same bits", vs);
+        b->row(b, &r);
+        r = (fb_bench_row){.generator = bc->generator,
+                           .backend = "vulkan",
+                           .device = peer->name,
+                           .mode = mode[1],
+                           .unit = bc->unit,
+                           .rate = rate[1],
+                           .gpu_rate = gpu[1],
+                           .size = true};
+        snprintf(r.note, sizeof r.note, "(one dispatch of %d rows)", rows);
+        b->row(b, &r);
+    }
+    for (int k = 0; k < 2; k++) side_fini(vk, &sides[k]);
+    if (gen_ok) fb_gen_fini(&g);
+    fb_engine_close(&e);
+    return rc;
+}
