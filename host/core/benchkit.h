@@ -90,8 +90,9 @@ fb_result fb_bench_variant(const fb_bench *b, const fb_bench_case *bc, fb_scene 
 
 /* A minimal shader of a layer's formula: the simplest fast GLSL a GPU programmer would write for
  * the bench's scene (bench/peers/), without the layer's generality, its values the layer's to the
- * bit where practical. Its interface: binding 0, one plane of 4-byte values; binding 1, the layer's
- * input as a storage buffer where `input`; the layer's push constants ({params; y0; rows}). */
+ * bit where practical. Its interface: bindings 0..planes-1, planes of 4-byte values; binding
+ * `planes`, the layer's input where `input` (a uniform buffer where the layer reads it as one); the
+ * layer's push constants ({params; y0; rows}). */
 typedef struct fb_bench_peer {
     const char *name; /* for people: "minimal GLSL (bench/peers/fbm_peer.comp)" */
     const char *mode; /* the rows' suffix: "kernel" MODE and "peer" MODE ("-simplex"; NULL: none) */
@@ -99,7 +100,8 @@ typedef struct fb_bench_peer {
     size_t spv_size;
     const uint32_t *spec; /* its specialisation constants 0..nspec-1 */
     uint32_t nspec;
-    int plane;          /* the layer's plane its output must equal */
+    int plane;          /* the layer's first plane its output must equal */
+    int planes;         /* its planes, compared with the layer's plane, plane + 1, ... (0: 1) */
     int per_invocation; /* pixels an invocation along a row, in groups 64 wide (0: 1) */
     bool input;         /* it reads the layer's input (binding 1) */
 } fb_bench_peer;

@@ -53,24 +53,27 @@ static fb_result layer_init(vkc_context *vk, const fb_gen *g, int rows, side *sd
     return rc;
 }
 
-/* The peer's side: its output plane, then the layer's input where it reads it. */
+/* The peer's side: its output planes, then the layer's input where it reads it. */
 static fb_result peer_init(vkc_context *vk, const fb_gen *g, const fb_bench_peer *peer, int rows, side *sd)
 {
     bool input = peer->input && g->input;
+    uint32_t np = peer->planes > 1 ? (uint32_t)peer->planes : 1u;
     fb_result rc = vkc_pipeline_create(vk,
                                        &(vkc_pipeline_desc){.spv = peer->spv,
                                                             .spv_size = peer->spv_size,
                                                             .push_size = g->push_size,
-                                                            .buffers = input ? 2u : 1u,
+                                                            .buffers = np + (input ? 1u : 0u),
+                                                            .uniform = input && g->input_uniform ? 1u << np : 0u,
                                                             .spec = peer->spec,
                                                             .nspec = peer->nspec,
                                                             .name = peer->name},
                                        &sd->pipe);
     sd->per = peer->per_invocation > 1 ? (uint32_t)peer->per_invocation : 1u;
     if (!rc) rc = vkc_job_create(vk, sd->pipe, &sd->job);
-    if (!rc) rc = vkc_buffer_create(vk, (uint64_t)g->scene->width * (uint64_t)rows * 4, &sd->buf[sd->nbufs++]);
+    for (uint32_t k = 0; k < np && !rc; k++)
+        rc = vkc_buffer_create(vk, (uint64_t)g->scene->width * (uint64_t)rows * 4, &sd->buf[sd->nbufs++]);
     if (!rc && input) rc = vkc_buffer_create(vk, g->input_size, &sd->buf[sd->nbufs++]);
-    if (!rc && input) rc = vkc_buffer_upload(vk, sd->buf[1], g->input, g->input_size);
+    if (!rc && input) rc = vkc_buffer_upload(vk, sd->buf[np], g->input, g->input_size);
     return rc;
 }
 
@@ -90,12 +93,14 @@ static fb_result side_strip(vkc_context *vk, const fb_gen *g, side *sd, int pass
     return rc;
 }
 
-/* The pixels of a strip where the two planes differ (the peer's and the layer's plane k). */
-static uint64_t differing(const side *layer, int k, const side *peer, size_t values)
+/* The pixels of a strip where the peer's planes differ from the layer's, from its plane k on. */
+static uint64_t differing(const side *layer, int k, const side *peer, int planes, size_t values)
 {
-    const uint32_t *a = vkc_buffer_data(layer->buf[k]), *b = vkc_buffer_data(peer->buf[0]);
     uint64_t n = 0;
-    for (size_t i = 0; i < values; i++) n += a[i] != b[i];
+    for (int j = 0; j < planes; j++) {
+        const uint32_t *a = vkc_buffer_data(layer->buf[k + j]), *b = vkc_buffer_data(peer->buf[j]);
+        for (size_t i = 0; i < values; i++) n += a[i] != b[i];
+    }
     return n;
 }
 
@@ -119,9 +124,11 @@ fb_result fb_bench_peer_layer(const fb_bench *b, const fb_bench_case *bc, const 
     uint64_t diff = 0;
     rc = fb_gen_init(&g, s, &s->layers[0]);
     bool gen_ok = rc == FB_OK;
-    if (!rc && (peer->plane >= fb_gen_nplanes(&g) || !fb_gen_plane_stored(&g, peer->plane)))
-        rc = fb_fail(FB_ERR_INTERNAL, "bench: peer %s compares plane %d, which the layer does not store", peer->name,
-                     peer->plane);
+    int planes = peer->planes > 1 ? peer->planes : 1;
+    for (int k = peer->plane; k < peer->plane + planes && !rc; k++)
+        if (k >= fb_gen_nplanes(&g) || !fb_gen_plane_stored(&g, k))
+            rc = fb_fail(FB_ERR_INTERNAL, "bench: peer %s compares plane %d, which the layer does not store",
+                         peer->name, k);
     int rows = rc ? 0 : strip_rows(vk, s);
     if (!rc) rc = layer_init(vk, &g, rows, &sides[0]);
     if (!rc) rc = peer_init(vk, &g, peer, rows, &sides[1]);
@@ -132,7 +139,8 @@ fb_result fb_bench_peer_layer(const fb_bench *b, const fb_bench_case *bc, const 
             int n = s->height - y0 < rows ? s->height - y0 : rows, first = (pass + 2) % 2;
             rc = side_strip(vk, &g, &sides[first], pass, y0, n);
             if (!rc) rc = side_strip(vk, &g, &sides[1 - first], pass, y0, n);
-            if (!rc && pass == PASSES - 1) diff += differing(&sides[0], peer->plane, &sides[1], (size_t)n * s->width);
+            if (!rc && pass == PASSES - 1)
+                diff += differing(&sides[0], peer->plane, &sides[1], planes, (size_t)n * s->width);
         }
     if (!rc) {
         double rate[2], gpu[2];
