@@ -114,6 +114,15 @@ typedef struct fb_bench_peer {
  * layer's to the bit) and differing (pixels), and "peer" MODE. Nothing without a device. */
 fb_result fb_bench_peer_layer(const fb_bench *b, const fb_bench_case *bc, const fb_scene *s, const fb_bench_peer *peer);
 
+/* The two rows of a kernel beside its peer, from three timed runs of each (side 0 the layer's, 1
+ * the peer's; seconds by the host clock and the device's timestamps, 0 where it has none) of
+ * `work` units of `unit` (rates in work / seconds / unit_scale): "kernel" MODE on `device`, with
+ * vs_peer, same_bits and differing (`diff` values unlike the layer's), and "peer" MODE on
+ * `peer_name`, noted by `peer_note` (the seconds are sorted in place). */
+void fb_bench_peer_rows(const fb_bench *b, const char *generator, const char *device, const char *peer_name,
+                        const char *mode, const char *unit, double work, double unit_scale, double wall[2][3],
+                        double gpu[2][3], uint64_t diff, const char *peer_note);
+
 /* Median seconds of three runs after a warm-up of rows(ctx, y0, n, task) over `height` rows cut into
  * tasks on a pool of `threads`; *ntasks (optional) the number of tasks. -1 on failure. */
 double fb_bench_rows(int threads, int height, void (*rows)(void *ctx, int y0, int n, int task), void *ctx, int *ntasks);

@@ -143,45 +143,58 @@ fb_result fb_bench_peer_layer(const fb_bench *b, const fb_bench_case *bc, const 
                 diff += differing(&sides[0], peer->plane, &sides[1], planes, (size_t)n * s->width);
         }
     if (!rc) {
-        double rate[2], gpu[2];
-        for (int k = 0; k < 2; k++) {
-            rate[k] = bc->work / fb_bench_median3(sides[k].wall) / bc->unit_scale;
-            double gs = fb_bench_median3(sides[k].gpu);
-            gpu[k] = gs > 0 ? bc->work / gs / bc->unit_scale : 0;
-        }
-        /* the ratio by the device's clock where it has one: the host clock counts the readback */
-        double vs = gpu[0] > 0 && gpu[1] > 0 ? gpu[0] / gpu[1] : rate[0] / rate[1];
-        char mode[2][64];
-        snprintf(mode[0], sizeof mode[0], "kernel%s", peer->mode ? peer->mode : "");
-        snprintf(mode[1], sizeof mode[1], "peer%s", peer->mode ? peer->mode : "");
-        fb_bench_row r = {.generator = bc->generator,
-                          .backend = "vulkan",
-                          .device = e.device,
-                          .mode = mode[0],
-                          .unit = bc->unit,
-                          .rate = rate[0],
-                          .gpu_rate = gpu[0],
-                          .size = true,
-                          .nextra = 3,
-                          .extra = {{"vs_peer", vs, 3}, {"same_bits", diff == 0, 0}, {"differing", (double)diff, 0}}};
-        if (diff)
-            snprintf(r.note, sizeof r.note, "x%.3f of its peer; %llu pixels differ", vs, (unsigned long long)diff);
-        else
-            snprintf(r.note, sizeof r.note, "x%.3f of its peer, the same bits", vs);
-        b->row(b, &r);
-        r = (fb_bench_row){.generator = bc->generator,
-                           .backend = "vulkan",
-                           .device = peer->name,
-                           .mode = mode[1],
-                           .unit = bc->unit,
-                           .rate = rate[1],
-                           .gpu_rate = gpu[1],
-                           .size = true};
-        snprintf(r.note, sizeof r.note, "(one dispatch of %d rows)", rows);
-        b->row(b, &r);
+        double wall[2][PASSES], gpu[2][PASSES];
+        for (int k = 0; k < 2; k++)
+            memcpy(wall[k], sides[k].wall, sizeof wall[k]), memcpy(gpu[k], sides[k].gpu, sizeof gpu[k]);
+        char note[64];
+        snprintf(note, sizeof note, "(one dispatch of %d rows)", rows);
+        fb_bench_peer_rows(b, bc->generator, e.device, peer->name, peer->mode, bc->unit, bc->work, bc->unit_scale, wall,
+                           gpu, diff, note);
     }
     for (int k = 0; k < 2; k++) side_fini(vk, &sides[k]);
     if (gen_ok) fb_gen_fini(&g);
     fb_engine_close(&e);
     return rc;
+}
+
+void fb_bench_peer_rows(const fb_bench *b, const char *generator, const char *device, const char *peer_name,
+                        const char *mode, const char *unit, double work, double unit_scale, double wall[2][3],
+                        double gpu[2][3], uint64_t diff, const char *peer_note)
+{
+    double rate[2], grate[2];
+    for (int k = 0; k < 2; k++) {
+        rate[k] = work / fb_bench_median3(wall[k]) / unit_scale;
+        double gs = fb_bench_median3(gpu[k]);
+        grate[k] = gs > 0 ? work / gs / unit_scale : 0;
+    }
+    /* the ratio by the device's clock where it has one: the host clock counts the readback */
+    double vs = grate[0] > 0 && grate[1] > 0 ? grate[0] / grate[1] : rate[0] / rate[1];
+    char modes[2][64];
+    snprintf(modes[0], sizeof modes[0], "kernel%s", mode ? mode : "");
+    snprintf(modes[1], sizeof modes[1], "peer%s", mode ? mode : "");
+    fb_bench_row r = {.generator = generator,
+                      .backend = "vulkan",
+                      .device = device,
+                      .mode = modes[0],
+                      .unit = unit,
+                      .rate = rate[0],
+                      .gpu_rate = grate[0],
+                      .size = true,
+                      .nextra = 3,
+                      .extra = {{"vs_peer", vs, 3}, {"same_bits", diff == 0, 0}, {"differing", (double)diff, 0}}};
+    if (diff)
+        snprintf(r.note, sizeof r.note, "x%.3f of its peer; %llu values differ", vs, (unsigned long long)diff);
+    else
+        snprintf(r.note, sizeof r.note, "x%.3f of its peer, the same bits", vs);
+    b->row(b, &r);
+    r = (fb_bench_row){.generator = generator,
+                       .backend = "vulkan",
+                       .device = peer_name,
+                       .mode = modes[1],
+                       .unit = unit,
+                       .rate = rate[1],
+                       .gpu_rate = grate[1],
+                       .size = true};
+    snprintf(r.note, sizeof r.note, "%s", peer_note ? peer_note : "");
+    b->row(b, &r);
 }
