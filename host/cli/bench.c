@@ -230,8 +230,11 @@ static void help(const fb_cli *cli)
            "an FMA-bound kernel (GFLOP/s) and a buffer copy (GB/s, bytes read plus written), with the CPU,\n"
            "device and driver named; on the device, by its timestamps: the copy shader (shader-copy; by the\n"
            "host clock with vkc's staging readback: shader-copy-readback), its own memory (device-copy) and\n"
-           "the host transfer each way (upload, download: bytes copied). Every rate is then also given per\n"
-           "peak GFLOP/s of its backend, and every line records\n"
+           "the host transfer each way (upload, download: bytes copied). After each whole bake, an\n"
+           "encode-only row: the same channels and compression from memory, on all cores. On the device,\n"
+           "each layer's shader (kernel rows) beside a minimal shader of its formula (peer rows,\n"
+           "bench/peers/) in the same run: vs_peer, and same_bits where their outputs agree to the bit.\n"
+           "Every rate is then also given per peak GFLOP/s of its backend, and every line records\n"
            "LP_NUM_THREADS and LP_NATIVE_VECTOR_WIDTH (lavapipe's speed and subgroup size).\n"
            "--compare EARLIER.json: each row's rate against the same row of an earlier --json run, as is\n"
            "and per peak (each run's rate divided by its own ceiling: a change of machine cancels out).\n",
