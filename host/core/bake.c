@@ -776,6 +776,9 @@ static fb_result run_strips(fb_engine *e, const fb_bake_desc *d, layer_run *runs
         if (!rc && w) rc = exrio_writer_rows(w, y0 - ry, n, planes);
         if (!rc && faces) rc = fb_faces_rows(faces, y0, n, planes, s->width);
         fb_log_context(NULL);
+        if (!rc && fb_progress_poll(&prog))
+            rc = fb_fail(FB_ERR_CANCELLED, "the bake was cancelled at rows %d-%d (by its progress callback)", y0,
+                         y0 + n - 1);
     }
     fb_progress_finish(&prog);
     return rc;
