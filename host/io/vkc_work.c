@@ -4,7 +4,8 @@
  */
 #include "vkc_private.h"
 
-#include "kernels/exact.h" /* K_SPEC_EXACT_NATIVE */
+#include "kernels/device.h" /* K_SPEC_CPU_DEVICE */
+#include "kernels/exact.h"  /* K_SPEC_EXACT_NATIVE */
 #include "spvpatch.h"
 
 #include <stdio.h>
@@ -98,18 +99,22 @@ fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, v
      * on lavapipe every branch it cannot prove uniform costs both sides. Every pipeline also gets
      * K_SPEC_EXACT_NATIVE (kernels/exact.h): the device's own division where it is known exact (the
      * native variant has it as a constant already; the portable one's answer then stays false). */
-    VkSpecializationMapEntry entries[9];
-    uint32_t data[9];
+    VkSpecializationMapEntry entries[10];
+    uint32_t data[10];
     for (uint32_t i = 0; i < nspec; i++) {
         entries[i] = (VkSpecializationMapEntry){.constantID = i, .offset = 4 * i, .size = 4};
         data[i] = desc->spec[i];
     }
     entries[nspec] = (VkSpecializationMapEntry){.constantID = K_SPEC_EXACT_NATIVE, .offset = 4 * nspec, .size = 4};
     data[nspec] = in->exact_native ? VK_TRUE : VK_FALSE;
+    /* and K_SPEC_CPU_DEVICE (kernels/device.h): the forms that suit a CPU's SIMD lanes */
+    entries[nspec + 1] =
+        (VkSpecializationMapEntry){.constantID = K_SPEC_CPU_DEVICE, .offset = 4 * (nspec + 1), .size = 4};
+    data[nspec + 1] = ctx->direct_map && !strcmp(in->type, "cpu") ? VK_TRUE : VK_FALSE;
     VkSpecializationInfo spec = {
-        .mapEntryCount = nspec + 1,
+        .mapEntryCount = nspec + 2,
         .pMapEntries = entries,
-        .dataSize = 4 * (nspec + 1),
+        .dataSize = 4 * (nspec + 2),
         .pData = data,
     };
     VkComputePipelineCreateInfo cpci = {

@@ -6,6 +6,7 @@
 
 #include "gen.h"
 #include "ifs.h"
+#include "vkc.h"
 #include "gen_lsystem.h"
 #include "lsys.h"
 #include "palette.h"
@@ -43,6 +44,10 @@ extern const fb_gen_class fb_gen_ifs;
 
 /* Its benchmarks (bench.c). */
 fb_result fb_ifs_bench(struct fb_bench *b);
+
+/* Steps a chain the chaos game of ifs layer g plays in one dispatch on device vk (host/gen/ifs/layer.c:
+ * a few hundred ms on a CPU device, a fold interval of 2^28 points on a GPU). */
+uint32_t fb_ifs_steps_per_dispatch(const fb_gen *g, const vkc_context *vk);
 
 /* The chaos-game statistics of an ifs layer after prepare (NULL for other layers). */
 const struct fb_ifs_stats *fb_gen_ifs_stats(const fb_gen *g);

@@ -19,6 +19,7 @@
 #include "kernels/ifs.h"
 #include "ifs64_comp.h"
 #include "ifs_comp.h"
+#include "ifs_fold_comp.h"
 
 #include <math.h>
 #include <stdatomic.h>
@@ -248,18 +249,18 @@ static void merge_task(void *ctx, int task)
 
 /* A histogram in whichever layout a backend left it: the hits and the colour sum of a cell. */
 typedef struct cells_view {
-    const uint32_t *hits;    /* 32-bit layouts */
+    const uint32_t *hits;    /* 32-bit layouts (with packed: the folded totals, or NULL) */
     const uint64_t *sum;     /* native: the colour sums */
-    const uint32_t *lo, *hi; /* vulkan, 32-bit atomics: colour sum words */
-    const uint64_t *packed;  /* vulkan, 64-bit atomics: hits | colour (mod 2^32) << 32 */
-    const uint32_t *carry;   /* ... and the carries out of the colour word */
+    const uint32_t *lo, *hi; /* vulkan: colour sum words */
+    const uint64_t *packed;  /* vulkan, 64-bit atomics: hits | colour sum << K_IFS_HIT_BITS since the last fold */
 } cells_view;
 
 static inline void cell_at(const cells_view *v, size_t cell, uint64_t *hits, uint64_t *sum)
 {
     if (v->packed) {
-        *hits = (uint32_t)v->packed[cell];
-        *sum = (uint64_t)v->carry[cell] << 32 | (v->packed[cell] >> 32);
+        uint64_t x = v->packed[cell];
+        *hits = (x & K_IFS_HIT_MASK) + (v->hits ? v->hits[cell] : 0);
+        *sum = (x >> K_IFS_HIT_BITS) + (v->hits ? (uint64_t)v->hi[cell] << 32 | v->lo[cell] : 0);
     } else {
         *hits = v->hits[cell];
         *sum = v->sum ? v->sum[cell] : (uint64_t)v->hi[cell] << 32 | v->lo[cell];
@@ -449,6 +450,60 @@ static fb_result prepare_native(fb_gen *g, fb_engine *e, fb_progress *prog)
 }
 
 enum { B_MAPS, B_CHAINS, B_COUNTS, B_HITS, B_LO, B_HI, NBUF };
+enum { F_HITS, F_LO, F_HI, F_FLAGS, NFOLD }; /* the folded totals of the 64-bit histogram */
+
+/* The points one fold interval of the 64-bit histogram may take (kernels/ifs.h). */
+#define FOLD_POINTS ((1ull << K_IFS_HIT_BITS) - 1)
+
+/* One 64-bit atomic a point where the device has them, the packed histogram fits one buffer and a
+ * dispatch of one step a chain fits a fold interval; else two 32-bit ones and a carry. The sums, and
+ * so the result, are the same. */
+static bool wide_histogram(const ifs_state *st, vkc_context *vk)
+{
+    uint64_t cells = (uint64_t)st->p.hist_w * st->p.hist_h;
+    return vkc_info(vk)->int64_atomics && cells * 8 <= vkc_info(vk)->max_storage_buffer_range &&
+           st->cr1 - st->cr0 <= FOLD_POINTS;
+}
+
+/* The 64-bit histogram is folded into totals when the run plays more points than a fold interval. */
+static bool folds(const ifs_state *st)
+{
+    return st->points > FOLD_POINTS;
+}
+
+/* Steps a chain per dispatch: on a CPU device a few hundred ms (POINTS_PER_DISPATCH, init's); on a
+ * GPU as many as a fold interval holds (2^28 points: milliseconds), since each job's end costs a
+ * round trip and, on a discrete GPU, vkc's copy of its buffers back to the host. */
+static uint32_t steps_per_dispatch(const ifs_state *st, const vkc_context *vk)
+{
+    if (!strcmp(vkc_info(vk)->type, "cpu")) return st->p.nsteps;
+    uint64_t n = FOLD_POINTS / (st->cr1 > st->cr0 ? st->cr1 - st->cr0 : 1); /* < 2^28 */
+    return n > st->p.nsteps ? (uint32_t)n : st->p.nsteps;
+}
+
+uint32_t fb_ifs_steps_per_dispatch(const fb_gen *g, const vkc_context *vk)
+{
+    return steps_per_dispatch(state(g), vk);
+}
+
+/* Adds the 64-bit cells into the totals and clears them (shaders/ifs_fold.comp). */
+static fb_result fold(vkc_context *vk, vkc_pipeline *pipe, vkc_buffer *packed, vkc_buffer *const *totals, size_t cells,
+                      double *gpu_seconds)
+{
+    vkc_job *job = NULL;
+    fb_result rc = vkc_job_create(vk, pipe, &job);
+    uint64_t groups = (cells + 63) / 64, gx = groups < 65535 ? groups : 65535;
+    struct {
+        uint32_t cells, stride;
+    } push = {(uint32_t)cells, (uint32_t)gx * 64};
+    vkc_buffer *bufs[1 + NFOLD] = {packed, totals[F_HITS], totals[F_LO], totals[F_HI], totals[F_FLAGS]};
+    double t = -1;
+    if (!rc) rc = vkc_job_submit(vk, job, bufs, 1 + NFOLD, &push, (const uint32_t[3]){gx, (groups + gx - 1) / gx, 1});
+    if (!rc) rc = vkc_job_wait(vk, job, &t);
+    if (t > 0) *gpu_seconds += t;
+    vkc_job_destroy(vk, &job);
+    return rc;
+}
 
 static fb_result prepare_vulkan(fb_gen *g, fb_engine *e, fb_progress *prog, double *gpu_seconds)
 {
@@ -456,17 +511,15 @@ static fb_result prepare_vulkan(fb_gen *g, fb_engine *e, fb_progress *prog, doub
     vkc_context *vk = e->vk;
     size_t cells = (size_t)st->p.hist_w * st->p.hist_h;
     uint64_t range = vkc_info(vk)->max_storage_buffer_range;
-    /* One 64-bit atomic per point where the device has them and the packed histogram fits one
-     * buffer; else two 32-bit ones. The sums, and so the result, are the same. */
-    bool wide = vkc_info(vk)->int64_atomics && (uint64_t)cells * 8 <= range;
+    bool wide = wide_histogram(st, vk), folding = wide && folds(st);
     if ((uint64_t)cells * 4 > range)
         return fb_fail(FB_ERR_INPUT,
                        "layer %s: a histogram of %zu cells needs %zu MiB per buffer; this device allows %llu MiB "
                        "(lower --oversample or the size, or use --backend native)",
                        g->layer->name, cells, cells * 4 >> 20, (unsigned long long)(range >> 20));
-    vkc_pipeline *pipe = NULL;
+    vkc_pipeline *pipe = NULL, *fold_pipe = NULL;
     vkc_job *job = NULL;
-    vkc_buffer *buf[NBUF] = {0};
+    vkc_buffer *buf[NBUF] = {0}, *tot[NFOLD] = {0};
     uint32_t spec[1] = {st->p.cmaps > 0};
     fb_result rc = vkc_pipeline_create(vk,
                                        &(vkc_pipeline_desc){.spv = wide ? ifs64_comp : ifs_comp,
@@ -477,32 +530,51 @@ static fb_result prepare_vulkan(fb_gen *g, fb_engine *e, fb_progress *prog, doub
                                                             .nspec = 1,
                                                             .name = g->layer->name},
                                        &pipe);
-    const uint64_t sizes[NBUF] = {sizeof(K_IfsMap) * st->ntable,
-                                  sizeof(K_IfsChain) * (uint64_t)st->p.chains,
-                                  16ull * st->p.chains,
-                                  (wide ? 8ull : 4ull) * cells,
-                                  4ull * cells,
-                                  wide ? 16ull : 4ull * cells};
+    /* wide: the packed cells, and two unused bindings */
+    const uint64_t sizes[NBUF] = {sizeof(K_IfsMap) * st->ntable, sizeof(K_IfsChain) * (uint64_t)st->p.chains,
+                                  16ull * st->p.chains,          (wide ? 8ull : 4ull) * cells,
+                                  wide ? 16ull : 4ull * cells,   wide ? 16ull : 4ull * cells};
     for (int b = 0; b < NBUF && !rc; b++) rc = vkc_buffer_create(vk, sizes[b], &buf[b]);
+    for (int b = 0; b < NFOLD && folding && !rc; b++)
+        rc = vkc_buffer_create(vk, b == F_FLAGS ? 16 : 4ull * cells, &tot[b]);
+    if (!rc && folding)
+        rc = vkc_pipeline_create(
+            vk,
+            &(vkc_pipeline_desc){FB_SPV(ifs_fold_comp), .push_size = 8, .buffers = 1 + NFOLD, .name = g->layer->name},
+            &fold_pipe);
     if (!rc) rc = vkc_buffer_upload(vk, buf[B_MAPS], st->table, sizes[B_MAPS]);
     void *zero = rc ? NULL : calloc(cells, wide ? 8 : 4);
     if (!rc && !zero) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     for (int b = B_HITS; b <= B_HI && !rc; b++) rc = vkc_buffer_upload(vk, buf[b], zero, sizes[b]);
+    for (int b = 0; b < NFOLD && folding && !rc; b++)
+        rc = vkc_buffer_upload(vk, tot[b], zero, b == F_FLAGS ? 16 : 4ull * cells);
     free(zero);
     if (!rc) rc = vkc_job_create(vk, pipe, &job);
-    uint32_t last = max_total(&st->p);
+    /* a job of no steps first: the uploads above, outside the game's timestamps */
+    K_IfsParams p0 = st->p;
+    p0.nsteps = 0;
+    if (!rc) rc = vkc_job_submit(vk, job, buf, NBUF, &p0, (const uint32_t[3]){(st->cr1 + 63) / 64, 1, 1});
+    if (!rc) rc = vkc_job_wait(vk, job, NULL);
+    uint32_t last = max_total(&st->p), nsteps = steps_per_dispatch(st, vk);
+    uint64_t since = 0, per = (uint64_t)(st->cr1 - st->cr0) * nsteps; /* points since the last fold, a dispatch's */
     double t0 = fb_now();
-    for (uint32_t step0 = 0; step0 < last && !rc; step0 += st->p.nsteps) {
+    for (uint32_t step0 = 0; step0 < last && !rc; step0 += nsteps) {
         K_IfsParams p = st->p;
         p.step0 = step0;
+        p.nsteps = nsteps;
         p.chain0 = st->cr0;
+        if (folding && since + per > FOLD_POINTS) {
+            rc = fold(vk, fold_pipe, buf[B_HITS], tot, cells, gpu_seconds);
+            since = 0;
+        }
         uint32_t groups[3] = {(st->cr1 + 63) / 64, 1, 1};
         double t = -1;
-        rc = vkc_job_submit(vk, job, buf, NBUF, &p, groups);
+        if (!rc) rc = vkc_job_submit(vk, job, buf, NBUF, &p, groups);
         if (!rc) rc = vkc_job_wait(vk, job, &t);
         if (t > 0) *gpu_seconds += t;
+        since += per;
         if (!rc) add_counts(st, vkc_buffer_data(buf[B_COUNTS]));
-        uint64_t done = (uint64_t)(step0 + p.nsteps < last ? step0 + p.nsteps : last) * (st->cr1 - st->cr0);
+        uint64_t done = (uint64_t)(last - step0 > nsteps ? step0 + nsteps : last) * (st->cr1 - st->cr0);
         fb_progress_update(prog, done < st->points ? done : st->points, st->points);
     }
     st->stats.game_seconds = fb_now() - t0;
@@ -510,14 +582,20 @@ static fb_result prepare_vulkan(fb_gen *g, fb_engine *e, fb_progress *prog, doub
         cells_view v = {
             .hits = vkc_buffer_data(buf[B_HITS]), .lo = vkc_buffer_data(buf[B_LO]), .hi = vkc_buffer_data(buf[B_HI])};
         if (wide) {
-            v = (cells_view){.packed = vkc_buffer_data(buf[B_HITS]), .carry = vkc_buffer_data(buf[B_LO])};
-            if (*(const uint32_t *)vkc_buffer_data(buf[B_HI])) st->stats.saturated++;
+            v = (cells_view){.packed = vkc_buffer_data(buf[B_HITS])};
+            if (folding) {
+                v.hits = vkc_buffer_data(tot[F_HITS]), v.lo = vkc_buffer_data(tot[F_LO]),
+                v.hi = vkc_buffer_data(tot[F_HI]);
+                if (*(const uint32_t *)vkc_buffer_data(tot[F_FLAGS])) st->stats.saturated++;
+            }
         }
         rc = reduce(st, g->scene->width, g->scene->height, &v);
     }
     vkc_job_destroy(vk, &job);
     for (int b = 0; b < NBUF; b++) vkc_buffer_destroy(vk, &buf[b]);
+    for (int b = 0; b < NFOLD; b++) vkc_buffer_destroy(vk, &tot[b]);
     vkc_pipeline_destroy(vk, &pipe);
+    vkc_pipeline_destroy(vk, &fold_pipe);
     return rc;
 }
 
@@ -656,15 +734,17 @@ const fb_ifs_stats *fb_gen_ifs_stats(const fb_gen *g)
 }
 
 /* The chaos game's memory: its histogram (12 bytes a cell: hits and colour sums; one per thread
- * where they fit in 1 GiB, as prepare_native decides), the chains' state, and the reduction to
- * pixels (16 bytes a pixel, then the 12 kept: count, density, colour; 8 more for a points part). */
+ * where they fit in 1 GiB, as prepare_native decides; on a device with 64-bit atomics 8, and 12 more
+ * for the totals when the run folds), the chains' state, and the reduction to pixels (16 bytes a
+ * pixel, then the 12 kept: count, density, colour; 8 more for a points part). */
 static uint64_t ifs_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
 {
     const ifs_state *st = state(g);
     uint64_t cells = (uint64_t)st->p.hist_w * st->p.hist_h, n = (uint64_t)g->scene->width * g->scene->height;
     uint64_t keep = 12 * n + (st->part ? 8 * n : 0), hist;
     if (e->kind == FB_BACKEND_VULKAN) {
-        hist = 12 * cells + 48ull * st->p.chains;
+        bool wide = e->vk && wide_histogram(st, e->vk);
+        hist = (wide ? 8 + (folds(st) ? 12 : 0) : 12) * cells + 48ull * st->p.chains;
     } else {
         int threads = e->pool ? fb_pool_threads(e->pool) : 1;
         if (threads > 64) threads = 64;
