@@ -234,12 +234,12 @@ static fb_result rivers_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     double secs = fb_now() - t0;
     free(initial), free(map);
     if (rc) return rc;
+    /* the world the image covers: the source's top-left corner (else the origin), extent wide */
     const fb_gen *w = world_of(g);
-    if (w) {
-        g->has_world = true;
-        memcpy(g->world, w->world, sizeof g->world);
-        g->epsg = w->epsg;
-    }
+    g->has_world = true;
+    g->world[0] = w ? w->world[0] : 0, g->world[1] = g->world[0] + extent;
+    g->world[3] = w ? w->world[3] : extent * sc->height / sc->width, g->world[2] = g->world[3] - cell * sc->height;
+    g->epsg = w ? w->epsg : 0;
     if (sc->height > 1) g->preview_shade[0] = g->preview_shade[1] = cell;
     float lo = INFINITY, hi = -INFINITY;
     uint64_t rivers = 0, lakes = 0;

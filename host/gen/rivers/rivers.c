@@ -739,7 +739,7 @@ fb_result fb_rivers_run(const fb_rivers_desc *d, fb_pool *pool, fb_progress *pro
     bool any = false;
     for (size_t i = 0; i < M.N && !any; i++) any = M.flag[i] & FIXED;
     if (!any)
-        rc = fb_fail(FB_ERR_INPUT, "rivers: no outlet: every edge is closed and no cell lies below the sea level %g",
+        rc = fb_fail(FB_ERR_INPUT, "no outlet: every edge is closed and no cell lies below the sea level %g",
                      d->sea_level);
     uint64_t flooded = 0;
     int flood_steps = 0;
