@@ -478,6 +478,13 @@ static fb_result route(model *M, double *s, bool single, uint64_t *flooded)
 
 /* ---- the stream power law ------------------------------------------------------------------------ */
 
+/* x^y, exactly where it can be: the exponents of the defaults (m = 1/2, n = 1) by a square root and
+ * nothing, correctly rounded on every machine; others by libm's pow. */
+static double power(double x, double y)
+{
+    return y == 1 ? x : y == 0.5 ? sqrt(x) : y == 2 ? x * x : pow(x, y);
+}
+
 /* The root of g(x) = x - h0 + F (x - b)^n in (b, h0) (g(b) < 0 < g(h0)): Newton's iteration from
  * h0, falling back to bisection whenever a step would leave the bracket. */
 static double newton(double h0, double b, double F, double n)
@@ -521,7 +528,7 @@ static void erode(model *M)
             continue;
         }
         uint32_t c = M->acc[i];
-        double F = M->F[(f & DIAG) != 0] * (c < POW_TABLE ? M->powA[c] : pow((double)c, d->m));
+        double F = M->F[(f & DIAG) != 0] * (c < POW_TABLE ? M->powA[c] : power((double)c, d->m));
         h[i] = unit ? (h0 + F * b) / (1 + F) : newton(h0, b, F, d->n);
     }
 }
@@ -645,10 +652,10 @@ static fb_result model_init(model *M, const fb_rivers_desc *d, fb_pool *pool)
         return fb_fail(FB_ERR_NOMEM, "rivers: out of memory for %d x %d cells", d->width, d->height);
     }
     M->powA[0] = 0;
-    for (int c = 1; c < POW_TABLE; c++) M->powA[c] = pow((double)c, d->m);
-    double a = pow(d->cell * d->cell, d->m); /* A^m = (c cell^2)^m */
-    M->F[0] = d->K * d->dt * a / pow(d->cell, d->n);
-    M->F[1] = d->K * d->dt * a / pow(d->cell * M_SQRT2, d->n);
+    for (int c = 1; c < POW_TABLE; c++) M->powA[c] = power((double)c, d->m);
+    double a = power(d->cell * d->cell, d->m); /* A^m = (c cell^2)^m */
+    M->F[0] = d->K * d->dt * a / power(d->cell, d->n);
+    M->F[1] = d->K * d->dt * a / power(d->cell * M_SQRT2, d->n);
     M->ud = d->uplift * d->dt;
     M->r = d->kd * d->dt / (d->cell * d->cell);
     for (size_t i = 0; i < N; i++)
