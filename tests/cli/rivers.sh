@@ -63,6 +63,54 @@ mkdir -p tiles
 "$FB" render s.json --backend native --quiet --set layers.r.heightmap=tiles/r.png --set 'layers.r.tiles=[2, 2]' -o ti.exr &&
   [ "$(ls tiles | grep -c '^r_x[01]_y[01]\.png$')" = 4 ] && [ "$(png_wh tiles/r_x1_y1.png)" = "49 41" ] && ok ||
   bad "rivers tiles: $(ls tiles)"
+# colour by height: R, G, B; under an overhead light with no ambient and one grey, the land is that
+# grey times the cosine of its slope (from the EXR's own heights, central differences), the water
+# its colour times the same
+python3 - << 'PY' > c.json
+import json
+s = json.load(open('s.json'))
+s['compression'] = 'none'
+s['layers'][1].update({'stops': [[0, 0.5, 0.5, 0.5], [1, 0.5, 0.5, 0.5]], 'light': [0, 90], 'ambient': 0,
+                       'water-colour': [0, 0, 1]})
+print(json.dumps(s))
+PY
+"$FB" render c.json --backend native --quiet -o c.exr && "$FB" info c.exr | grep -q "layer r .*B (float), G (float), R (float), Y (float)" &&
+  python3 - << 'PY' && ok || bad "rivers colour"
+import math, struct, sys
+def channels(path):
+    d = open(path, 'rb').read()
+    i, attrs = 8, {}
+    while d[i] != 0:
+        n = d.index(b'\0', i); t = d.index(b'\0', n + 1); size = struct.unpack('<i', d[t + 1:t + 5])[0]
+        attrs[d[i:n].decode()] = d[t + 5:t + 5 + size]; i = t + 5 + size
+    chans, j, cl = [], 0, attrs['channels']
+    while cl[j] != 0:
+        n = cl.index(b'\0', j); chans.append((cl[j:n].decode(), struct.unpack('<i', cl[n + 1:n + 5])[0])); j = n + 17
+    x0, y0, x1, y1 = struct.unpack('<4i', attrs['dataWindow']); W, H = x1 - x0 + 1, y1 - y0 + 1
+    out, off = {c: [] for c, _ in chans}, i + 1 + 8 * H
+    for y in range(H):
+        p = off + 8
+        for c, t in chans:
+            sz = 2 if t == 1 else 4
+            out[c].append(struct.unpack('<%d%s' % (W, 'e' if t == 1 else 'f' if t == 2 else 'I'), d[p:p + sz * W]))
+            p += sz * W
+        off = p
+    return W, H, out
+W, H, c = channels('c.exr')
+Y, R, G, B, river = c['r.Y'], c['r.R'], c['r.G'], c['r.B'], c['r.river']
+cell, worst, water = 9700 / W, 0, 0
+for y in range(H):
+    for x in range(W):
+        xl, xr, yu, yd = max(x - 1, 0), min(x + 1, W - 1), max(y - 1, 0), min(y + 1, H - 1)
+        gx = (Y[y][xr] - Y[y][xl]) / ((xr - xl) * cell)
+        gy = (Y[yu][x] - Y[yd][x]) / ((yd - yu) * cell)
+        light = 1 / math.sqrt(gx * gx + gy * gy + 1)
+        want = (0, 0, light) if river[y][x] > 0 else (0.5 * light,) * 3
+        water += river[y][x] > 0
+        worst = max(worst, max(abs(a - b) for a, b in zip((R[y][x], G[y][x], B[y][x]), want)))
+print('colour: largest difference %.3g, %d water pixels' % (worst, water))
+sys.exit(not (worst < 1e-5 and water > 0))
+PY
 # plants on it: instances stand on the surface; kept off the river mask (none within 100 units of a
 # river pixel's centre, by this script's own reading of the mask) and off slopes steeper than 20
 # degrees; some are kept and some left out

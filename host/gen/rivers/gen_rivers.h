@@ -5,6 +5,7 @@
 #define FB_GEN_RIVERS_H
 
 #include "gen.h"
+#include "palette.h"
 
 /* Stream-power erosion with uplift (rivers.h); lengths in the heights' unit, times in one time unit. */
 typedef struct fb_rivers_layer_params {
@@ -18,12 +19,14 @@ typedef struct fb_rivers_layer_params {
     double K, m, n, kd, dt;
     int steps;
     double noise;
-    bool keep_lakes;   /* "lakes": "keep" (else "fill") */
-    unsigned outlets;  /* FB_RIVERS_NORTH | ... */
-    bool has_sea;      /* "sea-level" */
-    double sea_level;  /* */
-    double extent;     /* the image's width in world units (0: the input's world, else 100000) */
-    double river_area; /* the river mask's threshold, world units squared (0: 1/1000 of the image's area) */
+    bool keep_lakes;       /* "lakes": "keep" (else "fill") */
+    unsigned outlets;      /* FB_RIVERS_NORTH | ... */
+    bool has_sea;          /* "sea-level" */
+    double sea_level;      /* */
+    double extent;         /* the image's width in world units (0: the input's world, else 100000) */
+    double river_area;     /* the river mask's threshold, world units squared (0: 1/1000 of the image's area) */
+    fb_relief_spec relief; /* colour by height: R, G, B */
+    double water[3];       /* the colour of rivers and standing water (lit like the land) */
 } fb_rivers_layer_params;
 
 extern const fb_gen_class fb_gen_rivers;

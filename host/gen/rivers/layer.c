@@ -5,7 +5,8 @@
  *
  * Channels: NAME.Y (the surface: the bed, with depressions filled unless lakes are kept), NAME.area
  * (drainage area by steepest descent, world units squared), NAME.river (1 where the area reaches
- * river-area), NAME.lake (depth of standing water: kept lakes and the sea).
+ * river-area), NAME.lake (depth of standing water: kept lakes and the sea); with a palette also NAME.R,
+ * .G, .B, the surface lit and coloured by height, the water in its colour.
  */
 #include "engine.h"
 #include "exrio.h"
@@ -52,6 +53,9 @@ static const fb_keyspec rivers_keys[] = {
     {"river-area", FB_K_NUM, 0, 1e30, true, NULL, NULL,
      "NAME.river is 1 where the drainage area reaches this, world units squared (default: 1/1000 of the image's "
      "area)"},
+    FB_RELIEF_KEYS,
+    {"water-colour", FB_K_NUMLIST, 0, 1e3, false, NULL, NULL,
+     "with a palette: the colour of rivers and standing water, R,G,B, lit like the land (default 0.03,0.12,0.3)", 3},
     {"heightmap", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
      "also write the heights (Y) for engines: OUT.png (16-bit grey), OUT.r16 (16-bit raw) or OUT.tif (float GeoTIFF)"},
     FB_HEIGHTMAP_KEYS,
@@ -112,6 +116,14 @@ static fb_result parse_rivers(const fb_vctx *v, const char *path, json_t *obj, c
         return fb_schema_error(v, sub, "no outlet: water must leave by an edge, or set a sea-level");
     P->extent = json_object_get(obj, "extent") ? fb_json_num(obj, "extent") : 0;
     P->river_area = json_object_get(obj, "river-area") ? fb_json_num(obj, "river-area") : 0;
+    if ((rc = fb_schema_relief(v, path, obj, &P->relief))) return rc;
+    const json_t *wc = json_object_get(obj, "water-colour");
+    if (wc && !P->relief.colour) {
+        snprintf(sub, sizeof sub, "%s.water-colour", path);
+        return fb_schema_error(v, sub, "water-colour shapes the colour by height: give palette, cosine or stops too");
+    }
+    static const double water[3] = {0.03, 0.12, 0.3};
+    for (int c = 0; c < 3; c++) P->water[c] = wc ? json_number_value(json_array_get(wc, (size_t)c)) : water[c];
     return FB_OK;
 }
 
@@ -121,6 +133,8 @@ typedef struct rivers_state {
     const fb_gen *src, *map; /* the starting heights' and the uplift map's layers (resolve), or NULL */
     int src_channel, map_channel;
     fb_rivers_out out;
+    fb_relief relief; /* with a palette: the colour by height */
+    double cell;
 } rivers_state;
 
 static rivers_state *state(const fb_gen *g)
@@ -247,6 +261,8 @@ static fb_result rivers_prepare(fb_gen *g, struct fb_engine *e, bool progress)
         lo = fminf(lo, s->out.height[i]), hi = fmaxf(hi, s->out.height[i]);
         rivers += s->out.river[i] > 0, lakes += s->out.lake[i] > 0;
     }
+    s->cell = cell;
+    if (P->relief.colour) fb_relief_init(&s->relief, &P->relief, lo, hi);
     double work = (double)n * P->steps;
     snprintf(g->summary, sizeof g->summary,
              "%s: %d x %d cells of %.4g, %d steps of %.4g; relief %.6g, largest basin %.3g%% of the cells, river "
@@ -265,6 +281,32 @@ static fb_result rivers_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     return FB_OK;
 }
 
+/* The colour of rows [y0, y0 + n): the land by height under the light, rivers and standing water in
+ * the water's colour under the same light; the slope by central differences of the surface (one-sided
+ * at the edges), in world units. */
+static void colour_rows(const fb_gen *g, int y0, int n, float *R, float *G, float *B)
+{
+    const rivers_state *s = state(g);
+    const fb_rivers_layer_params *P = fb_layer_params(g->layer);
+    const int W = g->scene->width, H = g->scene->height;
+    const float *z = s->out.height;
+    for (int y = y0; y < y0 + n; y++)
+        for (int x = 0; x < W; x++) {
+            size_t i = (size_t)y * W + x, o = i - (size_t)y0 * W;
+            int xl = x > 0 ? x - 1 : x, xr = x + 1 < W ? x + 1 : x, yu = y > 0 ? y - 1 : y, yd = y + 1 < H ? y + 1 : y;
+            double gx = xr > xl ? ((double)z[(size_t)y * W + xr] - z[(size_t)y * W + xl]) / ((xr - xl) * s->cell) : 0;
+            double gy = yd > yu ? ((double)z[(size_t)yu * W + x] - z[(size_t)yd * W + x]) / ((yd - yu) * s->cell) : 0;
+            float c[3];
+            if (s->out.river[i] > 0 || s->out.lake[i] > 0) {
+                double light = fb_relief_light(&s->relief, gx, gy);
+                for (int k = 0; k < 3; k++) c[k] = (float)(P->water[k] * light);
+            } else {
+                fb_relief_colour(&s->relief, z[i], gx, gy, c);
+            }
+            R[o] = c[0], G[o] = c[1], B[o] = c[2];
+        }
+}
+
 static void rivers_rows(const fb_gen *g, int y0, int n, void *const *planes)
 {
     const rivers_state *s = state(g);
@@ -272,10 +314,11 @@ static void rivers_rows(const fb_gen *g, int y0, int n, void *const *planes)
     const float *src[4] = {s->out.height, s->out.area, s->out.river, s->out.lake};
     for (int c = 0; c < 4; c++)
         if (planes[c]) memcpy(planes[c], src[c] + at, len);
+    if (g->nchannels > 4) colour_rows(g, y0, n, planes[4], planes[5], planes[6]);
 }
 
 /* The model's state and result (rivers.c), plus the input and the uplift map (4 bytes a cell each)
- * at the peak; the result (16 bytes a cell) kept for the strips. */
+ * at the peak; the result (16 bytes a cell) kept for the strips (the colour is computed in them). */
 static uint64_t rivers_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
 {
     (void)e;
@@ -297,13 +340,15 @@ static fb_result rivers_init(fb_gen *g)
     if (!s) return fb_fail(FB_ERR_NOMEM, "out of memory");
     g->owned = s;
     g->fini = rivers_fini;
-    static const char *const suffix[4] = {"Y", "area", "river", "lake"};
-    g->nchannels = 4;
+    static const char *const suffix[7] = {"Y", "area", "river", "lake", "R", "G", "B"};
+    const fb_rivers_layer_params *P = fb_layer_params(g->layer);
+    g->nchannels = P->relief.colour ? 7 : 4;
     for (int c = 0; c < g->nchannels; c++) {
         snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
         g->channel_types[c] = (g->layer->half && c != 1) || c == 2 ? EXRIO_HALF : EXRIO_FLOAT;
     }
     g->preview_channel = 0;
+    if (P->relief.colour) g->preview_rgb = 4; /* the preview shows the lit colour */
     if (g->scene->height > 1) g->preview_shade[0] = g->preview_shade[1] = extent_of(g) / g->scene->width;
     g->native_rows = rivers_rows;
     g->prepare = rivers_prepare;
