@@ -63,6 +63,10 @@ mkdir -p tiles
 "$FB" render s.json --backend native --quiet --set layers.r.heightmap=tiles/r.png --set 'layers.r.tiles=[2, 2]' -o ti.exr &&
   [ "$(ls tiles | grep -c '^r_x[01]_y[01]\.png$')" = 4 ] && [ "$(png_wh tiles/r_x1_y1.png)" = "49 41" ] && ok ||
   bad "rivers tiles: $(ls tiles)"
+# its benchmark row
+"$FB" bench --generator rivers --size 64x64 --json --quiet > bench.json &&
+  python3 -c "import json, sys; r = [json.loads(l) for l in open('bench.json')]; r = [x for x in r if x.get('generator') == 'rivers']; sys.exit(not (r and r[0]['unit'] == 'Mcell-steps/s' and r[0]['rate'] > 0))" &&
+  ok || bad "rivers bench: $(cat bench.json)"
 # colour by height: R, G, B; under an overhead light with no ambient and one grey, the land is that
 # grey times the cosine of its slope (from the EXR's own heights, central differences), the water
 # its colour times the same

@@ -1,8 +1,8 @@
 /*
- * Stream-power erosion at the benchmark size (at most 2048 x 2048), 50 time steps from a flat start
+ * Stream-power erosion at the benchmark size (at most 1024 x 1024), 50 time steps from a flat start
  * under uniform uplift with open edges, hillslope diffusion and filled depressions: the model alone
  * (no file), in cell-steps per second. The first steps fill many depressions (the start is noise);
- * bench/rivers.sh runs 500 steps beside the plain C peer, bench/peers/rivers_peer.c.
+ * bench/rivers.sh runs 2048 x 2048 and 500 steps beside the plain C peer, bench/peers/rivers_peer.c.
  */
 #include "benchkit.h"
 #include "gen_rivers.h"
@@ -15,7 +15,7 @@ enum { STEPS = 50 };
 fb_result fb_rivers_bench(fb_bench *b)
 {
     if (!b->native) return FB_OK; /* the host computes it on every backend: nothing of Vulkan's to measure */
-    int W = b->width < 2048 ? b->width : 2048, H = b->height < 2048 ? b->height : 2048;
+    int W = b->width < 1024 ? b->width : 1024, H = b->height < 1024 ? b->height : 1024;
     fb_rivers_desc d = {.width = W,
                         .height = H,
                         .cell = 100000.0 / W,
