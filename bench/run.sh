@@ -5,7 +5,9 @@
 # beside fractalbake's own when libcgal-dev can be installed, and the chaos-game peer (libflam3 rendering
 # the fern, bench/flam3_fern.c) when libflam3-dev can; fractalbake never links either. The fBm peer
 # (bench/fbm_peer.c, a minimal AVX2 gradient fBm at 4096 x 4096) and the erosion peer
-# (bench/erode_peer.c, the virtual-pipe model written plainly, at up to 1024 x 1024) always run.
+# (bench/erode_peer.c, the virtual-pipe model written plainly, at up to 1024 x 1024) and the
+# stream-power peer (bench/peers/rivers_peer.c, at the rivers rows' 1024 x 1024 and 50 steps; for
+# 2048 x 2048 and 500 steps, bench/rivers.sh) always run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh
@@ -25,10 +27,12 @@ fi
 gcc -O3 -mavx2 -o build/fbm_peer bench/fbm_peer.c -lpthread -lm
 # the erosion peer (bench/erode_peer.c): the same pipe model written plainly, always built
 gcc -O3 -march=native -o build/erode_peer bench/erode_peer.c -lpthread -lm
+gcc -O3 -march=native -o build/rivers_peer bench/peers/rivers_peer.c -lm
 {
   ./build/fractalbake bench --json "$@"
   ./build/fbm_peer --json "$@"
   ./build/erode_peer --json "$@"
+  ./build/rivers_peer --json --size 1024x1024 --steps 50
   if [ -n "$peer" ]; then "$peer" --json; fi
   if [ -n "$flam3" ]; then "$flam3" --json "$@"; fi
 } | while read -r line; do

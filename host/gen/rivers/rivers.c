@@ -41,6 +41,8 @@ enum { FIXED = 1, REACHED = 2, QUEUED = 4, LAKE = 8, DIAG = 16, BELOW = 32 };
 #define POW_TABLE 65536
 /* Columns solved together by the diffusion's column pass. */
 #define LANES 16
+/* Row bands (and blocks of lines) a pass is cut into at the most: four a thread. */
+#define MAX_TASKS 64
 
 /* The neighbours: the four sides first, then the diagonals (ties go to the first). */
 static const int DX[8] = {0, -1, 1, 0, -1, 1, -1, 1}, DY[8] = {-1, 0, 0, 1, -1, -1, 1, 1};
@@ -49,21 +51,21 @@ typedef struct model {
     const fb_rivers_desc *d;
     int W, H;
     size_t N;
-    double *h;             /* the bed */
-    double *z;             /* kept lakes: the water surface where there is a lake, else the bed */
-    int32_t *rcv;          /* receiver (itself for an outlet) */
-    uint32_t *cnt;         /* donors not yet ordered */
-    int32_t *order;        /* every donor before its receiver (the stack, read backwards) */
-    uint32_t *acc;         /* drainage area in cells */
-    uint8_t *flag;         /* FIXED, REACHED, QUEUED, LAKE, DIAG, BELOW */
-    int32_t *heap;         /* the priority-flood's queue */
-    int32_t *aux;          /* its first-in first-out queue of raised cells, or a walk down the receivers */
-    size_t task_pits[256]; /* the pits each task of the receivers' pass found */
-    double *powA;          /* c^m for c < POW_TABLE */
-    double F[2];           /* K dt cell^(2m) / L^n for a side and a diagonal receiver */
-    double ud;             /* U dt */
-    double r;              /* kd dt / cell^2 */
-    double *lines;         /* the diffusion's scratch: per task, LANES x max(W, H) + 2 x LANES doubles */
+    double *h;                   /* the bed */
+    double *z;                   /* kept lakes: the water surface where there is a lake, else the bed */
+    int32_t *rcv;                /* receiver (itself for an outlet) */
+    uint32_t *cnt;               /* donors not yet ordered */
+    int32_t *order;              /* every donor before its receiver (the stack, read backwards) */
+    uint32_t *acc;               /* drainage area in cells */
+    uint8_t *flag;               /* FIXED, REACHED, QUEUED, LAKE, DIAG, BELOW */
+    int32_t *heap;               /* the priority-flood's queue */
+    int32_t *aux;                /* its first-in first-out queue of raised cells, or a walk down the receivers */
+    size_t task_pits[MAX_TASKS]; /* the pits each task of the receivers' pass found */
+    double *powA;                /* c^m for c < POW_TABLE */
+    double F[2];                 /* K dt cell^(2m) / L^n for a side and a diagonal receiver */
+    double ud;                   /* U dt */
+    double r;                    /* kd dt / cell^2 */
+    double *lines;               /* the diffusion's scratch: per task, LANES x max(W, H) + 2 x LANES doubles */
     size_t line_stride;
     fb_pool *pool;
     int tasks; /* row bands (and column blocks) a pass is cut into */
@@ -605,12 +607,13 @@ const char *fb_rivers_check(const fb_rivers_desc *d)
     return NULL;
 }
 
-/* The state (h, z: 8 bytes; rcv, cnt, order, acc, heap, aux: 4; flag: 1) and the result (4 x 4). */
+/* The state (h, z: 8 bytes; rcv, cnt, order, acc, heap, aux: 4; flag: 1), the result (4 x 4), the
+ * tables and the diffusion's scratch (LANES lines of each task). */
 uint64_t fb_rivers_memory(int width, int height)
 {
     uint64_t n = (uint64_t)width * height;
     return n * (2 * 8 + 6 * 4 + 1 + 4 * 4) + POW_TABLE * 8 +
-           64 * 8 * LANES * (uint64_t)(width > height ? width : height);
+           MAX_TASKS * 8 * LANES * (uint64_t)(width > height ? width : height);
 }
 
 void fb_rivers_out_free(fb_rivers_out *o)
@@ -632,7 +635,7 @@ static fb_result model_init(model *M, const fb_rivers_desc *d, fb_pool *pool)
     memset(M, 0, sizeof *M);
     M->d = d, M->W = d->width, M->H = d->height, M->N = (size_t)d->width * d->height, M->pool = pool;
     int threads = pool ? fb_pool_threads(pool) : 1;
-    M->tasks = threads == 1 ? 1 : 4 * threads < 256 ? 4 * threads : 256;
+    M->tasks = threads == 1 ? 1 : 4 * threads < MAX_TASKS ? 4 * threads : MAX_TASKS;
     size_t N = M->N, L = (size_t)(M->W > M->H ? M->W : M->H);
     M->line_stride = LANES * L;
     M->h = fb_malloc_large(N * sizeof *M->h);
