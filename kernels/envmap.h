@@ -22,6 +22,7 @@
 #define FB_KERNELS_ENVMAP_H
 
 #include "common.h"
+#include "exact.h"
 
 #ifdef K_GLSL
 #define k_env_atan2(y, x) atan(y, x)
@@ -47,8 +48,8 @@
 /* Latitude (x) and longitude (y) of lat-long position (px, py) in a w x h image. */
 K_FN k_vec2 k_env_latlong_angles(float px, float py, uint w, uint h)
 {
-    float lat = h > 1u ? -K_PI * (py / K_F(h - 1u) - 0.5f) : 0.0f;
-    float lon = w > 1u ? -K_TAU * (px / K_F(w - 1u) - 0.5f) : 0.0f;
+    float lat = h > 1u ? -K_PI * (kx_div(py, K_F(h - 1u)) - 0.5f) : 0.0f;
+    float lon = w > 1u ? -K_TAU * (kx_div(px, K_F(w - 1u)) - 0.5f) : 0.0f;
     return k_vec2(lat, lon);
 }
 
@@ -63,19 +64,20 @@ K_FN k_vec3 k_env_latlong_dir(float px, float py, uint w, uint h)
  * rows for a direction along +-Y, longitude 0 where x = z = 0. */
 K_FN k_vec2 k_env_latlong_pos(k_vec3 d, uint w, uint h)
 {
-    float len = k_sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-    float r = k_sqrt(d.z * d.z + d.x * d.x);
-    float lat = r < k_abs(d.y) ? k_env_acos(r / len) * (d.y < 0.0f ? -1.0f : 1.0f) : k_env_asin(d.y / len);
+    float len = kx_sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    float r = kx_sqrt(d.z * d.z + d.x * d.x);
+    float lat =
+        r < k_abs(d.y) ? k_env_acos(kx_div(r, len)) * (d.y < 0.0f ? -1.0f : 1.0f) : k_env_asin(kx_div(d.y, len));
     float lon = (d.z == 0.0f && d.x == 0.0f) ? 0.0f : k_env_atan2(d.x, d.z);
-    float x = lon / (-K_TAU) + 0.5f;
-    float y = lat / (-K_PI) + 0.5f;
+    float x = kx_div(lon, -K_TAU) + 0.5f;
+    float y = kx_div(lat, -K_PI) + 0.5f;
     return k_vec2(x * K_F(w - 1u), y * K_F(h - 1u));
 }
 
 /* The face of cube-map row py (rows beyond the last face belong to the last). */
 K_FN uint k_env_cube_face(float py, uint n)
 {
-    float f = k_floor((py + 0.5f) / K_F(n));
+    float f = k_floor(kx_div(py + 0.5f, K_F(n)));
     return K_U(k_clamp(f, 0.0f, 5.0f));
 }
 
@@ -103,8 +105,8 @@ K_FN k_vec3 k_env_cube_dir_face(float px, float py, uint face, uint n)
         a = px;
         b = y0 + last - py;
     }
-    float s = n > 1u ? a / last * 2.0f - 1.0f : 0.0f;
-    float t = n > 1u ? b / last * 2.0f - 1.0f : 0.0f;
+    float s = n > 1u ? kx_div(a, last) * 2.0f - 1.0f : 0.0f;
+    float t = n > 1u ? kx_div(b, last) * 2.0f - 1.0f : 0.0f;
     if (face == K_CUBE_POS_X) return k_vec3(1.0f, s, t);
     if (face == K_CUBE_NEG_X) return k_vec3(-1.0f, s, t);
     if (face == K_CUBE_POS_Y) return k_vec3(s, 1.0f, t);
@@ -147,8 +149,8 @@ K_FN k_vec2 k_env_cube_pos_face(k_vec3 d, uint face, uint n)
         u = d.x;
         v = d.y;
     }
-    float a = (u / m + 1.0f) * 0.5f * last;
-    float b = (v / m + 1.0f) * 0.5f * last;
+    float a = (kx_div(u, m) + 1.0f) * 0.5f * last;
+    float b = (kx_div(v, m) + 1.0f) * 0.5f * last;
     if (face == K_CUBE_POS_X) return k_vec2(b, y0 + last - a);
     if (face == K_CUBE_NEG_X) return k_vec2(last - b, y0 + last - a);
     if (face == K_CUBE_NEG_Y) return k_vec2(a, y0 + b);

@@ -26,6 +26,7 @@
 #define FB_KERNELS_ERODE_H
 
 #include "common.h"
+#include "exact.h"
 
 /* Everything in world units per iteration, computed once on the host (host/gen/erode/erode.c). */
 K_STRUCT(K_ErodeParams)
@@ -75,7 +76,7 @@ K_FN k_vec4 k_erode_flux(K_ErodeParams p, k_vec4 f, float d1, float hc, k_vec4 h
     K_PRECISE float fb = k_max(0.0f, f.w + p.pipe * (hc - hn.w)) * inside.w;
     K_PRECISE float sum = ((fl + fr) + ft) + fb;
     K_PRECISE float k = 1.0f;
-    if (sum > 0.0f) k = k_min(1.0f, (d1 * p.vol) / sum);
+    if (sum > 0.0f) k = k_min(1.0f, kx_div(d1 * p.vol, sum));
     K_PRECISE float ol = fl * k;
     K_PRECISE float orr = fr * k;
     K_PRECISE float ot = ft * k;
@@ -95,12 +96,12 @@ K_FN k_vec4 k_erode_water(K_ErodeParams p, float b, float d1, float s, k_vec4 f,
     K_PRECISE float dm = (d1 + d2) * 0.5f;
     K_PRECISE float wx = ((fin.x - f.x) + (f.y - fin.y)) * 0.5f;
     K_PRECISE float wy = ((fin.z - f.z) + (f.w - fin.w)) * 0.5f;
-    K_PRECISE float q = k_sqrt(wx * wx + wy * wy) * p.inv_l;
-    K_PRECISE float speed = q / k_max(dm, p.dmin);
+    K_PRECISE float q = kx_sqrt(wx * wx + wy * wy) * p.inv_l;
+    K_PRECISE float speed = kx_div(q, k_max(dm, p.dmin));
     K_PRECISE float gx = (bn.y - bn.x) * p.half_inv_l;
     K_PRECISE float gy = (bn.w - bn.z) * p.half_inv_l;
     K_PRECISE float g2 = gx * gx + gy * gy;
-    K_PRECISE float sina = k_sqrt(g2 / (1.0f + g2));
+    K_PRECISE float sina = kx_sqrt(kx_div(g2, 1.0f + g2));
     K_PRECISE float cap = ((p.kc * sina) * speed) * k_min(1.0f, dm * p.inv_depth);
     K_PRECISE float nb = b;
     K_PRECISE float ns = s;
@@ -122,7 +123,7 @@ K_FN k_vec4 k_erode_water(K_ErodeParams p, float b, float d1, float s, k_vec4 f,
 K_FN float k_erode_carry(K_ErodeParams p, float s, float fk, float d1)
 {
     K_PRECISE float c = 0.0f;
-    if (d1 > 0.0f) c = s * ((fk * p.dt_area) / d1);
+    if (d1 > 0.0f) c = s * kx_div(fk * p.dt_area, d1);
     return c;
 }
 

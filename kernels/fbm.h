@@ -148,10 +148,10 @@ K_FN float k_fbm3(K_FbmParams p, uint stream, k_vec3 d)
  * (fbm_1, fbm_2, fbm_3)(d) / k, k = fx / (2 pi) cells per unit, then fbm_0(d'). */
 K_FN float k_fbm_dir(K_FbmParams p, k_vec3 d)
 {
-    float len = k_sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-    k_vec3 u = k_vec3(d.x / len, d.y / len, d.z / len);
+    float len = kx_sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    k_vec3 u = k_vec3(kx_div(d.x, len), kx_div(d.y, len), kx_div(d.z, len));
     if (p.warp != 0.0f) {
-        float s = p.warp * K_TAU / p.freq_x;
+        float s = kx_div(p.warp * K_TAU, p.freq_x);
         u = k_vec3(u.x + s * k_fbm3(p, 1u, u), u.y + s * k_fbm3(p, 2u, u), u.z + s * k_fbm3(p, 3u, u));
     }
     return k_fbm3(p, 0u, u);

@@ -97,8 +97,9 @@ K_FN k_vec2 k_julia_start(K_JuliaParams p, float u, float v)
         float rr = p.radius * v;
         /* wrapping u first makes t(0, v) = t(1, v) exactly: 2 pi * 1.0f is not 2 pi in float */
         float ang = K_TAU * (u - k_floor(u));
-        x = rr * k_cos(ang);
-        y = rr * k_sin(ang);
+        k_vec2 sc = k_sincos(ang); /* sincos.h: the same bits on every device */
+        x = rr * sc.y;
+        y = rr * sc.x;
     } else {
         x = p.scale_u * (u - 0.5f);
         y = p.scale_v * (v - 0.5f);
@@ -115,8 +116,9 @@ K_FN k_vec2 k_julia_dstart(K_JuliaParams p, float u, float v)
         /* d/dx of r v exp(i 2 pi u), u = (x + 0.5)/W: i 2 pi r v exp(i 2 pi u) / W */
         float k = K_TAU * p.radius * v * p.inv_width;
         float ang = K_TAU * (u - k_floor(u));
-        dx = -k * k_sin(ang);
-        dy = k * k_cos(ang);
+        k_vec2 sc = k_sincos(ang);
+        dx = -k * sc.x;
+        dy = k * sc.y;
     } else {
         dx = p.scale_u * p.inv_width;
         dy = 0.0f;
@@ -168,7 +170,7 @@ K_FN K_JuliaStart k_julia_quotient(K_JuliaParams p, float nr, float ni, float dr
     s.o.dz2 = 0.0f;
     K_PRECISE float den = dr * dr + di * di;
     if (!(den > 1.0e-30f)) return s;
-    float inv = 1.0f / den;
+    float inv = kx_div(1.0f, den);
     /* precise: an orbit is chaotic, so one fused rounding would change the escape count of
      * boundary pixels between a device and C. */
     K_PRECISE float zr = (nr * dr + ni * di) * inv + tw_re;
@@ -233,7 +235,7 @@ K_FN K_JuliaHom k_julia_env_point(K_JuliaParams p, float ex, float ey)
         k_vec2 ll = k_env_latlong_angles(ex, ey, p.width, p.height);
         k_vec2 lon = k_sincos(ll.y), lat = k_sincos(ll.x);
         float so = lon.x, co = lon.y;
-        float k = p.height > 1u ? (0.5f * K_PI) / K_F(p.height - 1u) : 0.0f; /* db/dy */
+        float k = p.height > 1u ? kx_div(0.5f * K_PI, K_F(p.height - 1u)) : 0.0f; /* db/dy */
         K_PRECISE float b = k * ey, g = k * (K_F(p.height - 1u) - ey);
         K_PRECISE float sb = k_sincos(b).x;
         h.nr = p.radius * so * sb;
@@ -247,17 +249,17 @@ K_FN K_JuliaHom k_julia_env_point(K_JuliaParams p, float ex, float ey)
     uint face = k_env_cube_face(ey, p.width);
     k_vec3 c = k_env_cube_dir_face(ex, ey, face, p.width);
     k_vec3 c1 = k_env_cube_dir_face(ex, ey + 1.0f, face, p.width);
-    K_PRECISE float len = k_sqrt(c.x * c.x + c.y * c.y + c.z * c.z);
+    K_PRECISE float len = kx_sqrt(c.x * c.x + c.y * c.y + c.z * c.z);
     K_PRECISE float q = c.x * c.x + c.z * c.z;
-    K_PRECISE float D = c.y >= 0.0f ? len + c.y : q / (len - c.y);
+    K_PRECISE float D = c.y >= 0.0f ? len + c.y : kx_div(q, len - c.y);
     K_PRECISE float gx = c1.x - c.x, gy = c1.y - c.y, gz = c1.z - c.z;
-    K_PRECISE float dD = (c.x * gx + c.y * gy + c.z * gz) / len + gy; /* D' */
+    K_PRECISE float dD = kx_div(c.x * gx + c.y * gy + c.z * gz, len) + gy; /* D' */
     h.nr = p.radius * c.x;
     h.ni = p.radius * c.z;
     h.d = D;
     h.gr = p.radius * (gx * D - c.x * dD);
     h.gi = p.radius * (gz * D - c.z * dD);
-    h.dir = k_vec3(c.x / len, c.y / len, c.z / len);
+    h.dir = k_vec3(kx_div(c.x, len), kx_div(c.y, len), kx_div(c.z, len));
     return h;
 }
 
@@ -328,9 +330,9 @@ K_FN K_JuliaResult k_julia_end(K_JuliaParams p, K_JuliaZ o, uint n, bool escaped
     float lnr = 0.5f * k_log2_poly(r2) * 0.69314718f; /* ln |z| */
     if ((want & K_JULIA_WANT_SMOOTH) != 0u) res.nsmooth = K_F(m) + 1.0f - k_log2_poly(lnr);
     if ((want & K_JULIA_WANT_DE) != 0u) {
-        float dz = k_sqrt(o.dz2); /* |z'| */
+        float dz = kx_sqrt(o.dz2); /* |z'| */
         /* an overflowed derivative (inf or NaN) gives 0, never a non-finite value */
-        res.de = (dz > 0.0f && dz < 3.0e38f) ? k_sqrt(r2) * lnr / dz : 0.0f;
+        res.de = (dz > 0.0f && dz < 3.0e38f) ? kx_div(kx_sqrt(r2) * lnr, dz) : 0.0f;
     }
     return res;
 }
@@ -478,12 +480,10 @@ K_FN K_JuliaPair k_julia_sample2(K_JuliaParams p, K_FbmParams turb, uint seed, u
 #define K_DF(x)      double(x)
 #define K_DU(x)      uint(x)
 #define k_floor_d(x) floor(x)
-#define k_sqrt_d(x)  sqrt(x)
 #else
 #define K_DF(x)      ((double)(x))
 #define K_DU(x)      ((uint)(x))
 #define k_floor_d(x) floor(x)
-#define k_sqrt_d(x)  sqrt(x)
 #endif
 
 K_STRUCT(K_JuliaD)
@@ -570,14 +570,14 @@ K_FN K_JuliaResult k_julia_run_d(K_JuliaParams p, K_JuliaD d, K_FbmParams turb, 
     res.inside = 0u;
     res.nsmooth = 0.0f;
     res.de = 0.0f;
-    K_PRECISE double u = fx / K_DF(p.width);
-    K_PRECISE double v = 1.0 - fy / K_DF(p.height);
+    K_PRECISE double u = kx_ddiv(fx, K_DF(p.width));
+    K_PRECISE double v = 1.0 - kx_ddiv(fy, K_DF(p.height));
     K_PRECISE double x, y, ddx, ddy;
     if (p.mapping == K_JULIA_POLAR) {
         K_PRECISE double rr = d.radius * v;
         K_PRECISE double ang = d.two_pi * (u - k_floor_d(u)); /* wrapped first: t(0, v) = t(1, v) */
         K_JuliaSinCos sc = k_julia_sincos_d(d, ang);
-        K_PRECISE double k = d.two_pi * rr / K_DF(p.width);
+        K_PRECISE double k = kx_ddiv(d.two_pi * rr, K_DF(p.width));
         x = rr * sc.c;
         y = rr * sc.s;
         ddx = -k * sc.s;
@@ -585,7 +585,7 @@ K_FN K_JuliaResult k_julia_run_d(K_JuliaParams p, K_JuliaD d, K_FbmParams turb, 
     } else {
         x = d.scale_u * (u - 0.5);
         y = d.scale_v * (v - 0.5);
-        ddx = d.scale_u / K_DF(p.width);
+        ddx = kx_ddiv(d.scale_u, K_DF(p.width));
         ddy = 0.0;
     }
     K_PRECISE double px = d.center_re + (d.rot_c * x - d.rot_s * y);
@@ -600,7 +600,7 @@ K_FN K_JuliaResult k_julia_run_d(K_JuliaParams p, K_JuliaD d, K_FbmParams turb, 
     K_PRECISE double di = -(d.a_re * py + d.a_im * px);
     K_PRECISE double den = dr * dr + di * di;
     if (!(den > 0.0)) return res; /* the pole */
-    K_PRECISE double inv = 1.0 / den;
+    K_PRECISE double inv = kx_ddiv(1.0, den);
     K_PRECISE double zr = (nr * dr + ni * di) * inv + K_DF(w.x);
     K_PRECISE double zi = (ni * dr - nr * di) * inv + K_DF(w.y);
     K_PRECISE double kk = 1.0 - (d.a_re * d.a_re + d.a_im * d.a_im);
@@ -642,8 +642,9 @@ K_FN K_JuliaResult k_julia_run_d(K_JuliaParams p, K_JuliaD d, K_FbmParams turb, 
     float lnr = 0.5f * k_log2_poly(r2) * 0.69314718f;
     if ((want & K_JULIA_WANT_SMOOTH) != 0u) res.nsmooth = K_F(m) + 1.0f - k_log2_poly(lnr);
     if ((want & K_JULIA_WANT_DE) != 0u) {
-        float dz = K_F(k_sqrt_d(o.dz2));
-        res.de = (dz > 0.0f && dz < 3.0e38f) ? k_sqrt(r2) * lnr / dz : 0.0f;
+        /* |z'| from dz2 rounded to float first (kx_sqrt: the same bits everywhere) */
+        float dz = kx_sqrt(K_F(o.dz2));
+        res.de = (dz > 0.0f && dz < 3.0e38f) ? kx_div(kx_sqrt(r2) * lnr, dz) : 0.0f;
     }
     return res;
 }

@@ -22,6 +22,7 @@
 #define FB_KERNELS_LSYS_H
 
 #include "common.h"
+#include "exact.h"
 
 #define K_LSYS_SEG_WORDS 9u /* ax ay ux uy len hw r g b */
 
@@ -90,7 +91,7 @@ K_FN K_LsysAcc k_lsys_add(K_LsysAcc acc, K_LsysSeg s, float px, float py)
 K_FN K_LsysAcc k_lsys_finish(K_LsysAcc acc)
 {
     if (acc.a <= 1.0f) return acc;
-    K_PRECISE float k = 1.0f / acc.a;
+    K_PRECISE float k = kx_div(1.0f, acc.a);
     K_PRECISE float r = acc.r * k;
     K_PRECISE float g = acc.g * k;
     K_PRECISE float b = acc.b * k;

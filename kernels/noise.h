@@ -8,7 +8,9 @@
 #ifndef FB_KERNELS_NOISE_H
 #define FB_KERNELS_NOISE_H
 
+#include "exact.h"
 #include "hash.h"
+#include "sincos.h"
 
 #define K_NOISE_PERIOD 4096u
 
@@ -51,7 +53,7 @@ K_FN uint k_wrap_cell(float i, uint p)
         return K_U(ii) % p;
     }
     float fp = K_F(p);
-    float r = k_clamp(i - fp * k_floor(i * (1.0f / fp)), 0.0f, fp - 1.0f);
+    float r = k_clamp(i - fp * k_floor(i * kx_div(1.0f, fp)), 0.0f, fp - 1.0f);
     return K_U(K_I(r)) % p;
 }
 
@@ -159,7 +161,7 @@ K_FN k_vec2 k_cellular(uint seed, float x, float y, uint px, uint py)
             }
         }
     }
-    return k_vec2(k_sqrt(f1), k_sqrt(f2));
+    return k_vec2(kx_sqrt(f1), kx_sqrt(f2));
 }
 
 /* Sine noise in [-1, 1]: sin(2 pi x) sin(2 pi y), period 1 cell. Fastest and periodic; fBm's
@@ -170,7 +172,7 @@ K_FN float k_sine_noise(float x, float y, uint px, uint py)
     float fx = k_floor(x), fy = k_floor(y);
     float xr = K_F(k_wrap_cell(fx, px)) + (x - fx);
     float yr = K_F(k_wrap_cell(fy, py)) + (y - fy);
-    return k_sin(K_TAU * xr) * k_sin(K_TAU * yr);
+    return k_sincos(K_TAU * xr).x * k_sincos(K_TAU * yr).x;
 }
 
 /* Dispatch on the noise kind. Cellular F1 is mapped from [0, sqrt(2)] to [-1, 1]; "cellular-f2"

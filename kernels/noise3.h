@@ -157,7 +157,7 @@ K_FN k_vec2 k_cellular3(uint seed, k_vec3 q)
             }
         }
     }
-    return k_vec2(k_sqrt(f1), k_sqrt(f2));
+    return k_vec2(kx_sqrt(f1), kx_sqrt(f2));
 }
 
 /* Sine noise in [-1, 1], period 1 cell, the coordinate reduced first as in 2D; sin from sincos.h,

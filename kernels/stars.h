@@ -126,8 +126,8 @@ K_FN float k_stars_weight(K_StarsParams p, float rx, float ry, uint flags, uint 
 K_FN float k_stars_jacobian(float s, float t)
 {
     K_PRECISE float q = 1.0f + s * s + t * t;
-    K_PRECISE float d = q * k_sqrt(q);
-    return 1.0f / d;
+    K_PRECISE float d = q * kx_sqrt(q);
+    return kx_div(1.0f, d);
 }
 
 /* The solid angle of the cube-face rectangle [s0, s1] x [t0, t1], by 3 x 3 Gauss-Legendre. */
@@ -161,7 +161,7 @@ K_FN float k_stars_cube_inv_omega(K_StarsParams p, uint x, uint y)
     K_PRECISE float s1 = k_min(a + 0.5f, last) * p.cube_h - 1.0f;
     K_PRECISE float t0 = k_max(b - 0.5f, 0.0f) * p.cube_h - 1.0f;
     K_PRECISE float t1 = k_min(b + 0.5f, last) * p.cube_h - 1.0f;
-    return 1.0f / k_stars_cube_solid_angle(s0, s1, t0, t1);
+    return kx_div(1.0f, k_stars_cube_solid_angle(s0, s1, t0, t1));
 }
 
 K_FN K_StarsAcc k_stars_init()

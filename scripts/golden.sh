@@ -6,16 +6,21 @@
 #                                                     for each failure OUTDIR holds NAME.exr (this
 #                                                     render), NAME.diff.exr (|A - B| per channel) and
 #                                                     NAME.diff.png (red: pixels beyond the threshold)
-#   scripts/golden.sh update [FRACTALBAKE]            re-render the references on the Vulkan backend
-#                                                     (lavapipe where there is no GPU), then review
-#                                                     `git diff --stat tests/golden` and the PNGs
+#   scripts/golden.sh update [FRACTALBAKE] [NAME...]  re-render the references (the named ones, else
+#                                                     all) on the Vulkan backend (lavapipe where there
+#                                                     is no GPU), then review `git diff --stat
+#                                                     tests/golden` and the PNGs
 #
-# FRACTALBAKE defaults to build/fractalbake; OUTDIR to build/golden.
+# A scene names its input files (a flame genome) relative to the repository.
+#
+# FRACTALBAKE defaults to build/fractalbake; OUTDIR to build/golden. FB_GOLDEN_BACKEND=native or
+# vulkan checks that backend (default: auto); every backend must give the reference's bits.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 mode=${1:-check}
 fb=$(realpath "${2:-$root/build/fractalbake}")
-out=${3:-$root/build/golden}
+out=$root/build/golden
+[ "$mode" = check ] && out=${3:-$out}
 gold=$root/tests/golden
 export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp}
 # lavapipe's settings, pinned: LP_NATIVE_VECTOR_WIDTH sets its SIMD width and so its subgroup size
@@ -23,6 +28,8 @@ export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp}
 # threads, which change its speed only. The references were rendered with these (docs/ci.md).
 export LP_NATIVE_VECTOR_WIDTH=${LP_NATIVE_VECTOR_WIDTH:-256} LP_NUM_THREADS=${LP_NUM_THREADS:-2}
 mkdir -p "$out"
+out=$(cd "$out" && pwd)
+cd "$root"
 
 render() { # NAME OUT.exr [extra args]
   local name=$1 dst=$2
@@ -36,13 +43,19 @@ render() { # NAME OUT.exr [extra args]
 
 case $mode in
 update)
+  shift $(($# < 2 ? $# : 2))
   grep -v '^#' "$gold/thresholds.txt" | while read -r name _; do
     [ -n "$name" ] || continue
+    [ $# -eq 0 ] || [[ " $* " == *" $name "* ]] || continue
     render "$name" "$gold/$name.exr" --backend vulkan --preview "$out/$name.png"
     echo "updated tests/golden/$name.exr (preview $out/$name.png)"
   done
   ;;
 check)
+  if [ "${FB_GOLDEN_BACKEND:-auto}" = vulkan ] && "$fb" devices 2> /dev/null | grep -q '^no Vulkan device'; then
+    echo "golden: no Vulkan device: not run"
+    exit 77
+  fi
   failed=0 n=0
   while read -r name args; do
     [ -n "$name" ] || continue
@@ -50,7 +63,7 @@ check)
     args=$(echo $args)
     [ "$args" = "-" ] && args=""
     n=$((n + 1))
-    if ! render "$name" "$out/$name.exr"; then
+    if ! render "$name" "$out/$name.exr" --backend "${FB_GOLDEN_BACKEND:-auto}"; then
       echo "golden $name: render failed"
       failed=$((failed + 1))
       continue

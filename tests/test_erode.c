@@ -9,6 +9,7 @@
  */
 #include "bake.h"
 #include "engine.h"
+#include "env.h"
 #include "erode.h"
 #include "exrio.h"
 #include "output.h"
@@ -203,7 +204,9 @@ static void test_threads(void)
 static int test_gpu(void)
 {
     fb_engine e;
-    if (fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .validation = true}, &e))
+    fb_env env; /* FB_VK_STAGING: the discrete-GPU path */
+    fb_env_read(&env);
+    if (fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_VULKAN, .validation = true, .vk_options = env.vk}, &e))
         TEST_SKIP("no Vulkan device");
     const int W = 157, H = 93;
     float *b = hills(W, H);

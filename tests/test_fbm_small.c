@@ -10,6 +10,7 @@
 #include "gen_fbm.h"
 #include "kernels/fbm.h"
 #include "scene.h"
+#include "env.h"
 #include "vkc.h"
 
 #include "testhelp.h"
@@ -125,7 +126,10 @@ static float *dispatch(vkc_context *vk, const fb_gen *g, uint32_t small)
 static int test_shader(void)
 {
     vkc_context *vk = NULL;
-    if (vkc_create(&(vkc_desc){.validation = true, .no_pipeline_cache = true}, &vk)) return 77;
+    fb_env env; /* FB_VK_STAGING: the discrete-GPU path */
+    fb_env_read(&env);
+    env.vk.validation = env.vk.no_pipeline_cache = true;
+    if (vkc_create(&env.vk, &vk)) return 77;
     static const char *noises[] = {"gradient", "value", "simplex", "cellular", "cellular-f2", "sine"};
     static const char *styles[] = {"",
                                    ", \"ridged\": true",

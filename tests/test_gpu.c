@@ -1,7 +1,9 @@
 /*
- * lavapipe (or any Vulkan device) against the native backend: the same fBm images from both for
- * every noise kind and style, bit-exact where the arithmetic allows it and within a stated
- * tolerance otherwise; determinism across strip heights; zero validation messages. Returns 77
+ * lavapipe (or any Vulkan device) against the native backend: the same bits from both for every fBm
+ * noise kind, style and mapping, and every Julia mapping and precision (every shader's arithmetic is
+ * exact: kernels/exact.h); determinism across strip heights; zero validation messages. With
+ * FB_VK_STAGING=1 (the CTest twin NAME-staging) the device takes a discrete GPU's path: the portable
+ * division and square root, device-local memory and staging copies. Returns 77
  * (not run) only when there is no Vulkan device.
  */
 #include "bake.h"
@@ -47,17 +49,11 @@ static float *bake_read(fb_engine *e, const char *json, int strip, const char *n
     return bake_read_channel(e, json, strip, name, NULL);
 }
 
-/* Julia: with every orbit operation `precise`, rect mapping gives the same escape counts on the
- * device and in C, bit for bit; polar mapping goes through cos/sin (Vulkan: 2^-11 absolute), which
- * may change the count of unstable boundary pixels only. The smooth count, distance estimate and
- * colour use log2 and pow of kernels/explog.h (float polynomials, the same operations on both sides)
- * and sqrt and division (correctly rounded on lavapipe): where the start points are the same bits
- * (rect and environment maps) every channel is the same bits; polar: 1e-4 absolute and relative
- * respectively where counts agree, on 99% of the pixels. */
+/* Julia: every mapping's start (sincos.h), orbit (contraction-free), smooth count and distance
+ * (explog.h, kernels/exact.h) are the same operations rounded the same on both sides: every channel
+ * the same bits, boundary pixels included. */
 static void test_julia(fb_engine *gpu, fb_engine *cpu)
 {
-    /* environment maps (k >= 4): their sin and cos are kernels/sincos.h's, the same bits on both sides,
-     * so their rule is rect's */
     static const char *variants[] = {"",
                                      ", \"alpha\": [0.5, 0.25]",
                                      ", \"mapping\": \"polar\", \"alpha\": [-0.3, 0]",
@@ -68,51 +64,19 @@ static void test_julia(fb_engine *gpu, fb_engine *cpu)
     for (int k = 0; k < 6; k++) {
         char json[512];
         const int W = sizes[k][0], H = sizes[k][1];
-        const bool exact = k < 2 || k >= 4; /* the same start points on both sides */
         snprintf(json, sizeof json, "{\"size\": [%d, %d], \"layers\": [{\"type\": \"julia\", \"max-iter\": 300%s}]}", W,
                  H, variants[k]);
-        uint32_t *ia = bake_read_channel(gpu, json, 13, "jg", "sky.iter"),
-                 *ib = bake_read_channel(cpu, json, 0, "jc", "sky.iter");
-        float *na = bake_read_channel(gpu, json, 13, "jg2", "sky.n"),
-              *nb = bake_read_channel(cpu, json, 0, "jc2", "sky.n");
-        float *da = bake_read_channel(gpu, json, 13, "jg3", "sky.de"),
-              *db = bake_read_channel(cpu, json, 0, "jc3", "sky.de");
-        CHECK(ia && ib && na && nb && da && db);
-        if (ia && ib && na && nb && da && db) {
-            int iter_diff = 0, n_bad = 0, de_bad = 0, N = W * H;
-            for (int i = 0; i < N; i++) {
-                if (ia[i] != ib[i]) {
-                    iter_diff++;
-                    continue;
-                }
-                n_bad += exact ? memcmp(&na[i], &nb[i], 4) != 0 : fabsf(na[i] - nb[i]) > 1e-4f;
-                de_bad +=
-                    exact ? memcmp(&da[i], &db[i], 4) != 0 : fabsf(da[i] - db[i]) > 1e-4f * fmaxf(fabsf(db[i]), 1e-3f);
-            }
-            if (exact)
-                CHECKF(iter_diff == 0, "julia rect or env %d: %d escape counts differ", k, iter_diff);
-            else
-                CHECKF(iter_diff <= N / 200, "julia %d (polar, env): %d of %d escape counts differ", k, iter_diff, N);
-            /* Polar: cos/sin move the start point by ~1e-7, which the smooth count's slope near the
-             * boundary amplifies; require the tolerance on 99% of the pixels whose counts agree. */
-            int allowed = exact ? 0 : (N - iter_diff) / 100;
-            CHECKF(n_bad <= allowed && de_bad <= allowed, "julia %d: %d smooth counts, %d distances beyond tolerance",
-                   k, n_bad, de_bad);
+        /* every channel the same bits (sincos.h and kernels/exact.h on both sides) */
+        static const char *chans[] = {"sky.iter", "sky.n", "sky.de", "sky.R"};
+        for (int c = 0; c < 4; c++) {
+            void *a = bake_read_channel(gpu, json, 13, "jg", chans[c]),
+                 *b = bake_read_channel(cpu, json, 0, "jc", chans[c]);
+            CHECK(a && b);
+            int diff = 0;
+            for (int i = 0; a && b && i < W * H; i++) diff += memcmp((char *)a + 4 * i, (char *)b + 4 * i, 4) != 0;
+            CHECKF(diff == 0, "julia %d: %d of %d %s values differ", k, diff, W * H, chans[c]);
+            free(a), free(b);
         }
-        /* Colour (stored as half): the same bits where the start points are; polar: within 2 half ULPs
-         * (1e-3 relative) on 99% of the pixels, for the reason above. */
-        float *ra = bake_read_channel(gpu, json, 13, "jg4", "sky.R"),
-              *rb = bake_read_channel(cpu, json, 0, "jc4", "sky.R");
-        CHECK(ra && rb);
-        if (ra && rb) {
-            int bad = 0, N = W * H;
-            for (int i = 0; i < N; i++)
-                bad +=
-                    exact ? memcmp(&ra[i], &rb[i], 4) != 0 : fabsf(ra[i] - rb[i]) > 1e-3f * fmaxf(1.0f, fabsf(rb[i]));
-            CHECKF(bad <= (exact ? 0 : N / 100), "julia %d: %d colour values beyond tolerance", k, bad);
-        }
-        free(ra), free(rb);
-        free(ia), free(ib), free(na), free(nb), free(da), free(db);
     }
 }
 
@@ -168,8 +132,8 @@ static void test_julia_channels(fb_engine *gpu, fb_engine *cpu)
     free(a1), free(o), free(a2);
 }
 
-/* Double precision: the device's escape counts equal C's to the bit in both mappings (sin and cos are
- * the kernel's own, in double arithmetic), turbulence included; the rest within the float tolerance. */
+/* Double precision: the device's escape counts and smooth counts equal C's to the bit in both
+ * mappings (sin and cos are the kernel's own in double, division kx_ddiv's), turbulence included. */
 static void test_julia_double(fb_engine *gpu, fb_engine *cpu)
 {
     static const char *variants[] = {"", ", \"mapping\": \"polar\", \"alpha\": [-0.3, 0], \"turbulence\": 0.2"};
@@ -186,9 +150,9 @@ static void test_julia_double(fb_engine *gpu, fb_engine *cpu)
         CHECK(ia && ib && na && nb);
         if (ia && ib && na && nb) {
             int N = 181 * 97, n_bad = 0;
-            for (int i = 0; i < N; i++) n_bad += fabsf(na[i] - nb[i]) > 1e-4f;
+            for (int i = 0; i < N; i++) n_bad += memcmp(&na[i], &nb[i], 4) != 0;
             CHECKF(!memcmp(ia, ib, (size_t)N * 4), "julia double %d: escape counts differ", k);
-            CHECKF(n_bad == 0, "julia double %d: %d smooth counts beyond 1e-4", k, n_bad);
+            CHECKF(n_bad == 0, "julia double %d: %d smooth counts differ", k, n_bad);
         }
         free(ia), free(ib), free(na), free(nb);
     }
@@ -240,18 +204,10 @@ int main(void)
                 worst = d > worst ? d : worst;
                 exact += a[i] == b[i];
             }
-            /* Tolerances. Sine noise goes through sin(), whose Vulkan precision is an absolute 2^-11
-             * in [-pi, pi] per call: 9 octaves of gain <= 1, amplified by the warp, stay below 0.035.
-             * The other noises use only +, *, floor and sqrt, but SPIR-V lets the device fuse a * b + c
-             * into an FMA where C (built with -ffp-contract=off) rounds twice: a 1-ULP difference
-             * (~1e-7 relative). Unwarped, that stays below 1e-5. A domain warp moves the sample point by
-             * warp * delta / freq, and the finest octave's slope is up to 8 (L G)^8 per cell
-             * (L = 2, G = 2^-0.6: ~75), summed over octaves ~280: 0.8 * 1e-6 * 280 * 8 < 2e-3. */
-            bool warped = strstr(styles[st], "warp") != NULL;
-            double tol = n == 5 ? 0.035 : warped ? 2e-3 : 1e-5;
-            CHECKF(worst <= tol, "%s %s: max abs %g (tolerance %g), %d of %d pixels bit-exact", noises[n],
-                   styles[st][0] ? styles[st] : "plain", worst, tol, exact, W * H);
-            if (n != 5) CHECKF(exact > W * H / 4, "%s: only %d of %d pixels bit-exact", noises[n], exact, W * H);
+            /* Every pixel the same bits: no contraction (the SPIR-V pass), sine noise through sincos.h,
+             * division and square root through kernels/exact.h. */
+            CHECKF(exact == W * H, "%s %s: %d of %d pixels bit-exact (max abs %g)", noises[n],
+                   styles[st][0] ? styles[st] : "plain", exact, W * H, worst);
             free(a);
             free(b);
         }

@@ -52,6 +52,9 @@ static fb_result run(const fb_cli *cli, void *opts)
                                   json_pack("{sisssssIsiss}", "index", i, "name", infos[i].name, "type", infos[i].type,
                                             "memory_bytes", (json_int_t)infos[i].memory, "subgroup_size",
                                             (int)infos[i].subgroup_size, "driver", infos[i].driver));
+            char arith[256];
+            vkc_arith_describe(&infos[i], arith, sizeof arith);
+            json_object_set_new(json_array_get(list, (size_t)i), "arithmetic", json_string(arith));
             if (infos[i].chosen) chosen = i;
         }
         json_object_set_new(o, "devices", list);
@@ -76,6 +79,9 @@ static fb_result run(const fb_cli *cli, void *opts)
     printf("(memory in MiB; * marks the device fractalbake chooses%s)\n", d->device ? " for --device" : "");
     for (int i = 0; i < n; i++) {
         if (!infos[i].chosen) continue;
+        char arith[256];
+        vkc_arith_describe(&infos[i], arith, sizeof arith);
+        printf("arithmetic on %s: %s\n", infos[i].name, arith);
         if (!strcmp(infos[i].type, "cpu"))
             printf("--backend auto (the default): %s is a CPU implementation of Vulkan, so each layer runs where it\n"
                    "is faster on this machine: the native C path (fBm with its AVX2 loop, float Julia sets with\n"
@@ -92,7 +98,7 @@ static fb_result run(const fb_cli *cli, void *opts)
 
 static const fb_arg flags[] = {
     {FB_ARG_STRING, "--device", NULL, offsetof(devices_opts, device)},
-    {FB_ARG_BOOL, "--json", NULL, offsetof(devices_opts, json)},
+    {FB_ARG_DOCUMENT, "--json", NULL, offsetof(devices_opts, json)},
     {FB_ARG_IGNORED, "--quiet"}, /* nothing to leave out: the list is the output */
     {FB_ARG_BOOL, "--help", "-h", offsetof(devices_opts, help)},
     {FB_ARG_END},

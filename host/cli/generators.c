@@ -2,7 +2,7 @@
  * fractalbake generators [--json]: every generator class of host/gen/list.c with its command, what
  * it makes, how a plan shares it between tasks, its keys (type, range, default, flag), a small
  * example scene's layers and its stated Vulkan-against-native tolerance. The conformance test
- * (tests/cli/conformance.sh) reads the JSON form, so it covers a new generator with no other edit.
+ * (tests/conformance.py) reads the JSON form, so it covers a new generator with no other edit.
  */
 #include "command.h"
 
@@ -77,7 +77,7 @@ static fb_result run(const fb_cli *cli, void *opts)
 }
 
 static const fb_arg flags[] = {
-    {FB_ARG_BOOL, "--json", NULL, offsetof(generators_opts, json)},
+    {FB_ARG_DOCUMENT, "--json", NULL, offsetof(generators_opts, json)},
     {FB_ARG_BOOL, "--help", "-h", offsetof(generators_opts, help)},
     {FB_ARG_END},
 };

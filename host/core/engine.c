@@ -48,13 +48,6 @@ fb_result fb_engine_open(const fb_engine_desc *d, fb_engine *e)
                  "native backend (%d threads)",
                  have, want, e->threads);
     } else if (d->backend != FB_BACKEND_NATIVE) {
-        /* lavapipe runs compute on a pool of its own, LP_NUM_THREADS threads (by default one per
-         * core), read when the device is created: --threads bounds it too. */
-        if (d->threads > 0) {
-            char n[16];
-            snprintf(n, sizeof n, "%d", d->threads);
-            setenv("LP_NUM_THREADS", n, 1);
-        }
         vkc_desc vd = d->vk_options;
         vd.device = d->device;
         vd.validation = d->validation || d->vk_options.validation;

@@ -35,8 +35,9 @@ typedef struct fb_layer {
     char name[64];
     bool half;                     /* store colour/height as half instead of float */
     exrio_compression compression; /* its part's, when the scene has one part per layer */
-    /* "heightmap" (fbm, terrain, constrain): its Y channel also written as OUT.png / OUT.r16 (16-bit,
-     * normalised to heightmap_range or the image's own range) or OUT.tif (a float GeoTIFF); "" none */
+    /* "heightmap" (a layer of heights, whose class's key table has the key): its Y channel also
+     * written as OUT.png / OUT.r16 (16-bit, normalised to heightmap_range or the image's own range)
+     * or OUT.tif (a float GeoTIFF); "" none */
     char heightmap[1024];
     int heightmap_engine;         /* fb_heightmap_engine: a preset, whose sidecar is written too */
     char heightmap_sidecar[1040]; /* the preset's sidecar (OUT.import.json), or "" */

@@ -238,6 +238,27 @@ static const char *type_name(VkPhysicalDeviceType t)
     }
 }
 
+static bool has_device_ext(const vkc_fns *vk, VkPhysicalDevice pd, const char *name)
+{
+    uint32_t n = 0;
+    bool has = false;
+    if (vk->vkEnumerateDeviceExtensionProperties(pd, NULL, &n, NULL) != VK_SUCCESS || !n) return false;
+    VkExtensionProperties *ep = calloc(n, sizeof *ep);
+    if (ep && vk->vkEnumerateDeviceExtensionProperties(pd, NULL, &n, ep) == VK_SUCCESS)
+        for (uint32_t i = 0; i < n; i++) has = has || !strcmp(ep[i].extensionName, name);
+    free(ep);
+    return has;
+}
+
+void vkc_arith_describe(const vkc_device_info *info, char *buf, size_t size)
+{
+    snprintf(buf, size, "rounding %s, denormals %s, NaN and infinity %s; division and square root: %s",
+             info->rte32 ? "to nearest (declared)" : "the device's default",
+             info->denorm32 ? "kept (declared)" : "the device's default",
+             info->szinp32 ? "kept (declared)" : "the device's default",
+             info->exact_native ? "the device's own (correctly rounded)" : "corrected exactly (kernels/exact.h)");
+}
+
 static void describe(const vkc_fns *vk, VkPhysicalDevice pd, vkc_device_info *info)
 {
     VkPhysicalDeviceProperties props;
@@ -259,6 +280,27 @@ static void describe(const vkc_fns *vk, VkPhysicalDevice pd, vkc_device_info *in
         snprintf(info->driver, sizeof info->driver, "%s %s", drv.driverName, drv.driverInfo);
     else
         snprintf(info->driver, sizeof info->driver, "driver %u", props.driverVersion);
+    /* exact arithmetic: the float-controls modes (an extension of its own before 1.2: this instance
+     * asks for 1.1) and whether the device's own division is known to be correctly rounded */
+    info->float_controls = has_device_ext(vk, pd, "VK_KHR_shader_float_controls");
+    if (info->float_controls) {
+        VkPhysicalDeviceFloatControlsProperties fc = {.sType =
+                                                          VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FLOAT_CONTROLS_PROPERTIES};
+        VkPhysicalDeviceProperties2 q = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &fc};
+        vk->vkGetPhysicalDeviceProperties2(pd, &q);
+        bool dn64 = fc.denormBehaviorIndependence == VK_SHADER_FLOAT_CONTROLS_INDEPENDENCE_ALL;
+        bool rn64 = fc.roundingModeIndependence == VK_SHADER_FLOAT_CONTROLS_INDEPENDENCE_ALL;
+        /* "NONE": one denormal (rounding) mode for every width: only where both widths offer it */
+        bool dn_none = fc.denormBehaviorIndependence == VK_SHADER_FLOAT_CONTROLS_INDEPENDENCE_NONE;
+        bool rn_none = fc.roundingModeIndependence == VK_SHADER_FLOAT_CONTROLS_INDEPENDENCE_NONE;
+        info->rte32 = fc.shaderRoundingModeRTEFloat32 && (!rn_none || fc.shaderRoundingModeRTEFloat64);
+        info->rte64 = fc.shaderRoundingModeRTEFloat64 && (rn64 || rn_none) && info->rte32;
+        info->denorm32 = fc.shaderDenormPreserveFloat32 && (!dn_none || fc.shaderDenormPreserveFloat64);
+        info->denorm64 = fc.shaderDenormPreserveFloat64 && (dn64 || dn_none) && info->denorm32;
+        info->szinp32 = fc.shaderSignedZeroInfNanPreserveFloat32;
+        info->szinp64 = fc.shaderSignedZeroInfNanPreserveFloat64;
+    }
+    info->exact_native = sub.pNext && drv.driverID == VK_DRIVER_ID_MESA_LLVMPIPE;
     VkPhysicalDeviceMemoryProperties mem;
     vk->vkGetPhysicalDeviceMemoryProperties(pd, &mem);
     for (uint32_t i = 0; i < mem.memoryHeapCount; i++)
@@ -508,18 +550,12 @@ fb_result vkc_create(const vkc_desc *desc, vkc_context **out)
     };
     /* 64-bit buffer atomics (VK_KHR_shader_atomic_int64, core in 1.2), where the device has them:
      * the chaos game packs a hit and its colour into one atomic add. */
-    const char *ext = "VK_KHR_shader_atomic_int64";
+    const char *exts[2], *ext = "VK_KHR_shader_atomic_int64";
+    uint32_t nexts = 0;
     VkPhysicalDeviceShaderAtomicInt64Features a64 = {
         .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_INT64_FEATURES};
     VkPhysicalDeviceFeatures2 f2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, .pNext = &a64};
-    bool has_ext = false;
-    uint32_t next = 0;
-    if (ctx->vk.vkEnumerateDeviceExtensionProperties(ctx->phys, NULL, &next, NULL) == VK_SUCCESS && next) {
-        VkExtensionProperties *ep = calloc(next, sizeof *ep);
-        if (ep && ctx->vk.vkEnumerateDeviceExtensionProperties(ctx->phys, NULL, &next, ep) == VK_SUCCESS)
-            for (uint32_t i = 0; i < next; i++) has_ext = has_ext || !strcmp(ep[i].extensionName, ext);
-        free(ep);
-    }
+    bool has_ext = has_device_ext(&ctx->vk, ctx->phys, ext);
     if (!has_ext) f2.pNext = NULL; /* the plain features only */
     ctx->vk.vkGetPhysicalDeviceFeatures2(ctx->phys, &f2);
     ctx->info.int64_atomics = has_ext && f2.features.shaderInt64 && a64.shaderBufferInt64Atomics && !desc->no_int64;
@@ -528,13 +564,17 @@ fb_result vkc_create(const vkc_desc *desc, vkc_context **out)
     VkPhysicalDeviceShaderAtomicInt64Features a64_on = {
         .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_INT64_FEATURES, .shaderBufferInt64Atomics = VK_TRUE};
     VkPhysicalDeviceFeatures on = {.shaderInt64 = ctx->info.int64_atomics, .shaderFloat64 = ctx->info.float64};
+    if (ctx->info.int64_atomics) exts[nexts++] = ext;
+    if (ctx->info.float_controls) exts[nexts++] = "VK_KHR_shader_float_controls";
+    /* FB_VK_STAGING's portable arithmetic: the kx_ helpers' correction even where the device is exact */
+    if (desc->portable) ctx->info.exact_native = false;
     VkDeviceCreateInfo dci = {
         .sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO,
         .pNext = ctx->info.int64_atomics ? &a64_on : NULL,
         .queueCreateInfoCount = 1,
         .pQueueCreateInfos = &qci,
-        .enabledExtensionCount = ctx->info.int64_atomics ? 1u : 0u,
-        .ppEnabledExtensionNames = &ext,
+        .enabledExtensionCount = nexts,
+        .ppEnabledExtensionNames = exts,
         .pEnabledFeatures = ctx->info.int64_atomics || ctx->info.float64 ? &on : NULL,
     };
     VKC_CHECK(ctx->vk.vkCreateDevice(ctx->phys, &dci, NULL, &ctx->device), fail);

@@ -13,6 +13,7 @@
 #include "fb.h"
 
 #include <stdbool.h>
+#include <stddef.h>
 
 typedef struct vkc_context vkc_context;
 typedef struct vkc_pipeline vkc_pipeline;
@@ -30,6 +31,13 @@ typedef struct vkc_device_info {
     uint64_t max_uniform_buffer_range;
     bool int64_atomics; /* 64-bit storage-buffer atomics enabled (VK_KHR_shader_atomic_int64); FB_VK_NO_INT64=1: off */
     bool float64;       /* shaderFloat64 enabled (double arithmetic in shaders); FB_VK_NO_FLOAT64=1: off */
+    /* Exact arithmetic (kernels/exact.h, docs/usage.md#determinism): the float-controls modes the device
+     * lets a shader declare (VK_KHR_shader_float_controls), for 32- and 64-bit floats, and whether its
+     * own division and square root are known to be correctly rounded (lavapipe: LLVM's IEEE
+     * instructions; elsewhere the kx_ helpers correct the device's estimate exactly). */
+    bool float_controls; /* the extension is there and enabled */
+    bool rte32, denorm32, szinp32, rte64, denorm64, szinp64;
+    bool exact_native;
     bool chosen;
 } vkc_device_info;
 
@@ -44,7 +52,12 @@ typedef struct vkc_desc {
     bool staging;          /* device-local memory and staging copies even where memory is shared */
     bool no_int64;         /* as if the device had no 64-bit buffer atomics */
     bool no_float64;       /* as if the device had no shaderFloat64 */
+    bool portable;         /* the kx_ helpers' portable code even where the device's division is exact */
 } vkc_desc;
+
+/* One line on a device's arithmetic: the float-controls modes its shaders declare and how they
+ * divide ("round to nearest, denormals kept, NaN kept; division: the device's own (exact)"). */
+void vkc_arith_describe(const vkc_device_info *info, char *buf, size_t size);
 
 /* Lists the Vulkan devices and marks the one `device_sel` (as in vkc_desc.device) would choose.
  * *out is malloc'd; the caller frees it. FB_ERR_NODEVICE when there is no loader or no device. */

@@ -4,6 +4,9 @@
  */
 #include "vkc_private.h"
 
+#include "kernels/exact.h" /* K_SPEC_EXACT_NATIVE */
+#include "spvpatch.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -73,22 +76,41 @@ fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, v
         .pPushConstantRanges = &range,
     };
     VKC_CHECK(ctx->vk.vkCreatePipelineLayout(ctx->device, &plci, NULL, &p->layout), fail);
+    /* The float-controls modes the device offers (round to nearest, denormals and NaN kept), so that
+     * it rounds as the native path does (spvpatch.h). */
+    const vkc_device_info *in = &ctx->info;
+    uint32_t *code = NULL;
+    size_t words = 0;
+    size_t nmod = 0;
+    const uint32_t *mod = spv_variant(desc->spv, desc->spv_size / 4, in->exact_native, &nmod);
+    rc = spv_add_float_controls(mod, nmod, (spv_float_modes){in->rte32, in->denorm32, in->szinp32},
+                                (spv_float_modes){in->rte64, in->denorm64, in->szinp64}, &code, &words);
+    if (rc) goto fail;
     VkShaderModuleCreateInfo smci = {
         .sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO,
-        .codeSize = desc->spv_size,
-        .pCode = desc->spv,
+        .codeSize = words * 4,
+        .pCode = code,
     };
-    VKC_CHECK(ctx->vk.vkCreateShaderModule(ctx->device, &smci, NULL, &module), fail);
+    VkResult made = ctx->vk.vkCreateShaderModule(ctx->device, &smci, NULL, &module);
+    free(code);
+    VKC_CHECK(made, fail);
     /* Specialization lets the device compiler fold uniform choices (noise kind, style flags) away:
-     * on lavapipe every branch it cannot prove uniform costs both sides. */
-    VkSpecializationMapEntry entries[8];
-    for (uint32_t i = 0; i < nspec; i++)
+     * on lavapipe every branch it cannot prove uniform costs both sides. Every pipeline also gets
+     * K_SPEC_EXACT_NATIVE (kernels/exact.h): the device's own division where it is known exact (the
+     * native variant has it as a constant already; the portable one's answer then stays false). */
+    VkSpecializationMapEntry entries[9];
+    uint32_t data[9];
+    for (uint32_t i = 0; i < nspec; i++) {
         entries[i] = (VkSpecializationMapEntry){.constantID = i, .offset = 4 * i, .size = 4};
+        data[i] = desc->spec[i];
+    }
+    entries[nspec] = (VkSpecializationMapEntry){.constantID = K_SPEC_EXACT_NATIVE, .offset = 4 * nspec, .size = 4};
+    data[nspec] = in->exact_native ? VK_TRUE : VK_FALSE;
     VkSpecializationInfo spec = {
-        .mapEntryCount = nspec,
+        .mapEntryCount = nspec + 1,
         .pMapEntries = entries,
-        .dataSize = 4 * nspec,
-        .pData = desc->spec,
+        .dataSize = 4 * (nspec + 1),
+        .pData = data,
     };
     VkComputePipelineCreateInfo cpci = {
         .sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO,
@@ -98,7 +120,7 @@ fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, v
                 .stage = VK_SHADER_STAGE_COMPUTE_BIT,
                 .module = module,
                 .pName = "main",
-                .pSpecializationInfo = nspec ? &spec : NULL,
+                .pSpecializationInfo = &spec,
             },
         .layout = p->layout,
     };
@@ -210,8 +232,11 @@ fb_result vkc_buffer_create(vkc_context *ctx, uint64_t size, vkc_buffer **out)
             VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_CACHED_BIT,
             VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
         };
-        rc =
-            make_buffer(ctx, size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, host_prefs, 2, &b->staging, &b->staging_mem, &got);
+        /* the staging buffer is the copy's destination after a job, and its source for an upload
+         * ("VUID-vkCmdCopyBuffer-srcBuffer-00118: srcBuffer must have been created with
+         * VK_BUFFER_USAGE_TRANSFER_SRC_BIT usage flag") */
+        rc = make_buffer(ctx, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host_prefs, 2,
+                         &b->staging, &b->staging_mem, &got);
         if (rc) goto fail;
         VKC_CHECK(ctx->vk.vkMapMemory(ctx->device, b->staging_mem, 0, VK_WHOLE_SIZE, 0, &b->map), fail);
     }

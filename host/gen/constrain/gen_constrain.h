@@ -6,7 +6,7 @@
 
 #include "gen.h"
 
-/* The FBM constraint model (host/constrain.h). Points and regions come from the scene's JSON (inline)
+/* The FBM constraint model (constrain.h). Points and regions come from the scene's JSON (inline)
  * or from files, read when the layer is set up. */
 typedef struct fb_constrain_params {
     char macro[1024];    /* "cone" | "ridge" | "boss" | "bowl" | IN.exr[:layer.channel] */

@@ -1,5 +1,5 @@
 /*
- * The constrain layer: the FBM constraint model (host/constrain.c) over the whole image, on the CPU
+ * The constrain layer: the FBM constraint model (constrain.c) over the whole image, on the CPU
  * in prepare (both backends give the same bits); strips are copied out.
  *
  * Channels: NAME.Y (D), NAME.macro (d), NAME.detail (D - d), NAME.T and NAME.H (the fields used),
@@ -580,7 +580,7 @@ static void constrain_rows(const fb_gen *g, int y0, int n, void *const *planes)
                 s->out.D[at + i] >= ((const fb_constrain_params *)fb_layer_params(g->layer))->water;
 }
 
-/* The model's arrays (host/constrain.c): the grid of N x N nodes (N = 2^k + 1 >= the longer side, 4
+/* The model's arrays (constrain.c): the grid of N x N nodes (N = 2^k + 1 >= the longer side, 4
  * bytes each), the H and T fields, the macro shape and the result D (4 bytes a pixel each); H, T,
  * the macro and D are kept for the strips. */
 static uint64_t constrain_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)

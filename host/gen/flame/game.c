@@ -419,7 +419,7 @@ static void run(fb_pool *pool, int threads, fb_task_fn fn, game *G)
         fn(G, 0);
 }
 
-fb_result fb_flame_play(const fb_flame_setup *S, fb_pool *pool, int threads, uint32_t cr0, uint32_t cr1,
+fb_result fb_flame_play(const fb_flame_setup *S, fb_pool *pool, int threads, bool scalar, uint32_t cr0, uint32_t cr1,
                         fb_flame_cell *total, uint64_t *bad, fb_progress *prog)
 {
     size_t cells = (size_t)S->p.hist_w * S->p.hist_h, bytes = fb_flame_cell_bytes(S);
@@ -428,11 +428,10 @@ fb_result fb_flame_play(const fb_flame_setup *S, fb_pool *pool, int threads, uin
     while (threads > 1 && (uint64_t)threads * cells * bytes > (1ull << 30)) threads--;
     uint8_t plain[FB_FLAME_MAX_XFORMS + 1] = {0};
     for (uint32_t f = 0; f < S->p.nxf; f++) plain[f] = plain_linear(S, f);
-    /* the AVX2 lanes where they apply; FB_FLAME_NO_LANES=1 plays every chain scalar (the same bits:
-     * for comparing the two paths and timing them) */
+    /* the AVX2 lanes where they apply, unless scalar */
     lane_tables tables;
     const lane_tables *lanes = NULL;
-    if (lanes_ok(S, plain) && !getenv("FB_FLAME_NO_LANES")) lane_tables_init(S, plain, &tables), lanes = &tables;
+    if (!scalar && lanes_ok(S, plain)) lane_tables_init(S, plain, &tables), lanes = &tables;
     void *hist[64] = {0};
     uint64_t nbad[64] = {0};
     fb_result rc = FB_OK;

@@ -17,8 +17,9 @@ size_t fb_flame_cell_bytes(const fb_flame_setup *S);
 
 /* Plays chains [cr0, cr1) of S on `threads` threads of pool (NULL: this thread) and adds their
  * points into total (hist_w x hist_h cells, zeroed or holding earlier sums); *bad gets the bad
- * values. prog (or NULL) counts points. */
-fb_result fb_flame_play(const fb_flame_setup *S, fb_pool *pool, int threads, uint32_t cr0, uint32_t cr1,
+ * values. prog (or NULL) counts points. scalar: every chain through the portable step, never the
+ * AVX2 lanes (the same bits: the benchmark's scalar reference, fb_gen.scalar). */
+fb_result fb_flame_play(const fb_flame_setup *S, fb_pool *pool, int threads, bool scalar, uint32_t cr0, uint32_t cr1,
                         fb_flame_cell *total, uint64_t *bad, fb_progress *prog);
 
 #endif

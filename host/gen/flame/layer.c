@@ -342,7 +342,7 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
     if (!rc && e->kind == FB_BACKEND_VULKAN)
         gpu = 0, rc = play_vulkan(g, e, total, &prog, &gpu);
     else if (!rc)
-        rc = fb_flame_play(S, e->pool, threads, st->cr0, st->cr1, total, &st->bad, &prog);
+        rc = fb_flame_play(S, e->pool, threads, g->scalar, st->cr0, st->cr1, total, &st->bad, &prog);
     fb_progress_finish(&prog);
     double t1 = fb_now(), points = chain_points(st);
     if (!rc)

@@ -468,6 +468,6 @@ const fb_gen_class fb_gen_julia = {
     .init = julia_init,
     .share = FB_SHARE_BAND,
     .cost = julia_cost,
-    .tolerance = {0.01, 2}, /* orbits on the edge of escaping: 0.35% of pixels differ (golden thresholds) */
+    .tolerance = {0, 0}, /* exact arithmetic (kernels/exact.h): the same bits on every backend */
     .bench = fb_julia_bench,
 };

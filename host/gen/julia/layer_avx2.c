@@ -183,7 +183,10 @@ AVX2 static v8start start8(const fb_julia_avx2_ctx *cx, __m256 fx, __m256 fy)
         __m256 ang = _mm256_mul_ps(_mm256_set1_ps(K_TAU), _mm256_sub_ps(u, _mm256_floor_ps(u)));
         float a[8], sn[8], cs[8];
         _mm256_storeu_ps(a, ang);
-        for (int k = 0; k < 8; k++) sn[k] = k_sin(a[k]), cs[k] = k_cos(a[k]);
+        for (int k = 0; k < 8; k++) {
+            k_vec2 sc = k_sincos(a[k]); /* as k_julia_start: the same bits on every device */
+            sn[k] = sc.x, cs[k] = sc.y;
+        }
         __m256 s = _mm256_loadu_ps(sn), c = _mm256_loadu_ps(cs);
         x = _mm256_mul_ps(rr, c);
         y = _mm256_mul_ps(rr, s);

@@ -1,6 +1,6 @@
 /*
  * The L-system plant generator: the string is derived and drawn by the turtle on the host
- * (host/lsys.c), its segments framed into pixel space, binned into square tiles, and rasterised
+ * (lsys.c), its segments framed into pixel space, binned into square tiles, and rasterised
  * with anti-aliased coverage per pixel by kernels/lsys.h, natively or by shaders/lsys.comp.
  *
  * Channels: NAME.A (coverage) and NAME.R, .G, .B (premultiplied by A).

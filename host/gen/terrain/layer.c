@@ -1,6 +1,6 @@
 /*
  * The terrain generator: survey points (a file, the scene, or a sampled height field) are
- * triangulated and refined on the CPU (host/terrain.c), then the refined TIN is rasterised into
+ * triangulated and refined on the CPU (terrain.c), then the refined TIN is rasterised into
  * the layer strip by strip: each pixel centre takes the height of the triangle that contains it,
  * interpolated linearly. Triangles are binned into bands of BAND rows in slot order, and where
  * two triangles claim a pixel (a shared edge) the later one in that order wins, so the image does
