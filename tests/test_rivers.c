@@ -1,19 +1,8 @@
 /*
- * Stream-power erosion (host/gen/rivers/): the model against closed forms and an independent fill,
- * and its output measured as river basins are, by code written here and nothing of the model's.
- *
- *   test_rivers                          the model's unit tests
- *   test_rivers FRACTALBAKE ROOT         and the scenes: the gallery's, two more, and the pipe model's
- *   test_rivers --measure FILE.exr Y [LAKE]   print the measures of a surface (docs/terrain.md's table)
- *
- * The measures (Rodriguez-Iturbe and Rinaldo, "Fractal River Basins", 1997): every cell drains to its
- * steepest lower neighbour of the 8 (D8, the drop over 1 or sqrt 2); the drainage area A of a cell is
- * the cells that drain through it, itself included; pits are the cells off the border and out of
- * standing water with no lower neighbour; beta is minus the slope of log P(A >= a) against log a,
- * fitted by least squares at 21 areas spaced evenly in log a from 10 to 1000 cells; the largest basin
- * is the most cells that drain to one cell.
+ * Stream-power erosion (host/gen/rivers/): the model against closed forms (steady channel profiles,
+ * diffusion), its fills against an independent one (Planchon and Darboux), the same bits on any thread
+ * count, and its parameter checks. Its scenes are measured as river basins are by tests/drainage.py.
  */
-#include "exrio.h"
 #include "pool.h"
 #include "rivers.h"
 
@@ -23,108 +12,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-/* ---- the measures ------------------------------------------------------------------------------- */
-
-typedef struct measure {
-    long pits;
-    double pits_per_1e4, beta, largest; /* largest: a share of the cells */
-} measure;
-
-static const float *g_z;
-
-static int by_height_down(const void *a, const void *b)
-{
-    float x = g_z[*(const int *)a], y = g_z[*(const int *)b];
-    if (x != y) return x > y ? -1 : 1;
-    return (*(const int *)a > *(const int *)b) - (*(const int *)a < *(const int *)b);
-}
-
-static measure measure_surface(const float *z, const float *lake, int W, int H)
-{
-    size_t N = (size_t)W * H;
-    int *to = malloc(N * sizeof *to), *ord = malloc(N * sizeof *ord);
-    double *A = malloc(N * sizeof *A);
-    REQUIRE(to && ord && A);
-    long pits = 0;
-    for (int y = 0; y < H; y++)
-        for (int x = 0; x < W; x++) {
-            size_t i = (size_t)y * W + x;
-            double best = 0;
-            int r = -1;
-            for (int dy = -1; dy <= 1; dy++)
-                for (int dx = -1; dx <= 1; dx++) {
-                    int nx = x + dx, ny = y + dy;
-                    if ((!dx && !dy) || nx < 0 || ny < 0 || nx >= W || ny >= H) continue;
-                    size_t j = (size_t)ny * W + nx;
-                    double drop = ((double)z[i] - z[j]) / (dx && dy ? sqrt(2.0) : 1.0);
-                    if (drop > best) best = drop, r = (int)j;
-                }
-            to[i] = r;
-            bool border = x == 0 || y == 0 || x == W - 1 || y == H - 1;
-            pits += r < 0 && !border && !(lake && lake[i] > 0);
-        }
-    for (size_t i = 0; i < N; i++) ord[i] = (int)i, A[i] = 1;
-    g_z = z;
-    qsort(ord, N, sizeof *ord, by_height_down); /* a cell's receiver lies lower: it comes later */
-    for (size_t k = 0; k < N; k++)
-        if (to[ord[k]] >= 0) A[to[ord[k]]] += A[ord[k]];
-    double top = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
-    for (size_t i = 0; i < N; i++)
-        if (to[i] < 0 && A[i] > top) top = A[i];
-    const int np = 21;
-    for (int k = 0; k < np; k++) {
-        double a = pow(10, 1 + 2.0 * k / (np - 1));
-        size_t c = 0;
-        for (size_t i = 0; i < N; i++) c += A[i] >= a;
-        double lx = log(a), ly = log((double)c / N);
-        sx += lx, sy += ly, sxx += lx * lx, sxy += lx * ly;
-    }
-    measure m = {pits, pits * 1e4 / N, -(np * sxy - sx * sy) / (np * sxx - sx * sx), top / N};
-    free(to), free(ord), free(A);
-    return m;
-}
-
-/* The criteria: pits at most 1 in 10^4 cells, beta in [0.38, 0.50], a basin of 5% or more. */
-static bool like_rivers(measure m)
-{
-    return m.pits_per_1e4 <= 1 && m.beta >= 0.38 && m.beta <= 0.50 && m.largest >= 0.05;
-}
-
-/* Channel `name` of an EXR file (whole, single-part or not), malloc'd; NULL (and a failed check) when
- * it is not there. */
-static float *read_channel(const char *path, const char *name, int *W, int *H)
-{
-    exrio_reader *r = NULL;
-    if (exrio_open(path, &r) != FB_OK) {
-        CHECKF(0, "cannot open %s", path);
-        return NULL;
-    }
-    int c = exrio_find_channel(r, name);
-    *W = exrio_width(r), *H = exrio_height(r);
-    float *v = c >= 0 ? malloc((size_t)*W * *H * sizeof *v) : NULL;
-    void **planes = calloc((size_t)exrio_nchannels(r), sizeof *planes);
-    if (v && planes) {
-        planes[c] = v;
-        if (exrio_read_rows(r, 0, *H, planes) != FB_OK) free(v), v = NULL;
-    }
-    free(planes);
-    exrio_close(&r);
-    CHECKF(v != NULL, "%s: no channel %s", path, name);
-    return v;
-}
-
-static int print_measure(const char *path, const char *y, const char *lake)
-{
-    int W, H, W2, H2;
-    float *z = read_channel(path, y, &W, &H), *l = lake ? read_channel(path, lake, &W2, &H2) : NULL;
-    if (!z || (lake && !l)) return 2;
-    measure m = measure_surface(z, l, W, H);
-    printf("%s %s: %d x %d: pits %ld (%.3g per 10^4 cells), beta %.3f, largest basin %.2f%% of the area%s\n", path, y,
-           W, H, m.pits, m.pits_per_1e4, m.beta, 100 * m.largest, like_rivers(m) ? "" : " (not like rivers)");
-    free(z), free(l);
-    return 0;
-}
 
 /* ---- the model ---------------------------------------------------------------------------------- */
 
@@ -358,9 +245,8 @@ static void test_check(void)
     CHECK(fb_rivers_run(&d, NULL, NULL, &o) == FB_ERR_INPUT);
 }
 
-int main(int argc, char **argv)
+int main(void)
 {
-    if (argc >= 4 && !strcmp(argv[1], "--measure")) return print_measure(argv[2], argv[3], argc > 4 ? argv[4] : NULL);
     test_profile(1);
     test_profile(2);
     test_profile(0.7);
