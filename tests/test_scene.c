@@ -214,7 +214,7 @@ static void test_sets(void)
           P(fb_julia_params, s.layers[1])->turbulence > 0 &&
           (P(fb_julia_params, s.layers[1])->alpha[0] != 0 || P(fb_julia_params, s.layers[1])->alpha[1] != 0));
     CHECK(s.layers[2].cls == &fb_gen_terrain && P(fb_terrain_layer_params, s.layers[2])->points_inline &&
-          P(fb_terrain_layer_params, s.layers[2])->smooth && P(fb_terrain_layer_params, s.layers[2])->colour);
+          P(fb_terrain_layer_params, s.layers[2])->smooth && P(fb_terrain_layer_params, s.layers[2])->relief.colour);
     CHECK(s.layers[6].cls == &fb_gen_ifs && P(fb_ifs_params, s.layers[6])->has_cond);
     fb_scene_fini(&s);
 }

@@ -56,6 +56,8 @@ typedef struct ifs_state {
     size_t nplants;
     const fb_gen *surface;
     int surface_plane, surface_channel;
+    const fb_gen *avoid; /* the mask the plants keep away from, or NULL */
+    int avoid_plane;
 } ifs_state;
 
 static ifs_state *state(const fb_gen *g)
@@ -611,24 +613,36 @@ static fb_result enumerate_plants(const fb_gen *g, ifs_state *st)
     return fb_ifs_plants(&f->maps, cond, b, f->inst_min_pixels / px, &st->plants, &st->nplants);
 }
 
-/* The height layer the instances stand on: a float channel of a layer with native rows. */
+/* A float channel of a layer with native rows, for the instances: the height layer they stand on, or
+ * the mask they keep away from. */
+static fb_result instance_source(fb_gen *g, const fb_gen *const *gens, const fb_ref *r, const char *key,
+                                 const char *kind, const fb_gen **src, int *channel)
+{
+    const fb_gen *l = gens[r->layer];
+    int c = fb_gen_channel_of(l, r->channel, g->layer->name, key);
+    if (c < 0) return FB_ERR_INPUT;
+    if (l->host_op || !l->native_rows || l->channel_types[c] == EXRIO_UINT)
+        return fb_fail(FB_ERR_INPUT, "layer %s: %s %s is %s; name %s", g->layer->name, key, l->channel_names[c],
+                       l->host_op ? "an op layer, computed strip by strip" : "not a height", kind);
+    *src = l, *channel = c;
+    return FB_OK;
+}
+
 static fb_result ifs_resolve(fb_gen *g, const fb_gen *const *gens, const int *plane_offset)
 {
     (void)plane_offset;
     const fb_ifs_params *f = fb_layer_params(g->layer);
-    if (!f->has_surface || f->surface.layer < 0) return FB_OK;
-    const fb_gen *src = gens[f->surface.layer];
-    int c = fb_gen_channel_of(src, f->surface.channel, g->layer->name, "instances-surface");
-    if (c < 0) return FB_ERR_INPUT;
-    if (src->host_op || !src->native_rows || src->channel_types[c] == EXRIO_UINT)
-        return fb_fail(FB_ERR_INPUT,
-                       "layer %s: instances-surface %s is %s; name a height layer (terrain, fbm, constrain...)",
-                       g->layer->name, src->channel_names[c],
-                       src->host_op ? "an op layer, computed strip by strip" : "not a height");
-    state(g)->surface = src;
-    state(g)->surface_plane = fb_gen_plane_of(src, c);
-    state(g)->surface_channel = c;
-    return FB_OK;
+    ifs_state *st = state(g);
+    fb_result rc = FB_OK;
+    int c;
+    if (f->has_surface && f->surface.layer >= 0 &&
+        !(rc = instance_source(g, gens, &f->surface, "instances-surface",
+                               "a height layer (terrain, fbm, constrain, rivers...)", &st->surface, &c)))
+        st->surface_plane = fb_gen_plane_of(st->surface, c), st->surface_channel = c;
+    if (!rc && f->has_avoid &&
+        !(rc = instance_source(g, gens, &f->avoid, "instances-avoid", "a mask (rivers.river...)", &st->avoid, &c)))
+        st->avoid_plane = fb_gen_plane_of(st->avoid, c);
+    return rc;
 }
 
 /* Writes the instances (prepare, after the surface's own prepare: layers prepare in dependency order). */
@@ -643,19 +657,25 @@ static fb_result write_instances(fb_gen *g)
                        .plane = st->surface_plane,
                        .constant = f->has_surface && f->surface.layer < 0 ? f->surface.value : 0,
                        .up = f->inst_up,
-                       .seed = g->scene->seed};
+                       .seed = g->scene->seed,
+                       .max_slope = f->max_slope,
+                       .avoid = st->avoid,
+                       .avoid_plane = st->avoid_plane,
+                       .avoid_distance = f->avoid_distance};
     memcpy(pl.frame, st->stats.bounds, sizeof pl.frame);
     if (st->surface && st->surface->has_world)
         pl.has_world = true, memcpy(pl.world, st->surface->world, sizeof pl.world);
-    size_t written, skipped;
-    fb_result rc = fb_ifs_write_instances(f->instances, &pl, st->plants, st->nplants, &written, &skipped);
+    size_t written, skipped, avoided;
+    fb_result rc = fb_ifs_write_instances(f->instances, &pl, st->plants, st->nplants, &written, &skipped, &avoided);
     if (rc) return rc;
-    snprintf(g->summary, sizeof g->summary, "layer %s (ifs): %zu plant instances in %.200s%s%.80s", g->layer->name,
+    snprintf(g->summary, sizeof g->summary, "layer %s (ifs): %zu plant instances in %.200s%s%.80s%s", g->layer->name,
              written, f->instances, st->surface ? " on " : "",
-             st->surface ? st->surface->channel_names[st->surface_channel] : "");
+             st->surface ? st->surface->channel_names[st->surface_channel] : "",
+             avoided ? " (others left out by slope or mask)" : "");
     snprintf(g->summary_json, sizeof g->summary_json,
-             "{\"layer\": \"%s\", \"generator\": \"ifs\", \"instances\": %zu, \"instances_left_out\": %zu}",
-             g->layer->name, written, skipped);
+             "{\"layer\": \"%s\", \"generator\": \"ifs\", \"instances\": %zu, \"instances_left_out\": %zu, "
+             "\"instances_avoided\": %zu}",
+             g->layer->name, written, skipped, avoided);
     if (skipped)
         fb_log(FB_LOG_WARN, "%s: %zu plants stand where %s has no height (NaN) and are not written", g->layer->name,
                skipped, st->surface->channel_names[st->surface_channel]);
@@ -877,9 +897,10 @@ static fb_result ifs_init(fb_gen *g)
 static int ifs_refs(fb_layer *L, fb_ref_slot *out)
 {
     fb_ifs_params *f = (void *)L->params;
-    if (!f->has_surface) return 0;
-    out[0] = (fb_ref_slot){&f->surface, "instances-surface", NULL};
-    return 1;
+    int n = 0;
+    if (f->has_surface) out[n++] = (fb_ref_slot){&f->surface, "instances-surface", NULL};
+    if (f->has_avoid) out[n++] = (fb_ref_slot){&f->avoid, "instances-avoid", NULL};
+    return n;
 }
 
 static int ifs_outputs(const fb_layer *L, const char **paths, const char **what, int max)
