@@ -33,12 +33,12 @@ typedef struct layer_run {
  * from other layers' strips. */
 static bool run_on_gpu(const fb_engine *e, const layer_run *lr)
 {
-    return e->kind == FB_BACKEND_VULKAN && !lr->gen.prepare && !lr->gen.host_op;
+    return e->kind == FB_BACKEND_VULKAN && !lr->gen.prepare && !lr->gen.compute.host_rows;
 }
 
 static bool run_on_pool(const fb_engine *e, const layer_run *lr)
 {
-    return !run_on_gpu(e, lr) && !lr->gen.host_op;
+    return !run_on_gpu(e, lr) && !lr->gen.compute.host_rows;
 }
 
 typedef struct native_task {
@@ -58,7 +58,7 @@ static void native_task_fn(void *ctx, int t)
     void *planes[FB_GEN_MAX_CHANNELS];
     for (int k = 0; k < fb_gen_nplanes(nt->gen); k++)
         planes[k] = nt->planes[k] ? (uint8_t *)nt->planes[k] + (size_t)r0 * row_bytes : NULL;
-    nt->gen->native_rows(nt->gen, nt->y0 + r0, r1 - r0, planes);
+    nt->gen->compute.native_rows(nt->gen, nt->y0 + r0, r1 - r0, planes);
     if (nt->prog) fb_progress_add(nt->prog, (uint64_t)(r1 - r0) * (uint64_t)nt->cols);
 }
 
@@ -69,31 +69,35 @@ static fb_result run_init(fb_engine *e, layer_run *lr, int strip_rows)
     fb_result rc = FB_OK;
     const int np = fb_gen_nplanes(&lr->gen);
     if (run_on_gpu(e, lr)) {
-        if (lr->gen.needs_float64 && !vkc_info(e->vk)->float64)
+        if (lr->gen.compute.shader.needs_float64 && !vkc_info(e->vk)->float64)
             return fb_fail(FB_ERR_INPUT,
                            "layer %s: precision \"double\" needs a Vulkan device with shaderFloat64, and %s has none "
                            "(use --backend native)",
                            lr->gen.layer->name, e->device);
-        rc = vkc_pipeline_create(e->vk,
-                                 &(vkc_pipeline_desc){.spv = lr->gen.spv,
-                                                      .spv_size = lr->gen.spv_size,
-                                                      .push_size = lr->gen.push_size,
-                                                      .buffers = (uint32_t)np + (lr->gen.input ? 1u : 0u),
-                                                      .uniform = lr->gen.input && lr->gen.input_uniform ? 1u << np : 0u,
-                                                      .spec = lr->gen.spec,
-                                                      .nspec = lr->gen.nspec,
-                                                      .name = lr->gen.layer->name},
-                                 &lr->pipe);
+        rc = vkc_pipeline_create(
+            e->vk,
+            &(vkc_pipeline_desc){
+                .spv = lr->gen.compute.shader.spv,
+                .spv_size = lr->gen.compute.shader.spv_size,
+                .push_size = lr->gen.compute.shader.push_size,
+                .buffers = (uint32_t)np + (lr->gen.compute.shader.input ? 1u : 0u),
+                .uniform = lr->gen.compute.shader.input && lr->gen.compute.shader.input_uniform ? 1u << np : 0u,
+                .spec = lr->gen.compute.shader.spec,
+                .nspec = lr->gen.compute.shader.nspec,
+                .name = lr->gen.layer->name},
+            &lr->pipe);
         for (int k = 0; k < SLOTS && !rc; k++) {
             rc = vkc_job_create(e->vk, lr->pipe, &lr->job[k]);
             /* a plane the layer does not store is never written: a token buffer binds it */
             for (int c = 0; c < np && !rc; c++)
                 rc = vkc_buffer_create(e->vk, fb_gen_plane_stored(&lr->gen, c) ? bytes : 16, &lr->buf[k][c]);
         }
-        if (!rc && lr->gen.input) {
+        if (!rc && lr->gen.compute.shader.input) {
             int at = np;
-            rc = vkc_buffer_create(e->vk, lr->gen.input_size, &lr->buf[0][at]);
-            if (!rc) rc = vkc_buffer_upload(e->vk, lr->buf[0][at], lr->gen.input, lr->gen.input_size);
+            rc = vkc_buffer_create(e->vk, lr->gen.compute.shader.input_size, &lr->buf[0][at]);
+            if (!rc)
+                rc = vkc_buffer_upload(e->vk, lr->buf[0][at], lr->gen.compute.shader.input,
+                                       lr->gen.compute.shader.input_size);
             for (int k = 1; k < SLOTS; k++) lr->buf[k][at] = lr->buf[0][at]; /* one input, both slots */
         }
         return rc;
@@ -129,7 +133,7 @@ static fb_result run_submit(fb_engine *e, layer_run *lr, int slot, int y0, int n
     fb_gen_push(&lr->gen, y0, n, push);
     fb_gen_groups(&lr->gen, n, groups);
     return vkc_job_submit(e->vk, lr->job[slot], lr->buf[slot],
-                          (uint32_t)fb_gen_nplanes(&lr->gen) + (lr->gen.input ? 1u : 0u), push, groups);
+                          (uint32_t)fb_gen_nplanes(&lr->gen) + (lr->gen.compute.shader.input ? 1u : 0u), push, groups);
 }
 
 /* Makes the strip [y0, y0+n) available in planes[]: waits for the GPU job, or points at the strip
@@ -141,11 +145,11 @@ static fb_result run_collect(fb_engine *e, layer_run *lr, int slot, const void *
         fb_result rc = vkc_job_wait(e->vk, lr->job[slot], &t);
         if (rc) return rc;
         if (t > 0) *gpu_seconds += t;
-        for (int c = 0; c < lr->gen.nchannels; c++)
+        for (int c = 0; c < lr->gen.store.nchannels; c++)
             planes[c] = vkc_buffer_data(lr->buf[slot][fb_gen_plane_of(&lr->gen, c)]);
         return FB_OK;
     }
-    for (int c = 0; c < lr->gen.nchannels; c++) planes[c] = lr->planes[slot][fb_gen_plane_of(&lr->gen, c)];
+    for (int c = 0; c < lr->gen.store.nchannels; c++) planes[c] = lr->planes[slot][fb_gen_plane_of(&lr->gen, c)];
     return FB_OK;
 }
 
@@ -211,9 +215,9 @@ typedef struct previews {
 
 static int alpha_channel(const fb_gen *g)
 {
-    for (int c = 0; c < g->nchannels; c++) {
-        size_t len = strlen(g->channel_names[c]);
-        if (len >= 2 && !strcmp(g->channel_names[c] + len - 2, ".A")) return c;
+    for (int c = 0; c < g->store.nchannels; c++) {
+        size_t len = strlen(g->store.channel_names[c]);
+        if (len >= 2 && !strcmp(g->store.channel_names[c] + len - 2, ".A")) return c;
     }
     return -1;
 }
@@ -239,28 +243,30 @@ static fb_result previews_create(const fb_scene *s, const layer_run *runs, const
     for (int i = 0; i < s->nlayers; i++) {
         const fb_gen *g = &runs[i].gen;
         /* op layers are data (masks, sums): shown by name, left out of the composite */
-        bool shown = pv->all ? true : pv->over ? !g->host_op || (i == s->nlayers - 1 && pv->n == 0) : i == only;
+        bool shown = pv->all    ? true
+                     : pv->over ? !g->compute.host_rows || (i == s->nlayers - 1 && pv->n == 0)
+                                : i == only;
         if (shown) {
             int k = pv->n++, cols = 1;
             while (cols * cols < s->nlayers) cols++;
             pv->layer[k] = i;
             pv->offset[k] = at;
-            pv->first[k] = g->preview_rgb >= 0 ? g->preview_rgb : g->preview_channel;
+            pv->first[k] = g->store.preview_rgb >= 0 ? g->store.preview_rgb : g->store.preview_channel;
             pv->alpha[k] = pv->over ? alpha_channel(g) : -1;
             snprintf(pv->labels[k], sizeof pv->labels[k], "%s (%s)", s->layers[i].name, s->layers[i].cls->name);
             /* a sheet's tiles share about 2048 pixels across */
             int side = pv->all ? (2048 / cols > 256 ? 2048 / cols : 256) : 2048;
-            fb_result rc = fb_preview_create_alpha(region[2], region[3], side, g->preview_rgb >= 0 ? 3 : 1,
+            fb_result rc = fb_preview_create_alpha(region[2], region[3], side, g->store.preview_rgb >= 0 ? 3 : 1,
                                                    pv->alpha[k] >= 0, &pv->p[k]);
             if (rc) return rc;
             fb_preview_set_row_stride(pv->p[k], s->width);
-            pv->uint[k] = g->preview_rgb < 0 && g->channel_types[g->preview_channel] == EXRIO_UINT;
-            if (g->preview_rgb < 0 && g->preview_shade[0] > 0)
-                fb_preview_set_hillshade(pv->p[k], g->preview_shade[0], g->preview_shade[1]);
-            pv->light[k] = pv->over && g->preview_rgb >= 0 && g->preview_light;
+            pv->uint[k] = g->store.preview_rgb < 0 && g->store.channel_types[g->store.preview_channel] == EXRIO_UINT;
+            if (g->store.preview_rgb < 0 && g->store.preview_shade[0] > 0)
+                fb_preview_set_hillshade(pv->p[k], g->store.preview_shade[0], g->store.preview_shade[1]);
+            pv->light[k] = pv->over && g->store.preview_rgb >= 0 && g->store.preview_light;
             if (pv->light[k]) fb_preview_set_light(pv->p[k]);
         }
-        at += g->nchannels;
+        at += g->store.nchannels;
     }
     pv->width = region[2];
     pv->stride = s->width;
@@ -313,7 +319,7 @@ static fb_result previews_add(previews *pv, const layer_run *runs, int y0, int n
     for (int k = 0; k < pv->n; k++) {
         const fb_gen *g = &runs[pv->layer[k]].gen;
         const void *const *lp = planes + pv->offset[k];
-        int f = pv->first[k], three = g->preview_rgb >= 0;
+        int f = pv->first[k], three = g->store.preview_rgb >= 0;
         const float *rows[4] = {lp[f], lp[three ? f + 1 : f], lp[three ? f + 2 : f], NULL};
         if (pv->alpha[k] >= 0) rows[three ? 3 : 1] = lp[pv->alpha[k]];
         if (pv->uint[k]) { /* converted into rows of the same stride */
@@ -353,8 +359,8 @@ static fb_result check_finite(const layer_run *runs, int nlayers, const void *co
     int at = 0;
     for (int i = 0; i < nlayers; i++) {
         const fb_gen *g = &runs[i].gen;
-        for (int c = 0; c < g->nchannels; c++, at++) {
-            if (g->channel_types[c] == EXRIO_UINT) continue;
+        for (int c = 0; c < g->store.nchannels; c++, at++) {
+            if (g->store.channel_types[c] == EXRIO_UINT) continue;
             for (int r = 0; r < n; r++) {
                 const uint32_t *row = (const uint32_t *)planes[at] + (size_t)r * stride;
                 uint32_t any = 0;
@@ -365,16 +371,16 @@ static fb_result check_finite(const layer_run *runs, int nlayers, const void *co
                     memcpy(&v, &row[x], 4);
                     if (isfinite(v)) continue;
                     fb_log_context("layer %s, rows %d-%d", g->layer->name, y0, y0 + n - 1);
-                    if (g->host_op) /* the user's numbers: weights or constants too large for a float */
+                    if (g->compute.host_rows) /* the user's numbers: weights or constants too large for a float */
                         return fb_fail(FB_ERR_INPUT,
                                        "layer %s: the %s gives %s at pixel (%d, %d) of %s: its inputs, weights or "
                                        "ranges are too large for a float (at most 3.4e38)",
                                        g->layer->name, g->layer->cls->name, isnan(v) ? "NaN" : "an infinity", x0 + x,
-                                       y0 + r, g->channel_names[c]);
+                                       y0 + r, g->store.channel_names[c]);
                     return fb_fail(FB_ERR_INTERNAL,
                                    "layer %s: channel %s holds %s at pixel (%d, %d): an internal error, please "
                                    "report it with the scene",
-                                   g->layer->name, g->channel_names[c], isnan(v) ? "NaN" : "an infinity", x0 + x,
+                                   g->layer->name, g->store.channel_names[c], isnan(v) ? "NaN" : "an infinity", x0 + x,
                                    y0 + r);
                 }
             }
@@ -411,8 +417,8 @@ static fb_result plan_memory(const fb_engine *e, const fb_bake_desc *d, const la
         bool gpu = run_on_gpu(&runs[i].e, &runs[i]);
         uint64_t planes = 0;
         for (int c = 0; c < fb_gen_nplanes(g); c++) planes += fb_gen_plane_stored(g, c);
-        uint64_t strips = (g->host_op ? 1 : SLOTS) * planes * (uint64_t)s->width * (uint64_t)strip * 4 +
-                          (gpu && g->input ? g->input_size : 0);
+        uint64_t strips = (g->compute.host_rows ? 1 : SLOTS) * planes * (uint64_t)s->width * (uint64_t)strip * 4 +
+                          (gpu && g->compute.shader.input ? g->compute.shader.input_size : 0);
         hold_sum += hold;
         strips_sum += strips;
         if (peak - hold > extra_max) extra_max = peak - hold;
@@ -526,8 +532,8 @@ static fb_result heightmaps_create(const fb_scene *s, const layer_run *runs, con
         char alpha[160];
         snprintf(alpha, sizeof alpha, "%s.A", s->layers[i].name);
         hm->alpha[i] = -1;
-        for (int k = 0; k < runs[i].gen.nchannels && f == FB_HEIGHTMAP_GEOTIFF; k++)
-            if (!strcmp(runs[i].gen.channel_names[k], alpha)) hm->alpha[i] = offset[i] + k;
+        for (int k = 0; k < runs[i].gen.store.nchannels && f == FB_HEIGHTMAP_GEOTIFF; k++)
+            if (!strcmp(runs[i].gen.store.channel_names[k], alpha)) hm->alpha[i] = offset[i] + k;
         if (!(hm->z[i] = fb_malloc_large((size_t)rw * rh * sizeof(float))))
             return fb_fail(FB_ERR_NOMEM, "layer %s: out of memory for its heightmap", s->layers[i].name);
     }
@@ -564,10 +570,11 @@ static fb_result heightmaps_write(const fb_scene *s, const layer_run *runs, heig
         }
         const fb_gen *g = &runs[i].gen;
         double world[4] = {0, 1, 0, 1};
-        if (g->has_world) { /* the region's part of the layer's frame */
-            double sx = (g->world[1] - g->world[0]) / s->width, sy = (g->world[3] - g->world[2]) / s->height;
-            world[0] = g->world[0] + region[0] * sx, world[1] = world[0] + region[2] * sx;
-            world[3] = g->world[3] - region[1] * sy, world[2] = world[3] - region[3] * sy;
+        if (g->prepared.has_world) { /* the region's part of the layer's frame */
+            double sx = (g->prepared.world[1] - g->prepared.world[0]) / s->width,
+                   sy = (g->prepared.world[3] - g->prepared.world[2]) / s->height;
+            world[0] = g->prepared.world[0] + region[0] * sx, world[1] = world[0] + region[2] * sx;
+            world[3] = g->prepared.world[3] - region[1] * sy, world[2] = world[3] - region[3] * sy;
         }
         fb_log_context("layer %s", L->name);
         rc = fb_heightmap_write(&(fb_heightmap_desc){.path = L->heightmap,
@@ -577,7 +584,7 @@ static fb_result heightmaps_write(const fb_scene *s, const layer_run *runs, heig
                                                      .lo = lo,
                                                      .hi = hi,
                                                      .world = world,
-                                                     .epsg = g->epsg,
+                                                     .epsg = g->prepared.epsg,
                                                      .engine = (fb_heightmap_engine)L->heightmap_engine,
                                                      .nodata = hm->alpha[i] >= 0,
                                                      .cols = L->tiles[0],
@@ -686,9 +693,10 @@ static fb_result open_writer(const fb_engine *e, const fb_bake_desc *d, const la
     if (d->points_part[1] > 0) {
         snprintf(part, sizeof part, "%d/%d", d->points_part[0], d->points_part[1]);
         for (int i = 0; i < s->nlayers; i++)
-            if (runs[i].gen.points_split)
+            if (runs[i].gen.prepared.points_split)
                 snprintf(outside + strlen(outside), sizeof outside - strlen(outside), "%s%s=%llu",
-                         outside[0] ? ";" : "", s->layers[i].name, (unsigned long long)runs[i].gen.points_outside);
+                         outside[0] ? ";" : "", s->layers[i].name,
+                         (unsigned long long)runs[i].gen.prepared.points_outside);
         attrs[nattrs++] = (exrio_attr){"fractalbake/points-part", part};
         attrs[nattrs++] = (exrio_attr){"fractalbake/points-outside", outside};
     }
@@ -756,14 +764,14 @@ static fb_result run_strips(fb_engine *e, const fb_bake_desc *d, layer_run *runs
         int at = 0;
         for (int i = 0; i < s->nlayers && !rc; i++) {
             fb_log_context("layer %s, rows %d-%d", s->layers[i].name, y0, y0 + n - 1);
-            if (!runs[i].gen.host_op) rc = run_collect(&runs[i].e, &runs[i], k % SLOTS, planes + at, gpu);
+            if (!runs[i].gen.compute.host_rows) rc = run_collect(&runs[i].e, &runs[i], k % SLOTS, planes + at, gpu);
             if (!rc && run_on_gpu(&runs[i].e, &runs[i])) fb_progress_add(&prog, (uint64_t)n * rw);
-            at += runs[i].gen.nchannels;
+            at += runs[i].gen.store.nchannels;
         }
         for (int j = 0; j < s->nlayers && !rc; j++) { /* op layers, after the layers they use */
             layer_run *lr = &runs[s->order[j]];
-            if (!lr->gen.host_op) continue;
-            lr->gen.host_rows(&lr->gen, (size_t)n * s->width, planes, lr->planes[0][0]);
+            if (!lr->gen.compute.host_rows) continue;
+            lr->gen.compute.host_rows(&lr->gen, (size_t)n * s->width, planes, lr->planes[0][0]);
             planes[offset[s->order[j]]] = lr->planes[0][0];
             fb_progress_add(&prog, (uint64_t)n * rw);
         }
@@ -791,8 +799,8 @@ static fb_result faces_create(const fb_engine *e, const fb_bake_desc *d, const l
         return fb_fail(FB_ERR_USAGE,
                        "--cube-faces: needs the whole of a cube environment map (mapping cube, no --region)");
     int rgb = -1;
-    for (int i = 0, at = 0; i < s->nlayers && rgb < 0; at += runs[i].gen.nchannels, i++)
-        if (runs[i].gen.preview_rgb >= 0) rgb = at + runs[i].gen.preview_rgb;
+    for (int i = 0, at = 0; i < s->nlayers && rgb < 0; at += runs[i].gen.store.nchannels, i++)
+        if (runs[i].gen.store.preview_rgb >= 0) rgb = at + runs[i].gen.store.preview_rgb;
     return fb_faces_create(&(fb_faces_desc){.pattern = d->cube_faces,
                                             .n = s->width,
                                             .channels = channels,
@@ -822,18 +830,18 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     if (!rc) rc = bake_window(e, d, region, &strip);
     for (int i = 0; i < s->nlayers && !rc; i++) {
         fb_log_context("layer %s", s->layers[i].name);
-        rc = fb_gen_init_run(&runs[i].gen, s, &s->layers[i],
-                             &(fb_gen_run){{d->points_part[0], d->points_part[1]}, {d->max_memory, e->overhead}});
-        runs[i].gen.scalar = e->scalar;
+        rc = fb_gen_init_run(
+            &runs[i].gen, s, &s->layers[i],
+            &(fb_gen_run){{d->points_part[0], d->points_part[1]}, {d->max_memory, e->overhead}, e->scalar});
         runs[i].e = *e;
         if (e->per_layer) /* auto on a CPU device: each layer where it runs faster (engine.h) */
-            runs[i].e.kind = runs[i].gen.lavapipe_faster ? FB_BACKEND_VULKAN : FB_BACKEND_NATIVE;
+            runs[i].e.kind = runs[i].gen.compute.lavapipe_faster ? FB_BACKEND_VULKAN : FB_BACKEND_NATIVE;
         fb_backend was;
         if (fb_layer_backend_of(d->layer_kinds, s->layers[i].name, &was) && (was == FB_BACKEND_NATIVE || e->vk))
             runs[i].e.kind = was; /* where it ran in the file baked again */
-        for (int c = 0; c < runs[i].gen.nchannels && !rc; c++)
-            channels[nch++] =
-                (exrio_channel){runs[i].gen.channel_names[c], runs[i].gen.channel_types[c], s->multipart ? i : 0};
+        for (int c = 0; c < runs[i].gen.store.nchannels && !rc; c++)
+            channels[nch++] = (exrio_channel){runs[i].gen.store.channel_names[c], runs[i].gen.store.channel_types[c],
+                                              s->multipart ? i : 0};
     }
     /* Memory is predicted, not discovered: the whole bake's peak, before anything large exists. */
     fb_bake_plan plan_local, *plan = d->plan ? d->plan : &plan_local;
@@ -849,7 +857,8 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     /* Layers that use others (op inputs, a macro shape) find them among every layer's generator. */
     int offset[FB_MAX_LAYERS];
     const fb_gen *gens[FB_MAX_LAYERS];
-    for (int i = 0, at = 0; i < s->nlayers; at += runs[i].gen.nchannels, i++) offset[i] = at, gens[i] = &runs[i].gen;
+    for (int i = 0, at = 0; i < s->nlayers; at += runs[i].gen.store.nchannels, i++)
+        offset[i] = at, gens[i] = &runs[i].gen;
     for (int i = 0; i < s->nlayers && !rc; i++)
         if (runs[i].gen.resolve) rc = runs[i].gen.resolve(&runs[i].gen, gens, offset);
     if (!rc) rc = heightmaps_create(s, runs, offset, d->region, &hm);
@@ -859,7 +868,7 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
         if (!runs[i].gen.prepare) continue;
         fb_log_context("layer %s", s->layers[i].name);
         rc = runs[i].gen.prepare(&runs[i].gen, &runs[i].e, d->progress);
-        if (runs[i].gen.prepare_gpu_seconds > 0) gpu += runs[i].gen.prepare_gpu_seconds;
+        if (runs[i].gen.prepared.gpu_seconds > 0) gpu += runs[i].gen.prepared.gpu_seconds;
     }
     if (rc) goto out;
     if (stats) {
@@ -879,8 +888,9 @@ fb_result fb_bake(fb_engine *e, const fb_bake_desc *d, fb_bake_stats *stats)
     if (!rc && d->preview) rc = previews_write(&pv, d->preview);
     if (!rc) rc = heightmaps_write(s, runs, &hm, region, stats);
     for (int i = 0; i < s->nlayers && !rc && d->report; i++)
-        if (runs[i].gen.summary[0])
-            d->report(runs[i].gen.layer->name, runs[i].gen.summary, runs[i].gen.summary_json, d->user);
+        if (runs[i].gen.prepared.summary[0])
+            d->report(runs[i].gen.layer->name, runs[i].gen.prepared.summary, runs[i].gen.prepared.summary_json,
+                      d->user);
 out:
     fb_log_context(NULL);
     fb_pool_wait(e->pool); /* a strip still computing when an error stopped the loop */

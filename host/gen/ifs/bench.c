@@ -119,7 +119,7 @@ static fb_result run(const fb_bench *b, const fb_scene *s)
             double t[4];
             for (int k = 0; k < 4 && !rc; k++) {
                 double t0 = fb_now();
-                rc = fb_ifs_avx2_game(g.params, g.input, threads, hits, sum);
+                rc = fb_ifs_avx2_game(g.params, g.compute.shader.input, threads, hits, sum);
                 t[k] = fb_now() - t0;
             }
             if (!rc)
@@ -131,7 +131,7 @@ static fb_result run(const fb_bench *b, const fb_scene *s)
             memset(hits, 0, cells * 4);
             memset(sum, 0, cells * 8);
             double t0 = fb_now();
-            scalar_game(g.params, g.input, n, hits, sum);
+            scalar_game(g.params, g.compute.shader.input, n, hits, sum);
             report(b, "native", "scalar-1-thread", "textbook C loop", 1, (double)n / (fb_now() - t0) * 1e-6, 0);
         }
         free(hits);

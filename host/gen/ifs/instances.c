@@ -153,7 +153,7 @@ static fb_result rows_at(rows2 *rw, int r)
             return fb_fail(FB_ERR_NOMEM, "out of memory");
     void *planes[FB_GEN_MAX_CHANNELS] = {0};
     for (int k = 0; k < np; k++) planes[k] = rw->buf[k];
-    pl->src->native_rows(pl->src, y0, n, planes);
+    pl->src->compute.native_rows(pl->src, y0, n, planes);
     rw->r = r;
     return FB_OK;
 }
