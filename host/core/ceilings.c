@@ -20,7 +20,8 @@ static double best3(double t[3])
     return b;
 }
 
-/* One dispatch of `pipe` over `bufs`, timed from the host. */
+/* One dispatch of `pipe` over `bufs` (device buffers: nothing is copied back to the host), timed by
+ * the device's timestamps around it, or from the host where the queue has none. */
 static fb_result timed_dispatch(vkc_context *vk, vkc_pipeline *pipe, vkc_buffer *const *bufs, uint32_t nbufs,
                                 const void *push, const uint32_t groups[3], double *seconds)
 {
@@ -28,10 +29,10 @@ static fb_result timed_dispatch(vkc_context *vk, vkc_pipeline *pipe, vkc_buffer 
     fb_result rc = vkc_job_create(vk, pipe, &job);
     double t[3] = {0};
     for (int run = -1; run < 3 && !rc; run++) { /* a warm-up, then three */
-        double t0 = fb_now();
+        double t0 = fb_now(), gpu = -1;
         rc = vkc_job_submit(vk, job, bufs, nbufs, push, groups);
-        if (!rc) rc = vkc_job_wait(vk, job, NULL);
-        if (run >= 0) t[run] = fb_now() - t0;
+        if (!rc) rc = vkc_job_wait(vk, job, &gpu);
+        if (run >= 0) t[run] = gpu > 0 ? gpu : fb_now() - t0;
     }
     vkc_job_destroy(vk, &job);
     if (!rc) *seconds = best3(t);
@@ -44,7 +45,7 @@ static fb_result measure_vulkan(vkc_context *vk, fb_ceilings *c)
     vkc_buffer *out = NULL, *src = NULL, *dst = NULL;
     fb_result rc = vkc_pipeline_create(
         vk, &(vkc_pipeline_desc){FB_SPV(ceiling_fma_comp), .push_size = 12, .buffers = 1, .name = "ceiling_fma"}, &fma);
-    if (!rc) rc = vkc_buffer_create(vk, (uint64_t)FMA_GROUPS * 64 * 4, &out);
+    if (!rc) rc = vkc_buffer_create_kind(vk, (uint64_t)FMA_GROUPS * 64 * 4, VKC_BUFFER_DEVICE, &out);
     struct {
         uint32_t iters;
         float a, b;
@@ -55,12 +56,11 @@ static fb_result measure_vulkan(vkc_context *vk, fb_ceilings *c)
     if (!rc)
         rc = vkc_pipeline_create(
             vk, &(vkc_pipeline_desc){FB_SPV(ceiling_copy_comp), .buffers = 2, .name = "ceiling_copy"}, &copy);
-    if (!rc) rc = vkc_buffer_create(vk, COPY_BYTES, &dst);
-    if (!rc) rc = vkc_buffer_create(vk, COPY_BYTES, &src);
-    void *fill = rc ? NULL : calloc(1, COPY_BYTES);
-    if (!rc && !fill) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
-    if (!rc) rc = vkc_buffer_upload(vk, src, fill, COPY_BYTES);
-    free(fill);
+    /* Device buffers: a shared buffer on a discrete GPU is copied back to the host after every job,
+     * and that copy (over PCIe) is what this figure measured before (issue 41); the contents do not
+     * matter to a copy. */
+    if (!rc) rc = vkc_buffer_create_kind(vk, COPY_BYTES, VKC_BUFFER_DEVICE, &dst);
+    if (!rc) rc = vkc_buffer_create_kind(vk, COPY_BYTES, VKC_BUFFER_DEVICE, &src);
     vkc_buffer *pair[2] = {dst, src};
     /* 64 invocations a group, a vec4 each: COPY_BYTES / 16 / 64 groups, in two rows */
     uint32_t gx = (uint32_t)(COPY_BYTES / 16 / 64 / 2);
