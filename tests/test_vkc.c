@@ -1,9 +1,9 @@
 /*
  * The Vulkan context's buffer kinds and jobs (host/io/vkc.h): a dispatch into device buffers read
  * back by a job's copies into a host buffer at given offsets (a bake's staging ring) gives the bits
- * a shared buffer gives; a job of copies alone, a device-to-device copy timed with timestamps, and
- * the bounds a kind refuses. Run on lavapipe (direct-mapped shared buffers) and, as its -staging
- * twin, on the discrete GPU's path. 77 where there is no Vulkan device.
+ * a shared buffer gives; a job of copies alone, a device-to-device copy timed with timestamps, an
+ * upload into a device buffer, and the bounds a kind refuses. Run on lavapipe (direct-mapped shared buffers) and, as
+ * its -staging twin, on the discrete GPU's path. 77 where there is no Vulkan device.
  */
 #include "env.h"
 #include "gen.h"
@@ -113,6 +113,16 @@ int main(void)
     CHECK(vkc_job_wait(vk, job, &none) == FB_OK);
     CHECK(none == -1 && vkc_job_copy_seconds(job) > 0);
     CHECK(!memcmp(got + 2 * bytes, want, bytes));
+    vkc_job_destroy(vk, &job);
+
+    /* an upload into a device buffer (through a host buffer), read back by a job's copy */
+    CHECK(vkc_buffer_upload(vk, dev2, want + 8, bytes - 8) == FB_OK);
+    REQUIRE(vkc_job_create(vk, NULL, &job) == FB_OK);
+    CHECK(vkc_job_run(vk, job,
+                      &(vkc_submit){.copies = &(vkc_copy){.src = dev2, .dst = host, .size = bytes - 8},
+                                    .ncopies = 1}) == FB_OK);
+    CHECK(vkc_job_wait(vk, job, NULL) == FB_OK);
+    CHECK(!memcmp(got, want + 8, bytes - 8));
     vkc_job_destroy(vk, &job);
 
     /* the bounds of each kind: a device buffer over maxStorageBufferRange is refused, a host one may

@@ -130,9 +130,10 @@ fb_result vkc_buffer_create(vkc_context *ctx, uint64_t size, vkc_buffer **out);
 fb_result vkc_buffer_create_kind(vkc_context *ctx, uint64_t size, vkc_buffer_kind kind, vkc_buffer **out);
 void vkc_buffer_destroy(vkc_context *ctx, vkc_buffer **b);
 
-/* Writes `size` bytes of input for the shader into a shared buffer: directly where it is
+/* Writes `size` bytes of input for the shader: into a shared buffer directly where it is
  * host-visible, else into its staging buffer, copied to the device buffer at the start of the next
- * submitted job that binds it. */
+ * submitted job that binds it; into a host buffer now; into a device buffer now, through a transient
+ * host buffer and a copy (waited for). */
 fb_result vkc_buffer_upload(vkc_context *ctx, vkc_buffer *b, const void *data, uint64_t size);
 
 /* Host pointer to a shared or host buffer's contents, valid after vkc_job_wait of a job that wrote

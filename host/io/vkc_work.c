@@ -304,11 +304,30 @@ void vkc_buffer_destroy(vkc_context *ctx, vkc_buffer **pb)
     *pb = NULL;
 }
 
+/* A device buffer's contents, through a host buffer of the same size and a job of one copy. */
+static fb_result upload_device(vkc_context *ctx, vkc_buffer *b, const void *data, uint64_t size)
+{
+    vkc_buffer *host = NULL;
+    vkc_job *job = NULL;
+    fb_result rc = vkc_buffer_create_kind(ctx, size, VKC_BUFFER_HOST, &host);
+    if (!rc) rc = vkc_buffer_upload(ctx, host, data, size);
+    if (!rc) rc = vkc_job_create(ctx, NULL, &job);
+    if (!rc)
+        rc = vkc_job_run(ctx, job,
+                         &(vkc_submit){.copies = &(vkc_copy){.src = host, .dst = b, .size = size}, .ncopies = 1});
+    if (!rc) rc = vkc_job_wait(ctx, job, NULL);
+    vkc_job_destroy(ctx, &job);
+    vkc_buffer_destroy(ctx, &host);
+    return rc;
+}
+
 fb_result vkc_buffer_upload(vkc_context *ctx, vkc_buffer *b, const void *data, uint64_t size)
 {
     fb_result rc = FB_OK;
-    if (NEVER(size > b->size) || NEVER(b->kind != VKC_BUFFER_SHARED))
-        return fb_fail(FB_ERR_INTERNAL, "vulkan: upload larger than its buffer, or into a buffer not shared");
+    if (NEVER(size > b->size) || NEVER(size == 0))
+        return fb_fail(FB_ERR_INTERNAL, "vulkan: an upload of %llu bytes into a buffer of %llu",
+                       (unsigned long long)size, (unsigned long long)b->size);
+    if (b->kind == VKC_BUFFER_DEVICE) return upload_device(ctx, b, data, size);
     memcpy(b->map, data, size);
     if (!b->coherent) {
         VkMappedMemoryRange r = {
