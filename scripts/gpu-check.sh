@@ -130,7 +130,7 @@ do_gallery() {
     echo "== every gallery scene at its own size: native and vulkan, compare --max-abs 0" >> "$out/bakes.txt"
     for f in "$root"/docs/examples/gallery-*.json; do
         n=$((n + 1))
-        bake_both "$(basename "$f" .json)" 60 "$f" && ok=$((ok + 1))
+        bake_both "$(basename "$f" .json)" 90 "$f" && ok=$((ok + 1))
     done
     if [ $ok -eq $n ]; then step gallery "ok: $n of $n scenes the same bits (bakes.txt)"; else
         step gallery "FAILED: $ok of $n scenes the same bits (bakes.txt)"

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Runs every command of README.md and docs/*.md, as a user would, and fails on any that fails.
+"""Runs every command of README.md, CONTRIBUTING.md and docs/*.md, as a user would, and fails on any that fails.
 
 A command is a line of a code block (indented by four spaces or more, or fenced as sh/bash/shell)
 that starts with a program the docs use (fractalbake, printf, listgeo, ...), with its continuation
@@ -101,8 +101,8 @@ def reduce(cmd):
 
 def main():
     root, fb = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
-    docs = sys.argv[3:] or ['README.md'] + sorted('docs/' + f for f in os.listdir(os.path.join(root, 'docs'))
-                                                  if f.endswith('.md'))
+    docs = sys.argv[3:] or ['README.md', 'CONTRIBUTING.md'] + sorted(
+        'docs/' + f for f in os.listdir(os.path.join(root, 'docs')) if f.endswith('.md'))
     ran = failed = skipped = 0
     vulkan = subprocess.run([fb, 'devices'], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL).stdout.startswith(b'#')
     for doc in docs:

@@ -21,8 +21,27 @@ plant io/exrio_read.c scene.h "host/core) goes against"         # io may not inc
 plant base/log.c exrio.h "host/io) goes against"           # base includes nothing above it
 plant core/bake.c gen_ifs.h "host/gen/ifs) goes against"   # core knows no generator
 plant gen/fbm/layer.c gen_ifs.h "host/gen/ifs) goes against" # a generator another it does not link
+plant gen/fbm/layer.c delaunay.h "host/geom) goes against"   # geom only where linked (terrain)
+plant cli/main.c gen_fbm.h "host/gen/fbm) goes against"      # the commands name no generator
 plant geom/delaunay.c vkc.h "host/io) goes against"        # geom and io are side by side
 plant core/scene.c ../io/exrio.h "not a header of host/ by its name" # no paths around the rule
 plant gen/julia/layer.c cli.h "not a header of host/ by its name"    # no header of that name
+# a loop of includes: scene.h -> gen.h -> scene.h
+rm -rf "$tmp/host"
+cp -r "$src/host" "$tmp/host"
+printf '#include "gen.h"\n' >> "$tmp/host/core/scene.h"
+bash "$src/scripts/check-layers.sh" "$tmp/host" 2> "$tmp/err"
+rc=$?
+check "a loop of includes fails" "[ $rc -eq 1 ] && grep -q 'an include loop: host/core/scene.h -> host/core/gen.h -> host/core/scene.h' '$tmp/err'"
+# host/cli at 4000 lines
+rm -rf "$tmp/host"
+cp -r "$src/host" "$tmp/host"
+n=$(cat "$tmp"/host/cli/*.[ch] | wc -l)
+yes '/* planted */' | head -n $((4000 - n)) > "$tmp/host/cli/planted.c"
+bash "$src/scripts/check-layers.sh" "$tmp/host" 2> "$tmp/err"
+rc=$?
+check "host/cli at 4000 lines fails" "[ $rc -eq 1 ] && grep -q 'host/cli holds 4000 lines' '$tmp/err'"
+sed -i 1d "$tmp/host/cli/planted.c"
+check "host/cli at 3999 lines passes" "bash '$src/scripts/check-layers.sh' '$tmp/host'"
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

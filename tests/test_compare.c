@@ -1,5 +1,5 @@
 /*
- * compare's verdicts on constructed pairs (cli/compare.c): images written here with known
+ * compare's verdicts on constructed pairs (compare/compare.c): images written here with known
  * differences, each threshold checked on both sides of its boundary: max-abs with fail-percent,
  * hardfail, warnings, per-channel and per-layer rules, RMSE, a size mismatch, a missing channel and
  * --ignore-missing.

@@ -208,9 +208,30 @@ static void test_kmath(void)
     }
 }
 
+/* The text reader checks what it is given before it builds a tree (scan.h): an entity declaration
+ * is refused (nothing is expanded: here 10^6 "lol"s in an attribute otherwise), as are 300
+ * attributes on one xform, and nothing of libxml2's own reaches stderr. */
+static void test_hostile_text(void)
+{
+    static const char laughs[] = "<!DOCTYPE flame [<!ENTITY a \"lolololololololololol\"><!ENTITY b "
+                                 "\"&a;&a;&a;&a;&a;&a;&a;&a;&a;&a;\"><!ENTITY c \"&b;&b;&b;&b;&b;&b;&b;&b;&b;&b;\">"
+                                 "<!ENTITY d \"&c;&c;&c;&c;&c;&c;&c;&c;&c;&c;\"><!ENTITY e \"&d;&d;&d;&d;&d;&d;&d;"
+                                 "&d;&d;&d;\">]><flame name=\"&e;\"><xform weight=\"1\" linear=\"1\"/>"
+                                 "<color index=\"0\" rgb=\"1 2 3\"/></flame>";
+    fb_flame_genome g;
+    CHECK(fb_flame_read(laughs, strlen(laughs), "laughs", NULL, NULL, &g, NULL) == FB_ERR_INPUT);
+    char many[8192] = "<flame><xform weight=\"1\" linear=\"1\"";
+    for (int i = 0; i < 300; i++) snprintf(many + strlen(many), sizeof many - strlen(many), " p%d=\"0\"", i);
+    snprintf(many + strlen(many), sizeof many - strlen(many), "/><color index=\"0\" rgb=\"1 2 3\"/></flame>");
+    CHECK(fb_flame_read(many, strlen(many), "many", NULL, NULL, &g, NULL) == FB_ERR_INPUT);
+    static const char ok[] = "<flame><xform weight=\"1\" linear=\"1\"/><color index=\"0\" rgb=\"1 2 3\"/></flame>";
+    CHECK(fb_flame_read(ok, strlen(ok), "ok", NULL, NULL, &g, NULL) == FB_OK);
+}
+
 int main(void)
 {
     test_kmath();
+    test_hostile_text();
     test_genome("opaque", k_opaque, 64, 48, 100, 16);
     test_genome("translucent", k_translucent, 64, 48, 100, 24);
     test_genome("symmetry, post, bad values, final", k_mixed, 64, 48, 100, 16);

@@ -1,5 +1,5 @@
 /*
- * merge's checks of what it is given (cli/merge.c), on files baked here: region files that tile
+ * merge's checks of what it is given (core/merge.c), on files baked here: region files that tile
  * the image merge to the whole-image bake byte for byte, in any order; overlapping regions, a
  * missing region, a region of another scene, of another size or with other channels, and a mix of
  * region files and points parts are each refused (FB_ERR_INPUT) naming what is wrong, and write

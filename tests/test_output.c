@@ -1,8 +1,8 @@
 /*
  * The output transaction (host/base/output.c): exclusive temporary files, all-or-nothing renames, nesting,
  * refusal of non-regular targets and of one path named twice, names too long for the folder, the
- * signal handler's clean-up; anonymous (O_TMPFILE) files that nothing sees and SIGKILL leaves nothing
- * of; signals during a commit taken after the whole set is in place.
+ * signal handler's clean-up; outputs that would replace an input; anonymous (O_TMPFILE) files that nothing sees and
+ * SIGKILL leaves nothing of; signals during a commit taken after the whole set is in place.
  */
 #include "output.h"
 #include "testhelp.h"
@@ -11,6 +11,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <stdio.h>
@@ -37,6 +38,14 @@ static const char *at(const char *name)
     k = (k + 1) % 4;
     snprintf(buf[k], sizeof buf[k], "%s/%s", g_dir, name);
     return buf[k];
+}
+
+/* name, spelled through the folder's "." */
+static const char *alias_of(const char *name)
+{
+    static char buf[512];
+    snprintf(buf, sizeof buf, "%s/./%s", g_dir, name);
+    return buf;
 }
 
 static bool has(const char *name, const char *text)
@@ -67,6 +76,17 @@ static int count_all(void)
     for (struct dirent *e; d && (e = readdir(d));) n += strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
     if (d) closedir(d);
     return n;
+}
+
+/* The warnings logged, and the last one, for the sweep's line. */
+static int g_warnings;
+static char g_last_warning[1024];
+static void count_warnings(int level, const char *msg, void *user)
+{
+    (void)user;
+    if (level != FB_LOG_WARN) return;
+    g_warnings++;
+    snprintf(g_last_warning, sizeof g_last_warning, "%s", msg);
 }
 
 /* The signal handler of a run, as main's: outside a commit it ends the process. */
@@ -149,7 +169,8 @@ int main(void)
     CHECK(fb_outputs_end(FB_OK) == FB_OK); /* the outer level has nothing left to commit */
     CHECK(has("a.txt", "two") && access(at("c.txt"), F_OK) != 0 && count_files(".tmp") == 0);
 
-    /* The temporary name: hidden, beside the target, 16 random hex digits, different every time. */
+    /* The temporary name: hidden, beside the target, ".NAME.PID.SET.RAND.tmp": this process, the set's
+     * 16 random hex digits (one for the transaction), 8 more random ones of its own. */
     fb_outputs_begin();
     CHECK(fb_output_reserve(at("d.txt"), "output") == FB_OK);
     CHECK(fb_output_reserve(at("e.txt"), "output") == FB_OK);
@@ -160,14 +181,18 @@ int main(void)
         if (strstr(e->d_name, ".tmp") && k < 2) snprintf(names[k++], sizeof names[k], "%s", e->d_name);
     if (d) closedir(d);
     CHECK(k == 2);
+    char sets[2][17] = {{0}}, rands[2][9] = {{0}};
     for (int i = 0; i < k; i++) {
         const char *n = names[i];
-        size_t len = strlen(n);
-        bool form = len == strlen(".d.txt.") + 16 + 4 && n[0] == '.' && !strcmp(n + len - 4, ".tmp");
-        for (size_t j = len - 20; form && j < len - 4; j++) form = strchr("0123456789abcdef", n[j]) != NULL;
+        char tail[64];
+        int pid = 0, used = 0;
+        bool form = (!strncmp(n, ".d.txt.", 7) || !strncmp(n, ".e.txt.", 7)) &&
+                    sscanf(n + 7, "%d.%16[0-9a-f].%8[0-9a-f]%n", &pid, sets[i], rands[i], &used) == 3 &&
+                    pid == (int)getpid() && strlen(sets[i]) == 16 && strlen(rands[i]) == 8 &&
+                    snprintf(tail, sizeof tail, "%s", n + 7 + used) > 0 && !strcmp(tail, ".tmp");
         CHECKF(form, "temporary name %s", n);
     }
-    CHECK(strcmp(names[0] + 7, names[1] + 7) != 0);
+    CHECK(!strcmp(sets[0], sets[1]) && strcmp(rands[0], rands[1]) != 0);
     /* Reserved but never written is an internal error at commit, and leaves nothing. */
     CHECK(fb_outputs_end(FB_OK) == FB_ERR_INTERNAL);
     CHECK(count_files(".tmp") == 0 && access(at("d.txt"), F_OK) != 0);
@@ -190,6 +215,55 @@ int main(void)
     CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
     CHECK(count_files(".tmp") == 0);
 
+    /* No output replaces an input: noted first (by device and inode, through another spelling or a
+     * hard link) or reserved first, the second of the two is refused; and a target that becomes an
+     * input's hard link after it was reserved is refused at the commit, the input untouched. */
+    REQUIRE(write_text("in.txt", "output", "input") == FB_OK);
+    REQUIRE(link(at("in.txt"), at("in-link.txt")) == 0);
+    fb_outputs_begin();
+    CHECK(fb_input_note(at("in.txt"), "scene", -1) == FB_OK);
+    CHECK(fb_input_note(at("in.txt"), "scene", -1) == FB_OK); /* the same input twice is one */
+    CHECK(fb_output_reserve(at("in.txt"), "output") == FB_ERR_USAGE);
+    CHECK(fb_output_reserve(alias_of("in.txt"), "output") == FB_ERR_USAGE);
+    CHECK(fb_output_reserve(at("in-link.txt"), "preview") == FB_ERR_USAGE);
+    CHECK(fb_input_note(at("not-yet.txt"), "points", -1) == FB_OK); /* by its resolved path */
+    CHECK(fb_output_reserve(alias_of("not-yet.txt"), "mesh") == FB_ERR_USAGE);
+    CHECK(fb_output_reserve(at("out.txt"), "output") == FB_OK);
+    CHECK(fb_input_note(at("out.txt"), "EXR", -1) == FB_ERR_USAGE); /* reserved first */
+    CHECK(fb_input_note("-", "scene", -1) == FB_OK);                /* standard input is no file */
+    CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
+    fb_outputs_begin(); /* the inputs went with the outermost end */
+    CHECK(fb_output_reserve(at("in.txt"), "output") == FB_OK);
+    fb_output_discard(at("in.txt"));
+    CHECK(fb_input_note(at("in.txt"), "scene", -1) == FB_OK);
+    fd = -1;
+    CHECK(fb_output_open(at("late.txt"), "output", &fd) == FB_OK && write(fd, "x", 1) == 1);
+    if (fd >= 0) close(fd);
+    CHECK(fb_output_done(at("late.txt"), FB_OK) == FB_OK);
+    CHECK(link(at("in.txt"), at("late.txt")) == 0); /* the target turns into the input since */
+    CHECK(fb_outputs_end(FB_OK) == FB_ERR_USAGE);
+    CHECK(has("in.txt", "input") && has("late.txt", "input") && count_files(".tmp") == 0);
+    unlink(at("in.txt")), unlink(at("in-link.txt")), unlink(at("late.txt"));
+
+    /* Standard output carries one document: a claim (--json) and "-" exclude each other, either
+     * order; the claim goes with the transaction. (Not where standard output is a terminal, which
+     * "-" refuses anyway.) */
+    if (!isatty(STDOUT_FILENO)) {
+        fb_outputs_begin();
+        CHECK(fb_output_claim_stdout("--json") == FB_OK);
+        CHECK(fb_output_reserve("-", "JUnit report") == FB_ERR_USAGE);
+        CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
+        fb_outputs_begin();
+        CHECK(fb_output_reserve("-", "output") == FB_OK);
+        CHECK(fb_output_claim_stdout("--json") == FB_ERR_USAGE);
+        CHECK(fb_output_reserve("-", "preview") == FB_ERR_USAGE);
+        CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
+        fb_outputs_begin();
+        CHECK(fb_output_reserve("-", "output") == FB_OK);
+        fb_output_discard("-");
+        CHECK(fb_outputs_end(FB_OK) == FB_OK);
+    }
+
     /* The signal handler's clean-up removes every temporary file. */
     fb_outputs_begin();
     CHECK(fb_output_reserve(at("i.txt"), "output") == FB_OK);
@@ -199,6 +273,55 @@ int main(void)
     CHECK(count_files(".tmp") == 0);
     fb_outputs_end(FB_ERR_INTERNAL);
     CHECK(access(at("j.txt"), F_OK) != 0);
+
+    /* A dead run's temporary files are removed by the next run that writes into their folder, with
+     * one line naming the set; a live run's are not, nor a file its name calls dead that someone holds
+     * locked (a reused pid, another pid namespace). */
+    int up[2];
+    REQUIRE(pipe(up) == 0);
+    pid_t child = fork();
+    if (child == 0) {
+        fb_outputs_begin();
+        if (fb_output_reserve(at("s1.txt"), "output") || fb_output_reserve(at("s2.txt"), "preview")) _exit(1);
+        if (write(up[1], "r", 1) != 1) _exit(1);
+        pause();
+        _exit(0);
+    }
+    char r1;
+    REQUIRE(child > 0 && read(up[0], &r1, 1) == 1);
+    close(up[0]), close(up[1]);
+    fb_log_set_sink(count_warnings, NULL);
+    fb_outputs_begin();
+    CHECK(fb_output_reserve(at("t1.txt"), "output") == FB_OK);
+    CHECK(count_files(".s1.txt.") == 1 && count_files(".s2.txt.") == 1 && g_warnings == 0); /* alive: kept */
+    CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
+    int cst = 0;
+    CHECK(kill(child, SIGKILL) == 0 && waitpid(child, &cst, 0) == child);
+    char set[17] = {0}, planted[512];
+    d = opendir(g_dir);
+    for (struct dirent *e; d && (e = readdir(d));)
+        if (!strncmp(e->d_name, ".s1.txt.", 8)) sscanf(e->d_name + 8, "%*d.%16[0-9a-f]", set);
+    if (d) closedir(d);
+    /* a file whose name says the dead child, held locked by this process (as by a live run) */
+    snprintf(planted, sizeof planted, "%s/.held.txt.%d.%s.0badcafe.tmp", g_dir, (int)child, set);
+    int held = open(planted, O_WRONLY | O_CREAT | O_EXCL, 0666);
+    CHECK(held >= 0 && flock(held, LOCK_EX) == 0);
+    fb_outputs_begin();
+    CHECK(fb_output_reserve(at("t2.txt"), "output") == FB_OK);
+    CHECK(count_files(".s1.txt.") == 0 && count_files(".s2.txt.") == 0 && count_files(".t2.txt.") == 1);
+    CHECKF(g_warnings == 1 && strstr(g_last_warning, set) && strstr(g_last_warning, "s1.txt, s2.txt") &&
+               strstr(g_last_warning, "removed 2 temporary files of an incomplete set"),
+           "%d warnings: %s", g_warnings, g_last_warning);
+    CHECK(access(planted, F_OK) == 0); /* locked: alive, whatever its name says */
+    CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
+    close(held);
+    g_warnings = 0;
+    fb_outputs_begin();
+    CHECK(fb_output_reserve(at("t3.txt"), "output") == FB_OK);
+    CHECK(access(planted, F_OK) != 0 && g_warnings == 1 && strstr(g_last_warning, "held.txt was not replaced"));
+    CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
+    fb_log_set_sink(NULL, NULL);
+    CHECK(count_files(".tmp") == 0);
 
     /* A name longer than the folder allows is refused when reserved, before any work (not at the
      * rename after it). */

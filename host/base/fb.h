@@ -1,8 +1,13 @@
 /*
  * fractalbake: the types every host module shares: the result code, the logger, small helpers.
  *
- * Library code (everything but main.c) never prints and never exits: it returns an fb_result and
- * hands text to the logger, whose sink main() chooses.
+ * Library code (every folder of host/ below host/cli, and kernels/) never prints, never exits and
+ * never reads the environment: it returns an fb_result, hands its text to the logger and its
+ * progress to the progress sink (sinks that main() installs), and takes its settings in
+ * descriptors. It writes nothing on standard output or standard error (no printf, puts, perror,
+ * stdout or stderr); the files a run names it writes through output.h, where "-" is standard
+ * output as one of those files. host/cli is the user interface: its commands print their results
+ * and messages, and cli/env.c alone reads the environment. tests/rules.py checks these rules.
  */
 #ifndef FB_H
 #define FB_H

@@ -6,6 +6,7 @@
 #include "textin.h"
 
 #include <errno.h>
+#include <dirent.h>
 #include <fcntl.h>
 #include <limits.h>
 #include <pthread.h>
@@ -25,10 +26,14 @@ enum { FREE = 0, RESERVED = 1, TAKEN = 2 };
 typedef struct entry {
     volatile sig_atomic_t live; /* the temporary file exists: the signal handler removes it */
     int state;
-    int fd;     /* RESERVED: the open temporary file, until taken */
-    int keepfd; /* an anonymous file (O_TMPFILE, or standard output's): kept open until the commit */
-    bool std;   /* "-": copied to standard output at the commit */
-    bool anon;  /* an O_TMPFILE file in the target's folder: linked to a hidden name at the commit */
+    int fd;       /* RESERVED: the open temporary file, until taken */
+    int keepfd;   /* the temporary file (or standard output's), kept open and locked until dropped */
+    bool std;     /* "-": copied to standard output at the commit */
+    bool anon;    /* an O_TMPFILE file in the target's folder: linked to a hidden name at the commit */
+    uint64_t set; /* the set of outputs it belongs to, named in its hidden temporary file with the pid */
+    bool has_id;  /* the target existed when reserved: its device and inode, checked against the inputs */
+    dev_t dev;
+    ino_t ino;
     char what[32];
     char path[PATH_MAX]; /* as the user gave it */
     char key[PATH_MAX];  /* the folder resolved, then the name: two spellings of one file compare equal */
@@ -53,6 +58,25 @@ static char g_tmpdir[PATH_MAX]; /* fb_outputs_tmpdir: "" is /tmp */
 enum { IDLE = 0, COMMITTING = 1, DYING = 2 };
 static atomic_int g_phase;
 static volatile sig_atomic_t g_deferred; /* the signal that came during the commit */
+
+/* The inputs of the run (fb_input_note): no output may name one. */
+typedef struct input {
+    char *path; /* as the user gave it */
+    char *key;  /* resolved: realpath, or the folder resolved and the name where it does not exist */
+    char what[32];
+    bool has_id; /* it exists: its device and inode */
+    dev_t dev;
+    ino_t ino;
+} input;
+static input *g_in;
+static int g_nin, g_capin;
+/* The set of the outermost transaction (0: none drawn yet), and the folders swept of dead runs'
+ * temporary files in it (sweep_locked). */
+static uint64_t g_set;
+static char *g_swept[FB_MAX_OUTPUTS];
+static int g_nswept;
+/* A document the run prints on standard output itself (fb_output_claim_stdout): no "-" output then. */
+static char g_stdout_claim[32];
 
 /* The folder and the name of path: "a/b.exr" -> "a", "b.exr"; "b.exr" -> ".", "b.exr". */
 static void split(const char *path, char *dir, size_t dsize, const char **base)
@@ -110,6 +134,30 @@ static bool key_of(const char *path, char *key)
     return true;
 }
 
+/* The input that names `key`, or is the file st describes (NULL: it does not exist), or NULL. Called
+ * locked. */
+static const input *input_named(const char *key, const struct stat *st)
+{
+    for (int i = 0; i < g_nin; i++) {
+        const input *in = &g_in[i];
+        if ((st && in->has_id && in->dev == st->st_dev && in->ino == st->st_ino) || !strcmp(in->key, key)) return in;
+    }
+    return NULL;
+}
+
+/* An output that would replace an input: refused, with how to do it on purpose. */
+static fb_result clash(const char *path, const char *what, const char *in_path, const char *in_what)
+{
+    const char *how = !strcmp(what, "output") ? "write the output under another name, then mv it over the input"
+                                              : "name another file";
+    if (!strcmp(path, in_path))
+        return fb_fail(FB_ERR_USAGE, "%s: is an input of this run (read as the %s) and cannot also be the %s: %s", path,
+                       in_what, what, how);
+    return fb_fail(FB_ERR_USAGE,
+                   "%s: is the same file as %s, an input of this run (read as the %s), and cannot also be the %s: %s",
+                   path, in_path, in_what, what, how);
+}
+
 static entry *free_entry(void)
 {
     for (int i = 0; i < g_count; i++)
@@ -123,8 +171,15 @@ static entry *free_entry(void)
 static fb_result reserve_stdout(const char *what, entry **out)
 {
     if (find("-"))
-        return fb_fail(FB_ERR_USAGE, "-: standard output named for two outputs (the %s and the %s)", find("-")->what,
-                       what);
+        return fb_fail(FB_ERR_USAGE,
+                       "-: standard output named for two outputs (the %s and the %s): it carries one document; "
+                       "name a file for one of them",
+                       find("-")->what, what);
+    if (g_stdout_claim[0])
+        return fb_fail(FB_ERR_USAGE,
+                       "-: standard output carries what %s prints: name a file for the %s (standard output "
+                       "carries one document)",
+                       g_stdout_claim, what);
     if (isatty(STDOUT_FILENO))
         return fb_fail(FB_ERR_USAGE, "-: the %s would go to a terminal: redirect standard output to a file or a pipe",
                        what);
@@ -173,14 +228,138 @@ static fb_result copy_to_stdout(entry *e)
     }
 }
 
-/* Creates the hidden named temporary file beside the target (".NAME.<16 hex>.tmp"), exclusively:
- * the fallback where the folder's file system has no O_TMPFILE. Returns the fd or -1 (errno). */
+/* A hidden temporary name beside the target, ".NAME.PID.SET.RAND.tmp": the process, the set of
+ * outputs it belongs to (16 hex digits, random) and 32 more random bits; what a later run needs to
+ * recognise the files of a dead run's set (sweep_locked), and more than anyone can predict. */
+static void temp_name(char *out, size_t size, const char *dir, const char *base, uint64_t set)
+{
+    snprintf(out, size, "%s/.%.180s.%ld.%016llx.%08x.tmp", dir, base, (long)getpid(), (unsigned long long)set,
+             (unsigned)random64());
+}
+
+/* The parts of a temporary name of temp_name's form; false for any other name. */
+static bool temp_parts(const char *name, char *base, size_t bsize, long *pid, uint64_t *set)
+{
+    char buf[NAME_MAX + 1];
+    size_t n = strlen(name);
+    if (n < 5 || n >= sizeof buf + 4 || name[0] != '.' || strcmp(name + n - 4, ".tmp")) return false;
+    memcpy(buf, name, n - 4);
+    buf[n - 4] = 0;
+    char *field[3]; /* RAND, SET, PID, from the end */
+    static const size_t len[3] = {8, 16, 0};
+    for (int k = 0; k < 3; k++) {
+        char *dot = strrchr(buf, '.');
+        if (!dot || dot == buf) return false;
+        field[k] = dot + 1;
+        size_t m = strlen(field[k]);
+        if (len[k] ? m != len[k] || strspn(field[k], "0123456789abcdef") != m
+                   : m == 0 || m > 9 || strspn(field[k], "0123456789") != m)
+            return false;
+        *dot = 0;
+    }
+    if (!buf[1]) return false;
+    snprintf(base, bsize, "%s", buf + 1);
+    *pid = strtol(field[2], NULL, 10);
+    *set = strtoull(field[1], NULL, 16);
+    return true;
+}
+
+/* Holds the temporary file locked (flock, exclusive) for as long as the entry keeps it open: a later
+ * run's sweep leaves a locked file alone whatever its name says (a pid reused, another pid
+ * namespace). The kernel drops the lock with the process. Where the file system has no flock, the
+ * pid alone tells. */
+static void lock_temp(int fd)
+{
+    while (flock(fd, LOCK_EX | LOCK_NB) != 0 && errno == EINTR) {
+    }
+}
+
+static int cmp_str(const void *a, const void *b)
+{
+    return strcmp(*(const char *const *)a, *(const char *const *)b);
+}
+
+/* A temporary file a sweep removed: its run, its set and its target's name. */
+typedef struct removed {
+    long pid;
+    uint64_t set;
+    char base[NAME_MAX + 1];
+} removed;
+
+static int cmp_removed(const void *a, const void *b)
+{
+    const removed *x = a, *y = b;
+    if (x->pid != y->pid) return x->pid < y->pid ? -1 : 1;
+    if (x->set != y->set) return x->set < y->set ? -1 : 1;
+    return strcmp(x->base, y->base);
+}
+
+/* One warning line for each set of n removed files (sorted), naming the targets it left as they were. */
+static void say_removed(const char *shown, const removed *r, size_t n)
+{
+    for (size_t i = 0, j; i < n; i = j) {
+        char targets[512] = "";
+        for (j = i; j < n && r[j].pid == r[i].pid && r[j].set == r[i].set; j++)
+            snprintf(targets + strlen(targets), sizeof targets - strlen(targets), "%s%s", j > i ? ", " : "", r[j].base);
+        fb_log(FB_LOG_WARN,
+               "removed %zu temporary file%s of an incomplete set of outputs in %s (set %016llx of process %ld, "
+               "which died before its commit was done): %s %s not replaced by that run",
+               j - i, j - i == 1 ? "" : "s", shown, (unsigned long long)r[i].set, r[i].pid, targets,
+               j - i == 1 ? "was" : "were");
+    }
+}
+
+/* Removes the temporary files a dead run left in dir (shown: the folder as the user spelled it),
+ * once per folder and transaction: those of temp_name's form whose process is gone and that no one
+ * holds locked, checked on the file itself before its name is removed; one warning line per set.
+ * Files of a live process, of another user's process, or of another form are left alone. Called
+ * locked. */
+static void sweep_locked(const char *shown, const char *dir)
+{
+    for (int i = 0; i < g_nswept; i++)
+        if (!strcmp(g_swept[i], dir)) return;
+    if (g_nswept < FB_MAX_OUTPUTS && (g_swept[g_nswept] = strdup(dir))) g_nswept++;
+    DIR *d = opendir(dir);
+    if (!d) return;
+    removed *r = NULL;
+    size_t n = 0, cap = 0;
+    for (struct dirent *de; (de = readdir(d));) {
+        removed one;
+        if (de->d_name[0] != '.' || !temp_parts(de->d_name, one.base, sizeof one.base, &one.pid, &one.set)) continue;
+        if (one.pid <= 0 || one.pid == (long)getpid() || kill((pid_t)one.pid, 0) == 0 || errno != ESRCH) continue;
+        int fd = openat(dirfd(d), de->d_name, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+        if (fd < 0) continue;
+        struct stat a, b;
+        bool gone = fstat(fd, &a) == 0 && S_ISREG(a.st_mode) && flock(fd, LOCK_EX | LOCK_NB) == 0 &&
+                    fstatat(dirfd(d), de->d_name, &b, AT_SYMLINK_NOFOLLOW) == 0 && a.st_dev == b.st_dev &&
+                    a.st_ino == b.st_ino && unlinkat(dirfd(d), de->d_name, 0) == 0;
+        close(fd);
+        if (gone && n == cap) { /* out of memory: the file is gone all the same, its line shorter */
+            removed *grown = realloc(r, (cap ? 2 * cap : 16) * sizeof *r);
+            if (grown) r = grown, cap = cap ? 2 * cap : 16;
+        }
+        if (gone && n < cap) r[n++] = one;
+    }
+    closedir(d);
+    qsort(r, n, sizeof *r, cmp_removed);
+    say_removed(shown, r, n);
+    free(r);
+}
+
+static void forget_swept_locked(void)
+{
+    for (int i = 0; i < g_nswept; i++) free(g_swept[i]);
+    g_nswept = 0;
+}
+
+/* Creates the hidden named temporary file beside the target (temp_name), exclusively: the fallback
+ * where the folder's file system has no O_TMPFILE. Returns the fd or -1 (errno). */
 static int create_named(entry *e, const char *dir, const char *base)
 {
     int fd = -1;
     for (int tries = 0; tries < 16 && fd < 0; tries++) {
         char tmp[PATH_MAX];
-        snprintf(tmp, sizeof tmp, "%s/.%.180s.%016llx.tmp", dir, base, (unsigned long long)random64());
+        temp_name(tmp, sizeof tmp, dir, base, e->set);
         /* The name is written before the file exists, so that a signal between the two removes
          * nothing else: unlink of a name that does not exist yet is harmless. */
         memcpy(e->tmp, tmp, sizeof tmp);
@@ -229,20 +408,30 @@ static fb_result reserve_locked(const char *path, const char *what, entry **out)
         return fb_fail(FB_ERR_USAGE, "%s: named as the %s and as the %s: two outputs cannot share one path", path,
                        twice->what, what);
     struct stat st;
-    if (lstat(path, &st) == 0 && !S_ISREG(st.st_mode))
+    bool exists = lstat(path, &st) == 0;
+    if (exists && !S_ISREG(st.st_mode))
         return fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", path,
                        fb_file_kind(st.st_mode), what);
+    const input *in = input_named(key, exists ? &st : NULL);
+    if (in) return clash(path, what, in->path, in->what);
     entry *e = free_entry();
     if (!e) return fb_fail(FB_ERR_USAGE, "%s: more than %d outputs", path, FB_MAX_OUTPUTS);
+    char kdir[PATH_MAX];
+    snprintf(kdir, sizeof kdir, "%.*s", strrchr(key, '/') == key ? 1 : (int)(strrchr(key, '/') - key), key);
+    sweep_locked(dir, kdir);
+    if (!g_set || g_depth == 0) g_set = random64() | 1; /* outside a transaction an output is its own set */
     e->live = 0;
     e->tmp[0] = 0;
+    e->set = g_set;
     int fd = create_anonymous(dir), keep = -1;
     bool anon = fd >= 0;
     if (fd < 0 && (errno == EOPNOTSUPP || errno == EISDIR || errno == EINVAL || errno == ENOENT))
         fd = create_named(e, dir, base);
-    if (anon && (keep = dup(fd)) < 0) {
+    if (fd >= 0) lock_temp(fd); /* the lock goes with the file's description: dup'ed below, it stays */
+    if (fd >= 0 && (keep = dup(fd)) < 0) {
         close(fd);
         fd = -1;
+        if (!anon) unlink(e->tmp), e->live = 0;
     }
     if (fd < 0) {
         int err = errno;
@@ -252,6 +441,9 @@ static fb_result reserve_locked(const char *path, const char *what, entry **out)
     e->fd = fd;
     e->keepfd = keep;
     e->anon = anon;
+    e->has_id = exists;
+    e->dev = exists ? st.st_dev : 0;
+    e->ino = exists ? st.st_ino : 0;
     e->std = false;
     e->state = RESERVED;
     snprintf(e->what, sizeof e->what, "%s", what);
@@ -265,7 +457,7 @@ static fb_result reserve_locked(const char *path, const char *what, entry **out)
 void fb_outputs_begin(void)
 {
     pthread_mutex_lock(&g_mu);
-    if (g_depth++ == 0) g_ndone = 0;
+    if (g_depth++ == 0) g_ndone = 0, g_set = 0;
     pthread_mutex_unlock(&g_mu);
 }
 
@@ -280,11 +472,6 @@ static void key_dir(const entry *e, char *dir, size_t size)
 {
     const char *slash = strrchr(e->key, '/');
     snprintf(dir, size, "%.*s", slash == e->key ? 1 : (int)(slash - e->key), e->key);
-}
-
-static int cmp_str(const void *a, const void *b)
-{
-    return strcmp(*(const char *const *)a, *(const char *const *)b);
 }
 
 /* Locks every folder the entries write into (flock, exclusive, in the folders' sorted order so that
@@ -328,7 +515,7 @@ static fb_result link_hidden(entry *e)
     snprintf(proc, sizeof proc, "/proc/self/fd/%d", e->keepfd);
     split(e->path, dir, sizeof dir, &base);
     for (int tries = 0; tries < 16; tries++) {
-        snprintf(e->tmp, sizeof e->tmp, "%s/.%.180s.%016llx.tmp", dir, base, (unsigned long long)random64());
+        temp_name(e->tmp, sizeof e->tmp, dir, base, e->set);
         e->live = 1; /* before the name exists: a signal then removes nothing else */
         if (linkat(AT_FDCWD, proc, AT_FDCWD, e->tmp, AT_SYMLINK_FOLLOW) == 0) return FB_OK;
         e->live = 0;
@@ -345,11 +532,17 @@ static fb_result commit_locked(entry **list, int n)
 {
     fb_result rc = FB_OK;
     struct stat st;
-    /* Checked again just before the renames: a target that became a non-regular file since. */
-    for (int i = 0; i < n && !rc; i++)
-        if (!list[i]->std && lstat(list[i]->path, &st) == 0 && !S_ISREG(st.st_mode))
+    /* Checked again just before the renames: a target that became a non-regular file, or an input,
+     * since. */
+    for (int i = 0; i < n && !rc; i++) {
+        const input *in;
+        if (list[i]->std || lstat(list[i]->path, &st) != 0) continue;
+        if (!S_ISREG(st.st_mode))
             rc = fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", list[i]->path,
                          fb_file_kind(st.st_mode), list[i]->what);
+        else if ((in = input_named(list[i]->key, &st)))
+            rc = clash(list[i]->path, list[i]->what, in->path, in->what);
+    }
     if (rc) return rc;
     int lockfds[FB_MAX_OUTPUTS], nlock = lock_folders(list, n, lockfds);
     int idle = IDLE;
@@ -400,6 +593,15 @@ static void deliver_deferred(void)
     }
 }
 
+/* The inputs noted go with the run's outermost transaction. Called locked. */
+static void forget_inputs_locked(void)
+{
+    for (int i = 0; i < g_nin; i++) free(g_in[i].path), free(g_in[i].key);
+    free(g_in);
+    g_in = NULL;
+    g_nin = g_capin = 0;
+}
+
 fb_result fb_outputs_end(fb_result rc)
 {
     pthread_mutex_lock(&g_mu);
@@ -418,6 +620,7 @@ fb_result fb_outputs_end(fb_result rc)
         if (!rc) rc = commit_locked(list, n);
         abort_locked(); /* after a failed rename: the rest are removed */
     }
+    if (g_depth == 0) forget_inputs_locked(), forget_swept_locked(), g_stdout_claim[0] = 0;
     pthread_mutex_unlock(&g_mu);
     deliver_deferred();
     return rc;
@@ -505,6 +708,7 @@ fb_result fb_output_done(const char *path, fb_result rc)
         g_ndone = 0;
         rc = commit_locked(&e, 1);
         drop(e);
+        forget_swept_locked();
     }
     pthread_mutex_unlock(&g_mu);
     deliver_deferred();
@@ -518,6 +722,63 @@ void fb_output_discard(const char *path)
     entry *e = path && key_of(path, key) ? find(key) : NULL;
     if (e) drop(e);
     pthread_mutex_unlock(&g_mu);
+}
+
+fb_result fb_output_claim_stdout(const char *what)
+{
+    fb_result rc = FB_OK;
+    pthread_mutex_lock(&g_mu);
+    const entry *e = find("-");
+    if (e)
+        rc = fb_fail(FB_ERR_USAGE,
+                     "%s: standard output carries the %s (-): name a file for it (standard output carries one "
+                     "document)",
+                     what, e->what);
+    else if (g_depth > 0)
+        snprintf(g_stdout_claim, sizeof g_stdout_claim, "%s", what);
+    pthread_mutex_unlock(&g_mu);
+    return rc;
+}
+
+fb_result fb_input_note(const char *path, const char *what, int fd)
+{
+    if (!path || !*path || !strcmp(path, "-")) return FB_OK; /* standard input is no file an output can name */
+    struct stat st;
+    bool has = (fd >= 0 ? fstat(fd, &st) : stat(path, &st)) == 0;
+    char key[PATH_MAX];
+    if (!realpath(path, key) && !key_of(path, key)) snprintf(key, sizeof key, "%s", path);
+    fb_result rc = FB_OK;
+    pthread_mutex_lock(&g_mu);
+    for (int i = 0; i < g_count && !rc; i++) { /* an output reserved before the input was opened */
+        const entry *e = &g_out[i];
+        if (e->state != FREE && !e->std &&
+            ((has && e->has_id && e->dev == st.st_dev && e->ino == st.st_ino) || !strcmp(e->key, key)))
+            rc = clash(e->path, e->what, path, what);
+    }
+    /* outside a transaction there is no run for it to belong to (a library caller's reads between its
+     * bakes): nothing to remember */
+    bool known = !rc && (g_depth == 0 || input_named(key, has ? &st : NULL));
+    if (!rc && !known && g_nin == g_capin) {
+        int cap = g_capin ? 2 * g_capin : 16;
+        input *grown = realloc(g_in, (size_t)cap * sizeof *g_in);
+        if (grown)
+            g_in = grown, g_capin = cap;
+        else
+            rc = fb_fail(FB_ERR_NOMEM, "out of memory for the inputs' names");
+    }
+    if (!rc && !known) {
+        input *in = &g_in[g_nin];
+        *in = (input){.path = strdup(path), .key = strdup(key), .has_id = has};
+        snprintf(in->what, sizeof in->what, "%s", what);
+        in->dev = has ? st.st_dev : 0;
+        in->ino = has ? st.st_ino : 0;
+        if (in->path && in->key)
+            g_nin++;
+        else
+            free(in->path), free(in->key), rc = fb_fail(FB_ERR_NOMEM, "out of memory for the inputs' names");
+    }
+    pthread_mutex_unlock(&g_mu);
+    return rc;
 }
 
 void fb_outputs_unlink_all(void)
@@ -553,15 +814,20 @@ void fb_outputs_tmpdir(const char *dir)
 
 fb_result fb_output_format(const char *flag, const char *path, const char *ext)
 {
-    static const char *const images[] = {".exr", ".png", ".jpg",  ".jpeg", ".tif", ".tiff", ".bmp",
-                                         ".gif", ".hdr", ".webp", ".tga",  ".ppm", ".dpx"};
+    static const struct {
+        const char *ext, *format;
+    } formats[] = {{".exr", "OpenEXR"}, {".png", "PNG"}, {".html", "HTML"}, {".xml", "XML"}};
+    size_t n = strlen(path), e = strlen(ext);
+    if (!strcmp(path, "-") || (n > e && !strcasecmp(path + n - e, ext) && path[n - e - 1] != '/')) return FB_OK;
+    const char *format = ext;
+    for (size_t i = 0; i < sizeof formats / sizeof formats[0]; i++)
+        if (!strcmp(ext, formats[i].ext)) format = formats[i].format;
     const char *slash = strrchr(path, '/'), *dot = strrchr(path, '.');
-    if (!dot || (slash && dot < slash) || !strcasecmp(dot, ext)) return FB_OK;
-    for (size_t i = 0; i < sizeof images / sizeof images[0]; i++)
-        if (!strcasecmp(dot, images[i]))
-            return fb_fail(FB_ERR_USAGE, "%s %s: this writes %s (%s), not %s: name the file %s", flag, path,
-                           !strcmp(ext, ".exr") ? "OpenEXR" : "PNG", ext, dot, ext);
-    return FB_OK;
+    if (dot && (!slash || dot > slash) && dot[1])
+        return fb_fail(FB_ERR_USAGE, "%s %s: this writes %s (%s), not %s: name the file %s", flag, path, format, ext,
+                       dot, ext);
+    return fb_fail(FB_ERR_USAGE, "%s %s: this writes %s: name the file %s (or - for standard output)", flag, path,
+                   format, ext);
 }
 
 int fb_outputs_written(const char **paths, const char **whats, uint64_t *bytes, int max)

@@ -15,9 +15,17 @@
  * Only regular files are replaced: a target that exists and is anything else (a directory, a device
  * node, a symbolic link, a FIFO) is refused before anything is computed, as is one path named twice.
  *
+ * No output replaces an input of the run: every file a run reads is noted as it is opened
+ * (fb_input_note, called by textin.h's readers, which every reader of the program goes through), and
+ * an output that names one (the same device and inode, or the same resolved path) is refused, whatever
+ * its extension and whichever comes first: reserving an output checks the inputs noted, noting an
+ * input checks the outputs reserved, and the commit checks the targets once more.
+ *
  * The path "-" is standard output: its data goes to an anonymous temporary file (in the folder of
- * fb_outputs_tmpdir) and is copied to standard output at the commit (so a failed run writes nothing there either); it
- * is refused when standard output is a terminal.
+ * fb_outputs_tmpdir) and is copied to standard output at the commit (so a failed run writes nothing
+ * there either); it is refused when standard output is a terminal. Standard output carries one
+ * document: a second "-" is refused, and so is one beside a document the run prints there itself (a
+ * --json summary, fb_output_claim_stdout).
  *
  * Transactions nest: fb_outputs_begin() / fb_outputs_end() pairs may be called inside one another
  * (main() around a command, fb_bake() around a bake); only the outermost end commits, and any
@@ -88,9 +96,20 @@ void fb_outputs_use_tmpfile(bool on);
  * $TMPDIR); NULL or "": /tmp. A folder that cannot hold it fails the reservation (FB_ERR_IO). */
 void fb_outputs_tmpdir(const char *dir);
 
-/* A file named for one image format (".png") where another is written (ext, ".exr") is refused:
- * FB_ERR_USAGE naming the flag. Names without an image extension (a mesh, /dev/null, "out") are
- * left to the other checks. */
+/* A file the flag writes in one format (ext, ".exr") must be named so (any case), or be "-": any other
+ * name (x.png, g.flame, out, /dev/null) is FB_ERR_USAGE naming the flag. */
 fb_result fb_output_format(const char *flag, const char *path, const char *ext);
+
+/* Claims standard output for a document the run prints there itself (what: the flag, "--json"), for
+ * the transaction: an output "-" is then refused, and the claim is refused (FB_ERR_USAGE, logged)
+ * when one was reserved. Outside any transaction it has no effect. */
+fb_result fb_output_claim_stdout(const char *what);
+
+/* Notes path as an input of the run (what: its role in messages, "scene", "points"; fd: the open file,
+ * or -1 to look the path up): from now until the outermost fb_outputs_end, an output that names the
+ * same file (the same device and inode, or the same resolved path where it does not exist) is refused.
+ * An output already reserved that names it makes this fail. FB_ERR_USAGE (logged) on a clash. "-",
+ * standard input, is no file. Outside any transaction nothing is remembered (there is no run). */
+fb_result fb_input_note(const char *path, const char *what, int fd);
 
 #endif

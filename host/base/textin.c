@@ -3,6 +3,8 @@
  */
 #include "textin.h"
 
+#include "output.h"
+
 #include <errno.h>
 #include <fcntl.h>
 #include <stdint.h>
@@ -61,6 +63,11 @@ static fb_result open_input(const char *path, const char *what, bool fifo, FILE 
                            path, what);
         return fb_fail(FB_ERR_INPUT, "%s: is %s%s (expected the %s file)", path, fb_file_kind(st.st_mode),
                        S_ISDIR(st.st_mode) ? "" : ", not a regular file or a pipe", what);
+    }
+    fb_result rc = fb_input_note(path, what, fd); /* no output of the run may replace it */
+    if (rc) {
+        close(fd);
+        return rc;
     }
     FILE *f = NULL;
     if (fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) & ~O_NONBLOCK) != 0 || !(f = fdopen(fd, "rb"))) {

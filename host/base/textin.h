@@ -20,6 +20,9 @@
  * - a FIFO where the reader seeks (an EXR is read by offsets): "is a FIFO, which cannot be read by
  *   offsets" (those readers take "-" for standard input instead);
  * - a FIFO that gives nothing (no writer, or an empty pipe): "is a FIFO with nothing written to it".
+ *
+ * Every file opened here is noted as an input of the run (fb_input_note, output.h): no output of the
+ * run may then replace it.
  */
 #ifndef FB_TEXTIN_H
 #define FB_TEXTIN_H

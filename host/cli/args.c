@@ -104,8 +104,9 @@ fb_result fb_args_parse(const fb_argspec *spec, const char *command, const void 
             continue;
         }
         const fb_arg *f = find(spec, a);
-        if (f && (f->kind == FB_ARG_BOOL || f->kind == FB_ARG_IGNORED)) {
-            if (f->kind == FB_ARG_BOOL) *(bool *)((char *)opts + f->off) = true;
+        if (f && (f->kind == FB_ARG_BOOL || f->kind == FB_ARG_IGNORED || f->kind == FB_ARG_DOCUMENT)) {
+            if (f->kind != FB_ARG_IGNORED) *(bool *)((char *)opts + f->off) = true;
+            if (f->kind == FB_ARG_DOCUMENT && fb_output_claim_stdout(f->name)) return FB_ERR_USAGE;
             continue;
         }
         if (f) {

@@ -20,14 +20,16 @@ typedef struct fb_arg_list {
 } fb_arg_list;
 
 typedef enum fb_arg_kind {
-    FB_ARG_END = 0, /* ends a table */
-    FB_ARG_BOOL,    /* a switch: bool at off set true */
-    FB_ARG_STRING,  /* const char * at off */
-    FB_ARG_OUTPUT,  /* const char * at off: a file this run writes, its extension checked (ext) */
-    FB_ARG_INT,     /* int at off: an integer in lo..hi (decimal, or exponent notation with a whole value) */
-    FB_ARG_LIST,    /* fb_arg_list at off: every value of the flag, in order */
-    FB_ARG_VALUE,   /* value read by parse(flag, value, field at off) */
-    FB_ARG_IGNORED, /* a switch accepted for uniformity that changes nothing for this command (why: a comment) */
+    FB_ARG_END = 0,  /* ends a table */
+    FB_ARG_BOOL,     /* a switch: bool at off set true */
+    FB_ARG_STRING,   /* const char * at off */
+    FB_ARG_OUTPUT,   /* const char * at off: a file this run writes, its extension checked (ext) */
+    FB_ARG_INT,      /* int at off: an integer in lo..hi (decimal, or exponent notation with a whole value) */
+    FB_ARG_LIST,     /* fb_arg_list at off: every value of the flag, in order */
+    FB_ARG_VALUE,    /* value read by parse(flag, value, field at off) */
+    FB_ARG_IGNORED,  /* a switch accepted for uniformity that changes nothing for this command (why: a comment) */
+    FB_ARG_DOCUMENT, /* a switch (bool at off) for a document printed on standard output (--json): it claims
+                      * standard output (output.h), so that no output "-" goes there too */
 } fb_arg_kind;
 
 typedef struct fb_arg {

@@ -244,7 +244,7 @@ static fb_result run(const fb_cli *cli, void *opts)
 
 #define B(f) offsetof(bench_opts, f)
 static const fb_arg flags[] = {
-    {FB_ARG_BOOL, "--json", NULL, B(json)},
+    {FB_ARG_DOCUMENT, "--json", NULL, B(json)},
     {FB_ARG_BOOL, "--quiet", NULL, B(quiet)},
     {FB_ARG_VALUE, "--size", NULL, B(size), .parse = arg_size},
     {FB_ARG_VALUE, "--backend", NULL, B(backend), .parse = arg_backend},

@@ -106,7 +106,7 @@ const fb_arg fb_bake_flags[] = {
     {FB_ARG_INT, "--zip-level", NULL, OPT(zip_level), 1, EXRIO_ZIP_LEVEL_MAX},
     {FB_ARG_BOOL, "--dry-run", NULL, OPT(dry_run)},
     {FB_ARG_BOOL, "--quiet", NULL, OPT(quiet)},
-    {FB_ARG_BOOL, "--json", NULL, OPT(json)},
+    {FB_ARG_DOCUMENT, "--json", NULL, OPT(json)},
     {FB_ARG_BOOL, "--validation", NULL, OPT(validation)},
     {FB_ARG_BOOL, "--help", "-h", OPT(help)},
     {FB_ARG_END},
@@ -206,8 +206,6 @@ static fb_result check_options(const fb_scene *scene, const fb_bake_opts *o)
 {
     fb_result rc = check_no_effect(scene, o);
     if (rc) return rc;
-    if (o->json && !o->dry_run && o->out && !strcmp(o->out, "-"))
-        return fb_fail(FB_ERR_USAGE, "--json: standard output holds the EXR (-o -): one or the other");
     if (o->preview_layer && !o->preview)
         return fb_fail(FB_ERR_USAGE,
                        "--preview-layer %s: only with --preview FILE.png (there is no preview to show it)",

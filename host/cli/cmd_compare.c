@@ -70,12 +70,14 @@ static void help(const fb_cli *cli)
            "LAYER=VALUE rules, or both: --max-abs 1e-4,sky.R=1e-3,terrain=1e-6):\n"
            "  --max-abs E, --fail E      a pixel fails when |A - B| > E (default 0: every pixel equal)\n"
            "  --fail-percent P           the channel fails when more than P%% of its pixels fail (default 0)\n"
-           "  --hardfail E               ... or when any pixel's |A - B| > E, whatever P\n"
+           "  --hardfail E               ... or when any pixel's |A - B| > E, whatever --fail and P say\n"
            "  --warn E, --warn-percent P, --hardwarn E   the same for a warning\n"
            "  --rmse E, --psnr DB, --ssim S              fail beyond an RMSE, below a PSNR or an SSIM\n"
            "  (--failpercent and --warnpercent are accepted too)\n"
            "  --allowfailures N          a channel fails (on --fail-percent or --hardfail) only when more than\n"
-           "                             N of its pixels are beyond --fail (idiff's rule)\n"
+           "                             N of its pixels fail: beyond --fail, or beyond --hardfail (idiff's\n"
+           "                             rule, but idiff 2.4 counts only those beyond -fail, and so skips\n"
+           "                             -hardfail while none is, against its own help)\n"
            "  --failrelative R, --warnrelative R   a pixel is beyond --fail (--warn) only when |A - B| is\n"
            "                             also beyond R * (|A| + |B|) / 2\n"
            "  idiff's single-dash spellings (-fail, -failpercent, -hardfail, -allowfailures, -warn, ...)\n"
@@ -165,6 +167,10 @@ static fb_result run(const fb_cli *cli, void *opts)
     d->a = c->files.v[0];
     d->b = c->files.v[1];
     d->print = c->quiet && !d->json ? print_result_only : fb_cli_print_line;
+    /* a document written to standard output (--junit -) is all it carries: the lines go to stderr */
+    const char *outs[] = {d->diff, d->diff_png, d->flip_png, d->report, d->junit};
+    for (size_t k = 0; k < sizeof outs / sizeof outs[0]; k++)
+        if (outs[k] && !strcmp(outs[k], "-")) d->user = stderr;
     if (cli_check_quiet_json(c->quiet, d->json)) return FB_ERR_USAGE;
     if (d->heat && !d->diff_png)
         return fb_fail(FB_ERR_USAGE, "--heat: only with --diff-png OUT.png (it chooses that picture's colours)");
@@ -205,7 +211,7 @@ static const fb_arg flags[] = {
     {FB_ARG_VALUE, "--warnrelative", NULL, D(warnrelative), .parse = arg_relative},
     {FB_ARG_BOOL, "--ignore-missing", NULL, D(ignore_missing)},
     {FB_ARG_BOOL, "--heat", NULL, D(heat)},
-    {FB_ARG_BOOL, "--json", NULL, D(json)},
+    {FB_ARG_DOCUMENT, "--json", NULL, D(json)},
     {FB_ARG_BOOL, "--quiet", NULL, offsetof(compare_opts, quiet)},
     {FB_ARG_INT, "--threads", NULL, D(threads), 1, 1024},
     {FB_ARG_BOOL, "--help", "-h", offsetof(compare_opts, help)},

@@ -98,7 +98,7 @@ static fb_result run(const fb_cli *cli, void *opts)
 
 static const fb_arg flags[] = {
     {FB_ARG_STRING, "--device", NULL, offsetof(devices_opts, device)},
-    {FB_ARG_BOOL, "--json", NULL, offsetof(devices_opts, json)},
+    {FB_ARG_DOCUMENT, "--json", NULL, offsetof(devices_opts, json)},
     {FB_ARG_IGNORED, "--quiet"}, /* nothing to leave out: the list is the output */
     {FB_ARG_BOOL, "--help", "-h", offsetof(devices_opts, help)},
     {FB_ARG_END},

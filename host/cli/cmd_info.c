@@ -26,7 +26,7 @@ static fb_result run(const fb_cli *cli, void *opts)
 }
 
 static const fb_arg flags[] = {
-    {FB_ARG_BOOL, "--json", NULL, offsetof(info_opts, json)},
+    {FB_ARG_DOCUMENT, "--json", NULL, offsetof(info_opts, json)},
     {FB_ARG_IGNORED, "--quiet"}, /* nothing to leave out: the description is the output */
     {FB_ARG_BOOL, "--help", "-h", offsetof(info_opts, help)},
     {FB_ARG_END},

@@ -32,8 +32,6 @@ static fb_result run(const fb_cli *cli, void *opts)
     if (!m->parts.n)
         return fb_fail(FB_ERR_USAGE, "merge: no region files given (fractalbake merge PARTS... -o OUT.exr)");
     if (cli_check_quiet_json(m->quiet, m->json)) return FB_ERR_USAGE;
-    if (m->json && !strcmp(m->out, "-"))
-        return fb_fail(FB_ERR_USAGE, "--json: standard output holds the EXR (-o -): one or the other");
     double t0 = fb_now();
     fb_result rc = fb_merge(&(fb_merge_desc){.paths = m->parts.v,
                                              .n = m->parts.n,
@@ -60,7 +58,7 @@ static const fb_arg flags[] = {
     {FB_ARG_INT, "--zip-level", NULL, M(zip_level), 1, EXRIO_ZIP_LEVEL_MAX},
     {FB_ARG_VALUE, "--max-memory", NULL, M(max_memory), .parse = fb_arg_memory},
     {FB_ARG_BOOL, "--quiet", NULL, M(quiet)},
-    {FB_ARG_BOOL, "--json", NULL, M(json)},
+    {FB_ARG_DOCUMENT, "--json", NULL, M(json)},
     {FB_ARG_BOOL, "--help", "-h", M(help)},
     {FB_ARG_END},
 };

@@ -94,7 +94,7 @@ static const fb_arg flags[] = {
     {FB_ARG_LIST, "--set", NULL, offsetof(plan_opts, sets)},
     {FB_ARG_INT, "--tasks", NULL, offsetof(plan_opts, ntasks), 1, FB_PLAN_MAX_TASKS},
     {FB_ARG_VALUE, "--task-startup", NULL, offsetof(plan_opts, startup), .parse = fb_arg_seconds},
-    {FB_ARG_BOOL, "--json", NULL, offsetof(plan_opts, json)},
+    {FB_ARG_DOCUMENT, "--json", NULL, offsetof(plan_opts, json)},
     {FB_ARG_IGNORED, "--quiet"}, /* it prints the plan and nothing else */
     {FB_ARG_BOOL, "--help", "-h", offsetof(plan_opts, help)},
     {FB_ARG_END},

@@ -1,6 +1,6 @@
 /*
  * The commands of the command line, one fb_command each, one file each under host/cli/ (cmd_*.c and
- * the commands with files of their own: tonemap.c, generators.c, bench.c). main.c only finds the
+ * the commands with files of their own: generators.c, bench.c). main.c only finds the
  * command, parses its argv with the command's table (args.h) into the command's options struct,
  * runs it, and then commits the outputs, prints the summary and exits.
  */

@@ -77,7 +77,7 @@ static fb_result run(const fb_cli *cli, void *opts)
 }
 
 static const fb_arg flags[] = {
-    {FB_ARG_BOOL, "--json", NULL, offsetof(generators_opts, json)},
+    {FB_ARG_DOCUMENT, "--json", NULL, offsetof(generators_opts, json)},
     {FB_ARG_BOOL, "--help", "-h", offsetof(generators_opts, help)},
     {FB_ARG_END},
 };

@@ -311,6 +311,17 @@ static void free_unstarted(exrio_writer *w)
     free(w);
 }
 
+/* True where a channel is colour: R, G or B, alone or as LAYER.R (OpenEXR's naming). */
+static bool file_has_colour(const exrio_writer_desc *d)
+{
+    for (int c = 0; c < d->nchannels; c++) {
+        const char *n = d->channels[c].name, *dot = strrchr(n, '.');
+        const char *last = dot ? dot + 1 : n;
+        if (!strcmp(last, "R") || !strcmp(last, "G") || !strcmp(last, "B")) return true;
+    }
+    return false;
+}
+
 fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
 {
     fb_result rc = FB_OK;
@@ -368,6 +379,14 @@ fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
                 er = exr_add_channel(
                     w->ctx, part, d->channels[c].name, pixel_type(d->channels[c].type),
                     d->channels[c].type == EXRIO_UINT ? EXR_PERCEPTUALLY_LINEAR : EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+        /* a file that holds colour says which: scene-linear Rec. 709 primaries, D65 white (ITU-R
+         * BT.709), so that a colour-managed tool need not guess. OpenEXR makes chromaticities a shared
+         * attribute of a multi-part file (every part the same value, or none: "non-conforming shared
+         * attributes" otherwise), so every part carries it when any part has colour. */
+        if (er == EXR_ERR_SUCCESS && file_has_colour(d)) {
+            const exr_attr_chromaticities_t rec709 = {0.64f, 0.33f, 0.30f, 0.60f, 0.15f, 0.06f, 0.3127f, 0.3290f};
+            er = exr_attr_set_chromaticities(w->ctx, part, "chromaticities", &rec709);
+        }
         /* every part is an image of the same sphere, so each says so (OpenEXR: 0 latlong, 1 cube) */
         if (er == EXR_ERR_SUCCESS && d->envmap != EXRIO_ENVMAP_NONE)
             er = exr_attr_set_envmap(w->ctx, part, "envmap",

@@ -48,6 +48,16 @@ static bool scan(const uint32_t *w, size_t n, size_t *cap_end, size_t *mode_end,
     return *cap_end && *mode_end && *nentries > 0;
 }
 
+const uint32_t *spv_variant(const uint32_t *spv, size_t words, bool native, size_t *out_words)
+{
+    *out_words = words;
+    if (words < 12 || spv[words - 1] != SPV_VARIANTS_MAGIC || spv[words - 2] < 5 || spv[words - 2] > words - 7)
+        return spv;
+    size_t portable = spv[words - 2];
+    *out_words = native ? words - 2 - portable : portable;
+    return native ? spv + portable : spv;
+}
+
 bool spv_uses_float64(const uint32_t *spv, size_t words)
 {
     size_t ce, me;

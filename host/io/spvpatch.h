@@ -32,6 +32,14 @@ typedef struct spv_float_modes {
 fb_result spv_add_float_controls(const uint32_t *spv, size_t words, spv_float_modes m32, spv_float_modes m64,
                                  uint32_t **out, size_t *out_words);
 
+/* The build embeds each shader as two modules in one array (cmake/spvexact.c): the portable one,
+ * then a native one in which K_EXACT_NATIVE (kernels/exact.h) is the constant true and the portable
+ * division's code is gone, then two words: the portable module's length and SPV_VARIANTS_MAGIC.
+ * The module to use (native: the device's own division is exact) and its length in *out_words; an
+ * array without the trailer (SPIR-V from a file) is returned whole. */
+#define SPV_VARIANTS_MAGIC 0x564e4246u /* "FBNV" */
+const uint32_t *spv_variant(const uint32_t *spv, size_t words, bool native, size_t *out_words);
+
 /* True where the module declares the Float64 capability (it computes in double). */
 bool spv_uses_float64(const uint32_t *spv, size_t words);
 

@@ -81,7 +81,9 @@ fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, v
     const vkc_device_info *in = &ctx->info;
     uint32_t *code = NULL;
     size_t words = 0;
-    rc = spv_add_float_controls(desc->spv, desc->spv_size / 4, (spv_float_modes){in->rte32, in->denorm32, in->szinp32},
+    size_t nmod = 0;
+    const uint32_t *mod = spv_variant(desc->spv, desc->spv_size / 4, in->exact_native, &nmod);
+    rc = spv_add_float_controls(mod, nmod, (spv_float_modes){in->rte32, in->denorm32, in->szinp32},
                                 (spv_float_modes){in->rte64, in->denorm64, in->szinp64}, &code, &words);
     if (rc) goto fail;
     VkShaderModuleCreateInfo smci = {
@@ -94,7 +96,8 @@ fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, v
     VKC_CHECK(made, fail);
     /* Specialization lets the device compiler fold uniform choices (noise kind, style flags) away:
      * on lavapipe every branch it cannot prove uniform costs both sides. Every pipeline also gets
-     * K_SPEC_EXACT_NATIVE (kernels/exact.h): the device's own division where it is known exact. */
+     * K_SPEC_EXACT_NATIVE (kernels/exact.h): the device's own division where it is known exact (the
+     * native variant has it as a constant already; the portable one's answer then stays false). */
     VkSpecializationMapEntry entries[9];
     uint32_t data[9];
     for (uint32_t i = 0; i < nspec; i++) {

@@ -69,11 +69,12 @@ printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "op
 printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": "h", "extent": 0}]}' > eext.json
 printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": "h.Z"}]}' > echan.json
 printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode", "input": "h", "talus": 90}]}' > etal.json
-mkdir -p unreadable.json adir adir.ply adir.png
+mkdir -p unreadable.json adir adir.ply adir.png adir.exr
 mkfifo afifo afifo.exr
 echo precious > victim.txt
 ln -s victim.txt alink
 ln -s victim.txt alink.png
+ln -s victim.txt alink.exr
 "$FB" fbm $N --size 16x16 -o small.exr --quiet
 "$FB" fbm $N --size 16x16 --seed 2 -o small2.exr --quiet
 "$FB" fbm $N --size 32x16 -o wide.exr --quiet
@@ -121,7 +122,19 @@ printf '{"size": [32, 16], "layers": [{"type": "julia", "name": "sky", "palette"
 printf '{"size": [32, 16], "layers": [{"type": "ifs", "name": "fern", "palette": "ice",\n "cosine": [0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 1, 1, 1, 0, 0.33, 0.67]}]}' > palcos.json
 printf '{"size": [32, 16], "layers": [{"type": "lsystem", "name": "tree", "palette": "ice"}]}' > palonly.json
 printf '{"size": [32, 16], "layers": [{"type": "julia", "name": "sky", "stops": [[0, 0, 0, 0], [1, 1, 1, 1]]}]}' > stopsonly.json
+# inputs an output must not replace, under names of the outputs' kinds
+cp small.exr in.html && cp small2.exr inb.xml && cp ok.flame okflame.exr && cp pts.csv pts.obj && cp two.ifs two.csv
+ln small.exr hard.exr && ln -s small.exr lsmall.exr
+"$FB" fbm $N --size 16x16 -o hm.exr --quiet
+"$FB" fbm $N --size 16x16 -o pab.exr --preview pa.png --quiet && "$FB" fbm $N --size 16x16 --seed 3 -o pab.exr --preview pb.png --quiet && rm pab.exr
+"$FB" ifs $N --size 32x32 --points 10000 -o if.exr --quiet
+printf '{"size": [65, 1], "layers": [{"type": "constrain", "profile": "prof.csv", "csv": "scene.csv"}]}' > scene.csv
 before=$(ls -A | sort)
+# every regular file's inode, size and time, to check that no row replaced or changed one (and its
+# bytes, checked once after the table)
+sums() { find . -maxdepth 1 -type f -printf '%i %s %T@ %p\n' | sort; }
+sums_before=$(sums)
+bytes_before=$(find . -maxdepth 1 -type f -exec md5sum {} + | sort -k2)
 vk=0
 have_vulkan && vk=1
 
@@ -147,11 +160,15 @@ while IFS=$'\t' read -r code needs pat args; do
     bad "[$args] stderr lacks '$pat': $err"
   elif [ "$after" != "$before" ]; then
     bad "[$args] left files: $(comm -13 <(echo "$before") <(echo "$after") | tr '\n' ' ')"
+  elif [ "$(sums)" != "$sums_before" ]; then
+    bad "[$args] changed a file: $(comm -13 <(echo "$sums_before") <(sums) | tr '\n' ' ')"
+    sums_before=$(sums) # the next rows are judged on their own
   else
     ok
   fi
   [ "$after" = "$before" ] || comm -13 <(echo "$before") <(echo "$after") | xargs -r rm -rf # the next row starts clean
 done < "$TABLE"
+check "every fixture byte-identical after the table" test "$(find . -maxdepth 1 -type f -exec md5sum {} + | sort -k2)" = "$bytes_before"
 check "the fixtures were not written through" test "$(cat victim.txt)" = precious -a -c /dev/null -a -p afifo
 echo "$rows rows ($skipped need Vulkan and were not run)"
 [ "$rows" -ge 120 ] && ok || bad "the table has $rows rows, fewer than 120"

@@ -124,4 +124,20 @@ check "  and the same colour FLIP" sh -c "cmp tc1.json tc2.json && cmp tc1.json 
 check "  (the report holds three FLIP layers and idiff's block)" \
   test "$(json_get tj1.json "len(r['flip']), 'idiff' in r")" = "3 True"
 check "--threads 0 is bad usage" test "$(code t1.exr t2.exr --threads 0)" = 2
+
+# standard output carries one document: the JUnit file alone (the lines go to stderr), never it and
+# the --json summary, nor two files
+"$FB" compare t1.exr t2.exr --fail 0.01 --junit - > ju.xml 2> ju.txt
+check "--junit -: exit 1 (beyond --fail)" test $? = 1
+check "  standard output is the JUnit XML alone" python3 -c "import xml.dom.minidom as m; m.parse('ju.xml')"
+check "  the lines went to stderr" grep -q "^result: FAIL" ju.txt
+for two in "--junit - --json" "--json --junit -" "--report - --json" "--report - --junit -" "--diff - --json"; do
+  # shellcheck disable=SC2086
+  "$FB" compare t1.exr t2.exr --fail 0.01 $two > two.out 2> two.txt
+  rc=$?
+  check "$two: exit $rc, wanted 2" test $rc = 2
+  check "  nothing on standard output ($(wc -c < two.out) bytes)" test ! -s two.out
+  check "  one line naming standard output: $(cat two.txt)" \
+    sh -c 'test "$(wc -l < two.txt)" = 1 && grep -q "standard output .*carries" two.txt'
+done
 cli_finish

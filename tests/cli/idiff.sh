@@ -3,7 +3,8 @@
 # mean error, RMS error, peak SNR, max error and the pixels over the warning and failure thresholds
 # (with -failrelative too), each equal to idiff's printed value at its printed precision; idiff's
 # single-dash flags are taken (or answered with ours); --allowfailures and --failrelative give
-# idiff's verdicts (exit 0 where idiff passes, 1 where it fails).
+# idiff's verdicts (exit 0 where idiff passes, 1 where it fails); --hardfail beside idiff's verdict
+# for each combination of -fail, -failpercent and -hardfail.
 # Usage: idiff.sh PATH/TO/fractalbake
 . "$(dirname "$0")/lib.sh"
 cli_init "$@"
@@ -72,6 +73,61 @@ check "idiff's -o is answered with --diff" test "$(v -o d.exr)" = 2
 check "  naming it" grep -q -- "-o: idiff's flag; fractalbake compare: the difference image: --diff OUT.exr" err.txt
 check "--allowfailures 1.5 is refused" test "$(v --allowfailures 1.5)" = 2
 check "  with one line" grep -q "expected a whole number of pixels >= 0" err.txt
+# --hardfail fails on any pixel beyond it, whatever --fail and --failpercent say: each combination
+# of the three beside idiff's own verdict on the same pair and flags. Pair A: one.exr and a3.exr, one
+# pixel of 64 off by 1.53; pair B: one.exr and onep.exr, 60 off by 0.1 and 4 by 1.9. Columns: pair,
+# flags, compare's exit (1 fail), idiff's exit (2 fail, 1 warn, 0 pass), and where the verdicts
+# differ, why. idiff 2.4 skips -hardfail while no pixel is beyond -fail (its -allowfailures 0 lets
+# them pass), against its help ("Fail if any one pixel exceeds this error"); with only --hardfail,
+# compare has no per-pixel --fail test (idiff's default -fail is 1e-6).
+oiiotool --create 8x8 1 --fill:color=1 8x8+0+0 --fill:color=2.53 1x1+3+3 -d float -o a3.exr
+rows=0
+while IFS='|' read -r pair flags want iwant why; do
+  [ -n "$pair" ] || continue
+  rows=$((rows + 1))
+  b=$([ "$pair" = A ] && echo a3.exr || echo onep.exr)
+  # shellcheck disable=SC2086
+  "$FB" compare one.exr $b $flags > /dev/null 2> err.txt
+  ours=$?
+  # shellcheck disable=SC2086
+  idiff $flags one.exr $b > /dev/null
+  theirs=$?
+  check "hardfail table, $pair $flags: compare exits $ours, wanted $want ($(cat err.txt))" test $ours = "$want"
+  check "hardfail table, $pair $flags: idiff exits $theirs, wanted $iwant" test $theirs = "$iwant"
+  if [ -z "$why" ]; then
+    check "hardfail table, $pair $flags: the same verdict as idiff" test $((ours == 1)) = $((theirs == 2))
+  else
+    check "hardfail table, $pair $flags: a verdict unlike idiff's ($why)" test $((ours == 1)) != $((theirs == 2))
+  fi
+done << 'TABLE'
+A|-fail 1|1|2|
+A|-fail 2|0|0|
+A|-failpercent 50|0|1|
+B|-failpercent 50|1|2|
+A|-hardfail 1|1|2|
+A|-hardfail 2|0|2|compare: with only --hardfail, no per-pixel --fail test
+B|-fail 0.05 -failpercent 50|1|2|
+B|-fail 1 -failpercent 10|0|1|
+A|-fail 1 -hardfail 0.1|1|2|
+A|-fail 1 -hardfail 2|1|2|
+A|-fail 10 -hardfail 0.1|1|0|idiff skips -hardfail with no pixel beyond -fail
+A|-fail 10 -hardfail 2|0|0|
+B|-failpercent 100 -hardfail 1|1|2|
+B|-failpercent 100 -hardfail 2|0|1|
+A|-fail 10 -failpercent 100 -hardfail 0.1|1|0|idiff skips -hardfail with no pixel beyond -fail
+B|-fail 0.5 -failpercent 10 -hardfail 1|1|2|
+B|-fail 2 -failpercent 10 -hardfail 1|1|0|idiff skips -hardfail with no pixel beyond -fail
+B|-fail 0.5 -failpercent 10 -hardfail 3|0|1|
+B|-fail 0.01 -failpercent 99 -hardfail 1 -allowfailures 3|1|2|
+B|-fail 0.01 -failpercent 100 -hardfail 1 -allowfailures 4|1|2|
+B|-fail 0.01 -failpercent 100 -hardfail 1 -allowfailures 64|0|0|
+B|-fail 1 -hardfail 0.5 -allowfailures 4|0|0|
+B|-fail 1 -hardfail 0.05 -allowfailures 4|1|0|idiff's allowance counts only the 4 pixels beyond -fail, not the 64 beyond -hardfail
+TABLE
+check "the hardfail table has $rows rows" test $rows = 23
+"$FB" compare one.exr a3.exr -fail 10 -failpercent 100 -hardfail 0.1 --junit hf.xml > /dev/null
+check "  its JUnit case fails too" grep -q 'name="no pixel beyond 0.1".*<failure' hf.xml
+
 # a non-finite value in one file only: a failing pixel in idiff's counts, and the errors at their
 # worst (mean and RMS error inf, peak SNR -inf, the max error inf where it is), as in every statistic
 oiiotool one.exr --fill:color=1e39 1x1+3+2 -d float -o inf.exr

@@ -39,25 +39,26 @@ for m in 027 000 077; do
 done
 
 # ---- 3. only regular files are replaced ----
-mkdir adir adir.ply && mkfifo afifo && ln -s victim.txt alink
-expect_fail 2 "adir: exists and is a directory" "" -- fbm $N --size 16x16 -o adir
-expect_fail 2 "afifo: exists and is a FIFO" "" -- fbm $N --size 16x16 -o afifo
-expect_fail 2 "alink: exists and is a symbolic link" "" -- fbm $N --size 16x16 -o alink
-expect_fail 2 "alink: exists and is a symbolic link" p.exr -- fbm $N --size 16x16 -o p.exr --preview alink
+mkdir adir.exr adir.ply && mkfifo afifo.exr && ln -s victim.txt alink.exr && ln -s victim.txt alink.png
+expect_fail 2 "adir.exr: exists and is a directory" "" -- fbm $N --size 16x16 -o adir.exr
+expect_fail 2 "afifo.exr: exists and is a FIFO" "" -- fbm $N --size 16x16 -o afifo.exr
+expect_fail 2 "alink.exr: exists and is a symbolic link" "" -- fbm $N --size 16x16 -o alink.exr
+expect_fail 2 "alink.png: exists and is a symbolic link" p.exr -- fbm $N --size 16x16 -o p.exr --preview alink.png
 expect_fail 2 "adir.ply: exists and is a directory" p.exr -- terrain $N --points pts.csv --size 16x16 --mesh adir.ply -o p.exr
-expect_fail 2 "/dev/null: exists and is a character device" "" -- fbm $N --size 16x16 -o /dev/null
-check "the link's target is untouched" test "$(cat victim.txt)" = precious -a -L alink -a -p afifo
+expect_fail 2 "/dev/null: exists and is a character device" "" -- constrain $N --size 65x1 --csv /dev/null -o p.exr
+expect_fail 2 "-o /dev/null: this writes OpenEXR: name the file .exr" "" -- fbm $N --size 16x16 -o /dev/null
+check "the link's target is untouched" test "$(cat victim.txt)" = precious -a -L alink.exr -a -p afifo.exr
 check "/dev/null is still a device" test -c /dev/null
 
 # ---- 4. all outputs of a run commit together ----
-expect_fail 2 "x: named as the output and as the preview" x -- fbm $N --size 16x16 -o x --preview x
-expect_fail 2 "named as the output and as the preview" x -- fbm $N --size 16x16 -o x --preview ./x
+expect_fail 2 "x.png: named as the preview and as the heightmap" x.png -- fbm $N --size 16x16 -o x.exr --preview x.png --heightmap x.png
+expect_fail 2 "named as the preview and as the heightmap" x.png -- fbm $N --size 16x16 -o x.exr --preview x.png --heightmap ./x.png
 expect_fail 2 "x.exr: this writes PNG" x.exr -- fbm $N --size 16x16 -o x.exr --preview x.exr
 mkdir -p sub
-expect_fail 2 "m.ply: named as the preview and as the mesh" x.exr -- terrain $N --points pts.csv --size 16x16 --mesh m.ply --preview sub/../m.ply -o x.exr
+expect_fail 2 "m.png: named as the preview and as the heightmap" x.exr -- terrain $N --points pts.csv --size 16x16 --heightmap m.png --preview sub/../m.png -o x.exr
 "$FB" fbm $N --size 16x16 -o c1.exr && "$FB" fbm $N --size 16x16 --seed 2 -o c2.exr
-"$FB" compare c1.exr c2.exr --diff d.exr --diff-png d.exr > /dev/null 2> cmp.txt
-check "compare: --diff and --diff-png on one path is usage (exit 2)" test $? -eq 2 -a ! -e d.exr
+"$FB" compare c1.exr c2.exr --diff-png d.png --flip-png d.png > /dev/null 2> cmp.txt
+check "compare: --diff-png and --flip-png on one path is usage (exit 2)" test $? -eq 2 -a ! -e d.png
 # A target that turns into a directory while the bake runs: the EXR is not renamed either.
 echo old > late.exr
 "$FB" julia $N --size 3000x3000 -o late.exr --preview late.png 2> late.txt &
@@ -201,6 +202,53 @@ if ${CC:-cc} -shared -fPIC -o noflock.so noflock.c 2> /dev/null; then
   check "... a folder that locks: no such line" test "$(grep -c 'cannot lock' lk.txt)" = 0
 else
   echo "no C compiler: the no-flock case was not run"
+fi
+
+# A KILL between the renames of a commit (a rename shim that stops the process before its second
+# rename of a temporary file): the EXR is new, the preview, mesh and heightmap old, their hidden
+# temporary files left. The next run that writes into the folder removes them, with one line naming
+# the incomplete set and the files it did not replace (that a live run's are left alone, whatever its
+# pid: tests/test_output.c).
+cat > stoprename.c << 'C'
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+int rename(const char *from, const char *to)
+{
+    static int n;
+    int (*real)(const char *, const char *) = (int (*)(const char *, const char *))dlsym(RTLD_NEXT, "rename");
+    const char *stop = getenv("STOP_BEFORE_RENAME");
+    size_t len = strlen(from);
+    if (stop && len > 4 && !strcmp(from + len - 4, ".tmp") && ++n == atoi(stop)) raise(SIGKILL);
+    return real(from, to);
+}
+C
+if ${CC:-cc} -shared -fPIC -o stoprename.so stoprename.c -ldl 2> /dev/null; then
+  mkdir kr
+  for f in k.exr k.png k.ply k.r16; do echo old > kr/$f; done
+  # (anonymous files too are given their hidden names before the first rename)
+  (cd kr && STOP_BEFORE_RENAME=2 LD_PRELOAD=$T/stoprename.so ASAN_OPTIONS=${ASAN_OPTIONS:+$ASAN_OPTIONS:}verify_asan_link_order=0 \
+    exec "$FB" terrain $N --points ../pts.csv --size 64x64 -o k.exr --preview k.png --mesh k.ply --heightmap k.r16)
+  rc=$?
+  check "KILL between renames: exit $rc, wanted 137" test $rc -eq 137
+  check "  the EXR is new, the rest old" sh -c '! grep -q old kr/k.exr && grep -q old kr/k.png && grep -q old kr/k.ply && grep -q old kr/k.r16'
+  left=$(ls -A kr | grep -c '\.tmp$')
+  check "  three temporary files left ($left)" test "$left" -eq 3
+  set_id=$(ls -A kr | sed -n 's/^\.k\.png\.[0-9]*\.\([0-9a-f]\{16\}\)\..*\.tmp$/\1/p')
+  "$FB" fbm --backend native --size 16x16 -o kr/next.exr 2> next.txt
+  check "  the next run into the folder bakes" test $? -eq 0 -a -s kr/next.exr
+  check "  and removed them: $(ls -A kr | tr '\n' ' ')" test "$(ls -A kr | grep -c '^\.k\..*\.tmp$')" -eq 0
+  check "  one line naming the set $set_id: $(cat next.txt)" \
+    test "$(grep -c "removed 3 temporary files of an incomplete set of outputs in kr (set $set_id of process" next.txt)" -eq 1
+  check "  and what was not replaced" grep -q "k.ply, k.png, k.r16 were not replaced by that run" next.txt
+  check "  no other warning" test "$(grep -c warning next.txt)" -eq 1
+  "$FB" fbm --backend native --size 16x16 -o kr/again.exr 2> again.txt
+  check "  a third run says nothing of it" test "$(grep -c warning again.txt)" -eq 0
+  check "  no temporary file at all" no_temp_files kr
+else
+  echo "no C compiler: the KILL between renames was not run"
 fi
 
 # ---- 10. inputs that are not regular files are refused at once; so are empty constraint sets ----

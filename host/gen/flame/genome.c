@@ -4,7 +4,7 @@
  * unknown variation or attribute) is refused here, so that a genome never renders silently different.
  */
 #include "genome.h"
-#include "textin.h"
+#include "scan.h"
 
 #include <libxml/parser.h>
 #include <libxml/tree.h>
@@ -339,11 +339,11 @@ static fb_result library_palette(const reader *r, const char *palettes, int numb
     size_t len = 0;
     if (fb_flame_slurp(palettes, &text, &len))
         return bad(r, "palette=\"%s\": cannot read flam3's palette library %s", "N", palettes);
-    xmlDocPtr doc =
-        xmlReadMemory(text, (int)len, palettes, NULL, XML_PARSE_NONET | XML_PARSE_NOERROR | XML_PARSE_NOWARNING);
+    xmlDocPtr doc = NULL;
+    fb_result rc = fb_flame_parse(text, len, palettes, &doc);
     free(text);
-    if (!doc) return bad(r, "palette library %s: %s", palettes, "not well-formed XML");
-    fb_result rc = FB_ERR_INPUT;
+    if (rc) return rc;
+    rc = FB_ERR_INPUT;
     for (xmlNodePtr n = xmlDocGetRootElement(doc)->children; n; n = n->next) {
         if (n->type != XML_ELEMENT_NODE || xmlStrcmp(n->name, (const xmlChar *)"palette")) continue;
         xmlChar *num = xmlGetProp(n, (const xmlChar *)"number"), *data = xmlGetProp(n, (const xmlChar *)"data");
@@ -752,7 +752,7 @@ static fb_result parse_flame(reader *r, xmlNodePtr node, const char *palettes, f
 
 fb_result fb_flame_slurp(const char *path, char **text, size_t *len)
 {
-    return fb_input_slurp(path, "flame", (size_t)1 << 30, text, len);
+    return fb_flame_load(path, text, len);
 }
 
 static void find_flames(xmlNodePtr n, xmlNodePtr *out, int *count, int max)
@@ -771,13 +771,9 @@ static void find_flames(xmlNodePtr n, xmlNodePtr *out, int *count, int max)
 fb_result fb_flame_read(const char *xml, size_t len, const char *what, const char *pick, const char *palettes,
                         fb_flame_genome *out, char **element)
 {
-    if (len > (1u << 30)) return fb_fail(FB_ERR_INPUT, "%s: larger than 1 GiB", what);
-    xmlDocPtr doc = xmlReadMemory(xml, (int)len, what, NULL, XML_PARSE_NONET | XML_PARSE_NOERROR | XML_PARSE_NOWARNING);
-    if (!doc) {
-        const xmlError *e = xmlGetLastError();
-        return fb_fail(FB_ERR_INPUT, "%s:%d: not well-formed XML: %s", what, e ? e->line : 0,
-                       e && e->message ? strtok(e->message, "\n") : "parse error");
-    }
+    xmlDocPtr doc = NULL;
+    fb_result prc = fb_flame_parse(xml, len, what, &doc);
+    if (prc) return prc;
     enum { MAXF = 4096 };
     static _Thread_local xmlNodePtr flames[MAXF];
     int count = 0;

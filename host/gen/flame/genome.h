@@ -104,12 +104,14 @@ typedef struct fb_flame_genome {
 
 /* Reads the <flame> named `pick` (its name attribute, or a decimal index from 0; NULL: the first) of
  * the XML text `xml` (`len` bytes; `what` names it in messages: a file path). A palette="N" reads
- * flam3's palette library `palettes`. Errors: FB_ERR_INPUT with one line naming the file, the flame,
- * the xform and the attribute (an unknown variation names the variation). */
+ * flam3's palette library `palettes`. The text is checked as fb_flame_slurp checks a file before its
+ * tree is built. Errors: FB_ERR_INPUT with one line naming the file, the flame, the xform and the
+ * attribute (an unknown variation names the variation), or the line libxml2 stopped at. */
 fb_result fb_flame_read(const char *xml, size_t len, const char *what, const char *pick, const char *palettes,
                         fb_flame_genome *out, char **element);
 
-/* Reads a whole file into memory (NUL-terminated). */
+/* Reads a whole .flame file into memory (NUL-terminated), refusing it by its counts as it streams in
+ * (scan.h: xforms, palette entries, attributes, sizes, entities), before anything large is built. */
 fb_result fb_flame_slurp(const char *path, char **text, size_t *len);
 
 /* Variation number of a flam3 variation name (all 99 of flam3 3.1.1), or -1. */

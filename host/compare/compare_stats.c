@@ -181,10 +181,10 @@ static bool all_finite(const float *a, const float *b, size_t npix)
 static void finite_block(cmp *k, chan_stats *c, float *pd, int y0, const float *a, const float *b, size_t npix)
 {
     const double frel = k->d->failrelative, wrel = k->d->warnrelative, fail = c->fail, warn = c->warn;
-    const double i_warn = k->i_warn, i_fail = k->i_fail;
+    const double i_warn = k->i_warn, i_fail = k->i_fail, hard = c->has_hardfail ? c->hardfail : INFINITY;
     double sum_sq = c->sum_sq, a_lo = c->a_lo, a_hi = c->a_hi, max_abs = c->max_abs;
     double i_sum = 0, i_sq = 0, i_peak = 0, i_max = 0;
-    uint64_t beyond = 0, beyond_warn = 0;
+    uint64_t beyond = 0, beyond_warn = 0, failing = 0;
     size_t max_i = SIZE_MAX, i_maxi = SIZE_MAX;
     bool have = c->max_x >= 0, has_warn = c->has_warn;
     uint8_t *over = c->over;
@@ -195,8 +195,10 @@ static void finite_block(cmp *k, chan_stats *c, float *pd, int y0, const float *
         if (va > a_hi) a_hi = va;
         if (ad > max_abs || (!have && ad > 0)) max_abs = ad, max_i = i, have = true;
         double avg = 0.5 * (fabs(va) + fabs(vb));
-        beyond += ad > fail && ad > frel * avg;
+        bool over_fail = ad > fail && ad > frel * avg;
+        beyond += over_fail;
         beyond_warn += has_warn && ad > warn && ad > wrel * avg;
+        failing += over_fail || ad > hard;
         if (over) {
             i_sum += ad, i_sq += ad * ad;
             if (va > i_peak) i_peak = va;
@@ -208,7 +210,7 @@ static void finite_block(cmp *k, chan_stats *c, float *pd, int y0, const float *
     }
     size_t W = (size_t)k->W;
     c->n += npix, c->sum_sq = sum_sq, c->a_lo = a_lo, c->a_hi = a_hi, c->max_abs = max_abs;
-    c->beyond += beyond, c->beyond_warn += beyond_warn;
+    c->beyond += beyond, c->beyond_warn += beyond_warn, c->failing += failing;
     if (max_i != SIZE_MAX) c->max_x = (int)(max_i % W), c->max_y = y0 + (int)(max_i / W);
     if (!over) return;
     c->i_sum = i_sum, c->i_sq = i_sq, c->i_peak = i_peak, c->i_nvals = npix;
@@ -236,7 +238,7 @@ static void channel_block(cmp *k, int s, int y0, int n, void **A, void **B)
                 if (k->pd) k->pd[s][i] = 0.0f;
                 continue; /* the same in both: no error, and not in idiff's sums */
             }
-            c->nonfinite_mismatch++, c->beyond++, c->beyond_warn++;
+            c->nonfinite_mismatch++, c->beyond++, c->beyond_warn++, c->failing++;
             c->max_abs = ad = INFINITY;
         } else {
             ad = fabs(va - vb);
@@ -251,6 +253,7 @@ static void channel_block(cmp *k, int s, int y0, int n, void **A, void **B)
             bool over_warn = ad > c->warn && ad > k->d->warnrelative * avg;
             if (over_fail) c->beyond++;
             if (c->has_warn && over_warn) c->beyond_warn++;
+            if (over_fail || (c->has_hardfail && ad > c->hardfail)) c->failing++;
         }
         if (c->over) idiff_value(k, c, va, vb, ad, avg, i, y0);
         if (k->pd) k->pd[s][i] = (float)ad;
@@ -332,6 +335,15 @@ fb_result cmp_stream_blocks(cmp *k)
     return k->diff ? exrio_writer_finish(&k->diff) : FB_OK;
 }
 
+/* A pixel fails beyond --fail, and beyond --hardfail whatever --fail says; --allowfailures N lets a
+ * channel with at most N failing pixels pass, idiff's "OK for this number of pixels to fail by any
+ * amount" (idiff 2.4 counts only the pixels beyond -fail, so that its -hardfail is skipped while none
+ * is, against its own help: "Fail if any one pixel exceeds this error"). */
+bool cmp_allowed(const cmp *k, const chan_stats *c)
+{
+    return (long long)c->failing <= k->d->allowfailures && c->nonfinite_mismatch == 0;
+}
+
 /* A channel's statistics and verdict. */
 void cmp_channel_verdict(cmp *k, chan_stats *c)
 {
@@ -346,7 +358,7 @@ void cmp_channel_verdict(cmp *k, chan_stats *c)
 #define FAIL_IF(cond, ...)                                                                                             \
     if (c->verdict != FB_VERDICT_FAIL && (cond))                                                                       \
     c->verdict = FB_VERDICT_FAIL, snprintf(c->why, sizeof c->why, __VA_ARGS__)
-    bool allowed = (long long)c->beyond <= k->d->allowfailures && c->nonfinite_mismatch == 0;
+    bool allowed = cmp_allowed(k, c);
     FAIL_IF(!allowed && c->abs_test && c->pct > c->failpct, "%.4g%% of pixels beyond %g (allowed %g%%%s)", c->pct,
             c->fail, c->failpct, k->d->allowfailures ? " or --allowfailures" : "");
     FAIL_IF(!allowed && c->has_hardfail && c->max_abs > c->hardfail, "max |A - B| %g beyond --hardfail %g", c->max_abs,

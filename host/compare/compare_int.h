@@ -60,6 +60,7 @@ typedef struct chan_stats {
     double sum_sq;
     uint64_t n; /* finite pairs */
     uint64_t beyond, beyond_warn;
+    uint64_t failing; /* pixels beyond --fail or beyond --hardfail: the failing pixels --allowfailures counts */
     uint64_t nonfinite_mismatch; /* NaN/Inf in one file and not the same in the other */
     uint64_t nonfinite_same;
     double a_lo, a_hi;
@@ -144,6 +145,8 @@ fb_result cmp_read_whole(cmp *k);
 /* compare_stats.c */
 fb_result cmp_stream_blocks(cmp *k);
 void cmp_channel_verdict(cmp *k, chan_stats *c);
+/* Whether --allowfailures lets the channel's failing pixels pass (--fail-percent and --hardfail). */
+bool cmp_allowed(const cmp *k, const chan_stats *c);
 void cmp_heat(double t, float rgb[3]);
 double cmp_heat_t(double ad);
 

@@ -1,4 +1,4 @@
-/* Image comparison, for `fractalbake compare`. */
+/* Image comparison, for `fractalbake compare` and anything else that compares two images. */
 #ifndef FB_COMPARE_H
 #define FB_COMPARE_H
 

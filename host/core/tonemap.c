@@ -1,17 +1,8 @@
-/*
- * fractalbake tonemap: re-runs the tone mapping of a layer whose class can re-tone it (gen.h:
- * fb_tone_ops; an ifs layer from the density and colour channels a bake stored) with new tone
- * parameters, without computing the layer again. The output is the input file with that layer's
- * tone-mapped channels recomputed and the scene updated; with the parameters unchanged it
- * reproduces the bake bit for bit (tests/cli/ifs.sh).
- */
-#include "command.h"
+/* Re-toning a stored layer: see tonemap.h. */
+#include "tonemap.h"
 
-#include "cliout.h"
 #include "exrio.h"
-#include "output.h"
 #include "gen.h"
-#include "flags.h"
 #include "scene.h"
 
 #include <jansson.h>
@@ -35,8 +26,7 @@ static void tone_flags(const fb_gen_class *c, char *out, size_t size)
         snprintf(out + strlen(out), size - strlen(out), "%s--%s", t == c->tone->keys ? "" : ", ", *t);
 }
 
-/* The classes that can be re-toned, "ifs, ..." (for messages), and how many. */
-static int tone_classes(char *out, size_t size)
+int fb_tone_classes(char *out, size_t size)
 {
     int n = 0;
     out[0] = 0;
@@ -45,22 +35,12 @@ static int tone_classes(char *out, size_t size)
     return n;
 }
 
-/* How many values flag `flag` takes for some re-tonable class (fb_scene_flag_arity), -1 for none. */
-static int tone_flag_arity(const char *flag)
-{
-    for (const fb_gen_class *const *c = fb_gen_list; *c; c++) {
-        int a = (*c)->tone ? fb_scene_flag_arity((*c)->name, flag) : -1;
-        if (a >= 0) return a;
-    }
-    return -1;
-}
-
-/* Merges the tone flags into layer object `lj` of class c (they are validated as c's flags here); a
- * new colour map replaces the old one of whatever kind. */
-static fb_result apply_flags(const fb_gen_class *c, json_t *lj, int argc, char **argv)
+/* Merges the new tone keys (d->tone's) into layer object `lj` of class c; a new colour map replaces
+ * the old one of whatever kind. */
+static fb_result apply_tone(const fb_tonemap_desc *d, const fb_gen_class *c, json_t *lj)
 {
     char *flags_json = NULL;
-    fb_result rc = fb_scene_from_flags(c->name, argc, argv, &flags_json);
+    fb_result rc = d->tone(c, d->user, &flags_json);
     if (rc) return rc;
     json_t *root = json_loads(flags_json, 0, NULL);
     free(flags_json);
@@ -88,31 +68,9 @@ static fb_result apply_flags(const fb_gen_class *c, json_t *lj, int argc, char *
     return FB_OK;
 }
 
-typedef struct tonemap_opts {
-    fb_arg_list files, flags; /* flags: the tone flags and their values */
-    const char *out, *layer;
-    bool quiet, json, help;
-} tonemap_opts;
-
-static void help(const fb_cli *cli)
+fb_result fb_tonemap(const fb_tonemap_desc *d)
 {
-    (void)cli;
-    char classes[256];
-    tone_classes(classes, sizeof classes);
-    printf("usage: fractalbake tonemap IN.exr -o OUT.exr [--layer NAME] [--brightness B] [--gamma G]\n"
-           "          [--gamma-threshold T] [--vibrancy V] [--highlight-power P] [--palette NAME |\n"
-           "          --cosine ... | --stops ...]\n"
-           "Recomputes the tone-mapped channels of a layer that stores what its tone map reads (%s\n"
-           "layers: R, G, B, A from the density and colour channels) with new tone parameters; the\n"
-           "other channels keep their stored values and the layer is not computed again.\n"
-           "--layer NAME: which layer (default: the first that can be re-toned).\n"
-           "--quiet: no summary line; --json: a JSON summary on standard output.\n",
-           classes);
-}
-
-/* The tone-mapped copy of `in` in `out`. */
-static fb_result tonemap(const char *in, const char *out, const char *layer, int nflags, char **flags)
-{
+    const char *in = d->in, *out = d->out, *layer = d->layer;
     fb_result rc = FB_OK;
     exrio_reader *r = NULL;
     exrio_writer *w = NULL;
@@ -141,11 +99,11 @@ static fb_result tonemap(const char *in, const char *out, const char *layer, int
     }
     if (!rc && !lj) {
         char classes[256];
-        tone_classes(classes, sizeof classes);
+        fb_tone_classes(classes, sizeof classes);
         rc = fb_fail(FB_ERR_INPUT, "%s: no layer%s%s in the stored scene that tonemap can re-tone (%s layers)", in,
                      layer ? " named " : "", layer ? layer : "", classes);
     }
-    if (!rc) rc = apply_flags(cls, lj, nflags, flags);
+    if (!rc) rc = apply_tone(d, cls, lj);
     if (!rc && !(text = json_dumps(root, JSON_SORT_KEYS | JSON_REAL_PRECISION(17))))
         rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     if (!rc) rc = fb_scene_parse(text, NULL, &scene);
@@ -210,52 +168,3 @@ static fb_result tonemap(const char *in, const char *out, const char *layer, int
     free(chans);
     return rc;
 }
-
-static fb_result run(const fb_cli *cli, void *opts)
-{
-    const tonemap_opts *o = opts;
-    if (!o->files.n)
-        return fb_fail(FB_ERR_USAGE, "tonemap: expected an input EXR (fractalbake tonemap IN.exr -o OUT.exr)");
-    if (!o->out) return fb_fail(FB_ERR_USAGE, "-o: missing output file (fractalbake tonemap IN.exr -o OUT.exr)");
-    if (cli_check_quiet_json(o->quiet, o->json)) return FB_ERR_USAGE;
-    double t0 = fb_now();
-    fb_result rc = tonemap(o->files.v[0], o->out, o->layer, o->flags.n, (char **)o->flags.v);
-    if (!rc && o->json)
-        json_object_set_new(fb_cli_summary(cli, "tonemap"), "seconds", json_real(fb_now() - t0));
-    else if (!rc && !o->quiet)
-        cli_after("fractalbake: wrote %s (tone-mapped) in %.2f s", o->out, fb_now() - t0);
-    return rc;
-}
-
-static int flag_arity(const void *data, const char *flag)
-{
-    (void)data;
-    return tone_flag_arity(flag);
-}
-
-#define T(f) offsetof(tonemap_opts, f)
-static const fb_arg flags[] = {
-    {FB_ARG_OUTPUT, "--output", "-o", T(out), .ext = ".exr"},
-    {FB_ARG_STRING, "--layer", NULL, T(layer)},
-    {FB_ARG_BOOL, "--quiet", NULL, T(quiet)},
-    {FB_ARG_BOOL, "--json", NULL, T(json)},
-    {FB_ARG_BOOL, "--help", "-h", T(help)},
-    {FB_ARG_END},
-};
-static const fb_arg *const tables[] = {flags, NULL};
-static const fb_argspec spec = {.flags = tables,
-                                .files_off = T(files),
-                                .max_files = 1,
-                                .too_many = "%s: tonemap takes one input file",
-                                .arity = flag_arity,
-                                .pass_off = T(flags)};
-
-const fb_command fb_cmd_tonemap = {
-    .name = "tonemap",
-    .usage = "  tonemap IN.exr -o OUT.exr [tone]   re-run a chaos game's tone mapping (no new game)\n",
-    .opts_size = sizeof(tonemap_opts),
-    .args = &spec,
-    .help = help,
-    .help_off = T(help),
-    .run = run};
-#undef T

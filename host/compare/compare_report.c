@@ -215,7 +215,7 @@ fb_result cmp_write_junit(cmp *k, double seconds)
     int n = 0;
     for (int q = 0; q < k->nst; q++) {
         const chan_stats *c = &k->st[q];
-        bool allowed = (long long)c->beyond <= k->d->allowfailures && c->nonfinite_mismatch == 0;
+        bool allowed = cmp_allowed(k, c);
         if (c->abs_test)
             add_case(cs, &n, c->name, !allowed && c->pct > c->failpct, false, "at most %g%% of pixels beyond %g",
                      c->failpct, c->fail);
