@@ -37,6 +37,7 @@ typedef struct batch {
     int nchunks[EXRIO_MAX_PARTS];
     void **chunk_data[EXRIO_MAX_PARTS]; /* compressed bytes of each chunk, written in order */
     uint64_t *chunk_size[EXRIO_MAX_PARTS];
+    size_t *chunk_cap[EXRIO_MAX_PARTS]; /* the capacity of its buffer */
     bool done;
     struct batch *next; /* queue link */
 } batch;
@@ -78,6 +79,12 @@ struct exrio_writer {
     char error_msg[600];
     pthread_t *threads;
     int nthreads;
+    /* Chunk buffers given back once written, taken again by the next chunks (under mu): a bake's
+     * chunks need the same few buffers over and over, and a malloc and free of each (hundreds of KiB)
+     * costs page faults wherever the allocator returns them to the system. */
+    void **spare;
+    size_t *spare_cap;
+    int nspare, max_spare;
 };
 
 /* The batch no longer reads its rows: a copy is freed, the caller's rows are released. */
@@ -98,8 +105,34 @@ static void batch_free(batch *b)
         for (int i = 0; i < b->nchunks[p] && b->chunk_data[p]; i++) free(b->chunk_data[p][i]);
         free(b->chunk_data[p]);
         free(b->chunk_size[p]);
+        free(b->chunk_cap[p]);
     }
     free(b);
+}
+
+/* A buffer of at least `need` bytes for a chunk: a spare one, or a new one. */
+static void *chunk_get(exrio_writer *w, size_t need, size_t *cap)
+{
+    void *buf = NULL;
+    pthread_mutex_lock(&w->mu);
+    for (int i = w->nspare - 1; i >= 0 && !buf; i--)
+        if (w->spare_cap[i] >= need) {
+            buf = w->spare[i], *cap = w->spare_cap[i];
+            w->spare[i] = w->spare[w->nspare - 1], w->spare_cap[i] = w->spare_cap[w->nspare - 1];
+            w->nspare--;
+        }
+    pthread_mutex_unlock(&w->mu);
+    if (!buf && (buf = malloc(need))) *cap = need;
+    return buf;
+}
+
+/* A written chunk's buffer given back (w->mu held). */
+static void chunk_put(exrio_writer *w, void *buf, size_t cap)
+{
+    if (w->nspare < w->max_spare)
+        w->spare[w->nspare] = buf, w->spare_cap[w->nspare++] = cap;
+    else
+        free(buf);
 }
 
 static void set_error(exrio_writer *w, fb_result rc, const char *msg)
@@ -160,9 +193,11 @@ static fb_result encode_batch(exrio_writer *w, batch *b, exrzip_state *z, char *
             if (wp->zip) enc.compress_fn = pack_only;
             er = exr_encoding_run(w->ctx, p, &enc);
             if (er != EXR_ERR_SUCCESS) goto exr_fail;
-            if (wp->zip) {
-                rc = exrzip_deflate(z, w->zip_level, enc.packed_buffer, enc.packed_bytes, &b->chunk_data[p][k],
-                                    &b->chunk_size[p][k]);
+            size_t need = wp->zip ? exrzip_bound(z, enc.packed_bytes) : enc.compressed_bytes ? enc.compressed_bytes : 1;
+            b->chunk_data[p][k] = chunk_get(w, need, &b->chunk_cap[p][k]);
+            if (b->chunk_data[p][k] && wp->zip) {
+                rc = exrzip_deflate(z, w->zip_level, enc.packed_buffer, enc.packed_bytes, b->chunk_data[p][k],
+                                    b->chunk_cap[p][k], &b->chunk_size[p][k]);
                 if (rc) {
                     snprintf(msg, msgsz, "out of memory compressing rows %d..%d", y, y + cinfo.height - 1);
                     break;
@@ -170,7 +205,6 @@ static fb_result encode_batch(exrio_writer *w, batch *b, exrzip_state *z, char *
                 continue;
             }
             b->chunk_size[p][k] = enc.compressed_bytes;
-            b->chunk_data[p][k] = malloc(enc.compressed_bytes ? enc.compressed_bytes : 1);
             if (!b->chunk_data[p][k]) {
                 snprintf(msg, msgsz, "out of memory compressing rows %d..%d", y, y + cinfo.height - 1);
                 rc = FB_ERR_NOMEM;
@@ -217,6 +251,10 @@ static void commit_ready(exrio_writer *w)
                     snprintf(m, sizeof m, "%s: cannot spool part %d: %s", w->path, p, strerror(errno));
                     set_error(w, FB_ERR_IO, m);
                 }
+        for (int p = 0; p < w->nparts; p++) /* the chunk buffers, for the next batches */
+            for (int k = 0; k < b->nchunks[p]; k++)
+                if (b->chunk_data[p][k])
+                    chunk_put(w, b->chunk_data[p][k], b->chunk_cap[p][k]), b->chunk_data[p][k] = NULL;
         w->order[w->committed] = NULL;
         batch_free(b);
         w->committed++;
@@ -277,7 +315,8 @@ static batch *batch_new(exrio_writer *w, int y0, const void *const *planes, size
         b->nchunks[p] = (b->nrows + w->parts[p].chunk_rows - 1) / w->parts[p].chunk_rows;
         b->chunk_data[p] = calloc((size_t)b->nchunks[p], sizeof *b->chunk_data[p]);
         b->chunk_size[p] = calloc((size_t)b->nchunks[p], sizeof *b->chunk_size[p]);
-        ok = ok && b->chunk_data[p] && b->chunk_size[p];
+        b->chunk_cap[p] = calloc((size_t)b->nchunks[p], sizeof *b->chunk_cap[p]);
+        ok = ok && b->chunk_data[p] && b->chunk_size[p] && b->chunk_cap[p];
     }
     if (!ok) {
         batch_free(b);
@@ -448,7 +487,12 @@ fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
     w->nthreads = d->threads > 0 ? d->threads : fb_cpu_count();
     w->max_in_flight = 2 * w->nthreads + 2;
     w->threads = calloc((size_t)w->nthreads, sizeof *w->threads);
-    if (!w->order || !w->threads) {
+    int most = 0; /* chunks of a batch, in its part of most */
+    for (int p = 0; p < w->nparts; p++) most += w->batch_rows / w->parts[p].chunk_rows;
+    w->max_spare = (w->max_in_flight + 1) * most;
+    w->spare = calloc((size_t)w->max_spare, sizeof *w->spare);
+    w->spare_cap = calloc((size_t)w->max_spare, sizeof *w->spare_cap);
+    if (!w->order || !w->threads || !w->spare || !w->spare_cap) {
         rc = fb_fail(FB_ERR_NOMEM, "out of memory");
         goto fail;
     }
@@ -581,6 +625,9 @@ static void writer_free(exrio_writer *w)
     free(w->order);
     free(w->threads);
     free(w->types);
+    for (int i = 0; i < w->nspare; i++) free(w->spare[i]);
+    free(w->spare);
+    free(w->spare_cap);
     for (int p = 0; p < EXRIO_MAX_PARTS; p++) {
         free(w->parts[p].file_order);
         if (w->parts[p].spool) fclose(w->parts[p].spool);
