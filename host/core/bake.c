@@ -118,19 +118,20 @@ static void plan_fill(const fb_engine *e, const fb_bake_desc *d, const layer_run
     plan->nlayers = s->nlayers;
     plan->piece_rows = sh->rows;
     plan->slots = sh->slots;
-    plan->base = e->kind == FB_BACKEND_VULKAN ? (uint64_t)96 << 20 : (uint64_t)12 << 20;
+    plan->base = e->kind == FB_BACKEND_VULKAN ? (uint64_t)80 << 20 : (uint64_t)12 << 20;
     bool unified = e->vk && vkc_info(e->vk)->unified;
-    /* A CPU device (lavapipe) compiles each pipeline with LLVM in this process, before the pieces
-     * stream, one pipeline at a time: for the module it compiles (the native variant where the
-     * device divides exactly, spvpatch.h) of s bytes, about 712 s + s^2 / 232 bytes at the peak
-     * (one-layer bakes on Mesa 22.3.6, 2026-12-04, RSS above a bake with the smallest shader: lsys's
-     * 11.6 KB 10 MiB, stars' 27 KB 20 MiB, fbm's 44 KB 38 MiB, julia's 102 KB 85 MiB, fbm_env's
-     * 96 KB 110 MiB, julia_env's 162 KB 218 MiB). */
+    /* A CPU device (lavapipe) compiles each pipeline with LLVM in this process, one at a time, before
+     * the pieces' buffers exist (pieces.c gives the compiler's freed memory back to the system
+     * then). For the module it compiles (the native variant where the device divides exactly,
+     * spvpatch.h) of s bytes, about 600 s + s^2 / 232 bytes at the peak: one-layer bakes on Mesa
+     * 22.3.6, 2026-12-04, peak RSS above `fractalbake devices` (61 MiB): lsys's 11.6 KB 10 MiB,
+     * stars' 27 KB 20 MiB, fbm's 44 KB 38 MiB, julia's 102 KB 85 MiB, fbm_env's 96 KB 110 MiB,
+     * julia_env's 162 KB 218 MiB. */
     for (int i = 0; i < s->nlayers && e->vk && !strcmp(vkc_info(e->vk)->type, "cpu"); i++) {
         const fb_gen_shader *sh = &runs[i].gen.compute.shader;
         size_t words = 0;
         if (runs[i].where == RUN_GPU) spv_variant(sh->spv, sh->spv_size / 4, vkc_info(e->vk)->exact_native, &words);
-        uint64_t spv = (uint64_t)words * 4, bytes = 712 * spv + spv * spv / 232;
+        uint64_t spv = (uint64_t)words * 4, bytes = 600 * spv + spv * spv / 232;
         if (bytes > plan->compile) plan->compile = bytes;
     }
     uint64_t hold_sum = 0, extra_max = 0;

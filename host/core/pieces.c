@@ -151,9 +151,16 @@ fb_result pieces_create(fb_engine *e, layer_run *runs, int nlayers, const bake_s
     p->plane_bytes = (size_t)p->width * (size_t)shape->rows * 4;
     p->slots = calloc((size_t)shape->slots, sizeof *p->slots);
     fb_result rc = p->slots ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory");
+    /* The pipelines first: a CPU device's compiler frees its memory before the pieces' buffers exist,
+     * and that memory is given back to the system (it would otherwise stay in the allocator's heap,
+     * beside the buffers, at the peak). */
     for (int i = 0; i < nlayers && !rc; i++) {
         fb_log_context("layer %s", runs[i].gen.layer->name);
         if (runs[i].where == RUN_GPU) rc = gpu_layer(p, i);
+    }
+    fb_release_free_memory();
+    for (int i = 0; i < nlayers && !rc; i++) {
+        fb_log_context("layer %s", runs[i].gen.layer->name);
         for (int t = 0; t < shape->slots && !rc; t++) {
             p->slots[t].ring = p;
             rc = runs[i].where == RUN_GPU ? slot_gpu(p, &p->slots[t], i) : slot_host(p, &p->slots[t], i);
