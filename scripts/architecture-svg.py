@@ -20,7 +20,8 @@ W = 900
 # a folder's place: (row, left, right) and what it holds, in a line
 PLACES = {
     "gen": (0, 20, 520, "the one list of generators, fb_gen_list[]"),
-    "cli": (0, 560, 880, "the commands: argv, environment, what is printed"),
+    "cli": (0, 560, 710, "the commands: argv, environment, print"),
+    "lib": (0, 730, 880, "libfractalbake: its API"),
     "compare": (1, 560, 880, "images compared: statistics, FLIP, SSIM, reports"),
     "core": (2, 20, 620, "scene, schema, gen.h (fb_gen_class), engines, bake, plan, merge"),
     "geom": (2, 660, 880, "exact predicates, Delaunay"),

@@ -2,7 +2,7 @@
 # Checks the structure of host/ (docs/architecture.md), naming each breach, exit 1 on any:
 # - every include goes down: a folder may include its own headers and those of the folders its
 #   library links (CMakeLists.txt), never one above or beside it:
-#     base <- geom, io <- core <- gen/NAME <- gen (the list); core <- compare <- cli
+#     base <- geom, io <- core <- gen/NAME <- gen (the list); core <- compare <- cli, lib
 #   A generator may use another generator's header, or geom's, only where CMakeLists.txt links the
 #   two (listed below; tests/rules.py checks that the lists are the same);
 # - no loop of includes: no header includes itself through others;
@@ -29,6 +29,7 @@ allowed() {
     gen) echo "gen base io core geom $gens" ;;
     compare) echo "compare base io core" ;;
     cli) echo "cli base io core compare" ;;
+    lib) echo "lib base io core compare" ;;
     *) echo "" ;;
     esac
 }
@@ -56,6 +57,8 @@ while IFS= read -r line; do
     # generated at build time: SPIR-V (NAME_comp.h) and the embedded default scene (core only)
     case $h in kernels/* | *_comp.h) continue ;; esac
     [ "$h" = default_scene.h ] && [ "$dir" = core ] && continue
+    # the installed API (include/fractalbake.h), which the library implements
+    [ "$h" = fractalbake.h ] && [ "$dir" = lib ] && continue
     where=${home[${h##*/}]:-}
     if [ -z "$where" ] || [ "$h" != "${h##*/}" ]; then
         echo "check-layers: host/$f: #include \"$h\": not a header of host/ by its name" >&2

@@ -11,8 +11,9 @@ libqhull-dev clang python3 libdeflate-dev openimageio-tools libtiff-dev libgeoti
 libxml2-dev libflam3-dev"
 # --test: also what only the tests use (a real one-node Slurm for tests/cli/slurm.sh, headless
 # Chromium for the HTML report of tests/cli/report.sh, flam3-render for tests/cli/flame.sh,
-# clang-format for tests/format.sh)
-[ "${1:-}" = --test ] && PKGS="$PKGS slurm-wlm chromium flam3-utils clang-format"
+# clang-format for tests/format.sh, Blender for tests/cli/blender-*.sh, numpy and pytest for
+# tests/python and tests/install.sh)
+[ "${1:-}" = --test ] && PKGS="$PKGS slurm-wlm chromium flam3-utils clang-format blender python3-numpy python3-pytest"
 missing=()
 for p in $PKGS; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -8,7 +8,8 @@ pipes, loops and redirections work as written), with `fractalbake` on PATH and `
 so that the example inputs resolve as they do from the repository's root. Sizes are reduced where
 a command gives one: --size and --set size= to at most 1024 pixels a side (the aspect kept; not
 where it names a --heightmap-engine, whose sizes are the engine's),
---points to 2e6, --insert to 20000. A few commands are not run, each for the reason listed below.
+--points to 2e6, --insert to 20000. A few commands are not run, each for the reason listed below
+(and Blender's where it is not installed).
 
 Usage: docs-examples.py REPO_ROOT PATH/TO/fractalbake [DOC.md ...]
 """
@@ -20,7 +21,7 @@ import sys
 import tempfile
 
 CMD = re.compile(r'^(fractalbake |\./scripts/|scripts/|bench/|\./build/|printf |listgeo |cmake |idiff |oiiotool |'
-                 r'exrmaketiled |exrinfo |python3 |for |sbatch |bash |mkdir )')
+                 r'exrmaketiled |exrinfo |python3 |for |sbatch |bash |mkdir |blender )')
 NOT_RUN = [
     (r'^\./scripts/test\.sh', 'the test suite itself, which runs this'),
     (r'^\./scripts/bake\.sh', 'builds into the repository (build/, out/); `fractalbake render` is run below'),
@@ -121,6 +122,8 @@ def main():
                 why = next((r for p, r in NOT_RUN if re.search(p, c['text'])), None)
                 if not why and '--backend vulkan' in c['text'] and not vulkan:
                     why = 'no Vulkan device here'
+                if not why and c['text'].startswith('blender ') and not shutil.which('blender'):
+                    why = 'Blender is not installed here'
                 where = '%s:%d' % (doc, c['line'])
                 if why:
                     print('not run  %s: %s  (%s)' % (where, c['text'], why))

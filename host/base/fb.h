@@ -3,7 +3,8 @@
  *
  * Library code (every folder of host/ below host/cli, and kernels/) never prints, never exits and
  * never reads the environment: it returns an fb_result, hands its text to the logger and its
- * progress to the progress sink (sinks that main() installs), and takes its settings in
+ * progress to the progress sink of the calling thread's scope (fb_scope, which its caller sets:
+ * main() for the command line, a library context for one call), and takes its settings in
  * descriptors. It writes nothing on standard output or standard error (no printf, puts, perror,
  * stdout or stderr); the files a run names it writes through output.h, where "-" is standard
  * output as one of those files. host/cli is the user interface: its commands print their results
@@ -25,14 +26,15 @@ typedef int32_t fb_result;
 
 enum {
     FB_OK = 0,
-    FB_ERR_USAGE = 1,    /* bad flag or argument (exit 2) */
-    FB_ERR_INPUT = 2,    /* bad input data: scene, file contents, values (exit 2) */
-    FB_ERR_IO = 3,       /* file system: cannot open, write, rename (exit 3) */
-    FB_ERR_NOMEM = 4,    /* allocation failed (exit 3) */
-    FB_ERR_VULKAN = 5,   /* a Vulkan call failed (exit 3) */
-    FB_ERR_NODEVICE = 6, /* no Vulkan loader or no device (exit 3 when vulkan was asked for) */
-    FB_ERR_EXR = 7,      /* OpenEXRCore reported an error (exit 3) */
-    FB_ERR_INTERNAL = 8, /* an impossible state was reached (exit 3) */
+    FB_ERR_USAGE = 1,     /* bad flag or argument (exit 2) */
+    FB_ERR_INPUT = 2,     /* bad input data: scene, file contents, values (exit 2) */
+    FB_ERR_IO = 3,        /* file system: cannot open, write, rename (exit 3) */
+    FB_ERR_NOMEM = 4,     /* allocation failed (exit 3) */
+    FB_ERR_VULKAN = 5,    /* a Vulkan call failed (exit 3) */
+    FB_ERR_NODEVICE = 6,  /* no Vulkan loader or no device (exit 3 when vulkan was asked for) */
+    FB_ERR_EXR = 7,       /* OpenEXRCore reported an error (exit 3) */
+    FB_ERR_INTERNAL = 8,  /* an impossible state was reached (exit 3) */
+    FB_ERR_CANCELLED = 9, /* the caller cancelled the work (a library's progress callback; exit 3) */
 };
 
 /* A short name for a result code ("bad input", "vulkan error", ...). */
@@ -46,7 +48,42 @@ enum { FB_LOG_ERROR = 0, FB_LOG_WARN = 1, FB_LOG_INFO = 2, FB_LOG_DEBUG = 3 };
 
 typedef void (*fb_log_fn)(int level, const char *msg, void *user);
 
-/* Routes log text to fn (NULL restores the default: nothing). */
+/* Where log text goes: fn(level, msg, user). */
+typedef struct fb_logger {
+    fb_log_fn fn;
+    void *user;
+} fb_logger;
+
+/*
+ * What a piece of work runs in: where its log goes, the output transaction its files join
+ * (output.h), where its progress is shown (progress.h). There is no process-wide setting of any of
+ * them: each thread has a scope, which a caller (the command line's main, a library context for
+ * the length of one call) sets on the thread it works on, and which the threads started for that
+ * work take from the thread that starts them (the pool's workers take the scope of the thread that
+ * hands them a job, the EXR writer's the scope of the thread that creates it). Two contexts working
+ * at once on two threads never see each other's messages, files or progress. NULL fields: the log
+ * goes nowhere, outputs go to the thread's own transaction (output.h), progress is shown nowhere.
+ */
+struct fb_outputs;
+struct fb_progress_sink;
+typedef struct fb_scope {
+    const fb_logger *log; /* must outlive the scope's use */
+    struct fb_outputs *outputs;
+    const struct fb_progress_sink *progress;
+} fb_scope;
+
+/* The calling thread's scope. */
+fb_scope fb_scope_get(void);
+
+/* Sets the calling thread's scope; returns the one it replaces, for the caller to set back. */
+fb_scope fb_scope_set(fb_scope s);
+
+/* The calling thread's scope with its transaction named even where it is the thread's own (output.h):
+ * what a thread started for this thread's work sets as its scope. */
+fb_scope fb_scope_capture(void);
+
+/* Routes the calling thread's log text to fn (NULL: nothing): its scope's logger, held by the
+ * thread (for programs and tests that log on one thread; a library call sets a scope instead). */
 void fb_log_set_sink(fb_log_fn fn, void *user);
 
 /* Formats a message and hands it to the sink. Returns `r` so that callers can write

@@ -15,8 +15,9 @@
 #include <time.h>
 #include <unistd.h>
 
-static fb_log_fn g_sink;
-static void *g_sink_user;
+/* The calling thread's scope (fb.h), and the logger fb_log_set_sink keeps for it. */
+static _Thread_local fb_scope t_scope;
+static _Thread_local fb_logger t_logger;
 
 const char *fb_result_string(fb_result r)
 {
@@ -39,6 +40,8 @@ const char *fb_result_string(fb_result r)
         return "openexr error";
     case FB_ERR_INTERNAL:
         return "internal error";
+    case FB_ERR_CANCELLED:
+        return "cancelled";
     default:
         return "unknown error";
     }
@@ -51,10 +54,22 @@ int fb_result_exit_code(fb_result r)
     return 3;
 }
 
+fb_scope fb_scope_get(void)
+{
+    return t_scope;
+}
+
+fb_scope fb_scope_set(fb_scope s)
+{
+    fb_scope old = t_scope;
+    t_scope = s;
+    return old;
+}
+
 void fb_log_set_sink(fb_log_fn fn, void *user)
 {
-    g_sink = fn;
-    g_sink_user = user;
+    t_logger = (fb_logger){fn, user};
+    t_scope.log = fn ? &t_logger : NULL;
 }
 
 /* What the calling thread is doing ("layer sky, rows 512-767"), put before its errors and warnings. */
@@ -74,7 +89,8 @@ void fb_log_context(const char *fmt, ...)
 
 static void vlog(int level, const char *fmt, va_list ap)
 {
-    if (!g_sink) return;
+    const fb_logger *log = t_scope.log;
+    if (!log || !log->fn) return;
     char buf[2048], msg[2048 + 192];
     vsnprintf(buf, sizeof buf, fmt, ap);
     const char *out = buf;
@@ -92,7 +108,7 @@ static void vlog(int level, const char *fmt, va_list ap)
         }
         out = msg;
     }
-    g_sink(level, out, g_sink_user);
+    log->fn(level, out, log->user);
 }
 
 fb_result fb_fail(fb_result r, const char *fmt, ...)

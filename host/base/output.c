@@ -40,24 +40,9 @@ typedef struct entry {
     char tmp[PATH_MAX];
 } entry;
 
-static entry g_out[FB_MAX_OUTPUTS];
-static volatile sig_atomic_t g_count; /* entries in use are below it */
-/* what the last commit put in place (fb_outputs_written) */
-static struct {
-    char path[PATH_MAX], what[32];
-    uint64_t bytes;
-} g_done[FB_MAX_OUTPUTS];
-static int g_ndone;
-static int g_depth;
-static pthread_mutex_t g_mu = PTHREAD_MUTEX_INITIALIZER;
-static bool g_tmpfile = true;   /* fb_outputs_use_tmpfile */
-static char g_tmpdir[PATH_MAX]; /* fb_outputs_tmpdir: "" is /tmp */
-
 /* The signal hand-off (fb_outputs_signal): IDLE, COMMITTING (a signal waits for the commit's end),
  * DYING (a handler is removing the temporary files; the commit must not start). */
 enum { IDLE = 0, COMMITTING = 1, DYING = 2 };
-static atomic_int g_phase;
-static volatile sig_atomic_t g_deferred; /* the signal that came during the commit */
 
 /* The inputs of the run (fb_input_note): no output may name one. */
 typedef struct input {
@@ -68,15 +53,99 @@ typedef struct input {
     dev_t dev;
     ino_t ino;
 } input;
-static input *g_in;
-static int g_nin, g_capin;
-/* The set of the outermost transaction (0: none drawn yet), and the folders swept of dead runs'
- * temporary files in it (sweep_locked). */
-static uint64_t g_set;
-static char *g_swept[FB_MAX_OUTPUTS];
-static int g_nswept;
-/* A document the run prints on standard output itself (fb_output_claim_stdout): no "-" output then. */
-static char g_stdout_claim[32];
+
+/* What a commit put in place (fb_outputs_written). */
+typedef struct done_entry {
+    char path[PATH_MAX], what[32];
+    uint64_t bytes;
+} done_entry;
+
+struct fb_outputs {
+    pthread_mutex_t mu;
+    entry *out;                  /* FB_MAX_OUTPUTS of them */
+    volatile sig_atomic_t count; /* entries in use are below it */
+    done_entry *done;            /* FB_MAX_OUTPUTS of them */
+    int ndone;
+    int depth;
+    bool tmpfile;          /* fb_outputs_use_tmpfile */
+    char tmpdir[PATH_MAX]; /* fb_outputs_tmpdir: "" is /tmp */
+    atomic_int phase;
+    volatile sig_atomic_t deferred; /* the signal that came during the commit */
+    input *in;
+    int nin, capin;
+    char stdout_claim[32]; /* a document the run prints on standard output itself: no "-" output then */
+    /* the set of the outermost transaction (0: none drawn yet), and the folders swept of dead runs'
+     * temporary files in it (sweep_locked) */
+    uint64_t set;
+    char *swept[FB_MAX_OUTPUTS];
+    int nswept;
+    int slot; /* in g_live */
+};
+
+/* Every transaction that exists, for the signal handler alone (fb_outputs_signal, which must remove
+ * the temporary files of all of them): no transaction reads another's entries. */
+#define MAX_TRANSACTIONS 64
+static fb_outputs *_Atomic g_live[MAX_TRANSACTIONS];
+
+/* The thread's own transaction (where its scope names none), made when first needed and freed when
+ * the thread ends. */
+static _Thread_local fb_outputs *t_own;
+static pthread_key_t g_own_key;
+static pthread_once_t g_own_once = PTHREAD_ONCE_INIT;
+
+static void own_free(void *o)
+{
+    fb_outputs_destroy((fb_outputs **)&o);
+}
+
+static void own_key(void)
+{
+    pthread_key_create(&g_own_key, own_free);
+}
+
+fb_result fb_outputs_create(fb_outputs **out)
+{
+    fb_outputs *o = calloc(1, sizeof *o);
+    if (o) o->out = calloc(FB_MAX_OUTPUTS, sizeof *o->out), o->done = calloc(FB_MAX_OUTPUTS, sizeof *o->done);
+    if (!o || !o->out || !o->done) {
+        if (o) free(o->out), free(o->done);
+        free(o);
+        return fb_fail(FB_ERR_NOMEM, "out of memory for the output transaction");
+    }
+    pthread_mutex_init(&o->mu, NULL);
+    o->tmpfile = true;
+    o->slot = -1;
+    for (int i = 0; i < MAX_TRANSACTIONS && o->slot < 0; i++) {
+        fb_outputs *none = NULL;
+        if (atomic_compare_exchange_strong(&g_live[i], &none, o)) o->slot = i;
+    }
+    if (o->slot < 0) {
+        fb_outputs_destroy(&o);
+        return fb_fail(FB_ERR_INTERNAL, "more than %d output transactions at once", MAX_TRANSACTIONS);
+    }
+    *out = o;
+    return FB_OK;
+}
+
+/* The calling thread's transaction: its scope's, or its own (made now when `make` and it has none).
+ * NULL only when it has none and make is false, or when making one failed (logged). */
+static fb_outputs *current(bool make)
+{
+    fb_outputs *o = fb_scope_get().outputs;
+    if (o) return o;
+    if (!t_own && make && fb_outputs_create(&t_own) == FB_OK) {
+        pthread_once(&g_own_once, own_key);
+        pthread_setspecific(g_own_key, t_own);
+    }
+    return t_own;
+}
+
+fb_scope fb_scope_capture(void)
+{
+    fb_scope s = fb_scope_get();
+    if (!s.outputs) s.outputs = t_own;
+    return s;
+}
 
 /* The folder and the name of path: "a/b.exr" -> "a", "b.exr"; "b.exr" -> ".", "b.exr". */
 static void split(const char *path, char *dir, size_t dsize, const char **base)
@@ -95,16 +164,17 @@ static uint64_t random64(void)
 {
     uint64_t r = 0;
     if (getrandom(&r, sizeof r, 0) != (ssize_t)sizeof r) { /* no entropy source: still unique, less secret */
-        static uint64_t n;
-        r = ((uint64_t)getpid() << 32) ^ (uint64_t)(fb_now() * 1e9) ^ (++n * 0x9E3779B97F4A7C15ull);
+        static _Atomic uint64_t n;
+        r = ((uint64_t)getpid() << 32) ^ (uint64_t)(fb_now() * 1e9) ^
+            ((atomic_fetch_add(&n, 1) + 1) * 0x9E3779B97F4A7C15ull);
     }
     return r;
 }
 
-static entry *find(const char *key)
+static entry *find(fb_outputs *o, const char *key)
 {
-    for (int i = 0; i < g_count; i++)
-        if (g_out[i].state != FREE && !strcmp(g_out[i].key, key)) return &g_out[i];
+    for (int i = 0; i < o->count; i++)
+        if (o->out[i].state != FREE && !strcmp(o->out[i].key, key)) return &o->out[i];
     return NULL;
 }
 
@@ -136,10 +206,10 @@ static bool key_of(const char *path, char *key)
 
 /* The input that names `key`, or is the file st describes (NULL: it does not exist), or NULL. Called
  * locked. */
-static const input *input_named(const char *key, const struct stat *st)
+static const input *input_named(const fb_outputs *o, const char *key, const struct stat *st)
 {
-    for (int i = 0; i < g_nin; i++) {
-        const input *in = &g_in[i];
+    for (int i = 0; i < o->nin; i++) {
+        const input *in = &o->in[i];
         if ((st && in->has_id && in->dev == st->st_dev && in->ino == st->st_ino) || !strcmp(in->key, key)) return in;
     }
     return NULL;
@@ -158,34 +228,34 @@ static fb_result clash(const char *path, const char *what, const char *in_path, 
                    path, in_path, in_what, what, how);
 }
 
-static entry *free_entry(void)
+static entry *free_entry(fb_outputs *o)
 {
-    for (int i = 0; i < g_count; i++)
-        if (g_out[i].state == FREE && !g_out[i].live) return &g_out[i];
-    return g_count < FB_MAX_OUTPUTS ? &g_out[g_count] : NULL;
+    for (int i = 0; i < o->count; i++)
+        if (o->out[i].state == FREE && !o->out[i].live) return &o->out[i];
+    return o->count < FB_MAX_OUTPUTS ? &o->out[o->count] : NULL;
 }
 
 /* "-": standard output. The data goes to an anonymous temporary file (gone when closed: nothing for
  * a signal to leave behind) and is copied to standard output at the commit, so that a failed run
  * writes nothing there either. Refused when standard output is a terminal. Called locked. */
-static fb_result reserve_stdout(const char *what, entry **out)
+static fb_result reserve_stdout(fb_outputs *o, const char *what, entry **out)
 {
-    if (find("-"))
+    if (find(o, "-"))
         return fb_fail(FB_ERR_USAGE,
                        "-: standard output named for two outputs (the %s and the %s): it carries one document; "
                        "name a file for one of them",
-                       find("-")->what, what);
-    if (g_stdout_claim[0])
+                       find(o, "-")->what, what);
+    if (o->stdout_claim[0])
         return fb_fail(FB_ERR_USAGE,
                        "-: standard output carries what %s prints: name a file for the %s (standard output "
                        "carries one document)",
-                       g_stdout_claim, what);
+                       o->stdout_claim, what);
     if (isatty(STDOUT_FILENO))
         return fb_fail(FB_ERR_USAGE, "-: the %s would go to a terminal: redirect standard output to a file or a pipe",
                        what);
-    entry *e = free_entry();
+    entry *e = free_entry(o);
     if (!e) return fb_fail(FB_ERR_USAGE, "-: more than %d outputs", FB_MAX_OUTPUTS);
-    const char *tmpdir = g_tmpdir[0] ? g_tmpdir : "/tmp";
+    const char *tmpdir = o->tmpdir[0] ? o->tmpdir : "/tmp";
     int fd = open(tmpdir, O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
     if (fd < 0) {
         char tmp[PATH_MAX];
@@ -202,7 +272,7 @@ static fb_result reserve_stdout(const char *what, entry **out)
     snprintf(e->what, sizeof e->what, "%s", what);
     snprintf(e->path, sizeof e->path, "-");
     snprintf(e->key, sizeof e->key, "-");
-    if (e == &g_out[g_count]) g_count = g_count + 1;
+    if (e == &o->out[o->count]) o->count = o->count + 1;
     *out = e;
     return FB_OK;
 }
@@ -314,11 +384,11 @@ static void say_removed(const char *shown, const removed *r, size_t n)
  * holds locked, checked on the file itself before its name is removed; one warning line per set.
  * Files of a live process, of another user's process, or of another form are left alone. Called
  * locked. */
-static void sweep_locked(const char *shown, const char *dir)
+static void sweep_locked(fb_outputs *o, const char *shown, const char *dir)
 {
-    for (int i = 0; i < g_nswept; i++)
-        if (!strcmp(g_swept[i], dir)) return;
-    if (g_nswept < FB_MAX_OUTPUTS && (g_swept[g_nswept] = strdup(dir))) g_nswept++;
+    for (int i = 0; i < o->nswept; i++)
+        if (!strcmp(o->swept[i], dir)) return;
+    if (o->nswept < FB_MAX_OUTPUTS && (o->swept[o->nswept] = strdup(dir))) o->nswept++;
     DIR *d = opendir(dir);
     if (!d) return;
     removed *r = NULL;
@@ -341,15 +411,15 @@ static void sweep_locked(const char *shown, const char *dir)
         if (gone && n < cap) r[n++] = one;
     }
     closedir(d);
-    qsort(r, n, sizeof *r, cmp_removed);
+    if (n) qsort(r, n, sizeof *r, cmp_removed); /* r is NULL when nothing was removed */
     say_removed(shown, r, n);
     free(r);
 }
 
-static void forget_swept_locked(void)
+static void forget_swept_locked(fb_outputs *o)
 {
-    for (int i = 0; i < g_nswept; i++) free(g_swept[i]);
-    g_nswept = 0;
+    for (int i = 0; i < o->nswept; i++) free(o->swept[i]);
+    o->nswept = 0;
 }
 
 /* Creates the hidden named temporary file beside the target (temp_name), exclusively: the fallback
@@ -373,9 +443,9 @@ static int create_named(entry *e, const char *dir, const char *base)
 /* An O_TMPFILE file in dir (nothing visible, nothing left by any end of the process), linkable at the
  * commit through /proc/self/fd. -1 where the file system or the kernel cannot (errno EOPNOTSUPP,
  * EISDIR, EINVAL), or without /proc. */
-static int create_anonymous(const char *dir)
+static int create_anonymous(const fb_outputs *o, const char *dir)
 {
-    if (!g_tmpfile || access("/proc/self/fd", X_OK) != 0) {
+    if (!o->tmpfile || access("/proc/self/fd", X_OK) != 0) {
         errno = EOPNOTSUPP;
         return -1;
     }
@@ -384,12 +454,12 @@ static int create_anonymous(const char *dir)
 
 /* Resolves path to its key; checks the target and its name; creates the temporary file. Called
  * locked. */
-static fb_result reserve_locked(const char *path, const char *what, entry **out)
+static fb_result reserve_locked(fb_outputs *o, const char *path, const char *what, entry **out)
 {
     char dir[PATH_MAX], key[PATH_MAX];
     const char *base;
     if (!path || !*path) return fb_fail(FB_ERR_USAGE, "%s: an empty file name", what);
-    if (!strcmp(path, "-")) return reserve_stdout(what, out);
+    if (!strcmp(path, "-")) return reserve_stdout(o, what, out);
     if (strlen(path) >= PATH_MAX - 64) return fb_fail(FB_ERR_USAGE, "%s: path too long for the %s", path, what);
     split(path, dir, sizeof dir, &base);
     if (!*base || !strcmp(base, ".") || !strcmp(base, ".."))
@@ -403,7 +473,7 @@ static fb_result reserve_locked(const char *path, const char *what, entry **out)
         return fb_fail(FB_ERR_USAGE, "%.60s...: the %s's file name has %zu bytes, more than the %ld its folder allows",
                        path, what, strlen(base), name_max);
     if (strlen(key) >= PATH_MAX - 32) return fb_fail(FB_ERR_USAGE, "%.60s...: path too long for the %s", path, what);
-    entry *twice = find(key);
+    entry *twice = find(o, key);
     if (twice)
         return fb_fail(FB_ERR_USAGE, "%s: named as the %s and as the %s: two outputs cannot share one path", path,
                        twice->what, what);
@@ -412,18 +482,18 @@ static fb_result reserve_locked(const char *path, const char *what, entry **out)
     if (exists && !S_ISREG(st.st_mode))
         return fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", path,
                        fb_file_kind(st.st_mode), what);
-    const input *in = input_named(key, exists ? &st : NULL);
+    const input *in = input_named(o, key, exists ? &st : NULL);
     if (in) return clash(path, what, in->path, in->what);
-    entry *e = free_entry();
+    entry *e = free_entry(o);
     if (!e) return fb_fail(FB_ERR_USAGE, "%s: more than %d outputs", path, FB_MAX_OUTPUTS);
     char kdir[PATH_MAX];
     snprintf(kdir, sizeof kdir, "%.*s", strrchr(key, '/') == key ? 1 : (int)(strrchr(key, '/') - key), key);
-    sweep_locked(dir, kdir);
-    if (!g_set || g_depth == 0) g_set = random64() | 1; /* outside a transaction an output is its own set */
+    sweep_locked(o, dir, kdir);
+    if (!o->set || o->depth == 0) o->set = random64() | 1; /* outside a transaction an output is its own set */
     e->live = 0;
     e->tmp[0] = 0;
-    e->set = g_set;
-    int fd = create_anonymous(dir), keep = -1;
+    e->set = o->set;
+    int fd = create_anonymous(o, dir), keep = -1;
     bool anon = fd >= 0;
     if (fd < 0 && (errno == EOPNOTSUPP || errno == EISDIR || errno == EINVAL || errno == ENOENT))
         fd = create_named(e, dir, base);
@@ -449,22 +519,24 @@ static fb_result reserve_locked(const char *path, const char *what, entry **out)
     snprintf(e->what, sizeof e->what, "%s", what);
     snprintf(e->path, sizeof e->path, "%s", path);
     memcpy(e->key, key, sizeof key);
-    if (e == &g_out[g_count]) g_count = g_count + 1;
+    if (e == &o->out[o->count]) o->count = o->count + 1;
     *out = e;
     return FB_OK;
 }
 
 void fb_outputs_begin(void)
 {
-    pthread_mutex_lock(&g_mu);
-    if (g_depth++ == 0) g_ndone = 0, g_set = 0;
-    pthread_mutex_unlock(&g_mu);
+    fb_outputs *o = current(true);
+    if (!o) return; /* no memory for one: the first output says so */
+    pthread_mutex_lock(&o->mu);
+    if (o->depth++ == 0) o->ndone = 0, o->set = 0;
+    pthread_mutex_unlock(&o->mu);
 }
 
-static void abort_locked(void)
+static void abort_locked(fb_outputs *o)
 {
-    for (int i = 0; i < g_count; i++) drop(&g_out[i]);
-    g_count = 0;
+    for (int i = 0; i < o->count; i++) drop(&o->out[i]);
+    o->count = 0;
 }
 
 /* The folder of a file entry's key, for the commit lock. */
@@ -480,9 +552,13 @@ static void key_dir(const entry *e, char *dir, size_t size)
  * that cannot be locked (a file system without flock) is committed unlocked, with a warning. */
 static int lock_folders(entry **list, int n, int *fds)
 {
-    static char dirs[FB_MAX_OUTPUTS][PATH_MAX];
+    char(*dirs)[PATH_MAX] = malloc((size_t)(n > 0 ? n : 1) * sizeof *dirs);
     const char *sorted[FB_MAX_OUTPUTS];
     int nd = 0, nfd = 0;
+    if (!dirs) { /* no memory to sort the folders: committed unlocked, as on a file system without flock */
+        fb_log(FB_LOG_WARN, "out of memory to lock the folders for the commit: committing unlocked");
+        return 0;
+    }
     for (int i = 0; i < n; i++) {
         if (list[i]->std) continue;
         key_dir(list[i], dirs[nd], sizeof dirs[nd]);
@@ -503,6 +579,7 @@ static int lock_folders(entry **list, int n, int *fds)
                    sorted[i], strerror(errno));
         fds[nfd++] = fd;
     }
+    free(dirs);
     return nfd;
 }
 
@@ -528,7 +605,7 @@ static fb_result link_hidden(entry *e)
  * locked, signals held off (fb_outputs_signal), every anonymous file given its hidden name, standard
  * output written (it cannot be taken back), then the renames. Records what was written. On a
  * failure, nothing more is renamed and the rest are removed by the caller. Called locked. */
-static fb_result commit_locked(entry **list, int n)
+static fb_result commit_locked(fb_outputs *o, entry **list, int n)
 {
     fb_result rc = FB_OK;
     struct stat st;
@@ -540,13 +617,13 @@ static fb_result commit_locked(entry **list, int n)
         if (!S_ISREG(st.st_mode))
             rc = fb_fail(FB_ERR_USAGE, "%s: exists and is %s: the %s replaces only regular files", list[i]->path,
                          fb_file_kind(st.st_mode), list[i]->what);
-        else if ((in = input_named(list[i]->key, &st)))
+        else if ((in = input_named(o, list[i]->key, &st)))
             rc = clash(list[i]->path, list[i]->what, in->path, in->what);
     }
     if (rc) return rc;
     int lockfds[FB_MAX_OUTPUTS], nlock = lock_folders(list, n, lockfds);
     int idle = IDLE;
-    while (!atomic_compare_exchange_strong(&g_phase, &idle, COMMITTING)) { /* a handler is ending the run */
+    while (!atomic_compare_exchange_strong(&o->phase, &idle, COMMITTING)) { /* a handler is ending the run */
         idle = IDLE;
         pause();
     }
@@ -556,7 +633,7 @@ static fb_result commit_locked(entry **list, int n)
         bytes[i] = e->keepfd >= 0 ? (fstat(e->keepfd, &st) == 0 ? (uint64_t)st.st_size : 0)
                                   : (lstat(e->tmp, &st) == 0 ? (uint64_t)st.st_size : 0);
     }
-    if (g_deferred) rc = FB_ERR_INTERNAL; /* a signal came before the first rename: nothing is put in place */
+    if (o->deferred) rc = FB_ERR_INTERNAL; /* a signal came before the first rename: nothing is put in place */
     for (int i = 0; i < n && !rc; i++)
         if (list[i]->anon) rc = link_hidden(list[i]);
     for (int i = 0; i < n && !rc; i++)
@@ -568,92 +645,106 @@ static fb_result commit_locked(entry **list, int n)
             break;
         }
         e->live = 0; /* in place: the handler must not remove it any more */
-        if (g_ndone < FB_MAX_OUTPUTS) {
-            snprintf(g_done[g_ndone].path, sizeof g_done[0].path, "%s", e->path);
-            snprintf(g_done[g_ndone].what, sizeof g_done[0].what, "%s", e->what);
-            g_done[g_ndone++].bytes = bytes[i];
+        if (o->ndone < FB_MAX_OUTPUTS) {
+            snprintf(o->done[o->ndone].path, sizeof o->done[0].path, "%s", e->path);
+            snprintf(o->done[o->ndone].what, sizeof o->done[0].what, "%s", e->what);
+            o->done[o->ndone++].bytes = bytes[i];
         }
     }
     for (int i = 0; i < nlock; i++) close(lockfds[i]); /* the locks go with the fds */
     if (rc) /* the hidden names given so far go too (drop unlinks what is live) */
         for (int i = 0; i < n; i++)
             if (list[i]->live && list[i]->anon) unlink(list[i]->tmp), list[i]->live = 0;
-    atomic_store(&g_phase, IDLE);
+    atomic_store(&o->phase, IDLE);
     return rc;
 }
 
 /* A signal that came during the commit: taken now, as if it had come after (its handler ends the
  * run). */
-static void deliver_deferred(void)
+static void deliver_deferred(fb_outputs *o)
 {
-    int sig = g_deferred;
+    int sig = o->deferred;
     if (sig) {
-        g_deferred = 0;
+        o->deferred = 0;
         raise(sig);
     }
 }
 
 /* The inputs noted go with the run's outermost transaction. Called locked. */
-static void forget_inputs_locked(void)
+static void forget_inputs_locked(fb_outputs *o)
 {
-    for (int i = 0; i < g_nin; i++) free(g_in[i].path), free(g_in[i].key);
-    free(g_in);
-    g_in = NULL;
-    g_nin = g_capin = 0;
+    for (int i = 0; i < o->nin; i++) free(o->in[i].path), free(o->in[i].key);
+    free(o->in);
+    o->in = NULL;
+    o->nin = o->capin = 0;
 }
 
 fb_result fb_outputs_end(fb_result rc)
 {
-    pthread_mutex_lock(&g_mu);
-    if (g_depth > 0) g_depth--;
+    fb_outputs *o = current(false);
+    if (!o) return rc ? rc : fb_fail(FB_ERR_NOMEM, "out of memory for the output transaction");
+    pthread_mutex_lock(&o->mu);
+    if (o->depth > 0) o->depth--;
     if (rc) {
-        abort_locked();
-    } else if (g_depth == 0) {
+        abort_locked(o);
+    } else if (o->depth == 0) {
         entry *list[FB_MAX_OUTPUTS];
         int n = 0;
-        for (int i = 0; i < g_count && !rc; i++)
-            if (g_out[i].state == RESERVED)
-                rc =
-                    fb_fail(FB_ERR_INTERNAL, "%s: the %s was reserved but never written", g_out[i].path, g_out[i].what);
-            else if (g_out[i].state == TAKEN)
-                list[n++] = &g_out[i];
-        if (!rc) rc = commit_locked(list, n);
-        abort_locked(); /* after a failed rename: the rest are removed */
+        for (int i = 0; i < o->count && !rc; i++)
+            if (o->out[i].state == RESERVED)
+                rc = fb_fail(FB_ERR_INTERNAL, "%s: the %s was reserved but never written", o->out[i].path,
+                             o->out[i].what);
+            else if (o->out[i].state == TAKEN)
+                list[n++] = &o->out[i];
+        if (!rc) rc = commit_locked(o, list, n);
+        abort_locked(o); /* after a failed rename: the rest are removed */
     }
-    if (g_depth == 0) forget_inputs_locked(), forget_swept_locked(), g_stdout_claim[0] = 0;
-    pthread_mutex_unlock(&g_mu);
-    deliver_deferred();
+    if (o->depth == 0) forget_inputs_locked(o), forget_swept_locked(o), o->stdout_claim[0] = 0;
+    pthread_mutex_unlock(&o->mu);
+    deliver_deferred(o);
     return rc;
+}
+
+/* The calling thread's transaction, or an error for the output at path. */
+static fb_result current_for(const char *path, fb_outputs **o)
+{
+    *o = current(true);
+    return *o ? FB_OK : fb_fail(FB_ERR_NOMEM, "%s: out of memory for the output transaction", path ? path : "-");
 }
 
 fb_result fb_output_reserve(const char *path, const char *what)
 {
     entry *e;
-    pthread_mutex_lock(&g_mu);
-    fb_result rc = reserve_locked(path, what, &e);
-    pthread_mutex_unlock(&g_mu);
+    fb_outputs *o;
+    fb_result rc = current_for(path, &o);
+    if (rc) return rc;
+    pthread_mutex_lock(&o->mu);
+    rc = reserve_locked(o, path, what, &e);
+    pthread_mutex_unlock(&o->mu);
     return rc;
 }
 
 fb_result fb_output_open(const char *path, const char *what, int *fd)
 {
     char key[PATH_MAX];
-    fb_result rc = FB_OK;
     entry *e = NULL;
-    pthread_mutex_lock(&g_mu);
-    if (path && *path && key_of(path, key) && (e = find(key))) {
+    fb_outputs *o;
+    fb_result rc = current_for(path, &o);
+    if (rc) return rc;
+    pthread_mutex_lock(&o->mu);
+    if (path && *path && key_of(path, key) && (e = find(o, key))) {
         if (e->state != RESERVED)
             rc = fb_fail(FB_ERR_USAGE, "%s: named as the %s and as the %s: two outputs cannot share one path", path,
                          e->what, what);
     } else {
-        rc = reserve_locked(path, what, &e);
+        rc = reserve_locked(o, path, what, &e);
     }
     if (!rc) {
         *fd = e->fd;
         e->fd = -1;
         e->state = TAKEN;
     }
-    pthread_mutex_unlock(&g_mu);
+    pthread_mutex_unlock(&o->mu);
     return rc;
 }
 
@@ -700,43 +791,49 @@ fb_result fb_output_done(const char *path, fb_result rc)
         return rc;
     }
     char key[PATH_MAX];
-    pthread_mutex_lock(&g_mu);
-    entry *e = key_of(path, key) ? find(key) : NULL;
+    fb_outputs *o = current(false);
+    if (!o) return fb_fail(FB_ERR_INTERNAL, "%s: finished but never opened as an output", path);
+    pthread_mutex_lock(&o->mu);
+    entry *e = key_of(path, key) ? find(o, key) : NULL;
     if (!e || e->state != TAKEN) {
         rc = fb_fail(FB_ERR_INTERNAL, "%s: finished but never opened as an output", path);
-    } else if (g_depth == 0) {
-        g_ndone = 0;
-        rc = commit_locked(&e, 1);
+    } else if (o->depth == 0) {
+        o->ndone = 0;
+        rc = commit_locked(o, &e, 1);
         drop(e);
-        forget_swept_locked();
+        forget_swept_locked(o);
     }
-    pthread_mutex_unlock(&g_mu);
-    deliver_deferred();
+    pthread_mutex_unlock(&o->mu);
+    deliver_deferred(o);
     return rc;
 }
 
 void fb_output_discard(const char *path)
 {
     char key[PATH_MAX];
-    pthread_mutex_lock(&g_mu);
-    entry *e = path && key_of(path, key) ? find(key) : NULL;
+    fb_outputs *o = current(false);
+    if (!o) return;
+    pthread_mutex_lock(&o->mu);
+    entry *e = path && key_of(path, key) ? find(o, key) : NULL;
     if (e) drop(e);
-    pthread_mutex_unlock(&g_mu);
+    pthread_mutex_unlock(&o->mu);
 }
 
 fb_result fb_output_claim_stdout(const char *what)
 {
     fb_result rc = FB_OK;
-    pthread_mutex_lock(&g_mu);
-    const entry *e = find("-");
+    fb_outputs *o = current(false);
+    if (!o) return FB_OK; /* outside any transaction: no effect */
+    pthread_mutex_lock(&o->mu);
+    const entry *e = find(o, "-");
     if (e)
         rc = fb_fail(FB_ERR_USAGE,
                      "%s: standard output carries the %s (-): name a file for it (standard output carries one "
                      "document)",
                      what, e->what);
-    else if (g_depth > 0)
-        snprintf(g_stdout_claim, sizeof g_stdout_claim, "%s", what);
-    pthread_mutex_unlock(&g_mu);
+    else if (o->depth > 0)
+        snprintf(o->stdout_claim, sizeof o->stdout_claim, "%s", what);
+    pthread_mutex_unlock(&o->mu);
     return rc;
 }
 
@@ -747,69 +844,109 @@ fb_result fb_input_note(const char *path, const char *what, int fd)
     bool has = (fd >= 0 ? fstat(fd, &st) : stat(path, &st)) == 0;
     char key[PATH_MAX];
     if (!realpath(path, key) && !key_of(path, key)) snprintf(key, sizeof key, "%s", path);
+    fb_outputs *o = current(false);
+    if (!o) return FB_OK; /* no transaction on this thread: no run to belong to, no output to clash with */
     fb_result rc = FB_OK;
-    pthread_mutex_lock(&g_mu);
-    for (int i = 0; i < g_count && !rc; i++) { /* an output reserved before the input was opened */
-        const entry *e = &g_out[i];
+    pthread_mutex_lock(&o->mu);
+    for (int i = 0; i < o->count && !rc; i++) { /* an output reserved before the input was opened */
+        const entry *e = &o->out[i];
         if (e->state != FREE && !e->std &&
             ((has && e->has_id && e->dev == st.st_dev && e->ino == st.st_ino) || !strcmp(e->key, key)))
             rc = clash(e->path, e->what, path, what);
     }
     /* outside a transaction there is no run for it to belong to (a library caller's reads between its
      * bakes): nothing to remember */
-    bool known = !rc && (g_depth == 0 || input_named(key, has ? &st : NULL));
-    if (!rc && !known && g_nin == g_capin) {
-        int cap = g_capin ? 2 * g_capin : 16;
-        input *grown = realloc(g_in, (size_t)cap * sizeof *g_in);
+    bool known = !rc && (o->depth == 0 || input_named(o, key, has ? &st : NULL));
+    if (!rc && !known && o->nin == o->capin) {
+        int cap = o->capin ? 2 * o->capin : 16;
+        input *grown = realloc(o->in, (size_t)cap * sizeof *o->in);
         if (grown)
-            g_in = grown, g_capin = cap;
+            o->in = grown, o->capin = cap;
         else
             rc = fb_fail(FB_ERR_NOMEM, "out of memory for the inputs' names");
     }
     if (!rc && !known) {
-        input *in = &g_in[g_nin];
+        input *in = &o->in[o->nin];
         *in = (input){.path = strdup(path), .key = strdup(key), .has_id = has};
         snprintf(in->what, sizeof in->what, "%s", what);
         in->dev = has ? st.st_dev : 0;
         in->ino = has ? st.st_ino : 0;
         if (in->path && in->key)
-            g_nin++;
+            o->nin++;
         else
             free(in->path), free(in->key), rc = fb_fail(FB_ERR_NOMEM, "out of memory for the inputs' names");
     }
-    pthread_mutex_unlock(&g_mu);
+    pthread_mutex_unlock(&o->mu);
     return rc;
+}
+
+/* Removes every temporary file of o (async-signal-safe). */
+static void unlink_all(fb_outputs *o)
+{
+    for (int i = 0; i < o->count; i++)
+        if (o->out[i].live) unlink(o->out[i].tmp);
 }
 
 void fb_outputs_unlink_all(void)
 {
-    for (int i = 0; i < g_count; i++)
-        if (g_out[i].live) unlink(g_out[i].tmp);
+    for (int i = 0; i < MAX_TRANSACTIONS; i++) {
+        fb_outputs *o = atomic_load(&g_live[i]);
+        if (o) unlink_all(o);
+    }
 }
 
 bool fb_outputs_signal(int sig)
 {
-    int idle = IDLE;
-    if (atomic_compare_exchange_strong(&g_phase, &idle, DYING)) {
-        fb_outputs_unlink_all();
-        return true;
+    bool end = true;
+    for (int i = 0; i < MAX_TRANSACTIONS; i++) {
+        fb_outputs *o = atomic_load(&g_live[i]);
+        int idle = IDLE;
+        if (!o) continue;
+        if (atomic_compare_exchange_strong(&o->phase, &idle, DYING)) {
+            unlink_all(o);
+            continue;
+        }
+        if (idle == COMMITTING && !o->deferred) o->deferred = sig;
+        end = false; /* COMMITTING: taken when the commit ends; DYING: another thread is ending the run */
     }
-    if (idle == COMMITTING && !g_deferred) g_deferred = sig;
-    return false; /* COMMITTING: taken when the commit ends; DYING: another thread is ending the run */
+    return end;
 }
 
 void fb_outputs_use_tmpfile(bool on)
 {
-    pthread_mutex_lock(&g_mu);
-    g_tmpfile = on;
-    pthread_mutex_unlock(&g_mu);
+    fb_outputs *o = current(true);
+    if (!o) return;
+    pthread_mutex_lock(&o->mu);
+    o->tmpfile = on;
+    pthread_mutex_unlock(&o->mu);
 }
 
 void fb_outputs_tmpdir(const char *dir)
 {
-    pthread_mutex_lock(&g_mu);
-    snprintf(g_tmpdir, sizeof g_tmpdir, "%s", dir ? dir : "");
-    pthread_mutex_unlock(&g_mu);
+    fb_outputs *o = current(true);
+    if (!o) return;
+    pthread_mutex_lock(&o->mu);
+    snprintf(o->tmpdir, sizeof o->tmpdir, "%s", dir ? dir : "");
+    pthread_mutex_unlock(&o->mu);
+}
+
+void fb_outputs_destroy(fb_outputs **po)
+{
+    fb_outputs *o = po ? *po : NULL;
+    if (!o) return;
+    if (o->slot >= 0) atomic_store(&g_live[o->slot], NULL); /* first: a signal handler then leaves it alone */
+    pthread_mutex_lock(&o->mu);
+    abort_locked(o);
+    forget_inputs_locked(o);
+    forget_swept_locked(o);
+    pthread_mutex_unlock(&o->mu);
+    if (t_own == o) t_own = NULL;
+    pthread_mutex_destroy(&o->mu);
+    free(o->out);
+    free(o->done);
+    memset(o, 0, sizeof *o);
+    free(o);
+    *po = NULL;
 }
 
 fb_result fb_output_format(const char *flag, const char *path, const char *ext)
@@ -833,12 +970,14 @@ fb_result fb_output_format(const char *flag, const char *path, const char *ext)
 int fb_outputs_written(const char **paths, const char **whats, uint64_t *bytes, int max)
 {
     int n = 0;
-    pthread_mutex_lock(&g_mu);
-    for (; n < g_ndone && n < max; n++) {
-        paths[n] = g_done[n].path;
-        whats[n] = g_done[n].what;
-        bytes[n] = g_done[n].bytes;
+    fb_outputs *o = current(false);
+    if (!o) return 0;
+    pthread_mutex_lock(&o->mu);
+    for (; n < o->ndone && n < max; n++) {
+        paths[n] = o->done[n].path;
+        whats[n] = o->done[n].what;
+        bytes[n] = o->done[n].bytes;
     }
-    pthread_mutex_unlock(&g_mu);
+    pthread_mutex_unlock(&o->mu);
     return n;
 }

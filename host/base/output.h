@@ -29,7 +29,13 @@
  *
  * Transactions nest: fb_outputs_begin() / fb_outputs_end() pairs may be called inside one another
  * (main() around a command, fb_bake() around a bake); only the outermost end commits, and any
- * failed end aborts everything. The registry is process-wide and thread-safe.
+ * failed end aborts everything.
+ *
+ * Every function below works on the calling thread's transaction: the one its scope names (fb.h: the
+ * command line's, a library context's for one call; the threads a bake starts take it from the
+ * thread that starts them), else the thread's own, made when first needed. A transaction is
+ * thread-safe; no transaction sees another's outputs or inputs. The signal functions alone reach
+ * every transaction that exists (a signal ends the whole process).
  */
 #ifndef FB_OUTPUT_H
 #define FB_OUTPUT_H
@@ -40,6 +46,17 @@
 #include <stdint.h>
 
 #define FB_MAX_OUTPUTS 300 /* room for a heightmap in 16 x 16 tiles beside the other outputs */
+
+typedef struct fb_outputs fb_outputs;
+
+/* A transaction of its own, for a scope (fb.h) to name: anonymous temporary files where the file system
+ * allows, standard output's data waiting in /tmp (fb_outputs_use_tmpfile, fb_outputs_tmpdir change
+ * them while it is the calling thread's). FB_ERR_NOMEM, or FB_ERR_INTERNAL with 64 transactions in
+ * the process already. */
+fb_result fb_outputs_create(fb_outputs **out);
+
+/* Removes every temporary file the transaction still holds and frees it. Null-safe; sets *o to NULL. */
+void fb_outputs_destroy(fb_outputs **o);
 
 /* Opens a transaction (or a nested level of one). */
 void fb_outputs_begin(void);
@@ -78,22 +95,24 @@ void fb_output_discard(const char *path);
  * in place, in order, with what they are and their sizes in bytes. Returns how many (at most max). */
 int fb_outputs_written(const char **paths, const char **whats, uint64_t *bytes, int max);
 
-/* For a signal handler: removes every temporary file of the transaction. Async-signal-safe. */
+/* For a signal handler: removes every temporary file of every transaction. Async-signal-safe. */
 void fb_outputs_unlink_all(void);
 
-/* For a handler of a signal that ends the run (async-signal-safe, any thread). Outside a commit:
- * removes every temporary file and returns true (the handler then ends the process). During a
- * commit: records the signal and returns false; the commit finishes the whole set (or, when the
+/* For a handler of a signal that ends the run (async-signal-safe, any thread). Outside a commit (of
+ * every transaction): removes every temporary file and returns true (the handler then ends the
+ * process). During a commit: records the signal and returns false; the commit finishes the whole set (or, when the
  * signal came before its first rename, puts nothing in place) and then raises the signal again,
  * which ends the run like one that came after. */
 bool fb_outputs_signal(int sig);
 
-/* Whether outputs may be anonymous (O_TMPFILE) files (default true). false: always the hidden named
- * temporary file, as on a file system without O_TMPFILE (for tests of that path). */
+/* Whether the calling thread's transaction's outputs may be anonymous (O_TMPFILE) files (default true).
+ * false: always the hidden named temporary file, as on a file system without O_TMPFILE (for tests of
+ * that path). */
 void fb_outputs_use_tmpfile(bool on);
 
-/* The folder where standard output's data ("-") waits for the commit (the command line passes
- * $TMPDIR); NULL or "": /tmp. A folder that cannot hold it fails the reservation (FB_ERR_IO). */
+/* The folder where the calling thread's transaction keeps standard output's data ("-") until the
+ * commit (the command line passes $TMPDIR); NULL or "": /tmp. A folder that cannot hold it fails the
+ * reservation (FB_ERR_IO). */
 void fb_outputs_tmpdir(const char *dir);
 
 /* A file the flag writes in one format (ext, ".exr") must be named so (any case), or be "-": any other

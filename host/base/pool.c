@@ -13,6 +13,7 @@ struct fb_pool {
     /* the current job */
     fb_task_fn fn;
     void *ctx;
+    fb_scope scope; /* the starting thread's (fb.h): the workers work in it */
     int ntasks, next, finished;
     unsigned generation;
     bool quit;
@@ -41,7 +42,9 @@ static void *worker(void *arg)
         while (!p->quit && p->generation == seen) pthread_cond_wait(&p->work_cv, &p->mu);
         if (p->quit) break;
         seen = p->generation;
+        fb_scope_set(p->scope);
         drain(p);
+        fb_scope_set((fb_scope){0});
     }
     pthread_mutex_unlock(&p->mu);
     return NULL;
@@ -104,6 +107,7 @@ void fb_pool_start(fb_pool *p, int ntasks, fb_task_fn fn, void *ctx)
     }
     p->fn = fn;
     p->ctx = ctx;
+    p->scope = fb_scope_capture();
     p->ntasks = ntasks;
     p->next = 0;
     p->finished = 0;

@@ -2,7 +2,8 @@
  * A fixed pool of worker threads for the native backend. fb_pool_run hands out task indices
  * 0..n-1 to the workers and the calling thread, and returns when all are done; fb_pool_start and
  * fb_pool_wait split it in two, so that the caller can do other work while the workers start. Which thread runs
- * which task never affects a result: tasks write disjoint outputs computed from their index alone.
+ * which task never affects a result: tasks write disjoint outputs computed from their index alone. The
+ * workers run a job's tasks in the scope (fb.h: log, outputs, progress) of the thread that started it.
  */
 #ifndef FB_POOL_H
 #define FB_POOL_H

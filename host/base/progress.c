@@ -7,24 +7,26 @@
 #include <string.h>
 #include <time.h>
 
-/* Where progress goes: set once by the program (the command line) before any work, like the log's
- * sink; none: progress is computed and shown nowhere. */
-static fb_progress_sink g_sink;
+/* The sink fb_progress_set_sink keeps for the calling thread's scope. */
+static _Thread_local fb_progress_sink t_sink;
 
 void fb_progress_set_sink(const fb_progress_sink *sink)
 {
-    g_sink = sink ? *sink : (fb_progress_sink){0};
+    t_sink = sink ? *sink : (fb_progress_sink){0};
+    fb_scope s = fb_scope_get();
+    s.progress = sink ? &t_sink : NULL;
+    fb_scope_set(s);
 }
 
-static void emit(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
-static void emit(const char *fmt, ...)
+static void emit(const fb_progress *p, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void emit(const fb_progress *p, const char *fmt, ...)
 {
     char text[512];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
-    if (g_sink.write) g_sink.write(text, g_sink.user);
+    if (p->sink.write) p->sink.write(text, p->sink.user);
 }
 
 void fb_format_rate(double r, const char *unit, char *out, int size)
@@ -60,10 +62,10 @@ static void draw(fb_progress *p, bool final)
     pthread_mutex_unlock(&p->mu);
     if (!p->tty) {
         if (p->steps)
-            emit("fractalbake: %s: %llu of %llu%s%s, %.0f s so far, about %s left\n", p->label,
+            emit(p, "fractalbake: %s: %llu of %llu%s%s, %.0f s so far, about %s left\n", p->label,
                  (unsigned long long)done, (unsigned long long)total, detail[0] ? ": " : "", detail, el, left);
         else
-            emit("fractalbake: %s: %.1f%% (%.4g of %.4g %s, %s, %.0f s so far, about %s left)\n", p->label, 100 * f,
+            emit(p, "fractalbake: %s: %.1f%% (%.4g of %.4g %s, %s, %.0f s so far, about %s left)\n", p->label, 100 * f,
                  (double)done * shown, (double)total * shown, p->unit, rate, el, left);
         return;
     }
@@ -73,10 +75,10 @@ static void draw(fb_progress *p, bool final)
     for (int i = 0; i < w; i++) bar[i] = i < fill ? '#' : '.';
     bar[w] = 0;
     if (p->steps)
-        emit("\r%s [%s] %llu of %llu  %s left  %-40.40s", p->label, bar, (unsigned long long)done,
+        emit(p, "\r%s [%s] %llu of %llu  %s left  %-40.40s", p->label, bar, (unsigned long long)done,
              (unsigned long long)total, left, detail);
     else
-        emit("\r%s [%s] %3d%%  %s  %s left   ", p->label, bar, (int)(100 * f), rate, left);
+        emit(p, "\r%s [%s] %3d%%  %s  %s left   ", p->label, bar, (int)(100 * f), rate, left);
     p->drawn = true;
 }
 
@@ -104,14 +106,16 @@ static void *ticker(void *arg)
 static void start(fb_progress *p, bool enabled, const char *label, const char *unit, bool steps)
 {
     memset(p, 0, sizeof *p);
-    p->tty = g_sink.terminal;
-    p->enabled = enabled && g_sink.write;
+    const fb_progress_sink *sink = fb_scope_get().progress;
+    if (sink) p->sink = *sink;
+    p->tty = p->sink.terminal;
+    p->enabled = enabled && (p->sink.write || p->sink.poll);
     p->steps = steps;
     p->start = fb_now();
     p->label = label;
     p->unit = unit;
     pthread_mutex_init(&p->mu, NULL);
-    if (p->enabled) p->running = pthread_create(&p->thread, NULL, ticker, p) == 0;
+    if (p->enabled && p->sink.write) p->running = pthread_create(&p->thread, NULL, ticker, p) == 0;
 }
 
 void fb_progress_init(fb_progress *p, bool enabled, const char *label, const char *unit)
@@ -147,6 +151,14 @@ void fb_progress_detail(fb_progress *p, const char *text)
     pthread_mutex_unlock(&p->mu);
 }
 
+bool fb_progress_poll(fb_progress *p)
+{
+    if (!p->enabled || !p->sink.poll) return false;
+    uint64_t done = atomic_load(&p->done), total = atomic_load(&p->total);
+    double f = total ? (double)done / (double)total : 0;
+    return p->sink.poll(f > 1 ? 1 : f, p->sink.user) != 0;
+}
+
 void fb_progress_finish(fb_progress *p)
 {
     if (p->running) {
@@ -155,7 +167,7 @@ void fb_progress_finish(fb_progress *p)
         p->running = false;
     }
     if (p->drawn && p->tty) {
-        emit("\r%*s\r", 110, "");
+        emit(p, "\r%*s\r", 110, "");
     }
     p->drawn = false;
     pthread_mutex_destroy(&p->mu);

@@ -55,6 +55,7 @@ typedef struct wpart {
 
 struct exrio_writer {
     exr_context_t ctx;
+    fb_scope scope; /* the creating thread's (fb.h), the workers' */
     char path[4096];
     int fd; /* the output transaction's temporary file (output.h) */
     int width, height, nchannels;
@@ -267,6 +268,7 @@ static void *worker_main(void *arg)
 {
     exrio_writer *w = arg;
     exrzip_state z = {0};
+    fb_scope_set(w->scope); /* the creating thread's: its log and its transaction */
     pthread_mutex_lock(&w->mu);
     for (;;) {
         while (!w->queue_head && !w->stopping) pthread_cond_wait(&w->cv, &w->mu);
@@ -496,6 +498,7 @@ fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
         rc = fb_fail(FB_ERR_NOMEM, "out of memory");
         goto fail;
     }
+    w->scope = fb_scope_capture();
     for (int t = 0; t < w->nthreads; t++) {
         if (pthread_create(&w->threads[t], NULL, worker_main, w) != 0) {
             w->nthreads = t;

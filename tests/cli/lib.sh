@@ -59,6 +59,26 @@ require_vulkan() {
   fi
 }
 
+# require_blender: a script that drives Blender is not run (77) where Blender is not installed
+require_blender() {
+  if ! command -v blender > /dev/null; then
+    echo "no blender: not run"
+    exit 77
+  fi
+}
+
+# blender_test NAME ARGS...: tests/blender/test_NAME.py in Blender (headless, factory settings), with the
+# repository's root and ARGS after its `--`; shows the script's ok and FAIL lines, and passes when it exits 0
+blender_test() {
+  local name=$1 rc
+  shift
+  blender -b --factory-startup --python-exit-code 1 -P "$ROOT/tests/blender/test_$name.py" -- "$ROOT" "$@" \
+    > "blender-$name.log" 2>&1
+  rc=$?
+  grep -E '^(ok|FAIL) ' "blender-$name.log"
+  [ $rc -eq 0 ] && ok || bad "tests/blender/test_$name.py: exit $rc: $(grep -E 'FAIL|Error' "blender-$name.log" | head -5)"
+}
+
 # valid_exr FILE: strict header check and a full decode through the OpenEXR C++ library
 valid_exr() {
   if exrinfo --strict "$1" > /dev/null 2>&1 && exrmaketiled "$1" "$T/tiled.exr" > /dev/null 2>&1; then ok; else bad "$1 is not a valid EXR"; fi

@@ -1,0 +1,173 @@
+"""The Python module (python/fractalbake) against the command line: the same bits, the same error
+lines, progress and cancelling (a callback, Ctrl-C), compare's statistics, two contexts on two
+backends at once. Run by tests/python/run.sh, which names the program and the library."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+
+import numpy as np
+import pytest
+
+import fractalbake
+
+FB = os.environ["FRACTALBAKE_PROGRAM"]
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+SMALL = ["size=96x48"]
+
+
+def cli(*args, check=True):
+    p = subprocess.run([FB, *args], capture_output=True, text=True)
+    if check:
+        assert p.returncode == 0, p.stderr
+    return p
+
+
+def same_bits(a, b):
+    assert list(a) == list(b)
+    for k in a:
+        assert a[k].dtype == b[k].dtype and a[k].shape == b[k].shape, k
+        assert a[k].tobytes() == b[k].tobytes(), f"{k} differs"
+
+
+@pytest.fixture(scope="module")
+def cli_small(tmp_path_factory):
+    path = tmp_path_factory.mktemp("cli") / "small.exr"
+    cli("render", "-q", "--backend", "native", "--set", SMALL[0], "-o", str(path))
+    return path
+
+
+def test_render_equals_cli(cli_small):
+    planes = fractalbake.render(sets=SMALL, backend="native")
+    same_bits(fractalbake.read(cli_small), planes)
+    # the types are the EXR's, as `fractalbake info` lists them
+    info = cli("info", str(cli_small)).stdout
+    assert planes["sky.R"].dtype == np.float16 and "R (half)" in info
+    assert planes["sky.iter"].dtype == np.uint32 and "iter (uint)" in info
+    assert planes["detail.Y"].dtype == np.float32 and planes["detail.Y"].shape == (48, 96)
+    assert np.isfinite(planes["sky.R"]).all() and planes["sky.R"].std() > 0  # a picture, not a constant
+
+
+def test_size_argument_is_the_set(cli_small):
+    same_bits(fractalbake.read(cli_small), fractalbake.render(size=(96, 48), backend="native"))
+
+
+def test_docs_example_full_default_scene():
+    """docs/examples/library.py: the default scene at its own size, in-process against the CLI."""
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "docs/examples/library.py"), FB], capture_output=True,
+                       text=True, env=os.environ)
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert "1024 x 512" in p.stdout and "the same bits" in p.stdout
+
+
+def test_bake_file_and_region(tmp_path, cli_small):
+    out = tmp_path / "lib.exr"
+    fractalbake.bake(None, out, sets=SMALL, backend="native")
+    full = fractalbake.read(out)
+    same_bits(fractalbake.read(cli_small), full)
+    part = fractalbake.render(sets=SMALL, backend="native", region=(10, 7, 40, 21))
+    for k in full:
+        assert part[k].tobytes() == full[k][7:28, 10:50].tobytes(), k
+
+
+def test_scene_as_text_dict_and_path(tmp_path):
+    text = '{"size": [64, 32], "seed": 3, "layers": [{"type": "fbm", "name": "n", "octaves": 4}]}'
+    path = tmp_path / "s.json"
+    path.write_text(text)
+    a = fractalbake.render(text, backend="native")
+    b = fractalbake.render(json.loads(text), backend="native")
+    c = fractalbake.render(str(path), backend="native")
+    cli("render", "-q", "--backend", "native", str(path), "-o", str(tmp_path / "s.exr"))
+    same_bits(fractalbake.read(tmp_path / "s.exr"), a)
+    same_bits(a, b)
+    same_bits(a, c)
+
+
+def test_errors_are_the_cli_line(tmp_path):
+    path = tmp_path / "bad.json"
+    path.write_text('{"size": [64, 32], "layers": [{"type": "fbm", "octaves": 99}]}')
+    p = cli("render", "-q", str(path), "-o", str(tmp_path / "x.exr"), check=False)
+    assert p.returncode == 2
+    with pytest.raises(fractalbake.Error) as e:
+        fractalbake.render(str(path), backend="native")
+    assert str(e.value) == p.stderr.strip() and "octaves" in str(e.value) and e.value.code == 2
+    with pytest.raises(fractalbake.Error) as e:
+        fractalbake.render(backend="cuda")
+    assert str(e.value) == 'fractalbake: backend "cuda": expected auto, vulkan or native' and e.value.code == 1
+
+
+def test_progress_and_cancel(tmp_path):
+    seen = []
+    fractalbake.render(sets=SMALL, backend="native", progress=seen.append)
+    assert seen and seen == sorted(seen) and seen[-1] == 1.0 and all(0 <= f <= 1 for f in seen)
+    out = tmp_path / "stopped.exr"
+    with pytest.raises(fractalbake.Error) as e:
+        fractalbake.bake(None, out, sets=SMALL, backend="native", progress=lambda f: True)
+    assert e.value.code == fractalbake.ERR_CANCELLED and "cancelled" in str(e.value)
+    assert not out.exists() and os.listdir(tmp_path) == []
+
+
+def test_ctrl_c_cancels_cleanly(tmp_path):
+    """SIGINT during a bake: the bake stops at its next strip, no file is left, KeyboardInterrupt is raised."""
+    out = tmp_path / "interrupted.exr"
+    calls = []
+
+    def progress(f):
+        calls.append(f)
+        if len(calls) == 1:
+            signal.raise_signal(signal.SIGINT)  # what Ctrl-C sends; Python raises it here
+
+    with pytest.raises(KeyboardInterrupt):
+        fractalbake.bake(None, out, sets=["size=96x96"], backend="native", progress=progress)
+    assert len(calls) == 1 and not out.exists() and os.listdir(tmp_path) == []
+    # the context still works afterwards
+    assert "sky.R" in fractalbake.render(sets=SMALL, backend="native")
+
+
+def test_compare_is_the_cli_json(tmp_path):
+    a, b = tmp_path / "a.exr", tmp_path / "b.exr"
+    fractalbake.bake(None, a, sets=SMALL, backend="native")
+    fractalbake.bake(None, b, sets=SMALL + ["seed=8"], backend="native")
+    ours = fractalbake.compare(a, b, max_abs="0.5")
+    theirs = json.loads(cli("compare", "--json", "--max-abs", "0.5", str(a), str(b), check=False).stdout)
+    assert ours == theirs
+    assert ours["result"] == "fail" and len(ours["channels"]) == 24
+    # the statistics against numpy's, on the arrays read back
+    pa, pb = fractalbake.read(a), fractalbake.read(b)
+    for ch in ours["channels"]:
+        d = np.abs(pa[ch["name"]].astype(np.float64) - pb[ch["name"]].astype(np.float64))
+        assert ch["max_abs"] == pytest.approx(d.max(), rel=1e-12, abs=0), ch["name"]
+        assert ch["rmse"] == pytest.approx(np.sqrt((d * d).mean()), rel=1e-9), ch["name"]
+        assert ch["beyond_fail_pixels"] == int((d > 0.5).sum()), ch["name"]
+    same = fractalbake.compare(a, a)
+    assert same["result"] == "pass" and all(ch["max_abs"] == 0 for ch in same["channels"])
+
+
+def test_two_contexts_on_two_backends():
+    try:
+        vk = fractalbake.Context("vulkan", threads=2)
+    except fractalbake.Error as e:
+        pytest.skip(f"no Vulkan device: {e}")
+    nat = fractalbake.Context("native", threads=2)
+    assert (vk.backend, nat.backend) == ("vulkan", "native")
+    results, errors = {}, {}
+
+    def work(name, ctx):
+        for _ in range(2):
+            results[name] = ctx.render(sets=SMALL)
+        try:
+            ctx.render(sets=["seed=-1"])
+        except fractalbake.Error as e:
+            errors[name] = str(e)
+
+    threads = [threading.Thread(target=work, args=a) for a in (("vk", vk), ("nat", nat))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    same_bits(results["vk"], results["nat"])
+    assert errors["vk"] == errors["nat"] and "seed" in errors["vk"]
+    vk.close()
+    nat.close()
