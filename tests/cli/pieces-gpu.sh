@@ -7,6 +7,10 @@
 . "$(dirname "$0")/lib.sh"
 cli_init "$@"
 require_vulkan
+if [ -n "${FB_VK_STAGING:-}" ]; then # CTest's NAME-staging entry: this script sets it per bake itself
+  echo "FB_VK_STAGING is part of this script's own runs: not run again under it"
+  exit 77
+fi
 
 # A per-pixel layer with a heightmap, a Julia set (seven channels, some half, one uint), an op layer
 # reading the first, and a chaos game (prepared before the pieces, its rows from the host).
