@@ -55,6 +55,7 @@ struct pieces {
     fb_sink *const *sinks;
     int nsinks;
     fb_pool *bands; /* the consumer's band workers */
+    fb_scope scope; /* the bake's thread's (fb.h): the consumer works in it */
     fb_progress prog;
 };
 
@@ -376,6 +377,9 @@ static fb_result produce(pieces *p, double *gpu_seconds)
     for (int k = 0; k < p->npieces && !rc; k++) {
         if (ahead && k + 1 < p->npieces) rc = slot_start(p, k + 1, &next);
         if (!rc) rc = slot_finish(p, cur, gpu_seconds);
+        if (!rc && fb_progress_poll(&p->prog))
+            rc = fb_fail(FB_ERR_CANCELLED, "the bake was cancelled at rows %d-%d (by its progress callback)", cur->y0,
+                         cur->y0 + cur->n - 1);
         if (!rc && !ahead && k + 1 < p->npieces) rc = slot_start(p, k + 1, &next);
         cur = next;
     }
@@ -434,6 +438,7 @@ static fb_result feed(pieces *p, const fb_piece *pc)
 static void *consume(void *arg)
 {
     pieces *p = arg;
+    fb_scope_set(p->scope); /* the bake's log and output transaction */
     const int *region = p->shape.region;
     for (int k = 0; k < p->npieces; k++) {
         slot *sl = &p->slots[k % p->shape.slots];
@@ -476,6 +481,7 @@ fb_result pieces_run(pieces *p, fb_sink *const *sinks, int nsinks, bool progress
     fb_progress_init(&p->prog, progress, "bake", "pix");
     fb_progress_update(&p->prog, 0, (uint64_t)p->shape.region[2] * p->shape.region[3] * (uint64_t)s->nlayers);
     fb_progress_set_scale(&p->prog, s->nlayers);
+    p->scope = fb_scope_capture();
     pthread_t consumer;
     if (pthread_create(&consumer, NULL, consume, p) != 0) {
         fb_pool_destroy(&p->bands);
