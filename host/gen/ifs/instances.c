@@ -153,7 +153,7 @@ static fb_result rows_at(rows2 *rw, int r)
             return fb_fail(FB_ERR_NOMEM, "out of memory");
     void *planes[FB_GEN_MAX_CHANNELS] = {0};
     for (int k = 0; k < np; k++) planes[k] = rw->buf[k];
-    pl->src->native_rows(pl->src, y0, n, planes);
+    pl->src->compute.native_rows(pl->src, y0, n, planes);
     rw->r = r;
     return FB_OK;
 }
@@ -223,7 +223,7 @@ static float *read_mask(const fb_ifs_place *pl, fb_result *rc)
             *rc = fb_fail(FB_ERR_NOMEM, "out of memory for the instances' mask");
     for (int y0 = 0; y0 < pl->height && !*rc; y0 += band) {
         int n = y0 + band <= pl->height ? band : pl->height - y0;
-        pl->avoid->native_rows(pl->avoid, y0, n, planes);
+        pl->avoid->compute.native_rows(pl->avoid, y0, n, planes);
         memcpy(mask + (size_t)y0 * pl->width, planes[pl->avoid_plane], (size_t)n * pl->width * sizeof *mask);
     }
     for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(planes[k]);

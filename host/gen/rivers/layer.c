@@ -153,8 +153,8 @@ static const fb_gen *world_of(const fb_gen *g)
 {
     const rivers_state *s = state(g);
     if (!s) return NULL;
-    if (s->src && s->src->has_world) return s->src;
-    if (s->map && s->map->has_world) return s->map;
+    if (s->src && s->src->prepared.has_world) return s->src;
+    if (s->map && s->map->prepared.has_world) return s->map;
     return NULL;
 }
 
@@ -163,7 +163,7 @@ static double extent_of(const fb_gen *g)
     const fb_rivers_layer_params *P = fb_layer_params(g->layer);
     const fb_gen *w = world_of(g);
     if (P->extent > 0) return P->extent;
-    if (w) return w->world[1] - w->world[0];
+    if (w) return w->prepared.world[1] - w->prepared.world[0];
     return 100000;
 }
 
@@ -181,14 +181,14 @@ static fb_result read_channel(const fb_gen *g, const fb_gen *src, int c, const c
             rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     for (int y0 = 0; y0 < sc->height && !rc; y0 += band) {
         int n = y0 + band <= sc->height ? band : sc->height - y0;
-        src->native_rows(src, y0, n, planes);
+        src->compute.native_rows(src, y0, n, planes);
         memcpy(out + (size_t)y0 * sc->width, planes[fb_gen_plane_of(src, c)], (size_t)n * sc->width * 4);
     }
     for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(planes[k]);
     for (size_t i = 0; !rc && i < (size_t)sc->width * sc->height; i++)
         if (!isfinite(out[i]))
             rc = fb_fail(FB_ERR_INPUT, "layer %s: its %s %s has a NaN or infinite value at (%zu, %zu)", g->layer->name,
-                         what, src->channel_names[c], i % sc->width, i / sc->width);
+                         what, src->store.channel_names[c], i % sc->width, i / sc->width);
     return rc;
 }
 
@@ -250,11 +250,12 @@ static fb_result rivers_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     if (rc) return rc;
     /* the world the image covers: the source's top-left corner (else the origin), extent wide */
     const fb_gen *w = world_of(g);
-    g->has_world = true;
-    g->world[0] = w ? w->world[0] : 0, g->world[1] = g->world[0] + extent;
-    g->world[3] = w ? w->world[3] : extent * sc->height / sc->width, g->world[2] = g->world[3] - cell * sc->height;
-    g->epsg = w ? w->epsg : 0;
-    if (sc->height > 1) g->preview_shade[0] = g->preview_shade[1] = cell;
+    g->prepared.has_world = true;
+    g->prepared.world[0] = w ? w->prepared.world[0] : 0, g->prepared.world[1] = g->prepared.world[0] + extent;
+    g->prepared.world[3] = w ? w->prepared.world[3] : extent * sc->height / sc->width,
+    g->prepared.world[2] = g->prepared.world[3] - cell * sc->height;
+    g->prepared.epsg = w ? w->prepared.epsg : 0;
+    if (sc->height > 1) g->store.preview_shade[0] = g->store.preview_shade[1] = cell;
     float lo = INFINITY, hi = -INFINITY;
     uint64_t rivers = 0, lakes = 0;
     for (size_t i = 0; i < n; i++) {
@@ -264,14 +265,14 @@ static fb_result rivers_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     s->cell = cell;
     if (P->relief.colour) fb_relief_init(&s->relief, &P->relief, lo, hi);
     double work = (double)n * P->steps;
-    snprintf(g->summary, sizeof g->summary,
+    snprintf(g->prepared.summary, sizeof g->prepared.summary,
              "%s: %d x %d cells of %.4g, %d steps of %.4g; relief %.6g, largest basin %.3g%% of the cells, river "
              "cells %.3g%%, standing water %.3g%%, depressions filled in %d steps (%llu cells); %.3f s, %.3g "
              "Mcell-steps/s",
              g->layer->name, sc->width, sc->height, cell, P->steps, P->dt, (double)hi - lo, 100 * s->out.largest_basin,
              100.0 * rivers / n, 100.0 * lakes / n, s->out.flood_steps, (unsigned long long)s->out.flooded, secs,
              work / secs * 1e-6);
-    snprintf(g->summary_json, sizeof g->summary_json,
+    snprintf(g->prepared.summary_json, sizeof g->prepared.summary_json,
              "{\"layer\": \"%s\", \"generator\": \"rivers\", \"width\": %d, \"height\": %d, \"cell\": %.9g, "
              "\"steps\": %d, \"relief\": %.9g, \"largest_basin\": %.6g, \"river_cells\": %llu, \"water_cells\": %llu, "
              "\"flood_steps\": %d, \"flooded\": %llu, \"seconds\": %.6f}",
@@ -314,7 +315,7 @@ static void rivers_rows(const fb_gen *g, int y0, int n, void *const *planes)
     const float *src[4] = {s->out.height, s->out.area, s->out.river, s->out.lake};
     for (int c = 0; c < 4; c++)
         if (planes[c]) memcpy(planes[c], src[c] + at, len);
-    if (g->nchannels > 4) colour_rows(g, y0, n, planes[4], planes[5], planes[6]);
+    if (g->store.nchannels > 4) colour_rows(g, y0, n, planes[4], planes[5], planes[6]);
 }
 
 /* The model's state and result (rivers.c), plus the input and the uplift map (4 bytes a cell each)
@@ -334,7 +335,7 @@ static fb_result rivers_init(fb_gen *g)
     uint64_t hold, peak = rivers_memory(g, NULL, &hold);
     char who[96];
     snprintf(who, sizeof who, "stream-power erosion of %d x %d cells", g->scene->width, g->scene->height);
-    fb_result rc = fb_memory_check(&g->budget, peak, who);
+    fb_result rc = fb_memory_check(&g->run.budget, peak, who);
     if (rc) return rc;
     rivers_state *s = calloc(1, sizeof *s);
     if (!s) return fb_fail(FB_ERR_NOMEM, "out of memory");
@@ -342,19 +343,19 @@ static fb_result rivers_init(fb_gen *g)
     g->fini = rivers_fini;
     static const char *const suffix[7] = {"Y", "area", "river", "lake", "R", "G", "B"};
     const fb_rivers_layer_params *P = fb_layer_params(g->layer);
-    g->nchannels = P->relief.colour ? 7 : 4;
-    for (int c = 0; c < g->nchannels; c++) {
-        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
-        g->channel_types[c] = (g->layer->half && c != 1) || c == 2 ? EXRIO_HALF : EXRIO_FLOAT;
+    g->store.nchannels = P->relief.colour ? 7 : 4;
+    for (int c = 0; c < g->store.nchannels; c++) {
+        snprintf(g->store.channel_names[c], sizeof g->store.channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        g->store.channel_types[c] = (g->layer->half && c != 1) || c == 2 ? EXRIO_HALF : EXRIO_FLOAT;
     }
-    g->preview_channel = 0;
-    if (P->relief.colour) g->preview_rgb = 4; /* the preview shows the lit colour */
-    if (g->scene->height > 1) g->preview_shade[0] = g->preview_shade[1] = extent_of(g) / g->scene->width;
-    g->native_rows = rivers_rows;
+    g->store.preview_channel = 0;
+    if (P->relief.colour) g->store.preview_rgb = 4; /* the preview shows the lit colour */
+    if (g->scene->height > 1) g->store.preview_shade[0] = g->store.preview_shade[1] = extent_of(g) / g->scene->width;
+    g->compute.native_rows = rivers_rows;
     g->prepare = rivers_prepare;
     g->memory = rivers_memory;
     g->resolve = rivers_resolve;
-    g->prepare_gpu_seconds = -1;
+    g->prepared.gpu_seconds = -1;
     return FB_OK;
 }
 
@@ -365,10 +366,10 @@ static fb_result find_source(fb_gen *g, const fb_gen *const *gens, const fb_ref 
     const fb_gen *l = gens[r->layer];
     int c = fb_gen_channel_of(l, r->channel, g->layer->name, key);
     if (c < 0) return FB_ERR_INPUT;
-    if (l->host_op || l->channel_types[c] == EXRIO_UINT)
-        return fb_fail(FB_ERR_INPUT, "layer %s: %s \"%s\": %s", g->layer->name, key, l->channel_names[c],
-                       l->host_op ? "an op layer cannot drive it yet (bake it, or name the layer it reads)"
-                                  : "a channel of integers, not heights");
+    if (l->compute.host_rows || l->store.channel_types[c] == EXRIO_UINT)
+        return fb_fail(FB_ERR_INPUT, "layer %s: %s \"%s\": %s", g->layer->name, key, l->store.channel_names[c],
+                       l->compute.host_rows ? "an op layer cannot drive it yet (bake it, or name the layer it reads)"
+                                            : "a channel of integers, not heights");
     *src = l, *channel = c;
     return FB_OK;
 }

@@ -229,7 +229,7 @@ static void terrain_rows(const fb_gen *g, int y0, int n, void *const *planes)
     const fb_dt *d = &s->t.dt;
     const int W = g->scene->width, H = g->scene->height;
     float *Y = planes[0], *A = planes[1], *S = planes[2];
-    float *R = g->nchannels > 3 ? planes[3] : NULL, *G = R ? planes[4] : NULL, *B = R ? planes[5] : NULL;
+    float *R = g->store.nchannels > 3 ? planes[3] : NULL, *G = R ? planes[4] : NULL, *B = R ? planes[5] : NULL;
     for (size_t i = 0; i < (size_t)n * W; i++) Y[i] = (float)s->fill, A[i] = 0, S[i] = 0;
     for (size_t i = 0; R && i < (size_t)n * W; i++) R[i] = G[i] = B[i] = 0;
     const double sx = (s->bounds[1] - s->bounds[0]) / W, sy = (s->bounds[3] - s->bounds[2]) / H;
@@ -419,11 +419,11 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     } else {
         memcpy(s->bounds, P->bounds, sizeof s->bounds);
     }
-    g->preview_shade[0] = (s->bounds[1] - s->bounds[0]) / g->scene->width;
-    g->preview_shade[1] = (s->bounds[3] - s->bounds[2]) / g->scene->height;
-    memcpy(g->world, s->bounds, sizeof g->world); /* the image's frame, for a GeoTIFF heightmap */
-    g->has_world = true;
-    g->epsg = P->epsg;
+    g->store.preview_shade[0] = (s->bounds[1] - s->bounds[0]) / g->scene->width;
+    g->store.preview_shade[1] = (s->bounds[3] - s->bounds[2]) / g->scene->height;
+    memcpy(g->prepared.world, s->bounds, sizeof g->prepared.world); /* the image's frame, for a GeoTIFF heightmap */
+    g->prepared.has_world = true;
+    g->prepared.epsg = P->epsg;
     double t0 = fb_now();
     if (P->smooth && !(s->grad = fb_smooth_gradients(&s->t)))
         return fb_fail(FB_ERR_NOMEM, "layer %s: out of memory for the vertex gradients", g->layer->name);
@@ -431,13 +431,13 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     if (P->mesh[0] && (rc = fb_terrain_write_mesh(&s->t, s->bounds, P->mesh))) return rc; /* renamed with the EXR */
     double t_out = fb_now() - t0;
     const fb_terrain_stats *st = &s->st;
-    snprintf(g->summary, sizeof g->summary,
+    snprintf(g->prepared.summary, sizeof g->prepared.summary,
              "layer %s (terrain): %u input points (%llu duplicates left out), %llu inserted, %llu variances clamped "
              "to 0, %u triangles; sigma %.6g; triangulate %.3f s, refine %.3f s, bin%s %.3f s%s%.200s",
              g->layer->name, st->input, (unsigned long long)st->duplicates, (unsigned long long)st->inserted,
              (unsigned long long)st->clamped, s->t.dt.nfinite, st->sigma, st->build_seconds, st->refine_seconds,
              P->mesh[0] ? " and mesh" : "", t_out, P->mesh[0] ? "; mesh " : "", P->mesh);
-    snprintf(g->summary_json, sizeof g->summary_json,
+    snprintf(g->prepared.summary_json, sizeof g->prepared.summary_json,
              "{\"layer\": \"%s\", \"generator\": \"terrain\", \"input_points\": %u, \"duplicates\": %llu, "
              "\"inserted\": %llu, \"hull_splits\": %llu, \"clamped_variances\": %llu, \"rejected_sites\": %llu, "
              "\"variance_stages\": %u, "
@@ -508,18 +508,18 @@ static fb_result terrain_init(fb_gen *g)
     if (rc) return rc;
 
     static const char *const suffix[6] = {"Y", "A", "slope", "R", "G", "B"};
-    g->nchannels = P->relief.colour ? 6 : 3;
-    for (int c = 0; c < g->nchannels; c++) {
-        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
-        g->channel_types[c] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
+    g->store.nchannels = P->relief.colour ? 6 : 3;
+    for (int c = 0; c < g->store.nchannels; c++) {
+        snprintf(g->store.channel_names[c], sizeof g->store.channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        g->store.channel_types[c] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
     }
-    g->channel_types[1] = EXRIO_HALF;
-    g->preview_channel = 0;
-    if (P->relief.colour) g->preview_rgb = 3; /* the preview shows the lit colour */
-    g->native_rows = terrain_rows;
+    g->store.channel_types[1] = EXRIO_HALF;
+    g->store.preview_channel = 0;
+    if (P->relief.colour) g->store.preview_rgb = 3; /* the preview shows the lit colour */
+    g->compute.native_rows = terrain_rows;
     g->prepare = terrain_prepare;
     g->memory = terrain_memory;
-    g->prepare_gpu_seconds = -1;
+    g->prepared.gpu_seconds = -1;
     return FB_OK;
 }
 
