@@ -46,7 +46,7 @@ static fb_result run_scene(fb_engine *e, const char *json, run_out *out)
         size_t n = (size_t)s.width * s.height;
         float *planes[7];
         for (int c = 0; c < 7; c++) planes[c] = malloc(n * 4);
-        g.native_rows(&g, 0, s.height, (void *const *)planes);
+        g.compute.native_rows(&g, 0, s.height, (void *const *)planes);
         out->count = (uint32_t *)(void *)planes[0];
         out->colour = planes[2];
         for (int c = 0; c < 7; c++)

@@ -34,46 +34,49 @@ static fb_result layer_init(vkc_context *vk, const fb_gen *g, int rows, side *sd
 {
     int np = fb_gen_nplanes(g);
     uint64_t bytes = (uint64_t)g->scene->width * (uint64_t)rows * 4;
-    fb_result rc = vkc_pipeline_create(vk,
-                                       &(vkc_pipeline_desc){.spv = g->spv,
-                                                            .spv_size = g->spv_size,
-                                                            .push_size = g->push_size,
-                                                            .buffers = (uint32_t)np + (g->input ? 1u : 0u),
-                                                            .uniform = g->input && g->input_uniform ? 1u << np : 0u,
-                                                            .spec = g->spec,
-                                                            .nspec = g->nspec,
-                                                            .name = g->layer->name},
-                                       &sd->pipe);
-    sd->per = g->per_invocation > 1 ? (uint32_t)g->per_invocation : 1u;
+    fb_result rc = vkc_pipeline_create(
+        vk,
+        &(vkc_pipeline_desc){.spv = g->compute.shader.spv,
+                             .spv_size = g->compute.shader.spv_size,
+                             .push_size = g->compute.shader.push_size,
+                             .buffers = (uint32_t)np + (g->compute.shader.input ? 1u : 0u),
+                             .uniform = g->compute.shader.input && g->compute.shader.input_uniform ? 1u << np : 0u,
+                             .spec = g->compute.shader.spec,
+                             .nspec = g->compute.shader.nspec,
+                             .name = g->layer->name},
+        &sd->pipe);
+    sd->per = g->compute.shader.per_invocation > 1 ? (uint32_t)g->compute.shader.per_invocation : 1u;
     if (!rc) rc = vkc_job_create(vk, sd->pipe, &sd->job);
     for (int c = 0; c < np && !rc; c++, sd->nbufs++)
         rc = vkc_buffer_create(vk, fb_gen_plane_stored(g, c) ? bytes : 16, &sd->buf[c]);
-    if (!rc && g->input) rc = vkc_buffer_create(vk, g->input_size, &sd->buf[sd->nbufs++]);
-    if (!rc && g->input) rc = vkc_buffer_upload(vk, sd->buf[np], g->input, g->input_size);
+    if (!rc && g->compute.shader.input) rc = vkc_buffer_create(vk, g->compute.shader.input_size, &sd->buf[sd->nbufs++]);
+    if (!rc && g->compute.shader.input)
+        rc = vkc_buffer_upload(vk, sd->buf[np], g->compute.shader.input, g->compute.shader.input_size);
     return rc;
 }
 
 /* The peer's side: its output planes, then the layer's input where it reads it. */
 static fb_result peer_init(vkc_context *vk, const fb_gen *g, const fb_bench_peer *peer, int rows, side *sd)
 {
-    bool input = peer->input && g->input;
+    bool input = peer->input && g->compute.shader.input;
     uint32_t np = peer->planes > 1 ? (uint32_t)peer->planes : 1u;
-    fb_result rc = vkc_pipeline_create(vk,
-                                       &(vkc_pipeline_desc){.spv = peer->spv,
-                                                            .spv_size = peer->spv_size,
-                                                            .push_size = g->push_size,
-                                                            .buffers = np + (input ? 1u : 0u),
-                                                            .uniform = input && g->input_uniform ? 1u << np : 0u,
-                                                            .spec = peer->spec,
-                                                            .nspec = peer->nspec,
-                                                            .name = peer->name},
-                                       &sd->pipe);
+    fb_result rc =
+        vkc_pipeline_create(vk,
+                            &(vkc_pipeline_desc){.spv = peer->spv,
+                                                 .spv_size = peer->spv_size,
+                                                 .push_size = g->compute.shader.push_size,
+                                                 .buffers = np + (input ? 1u : 0u),
+                                                 .uniform = input && g->compute.shader.input_uniform ? 1u << np : 0u,
+                                                 .spec = peer->spec,
+                                                 .nspec = peer->nspec,
+                                                 .name = peer->name},
+                            &sd->pipe);
     sd->per = peer->per_invocation > 1 ? (uint32_t)peer->per_invocation : 1u;
     if (!rc) rc = vkc_job_create(vk, sd->pipe, &sd->job);
     for (uint32_t k = 0; k < np && !rc; k++)
         rc = vkc_buffer_create(vk, (uint64_t)g->scene->width * (uint64_t)rows * 4, &sd->buf[sd->nbufs++]);
-    if (!rc && input) rc = vkc_buffer_create(vk, g->input_size, &sd->buf[sd->nbufs++]);
-    if (!rc && input) rc = vkc_buffer_upload(vk, sd->buf[np], g->input, g->input_size);
+    if (!rc && input) rc = vkc_buffer_create(vk, g->compute.shader.input_size, &sd->buf[sd->nbufs++]);
+    if (!rc && input) rc = vkc_buffer_upload(vk, sd->buf[np], g->compute.shader.input, g->compute.shader.input_size);
     return rc;
 }
 

@@ -110,10 +110,10 @@ static fb_result peer_init(vkc_context *vk, const fb_gen *g, peer_game *pg)
         &(vkc_pipeline_desc){FB_SPV(ifs_peer_comp), .push_size = sizeof(K_IfsParams), .buffers = 3, .name = "ifs_peer"},
         &pg->pipe);
     if (!rc) rc = vkc_job_create(vk, pg->pipe, &pg->job);
-    if (!rc) rc = vkc_buffer_create(vk, g->input_size, &pg->buf[0]);
+    if (!rc) rc = vkc_buffer_create(vk, g->compute.shader.input_size, &pg->buf[0]);
     if (!rc) rc = vkc_buffer_create(vk, 16ull * p->chains, &pg->buf[1]);
     if (!rc) rc = vkc_buffer_create(vk, 8ull * pg->cells, &pg->buf[2]);
-    if (!rc) rc = vkc_buffer_upload(vk, pg->buf[0], g->input, g->input_size);
+    if (!rc) rc = vkc_buffer_upload(vk, pg->buf[0], g->compute.shader.input, g->compute.shader.input_size);
     if (!rc && !(pg->zero = calloc(pg->cells, 8))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     return rc;
 }
@@ -173,7 +173,7 @@ static fb_result peer_compare(const fb_bench *b, fb_engine *e, double points)
             wall[0][run] = fb_gen_ifs_stats(&layer)->game_seconds;
             gpu[0][run] = fb_gen_ifs_stats(&layer)->gpu_seconds;
         }
-        if (!rc && run == 2) layer.native_rows(&layer, 0, s->height, (void *const *)planes);
+        if (!rc && run == 2) layer.compute.native_rows(&layer, 0, s->height, (void *const *)planes);
         fb_gen_fini(&layer);
         double w = 0, t = 0;
         if (!rc) rc = peer_run(e->vk, &g, &pg, nsteps, &w, &t);
@@ -241,7 +241,7 @@ static fb_result run(const fb_bench *b, const fb_bench_case *bc, const fb_scene 
             double t[4];
             for (int k = 0; k < 4 && !rc; k++) {
                 double t0 = fb_now();
-                rc = fb_ifs_avx2_game(g.params, g.input, threads, hits, sum);
+                rc = fb_ifs_avx2_game(g.params, g.compute.shader.input, threads, hits, sum);
                 t[k] = fb_now() - t0;
             }
             if (!rc)
@@ -253,7 +253,7 @@ static fb_result run(const fb_bench *b, const fb_bench_case *bc, const fb_scene 
             memset(hits, 0, cells * 4);
             memset(sum, 0, cells * 8);
             double t0 = fb_now();
-            scalar_game(g.params, g.input, n, hits, sum);
+            scalar_game(g.params, g.compute.shader.input, n, hits, sum);
             report(b, "native", "scalar-1-thread", "textbook C loop", 1, (double)n / (fb_now() - t0) * 1e-6, 0);
         }
         free(hits);

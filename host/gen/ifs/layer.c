@@ -56,6 +56,8 @@ typedef struct ifs_state {
     size_t nplants;
     const fb_gen *surface;
     int surface_plane, surface_channel;
+    const fb_gen *avoid; /* the mask the plants keep away from, or NULL */
+    int avoid_plane;
 } ifs_state;
 
 static ifs_state *state(const fb_gen *g)
@@ -135,7 +137,8 @@ static fb_result lsystem_condensation(const fb_gen *g, K_IfsMap **out, uint32_t 
     fb_lsys_seg *segs = NULL;
     int depth = 0;
     snprintf(who, sizeof who, "layer %s: condensation", g->layer->name);
-    fb_result rc = fb_lsys_derive(&f->cond_sys, g->scene->seed, f->cond_max_symbols, 0, &g->budget, who, &str, &len);
+    fb_result rc =
+        fb_lsys_derive(&f->cond_sys, g->scene->seed, f->cond_max_symbols, 0, &g->run.budget, who, &str, &len);
     if (rc) return rc;
     size_t nf = 0;
     for (size_t i = 0; i < len; i++) nf += str[i] == 'F';
@@ -407,7 +410,7 @@ static fb_result prepare_native(fb_gen *g, fb_engine *e, fb_progress *prog)
     /* The hand-vectorised loop (bit-exact with the kernel, tests/test_avx2.c) where it applies: one
      * task per histogram, in rounds of the dispatch's steps (POINTS_PER_DISPATCH points, a fraction
      * of a second) so that the bar moves at any point count. */
-    bool avx2 = !rc && !g->scalar && (priv || threads == 1) && fb_ifs_avx2_supported(&st->p);
+    bool avx2 = !rc && !g->run.scalar && (priv || threads == 1) && fb_ifs_avx2_supported(&st->p);
     for (uint32_t step0 = 0; avx2 && step0 < last; step0 += st->p.nsteps) {
         uint32_t t1 = last - step0 > st->p.nsteps ? step0 + st->p.nsteps : last;
         avx2_round r = {st, hist, chains, step0, t1, nhist, {{0}}};
@@ -611,24 +614,36 @@ static fb_result enumerate_plants(const fb_gen *g, ifs_state *st)
     return fb_ifs_plants(&f->maps, cond, b, f->inst_min_pixels / px, &st->plants, &st->nplants);
 }
 
-/* The height layer the instances stand on: a float channel of a layer with native rows. */
+/* A float channel of a layer with native rows, for the instances: the height layer they stand on, or
+ * the mask they keep away from. */
+static fb_result instance_source(fb_gen *g, const fb_gen *const *gens, const fb_ref *r, const char *key,
+                                 const char *kind, const fb_gen **src, int *channel)
+{
+    const fb_gen *l = gens[r->layer];
+    int c = fb_gen_channel_of(l, r->channel, g->layer->name, key);
+    if (c < 0) return FB_ERR_INPUT;
+    if (l->compute.host_rows || !l->compute.native_rows || l->store.channel_types[c] == EXRIO_UINT)
+        return fb_fail(FB_ERR_INPUT, "layer %s: %s %s is %s; name %s", g->layer->name, key, l->store.channel_names[c],
+                       l->compute.host_rows ? "an op layer, computed strip by strip" : "not a height", kind);
+    *src = l, *channel = c;
+    return FB_OK;
+}
+
 static fb_result ifs_resolve(fb_gen *g, const fb_gen *const *gens, const int *plane_offset)
 {
     (void)plane_offset;
     const fb_ifs_params *f = fb_layer_params(g->layer);
-    if (!f->has_surface || f->surface.layer < 0) return FB_OK;
-    const fb_gen *src = gens[f->surface.layer];
-    int c = fb_gen_channel_of(src, f->surface.channel, g->layer->name, "instances-surface");
-    if (c < 0) return FB_ERR_INPUT;
-    if (src->host_op || !src->native_rows || src->channel_types[c] == EXRIO_UINT)
-        return fb_fail(FB_ERR_INPUT,
-                       "layer %s: instances-surface %s is %s; name a height layer (terrain, fbm, constrain...)",
-                       g->layer->name, src->channel_names[c],
-                       src->host_op ? "an op layer, computed strip by strip" : "not a height");
-    state(g)->surface = src;
-    state(g)->surface_plane = fb_gen_plane_of(src, c);
-    state(g)->surface_channel = c;
-    return FB_OK;
+    ifs_state *st = state(g);
+    fb_result rc = FB_OK;
+    int c;
+    if (f->has_surface && f->surface.layer >= 0 &&
+        !(rc = instance_source(g, gens, &f->surface, "instances-surface",
+                               "a height layer (terrain, fbm, constrain, rivers...)", &st->surface, &c)))
+        st->surface_plane = fb_gen_plane_of(st->surface, c), st->surface_channel = c;
+    if (!rc && f->has_avoid &&
+        !(rc = instance_source(g, gens, &f->avoid, "instances-avoid", "a mask (rivers.river...)", &st->avoid, &c)))
+        st->avoid_plane = fb_gen_plane_of(st->avoid, c);
+    return rc;
 }
 
 /* Writes the instances (prepare, after the surface's own prepare: layers prepare in dependency order). */
@@ -643,22 +658,28 @@ static fb_result write_instances(fb_gen *g)
                        .plane = st->surface_plane,
                        .constant = f->has_surface && f->surface.layer < 0 ? f->surface.value : 0,
                        .up = f->inst_up,
-                       .seed = g->scene->seed};
+                       .seed = g->scene->seed,
+                       .max_slope = f->max_slope,
+                       .avoid = st->avoid,
+                       .avoid_plane = st->avoid_plane,
+                       .avoid_distance = f->avoid_distance};
     memcpy(pl.frame, st->stats.bounds, sizeof pl.frame);
-    if (st->surface && st->surface->has_world)
-        pl.has_world = true, memcpy(pl.world, st->surface->world, sizeof pl.world);
-    size_t written, skipped;
-    fb_result rc = fb_ifs_write_instances(f->instances, &pl, st->plants, st->nplants, &written, &skipped);
+    if (st->surface && st->surface->prepared.has_world)
+        pl.has_world = true, memcpy(pl.world, st->surface->prepared.world, sizeof pl.world);
+    size_t written, skipped, avoided;
+    fb_result rc = fb_ifs_write_instances(f->instances, &pl, st->plants, st->nplants, &written, &skipped, &avoided);
     if (rc) return rc;
-    snprintf(g->summary, sizeof g->summary, "layer %s (ifs): %zu plant instances in %.200s%s%.80s", g->layer->name,
-             written, f->instances, st->surface ? " on " : "",
-             st->surface ? st->surface->channel_names[st->surface_channel] : "");
-    snprintf(g->summary_json, sizeof g->summary_json,
-             "{\"layer\": \"%s\", \"generator\": \"ifs\", \"instances\": %zu, \"instances_left_out\": %zu}",
-             g->layer->name, written, skipped);
+    snprintf(g->prepared.summary, sizeof g->prepared.summary, "layer %s (ifs): %zu plant instances in %.200s%s%.80s%s",
+             g->layer->name, written, f->instances, st->surface ? " on " : "",
+             st->surface ? st->surface->store.channel_names[st->surface_channel] : "",
+             avoided ? " (others left out by slope or mask)" : "");
+    snprintf(g->prepared.summary_json, sizeof g->prepared.summary_json,
+             "{\"layer\": \"%s\", \"generator\": \"ifs\", \"instances\": %zu, \"instances_left_out\": %zu, "
+             "\"instances_avoided\": %zu}",
+             g->layer->name, written, skipped, avoided);
     if (skipped)
         fb_log(FB_LOG_WARN, "%s: %zu plants stand where %s has no height (NaN) and are not written", g->layer->name,
-               skipped, st->surface->channel_names[st->surface_channel]);
+               skipped, st->surface->store.channel_names[st->surface_channel]);
     return FB_OK;
 }
 
@@ -679,11 +700,11 @@ static fb_result ifs_prepare(fb_gen *g, fb_engine *e, bool progress)
     fb_progress_finish(&prog);
     st->stats.seconds = fb_now() - t0;
     st->stats.gpu_seconds = gpu;
-    g->prepare_gpu_seconds = gpu;
+    g->prepared.gpu_seconds = gpu;
     if (rc) return rc;
     const fb_ifs_stats *x = &st->stats;
-    g->points_split = true; /* a game that render --points-part splits; merge needs its outside count */
-    g->points_outside = x->outside;
+    g->prepared.points_split = true; /* a game that render --points-part splits; merge needs its outside count */
+    g->prepared.points_outside = x->outside;
     fb_log(FB_LOG_INFO,
            "%s: %llu points: %llu hits, %llu outside the frame, %llu discarded (transient), %llu restarts, %.3g "
            "Mpts/s",
@@ -708,7 +729,7 @@ static void ifs_rows(const fb_gen *g, int y0, int n, void *const *planes)
     memcpy(planes[1], st->density + at, len * 4);
     memcpy(planes[2], st->colour + at, len * 4);
     fb_ifs_tonemap_row(&st->tone, st->density + at, st->colour + at, len, planes[3], planes[4], planes[5], planes[6]);
-    if (g->nchannels > 7) /* a points part: the colour sums, split into two uint words */
+    if (g->store.nchannels > 7) /* a points part: the colour sums, split into two uint words */
         for (size_t i = 0; i < len; i++) {
             uint64_t v = st->sum ? st->sum[at + i] : 0;
             ((uint32_t *)planes[7])[i] = (uint32_t)v;
@@ -818,9 +839,10 @@ static fb_result ifs_init(fb_gen *g)
     /* A points part K of N runs the K-th share of the chains, cut at multiples of 64 (a workgroup):
      * the parts' histograms add up to the whole game's exactly. */
     st->cr0 = 0, st->cr1 = p->chains;
-    st->part = g->points_part[1] > 0;
+    st->part = g->run.points_part[1] > 0;
     if (st->part) {
-        uint64_t groups = (p->chains + 63) / 64, k = (uint64_t)g->points_part[0], parts = (uint64_t)g->points_part[1];
+        uint64_t groups = (p->chains + 63) / 64, k = (uint64_t)g->run.points_part[0],
+                 parts = (uint64_t)g->run.points_part[1];
         uint64_t c0 = groups * (k - 1) / parts * 64, c1 = groups * k / parts * 64;
         st->cr0 = (uint32_t)(c0 < p->chains ? c0 : p->chains);
         st->cr1 = (uint32_t)(c1 < p->chains ? c1 : p->chains);
@@ -844,8 +866,8 @@ static fb_result ifs_init(fb_gen *g)
     /* for the benchmark's references: the kernel parameters and the map table */
     _Static_assert(sizeof(K_IfsParams) <= sizeof(g->params), "params fit");
     memcpy(g->params, p, sizeof *p);
-    g->input = st->table;
-    g->input_size = (uint32_t)(st->ntable * sizeof(K_IfsMap));
+    g->compute.shader.input = st->table;
+    g->compute.shader.input_size = (uint32_t)(st->ntable * sizeof(K_IfsMap));
 
     fb_ifs_tone *t = &st->tone;
     t->brightness = f->brightness;
@@ -860,14 +882,14 @@ static fb_result ifs_init(fb_gen *g)
     exrio_type colour = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
     const exrio_type types[9] = {EXRIO_UINT, EXRIO_FLOAT, EXRIO_FLOAT, colour,    colour,
                                  colour,     colour,      EXRIO_UINT,  EXRIO_UINT};
-    g->nchannels = st->part ? 9 : 7; /* a points part also carries the colour sums, which merge adds */
-    for (int c = 0; c < g->nchannels; c++) {
-        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
-        g->channel_types[c] = types[c];
+    g->store.nchannels = st->part ? 9 : 7; /* a points part also carries the colour sums, which merge adds */
+    for (int c = 0; c < g->store.nchannels; c++) {
+        snprintf(g->store.channel_names[c], sizeof g->store.channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        g->store.channel_types[c] = types[c];
     }
-    g->preview_channel = 1;
-    g->preview_rgb = 3;
-    g->native_rows = ifs_rows;
+    g->store.preview_channel = 1;
+    g->store.preview_rgb = 3;
+    g->compute.native_rows = ifs_rows;
     g->prepare = ifs_prepare;
     g->memory = ifs_memory;
     g->resolve = ifs_resolve;
@@ -877,9 +899,10 @@ static fb_result ifs_init(fb_gen *g)
 static int ifs_refs(fb_layer *L, fb_ref_slot *out)
 {
     fb_ifs_params *f = (void *)L->params;
-    if (!f->has_surface) return 0;
-    out[0] = (fb_ref_slot){&f->surface, "instances-surface", NULL};
-    return 1;
+    int n = 0;
+    if (f->has_surface) out[n++] = (fb_ref_slot){&f->surface, "instances-surface", NULL};
+    if (f->has_avoid) out[n++] = (fb_ref_slot){&f->avoid, "instances-avoid", NULL};
+    return n;
 }
 
 static int ifs_outputs(const fb_layer *L, const char **paths, const char **what, int max)

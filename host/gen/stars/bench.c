@@ -27,7 +27,7 @@ static void scatter_rows(void *ctx, int y0, int n, int task)
 {
     const scatter_job *j = ctx;
     const K_StarsParams *p = (const K_StarsParams *)(const void *)j->g->params;
-    const uint32_t *w = j->g->input;
+    const uint32_t *w = j->g->compute.shader.input;
     const K_StarsRec *rec = (const K_StarsRec *)(const void *)(w + p->rec_off);
     size_t plane = (size_t)p->width * p->height;
     float *R = j->rgb, *G = R + plane, *B = G + plane;
