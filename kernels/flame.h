@@ -381,7 +381,7 @@ K_FN uint k_flame_vis(uint q, uint visq)
  * not compact) alpha and opacity. A point adds at most 4080 to a colour, so every field is exact
  * while fewer than 2^K_FLAME_HIT_BITS points are played in between folds into wider totals
  * (shaders/flame_fold.comp): the hits fit their bits and each colour 38 bits. */
-#define K_FLAME_HIT_BITS     26u
+#define K_FLAME_HIT_BITS       26u
 #define K_FLAME_WORDS(compact) ((compact) != 0u ? 3u : 5u)
 
 #endif
