@@ -59,9 +59,19 @@ typedef struct records {
     uint32_t n;
 } records;
 
-static void make_records(const fb_flame_setup *S, const K_FlameChain *pts, uint32_t n, records *r)
+static void make_records(const fb_flame_setup *S, bool compact, const K_FlameChain *pts, uint32_t n, records *r)
 {
     uint32_t m = 0;
+    if (compact) { /* every xform visible (visq 32768), the palette entry alone: scatter16 reads no more */
+        for (uint32_t t = 0; t < n; t++) {
+            uint32_t cell = k_flame_cell(S->p, pts[t]);
+            r->cell[m] = cell;
+            r->col[m] = k_flame_index(pts[t].pc);
+            m += cell != K_FLAME_NONE;
+        }
+        r->n = m;
+        return;
+    }
     for (uint32_t t = 0; t < n; t++) {
         uint32_t cell = k_flame_cell(S->p, pts[t]), visq = S->xf[pts[t].vis].visq;
         r->cell[m] = cell;
@@ -128,7 +138,7 @@ typedef struct game {
 
 static void scatter(const game *G, int task, const K_FlameChain *pts, uint32_t n, records *rec)
 {
-    make_records(G->S, pts, n, rec);
+    make_records(G->S, G->compact, pts, n, rec);
     if (G->compact)
         scatter16(G->S, rec, G->hist[task], G->total);
     else
