@@ -342,18 +342,16 @@ LANES_AVX2 static uint64_t play8(const game *G, int task, uint32_t i, const lane
             _mm256_storeu_si256((__m256i *)n, _mm256_add_epi32(vn, _mm256_set1_epi32(1)));
             uint32_t f[8];
             _mm256_storeu_si256((__m256i *)f, fn);
-            int lanes_ok = _mm256_movemask_ps(ok);
+            unsigned scalar = ~(unsigned)_mm256_movemask_ps(ok) & 255u;
             K_FlameChain *out = &pts[t * 8];
-            for (int l = 0; l < 8; l++) {
-                if (lanes_ok >> l & 1) {
-                    out[l].px = x[l], out[l].py = y[l], out[l].pc = c[l], out[l].vis = f[l];
-                    continue;
-                }
-                /* the scalar step from the lane's state before this step (n was advanced above) */
+            for (int l = 0; l < 8; l++) out[l].px = x[l], out[l].py = y[l], out[l].pc = c[l], out[l].vis = f[l];
+            /* the other lanes (a few a step: no test a lane, which the random choice would mispredict),
+             * each the scalar step from its state before this step (kept by the blends; n was advanced
+             * above) */
+            for (; scalar; scalar &= scalar - 1u) {
+                int l = __builtin_ctz(scalar);
                 K_FlameChain s = st[l];
-                s.x = _mm256_cvtss_f32(_mm256_permutevar8x32_ps(vx, _mm256_set1_epi32(l)));
-                s.y = _mm256_cvtss_f32(_mm256_permutevar8x32_ps(vy, _mm256_set1_epi32(l)));
-                s.c = _mm256_cvtss_f32(_mm256_permutevar8x32_ps(vc, _mm256_set1_epi32(l)));
+                s.x = x[l], s.y = y[l], s.c = c[l];
                 s.n = n[l] - 1u;
                 s.bad = 0;
                 s = step(P, s, key[l], plain K_FLAME_TABLES);
