@@ -35,12 +35,12 @@ static double layer_seconds(const char *channels, bool scalar)
     if (fb_scene_parse(json, NULL, &s) || fb_gen_init(&g, &s, &s.layers[0])) exit(1);
     void *planes[FB_GEN_MAX_CHANNELS] = {0};
     /* touched before the clock starts: a bake reuses its strip buffers, so page faults are not the layer's */
-    for (int c = 0; c < g.nchannels; c++) planes[fb_gen_plane_of(&g, c)] = calloc((size_t)s.width * s.height, 4);
+    for (int c = 0; c < g.store.nchannels; c++) planes[fb_gen_plane_of(&g, c)] = calloc((size_t)s.width * s.height, 4);
     for (int c = 0; c < FB_GEN_MAX_CHANNELS; c++)
         if (planes[c]) memset(planes[c], 1, (size_t)s.width * s.height * 4);
-    g.scalar = scalar;
+    g.run.scalar = scalar;
     double t0 = cpu_seconds();
-    g.native_rows(&g, 0, s.height, planes);
+    g.compute.native_rows(&g, 0, s.height, planes);
     double t = cpu_seconds() - t0;
     for (int c = 0; c < FB_GEN_MAX_CHANNELS; c++) free(planes[c]);
     fb_gen_fini(&g);

@@ -127,21 +127,24 @@ static fb_result variant_init(vkc_context *vk, variant *v, const char *kind, con
     if (!rc) rc = fb_gen_init(&v->g, &v->s, &v->s.layers[0]);
     if (rc) return rc;
     int np = fb_gen_nplanes(&v->g);
-    vkc_pipeline_desc d = {.spv = v->spv ? v->spv : v->g.spv,
-                           .spv_size = v->spv ? v->spv_size : v->g.spv_size,
-                           .push_size = v->g.push_size,
-                           .buffers = (uint32_t)np + (v->g.input ? 1u : 0u),
-                           /* an earlier build's SPIR-V reads its input as a storage buffer unless --spv-ubo */
-                           .uniform = v->g.input && (v->spv ? v->spv_ubo : v->g.input_uniform) ? 1u << np : 0u,
-                           .spec = v->g.spec,
-                           .nspec = v->g.nspec,
-                           .name = v->name};
+    vkc_pipeline_desc d = {
+        .spv = v->spv ? v->spv : v->g.compute.shader.spv,
+        .spv_size = v->spv ? v->spv_size : v->g.compute.shader.spv_size,
+        .push_size = v->g.compute.shader.push_size,
+        .buffers = (uint32_t)np + (v->g.compute.shader.input ? 1u : 0u),
+        /* an earlier build's SPIR-V reads its input as a storage buffer unless --spv-ubo */
+        .uniform =
+            v->g.compute.shader.input && (v->spv ? v->spv_ubo : v->g.compute.shader.input_uniform) ? 1u << np : 0u,
+        .spec = v->g.compute.shader.spec,
+        .nspec = v->g.compute.shader.nspec,
+        .name = v->name};
     rc = vkc_pipeline_create(vk, &d, &v->pipe);
     if (!rc) rc = vkc_job_create(vk, v->pipe, &v->job);
     for (int k = 0; k < np && !rc; k++)
         rc = vkc_buffer_create(vk, (uint64_t)o->size * (uint64_t)o->rows * 4, &v->buf[k]);
-    if (!rc && v->g.input) rc = vkc_buffer_create(vk, v->g.input_size, &v->buf[np]);
-    if (!rc && v->g.input) rc = vkc_buffer_upload(vk, v->buf[np], v->g.input, v->g.input_size);
+    if (!rc && v->g.compute.shader.input) rc = vkc_buffer_create(vk, v->g.compute.shader.input_size, &v->buf[np]);
+    if (!rc && v->g.compute.shader.input)
+        rc = vkc_buffer_upload(vk, v->buf[np], v->g.compute.shader.input, v->g.compute.shader.input_size);
     return rc;
 }
 
@@ -170,7 +173,8 @@ static fb_result variant_pass(vkc_context *vk, variant *v, const options *o, int
         fb_gen_push(&v->g, y0, n, push);
         fb_gen_groups(&v->g, n, groups);
         double t0 = fb_now(), c0 = process_cpu(), g = -1;
-        fb_result rc = vkc_job_submit(vk, v->job, v->buf, (uint32_t)np + (v->g.input ? 1u : 0u), push, groups);
+        fb_result rc =
+            vkc_job_submit(vk, v->job, v->buf, (uint32_t)np + (v->g.compute.shader.input ? 1u : 0u), push, groups);
         if (!rc) rc = vkc_job_wait(vk, v->job, &g);
         if (rc) return rc;
         wall += fb_now() - t0;

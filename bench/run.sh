@@ -5,8 +5,10 @@
 # beside fractalbake's own when libcgal-dev can be installed, and the chaos-game peer (libflam3 rendering
 # the fern, bench/flam3_fern.c) when libflam3-dev can; fractalbake never links either. The fBm peer
 # (bench/fbm_peer.c, a minimal AVX2 gradient fBm at 4096 x 4096) and the erosion peer
-# (bench/erode_peer.c, the virtual-pipe model written plainly, at up to 1024 x 1024) and the flame's
-# (bench/peers/flame_peer.c, the genome gold's chaos game hard-coded) always run.
+# (bench/erode_peer.c, the virtual-pipe model written plainly, at up to 1024 x 1024), the flame's
+# (bench/peers/flame_peer.c, the genome gold's chaos game hard-coded) and the stream-power peer
+# (bench/peers/rivers_peer.c, at the rivers rows' 1024 x 1024 and 50 steps; for 2048 x 2048 and 500
+# steps, bench/rivers.sh) always run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh
@@ -29,11 +31,13 @@ gcc -O3 -march=native -o build/erode_peer bench/erode_peer.c -lpthread -lm
 # the flame's peer and ceiling (bench/peers/flame_peer.c: the genome gold, as the flame rows), always
 # built, run on every core at the flame rows' quality 20
 gcc -O2 -march=native -ffp-contract=off -Ikernels -o build/flame_peer bench/peers/flame_peer.c -lpthread -lm
+gcc -O3 -march=native -o build/rivers_peer bench/peers/rivers_peer.c -lm
 {
   ./build/fractalbake bench --json "$@"
   ./build/fbm_peer --json "$@"
   ./build/erode_peer --json "$@"
   ./build/flame_peer --json "$(nproc)" 20
+  ./build/rivers_peer --json --size 1024x1024 --steps 50
   if [ -n "$peer" ]; then "$peer" --json; fi
   if [ -n "$flam3" ]; then "$flam3" --json "$@"; fi
 } | while read -r line; do

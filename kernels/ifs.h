@@ -18,6 +18,14 @@
 #define K_IFS_MAX_MAPS 64u
 #define K_IFS_NONE     0xffffffffu
 
+/* A histogram cell of 64 bits (shaders/ifs64.comp): its hits in the low K_IFS_HIT_BITS bits and the
+ * colour sum above them, one atomic add of (q << K_IFS_HIT_BITS) + 1 a point. Exact while fewer than
+ * 2^K_IFS_HIT_BITS points are played into it: the hits then fit their bits and the colour sum (at
+ * most 255 a hit) the other 36. The host folds the cells into wider totals before more are played
+ * (shaders/ifs_fold.comp). */
+#define K_IFS_HIT_BITS 28u
+#define K_IFS_HIT_MASK 0x0fffffffu
+
 /* What the last step did with the chain's point. */
 #define K_IFS_PLOT    0u /* the point is on the attractor: plot it (or count it outside the frame) */
 #define K_IFS_SKIP    1u /* transient: one of the first `skip` points after a (re)start */

@@ -7,7 +7,8 @@
 #
 # Usage: scripts/gpu-check.sh OUTDIR
 #   FB_BUILD_DIR=DIR            the build to check (default: build, configured and built if missing)
-#   FB_GPU_CHECK_STEPS="..."    the steps, in order (default: devices tests golden gallery large bench)
+#   FB_GPU_CHECK_STEPS="..."    the steps, in order (default: devices tests golden gallery large huge
+#                               bench; huge: the night sky at 32768 x 16384 within --max-memory 8G)
 #   FB_GPU_CHECK_SMALL=1        the large scenes at a sixteenth of their area (to try the script on
 #                               lavapipe; implies FB_GPU_CHECK_ALLOW_CPU=1)
 #   FB_GPU_CHECK_ALLOW_CPU=1    run even where the only device is a CPU one
@@ -156,6 +157,36 @@ do_large() {
     fi
 }
 
+# The memory bound on the device: the night sky at 32768 x 16384 (a sixteenth with SMALL) on it with
+# --max-memory 8G, its peak RSS against the limit and against --dry-run's prediction, and its time.
+do_huge() {
+    local d=1 w h pred rss t
+    [ "$small" = 1 ] && d=4
+    w=$((32768 / d)) h=$((16384 / d))
+    local args=("$root/docs/examples/gallery-night-sky.json" --set size=${w}x$h --backend vulkan --max-memory 8G)
+    pred=$("$fb" render "${args[@]}" --dry-run --json -o "$scratch/h.exr" | sed -n 's/.*"peak_bytes": \([0-9]*\).*/\1/p')
+    if [ ! -x /usr/bin/time ]; then
+        step huge "not run: no /usr/bin/time to measure the peak RSS"
+        return
+    fi
+    if ! timed t /usr/bin/time -f %M -o "$scratch/rss" timeout 150 "$fb" render "${args[@]}" --quiet \
+        -o "$scratch/h.exr" 2>> "$out/bakes.txt"; then
+        step huge "FAILED or cut at 150 s: night sky ${w}x$h within --max-memory 8G (bakes.txt)"
+        status=1
+        return
+    fi
+    rss=$(($(tail -1 "$scratch/rss") << 10))
+    rm -f "$scratch/h.exr"
+    printf 'night sky %sx%s vulkan --max-memory 8G: %ss, peak RSS %d MiB, predicted %d MiB\n' "$w" "$h" "$t" \
+        $((rss >> 20)) $((${pred:-0} >> 20)) >> "$out/bakes.txt"
+    if [ "$rss" -le $((8 << 30)) ] && [ -n "$pred" ] && [ "$rss" -le $((pred * 5 / 4)) ]; then
+        step huge "ok: night sky ${w}x$h in $t s, $((rss >> 20)) MiB (predicted $((pred >> 20)))"
+    else
+        step huge "FAILED: night sky ${w}x$h peak $((rss >> 20)) MiB: beyond 8 GiB or 1.25x the prediction"
+        status=1
+    fi
+}
+
 do_bench() {
     local args=${FB_GPU_CHECK_BENCH:---size 4096x4096}
     [ "$small" = 1 ] && args="--size 512x512 --points 1e7"
@@ -165,21 +196,25 @@ do_bench() {
         step baseline "$(wc -l < "$out/baseline.jsonl") rows (baseline.jsonl: $FB_GPU_CHECK_BASELINE)"
         [ -s "$out/baseline.jsonl" ] && args="$args --compare $out/baseline.jsonl"
     fi
+    # every generator's rows, its kernels beside their minimal shaders (bench/peers/): 150 s on the
+    # H200; the small check on lavapipe's two cores takes longer
+    local limit=150
+    [ "$small" = 1 ] && limit=420
     # shellcheck disable=SC2086
-    if timeout 120 "$fb" bench --json --quiet $args > "$out/bench.jsonl" 2>> "$out/bench.err"; then
+    if timeout $limit "$fb" bench --json --quiet $args > "$out/bench.jsonl" 2>> "$out/bench.err"; then
         step bench "ok ($(wc -l < "$out/bench.jsonl") rows in bench.jsonl)"
     else
-        step bench "FAILED or cut at 120 s (bench.err; $(wc -l < "$out/bench.jsonl") rows)"
+        step bench "FAILED or cut at $limit s (bench.err; $(wc -l < "$out/bench.jsonl") rows)"
         status=1
     fi
     [ -s "$out/bench.err" ] || rm -f "$out/bench.err"
 }
 
-for s in ${FB_GPU_CHECK_STEPS:-devices tests golden gallery large bench}; do
+for s in ${FB_GPU_CHECK_STEPS:-devices tests golden gallery large huge bench}; do
     case $s in
-    devices | tests | golden | gallery | large | bench) "do_$s" ;;
+    devices | tests | golden | gallery | large | huge | bench) "do_$s" ;;
     *)
-        echo "gpu-check.sh: unknown step $s (devices tests golden gallery large bench)" >&2
+        echo "gpu-check.sh: unknown step $s (devices tests golden gallery large huge bench)" >&2
         exit 2
         ;;
     esac

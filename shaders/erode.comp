@@ -1,11 +1,14 @@
 #version 450
-// Erosion: one pass of one iteration (push constant p.pass), one invocation per cell. The math is
-// kernels/erode.h; host/gen/erode/erode.c gathers the neighbours the same way on the CPU.
+// Erosion: one pass of one iteration, one invocation per cell. The pass is a specialization constant
+// (a pipeline each: a branch on a push constant costs lavapipe all three passes' code), the
+// workgroups 16 x 16 cells (a tile's neighbours in the cache). The math is kernels/erode.h;
+// host/gen/erode/erode.c gathers the neighbours the same way on the CPU.
 #extension GL_GOOGLE_include_directive : require
 #define K_GLSL 1
 #include "../kernels/erode.h"
 
-layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
+layout(local_size_x = 16, local_size_y = 16, local_size_z = 1) in;
+layout(constant_id = 0) const uint PASS = 0u;
 
 layout(push_constant) uniform Push
 {
@@ -27,7 +30,7 @@ void main()
     if (x >= p.width || y >= p.height) return;
     uint w = p.width, i = y * w + x;
     bool l = x > 0u, r = x + 1u < w, t = y > 0u, b = y + 1u < p.height;
-    if (p.pass == K_ERODE_PASS_FLUX) {
+    if (PASS == K_ERODE_PASS_FLUX) {
         vec4 c = S.v[i];
         float hc = k_erode_surface(p, c);
         vec4 hn = vec4(l ? k_erode_surface(p, S.v[i - 1u]) : hc, r ? k_erode_surface(p, S.v[i + 1u]) : hc,
@@ -35,7 +38,7 @@ void main()
         vec4 inside = vec4(l ? 1.0f : 0.0f, r ? 1.0f : 0.0f, t ? 1.0f : 0.0f, b ? 1.0f : 0.0f);
         precise float d1 = c.y + p.rain;
         F.v[i] = k_erode_flux(p, F.v[i], d1, hc, hn, inside);
-    } else if (p.pass == K_ERODE_PASS_WATER) {
+    } else if (PASS == K_ERODE_PASS_WATER) {
         vec4 c = S.v[i];
         vec4 fin = vec4(l ? F.v[i - 1u].y : 0.0f, r ? F.v[i + 1u].x : 0.0f, t ? F.v[i - w].w : 0.0f,
                         b ? F.v[i + w].z : 0.0f);

@@ -1,7 +1,8 @@
 // The chaos game: one invocation per chain, `nsteps` steps per dispatch, every plotted point
 // splatted into integer histograms with atomics (order-independent sums). The math is
 // kernels/ifs.h; host/gen/ifs/layer.c runs the same loop natively. Included by ifs.comp (32-bit atomics:
-// a hit and its colour are two adds) and ifs64.comp (FB_IFS_INT64: one 64-bit add per point).
+// a hit and its colour are two adds, and a third for the colour word's carry) and ifs64.comp
+// (FB_IFS_INT64: one 64-bit add per point, whose result nothing waits for).
 #define K_GLSL 1
 #include "../kernels/common.h"
 
@@ -37,12 +38,9 @@ layout(std430, set = 0, binding = 2) writeonly buffer Counts
 }
 counts;
 #ifdef FB_IFS_INT64
-// per cell: hits in the low word, the colour sum (mod 2^32) in the high word
+// per cell: hits and colour sum since the last fold (kernels/ifs.h, K_IFS_HIT_BITS); bindings 4 and 5
+// are not used
 layout(std430, set = 0, binding = 3) buffer Hits { uint64_t v[]; } hits;
-// per cell: carries out of the colour word
-layout(std430, set = 0, binding = 4) buffer Carry { uint v[]; } carry;
-// [0] != 0: some cell's hit count reached 2^32 (its colour is then off by one carry)
-layout(std430, set = 0, binding = 5) buffer Flags { uint v[]; } flags;
 #else
 layout(std430, set = 0, binding = 3) buffer Hits { uint v[]; } hits;
 layout(std430, set = 0, binding = 4) buffer SumLo { uint v[]; } sum_lo;
@@ -75,10 +73,8 @@ void main()
             } else {
                 uint q = k_ifs_quant(s.c);
 #ifdef FB_IFS_INT64
-                uint64_t old = atomicAdd(hits.v[cell], (uint64_t(q) << 32) | uint64_t(1u));
-                uint lo = uint(old), hi = uint(old >> 32);
-                if (lo == 0xffffffffu) atomicOr(flags.v[0], 1u);
-                if (hi + q < hi) atomicAdd(carry.v[cell], 1u); // the carry out of the colour word
+                // its result unused: nothing waits for the add (a GPU sends it off as a reduction)
+                atomicAdd(hits.v[cell], (uint64_t(q) << K_IFS_HIT_BITS) | uint64_t(1u));
 #else
                 atomicAdd(hits.v[cell], 1u);
                 uint old = atomicAdd(sum_lo.v[cell], q);

@@ -1,8 +1,10 @@
 // Warped Julia sets: one invocation per two neighbouring pixels of a row, their orbits iterated in
-// one loop (two dependency chains in flight). The math is kernels/julia.h. Included by julia.comp
+// one loop (two dependency chains in flight) on a CPU device, one after the other on a GPU
+// (kernels/device.h). The math is kernels/julia.h. Included by julia.comp
 // (float), julia_env.comp (K_ENVMAP: float, lat-long and cube maps) and julia64.comp (K_JULIA_F64:
 // the grid and orbit in double; needs shaderFloat64).
 #define K_GLSL 1
+#include "../kernels/device.h"
 #include "../kernels/julia.h"
 #include "../kernels/palette.h"
 
@@ -67,6 +69,26 @@ vec3 sky_colour(K_JuliaResult res)
     return k_sky_rgb(c, res.inside, res.nsmooth, pal.entries[i0], pal.entries[k_sky_i1(i0)]);
 }
 
+#ifndef K_JULIA_F64
+// Sample k of pixels (x, y) and (x + 1, y) (has_b false: the first only). On a CPU device the two
+// orbits share one loop: two dependency chains a SIMD lane. On a GPU one runs after the other: a
+// warp runs a loop as long as its slowest lane, so the pair's loop lasted as long as the slowest of
+// 64 pixels, each loop now as long as the slowest of 32. The results are k_julia_run's either way.
+K_JuliaPair sample2(K_JuliaParams p, uint x, uint y, uint k, bool has_b, uint want)
+{
+    if (K_CPU_DEVICE) return k_julia_sample2(p, pal.turb, pal.colour.seed, x, y, k, has_b, want);
+    K_JuliaPair r;
+    k_vec2 fa = k_julia_sample_xy(p, pal.colour.seed, x, y, k);
+    r.a = k_julia_run(p, k_julia_start_at(p, pal.turb, fa.x, fa.y), want);
+    r.b = r.a;
+    if (has_b) {
+        k_vec2 fb = k_julia_sample_xy(p, pal.colour.seed, x + 1u, y, k);
+        r.b = k_julia_run(p, k_julia_start_at(p, pal.turb, fb.x, fb.y), want);
+    }
+    return r;
+}
+#endif
+
 // Pixel i alone.
 void store(uint i, K_JuliaResult res)
 {
@@ -129,7 +151,7 @@ void main()
     res.b = res.a;
     if (has_b) res.b = k_julia_run_d(p, pal.dp, pal.turb, double(x) + 1.5, double(y) + 0.5, want);
 #else
-    K_JuliaPair res = k_julia_sample2(p, pal.turb, pal.colour.seed, x, y, 0u, has_b, want);
+    K_JuliaPair res = sample2(p, x, y, 0u, has_b, want);
 #endif
     uint i = r * p.width + x;
     if (EVEN_WIDTH != 0u) {
@@ -152,7 +174,7 @@ void main()
             q.b = k_julia_run_d(p, pal.dp, pal.turb, double(fb.x), double(fb.y), K_JULIA_WANT_SMOOTH);
         }
 #else
-        K_JuliaPair q = k_julia_sample2(p, pal.turb, pal.colour.seed, x, y, k, has_b, K_JULIA_WANT_SMOOTH);
+        K_JuliaPair q = sample2(p, x, y, k, has_b, K_JULIA_WANT_SMOOTH);
 #endif
         sa += sky_colour(q.a);
         sb += sky_colour(q.b);

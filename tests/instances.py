@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Plant instances of an ifs population (docs/plants.md, "Plant instances").
 
-Independent readers (a PLY and CSV reader, an uncompressed OpenEXR scanline reader) and an
+Independent readers (a PLY and CSV reader, an OpenEXR scanline reader: tests/exrfile.py) and an
 independent enumeration of the population check what `--instances` writes: the attribute names and
 count, the plants' positions, sizes and generations, that they stand on the terrain layer's surface
 (the EXR's heights, bilinear between pixel centres), the normal, the orientation, CSV and PLY
@@ -15,6 +15,8 @@ import struct
 import subprocess
 import sys
 import tempfile
+
+from exrfile import read_exr_channel
 
 FB = os.path.abspath(sys.argv[1])
 NAMES = ["id", "x", "y", "z", "nx", "ny", "nz", "pscale", "orient_x", "orient_y", "orient_z", "orient_w", "variant"]
@@ -67,43 +69,6 @@ def read_csv(path):
         vals = line.split(",")
         rows.append({n: int(v) if n in ("id", "variant") else f32(float(v)) for n, v in zip(names, vals)})
     return names, rows
-
-
-def read_exr_channel(path, channel):
-    """One channel of a single-part scanline OpenEXR without compression, as rows of floats."""
-    d = open(path, "rb").read()
-    assert struct.unpack_from("<I", d, 0)[0] == 20000630
-    at, attrs = 8, {}
-    while d[at] != 0:
-        name_end = d.index(b"\0", at)
-        name = d[at:name_end].decode()
-        type_end = d.index(b"\0", name_end + 1)
-        size = struct.unpack_from("<i", d, type_end + 1)[0]
-        attrs[name] = d[type_end + 5:type_end + 5 + size]
-        at = type_end + 5 + size
-    at += 1
-    assert attrs["compression"][0] == 0, "the test scene is uncompressed"
-    chans, c = [], 0
-    cl = attrs["channels"]
-    while cl[c] != 0:
-        e = cl.index(b"\0", c)
-        chans.append((cl[c:e].decode(), struct.unpack_from("<i", cl, e + 1)[0]))
-        c = e + 17
-    x0, y0, x1, y1 = struct.unpack("<4i", attrs["dataWindow"])
-    w, h = x1 - x0 + 1, y1 - y0 + 1
-    offsets = struct.unpack_from(f"<{h}Q", d, at)
-    out = []
-    for off in offsets:
-        pos = off + 8
-        row = None
-        for name, t in chans:
-            n = w * (2 if t == 1 else 4)
-            if name == channel:
-                row = list(struct.unpack_from(f"<{w}" + {0: "I", 1: "e", 2: "f"}[t], d, pos))
-            pos += n
-        out.append(row)
-    assert out[0] is not None, f"no channel {channel}"
-    return out
 
 
 def population(maps, cond_height, frame, min_size):

@@ -45,9 +45,7 @@ MAX_LINES = 150
 # branches land (issue 43).
 LONG_ALLOWED = set()
 # Paths in comments that name what no longer exists, in files that others own now (issue 43).
-PATH_ALLOWED = {
-    ("host/core/gen.h", "tests/cli/conformance.sh"),  # it is tests/conformance.py (gen.h's owner)
-}
+PATH_ALLOWED = set()
 ENV_READER = "host/cli/env.c"
 
 

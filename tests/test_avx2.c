@@ -34,8 +34,8 @@ int main(void)
         size_t n = (size_t)s.width * s.height;
         float *a = malloc(n * 4), *b = malloc(n * 4);
         void *planes[1] = {a};
-        g.scalar = true; /* the portable kernel, k_fbm_pixel per pixel: not the AVX2 loop again */
-        g.native_rows(&g, 0, s.height, planes);
+        g.run.scalar = true; /* the portable kernel, k_fbm_pixel per pixel: not the AVX2 loop again */
+        g.compute.native_rows(&g, 0, s.height, planes);
         fb_fbm_avx2_rows(g.params, 0, s.height, b);
         int diff = 0;
         for (size_t i = 0; i < n; i++) diff += memcmp(&a[i], &b[i], 4) != 0;
@@ -74,13 +74,13 @@ int main(void)
                     CHECKF(fb_fbm3_avx2_supported(p), "%s: the lanes are not used", kinds[kind]);
                     size_t n = (size_t)s.width * s.height;
                     float *a = malloc(n * 4), *b = malloc(n * 4), *c = malloc(n * 4);
-                    g.scalar = true;
-                    g.native_rows(&g, 0, s.height, (void *[]){a});
-                    g.scalar = false;
-                    g.native_rows(&g, 0, s.height, (void *[]){b});
+                    g.run.scalar = true;
+                    g.compute.native_rows(&g, 0, s.height, (void *[]){a});
+                    g.run.scalar = false;
+                    g.compute.native_rows(&g, 0, s.height, (void *[]){b});
                     for (int y0 = 0, h = 1; y0 < s.height; y0 += h, h++) {
                         int rows = y0 + h <= s.height ? h : s.height - y0;
-                        g.native_rows(&g, y0, rows, (void *[]){c + (size_t)y0 * s.width});
+                        g.compute.native_rows(&g, y0, rows, (void *[]){c + (size_t)y0 * s.width});
                     }
                     int diff = 0, split = 0, moved = 0;
                     for (size_t i = 0; i < n; i++) {
@@ -158,8 +158,8 @@ int main(void)
         float *rest[6];
         for (int c = 0; c < 6; c++) rest[c] = malloc(n * 4);
         void *planes[7] = {a, rest[0], rest[1], rest[2], rest[3], rest[4], rest[5]};
-        g.scalar = true;
-        g.native_rows(&g, 0, s.height, planes);
+        g.run.scalar = true;
+        g.compute.native_rows(&g, 0, s.height, planes);
         uint64_t total = 0, want = 0;
         fb_julia_avx2_rows(g.params, 0, s.height, b, &total);
         int diff = 0;
@@ -227,20 +227,20 @@ int main(void)
         if (!fb_julia_avx2_layer_supported((const K_JuliaParams *)(const void *)g.params))
             TEST_SKIP("this CPU has no AVX2");
         size_t n = (size_t)s.width * s.height;
-        uint32_t stored = g.spec[4];
+        uint32_t stored = g.compute.shader.spec[4];
         void *a[7] = {0}, *b[7] = {0}, *c[7] = {0};
         for (int p = 0; p < 7; p++)
             if (stored & (1u << p)) a[p] = malloc(n * 4), b[p] = malloc(n * 4), c[p] = malloc(n * 4);
-        g.scalar = true;
-        g.native_rows(&g, 0, s.height, a);
-        g.scalar = false;
-        g.native_rows(&g, 0, s.height, b);
+        g.run.scalar = true;
+        g.compute.native_rows(&g, 0, s.height, a);
+        g.run.scalar = false;
+        g.compute.native_rows(&g, 0, s.height, b);
         /* strips of 1, 2, 3, ... rows: the same bits whatever the split */
         for (int y0 = 0, h = 1; y0 < s.height; y0 += h, h++) {
             int rows = y0 + h <= s.height ? h : s.height - y0;
             void *sub[7];
             for (int p = 0; p < 7; p++) sub[p] = c[p] ? (char *)c[p] + (size_t)y0 * s.width * 4 : NULL;
-            g.native_rows(&g, y0, rows, sub);
+            g.compute.native_rows(&g, y0, rows, sub);
         }
         static const char *const plane[7] = {"iter", "n", "inside", "de", "R", "G", "B"};
         for (int p = 0; p < 7; p++) {
@@ -288,14 +288,14 @@ int main(void)
         fb_engine e;
         CHECK(fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = 1, .scalar = true}, &e) ==
               FB_OK);
-        g.scalar = true;
+        g.run.scalar = true;
         CHECK(g.prepare(&g, &e, false) == FB_OK);
         const fb_ifs_stats *st = fb_gen_ifs_stats(&g);
         const K_IfsParams *p = (const K_IfsParams *)(const void *)g.params;
         size_t cells = (size_t)p->hist_w * p->hist_h, n = (size_t)s.width * s.height;
         uint32_t *hits = calloc(cells, 4), *count = malloc(n * 4);
         uint64_t *sum = calloc(cells, 8), counts[3] = {0, 0, 0};
-        fb_ifs_avx2_chains(g.params, g.input, 0, p->chains, 0, UINT32_MAX, NULL, hits, sum, counts);
+        fb_ifs_avx2_chains(g.params, g.compute.shader.input, 0, p->chains, 0, UINT32_MAX, NULL, hits, sum, counts);
         /* the same chains in step windows one after another (uneven, some past a chain's end): the
          * same sums, bit for bit, and the same counters */
         {
@@ -304,7 +304,8 @@ int main(void)
             K_IfsChain *state = calloc(p->chains, sizeof *state);
             const uint32_t win[] = {0, 1, 8, 1000, 1777, 1000000, UINT32_MAX};
             for (int w = 0; w + 1 < 7; w++)
-                fb_ifs_avx2_chains(g.params, g.input, 0, p->chains, win[w], win[w + 1], state, h2, s2, n2);
+                fb_ifs_avx2_chains(g.params, g.compute.shader.input, 0, p->chains, win[w], win[w + 1], state, h2, s2,
+                                   n2);
             CHECKF(!memcmp(h2, hits, cells * 4) && !memcmp(s2, sum, cells * 8),
                    "ifs %d: step windows give other sums than one window", k);
             CHECKF(!memcmp(n2, counts, sizeof n2), "ifs %d: step windows give other counters", k);
@@ -313,7 +314,7 @@ int main(void)
         float *rest[6];
         for (int c = 0; c < 6; c++) rest[c] = malloc(n * 4);
         void *planes[7] = {count, rest[0], rest[1], rest[2], rest[3], rest[4], rest[5]};
-        g.native_rows(&g, 0, s.height, planes);
+        g.compute.native_rows(&g, 0, s.height, planes);
         int diff = 0;
         uint32_t K = p->hist_w / (uint32_t)s.width;
         for (int y = 0; y < s.height; y++)

@@ -93,7 +93,7 @@ static void test_bound(void)
 /* Runs the layer's shader over the whole image with specialisation constant 2 set to `small`. */
 static float *dispatch(vkc_context *vk, const fb_gen *g, uint32_t small)
 {
-    uint32_t spec[3] = {g->spec[0], g->spec[1], small};
+    uint32_t spec[3] = {g->compute.shader.spec[0], g->compute.shader.spec[1], small};
     vkc_pipeline *pipe = NULL;
     vkc_job *job = NULL;
     vkc_buffer *buf = NULL;
@@ -104,9 +104,9 @@ static float *dispatch(vkc_context *vk, const fb_gen *g, uint32_t small)
     fb_gen_push(g, 0, h, push);
     fb_gen_groups(g, h, groups);
     fb_result rc = vkc_pipeline_create(vk,
-                                       &(vkc_pipeline_desc){.spv = g->spv,
-                                                            .spv_size = g->spv_size,
-                                                            .push_size = g->push_size,
+                                       &(vkc_pipeline_desc){.spv = g->compute.shader.spv,
+                                                            .spv_size = g->compute.shader.spv_size,
+                                                            .push_size = g->compute.shader.push_size,
                                                             .buffers = 1,
                                                             .spec = spec,
                                                             .nspec = 3,
@@ -150,9 +150,9 @@ static int test_shader(void)
             fb_gen g;
             REQUIRE(fb_scene_parse(json, NULL, &s) == FB_OK);
             REQUIRE(fb_gen_init(&g, &s, &s.layers[0]) == FB_OK);
-            REQUIRE(g.nspec == 4);
+            REQUIRE(g.compute.shader.nspec == 4);
             bool small = fb_fbm_lattice_bound((const K_FbmParams *)(const void *)g.params) < 16777216.0;
-            CHECKF(g.spec[2] == (small ? 1u : 0u), "%s: spec 2 is %u", json, g.spec[2]);
+            CHECKF(g.compute.shader.spec[2] == (small ? 1u : 0u), "%s: spec 2 is %u", json, g.compute.shader.spec[2]);
             if (small) {
                 float *a = dispatch(vk, &g, 0), *b = dispatch(vk, &g, 1);
                 CHECKF(a && b && !memcmp(a, b, 193 * 77 * 4), "%s: the specialised shader changes bits", json);

@@ -46,7 +46,7 @@ static fb_result run_scene(fb_engine *e, const char *json, run_out *out)
         size_t n = (size_t)s.width * s.height;
         float *planes[7];
         for (int c = 0; c < 7; c++) planes[c] = malloc(n * 4);
-        g.native_rows(&g, 0, s.height, (void *const *)planes);
+        g.compute.native_rows(&g, 0, s.height, (void *const *)planes);
         out->count = (uint32_t *)(void *)planes[0];
         out->colour = planes[2];
         for (int c = 0; c < 7; c++)
@@ -212,6 +212,32 @@ static void test_determinism(fb_engine *engines, int nengines)
         }
         run_free(&first);
     }
+}
+
+/* More points than a fold interval of the device's 64-bit cells (kernels/ifs.h, 2^28 - 1), all into
+ * one cell: a map onto the point (0.5, 0.5), the pixel (8, 8) of a 16 x 16 frame [0, 1]^2. The cell
+ * holds every point plotted, on every engine, with the same colour: the fold (shaders/ifs_fold.comp)
+ * carried the hits past 2^28 and the colour sum past 2^32 exactly. */
+static void test_fold(fb_engine *engines, int nengines)
+{
+    const char *json = "{\"size\": [16, 16], \"seed\": 5, \"layers\": [{\"type\": \"ifs\", \"maps\": "
+                       "[[0, 0, 0, 0, 0.5, 0.5]], \"bounds\": [0, 1, 0, 1], \"points\": 280000000}]}";
+    run_out first;
+    fb_result rc = run_scene(&engines[0], json, &first);
+    CHECKF(rc == FB_OK, "%s", g_last_error);
+    if (rc) return;
+    uint64_t plotted = 280000000ull - first.stats.discarded;
+    CHECKF(first.count[8 * 16 + 8] == plotted && first.stats.hits == plotted && plotted > (1u << 28),
+           "one cell: %u hits of %llu plotted", first.count[8 * 16 + 8], (unsigned long long)plotted);
+    for (int i = 1; i < nengines; i++) {
+        if (engines[i].kind != FB_BACKEND_VULKAN) continue;
+        run_out r;
+        rc = run_scene(&engines[i], json, &r);
+        CHECKF(rc == FB_OK && same_run(&first, &r), "the fold: %s differs from native (%u hits)", engines[i].device,
+               rc ? 0u : r.count[8 * 16 + 8]);
+        if (!rc) run_free(&r);
+    }
+    run_free(&first);
 }
 
 /* The population: trees at x_k = 1 - 0.75^k whose tops are at 0.75^k times the first one's; C the
@@ -512,6 +538,7 @@ int main(int argc, char **argv)
     test_accounting(&engines[0]);
     if (have_gpu) test_accounting(&engines[n - 1]);
     test_determinism(engines, n);
+    if (have_gpu) test_fold(engines, n);
     test_condensation_row(&engines[0], "\"preset\": \"population\"");
     test_condensation_row(&engines[0],
                           "\"maps\": [[0.75, 0, 0, 0.75, 0.25, 0]], \"condensation\": {\"preset\": \"tree\"}");

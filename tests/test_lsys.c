@@ -298,7 +298,7 @@ static fb_result gen_rows(const char *json, planes4 *out, fb_gen *keep)
     if (!rc) {
         size_t n = (size_t)s.width * s.height;
         for (int c = 0; c < 4; c++) out->p[c] = calloc(n, 4);
-        g.native_rows(&g, 0, s.height, (void *const *)out->p);
+        g.compute.native_rows(&g, 0, s.height, (void *const *)out->p);
         out->w = s.width, out->h = s.height;
     }
     if (keep && !rc) {
@@ -344,8 +344,8 @@ static void test_generator(void)
     CHECKF(rc == FB_OK, "%s", g_last_error);
     if (!rc) {
         const K_LsysParams *p = (const K_LsysParams *)(const void *)g.params;
-        const uint32_t *w = g.input;
-        size_t nseg = (g.input_size / 4 - p->seg_off) / K_LSYS_SEG_WORDS, diff = 0, lit = 0;
+        const uint32_t *w = g.compute.shader.input;
+        size_t nseg = (g.compute.shader.input_size / 4 - p->seg_off) / K_LSYS_SEG_WORDS, diff = 0, lit = 0;
         for (uint32_t y = 0; y < 157; y++)
             for (uint32_t x = 0; x < 203; x++) {
                 K_LsysAcc acc = {0, 0, 0, 0};
@@ -372,7 +372,7 @@ static void test_generator(void)
     if (!rc) {
         const K_LsysParams *p = (const K_LsysParams *)(const void *)g.params;
         K_LsysSeg s[3];
-        memcpy(s, (const uint32_t *)g.input + p->seg_off, sizeof s);
+        memcpy(s, (const uint32_t *)g.compute.shader.input + p->seg_off, sizeof s);
         CHECKF(fabsf(s[0].hw - 0.5f) < 1e-5f && fabsf(s[1].hw - 0.25f) < 1e-5f && fabsf(s[2].hw - 0.125f) < 1e-5f,
                "half widths %g %g %g", s[0].hw, s[1].hw, s[2].hw);
         CHECK(fabsf(s[0].len - 10.0f) < 1e-4f && fabsf(s[0].ay - 80.0f) < 1e-4f); /* 10 px per unit, y up */

@@ -53,17 +53,18 @@ static void test_keys(void)
     CHECK(p.offset_x == 1.5f && p.offset_y == -2.0f);
     CHECK(p.flags == K_FBM_RIDGED && p.warp == 0.25f);
     CHECK(p.width == 200 && p.height == 100 && p.inv_width == 1.0f / 200.0f);
-    CHECK(g.nchannels == 1 && !strcmp(g.channel_names[0], "h.Y") && g.channel_types[0] == EXRIO_HALF);
+    CHECK(g.store.nchannels == 1 && !strcmp(g.store.channel_names[0], "h.Y") && g.store.channel_types[0] == EXRIO_HALF);
     /* 6 cells x 1.99^12 at the finest octave: far under 2^24, so the small-coordinate shader */
-    CHECK(g.nspec == 4 && g.spec[0] == K_NOISE_CELLULAR_F2 && g.spec[1] == K_FBM_RIDGED && g.spec[2] == 1u &&
-          g.spec[3] == K_ENV_RECT);
+    CHECK(g.compute.shader.nspec == 4 && g.compute.shader.spec[0] == K_NOISE_CELLULAR_F2 &&
+          g.compute.shader.spec[1] == K_FBM_RIDGED && g.compute.shader.spec[2] == 1u &&
+          g.compute.shader.spec[3] == K_ENV_RECT);
     fb_scene_fini(&s);
 
     /* defaults, filled into the stored scene */
     p = params_of("{\"layers\": [{\"type\": \"fbm\"}]}", &s, &g);
     CHECK(s.width == 1024 && s.height == 1024 && s.seed == 1 && s.compression == EXRIO_ZIP);
     CHECK(p.octaves == 8 && p.gain == 0.5f && p.lacunarity == 2.0f && p.noise == K_NOISE_GRADIENT && p.flags == 0);
-    CHECK(g.channel_types[0] == EXRIO_FLOAT && !strcmp(g.channel_names[0], "fbm.Y"));
+    CHECK(g.store.channel_types[0] == EXRIO_FLOAT && !strcmp(g.store.channel_names[0], "fbm.Y"));
     CHECK(strstr(s.json, "\"octaves\":8,") && strstr(s.json, "\"hurst\":1.0,") && strstr(s.json, "\"seed\":1,"));
     /* compact, numbers in their shortest round-trip form (0.08, not 0.080000000000000002) */
     CHECK(!strchr(s.json, '\n') && !strstr(s.json, ": ") && strstr(s.json, "\"rotation\":36.87,"));
@@ -147,22 +148,25 @@ static void test_julia_keys(void)
     CHECK(fabsf(p.rot_c) < 1e-7f && fabsf(p.rot_s - 1.0f) < 1e-7f);
     CHECK(p.a_re == -0.3f && p.a_im == 0.1f && p.c_re == -0.4f && p.c_im == 0.6f);
     CHECK(p.lambda == 0.2f && fabsf(p.turb_norm - 1.0f / (1.0f + 0.70710678f + 0.5f)) < 1e-6f);
-    const K_SkyColour *c = g.input;
+    const K_SkyColour *c = g.compute.shader.input;
     K_FbmParams t;
-    memcpy(&t, (const char *)g.input + 48, sizeof t);
+    memcpy(&t, (const char *)g.compute.shader.input + 48, sizeof t);
     CHECK(c->inv_period == 0.125f && c->offset == 0.5f && c->brightness == 2.0f && c->gamma == 2.2f);
     CHECK(c->density == 3.0f && c->inv_n_ref == 1.0f / 16.0f && c->samples == 6 && c->seed == 8);
     CHECK(c->inside_r == 0.1f && c->inside_g == 0.2f && c->inside_b == 0.3f);
     CHECK(t.octaves == 3 && fabsf(t.gain - 0.70710678f) < 1e-7f && t.freq_x == 5.0f && t.flags == K_FBM_TILEABLE);
     CHECK(t.seed == 8 && t.width == 300 && t.inv_freq_x == 0.2f);
     /* the gradient's last stop is the table's last entry */
-    const float *last = (const float *)((const char *)g.input + 144) + 4 * (K_PALETTE_SIZE - 1);
+    const float *last = (const float *)((const char *)g.compute.shader.input + 144) + 4 * (K_PALETTE_SIZE - 1);
     CHECK(last[0] == 1.0f && last[1] == 0.5f && last[2] == 0.25f);
-    CHECK(g.nspec == 6 && g.spec[0] == K_JULIA_POLAR && g.spec[1] == 1 && g.spec[2] == 6 && g.spec[3] == 3);
-    CHECK(g.spec[4] == 127 && g.nkernel == 7 && g.per_invocation == 2); /* every channel by default */
-    CHECK(g.spec[5] == 1); /* width 300: even, each invocation's pair stored as one vec2 */
-    CHECK(g.nchannels == 7 && !strcmp(g.channel_names[0], "night.iter") && g.channel_types[0] == EXRIO_UINT);
-    CHECK(!strcmp(g.channel_names[4], "night.R") && g.channel_types[4] == EXRIO_FLOAT); /* half: false */
+    CHECK(g.compute.shader.nspec == 6 && g.compute.shader.spec[0] == K_JULIA_POLAR && g.compute.shader.spec[1] == 1 &&
+          g.compute.shader.spec[2] == 6 && g.compute.shader.spec[3] == 3);
+    CHECK(g.compute.shader.spec[4] == 127 && g.compute.nkernel == 7 &&
+          g.compute.shader.per_invocation == 2); /* every channel by default */
+    CHECK(g.compute.shader.spec[5] == 1);        /* width 300: even, each invocation's pair stored as one vec2 */
+    CHECK(g.store.nchannels == 7 && !strcmp(g.store.channel_names[0], "night.iter") &&
+          g.store.channel_types[0] == EXRIO_UINT);
+    CHECK(!strcmp(g.store.channel_names[4], "night.R") && g.store.channel_types[4] == EXRIO_FLOAT); /* half: false */
     fb_gen_fini(&g);
     fb_scene_fini(&s);
 
@@ -171,8 +175,9 @@ static void test_julia_keys(void)
     CHECK(fb_gen_init(&g, &s, &s.layers[0]) == FB_OK);
     memcpy(&p, g.params, sizeof p);
     CHECK(p.scale_u == 3.0f && p.scale_v == 1.0f && p.mapping == K_JULIA_RECT && p.max_iter == 256);
-    CHECK(p.c_re == -0.8f && p.c_im == 0.156f && p.lambda == 0.0f && g.spec[1] == 0 && g.spec[2] == 1);
-    CHECK(g.channel_types[4] == EXRIO_HALF && !strcmp(g.channel_names[0], "sky.iter"));
+    CHECK(p.c_re == -0.8f && p.c_im == 0.156f && p.lambda == 0.0f && g.compute.shader.spec[1] == 0 &&
+          g.compute.shader.spec[2] == 1);
+    CHECK(g.store.channel_types[4] == EXRIO_HALF && !strcmp(g.store.channel_names[0], "sky.iter"));
     fb_gen_fini(&g);
     fb_scene_fini(&s);
 }
@@ -214,7 +219,7 @@ static void test_sets(void)
           P(fb_julia_params, s.layers[1])->turbulence > 0 &&
           (P(fb_julia_params, s.layers[1])->alpha[0] != 0 || P(fb_julia_params, s.layers[1])->alpha[1] != 0));
     CHECK(s.layers[2].cls == &fb_gen_terrain && P(fb_terrain_layer_params, s.layers[2])->points_inline &&
-          P(fb_terrain_layer_params, s.layers[2])->smooth && P(fb_terrain_layer_params, s.layers[2])->colour);
+          P(fb_terrain_layer_params, s.layers[2])->smooth && P(fb_terrain_layer_params, s.layers[2])->relief.colour);
     CHECK(s.layers[6].cls == &fb_gen_ifs && P(fb_ifs_params, s.layers[6])->has_cond);
     fb_scene_fini(&s);
 }

@@ -169,7 +169,7 @@ static fb_result render(const char *mapping, int w, int h, const char *extra, im
     if (!rc) {
         size_t n = (size_t)w * h;
         for (int c = 0; c < 4; c++) out->p[c] = calloc(n, 4);
-        g.native_rows(&g, 0, h, (void *const *)out->p);
+        g.compute.native_rows(&g, 0, h, (void *const *)out->p);
         out->w = w, out->h = h;
         out->mapping = ((const fb_stars_params *)fb_layer_params(&s.layers[0]))->mapping;
         fb_gen_fini(&g);

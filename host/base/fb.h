@@ -157,4 +157,9 @@ const char *fb_closest(const char *word, const char *const *cands, int n);
  * first touch costs a fault per 2 MiB instead of per 4 KiB (the kernel may decline). Free with free(). */
 void *fb_malloc_large(size_t size);
 
+/* Gives the allocator's free memory back to the system (glibc: malloc_trim), after a phase that
+ * freed much (a CPU device's shader compiler), so that it does not stay resident beside what comes
+ * next. Nothing elsewhere. */
+void fb_release_free_memory(void);
+
 #endif

@@ -2,6 +2,9 @@
 
 #include <errno.h>
 #include <math.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 #include <stdarg.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -148,6 +151,13 @@ void *fb_malloc_large(size_t size)
     madvise(p, size & ~(size_t)4095, MADV_HUGEPAGE); /* advice only: failure changes nothing */
 #endif
     return p;
+}
+
+void fb_release_free_memory(void)
+{
+#ifdef __GLIBC__
+    malloc_trim(0);
+#endif
 }
 
 uint64_t fb_physical_memory(void)

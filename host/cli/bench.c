@@ -227,8 +227,14 @@ static void help(const fb_cli *cli)
            "[--backend vulkan|native] [--device D] [--threads N] [--compare EARLIER.json]\n"
            "Throughput of every generator on each backend, a line per measurement (--json: a JSON object\n"
            "per line); progress on stderr unless --quiet. First the machine's ceilings on each backend:\n"
-           "an FMA-bound kernel (GFLOP/s) and a buffer copy (GB/s), with the CPU, device and driver named;\n"
-           "every rate is then also given per peak GFLOP/s of its backend, and every line records\n"
+           "an FMA-bound kernel (GFLOP/s) and a buffer copy (GB/s, bytes read plus written), with the CPU,\n"
+           "device and driver named; on the device, by its timestamps: the copy shader (shader-copy; by the\n"
+           "host clock with vkc's staging readback: shader-copy-readback), its own memory (device-copy) and\n"
+           "the host transfer each way (upload, download: bytes copied). After each whole bake, an\n"
+           "encode-only row: the same channels and compression from memory, on all cores. On the device,\n"
+           "each layer's shader (kernel rows) beside a minimal shader of its formula (peer rows,\n"
+           "bench/peers/) in the same run: vs_peer, and same_bits where their outputs agree to the bit.\n"
+           "Every rate is then also given per peak GFLOP/s of its backend, and every line records\n"
            "LP_NUM_THREADS and LP_NATIVE_VECTOR_WIDTH (lavapipe's speed and subgroup size).\n"
            "--compare EARLIER.json: each row's rate against the same row of an earlier --json run, as is\n"
            "and per peak (each run's rate divided by its own ceiling: a change of machine cancels out).\n",
@@ -328,11 +334,17 @@ static fb_result bench(const fb_env *env, const bench_opts *o)
                 double rate;
                 const char *device;
                 int threads;
-            } rows[4] = {{"vulkan", "fma", "GFLOP/s", ctx.ceil.vk_gflops, ctx.ceil.device, 0},
-                         {"vulkan", "copy", "GB/s", ctx.ceil.vk_gbps, ctx.ceil.device, 0},
-                         {"native", "fma", "GFLOP/s", ctx.ceil.native_gflops, "native C", ctx.ceil.threads},
-                         {"native", "copy", "GB/s", ctx.ceil.native_gbps, "native C", ctx.ceil.threads}};
-            for (int k = 0; k < 4; k++)
+            } rows[] = {
+                {"vulkan", "fma", "GFLOP/s", ctx.ceil.vk_gflops, ctx.ceil.device, 0},
+                {"vulkan", "shader-copy", "GB/s", ctx.ceil.vk_gbps, ctx.ceil.device, 0},
+                {"vulkan", "shader-copy-readback", "GB/s", ctx.ceil.vk_gbps_wall, ctx.ceil.device, 0},
+                {"vulkan", "device-copy", "GB/s", ctx.ceil.vk_copy_gbps, ctx.ceil.device, 0},
+                {"vulkan", "upload", "GB/s", ctx.ceil.vk_upload_gbps, ctx.ceil.device, 0},
+                {"vulkan", "download", "GB/s", ctx.ceil.vk_download_gbps, ctx.ceil.device, 0},
+                {"native", "fma", "GFLOP/s", ctx.ceil.native_gflops, "native C", ctx.ceil.threads},
+                {"native", "copy", "GB/s", ctx.ceil.native_gbps, "native C", ctx.ceil.threads},
+            };
+            for (size_t k = 0; k < sizeof rows / sizeof rows[0]; k++)
                 if (rows[k].rate > 0)
                     print_row(&b, &(fb_bench_row){.generator = "ceiling",
                                                   .backend = rows[k].backend,

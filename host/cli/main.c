@@ -102,7 +102,7 @@ static const char *const k_usage =
     "  --device D            Vulkan device index or name substring (see `fractalbake devices`)\n"
     "  --threads N           native threads, EXR compression threads and lavapipe's own compute\n"
     "                        threads (LP_NUM_THREADS) (default: all cores)\n"
-    "  --strip-rows N        rows computed per strip (the result does not depend on it)\n"
+    "  --strip-rows N        rows of a piece (default: sized for the device; no effect on the result)\n"
     "  --region X,Y,W,H      bake only these pixels (the same as in the full bake) into a region file;\n"
     "                        `fractalbake merge` joins region files into the whole image\n"
     "  --points-part K/N     bake the K-th of N shares of every chaos game's points (the other\n"

@@ -1,8 +1,11 @@
 /*
- * The bake driver: scene -> generators -> strips -> EXR writer (and PNG preview).
+ * The bake driver: scene -> generators -> pieces -> sinks (the EXR writer, the PNG preview, the
+ * heightmaps, a cube's faces, the finite check).
  *
- * Every generator computes strips of rows keyed by absolute pixel coordinates, so the result does
- * not depend on the strip height, the thread count or the order in which strips complete.
+ * Every generator computes pieces of rows keyed by absolute pixel coordinates, so the result does
+ * not depend on the piece's height, the thread count or the order in which pieces complete. Pieces
+ * are sized for the device (a CPU's strips of a few MiB, a discrete GPU's dispatches of millions of
+ * invocations), and at most a ring of them is in flight between the producer and the sinks.
  */
 #ifndef FB_BAKE_H
 #define FB_BAKE_H
@@ -19,10 +22,15 @@ typedef struct fb_bake_plan {
         uint64_t bytes; /* the layer's own peak (histogram, mesh, grid) and its strip buffers */
     } layers[FB_MAX_LAYERS];
     uint64_t base;    /* the process and its backend (a Vulkan driver is tens of MiB) */
-    uint64_t writer;  /* the EXR writer's queue of rows and compressed chunks */
+    uint64_t compile; /* a CPU device's compile of its largest pipeline, before the pieces stream */
+    uint64_t pieces;  /* the ring of pieces in flight (host memory; a CPU device's buffers included) */
+    uint64_t writer;  /* the EXR writer's compressed chunks (and its copies of rows it does not read in place) */
     uint64_t preview; /* the preview's sums */
-    uint64_t peak;    /* all of it at the worst moment */
+    uint64_t peak;    /* all of it at the worst moment: base, then the compile or the rest */
     uint64_t limit;   /* --max-memory */
+    uint64_t device;  /* a discrete GPU's own memory: the ring's device buffers (not in peak) */
+    int piece_rows;   /* rows of a piece */
+    int slots;        /* pieces in flight */
 } fb_bake_plan;
 
 typedef struct fb_bake_desc {
@@ -32,7 +40,7 @@ typedef struct fb_bake_desc {
     /* What the preview shows: a layer's name, or "over" (every layer composited back to front by its
      * coverage channel A; op layers are left out). NULL: the only layer, or "over" when there are several. */
     const char *preview_layer;
-    int strip_rows; /* 0: automatic */
+    int strip_rows; /* the rows of a piece (a dispatch on a GPU); 0: sized for the device */
     int zip_level;  /* the deflate level of ZIP chunks; 0: EXRIO_ZIP_LEVEL */
     /* The points part {K, N} (1 <= K <= N) of every chaos game to compute (render --points-part
      * K/N), the other layers whole; N == 0: the whole games. */

@@ -5,6 +5,7 @@
 #include "gen.h"
 
 #include "bake.h"
+#include "output.h"
 #include "pool.h"
 
 #include <stdarg.h>
@@ -98,6 +99,125 @@ void fb_bench_report(const fb_bench *b, const fb_bench_case *bc, const char *dev
     b->row(b, &r);
 }
 
+/* ---- encode-only: the EXR writer from memory ------------------------------------------------ */
+
+#define ENCODE_HELD ((uint64_t)1 << 30) /* the most of a file held in memory; more rows repeat these */
+
+typedef struct held_file {
+    exrio_writer_desc desc;
+    exrio_channel ch[FB_GEN_MAX_CHANNELS];
+    char names[FB_GEN_MAX_CHANNELS][80], part_names[EXRIO_MAX_PARTS][80];
+    const char *part_ptrs[EXRIO_MAX_PARTS];
+    exrio_compression part_comp[EXRIO_MAX_PARTS];
+    float *planes; /* nchannels planes of `rows` rows (uint channels as their bits) */
+    int rows;
+} held_file;
+
+/* The file at path read into memory (its first rows, up to ENCODE_HELD bytes), with the writer's
+ * description of the same channels, types, parts and compression. */
+static fb_result hold_file(const char *path, held_file *h)
+{
+    exrio_reader *r = NULL;
+    fb_result rc = exrio_open(path, &r);
+    if (rc) return rc;
+    int w = exrio_width(r), ht = exrio_height(r), nch = exrio_nchannels(r), np = exrio_nparts(r);
+    if (nch > FB_GEN_MAX_CHANNELS || np > EXRIO_MAX_PARTS) {
+        exrio_close(&r);
+        return fb_fail(FB_ERR_INTERNAL, "bench: %s has more channels or parts than the encoder bench holds", path);
+    }
+    uint64_t row_bytes = (uint64_t)w * (uint64_t)nch * 4;
+    h->rows = (int)(ENCODE_HELD / row_bytes < (uint64_t)ht ? ENCODE_HELD / row_bytes : (uint64_t)ht);
+    if (h->rows < 1) h->rows = 1;
+    h->planes = malloc((size_t)row_bytes * (size_t)h->rows);
+    if (!h->planes) rc = fb_fail(FB_ERR_NOMEM, "out of memory for the encoder bench");
+    void *planes[FB_GEN_MAX_CHANNELS];
+    for (int c = 0; c < nch && !rc; c++) {
+        snprintf(h->names[c], sizeof h->names[c], "%s", exrio_channel_name(r, c));
+        h->ch[c] = (exrio_channel){h->names[c], exrio_channel_type(r, c), exrio_channel_part(r, c)};
+        planes[c] = h->planes + (size_t)c * (size_t)w * (size_t)h->rows;
+    }
+    for (int p = 0; p < np && !rc; p++) {
+        snprintf(h->part_names[p], sizeof h->part_names[p], "%s", exrio_part_name(r, p));
+        h->part_ptrs[p] = h->part_names[p];
+        int comp = exrio_compression_parse(exrio_part_compression(r, p));
+        h->part_comp[p] = comp < 0 ? EXRIO_NONE : (exrio_compression)comp;
+    }
+    if (!rc) rc = exrio_read_rows(r, 0, h->rows, planes);
+    if (!rc)
+        h->desc = (exrio_writer_desc){.path = path,
+                                      .what = "benchmark output",
+                                      .width = w,
+                                      .height = ht,
+                                      .nparts = np,
+                                      .part_names = np > 1 ? h->part_ptrs : NULL,
+                                      .part_compression = np > 1 ? h->part_comp : NULL,
+                                      .compression = h->part_comp[0],
+                                      .channels = h->ch,
+                                      .nchannels = nch,
+                                      .envmap = exrio_envmap_of(r)};
+    exrio_close(&r);
+    return rc;
+}
+
+/* One write of the held file through the writer, strips of about a MiB a channel as a bake gives
+ * them; the held rows repeat where the file had more. */
+static fb_result write_held(const held_file *h, int threads)
+{
+    exrio_writer_desc d = h->desc;
+    d.threads = threads;
+    int w = d.width, strip = (1 << 20) / w > 1 ? (1 << 20) / w : 1;
+    if (strip > h->rows) strip = h->rows;
+    fb_outputs_begin();
+    exrio_writer *wr = NULL;
+    fb_result rc = exrio_writer_create(&d, &wr);
+    for (int y0 = 0; y0 < d.height && !rc; y0 += strip) {
+        int n = d.height - y0 < strip ? d.height - y0 : strip, at = y0 % h->rows;
+        if (at + n > h->rows) at = 0;
+        const void *planes[FB_GEN_MAX_CHANNELS];
+        for (int c = 0; c < d.nchannels; c++)
+            planes[c] = h->planes + ((size_t)c * (size_t)h->rows + (size_t)at) * (size_t)w;
+        rc = exrio_writer_rows(wr, y0, n, planes);
+    }
+    if (!rc) rc = exrio_writer_finish(&wr);
+    exrio_writer_abort(&wr);
+    return fb_outputs_end(rc);
+}
+
+fb_result fb_bench_encode(const fb_bench *b, const fb_bench_case *bc, const char *compression, double bake_seconds)
+{
+    held_file *h = calloc(1, sizeof *h);
+    if (!h) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    fb_result rc = hold_file(b->out, h);
+    int threads = b->threads > 0 ? b->threads : fb_cpu_count();
+    double t[3];
+    for (int k = 0; k < 3 && !rc; k++) {
+        double t0 = fb_now();
+        rc = write_held(h, threads);
+        t[k] = fb_now() - t0;
+    }
+    if (!rc) {
+        double sec = fb_bench_median3(t);
+        char mode[64];
+        snprintf(mode, sizeof mode, "encode-only-%s", compression);
+        fb_bench_row r = {.generator = bc->generator,
+                          .backend = "native",
+                          .device = "EXR writer from memory",
+                          .mode = mode,
+                          .unit = bc->unit,
+                          .rate = bc->work / sec / bc->unit_scale,
+                          .threads = threads,
+                          .size = true,
+                          .nextra = 1,
+                          .extra = {{"bake_vs_encode", bake_seconds / sec, 3}}};
+        snprintf(r.note, sizeof r.note, "(%d channels, %.3f s; the whole bake %.2fx that)", h->desc.nchannels, sec,
+                 bake_seconds / sec);
+        b->row(b, &r);
+    }
+    free(h->planes);
+    free(h);
+    return rc;
+}
+
 /* Whole bakes with the EXR written, for each compression: what a user's bake costs. */
 static fb_result end_to_end(const fb_bench *b, const fb_bench_case *bc, fb_engine *e, fb_scene *s)
 {
@@ -110,6 +230,7 @@ static fb_result end_to_end(const fb_bench *b, const fb_bench_case *bc, fb_engin
         s->compression = comps[c];
         rc = fb_bench_timed(e, s, b->out, &wall, &gpu);
         if (!rc) fb_bench_report(b, bc, e->device, fb_backend_name(e->kind), names[c], e->threads, wall, gpu);
+        if (!rc) rc = fb_bench_encode(b, bc, exrio_compression_name(comps[c]), wall);
     }
     s->compression = keep;
     return rc;

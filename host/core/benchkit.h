@@ -77,6 +77,12 @@ fb_result fb_bench_open_vulkan(const fb_bench *b, fb_engine *e, bool *have);
 void fb_bench_report(const fb_bench *b, const fb_bench_case *bc, const char *device, const char *backend,
                      const char *mode, int threads, double seconds, double gpu_seconds);
 
+/* The encoder alone: the file the last bake wrote (b->out) read into memory, then written again
+ * through the EXR writer with the same channels, types and compression on every core (or the
+ * bench's --threads), median of three: an "encode-only-COMPRESSION" row in the case's unit, with
+ * bake_vs_encode, the bake's `bake_seconds` over the encoder's (1: the bake as fast as encoding). */
+fb_result fb_bench_encode(const fb_bench *b, const fb_bench_case *bc, const char *compression, double bake_seconds);
+
 /* A per-pixel layer on every backend: generate-only and end-to-end (none, zip, piz) bakes, the
  * reference (seconds tref > 0, from the caller: a hand-vectorised loop) and the scalar kernel on one
  * thread. */
@@ -88,6 +94,41 @@ fb_result fb_bench_auto_zip(const fb_bench *b, const fb_bench_case *bc, fb_scene
 
 /* The layer alone (no file) on each backend, under another mode name. */
 fb_result fb_bench_variant(const fb_bench *b, const fb_bench_case *bc, fb_scene *s, const char *mode);
+
+/* A minimal shader of a layer's formula: the simplest fast GLSL a GPU programmer would write for
+ * the bench's scene (bench/peers/), without the layer's generality, its values the layer's to the
+ * bit where practical. Its interface: bindings 0..planes-1, planes of 4-byte values; binding
+ * `planes`, the layer's input where `input` (a uniform buffer where the layer reads it as one); the
+ * layer's push constants ({params; y0; rows}). */
+typedef struct fb_bench_peer {
+    const char *name; /* for people: "minimal GLSL (bench/peers/fbm_peer.comp)" */
+    const char *mode; /* the rows' suffix: "kernel" MODE and "peer" MODE ("-simplex"; NULL: none) */
+    const uint32_t *spv;
+    size_t spv_size;
+    const uint32_t *spec; /* its specialisation constants 0..nspec-1 */
+    uint32_t nspec;
+    int plane;          /* the layer's first plane its output must equal */
+    int planes;         /* its planes, compared with the layer's plane, plane + 1, ... (0: 1) */
+    int per_invocation; /* pixels an invocation along a row, in groups 64 wide (0: 1) */
+    bool input;         /* it reads the layer's input (binding 1) */
+} fb_bench_peer;
+
+/* The layer of s (its one layer) by its own shader as a bake dispatches it, beside `peer`, on the
+ * Vulkan device, in dispatches as large as a storage buffer allows (the whole image where it fits:
+ * a GPU's dispatch, not a lavapipe strip); a warm-up pass, then three, the two alternating; rates
+ * by the host clock and the device's timestamps. Rows "kernel" MODE, with vs_peer (its rate over
+ * the peer's, by the timestamps where the device has them), same_bits (1: the peer's plane is the
+ * layer's to the bit) and differing (pixels), and "peer" MODE. Nothing without a device. */
+fb_result fb_bench_peer_layer(const fb_bench *b, const fb_bench_case *bc, const fb_scene *s, const fb_bench_peer *peer);
+
+/* The two rows of a kernel beside its peer, from three timed runs of each (side 0 the layer's, 1
+ * the peer's; seconds by the host clock and the device's timestamps, 0 where it has none) of
+ * `work` units of `unit` (rates in work / seconds / unit_scale): "kernel" MODE on `device`, with
+ * vs_peer, same_bits and differing (`diff` values unlike the layer's), and "peer" MODE on
+ * `peer_name`, noted by `peer_note` (the seconds are sorted in place). */
+void fb_bench_peer_rows(const fb_bench *b, const char *generator, const char *device, const char *peer_name,
+                        const char *mode, const char *unit, double work, double unit_scale, double wall[2][3],
+                        double gpu[2][3], uint64_t diff, const char *peer_note);
 
 /* Median seconds of three runs after a warm-up of rows(ctx, y0, n, task) over `height` rows cut into
  * tasks on a pool of `threads`; *ntasks (optional) the number of tasks. -1 on failure. */

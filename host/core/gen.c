@@ -21,7 +21,7 @@ void fb_gen_names(char *out, size_t size)
 
 fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer)
 {
-    return fb_gen_init_run(g, scene, layer, &(fb_gen_run){{0, 0}, {0, 0}});
+    return fb_gen_init_run(g, scene, layer, &(fb_gen_run){{0, 0}, {0, 0}, false});
 }
 
 fb_result fb_gen_init_run(fb_gen *g, const fb_scene *scene, const fb_layer *layer, const fb_gen_run *run)
@@ -29,10 +29,8 @@ fb_result fb_gen_init_run(fb_gen *g, const fb_scene *scene, const fb_layer *laye
     memset(g, 0, sizeof *g);
     g->scene = scene;
     g->layer = layer;
-    g->points_part[0] = run->points_part[0];
-    g->points_part[1] = run->points_part[1];
-    g->budget = run->budget;
-    g->preview_rgb = -1;
+    g->run = *run;
+    g->store.preview_rgb = -1;
     if (!layer->cls) return fb_fail(FB_ERR_INTERNAL, "layer %s: no generator", layer->name);
     return layer->cls->init(g);
 }
@@ -44,36 +42,36 @@ void fb_gen_fini(fb_gen *g)
     g->fini = NULL;
     free(g->owned);
     g->owned = NULL;
-    g->input = NULL;
+    g->compute.shader.input = NULL;
 }
 
 void fb_gen_push(const fb_gen *g, int y0, int n, void *out)
 {
     uint32_t strip[2] = {(uint32_t)y0, (uint32_t)n};
-    memcpy(out, g->params, g->params_size);
-    memcpy((uint8_t *)out + g->params_size, strip, sizeof strip);
+    memcpy(out, g->params, g->compute.shader.params_size);
+    memcpy((uint8_t *)out + g->compute.shader.params_size, strip, sizeof strip);
 }
 
 int fb_gen_nplanes(const fb_gen *g)
 {
-    return g->nkernel > 0 ? g->nkernel : g->nchannels;
+    return g->compute.nkernel > 0 ? g->compute.nkernel : g->store.nchannels;
 }
 
 int fb_gen_plane_of(const fb_gen *g, int c)
 {
-    return g->nkernel > 0 ? g->kernel_of[c] : c;
+    return g->compute.nkernel > 0 ? g->compute.kernel_of[c] : c;
 }
 
 bool fb_gen_plane_stored(const fb_gen *g, int k)
 {
-    for (int c = 0; c < g->nchannels; c++)
+    for (int c = 0; c < g->store.nchannels; c++)
         if (fb_gen_plane_of(g, c) == k) return true;
     return false;
 }
 
 void fb_gen_groups(const fb_gen *g, int n, uint32_t out[3])
 {
-    uint32_t per = g->per_invocation > 1 ? (uint32_t)g->per_invocation : 1u;
+    uint32_t per = g->compute.shader.per_invocation > 1 ? (uint32_t)g->compute.shader.per_invocation : 1u;
     out[0] = ((uint32_t)g->scene->width + 64 * per - 1) / (64 * per);
     out[1] = (uint32_t)n;
     out[2] = 1;
@@ -84,10 +82,10 @@ int fb_gen_channel_of(const fb_gen *src, const char *channel, const char *who, c
     char want[160], have[FB_GEN_MAX_CHANNELS * 40] = "";
     snprintf(want, sizeof want, "%s.%s", src->layer->name, channel[0] ? channel : "Y");
     int c = -1;
-    for (int i = 0; i < src->nchannels; i++) {
-        if (!strcmp(src->channel_names[i], want)) c = i;
+    for (int i = 0; i < src->store.nchannels; i++) {
+        if (!strcmp(src->store.channel_names[i], want)) c = i;
         snprintf(have + strlen(have), sizeof have - strlen(have), "%s%s", i ? ", " : "",
-                 strchr(src->channel_names[i], '.') + 1);
+                 strchr(src->store.channel_names[i], '.') + 1);
     }
     if (c < 0)
         fb_fail(FB_ERR_INPUT, "layer \"%s\": %s \"%s\": layer \"%s\" has no channel %s (channels: %s)", who, what, want,

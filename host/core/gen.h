@@ -17,33 +17,34 @@
 typedef struct fb_gen fb_gen;
 struct fb_engine;
 
-struct fb_gen {
-    const fb_scene *scene;
-    const fb_layer *layer;
-    /* A run option, not part of the scene: the points part {K, N} (1 <= K <= N) of a chaos game this
-     * run computes (render --points-part K/N; fb_gen_init_run); N == 0: the whole game. */
+/* The run options a bake gives its layers, not part of the scene: the points part {K, N} (1 <= K
+ * <= N) of a chaos game this run computes (render --points-part K/N; N == 0: the whole game), what
+ * the layer may allocate (the bake's --max-memory and its engine's overhead: a class whose init
+ * allocates much checks its peak against it, fb_memory_check(&g->run.budget, ...)), and whether
+ * the native path is the portable kernel only, no hand-vectorised path (the benchmark's reference). */
+typedef struct fb_gen_run {
     int points_part[2];
-    /* What the layer may allocate (the bake's --max-memory and its engine's overhead): a class
-     * whose init allocates much checks its peak against it (fb_memory_check(&g->budget, ...)). */
     fb_memory budget;
+    bool scalar;
+} fb_gen_run;
+
+/* What a layer stores: its channels in the file, and how a preview shows them. */
+typedef struct fb_gen_store {
     int nchannels;
-    int preview_channel; /* the float channel a grey preview shows */
-    int preview_rgb;     /* if >= 0: the first of three float channels R, G, B shown in colour instead (-1) */
     char channel_names[FB_GEN_MAX_CHANNELS][80];
     exrio_type channel_types[FB_GEN_MAX_CHANNELS];
+    int preview_channel;     /* the float channel a grey preview shows */
+    int preview_rgb;         /* if >= 0: the first of three float channels R, G, B shown in colour instead (-1) */
+    double preview_shade[2]; /* > 0: the preview shows preview_channel as a hillshade (world units per
+                                pixel in x and y) */
+    bool preview_light;      /* its R, G, B are light without coverage (a star field): the over composite
+                                adds them to the layers behind instead of hiding those */
+} fb_gen_store;
 
-    /* native: fill rows [y0, y0 + n); planes[k] holds n * width values (4 bytes each) for each of the
-     * kernel's planes (see nkernel), NULL for a plane the layer does not store */
-    void (*native_rows)(const fb_gen *g, int y0, int n, void *const *planes);
-
-    /* A kernel that can compute more channels than the layer stores (a julia layer's `channels`):
-     * nkernel planes (the shader's buffers 0..nkernel-1), stored channel c being plane kernel_of[c].
-     * Planes not stored are neither computed nor written. nkernel 0: the planes are the channels. */
-    int nkernel;
-    int kernel_of[FB_GEN_MAX_CHANNELS];
-
-    /* vulkan: the shader, its push constants for a strip, and its workgroup counts */
-    const uint32_t *spv;
+/* A compute shader over the layer's kernel: what the Vulkan backend dispatches over a piece of rows,
+ * one storage buffer per kernel plane (fb_gen_nplanes), then `input` if any. */
+typedef struct fb_gen_shader {
+    const uint32_t *spv; /* NULL: the layer has no shader */
     size_t spv_size;
     uint32_t push_size; /* params_size + 8: the shader's push block is {params; uint y0; uint rows;} */
     uint32_t params_size;
@@ -53,53 +54,70 @@ struct fb_gen {
     bool input_uniform; /* the shader reads input as a uniform buffer (std140), not a storage buffer */
     uint32_t spec[8];   /* specialization constants 0..nspec-1 */
     uint32_t nspec;
+    int per_invocation; /* pixels of a row per invocation (0: 1) */
+    bool needs_float64; /* the shader uses doubles (the device must have shaderFloat64) */
+} fb_gen_shader;
 
-    /* Layers that are not a function of the pixel (the chaos game) compute everything here, once, on
-     * the engine's backend before the first strip; their strips then come from native_rows on the
-     * host whatever the backend. NULL for per-pixel generators. */
-    fb_result (*prepare)(fb_gen *g, struct fb_engine *e, bool progress);
-    double prepare_gpu_seconds; /* set by prepare: dispatch time on the GPU, else -1 */
-
-    /* The bytes this layer will allocate besides the bake's strips, predicted before it does (after
-     * init, which reads the inputs): returns the peak (prepare's arrays and what it keeps) and sets
-     * *hold to what it keeps while the strips are produced. NULL: nothing worth counting. */
-    uint64_t (*memory)(const fb_gen *g, const struct fb_engine *e, uint64_t *hold);
-
-    /* Side outputs (a mesh, a CSV) are written by prepare through the output transaction
-     * (output.h), which renames them with the EXR when the whole run succeeds. */
-    double preview_shade[2]; /* > 0: the preview shows preview_channel as a hillshade (world units per
-                                pixel in x and y) */
-    bool preview_light;      /* its R, G, B are light without coverage (a star field): the over composite
-                                adds them to the layers behind instead of hiding those */
-    bool has_world;          /* set by prepare: the image covers world[] = xmin, xmax, ymin, ymax (y up) */
-    double world[4];
-    int epsg;                /* ... in this projected CRS (EPSG code; 0: not stated) */
-    char summary[512];       /* set by prepare: one human line about the layer's computation, or "" */
-    char summary_json[1024]; /* the same as a JSON object, or "" */
-
-    /* Layers that use other layers (struct fb_gen_class.refs): called once every layer's generator is
-     * set up, with all of the scene's (gens, in scene order; plane_offset[i] is the first plane of
-     * layer i in a strip), to find their sources. Prepares run in dependency order (sources first). */
-    fb_result (*resolve)(fb_gen *g, const fb_gen *const *gens, const int *plane_offset);
-
-    /* A layer computed on the host from other layers' planes of the same strip (an op layer): count
+/* How a layer's rows are computed: natively (native_rows), by the shader, or on the host from other
+ * layers' planes of the same piece (host_rows). */
+typedef struct fb_gen_compute {
+    /* native: fill rows [y0, y0 + n); planes[k] holds n * width values (4 bytes each) for each of the
+     * kernel's planes (see nkernel), NULL for a plane the layer does not store */
+    void (*native_rows)(const fb_gen *g, int y0, int n, void *const *planes);
+    /* A layer computed on the host from other layers' planes of the same piece (an op layer): count
      * values of its one float channel; neither native_rows nor a shader. */
     void (*host_rows)(const fb_gen *g, size_t count, const void *const *planes, float *out);
-    bool host_op; /* host_rows is set */
+    /* A kernel that can compute more channels than the layer stores (a julia layer's `channels`):
+     * nkernel planes (the shader's buffers 0..nkernel-1), stored channel c being plane kernel_of[c].
+     * Planes not stored are neither computed nor written. nkernel 0: the planes are the channels. */
+    int nkernel;
+    int kernel_of[FB_GEN_MAX_CHANNELS];
+    fb_gen_shader shader;
+    /* On a CPU implementation of Vulkan (lavapipe) this layer's shader is faster than its native path
+     * (Julia; fBm outside its AVX2 case), so --backend auto runs it there; otherwise the native path
+     * wins on such a device (bench/RESULTS.md). A GPU runs every layer. */
+    bool lavapipe_faster;
+} fb_gen_compute;
 
-    /* A layer split by chaos-game points (render --points-part): set by prepare, the points that fell
-     * outside the frame (merge needs them for the density). */
+/* What a layer's preparation produced (set by prepare). */
+typedef struct fb_gen_prepared {
+    double gpu_seconds; /* dispatch time on the GPU, else -1 */
+    bool has_world;     /* the image covers world[] = xmin, xmax, ymin, ymax (y up) */
+    double world[4];
+    int epsg;                /* ... in this projected CRS (EPSG code; 0: not stated) */
+    char summary[512];       /* one human line about the layer's computation, or "" */
+    char summary_json[1024]; /* the same as a JSON object, or "" */
+    /* A layer split by chaos-game points (render --points-part): the points that fell outside the
+     * frame (merge needs them for the density). */
     bool points_split;
     uint64_t points_outside;
+} fb_gen_prepared;
 
-    int per_invocation; /* vulkan: pixels of a row per invocation (0: 1) */
-    bool needs_float64; /* vulkan: the shader uses doubles (the device must have shaderFloat64) */
+/* A layer's generator, as its class's init fills it: what it stores, how it is computed, and what
+ * its preparation produced, with the hooks that run around the pieces. */
+struct fb_gen {
+    const fb_scene *scene;
+    const fb_layer *layer;
+    fb_gen_run run;
+    fb_gen_store store;
+    fb_gen_compute compute;
+    fb_gen_prepared prepared;
 
-    bool scalar; /* native: the portable kernel only, no hand-vectorised path (benchmark reference) */
-    /* Set by init: on a CPU implementation of Vulkan (lavapipe) this layer's shader is faster than its
-     * native path (Julia; fBm outside its AVX2 case), so --backend auto runs it there; otherwise the
-     * native path wins on such a device (bench/RESULTS.md). A GPU runs every layer. */
-    bool lavapipe_faster;
+    /* Layers that are not a function of the pixel (the chaos game) compute everything here, once, on
+     * the engine's backend before the first piece; their pieces then come from native_rows on the
+     * host whatever the backend. NULL for per-pixel generators. Side outputs (a mesh, a CSV) are
+     * written here through the output transaction (output.h), which renames them with the EXR when
+     * the whole run succeeds. */
+    fb_result (*prepare)(fb_gen *g, struct fb_engine *e, bool progress);
+    /* The bytes this layer will allocate besides the bake's pieces, predicted before it does (after
+     * init, which reads the inputs): returns the peak (prepare's arrays and what it keeps) and sets
+     * *hold to what it keeps while the pieces are produced. NULL: nothing worth counting. */
+    uint64_t (*memory)(const fb_gen *g, const struct fb_engine *e, uint64_t *hold);
+    /* Layers that use other layers (struct fb_gen_class.refs): called once every layer's generator is
+     * set up, with all of the scene's (gens, in scene order; plane_offset[i] is the first plane of
+     * layer i in a piece), to find their sources. Prepares run in dependency order (sources first). */
+    fb_result (*resolve)(fb_gen *g, const fb_gen *const *gens, const int *plane_offset);
+
     _Alignas(16) unsigned char params[256]; /* generator-private, e.g. K_FbmParams */
     void *owned;                            /* generator-owned memory (freed by fb_gen_fini) */
     void (*fini)(fb_gen *g);                /* frees what `owned` points to, before owned itself */
@@ -172,7 +190,7 @@ typedef struct fb_gen_class {
     fb_result (*cost)(const fb_scene *s, int layer, double *rows, double *total);
     double part_pixel_seconds;
     const fb_points_ops *points; /* FB_SHARE_POINTS: how merge adds the parts */
-    /* For `fractalbake generators` and the conformance test (tests/cli/conformance.sh): a small scene's
+    /* For `fractalbake generators` and the conformance test (tests/conformance.py): a small scene's
      * "layers" that bake it (JSON; NULL: [{"type": NAME}]), and how far its Vulkan result may be from
      * its native one (the largest |difference|, and the share of pixels in percent allowed beyond
      * it; both 0: the same bits). */
@@ -203,13 +221,6 @@ void fb_gen_names(char *out, size_t size);
 
 /* Sets up the generator of `layer`. */
 fb_result fb_gen_init(fb_gen *g, const fb_scene *scene, const fb_layer *layer);
-
-/* The run options a bake gives its layers: the points part {K, N} of a chaos game (N == 0: the
- * whole game) and the memory it may use. */
-typedef struct fb_gen_run {
-    int points_part[2];
-    fb_memory budget;
-} fb_gen_run;
 
 /* fb_gen_init with run options (fb_gen_init: {0}, the whole game and the default memory limit). */
 fb_result fb_gen_init_run(fb_gen *g, const fb_scene *scene, const fb_layer *layer, const fb_gen_run *run);

@@ -281,8 +281,8 @@ static bool chaos_sum_only(const chaos_layer *c, const char *name)
     const char *lname = c->gen.layer->name;
     size_t len = strlen(lname);
     if (strncmp(name, lname, len) || name[len] != '.') return false;
-    for (int j = 0; j < c->gen.nchannels; j++)
-        if (!strcmp(c->gen.channel_names[j], name)) return false;
+    for (int j = 0; j < c->gen.store.nchannels; j++)
+        if (!strcmp(c->gen.store.channel_names[j], name)) return false;
     for (int k = 0; k < c->nsums; k++) {
         size_t sl = strlen(c->suffix[k]);
         const char *q = name + len + 1;
@@ -298,13 +298,13 @@ static fb_result chaos_rows(const chaos_layer *c, const exrio_channel *ch, void 
                             const char *path)
 {
     void *planes[FB_GEN_MAX_CHANNELS] = {0};
-    for (int j = 0; j < c->gen.nchannels; j++) {
+    for (int j = 0; j < c->gen.store.nchannels; j++) {
         for (int o = 0; o < nout; o++)
-            if (!strcmp(ch[o].name, c->gen.channel_names[j])) planes[j] = outp[o];
+            if (!strcmp(ch[o].name, c->gen.store.channel_names[j])) planes[j] = outp[o];
         if (!planes[j])
             return fb_fail(FB_ERR_INPUT, "%s: layer %s lacks some of its channels", path, c->gen.layer->name);
     }
-    c->gen.native_rows(&c->gen, y0, n, planes);
+    c->gen.compute.native_rows(&c->gen, y0, n, planes);
     return FB_OK;
 }
 
@@ -465,8 +465,8 @@ static fb_result merge_points(part *p, int n, const fb_merge_desc *d)
         if (sum_only) continue;
         src[nout] = c;
         for (int k = 0; k < ncl; k++)
-            for (int j = 0; j < cl[k].gen.nchannels; j++)
-                if (!strcmp(cl[k].gen.channel_names[j], name)) src[nout] = -1 - k;
+            for (int j = 0; j < cl[k].gen.store.nchannels; j++)
+                if (!strcmp(cl[k].gen.store.channel_names[j], name)) src[nout] = -1 - k;
         ch[nout] = (exrio_channel){name, exrio_channel_type(p[0].r, c), exrio_channel_part(p[0].r, c)};
         if (!(outp[nout] = malloc((size_t)W * MERGE_STRIP * 4))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
         nout++;
@@ -616,12 +616,12 @@ static fb_result tasks_channels(task_merge *m)
             m->ncl++;
             c->layer = l;
             rc = fb_gen_init(&c->gen, sc, &sc->layers[l]);
-            for (int j = 0; j < c->gen.nchannels && !rc; j++) {
+            for (int j = 0; j < c->gen.store.nchannels && !rc; j++) {
                 if (m->nout == FB_MERGE_MAX_CHANNELS)
                     rc = fb_fail(FB_ERR_INPUT, "merge handles at most %d channels", m->nout);
                 else
-                    m->ch[m->nout++] =
-                        (exrio_channel){c->gen.channel_names[j], c->gen.channel_types[j], sc->multipart ? l : 0};
+                    m->ch[m->nout++] = (exrio_channel){c->gen.store.channel_names[j], c->gen.store.channel_types[j],
+                                                       sc->multipart ? l : 0};
             }
             continue;
         }

@@ -74,3 +74,29 @@ void fb_palette_build(const fb_palette_spec *spec, float table[FB_PALETTE_ENTRIE
             stops_at(k_named[spec->named].nstops, k_named[spec->named].stops, t, table[i]);
     }
 }
+
+void fb_relief_init(fb_relief *r, const fb_relief_spec *spec, double zlo, double zhi)
+{
+    fb_palette_build(&spec->palette, r->table);
+    double az = spec->light[0] * (M_PI / 180), alt = spec->light[1] * (M_PI / 180);
+    r->lx = sin(az) * cos(alt), r->ly = cos(az) * cos(alt), r->lz = sin(alt), r->ambient = spec->ambient;
+    r->zlo = spec->range_set ? spec->range[0] : zlo, r->zhi = spec->range_set ? spec->range[1] : zhi;
+    if (!(r->zhi > r->zlo)) r->zhi = r->zlo + 1;
+}
+
+double fb_relief_light(const fb_relief *r, double gx, double gy)
+{
+    double len = sqrt(gx * gx + gy * gy + 1), d = (-gx * r->lx - gy * r->ly + r->lz) / len;
+    return r->ambient + (1 - r->ambient) * (d > 0 ? d : 0);
+}
+
+void fb_relief_colour(const fb_relief *r, double z, double gx, double gy, float rgb[3])
+{
+    double light = fb_relief_light(r, gx, gy);
+    double t = (z - r->zlo) / (r->zhi - r->zlo) * (FB_PALETTE_ENTRIES - 1);
+    t = t < 0 ? 0 : t > FB_PALETTE_ENTRIES - 1 ? FB_PALETTE_ENTRIES - 1 : t;
+    int i = (int)t;
+    int j = i + 1 < FB_PALETTE_ENTRIES ? i + 1 : i;
+    double f = t - i;
+    for (int c = 0; c < 3; c++) rgb[c] = (float)(light * (r->table[i][c] * (1 - f) + r->table[j][c] * f));
+}

@@ -558,6 +558,40 @@ fb_result fb_schema_palette(const fb_vctx *v, const char *path, const json_t *ob
     return FB_OK;
 }
 
+fb_result fb_schema_relief(const fb_vctx *v, const char *path, const json_t *obj, fb_relief_spec *t)
+{
+    char sub[256];
+    memset(t, 0, sizeof *t);
+    t->colour = json_object_get(obj, "palette") || json_object_get(obj, "cosine") || json_object_get(obj, "stops");
+    static const char *const needs_palette[3] = {"light", "ambient", "colour-range"};
+    for (int k = 0; k < 3; k++)
+        if (!t->colour && json_object_get(obj, needs_palette[k])) {
+            snprintf(sub, sizeof sub, "%s.%s", path, needs_palette[k]);
+            return fb_schema_error(v, sub, "%s shapes the colour by height: give palette, cosine or stops too",
+                                   needs_palette[k]);
+        }
+    fb_result rc = t->colour ? fb_schema_palette(v, path, obj, &t->palette) : FB_OK;
+    if (rc) return rc;
+    const json_t *lj = json_object_get(obj, "light"), *cr = json_object_get(obj, "colour-range");
+    t->light[0] = lj ? json_number_value(json_array_get(lj, 0)) : 315;
+    t->light[1] = lj ? json_number_value(json_array_get(lj, 1)) : 45;
+    if (t->light[1] < 0 || t->light[1] > 90) {
+        snprintf(sub, sizeof sub, "%s.light", path);
+        return fb_schema_error(v, sub, "the light's altitude must lie in 0..90 degrees, found %g", t->light[1]);
+    }
+    t->ambient = json_object_get(obj, "ambient") ? fb_json_num(obj, "ambient") : 0.2;
+    t->range_set = cr != NULL;
+    if (cr) {
+        t->range[0] = json_number_value(json_array_get(cr, 0));
+        t->range[1] = json_number_value(json_array_get(cr, 1));
+        if (!(t->range[1] > t->range[0])) {
+            snprintf(sub, sizeof sub, "%s.colour-range", path);
+            return fb_schema_error(v, sub, "the second height must be above the first");
+        }
+    }
+    return FB_OK;
+}
+
 void fb_json_string(const json_t *obj, const char *key, char *out, size_t size)
 {
     const json_t *j = json_object_get(obj, key);

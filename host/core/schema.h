@@ -106,6 +106,26 @@ fb_result fb_schema_check_value(const fb_vctx *v, const char *path, const fb_key
 /* The colour map keys shared by the layers that have one: palette, cosine, stops. */
 fb_result fb_schema_palette(const fb_vctx *v, const char *path, const json_t *obj, fb_palette_spec *pal);
 
+/* The keys of a height layer's colour by height under a light (fb_relief_spec, palette.h), for its
+ * key table; fb_schema_relief reads them (light, ambient and colour-range only with a palette). */
+/* clang-format off */
+#define FB_RELIEF_KEYS                                                                                                 \
+    {"palette", FB_K_ENUM, 0, 0, false, FB_PALETTE_NAMES, NULL,                                                        \
+     "also store R, G, B: the surface lit and coloured by this map by height (or cosine, stops)"},                     \
+    {"cosine", FB_K_NUMLIST, -10, 10, false, NULL, NULL,                                                               \
+     "colour by height, a cosine palette a + b cos(2 pi (c t + d)): 12 numbers aR,aG,aB,bR,bG,bB,cR,cG,cB,dR,dG,dB",  \
+     12},                                                                                                              \
+    {"stops", FB_K_STOPS, 0, 1e3, false, NULL, NULL,                                                                   \
+     "colour by height, a gradient: [[t, r, g, b], ...], t from 0 (lowest) to 1 (highest) (flag: \"t,r,g,b;...\")"},   \
+    {"light", FB_K_VEC2, -360, 360, false, NULL, NULL,                                                                 \
+     "with a palette: the light's azimuth (clockwise from north, y up) and altitude, degrees (default 315,45)"},       \
+    {"ambient", FB_K_NUM, 0, 1, false, NULL, NULL, "with a palette: the light that reaches every slope (default 0.2)"}, \
+    {"colour-range", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL,                                                        \
+     "with a palette: the heights at its two ends (default: the layer's lowest and highest)"}
+/* clang-format on */
+struct fb_relief_spec;
+fb_result fb_schema_relief(const fb_vctx *v, const char *path, const json_t *obj, struct fb_relief_spec *out);
+
 /* Readers of checked values. */
 double fb_json_num(const json_t *obj, const char *key);
 bool fb_json_bool(const json_t *obj, const char *key);

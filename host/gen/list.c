@@ -15,6 +15,7 @@
     X(terrain)                                                                                                         \
     X(constrain)                                                                                                       \
     X(erode)                                                                                                           \
+    X(rivers)                                                                                                          \
     X(op)
 
 #define DECLARE(name) extern const fb_gen_class fb_gen_##name;

@@ -88,6 +88,23 @@ fb_result exrio_writer_create(const exrio_writer_desc *desc, exrio_writer **out)
  * the compression queue is full. */
 fb_result exrio_writer_rows(exrio_writer *w, int y0, int nrows, const void *const *planes);
 
+/* Who keeps alive the rows the writer reads in place (exrio_writer_rows_held): retain(ctx) is called
+ * once for each batch made of them before the call returns, and release(ctx) once for each when the
+ * batch no longer reads them (encoded, or abandoned), from any thread. */
+typedef struct exrio_hold {
+    void (*retain)(void *ctx);
+    void (*release)(void *ctx);
+    void *ctx;
+} exrio_hold;
+
+/* The writer's batch: rows compressed together by one worker (a multiple of every chunk height). */
+int exrio_writer_batch_rows(const exrio_writer *w);
+
+/* As exrio_writer_rows, but rows that make whole batches (starting at a multiple of the batch rows
+ * with nothing half-filled before them, and as many rows or up to the image's last) are not copied:
+ * the workers read them in place, held through `hold` until encoded. The rest is copied. */
+fb_result exrio_writer_rows_held(exrio_writer *w, int y0, int nrows, const void *const *planes, const exrio_hold *hold);
+
 /* Waits for the last chunks and completes the temporary file, which the output transaction renames
  * into place with the run's other outputs. Frees the writer, whatever the result; on failure the
  * temporary file is removed. */

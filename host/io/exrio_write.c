@@ -26,13 +26,18 @@ static exr_pixel_type_t pixel_type(exrio_type t)
 /* ---- writer --------------------------------------------------------------------------------- */
 
 /* One batch of whole chunks (of every part): the rows as given (4 bytes a value), then the
- * compressed chunks of each part. */
+ * compressed chunks of each part. The rows are a copy the batch owns, or the caller's, read in place
+ * and held (exrio_writer_rows_held) until they are encoded. */
 typedef struct batch {
     int y0, nrows;
-    uint8_t *rows; /* nchannels planes of nrows * width values */
+    uint8_t *rows;       /* the copy: nchannels planes of nrows * width values, or NULL */
+    const uint8_t **src; /* channel c's first row (in `rows`, or the caller's) */
+    size_t stride;       /* bytes from a row of src[c] to the next */
+    exrio_hold hold;     /* the caller's rows: released once encoded (hold.release NULL: a copy) */
     int nchunks[EXRIO_MAX_PARTS];
     void **chunk_data[EXRIO_MAX_PARTS]; /* compressed bytes of each chunk, written in order */
     uint64_t *chunk_size[EXRIO_MAX_PARTS];
+    size_t *chunk_cap[EXRIO_MAX_PARTS]; /* the capacity of its buffer */
     bool done;
     struct batch *next; /* queue link */
 } batch;
@@ -75,18 +80,60 @@ struct exrio_writer {
     char error_msg[600];
     pthread_t *threads;
     int nthreads;
+    /* Chunk buffers given back once written, taken again by the next chunks (under mu): a bake's
+     * chunks need the same few buffers over and over, and a malloc and free of each (hundreds of KiB)
+     * costs page faults wherever the allocator returns them to the system. */
+    void **spare;
+    size_t *spare_cap;
+    int nspare, max_spare;
 };
+
+/* The batch no longer reads its rows: a copy is freed, the caller's rows are released. */
+static void batch_drop_rows(batch *b)
+{
+    free(b->rows);
+    b->rows = NULL;
+    if (b->hold.release) b->hold.release(b->hold.ctx);
+    b->hold.release = NULL;
+}
 
 static void batch_free(batch *b)
 {
     if (!b) return;
+    batch_drop_rows(b);
+    free(b->src);
     for (int p = 0; p < EXRIO_MAX_PARTS; p++) {
         for (int i = 0; i < b->nchunks[p] && b->chunk_data[p]; i++) free(b->chunk_data[p][i]);
         free(b->chunk_data[p]);
         free(b->chunk_size[p]);
+        free(b->chunk_cap[p]);
     }
-    free(b->rows);
     free(b);
+}
+
+/* A buffer of at least `need` bytes for a chunk: a spare one, or a new one. */
+static void *chunk_get(exrio_writer *w, size_t need, size_t *cap)
+{
+    void *buf = NULL;
+    pthread_mutex_lock(&w->mu);
+    for (int i = w->nspare - 1; i >= 0 && !buf; i--)
+        if (w->spare_cap[i] >= need) {
+            buf = w->spare[i], *cap = w->spare_cap[i];
+            w->spare[i] = w->spare[w->nspare - 1], w->spare_cap[i] = w->spare_cap[w->nspare - 1];
+            w->nspare--;
+        }
+    pthread_mutex_unlock(&w->mu);
+    if (!buf && (buf = malloc(need))) *cap = need;
+    return buf;
+}
+
+/* A written chunk's buffer given back (w->mu held). */
+static void chunk_put(exrio_writer *w, void *buf, size_t cap)
+{
+    if (w->nspare < w->max_spare)
+        w->spare[w->nspare] = buf, w->spare_cap[w->nspare++] = cap;
+    else
+        free(buf);
 }
 
 static void set_error(exrio_writer *w, fb_result rc, const char *msg)
@@ -134,11 +181,9 @@ static fb_result encode_batch(exrio_writer *w, batch *b, exrzip_state *z, char *
             init = true;
             for (int c = 0; c < enc.channel_count; c++) {
                 int src = wp->file_order[c];
-                size_t row_bytes = (size_t)w->width * 4;
-                enc.channels[c].encode_from_ptr =
-                    b->rows + (size_t)src * b->nrows * row_bytes + (size_t)(y - b->y0) * row_bytes;
+                enc.channels[c].encode_from_ptr = b->src[src] + (size_t)(y - b->y0) * b->stride;
                 enc.channels[c].user_pixel_stride = 4;
-                enc.channels[c].user_line_stride = (int32_t)row_bytes;
+                enc.channels[c].user_line_stride = (int32_t)b->stride;
                 enc.channels[c].user_bytes_per_element = 4;
                 enc.channels[c].user_data_type = w->types[src] == EXRIO_UINT ? EXR_PIXEL_UINT : EXR_PIXEL_FLOAT;
             }
@@ -149,9 +194,11 @@ static fb_result encode_batch(exrio_writer *w, batch *b, exrzip_state *z, char *
             if (wp->zip) enc.compress_fn = pack_only;
             er = exr_encoding_run(w->ctx, p, &enc);
             if (er != EXR_ERR_SUCCESS) goto exr_fail;
-            if (wp->zip) {
-                rc = exrzip_deflate(z, w->zip_level, enc.packed_buffer, enc.packed_bytes, &b->chunk_data[p][k],
-                                    &b->chunk_size[p][k]);
+            size_t need = wp->zip ? exrzip_bound(z, enc.packed_bytes) : enc.compressed_bytes ? enc.compressed_bytes : 1;
+            b->chunk_data[p][k] = chunk_get(w, need, &b->chunk_cap[p][k]);
+            if (b->chunk_data[p][k] && wp->zip) {
+                rc = exrzip_deflate(z, w->zip_level, enc.packed_buffer, enc.packed_bytes, b->chunk_data[p][k],
+                                    b->chunk_cap[p][k], &b->chunk_size[p][k]);
                 if (rc) {
                     snprintf(msg, msgsz, "out of memory compressing rows %d..%d", y, y + cinfo.height - 1);
                     break;
@@ -159,7 +206,6 @@ static fb_result encode_batch(exrio_writer *w, batch *b, exrzip_state *z, char *
                 continue;
             }
             b->chunk_size[p][k] = enc.compressed_bytes;
-            b->chunk_data[p][k] = malloc(enc.compressed_bytes ? enc.compressed_bytes : 1);
             if (!b->chunk_data[p][k]) {
                 snprintf(msg, msgsz, "out of memory compressing rows %d..%d", y, y + cinfo.height - 1);
                 rc = FB_ERR_NOMEM;
@@ -179,8 +225,7 @@ static fb_result encode_batch(exrio_writer *w, batch *b, exrzip_state *z, char *
         }
         if (init) exr_encoding_destroy(w->ctx, &enc);
     }
-    free(b->rows); /* the raw rows are no longer needed: keep only compressed data in memory */
-    b->rows = NULL;
+    batch_drop_rows(b); /* the raw rows are no longer needed: keep only compressed data in memory */
     return rc;
 }
 
@@ -207,6 +252,10 @@ static void commit_ready(exrio_writer *w)
                     snprintf(m, sizeof m, "%s: cannot spool part %d: %s", w->path, p, strerror(errno));
                     set_error(w, FB_ERR_IO, m);
                 }
+        for (int p = 0; p < w->nparts; p++) /* the chunk buffers, for the next batches */
+            for (int k = 0; k < b->nchunks[p]; k++)
+                if (b->chunk_data[p][k])
+                    chunk_put(w, b->chunk_data[p][k], b->chunk_cap[p][k]), b->chunk_data[p][k] = NULL;
         w->order[w->committed] = NULL;
         batch_free(b);
         w->committed++;
@@ -241,20 +290,35 @@ static void *worker_main(void *arg)
     return NULL;
 }
 
-static batch *batch_new(exrio_writer *w, int y0)
+/* A batch of the rows from y0: a copy of them to fill (planes NULL), or the caller's planes (row y0
+ * `offset` bytes into each, `stride` bytes a row), held. */
+static batch *batch_new(exrio_writer *w, int y0, const void *const *planes, size_t offset, size_t stride,
+                        const exrio_hold *hold)
 {
     batch *b = calloc(1, sizeof *b);
     if (!b) return NULL;
     b->y0 = y0;
     b->nrows = w->batch_rows;
     if (y0 + b->nrows > w->height) b->nrows = w->height - y0;
-    b->rows = malloc(w->plane_bytes_per_row * (size_t)w->nchannels * (size_t)b->nrows);
-    bool ok = b->rows != NULL;
+    b->src = calloc((size_t)w->nchannels, sizeof *b->src);
+    bool ok = b->src != NULL;
+    if (ok && planes) {
+        for (int c = 0; c < w->nchannels; c++) b->src[c] = (const uint8_t *)planes[c] + offset;
+        b->stride = stride;
+        b->hold = *hold;
+        if (hold->retain) hold->retain(hold->ctx);
+    } else if (ok) {
+        b->rows = malloc(w->plane_bytes_per_row * (size_t)w->nchannels * (size_t)b->nrows);
+        ok = b->rows != NULL;
+        b->stride = w->plane_bytes_per_row;
+        for (int c = 0; c < w->nchannels && ok; c++) b->src[c] = b->rows + (size_t)c * b->nrows * b->stride;
+    }
     for (int p = 0; p < w->nparts; p++) {
         b->nchunks[p] = (b->nrows + w->parts[p].chunk_rows - 1) / w->parts[p].chunk_rows;
         b->chunk_data[p] = calloc((size_t)b->nchunks[p], sizeof *b->chunk_data[p]);
         b->chunk_size[p] = calloc((size_t)b->nchunks[p], sizeof *b->chunk_size[p]);
-        ok = ok && b->chunk_data[p] && b->chunk_size[p];
+        b->chunk_cap[p] = calloc((size_t)b->nchunks[p], sizeof *b->chunk_cap[p]);
+        ok = ok && b->chunk_data[p] && b->chunk_size[p] && b->chunk_cap[p];
     }
     if (!ok) {
         batch_free(b);
@@ -425,7 +489,12 @@ fb_result exrio_writer_create(const exrio_writer_desc *d, exrio_writer **out)
     w->nthreads = d->threads > 0 ? d->threads : fb_cpu_count();
     w->max_in_flight = 2 * w->nthreads + 2;
     w->threads = calloc((size_t)w->nthreads, sizeof *w->threads);
-    if (!w->order || !w->threads) {
+    int most = 0; /* chunks of a batch, in its part of most */
+    for (int p = 0; p < w->nparts; p++) most += w->batch_rows / w->parts[p].chunk_rows;
+    w->max_spare = (w->max_in_flight + 1) * most;
+    w->spare = calloc((size_t)w->max_spare, sizeof *w->spare);
+    w->spare_cap = calloc((size_t)w->max_spare, sizeof *w->spare_cap);
+    if (!w->order || !w->threads || !w->spare || !w->spare_cap) {
         rc = fb_fail(FB_ERR_NOMEM, "out of memory");
         goto fail;
     }
@@ -464,15 +533,22 @@ static fb_result submit_filling(exrio_writer *w)
     return rc;
 }
 
-fb_result exrio_writer_rows(exrio_writer *w, int y0, int nrows, const void *const *planes)
+/* The error the workers met, logged (one line) and returned. */
+static fb_result worker_error(exrio_writer *w, fb_result rc)
 {
-    if (y0 != w->next_row || nrows < 0 || y0 + nrows > w->height)
-        return fb_fail(FB_ERR_INTERNAL, "%s: rows %d..%d given out of order (next is %d)", w->path, y0, y0 + nrows - 1,
-                       w->next_row);
+    pthread_mutex_lock(&w->mu);
+    fb_fail(rc, "%s", w->error_msg);
+    pthread_mutex_unlock(&w->mu);
+    return rc;
+}
+
+/* Copies rows [first, nrows) of the planes (the next rows of the image) into batches. */
+static fb_result copy_rows(exrio_writer *w, const void *const *planes, int first, int nrows)
+{
     size_t rb = w->plane_bytes_per_row;
-    int done = 0;
+    int done = first;
     while (done < nrows) {
-        if (!w->filling && !(w->filling = batch_new(w, w->next_row)))
+        if (!w->filling && !(w->filling = batch_new(w, w->next_row, NULL, 0, 0, NULL)))
             return fb_fail(FB_ERR_NOMEM, "out of memory buffering rows for %s", w->path);
         batch *b = w->filling;
         int at = w->next_row - b->y0;
@@ -491,15 +567,47 @@ fb_result exrio_writer_rows(exrio_writer *w, int y0, int nrows, const void *cons
         w->next_row += n;
         if (at + n == b->nrows) {
             fb_result rc = submit_filling(w);
-            if (rc) {
-                pthread_mutex_lock(&w->mu);
-                fb_fail(rc, "%s", w->error_msg);
-                pthread_mutex_unlock(&w->mu);
-                return rc;
-            }
+            if (rc) return worker_error(w, rc);
         }
     }
     return FB_OK;
+}
+
+static fb_result check_order(const exrio_writer *w, int y0, int nrows)
+{
+    if (y0 != w->next_row || nrows < 0 || y0 + nrows > w->height)
+        return fb_fail(FB_ERR_INTERNAL, "%s: rows %d..%d given out of order (next is %d)", w->path, y0, y0 + nrows - 1,
+                       w->next_row);
+    return FB_OK;
+}
+
+fb_result exrio_writer_rows(exrio_writer *w, int y0, int nrows, const void *const *planes)
+{
+    fb_result rc = check_order(w, y0, nrows);
+    return rc ? rc : copy_rows(w, planes, 0, nrows);
+}
+
+int exrio_writer_batch_rows(const exrio_writer *w)
+{
+    return w->batch_rows;
+}
+
+fb_result exrio_writer_rows_held(exrio_writer *w, int y0, int nrows, const void *const *planes, const exrio_hold *hold)
+{
+    fb_result rc = check_order(w, y0, nrows);
+    if (rc) return rc;
+    size_t stride = (size_t)w->row_stride * 4;
+    int done = 0;
+    /* whole batches read in place, while the rows start a batch (nothing half-filled before) */
+    while (!w->filling && (y0 + done) % w->batch_rows == 0 && done < nrows &&
+           (nrows - done >= w->batch_rows || y0 + nrows == w->height)) {
+        if (!(w->filling = batch_new(w, y0 + done, planes, (size_t)done * stride, stride, hold)))
+            return fb_fail(FB_ERR_NOMEM, "out of memory queueing rows for %s", w->path);
+        done += w->filling->nrows;
+        w->next_row += w->filling->nrows;
+        if ((rc = submit_filling(w))) return worker_error(w, rc);
+    }
+    return copy_rows(w, planes, done, nrows);
 }
 
 /* Stops the workers after the queue drains. */
@@ -520,6 +628,9 @@ static void writer_free(exrio_writer *w)
     free(w->order);
     free(w->threads);
     free(w->types);
+    for (int i = 0; i < w->nspare; i++) free(w->spare[i]);
+    free(w->spare);
+    free(w->spare_cap);
     for (int p = 0; p < EXRIO_MAX_PARTS; p++) {
         free(w->parts[p].file_order);
         if (w->parts[p].spool) fclose(w->parts[p].spool);

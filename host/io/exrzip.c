@@ -83,9 +83,17 @@ static void zip_predict(const uint8_t *restrict p, uint8_t *restrict tmp, uint8_
  * holds the noisiest bytes of a float); over the layers measured (bench/RESULTS.md), float fBm's
  * samples save 1.3 to 1.7% and every other kind's at least 23%, so the cut is far from both.
  * Levels 2 to 12 always deflate the whole chunk.
- * *out receives malloc'd bytes, *size their count. */
-fb_result exrzip_deflate(exrzip_state *z, int level, const uint8_t *packed, size_t n, void **out, uint64_t *size)
+ * The caller's buffer receives the chunk: no allocation per chunk. */
+size_t exrzip_bound(const exrzip_state *z, size_t n)
 {
+    size_t bound = libdeflate_zlib_compress_bound(z->dc, n);
+    return bound > n ? bound : n > 0 ? n : 1;
+}
+
+fb_result exrzip_deflate(exrzip_state *z, int level, const uint8_t *packed, size_t n, uint8_t *out, size_t cap,
+                         uint64_t *size)
+{
+    if (NEVER(cap < exrzip_bound(z, n))) return FB_ERR_INTERNAL;
     if (z->cap < n) {
         uint8_t *a = realloc(z->split, n), *b = a ? realloc(z->pred, n) : NULL;
         if (a) z->split = a;
@@ -93,23 +101,18 @@ fb_result exrzip_deflate(exrzip_state *z, int level, const uint8_t *packed, size
         z->pred = b, z->cap = n;
     }
     zip_predict(packed, z->split, z->pred, n);
-    size_t bound = libdeflate_zlib_compress_bound(z->dc, n);
-    uint8_t *c = malloc(bound ? bound : 1);
-    if (!c) return FB_ERR_NOMEM;
     size_t half = (n + 1) / 2, zn = 0;
     bool worth = n > 0;
     if (level == 1 && half >= 4 * ZIP_SAMPLE) {
-        size_t zs = libdeflate_zlib_compress(z->dc, z->pred, ZIP_SAMPLE, c, bound);
-        zs += zs ? libdeflate_zlib_compress(z->dc, z->pred + half, ZIP_SAMPLE, c, bound) : 0;
+        size_t zs = libdeflate_zlib_compress(z->dc, z->pred, ZIP_SAMPLE, out, cap);
+        zs += zs ? libdeflate_zlib_compress(z->dc, z->pred + half, ZIP_SAMPLE, out, cap) : 0;
         worth = zs > 0 && zs * 16 < (size_t)2 * ZIP_SAMPLE * 15;
     }
-    if (worth) zn = libdeflate_zlib_compress(z->dc, z->pred, n, c, bound);
+    if (worth) zn = libdeflate_zlib_compress(z->dc, z->pred, n, out, cap);
     if (zn == 0 || zn >= n) { /* stored raw: the size equal to the packed size tells readers so */
-        memcpy(c, packed, n);
+        memcpy(out, packed, n);
         zn = n;
     }
-    *out = zn < bound ? realloc(c, zn ? zn : 1) : c;
-    if (!*out) *out = c;
     *size = zn;
     return FB_OK;
 }

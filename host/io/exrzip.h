@@ -26,8 +26,13 @@ typedef struct exrzip_state {
 bool exrzip_start(exrzip_state *z, int level);
 void exrzip_state_free(exrzip_state *z);
 
-/* Compresses n packed bytes: *out receives malloc'd bytes, *size their count (n: stored raw). */
-fb_result exrzip_deflate(exrzip_state *z, int level, const uint8_t *packed, size_t n, void **out, uint64_t *size);
+/* The bytes exrzip_deflate may write for n packed bytes (the state started). */
+size_t exrzip_bound(const exrzip_state *z, size_t n);
+
+/* Compresses n packed bytes into out (cap bytes, at least exrzip_bound): *size their count (n: stored
+ * raw). */
+fb_result exrzip_deflate(exrzip_state *z, int level, const uint8_t *packed, size_t n, uint8_t *out, size_t cap,
+                         uint64_t *size);
 
 /* A reader's ZIP state: the decompressor and its buffer. */
 typedef struct exrzip_inflater {

@@ -29,6 +29,11 @@ void fb_preview_set_row_stride(fb_preview *p, int stride)
     p->stride = stride;
 }
 
+int fb_preview_scale(const fb_preview *p)
+{
+    return p->scale;
+}
+
 void fb_preview_set_light(fb_preview *p)
 {
     p->light = true;

@@ -22,6 +22,9 @@ void fb_preview_destroy(fb_preview **p);
 void fb_preview_set_hillshade(fb_preview *p, double dx, double dy);
 /* The rows given to fb_preview_add_rows are `stride` values apart (default: the width). */
 void fb_preview_set_row_stride(fb_preview *p, int stride);
+/* Source rows per preview row: calls of fb_preview_add_rows for bands that start at multiples of it
+ * touch disjoint preview pixels (and may run at once). */
+int fb_preview_scale(const fb_preview *p);
 /* The colour is light with no coverage (a star field): the over composite adds it to what lies behind
  * (premultiplied colour with alpha 0) instead of covering it. */
 void fb_preview_set_light(fb_preview *p);

@@ -269,14 +269,20 @@ static void describe(const vkc_fns *vk, VkPhysicalDevice pd, vkc_device_info *in
     info->api_version = props.apiVersion;
     info->max_storage_buffer_range = props.limits.maxStorageBufferRange;
     info->max_uniform_buffer_range = props.limits.maxUniformBufferRange;
-    VkPhysicalDeviceSubgroupProperties sub = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+    for (int i = 0; i < 3; i++) info->max_workgroup_count[i] = props.limits.maxComputeWorkGroupCount[i];
+    info->unified =
+        props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU || props.deviceType == VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU;
+    VkPhysicalDeviceMaintenance3Properties m3 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
+    VkPhysicalDeviceSubgroupProperties sub = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES,
+                                              .pNext = &m3};
     VkPhysicalDeviceDriverProperties drv = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
     /* VkPhysicalDeviceDriverProperties is core in 1.2; only chain it where the device has 1.2. */
-    if (VK_API_VERSION_MINOR(props.apiVersion) >= 2 || VK_API_VERSION_MAJOR(props.apiVersion) > 1) sub.pNext = &drv;
+    if (VK_API_VERSION_MINOR(props.apiVersion) >= 2 || VK_API_VERSION_MAJOR(props.apiVersion) > 1) m3.pNext = &drv;
     VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &sub};
     vk->vkGetPhysicalDeviceProperties2(pd, &p2);
     info->subgroup_size = sub.subgroupSize;
-    if (sub.pNext)
+    info->max_allocation = m3.maxMemoryAllocationSize;
+    if (m3.pNext)
         snprintf(info->driver, sizeof info->driver, "%s %s", drv.driverName, drv.driverInfo);
     else
         snprintf(info->driver, sizeof info->driver, "driver %u", props.driverVersion);
@@ -300,11 +306,14 @@ static void describe(const vkc_fns *vk, VkPhysicalDevice pd, vkc_device_info *in
         info->szinp32 = fc.shaderSignedZeroInfNanPreserveFloat32;
         info->szinp64 = fc.shaderSignedZeroInfNanPreserveFloat64;
     }
-    info->exact_native = sub.pNext && drv.driverID == VK_DRIVER_ID_MESA_LLVMPIPE;
+    info->exact_native = m3.pNext && drv.driverID == VK_DRIVER_ID_MESA_LLVMPIPE;
     VkPhysicalDeviceMemoryProperties mem;
     vk->vkGetPhysicalDeviceMemoryProperties(pd, &mem);
     for (uint32_t i = 0; i < mem.memoryHeapCount; i++)
-        if (mem.memoryHeaps[i].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT) info->memory += mem.memoryHeaps[i].size;
+        if (mem.memoryHeaps[i].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT) {
+            info->memory += mem.memoryHeaps[i].size;
+            if (mem.memoryHeaps[i].size > info->heap) info->heap = mem.memoryHeaps[i].size;
+        }
 }
 
 static bool all_digits(const char *s)
@@ -537,9 +546,8 @@ fb_result vkc_create(const vkc_desc *desc, vkc_context **out)
     ctx->timestamp_period = props.limits.timestampPeriod;
     /* desc->staging forces the discrete-GPU path (device-local + staging copy) on any device, so
      * that lavapipe in CI exercises it under the validation layer. */
-    ctx->direct_map = (props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ||
-                       props.deviceType == VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU) &&
-                      !desc->staging;
+    ctx->direct_map = ctx->info.unified && !desc->staging;
+    ctx->info.staging = !ctx->direct_map;
 
     float prio = 1.0f;
     VkDeviceQueueCreateInfo qci = {

@@ -2,10 +2,13 @@
  * vkc: the Vulkan compute context. The only module that talks to Vulkan.
  *
  * The loader (libvulkan.so.1) is opened at run time, so that fractalbake runs its native backend
- * on a machine with no Vulkan at all. One instance, one device, one compute queue. Buffers are
- * storage buffers the host can read after a job: device memory mapped directly where the device
- * says it is host-visible and it is a CPU or integrated device (lavapipe), otherwise device-local
- * memory copied to a host-cached staging buffer inside the same submission.
+ * on a machine with no Vulkan at all. One instance, one device, one compute queue. Buffers are of
+ * three kinds (vkc_buffer_kind): shared storage buffers the host reads after a job (device memory
+ * mapped directly where the device shares memory with the host, a CPU or integrated device such as
+ * lavapipe; otherwise device-local memory copied to a staging buffer of its own inside every job),
+ * device-local storage buffers the host never maps, and host-cached buffers that a job's copies
+ * fill (the staging ring of a bake on a discrete GPU). A job is one submission: a dispatch, then
+ * copies between buffers, with timestamps around either.
  */
 #ifndef FB_VKC_H
 #define FB_VKC_H
@@ -29,6 +32,16 @@ typedef struct vkc_device_info {
     uint32_t api_version;
     uint64_t max_storage_buffer_range;
     uint64_t max_uniform_buffer_range;
+    uint32_t max_workgroup_count[3]; /* maxComputeWorkGroupCount */
+    uint64_t max_allocation;         /* maxMemoryAllocationSize: the largest buffer of any kind */
+    uint64_t heap;                   /* the largest device-local heap, bytes */
+    /* The device's memory is the host's (a CPU or integrated device): what it allocates counts against
+     * the host's memory. */
+    bool unified;
+    /* Shared buffers live in device-local memory and reach the host through staging copies (a
+     * discrete GPU, or vkc_desc.staging): a bake then reads its pieces back through a ring of
+     * host-cached buffers (VKC_BUFFER_DEVICE and VKC_BUFFER_HOST) while the device computes. */
+    bool staging;
     bool int64_atomics; /* 64-bit storage-buffer atomics enabled (VK_KHR_shader_atomic_int64); FB_VK_NO_INT64=1: off */
     bool float64;       /* shaderFloat64 enabled (double arithmetic in shaders); FB_VK_NO_FLOAT64=1: off */
     /* Exact arithmetic (kernels/exact.h, docs/usage.md#determinism): the float-controls modes the device
@@ -97,30 +110,78 @@ typedef struct vkc_pipeline_desc {
 fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, vkc_pipeline **out);
 void vkc_pipeline_destroy(vkc_context *ctx, vkc_pipeline **p);
 
-/* A storage buffer of `size` bytes whose contents the host reads after a job completes, and may
- * write before a job is submitted (vkc_buffer_upload). */
+/* What a buffer is for. */
+typedef enum vkc_buffer_kind {
+    /* A storage buffer whose contents the host reads after a job completes and may write before one
+     * (vkc_buffer_upload): mapped directly where the device shares memory with the host, else
+     * device-local with a host-cached staging copy of its own, copied inside every job that binds it. */
+    VKC_BUFFER_SHARED = 0,
+    /* A device-local storage buffer the host never maps: written and read by shaders, read back by a
+     * job's copies (vkc_submit.copies) into a host buffer. At most maxStorageBufferRange bytes. */
+    VKC_BUFFER_DEVICE,
+    /* Host-cached memory, mapped, the destination (or source) of a job's copies: a staging ring's
+     * slot. Never bound to a shader; up to max_allocation bytes. */
+    VKC_BUFFER_HOST,
+} vkc_buffer_kind;
+
+/* A VKC_BUFFER_SHARED buffer of `size` bytes (at most maxStorageBufferRange). */
 fb_result vkc_buffer_create(vkc_context *ctx, uint64_t size, vkc_buffer **out);
+/* A buffer of `size` bytes of the given kind. */
+fb_result vkc_buffer_create_kind(vkc_context *ctx, uint64_t size, vkc_buffer_kind kind, vkc_buffer **out);
 void vkc_buffer_destroy(vkc_context *ctx, vkc_buffer **b);
 
-/* Writes `size` bytes of input for the shader: directly where the buffer is host-visible, else into
- * its staging buffer, copied to the device buffer at the start of the next submitted job. */
+/* Writes `size` bytes of input for the shader: into a shared buffer directly where it is
+ * host-visible, else into its staging buffer, copied to the device buffer at the start of the next
+ * submitted job that binds it; into a host buffer now; into a device buffer now, through a transient
+ * host buffer and a copy (waited for). */
 fb_result vkc_buffer_upload(vkc_context *ctx, vkc_buffer *b, const void *data, uint64_t size);
 
-/* Host pointer to the buffer's contents, valid after vkc_job_wait of a job that wrote it. */
+/* Host pointer to a shared or host buffer's contents, valid after vkc_job_wait of a job that wrote
+ * it; NULL for a device buffer. */
 const void *vkc_buffer_data(const vkc_buffer *b);
 uint64_t vkc_buffer_size(const vkc_buffer *b);
 
-/* A reusable submission: one command buffer, fence, descriptor set and pair of timestamps. */
+/* A reusable submission: one command buffer, fence, descriptor set and timestamps. pipe NULL: a job
+ * of copies alone. */
 fb_result vkc_job_create(vkc_context *ctx, vkc_pipeline *pipe, vkc_job **out);
 void vkc_job_destroy(vkc_context *ctx, vkc_job **job);
 
-/* Records and submits one dispatch of `groups` workgroups with `push` constants, writing `bufs`.
- * The job must not be in flight. */
+/* A copy of `size` bytes between two buffers (device to host, device to device, host to device). */
+typedef struct vkc_copy {
+    vkc_buffer *src, *dst;
+    uint64_t src_offset, dst_offset, size;
+} vkc_copy;
+
+/* What a job records: a dispatch of `groups` workgroups (0 in any: none) with `push` constants over
+ * the pipeline's buffers `bufs`, then `copies` in order, each reading what the dispatch wrote. */
+typedef struct vkc_submit {
+    vkc_buffer *const *bufs;
+    uint32_t nbufs;
+    const void *push;
+    uint32_t groups[3];
+    const vkc_copy *copies;
+    uint32_t ncopies;
+} vkc_submit;
+
+/* Records and submits the job's work. The job must not be in flight. */
+fb_result vkc_job_run(vkc_context *ctx, vkc_job *job, const vkc_submit *work);
+
+/* vkc_job_run of one dispatch over `bufs` and no copies. */
 fb_result vkc_job_submit(vkc_context *ctx, vkc_job *job, vkc_buffer *const *bufs, uint32_t nbufs, const void *push,
                          const uint32_t groups[3]);
 
-/* Waits for the job; afterwards its buffers' data is visible to the host. *gpu_seconds (optional)
- * is the time between the dispatch's timestamps, or -1 where the queue has no timestamps. */
+/* Waits for the job; afterwards the data of its shared buffers and its copies' host buffers is
+ * visible to the host. *gpu_seconds (optional) is the time between the dispatch's timestamps, or -1
+ * where the queue has no timestamps (or the job had no dispatch). */
 fb_result vkc_job_wait(vkc_context *ctx, vkc_job *job, double *gpu_seconds);
+
+/* The device time of the last waited job's copies (all of them, from the timestamps around them), or
+ * -1 where the queue has no timestamps or the job made no copies. */
+double vkc_job_copy_seconds(const vkc_job *job);
+
+/* Copies `size` bytes from src to dst (any kinds; offsets 0) in a submission of its own and waits:
+ * *gpu_seconds is the copy's device time from timestamps (-1 where the queue has none). The
+ * device's own memory bandwidth, for two device buffers: 2 * size / *gpu_seconds. */
+fb_result vkc_copy_timed(vkc_context *ctx, vkc_buffer *src, vkc_buffer *dst, uint64_t size, double *gpu_seconds);
 
 #endif

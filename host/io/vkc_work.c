@@ -4,7 +4,8 @@
  */
 #include "vkc_private.h"
 
-#include "kernels/exact.h" /* K_SPEC_EXACT_NATIVE */
+#include "kernels/device.h" /* K_SPEC_CPU_DEVICE */
+#include "kernels/exact.h"  /* K_SPEC_EXACT_NATIVE */
 #include "spvpatch.h"
 
 #include <stdio.h>
@@ -98,18 +99,22 @@ fb_result vkc_pipeline_create(vkc_context *ctx, const vkc_pipeline_desc *desc, v
      * on lavapipe every branch it cannot prove uniform costs both sides. Every pipeline also gets
      * K_SPEC_EXACT_NATIVE (kernels/exact.h): the device's own division where it is known exact (the
      * native variant has it as a constant already; the portable one's answer then stays false). */
-    VkSpecializationMapEntry entries[9];
-    uint32_t data[9];
+    VkSpecializationMapEntry entries[10];
+    uint32_t data[10];
     for (uint32_t i = 0; i < nspec; i++) {
         entries[i] = (VkSpecializationMapEntry){.constantID = i, .offset = 4 * i, .size = 4};
         data[i] = desc->spec[i];
     }
     entries[nspec] = (VkSpecializationMapEntry){.constantID = K_SPEC_EXACT_NATIVE, .offset = 4 * nspec, .size = 4};
     data[nspec] = in->exact_native ? VK_TRUE : VK_FALSE;
+    /* and K_SPEC_CPU_DEVICE (kernels/device.h): the forms that suit a CPU's SIMD lanes */
+    entries[nspec + 1] =
+        (VkSpecializationMapEntry){.constantID = K_SPEC_CPU_DEVICE, .offset = 4 * (nspec + 1), .size = 4};
+    data[nspec + 1] = ctx->direct_map && !strcmp(in->type, "cpu") ? VK_TRUE : VK_FALSE;
     VkSpecializationInfo spec = {
-        .mapEntryCount = nspec + 1,
+        .mapEntryCount = nspec + 2,
         .pMapEntries = entries,
-        .dataSize = 4 * (nspec + 1),
+        .dataSize = 4 * (nspec + 2),
         .pData = data,
     };
     VkComputePipelineCreateInfo cpci = {
@@ -147,9 +152,10 @@ void vkc_pipeline_destroy(vkc_context *ctx, vkc_pipeline **pp)
 
 struct vkc_buffer {
     uint64_t size;
-    VkBuffer buf; /* the storage buffer the shader writes */
+    vkc_buffer_kind kind;
+    VkBuffer buf; /* the storage buffer the shader writes (a host buffer: the mapped buffer itself) */
     VkDeviceMemory mem;
-    VkBuffer staging; /* host-readable copy, when `buf` is not mapped directly */
+    VkBuffer staging; /* a shared buffer's host-readable copy, when `buf` is not mapped directly */
     VkDeviceMemory staging_mem;
     void *map;
     bool coherent;
@@ -199,20 +205,23 @@ fail:
 
 static void advise_huge(void *p, uint64_t size);
 
-fb_result vkc_buffer_create(vkc_context *ctx, uint64_t size, vkc_buffer **out)
+/* (any storage buffer may be bound as a uniform buffer: vkc_pipeline_desc.uniform; and copied from
+ * or to: "VUID-vkCmdCopyBuffer-srcBuffer-00118: srcBuffer must have been created with
+ * VK_BUFFER_USAGE_TRANSFER_SRC_BIT usage flag") */
+static const VkBufferUsageFlags k_storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT |
+                                            VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+static const VkBufferUsageFlags k_transfer = VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+
+/* Host-cached memory if there is any, else coherent: what the host reads after a copy. */
+static const VkMemoryPropertyFlags k_host_prefs[] = {
+    VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_CACHED_BIT,
+    VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+};
+
+/* A shared buffer: mapped device memory, or device memory and a staging copy of its own. */
+static fb_result make_shared(vkc_context *ctx, vkc_buffer *b, VkMemoryPropertyFlags *got)
 {
     fb_result rc = FB_OK;
-    if (size == 0 || size > ctx->info.max_storage_buffer_range)
-        return fb_fail(FB_ERR_INTERNAL,
-                       "vulkan: a %llu-byte storage buffer exceeds the device's maxStorageBufferRange (%llu)",
-                       (unsigned long long)size, (unsigned long long)ctx->info.max_storage_buffer_range);
-    vkc_buffer *b = calloc(1, sizeof *b);
-    if (!b) return fb_fail(FB_ERR_NOMEM, "out of memory");
-    b->size = size;
-    VkMemoryPropertyFlags got = 0;
-    /* (any buffer may be bound as a uniform buffer: vkc_pipeline_desc.uniform) */
-    const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT |
-                                       VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
     if (ctx->direct_map) {
         const VkMemoryPropertyFlags prefs[] = {
             VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT | VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT |
@@ -220,26 +229,53 @@ fb_result vkc_buffer_create(vkc_context *ctx, uint64_t size, vkc_buffer **out)
             VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT | VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
             VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
         };
-        rc = make_buffer(ctx, size, storage, prefs, 3, &b->buf, &b->mem, &got);
-        if (rc) goto fail;
-        VKC_CHECK(ctx->vk.vkMapMemory(ctx->device, b->mem, 0, VK_WHOLE_SIZE, 0, &b->map), fail);
-        advise_huge(b->map, size);
-    } else {
-        const VkMemoryPropertyFlags dev_prefs[] = {VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0};
-        rc = make_buffer(ctx, size, storage, dev_prefs, 2, &b->buf, &b->mem, &got);
-        if (rc) goto fail;
-        const VkMemoryPropertyFlags host_prefs[] = {
-            VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_CACHED_BIT,
-            VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
-        };
-        /* the staging buffer is the copy's destination after a job, and its source for an upload
-         * ("VUID-vkCmdCopyBuffer-srcBuffer-00118: srcBuffer must have been created with
-         * VK_BUFFER_USAGE_TRANSFER_SRC_BIT usage flag") */
-        rc = make_buffer(ctx, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, host_prefs, 2,
-                         &b->staging, &b->staging_mem, &got);
-        if (rc) goto fail;
-        VKC_CHECK(ctx->vk.vkMapMemory(ctx->device, b->staging_mem, 0, VK_WHOLE_SIZE, 0, &b->map), fail);
+        rc = make_buffer(ctx, b->size, k_storage, prefs, 3, &b->buf, &b->mem, got);
+        if (rc) return rc;
+        VKC_CHECK(ctx->vk.vkMapMemory(ctx->device, b->mem, 0, VK_WHOLE_SIZE, 0, &b->map), out);
+        advise_huge(b->map, b->size);
+        return FB_OK;
     }
+    const VkMemoryPropertyFlags dev_prefs[] = {VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0};
+    rc = make_buffer(ctx, b->size, k_storage, dev_prefs, 2, &b->buf, &b->mem, got);
+    if (rc) return rc;
+    /* the staging buffer is the copy's destination after a job, and its source for an upload */
+    rc = make_buffer(ctx, b->size, k_transfer, k_host_prefs, 2, &b->staging, &b->staging_mem, got);
+    if (rc) return rc;
+    VKC_CHECK(ctx->vk.vkMapMemory(ctx->device, b->staging_mem, 0, VK_WHOLE_SIZE, 0, &b->map), out);
+out:
+    return rc;
+}
+
+fb_result vkc_buffer_create(vkc_context *ctx, uint64_t size, vkc_buffer **out)
+{
+    return vkc_buffer_create_kind(ctx, size, VKC_BUFFER_SHARED, out);
+}
+
+fb_result vkc_buffer_create_kind(vkc_context *ctx, uint64_t size, vkc_buffer_kind kind, vkc_buffer **out)
+{
+    fb_result rc = FB_OK;
+    uint64_t most = kind == VKC_BUFFER_HOST ? ctx->info.max_allocation : ctx->info.max_storage_buffer_range;
+    if (size == 0 || size > most)
+        return fb_fail(FB_ERR_INTERNAL, "vulkan: a %llu-byte %s buffer exceeds the device's %s (%llu)",
+                       (unsigned long long)size, kind == VKC_BUFFER_HOST ? "host" : "storage",
+                       kind == VKC_BUFFER_HOST ? "maxMemoryAllocationSize" : "maxStorageBufferRange",
+                       (unsigned long long)most);
+    vkc_buffer *b = calloc(1, sizeof *b);
+    if (!b) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    b->size = size;
+    b->kind = kind;
+    VkMemoryPropertyFlags got = VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    if (kind == VKC_BUFFER_SHARED) {
+        rc = make_shared(ctx, b, &got);
+    } else if (kind == VKC_BUFFER_DEVICE) {
+        const VkMemoryPropertyFlags dev_prefs[] = {VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0};
+        rc = make_buffer(ctx, size, k_storage, dev_prefs, 2, &b->buf, &b->mem, &got);
+        got |= VK_MEMORY_PROPERTY_HOST_COHERENT_BIT; /* never mapped: nothing to flush */
+    } else {
+        rc = make_buffer(ctx, size, k_transfer, k_host_prefs, 2, &b->buf, &b->mem, &got);
+        if (!rc) VKC_CHECK(ctx->vk.vkMapMemory(ctx->device, b->mem, 0, VK_WHOLE_SIZE, 0, &b->map), fail);
+    }
+    if (rc) goto fail;
     b->coherent = (got & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT) != 0;
     *out = b;
     return FB_OK;
@@ -276,10 +312,30 @@ void vkc_buffer_destroy(vkc_context *ctx, vkc_buffer **pb)
     *pb = NULL;
 }
 
+/* A device buffer's contents, through a host buffer of the same size and a job of one copy. */
+static fb_result upload_device(vkc_context *ctx, vkc_buffer *b, const void *data, uint64_t size)
+{
+    vkc_buffer *host = NULL;
+    vkc_job *job = NULL;
+    fb_result rc = vkc_buffer_create_kind(ctx, size, VKC_BUFFER_HOST, &host);
+    if (!rc) rc = vkc_buffer_upload(ctx, host, data, size);
+    if (!rc) rc = vkc_job_create(ctx, NULL, &job);
+    if (!rc)
+        rc = vkc_job_run(ctx, job,
+                         &(vkc_submit){.copies = &(vkc_copy){.src = host, .dst = b, .size = size}, .ncopies = 1});
+    if (!rc) rc = vkc_job_wait(ctx, job, NULL);
+    vkc_job_destroy(ctx, &job);
+    vkc_buffer_destroy(ctx, &host);
+    return rc;
+}
+
 fb_result vkc_buffer_upload(vkc_context *ctx, vkc_buffer *b, const void *data, uint64_t size)
 {
     fb_result rc = FB_OK;
-    if (NEVER(size > b->size)) return fb_fail(FB_ERR_INTERNAL, "vulkan: upload larger than its buffer");
+    if (NEVER(size > b->size) || NEVER(size == 0))
+        return fb_fail(FB_ERR_INTERNAL, "vulkan: an upload of %llu bytes into a buffer of %llu",
+                       (unsigned long long)size, (unsigned long long)b->size);
+    if (b->kind == VKC_BUFFER_DEVICE) return upload_device(ctx, b, data, size);
     memcpy(b->map, data, size);
     if (!b->coherent) {
         VkMappedMemoryRange r = {
@@ -306,17 +362,50 @@ uint64_t vkc_buffer_size(const vkc_buffer *b)
 
 /* ---- jobs ----------------------------------------------------------------------------------- */
 
+#define VKC_MAX_COPIES 128 /* copies a job records (a piece's planes: one each) */
+
 struct vkc_job {
-    vkc_pipeline *pipe;
+    vkc_pipeline *pipe; /* NULL: copies alone */
     VkCommandBuffer cmd;
     VkFence fence;
     VkDescriptorPool dpool;
     VkDescriptorSet set;
-    VkQueryPool queries;
+    VkQueryPool queries; /* 0, 1: around the dispatch; 2, 3: around the copies */
     bool in_flight;
+    bool dispatched, copied; /* what the job in flight records */
+    double copy_seconds;
     vkc_buffer *bufs[8];
     uint32_t nbufs;
+    vkc_buffer *dsts[VKC_MAX_COPIES]; /* the copies' host buffers, invalidated after the wait */
+    uint32_t ndsts;
 };
+
+static fb_result make_descriptors(vkc_context *ctx, vkc_job *job, const vkc_pipeline *pipe)
+{
+    fb_result rc = FB_OK;
+    uint32_t nuni = 0;
+    for (uint32_t i = 0; i < pipe->buffers; i++) nuni += (pipe->uniform >> i) & 1u;
+    VkDescriptorPoolSize ps[2] = {
+        {.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .descriptorCount = pipe->buffers - nuni},
+        {.type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, .descriptorCount = nuni},
+    };
+    VkDescriptorPoolCreateInfo dpci = {
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO,
+        .maxSets = 1,
+        .poolSizeCount = nuni == 0 || nuni == pipe->buffers ? 1u : 2u,
+        .pPoolSizes = nuni == pipe->buffers ? &ps[1] : ps,
+    };
+    VKC_CHECK(ctx->vk.vkCreateDescriptorPool(ctx->device, &dpci, NULL, &job->dpool), out);
+    VkDescriptorSetAllocateInfo dsai = {
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
+        .descriptorPool = job->dpool,
+        .descriptorSetCount = 1,
+        .pSetLayouts = &pipe->dsl,
+    };
+    VKC_CHECK(ctx->vk.vkAllocateDescriptorSets(ctx->device, &dsai, &job->set), out);
+out:
+    return rc;
+}
 
 fb_result vkc_job_create(vkc_context *ctx, vkc_pipeline *pipe, vkc_job **out)
 {
@@ -324,6 +413,7 @@ fb_result vkc_job_create(vkc_context *ctx, vkc_pipeline *pipe, vkc_job **out)
     vkc_job *job = calloc(1, sizeof *job);
     if (!job) return fb_fail(FB_ERR_NOMEM, "out of memory");
     job->pipe = pipe;
+    job->copy_seconds = -1;
     VkCommandBufferAllocateInfo cbai = {
         .sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO,
         .commandPool = ctx->pool,
@@ -333,35 +423,12 @@ fb_result vkc_job_create(vkc_context *ctx, vkc_pipeline *pipe, vkc_job **out)
     VKC_CHECK(ctx->vk.vkAllocateCommandBuffers(ctx->device, &cbai, &job->cmd), fail);
     VkFenceCreateInfo fci = {.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
     VKC_CHECK(ctx->vk.vkCreateFence(ctx->device, &fci, NULL, &job->fence), fail);
-    if (pipe->buffers) {
-        uint32_t nuni = 0;
-        for (uint32_t i = 0; i < pipe->buffers; i++) nuni += (pipe->uniform >> i) & 1u;
-        VkDescriptorPoolSize ps[2] = {
-            {.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .descriptorCount = pipe->buffers - nuni},
-            {.type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, .descriptorCount = nuni},
-        };
-        VkDescriptorPoolCreateInfo dpci = {
-            .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO,
-            .maxSets = 1,
-            .poolSizeCount = nuni == 0               ? 1u
-                             : nuni == pipe->buffers ? 1u
-                                                     : 2u,
-            .pPoolSizes = nuni == pipe->buffers ? &ps[1] : ps,
-        };
-        VKC_CHECK(ctx->vk.vkCreateDescriptorPool(ctx->device, &dpci, NULL, &job->dpool), fail);
-        VkDescriptorSetAllocateInfo dsai = {
-            .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
-            .descriptorPool = job->dpool,
-            .descriptorSetCount = 1,
-            .pSetLayouts = &pipe->dsl,
-        };
-        VKC_CHECK(ctx->vk.vkAllocateDescriptorSets(ctx->device, &dsai, &job->set), fail);
-    }
+    if (pipe && pipe->buffers && (rc = make_descriptors(ctx, job, pipe))) goto fail;
     if (ctx->timestamps) {
         VkQueryPoolCreateInfo qpci = {
             .sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO,
             .queryType = VK_QUERY_TYPE_TIMESTAMP,
-            .queryCount = 2,
+            .queryCount = 4,
         };
         VKC_CHECK(ctx->vk.vkCreateQueryPool(ctx->device, &qpci, NULL, &job->queries), fail);
     }
@@ -386,18 +453,23 @@ void vkc_job_destroy(vkc_context *ctx, vkc_job **pjob)
     *pjob = NULL;
 }
 
-fb_result vkc_job_submit(vkc_context *ctx, vkc_job *job, vkc_buffer *const *bufs, uint32_t nbufs, const void *push,
-                         const uint32_t groups[3])
+static void barrier(vkc_context *ctx, VkCommandBuffer cmd, VkPipelineStageFlags src, VkAccessFlags src_access,
+                    VkPipelineStageFlags dst, VkAccessFlags dst_access)
 {
-    fb_result rc = FB_OK;
-    vkc_pipeline *p = job->pipe;
-    if (NEVER(job->in_flight) || NEVER(nbufs != p->buffers))
-        return fb_fail(FB_ERR_INTERNAL, "vulkan: job submitted while in flight or with wrong buffer count");
+    VkMemoryBarrier mb = {
+        .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER, .srcAccessMask = src_access, .dstAccessMask = dst_access};
+    ctx->vk.vkCmdPipelineBarrier(cmd, src, dst, 0, 1, &mb, 0, NULL, 0, NULL);
+}
 
+/* The dispatch: host data for staged inputs copied in first, then the shader between timestamps 0
+ * and 1. */
+static void record_dispatch(vkc_context *ctx, vkc_job *job, const vkc_submit *w)
+{
+    const vkc_pipeline *p = job->pipe;
     VkDescriptorBufferInfo infos[8];
     VkWriteDescriptorSet writes[8];
-    for (uint32_t i = 0; i < nbufs; i++) {
-        infos[i] = (VkDescriptorBufferInfo){.buffer = bufs[i]->buf, .offset = 0, .range = VK_WHOLE_SIZE};
+    for (uint32_t i = 0; i < w->nbufs; i++) {
+        infos[i] = (VkDescriptorBufferInfo){.buffer = w->bufs[i]->buf, .offset = 0, .range = VK_WHOLE_SIZE};
         writes[i] = (VkWriteDescriptorSet){
             .sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
             .dstSet = job->set,
@@ -406,76 +478,87 @@ fb_result vkc_job_submit(vkc_context *ctx, vkc_job *job, vkc_buffer *const *bufs
             .descriptorType = desc_type(p->uniform, i),
             .pBufferInfo = &infos[i],
         };
-        job->bufs[i] = bufs[i];
     }
-    job->nbufs = nbufs;
     /* Legal here: the set is not in use by any pending command buffer (the job is not in flight). */
-    if (nbufs) ctx->vk.vkUpdateDescriptorSets(ctx->device, nbufs, writes, 0, NULL);
+    if (w->nbufs) ctx->vk.vkUpdateDescriptorSets(ctx->device, w->nbufs, writes, 0, NULL);
+    bool uploads = false;
+    for (uint32_t i = 0; i < w->nbufs; i++) {
+        if (!w->bufs[i]->upload_pending) continue;
+        VkBufferCopy region = {.size = w->bufs[i]->size};
+        ctx->vk.vkCmdCopyBuffer(job->cmd, w->bufs[i]->staging, w->bufs[i]->buf, 1, &region);
+        w->bufs[i]->upload_pending = false;
+        uploads = true;
+    }
+    if (uploads)
+        barrier(ctx, job->cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+    if (job->queries) ctx->vk.vkCmdWriteTimestamp(job->cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, job->queries, 0);
+    ctx->vk.vkCmdBindPipeline(job->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
+    if (w->nbufs)
+        ctx->vk.vkCmdBindDescriptorSets(job->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->layout, 0, 1, &job->set, 0, NULL);
+    if (p->push_size)
+        ctx->vk.vkCmdPushConstants(job->cmd, p->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, p->push_size, w->push);
+    ctx->vk.vkCmdDispatch(job->cmd, w->groups[0], w->groups[1], w->groups[2]);
+    if (job->queries) ctx->vk.vkCmdWriteTimestamp(job->cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, job->queries, 1);
+}
 
+/* The copies after the dispatch (the shared buffers' own staging copies, then the caller's), between
+ * timestamps 2 and 3, and the barrier that makes every write visible to the host. */
+static void record_copies(vkc_context *ctx, vkc_job *job, const vkc_submit *w)
+{
+    bool staged = false;
+    for (uint32_t i = 0; i < w->nbufs && job->dispatched; i++) staged = staged || w->bufs[i]->staging;
+    job->copied = staged || w->ncopies > 0;
+    if (job->copied) {
+        if (job->dispatched)
+            barrier(ctx, job->cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                    VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT);
+        if (job->queries) ctx->vk.vkCmdWriteTimestamp(job->cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, job->queries, 2);
+        for (uint32_t i = 0; i < w->nbufs && staged; i++) {
+            if (!w->bufs[i]->staging) continue;
+            VkBufferCopy region = {.size = w->bufs[i]->size};
+            ctx->vk.vkCmdCopyBuffer(job->cmd, w->bufs[i]->buf, w->bufs[i]->staging, 1, &region);
+        }
+        for (uint32_t i = 0; i < w->ncopies; i++) {
+            const vkc_copy *c = &w->copies[i];
+            VkBufferCopy region = {.srcOffset = c->src_offset, .dstOffset = c->dst_offset, .size = c->size};
+            ctx->vk.vkCmdCopyBuffer(job->cmd, c->src->buf, c->dst->buf, 1, &region);
+        }
+        if (job->queries) ctx->vk.vkCmdWriteTimestamp(job->cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, job->queries, 3);
+    }
+    /* Make shader (or copy) writes available to host reads after the fence: "a fence signal
+     * operation does not make writes available to the host" without a host-access barrier. */
+    barrier(ctx, job->cmd, job->copied ? VK_PIPELINE_STAGE_TRANSFER_BIT : VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+            job->copied ? VK_ACCESS_TRANSFER_WRITE_BIT : VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
+            VK_ACCESS_HOST_READ_BIT);
+}
+
+fb_result vkc_job_run(vkc_context *ctx, vkc_job *job, const vkc_submit *w)
+{
+    fb_result rc = FB_OK;
+    bool dispatch = w->groups[0] && w->groups[1] && w->groups[2];
+    if (NEVER(job->in_flight) || NEVER(dispatch && (!job->pipe || w->nbufs != job->pipe->buffers)) ||
+        NEVER(w->nbufs > 8) || NEVER(w->ncopies > VKC_MAX_COPIES))
+        return fb_fail(FB_ERR_INTERNAL, "vulkan: job submitted while in flight, or with a wrong buffer count");
+    job->nbufs = dispatch ? w->nbufs : 0;
+    for (uint32_t i = 0; i < job->nbufs; i++) job->bufs[i] = w->bufs[i];
+    job->ndsts = 0;
+    for (uint32_t i = 0; i < w->ncopies; i++) {
+        bool seen = false;
+        for (uint32_t k = 0; k < job->ndsts; k++) seen = seen || job->dsts[k] == w->copies[i].dst;
+        if (!seen && w->copies[i].dst->map) job->dsts[job->ndsts++] = w->copies[i].dst;
+    }
+    job->dispatched = dispatch;
     VKC_CHECK(ctx->vk.vkResetCommandBuffer(job->cmd, 0), out);
     VkCommandBufferBeginInfo cbbi = {
         .sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,
         .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT,
     };
     VKC_CHECK(ctx->vk.vkBeginCommandBuffer(job->cmd, &cbbi), out);
-    if (job->queries) {
-        ctx->vk.vkCmdResetQueryPool(job->cmd, job->queries, 0, 2);
-        ctx->vk.vkCmdWriteTimestamp(job->cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, job->queries, 0);
-    }
-    /* Host data for staged input buffers goes to the device buffer first. */
-    bool uploads = false;
-    for (uint32_t i = 0; i < nbufs; i++) {
-        if (!bufs[i]->upload_pending) continue;
-        VkBufferCopy region = {.size = bufs[i]->size};
-        ctx->vk.vkCmdCopyBuffer(job->cmd, bufs[i]->staging, bufs[i]->buf, 1, &region);
-        bufs[i]->upload_pending = false;
-        uploads = true;
-    }
-    if (uploads) {
-        VkMemoryBarrier ub = {
-            .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER,
-            .srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT,
-            .dstAccessMask = VK_ACCESS_SHADER_READ_BIT,
-        };
-        ctx->vk.vkCmdPipelineBarrier(job->cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0,
-                                     1, &ub, 0, NULL, 0, NULL);
-    }
-    ctx->vk.vkCmdBindPipeline(job->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
-    if (nbufs)
-        ctx->vk.vkCmdBindDescriptorSets(job->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->layout, 0, 1, &job->set, 0, NULL);
-    if (p->push_size)
-        ctx->vk.vkCmdPushConstants(job->cmd, p->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, p->push_size, push);
-    ctx->vk.vkCmdDispatch(job->cmd, groups[0], groups[1], groups[2]);
-    if (job->queries) ctx->vk.vkCmdWriteTimestamp(job->cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, job->queries, 1);
-
-    bool staged = false;
-    for (uint32_t i = 0; i < nbufs; i++) staged = staged || bufs[i]->staging;
-    if (staged) {
-        VkMemoryBarrier mb = {
-            .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER,
-            .srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT,
-            .dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT,
-        };
-        ctx->vk.vkCmdPipelineBarrier(job->cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0,
-                                     1, &mb, 0, NULL, 0, NULL);
-        for (uint32_t i = 0; i < nbufs; i++) {
-            if (!bufs[i]->staging) continue;
-            VkBufferCopy region = {.size = bufs[i]->size};
-            ctx->vk.vkCmdCopyBuffer(job->cmd, bufs[i]->buf, bufs[i]->staging, 1, &region);
-        }
-    }
-    /* Make shader (or copy) writes available to host reads after the fence: "a fence signal
-     * operation does not make writes available to the host" without a host-access barrier. */
-    VkMemoryBarrier hb = {
-        .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER,
-        .srcAccessMask = staged ? VK_ACCESS_TRANSFER_WRITE_BIT : VK_ACCESS_SHADER_WRITE_BIT,
-        .dstAccessMask = VK_ACCESS_HOST_READ_BIT,
-    };
-    ctx->vk.vkCmdPipelineBarrier(job->cmd,
-                                 staged ? VK_PIPELINE_STAGE_TRANSFER_BIT : VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                                 VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &hb, 0, NULL, 0, NULL);
+    if (job->queries) ctx->vk.vkCmdResetQueryPool(job->cmd, job->queries, 0, 4);
+    if (dispatch) record_dispatch(ctx, job, w);
+    record_copies(ctx, job, w);
     VKC_CHECK(ctx->vk.vkEndCommandBuffer(job->cmd), out);
-
     VKC_CHECK(ctx->vk.vkResetFences(ctx->device, 1, &job->fence), out);
     VkSubmitInfo si = {
         .sType = VK_STRUCTURE_TYPE_SUBMIT_INFO,
@@ -488,6 +571,29 @@ out:
     return rc;
 }
 
+fb_result vkc_job_submit(vkc_context *ctx, vkc_job *job, vkc_buffer *const *bufs, uint32_t nbufs, const void *push,
+                         const uint32_t groups[3])
+{
+    return vkc_job_run(
+        ctx, job,
+        &(vkc_submit){.bufs = bufs, .nbufs = nbufs, .push = push, .groups = {groups[0], groups[1], groups[2]}});
+}
+
+static fb_result invalidate(vkc_context *ctx, const vkc_buffer *b)
+{
+    fb_result rc = FB_OK;
+    if (b->coherent || !b->map) return FB_OK;
+    VkMappedMemoryRange r = {
+        .sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE,
+        .memory = b->staging ? b->staging_mem : b->mem,
+        .offset = 0,
+        .size = VK_WHOLE_SIZE,
+    };
+    VKC_CHECK(ctx->vk.vkInvalidateMappedMemoryRanges(ctx->device, 1, &r), out);
+out:
+    return rc;
+}
+
 fb_result vkc_job_wait(vkc_context *ctx, vkc_job *job, double *gpu_seconds)
 {
     fb_result rc = FB_OK;
@@ -495,24 +601,44 @@ fb_result vkc_job_wait(vkc_context *ctx, vkc_job *job, double *gpu_seconds)
     if (!job->in_flight) return FB_OK;
     VKC_CHECK(ctx->vk.vkWaitForFences(ctx->device, 1, &job->fence, VK_TRUE, UINT64_MAX), out);
     job->in_flight = false;
-    for (uint32_t i = 0; i < job->nbufs; i++) {
-        vkc_buffer *b = job->bufs[i];
-        if (b->coherent) continue;
-        VkMappedMemoryRange r = {
-            .sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE,
-            .memory = b->staging ? b->staging_mem : b->mem,
-            .offset = 0,
-            .size = VK_WHOLE_SIZE,
-        };
-        VKC_CHECK(ctx->vk.vkInvalidateMappedMemoryRanges(ctx->device, 1, &r), out);
-    }
-    if (gpu_seconds && job->queries) {
-        uint64_t ts[2];
-        VKC_CHECK(ctx->vk.vkGetQueryPoolResults(ctx->device, job->queries, 0, 2, sizeof ts, ts, sizeof ts[0],
+    for (uint32_t i = 0; i < job->nbufs && !rc; i++) rc = invalidate(ctx, job->bufs[i]);
+    for (uint32_t i = 0; i < job->ndsts && !rc; i++) rc = invalidate(ctx, job->dsts[i]);
+    if (rc) goto out;
+    job->copy_seconds = -1;
+    /* only the queries this job wrote: waiting on one never written would not return */
+    double tick = (double)ctx->timestamp_period * 1e-9;
+    uint64_t ts[4];
+    if (job->queries && job->dispatched && gpu_seconds) {
+        VKC_CHECK(ctx->vk.vkGetQueryPoolResults(ctx->device, job->queries, 0, 2, 2 * sizeof ts[0], ts, sizeof ts[0],
                                                 VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT),
                   out);
-        *gpu_seconds = (double)(ts[1] - ts[0]) * (double)ctx->timestamp_period * 1e-9;
+        *gpu_seconds = (double)(ts[1] - ts[0]) * tick;
+    }
+    if (job->queries && job->copied) {
+        VKC_CHECK(ctx->vk.vkGetQueryPoolResults(ctx->device, job->queries, 2, 2, 2 * sizeof ts[0], ts + 2, sizeof ts[0],
+                                                VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT),
+                  out);
+        job->copy_seconds = (double)(ts[3] - ts[2]) * tick;
     }
 out:
+    return rc;
+}
+
+double vkc_job_copy_seconds(const vkc_job *job)
+{
+    return job->copy_seconds;
+}
+
+fb_result vkc_copy_timed(vkc_context *ctx, vkc_buffer *src, vkc_buffer *dst, uint64_t size, double *gpu_seconds)
+{
+    vkc_job *job = NULL;
+    *gpu_seconds = -1;
+    fb_result rc = vkc_job_create(ctx, NULL, &job);
+    if (!rc)
+        rc = vkc_job_run(ctx, job,
+                         &(vkc_submit){.copies = &(vkc_copy){.src = src, .dst = dst, .size = size}, .ncopies = 1});
+    if (!rc) rc = vkc_job_wait(ctx, job, NULL);
+    if (!rc) *gpu_seconds = vkc_job_copy_seconds(job);
+    vkc_job_destroy(ctx, &job);
     return rc;
 }

@@ -57,6 +57,11 @@ printf '{"size": [64, 32], "layers": [{"type": "julia", "channels": []}]}' > cha
 printf '{"size": [64, 32], "layers": [{"type": "ifs",\n "maps": []}]}' > empty.json
 printf '{"size": [64, 32], "layers": [{"type": "ifs", "maps": [[0.5, 0, 0, 0.5, 0, 0],\n [0.5, 0, 0, 0.5, 1, NaN]]}]}' > nanmap.json
 printf '{"size": [64, 32], "layers": [{"type": "lsystem", "axiom": "F",\n "rules": ["F=F[+F]", 3]}]}' > lrule.json
+printf '{"size": [64, 32], "layers": [{"type": "rivers", "uplift-map": 0.5}]}' > rmapnum.json
+printf '{"size": [64, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "op", "name": "o", "op": "multiply", "inputs": ["h", 2]}, {"type": "rivers", "uplift-map": "o"}]}' > rop.json
+printf '{"size": [64, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "rivers", "uplift-map": "h", "uplift-range": [1, 1]}]}' > rrange.json
+printf '{"size": [64, 32], "layers": [{"type": "rivers",\n "steps": 1000000000}]}' > rsteps.json
+printf '{"size": [64, 32], "layers": [{"type": "rivers", "steps": 5}]}' > rok.json
 printf 'leaf {\n  .5 0 0 .5 0 0 .5\n  .5 0 0 .5 1 0 zz\n}\n' > broken.ifs
 printf 'halves { .5 0 0 .5 0 0 .5 .5 0 0 .5 1 0 .5 }\nthirds {\n .33 0 0 .33 0 0 .3 .33 0 0 .33 .66 0 .3 .33 0 0 .33 .33 .5 .4\n}\n' > two.ifs
 printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "h"}, {"type": "erode"}]}' > enoin.json

@@ -63,6 +63,25 @@ if have_vulkan; then
   LO=0.9 HI=2 predicted_vs_measured "lsystem, vulkan (a bound)" lsystem $V --preset tree --size 4096x4096
   predicted_vs_measured "terrain, vulkan" terrain $V --points pts.csv --insert 2000000 --size 2048x2048
   predicted_vs_measured "default scene, vulkan" render $V
+  # the discrete GPU's path: device buffers copied back through host buffers, pieces of 2^22 pixels
+  FB_VK_STAGING=1 predicted_vs_measured "fbm, vulkan, staged" fbm $V --size 8192x4096
+fi
+
+# A 32768 x 16384 bake of the night sky (the gallery's scene) is predicted within --max-memory 8G on
+# each path: native, a CPU device, a discrete GPU's (a real run of that size is for a GPU machine).
+big_within_8g() {
+  local what=$1 pred
+  shift
+  pred=$("$FB" render "$ROOT/docs/examples/gallery-night-sky.json" --set size=32768,16384 --max-memory 8G \
+    -o big.exr --dry-run --json "$@" | sed -n 's/.*"peak_bytes": \([0-9]*\).*/\1/p')
+  echo "32768 x 16384 night sky, $what: predicted $((${pred:-0} >> 20)) MiB"
+  check "32768 x 16384 night sky, $what: predicted ${pred:-nothing} bytes, wanted at most 8 GiB" \
+    test "${pred:-0}" -gt 0 -a "${pred:-0}" -le $((8 << 30))
+}
+big_within_8g native $N
+if have_vulkan; then
+  big_within_8g vulkan $V
+  FB_VK_STAGING=1 big_within_8g "vulkan, staged" $V
 fi
 
 # Beyond --max-memory: refused before allocating, in a moment, one line naming the layer.

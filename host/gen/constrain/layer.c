@@ -525,7 +525,7 @@ static fb_result constrain_prepare(fb_gen *g, struct fb_engine *e, bool progress
                 rc = fb_fail(FB_ERR_NOMEM, "out of memory");
         for (int y0 = 0; y0 < sc->height && !rc; y0 += band) {
             int n = y0 + band <= sc->height ? band : sc->height - y0;
-            src->native_rows(src, y0, n, planes);
+            src->compute.native_rows(src, y0, n, planes);
             memcpy(s->macro + (size_t)y0 * sc->width, planes[fb_gen_plane_of(src, s->macro_channel)],
                    (size_t)n * sc->width * 4);
         }
@@ -550,12 +550,12 @@ static fb_result constrain_prepare(fb_gen *g, struct fb_engine *e, bool progress
         if ((rc = fb_output_done(P->csv, rc))) return rc;
     }
     if (P->plot[0] && (rc = write_plot(s, sc->width, P->plot))) return rc;
-    snprintf(g->summary, sizeof g->summary,
+    snprintf(g->prepared.summary, sizeof g->prepared.summary,
              "layer %s (constrain): %d x %d, %d discrete and %d continuous constraints, T %.3g, H %.3g; max |D - d| "
              "%.4g; %.3f s%s%.150s%s%.150s",
              g->layer->name, sc->width, sc->height, s->npoints, s->nregions, P->T, P->hurst, maxdev, secs,
              P->csv[0] ? "; csv " : "", P->csv, P->plot[0] ? "; plot " : "", P->plot);
-    snprintf(g->summary_json, sizeof g->summary_json,
+    snprintf(g->prepared.summary_json, sizeof g->prepared.summary_json,
              "{\"layer\": \"%s\", \"generator\": \"constrain\", \"width\": %d, \"height\": %d, \"points\": %d, "
              "\"regions\": %d, \"max_deviation\": %.9g, \"seconds\": %.6f}",
              g->layer->name, sc->width, sc->height, s->npoints, s->nregions, maxdev, secs);
@@ -574,7 +574,7 @@ static void constrain_rows(const fb_gen *g, int y0, int n, void *const *planes)
     }
     memcpy(planes[3], s->out.T + at, len * 4);
     memcpy(planes[4], s->out.H + at, len * 4);
-    if (g->nchannels > 5)
+    if (g->store.nchannels > 5)
         for (size_t i = 0; i < len; i++)
             ((float *)planes[5])[i] =
                 s->out.D[at + i] >= ((const fb_constrain_params *)fb_layer_params(g->layer))->water;
@@ -599,7 +599,7 @@ static fb_result constrain_init(fb_gen *g)
     uint64_t hold, peak = constrain_memory(g, NULL, &hold);
     char who[96]; /* checked before the macro shape, 4 bytes a pixel, is allocated */
     snprintf(who, sizeof who, "layer %s", g->layer->name);
-    fb_result mrc = fb_memory_check(&g->budget, peak, who);
+    fb_result mrc = fb_memory_check(&g->run.budget, peak, who);
     if (mrc) return mrc;
     constrain_state *s = calloc(1, sizeof *s);
     if (!s) return fb_fail(FB_ERR_NOMEM, "out of memory");
@@ -608,21 +608,21 @@ static fb_result constrain_init(fb_gen *g)
     fb_result rc = read_inputs(g, s);
     if (rc) return rc;
     static const char *const suffix[6] = {"Y", "macro", "detail", "T", "H", "A"};
-    g->nchannels = ((const fb_constrain_params *)fb_layer_params(g->layer))->has_water ? 6 : 5;
-    for (int c = 0; c < g->nchannels; c++) {
-        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
-        g->channel_types[c] = g->layer->half || c == 5 ? EXRIO_HALF : EXRIO_FLOAT;
+    g->store.nchannels = ((const fb_constrain_params *)fb_layer_params(g->layer))->has_water ? 6 : 5;
+    for (int c = 0; c < g->store.nchannels; c++) {
+        snprintf(g->store.channel_names[c], sizeof g->store.channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        g->store.channel_types[c] = g->layer->half || c == 5 ? EXRIO_HALF : EXRIO_FLOAT;
     }
-    g->preview_channel = 0;
+    g->store.preview_channel = 0;
     if (g->scene->height > 1) { /* the preview: a hillshade, the grid taken as 40 units across */
         int side = g->scene->width > g->scene->height ? g->scene->width : g->scene->height;
-        g->preview_shade[0] = g->preview_shade[1] = 40.0 / side;
+        g->store.preview_shade[0] = g->store.preview_shade[1] = 40.0 / side;
     }
-    g->native_rows = constrain_rows;
+    g->compute.native_rows = constrain_rows;
     g->prepare = constrain_prepare;
     g->memory = constrain_memory;
     g->resolve = constrain_resolve;
-    g->prepare_gpu_seconds = -1;
+    g->prepared.gpu_seconds = -1;
     return FB_OK;
 }
 
@@ -636,10 +636,11 @@ static fb_result constrain_resolve(fb_gen *g, const fb_gen *const *gens, const i
     const fb_gen *src = gens[m->layer];
     int c = fb_gen_channel_of(src, m->channel, g->layer->name, "macro");
     if (c < 0) return FB_ERR_INPUT;
-    if (src->host_op || src->channel_types[c] == EXRIO_UINT)
-        return fb_fail(FB_ERR_INPUT, "layer \"%s\": macro \"%s\": %s", g->layer->name, src->channel_names[c],
-                       src->host_op ? "an op layer cannot be a macro shape yet (bake it, then give IN.exr:layer.Y)"
-                                    : "a channel of integers, not heights");
+    if (src->compute.host_rows || src->store.channel_types[c] == EXRIO_UINT)
+        return fb_fail(FB_ERR_INPUT, "layer \"%s\": macro \"%s\": %s", g->layer->name, src->store.channel_names[c],
+                       src->compute.host_rows
+                           ? "an op layer cannot be a macro shape yet (bake it, then give IN.exr:layer.Y)"
+                           : "a channel of integers, not heights");
     state(g)->macro_src = src;
     state(g)->macro_channel = c;
     return FB_OK;

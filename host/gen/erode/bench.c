@@ -1,14 +1,20 @@
 /*
  * Erosion at the benchmark size (at most 1024 x 1024) over fBm-like ridges, 50 iterations, on each backend: the model
- * alone (no input layer, no file), in cell-iterations per second.
+ * alone (no input layer, no file), in cell-iterations per second; on the device, beside a minimal shader of the same
+ * passes (bench/peers/erode_peer.comp) in the same run, its results checked bit for bit.
  */
 #include "benchkit.h"
 #include "erode.h"
 #include "gen_erode.h"
 
+#include "kernels/erode.h"
+/* after the headers of core: the SPIR-V array is a uint32_t[] */
+#include "erode_peer_comp.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 enum { ITERS = 50 };
 
@@ -36,6 +42,109 @@ static void row(const fb_bench *b, const char *backend, const char *device, int 
                       .size = true};
     snprintf(r.note, sizeof r.note, "(%d iterations in %.3f s)", ITERS, sec);
     b->row(b, &r);
+}
+
+/* The minimal shader's side: a pipeline and a job a pass, the four grids. */
+typedef struct peer_side {
+    vkc_pipeline *pipe[3];
+    vkc_job *job[3];
+    vkc_buffer *buf[4]; /* S, T, F, M as the layer's (host/gen/erode/erode.c) */
+} peer_side;
+
+static void peer_fini(vkc_context *vk, peer_side *ps)
+{
+    for (int k = 0; k < 3; k++) vkc_job_destroy(vk, &ps->job[k]), vkc_pipeline_destroy(vk, &ps->pipe[k]);
+    for (int k = 0; k < 4; k++) vkc_buffer_destroy(vk, &ps->buf[k]);
+}
+
+static fb_result peer_init(vkc_context *vk, size_t n, peer_side *ps)
+{
+    fb_result rc = FB_OK;
+    for (uint32_t k = 0; k < 3 && !rc; k++) {
+        rc = vkc_pipeline_create(vk,
+                                 &(vkc_pipeline_desc){FB_SPV(erode_peer_comp), .push_size = sizeof(K_ErodeParams),
+                                                      .buffers = 4, .spec = &k, .nspec = 1, .name = "erode_peer"},
+                                 &ps->pipe[k]);
+        if (!rc) rc = vkc_job_create(vk, ps->pipe[k], &ps->job[k]);
+    }
+    for (int k = 0; k < 4 && !rc; k++) rc = vkc_buffer_create(vk, (uint64_t)n * 16, &ps->buf[k]);
+    return rc;
+}
+
+/* The whole model by the peer: the grids as the layer starts them, then its passes; host-clock and
+ * timestamp seconds of the passes. */
+static fb_result peer_run(vkc_context *vk, const fb_erode_desc *d, peer_side *ps, double *wall, double *gpu)
+{
+    size_t n = (size_t)d->width * d->height;
+    k_vec4 *init = calloc(n, sizeof *init);
+    if (!init) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    fb_result rc = FB_OK;
+    for (int k = 3; k >= 0 && !rc; k--) {
+        if (k == 0)
+            for (size_t i = 0; i < n; i++) init[i].x = d->bed[i];
+        rc = vkc_buffer_upload(vk, ps->buf[k], init, (uint64_t)n * 16);
+    }
+    free(init);
+    K_ErodeParams p = fb_erode_params(d);
+    uint32_t groups[3] = {((uint32_t)d->width + 15) / 16, ((uint32_t)d->height + 15) / 16, 1};
+    *gpu = 0;
+    double t0 = fb_now();
+    for (int it = 0; it < d->iterations && !rc; it++)
+        for (int k = 0; k < 3 && !rc; k++) {
+            double t = -1;
+            rc = vkc_job_submit(vk, ps->job[k], ps->buf, 4, &p, groups);
+            if (!rc) rc = vkc_job_wait(vk, ps->job[k], &t);
+            *gpu += t > 0 ? t : 0;
+        }
+    *wall = fb_now() - t0;
+    return rc;
+}
+
+/* The values of the layer's result that differ from the peer's grids (bed, water, sediment; flow,
+ * wear, deposit). */
+static uint64_t differing(const fb_erode_out *o, const peer_side *ps, size_t n)
+{
+    const k_vec4 *S = vkc_buffer_data(ps->buf[0]), *M = vkc_buffer_data(ps->buf[3]);
+    uint64_t diff = 0;
+    for (size_t i = 0; i < n; i++) {
+        const float a[6] = {o->bed[i], o->water[i], o->sediment[i], o->flow[i], o->wear[i], o->deposit[i]};
+        const float c[6] = {S[i].x, S[i].y, S[i].z, M[i].x, M[i].y, M[i].z};
+        for (int k = 0; k < 6; k++) diff += memcmp(&a[k], &c[k], 4) != 0;
+    }
+    return diff;
+}
+
+/* The layer's model and the peer's, alternating: a warm-up (which compiles the pipelines) and three
+ * each; the "generate" row, then the "kernel" and "peer" rows. */
+static fb_result time_vulkan(const fb_bench *b, fb_engine *e, const fb_erode_desc *d, double work)
+{
+    size_t n = (size_t)d->width * d->height;
+    peer_side ps = {0};
+    fb_result rc = peer_init(e->vk, n, &ps);
+    double wall[2][3], gpu[2][3];
+    uint64_t diff = 0;
+    for (int k = -1; k < 3 && !rc; k++) {
+        fb_erode_out o;
+        double t0 = fb_now(), w, g = 0;
+        rc = fb_erode_run_vulkan(d, e->vk, NULL, &o);
+        if (rc) break;
+        w = fb_now() - t0;
+        if (k >= 0) wall[0][k] = w, gpu[0][k] = o.gpu_seconds;
+        rc = peer_run(e->vk, d, &ps, &w, &g);
+        if (!rc && k >= 0) wall[1][k] = w, gpu[1][k] = g;
+        if (!rc && k == 2) diff = differing(&o, &ps, n);
+        fb_erode_out_free(&o);
+    }
+    if (!rc) {
+        double sec = fb_bench_median3(wall[0]), g = fb_bench_median3(gpu[0]);
+        row(b, "vulkan", e->device, 0, work / sec, g > 0 ? work / g : 0, sec);
+        char note[64];
+        snprintf(note, sizeof note, "(%d iterations of 3 dispatches)", d->iterations);
+        fb_bench_peer_rows(b, "erode", e->device, "minimal GLSL (bench/peers/erode_peer.comp)", NULL, "Mcell-iter/s",
+                           work, 1, wall, gpu, diff, note);
+    }
+    peer_fini(e->vk, &ps);
+    return rc;
 }
 
 fb_result fb_erode_bench(fb_bench *b)
@@ -67,19 +176,7 @@ fb_result fb_erode_bench(fb_bench *b)
     fb_engine e;
     bool have = false;
     if (b->vulkan && !(rc = fb_bench_open_vulkan(b, &e, &have)) && have) {
-        double t[4], gpu[4];
-        for (int k = 0; k < 4 && !rc; k++) { /* the first compiles the pipeline */
-            fb_erode_out o;
-            double t0 = fb_now();
-            rc = fb_erode_run_vulkan(&d, e.vk, NULL, &o);
-            t[k] = fb_now() - t0;
-            gpu[k] = rc ? -1 : o.gpu_seconds;
-            if (!rc) fb_erode_out_free(&o);
-        }
-        if (!rc) {
-            double sec = fb_bench_median3(t + 1), g = fb_bench_median3(gpu + 1);
-            row(b, "vulkan", e.device, 0, work / sec, g > 0 ? work / g : 0, sec);
-        }
+        rc = time_vulkan(b, &e, &d, work);
         fb_engine_close(&e);
     }
     if (!rc && b->native) {

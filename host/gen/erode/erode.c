@@ -213,13 +213,18 @@ fb_result fb_erode_run_vulkan(const fb_erode_desc *d, vkc_context *vk, fb_progre
                        "erode: a grid of %zu cells needs %llu MiB per buffer; this device allows %llu MiB (lower the "
                        "size, or use --backend native)",
                        n, (unsigned long long)((uint64_t)n * 16 >> 20), (unsigned long long)(range >> 20));
-    vkc_pipeline *pipe = NULL;
-    vkc_job *job = NULL;
+    /* a pipeline and a job a pass (shaders/erode.comp's specialization constant) */
+    vkc_pipeline *pipe[3] = {0};
+    vkc_job *job[3] = {0};
     vkc_buffer *buf[NBUF] = {0};
-    fb_result rc = vkc_pipeline_create(
-        vk,
-        &(vkc_pipeline_desc){FB_SPV(erode_comp), .push_size = sizeof(K_ErodeParams), .buffers = NBUF, .name = "erode"},
-        &pipe);
+    fb_result rc = FB_OK;
+    for (uint32_t pass = 0; pass < 3 && !rc; pass++) {
+        rc = vkc_pipeline_create(vk,
+                                 &(vkc_pipeline_desc){FB_SPV(erode_comp), .push_size = sizeof(K_ErodeParams),
+                                                      .buffers = NBUF, .spec = &pass, .nspec = 1, .name = "erode"},
+                                 &pipe[pass]);
+        if (!rc) rc = vkc_job_create(vk, pipe[pass], &job[pass]);
+    }
     for (int b = 0; b < NBUF && !rc; b++) rc = vkc_buffer_create(vk, (uint64_t)n * 16, &buf[b]);
     k_vec4 *init = rc ? NULL : calloc(n, sizeof *init);
     if (!rc && !init) rc = fb_fail(FB_ERR_NOMEM, "erode: out of memory for %zu cells", n);
@@ -229,16 +234,15 @@ fb_result fb_erode_run_vulkan(const fb_erode_desc *d, vkc_context *vk, fb_progre
         rc = vkc_buffer_upload(vk, buf[b], init, (uint64_t)n * 16);
     }
     free(init);
-    if (!rc) rc = vkc_job_create(vk, pipe, &job);
     K_ErodeParams p = fb_erode_params(d);
-    uint32_t groups[3] = {((uint32_t)d->width + 63) / 64, (uint32_t)d->height, 1};
+    uint32_t groups[3] = {((uint32_t)d->width + 15) / 16, ((uint32_t)d->height + 15) / 16, 1};
     double gpu = 0;
     for (int it = 0; it < d->iterations && !rc; it++) {
         for (uint pass = 0; pass < 3 && !rc; pass++) {
             p.pass = pass;
             double t = -1;
-            rc = vkc_job_submit(vk, job, buf, NBUF, &p, groups);
-            if (!rc) rc = vkc_job_wait(vk, job, &t);
+            rc = vkc_job_submit(vk, job[pass], buf, NBUF, &p, groups);
+            if (!rc) rc = vkc_job_wait(vk, job[pass], &t);
             if (t > 0) gpu += t;
         }
         if (prog) fb_progress_update(prog, (uint64_t)(it + 1) * n, (uint64_t)d->iterations * n);
@@ -248,8 +252,7 @@ fb_result fb_erode_run_vulkan(const fb_erode_desc *d, vkc_context *vk, fb_progre
         unpack(vkc_buffer_data(buf[B_S]), vkc_buffer_data(buf[B_M]), n, out);
         out->gpu_seconds = gpu;
     }
-    vkc_job_destroy(vk, &job);
+    for (int k = 0; k < 3; k++) vkc_job_destroy(vk, &job[k]), vkc_pipeline_destroy(vk, &pipe[k]);
     for (int b = 0; b < NBUF; b++) vkc_buffer_destroy(vk, &buf[b]);
-    vkc_pipeline_destroy(vk, &pipe);
     return rc;
 }

@@ -135,7 +135,7 @@ static double extent_of(const fb_gen *g)
     const fb_erode_layer_params *P = fb_layer_params(g->layer);
     const erode_state *s = state(g);
     if (P->extent > 0) return P->extent;
-    if (s && s->src && s->src->has_world) return s->src->world[1] - s->src->world[0];
+    if (s && s->src && s->src->prepared.has_world) return s->src->prepared.world[1] - s->src->prepared.world[0];
     return 1024;
 }
 
@@ -154,7 +154,7 @@ static fb_result read_input(const fb_gen *g, float *bed)
             rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     for (int y0 = 0; y0 < sc->height && !rc; y0 += band) {
         int n = y0 + band <= sc->height ? band : sc->height - y0;
-        src->native_rows(src, y0, n, planes);
+        src->compute.native_rows(src, y0, n, planes);
         memcpy(bed + (size_t)y0 * sc->width, planes[fb_gen_plane_of(src, s->channel)], (size_t)n * sc->width * 4);
     }
     for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(planes[k]);
@@ -246,20 +246,20 @@ static fb_result erode_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     free(bed);
     free(s->out.bed), s->out.bed = NULL;                       /* the strips need only the settled height */
     if (P->masks[0][0] && (rc = write_masks(g, P))) return rc; /* committed with the EXR */
-    g->prepare_gpu_seconds = s->out.gpu_seconds;
-    if (s->src->has_world) {
-        g->has_world = true;
-        memcpy(g->world, s->src->world, sizeof g->world);
-        g->epsg = s->src->epsg;
+    g->prepared.gpu_seconds = s->out.gpu_seconds;
+    if (s->src->prepared.has_world) {
+        g->prepared.has_world = true;
+        memcpy(g->prepared.world, s->src->prepared.world, sizeof g->prepared.world);
+        g->prepared.epsg = s->src->prepared.epsg;
     }
-    if (sc->height > 1) g->preview_shade[0] = g->preview_shade[1] = extent / sc->width;
+    if (sc->height > 1) g->store.preview_shade[0] = g->store.preview_shade[1] = extent / sc->width;
     double cell_iters = (double)n * P->iterations;
-    snprintf(g->summary, sizeof g->summary,
+    snprintf(g->prepared.summary, sizeof g->prepared.summary,
              "%s: %d x %d cells of %.4g, %d iterations over %.4g; material moved %.6g, mass change %.3g (relative); "
              "%.3f s, %.3g Mcell-iterations/s",
              g->layer->name, sc->width, sc->height, d.cell, P->iterations, P->duration, moved,
              total0 != 0 ? (total1 - total0) / fabs(total0) : total1 - total0, secs, cell_iters / secs * 1e-6);
-    snprintf(g->summary_json, sizeof g->summary_json,
+    snprintf(g->prepared.summary_json, sizeof g->prepared.summary_json,
              "{\"layer\": \"%s\", \"generator\": \"erode\", \"width\": %d, \"height\": %d, \"cell\": %.9g, "
              "\"iterations\": %d, \"moved\": %.9g, \"seconds\": %.6f}",
              g->layer->name, sc->width, sc->height, d.cell, P->iterations, moved, secs);
@@ -292,25 +292,25 @@ static fb_result erode_init(fb_gen *g)
     uint64_t hold, peak = erode_memory(g, NULL, &hold);
     char who[96];
     snprintf(who, sizeof who, "erosion of %d x %d cells", g->scene->width, g->scene->height);
-    fb_result rc = fb_memory_check(&g->budget, peak, who);
+    fb_result rc = fb_memory_check(&g->run.budget, peak, who);
     if (rc) return rc;
     erode_state *s = calloc(1, sizeof *s);
     if (!s) return fb_fail(FB_ERR_NOMEM, "out of memory");
     g->owned = s;
     g->fini = erode_fini;
     static const char *const suffix[6] = {"Y", "flow", "wear", "deposition", "sediment", "water"};
-    g->nchannels = 6;
-    for (int c = 0; c < g->nchannels; c++) {
-        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
-        g->channel_types[c] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
+    g->store.nchannels = 6;
+    for (int c = 0; c < g->store.nchannels; c++) {
+        snprintf(g->store.channel_names[c], sizeof g->store.channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        g->store.channel_types[c] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
     }
-    g->preview_channel = 0;
-    if (g->scene->height > 1) g->preview_shade[0] = g->preview_shade[1] = extent_of(g) / g->scene->width;
-    g->native_rows = erode_rows;
+    g->store.preview_channel = 0;
+    if (g->scene->height > 1) g->store.preview_shade[0] = g->store.preview_shade[1] = extent_of(g) / g->scene->width;
+    g->compute.native_rows = erode_rows;
     g->prepare = erode_prepare;
     g->memory = erode_memory;
     g->resolve = erode_resolve;
-    g->prepare_gpu_seconds = -1;
+    g->prepared.gpu_seconds = -1;
     return FB_OK;
 }
 
@@ -321,10 +321,11 @@ static fb_result erode_resolve(fb_gen *g, const fb_gen *const *gens, const int *
     const fb_gen *src = gens[P->input.layer];
     int c = fb_gen_channel_of(src, P->input.channel, g->layer->name, "input");
     if (c < 0) return FB_ERR_INPUT;
-    if (src->host_op || src->channel_types[c] == EXRIO_UINT)
-        return fb_fail(FB_ERR_INPUT, "input \"%s\": %s", src->channel_names[c],
-                       src->host_op ? "an op layer cannot be eroded yet (bake it, or erode the layer it reads)"
-                                    : "a channel of integers, not heights");
+    if (src->compute.host_rows || src->store.channel_types[c] == EXRIO_UINT)
+        return fb_fail(FB_ERR_INPUT, "input \"%s\": %s", src->store.channel_names[c],
+                       src->compute.host_rows
+                           ? "an op layer cannot be eroded yet (bake it, or erode the layer it reads)"
+                           : "a channel of integers, not heights");
     state(g)->src = src;
     state(g)->channel = c;
     return FB_OK;

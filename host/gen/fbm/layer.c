@@ -171,11 +171,11 @@ static void fbm_rows(const fb_gen *g, int y0, int n, void *const *planes)
     const K_FbmParams *p = params(g);
     float *out = planes[0];
     /* Both bit-exact with the kernel (tests/test_avx2.c), so using them changes no result. */
-    if (!g->scalar && avx2_applies(p)) {
+    if (!g->run.scalar && avx2_applies(p)) {
         fb_fbm_avx2_rows(p, y0, n, out);
         return;
     }
-    if (!g->scalar && avx2_env_applies(p)) {
+    if (!g->run.scalar && avx2_env_applies(p)) {
         fb_fbm3_avx2_rows(p, y0, n, out);
         return;
     }
@@ -266,23 +266,23 @@ double fb_fbm_lattice_bound(const K_FbmParams *p)
 static fb_result fbm_init(fb_gen *g)
 {
     fb_fbm_params_fill(g->scene, g->layer, (K_FbmParams *)(void *)g->params);
-    g->nchannels = 1;
-    snprintf(g->channel_names[0], sizeof g->channel_names[0], "%s.Y", g->layer->name);
-    g->channel_types[0] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
-    g->native_rows = fbm_rows;
+    g->store.nchannels = 1;
+    snprintf(g->store.channel_names[0], sizeof g->store.channel_names[0], "%s.Y", g->layer->name);
+    g->store.channel_types[0] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
+    g->compute.native_rows = fbm_rows;
     /* the AVX2 loops beat lavapipe (the plane's 1.6x; the sphere's, lat-long 2048 x 1024 x 8 octaves:
      * gradient 0.2 s of CPU against 0.9 s, cellular 1.8 s against 4.3 s); the scalar C does not */
-    g->lavapipe_faster = !avx2_applies(params(g)) && !avx2_env_applies(params(g));
+    g->compute.lavapipe_faster = !avx2_applies(params(g)) && !avx2_env_applies(params(g));
     bool env = params(g)->mapping != K_ENV_RECT; /* only the sphere's shader carries 3D noise */
-    g->spv = env ? fbm_env_comp : fbm_comp;
-    g->spv_size = env ? sizeof fbm_env_comp : sizeof fbm_comp;
-    g->params_size = sizeof(K_FbmParams);
-    g->push_size = sizeof(fbm_push);
-    g->spec[0] = params(g)->noise;
-    g->spec[1] = params(g)->flags;
-    g->spec[2] = fb_fbm_lattice_bound(params(g)) < 16777216.0 ? 1u : 0u;
-    g->spec[3] = params(g)->mapping;
-    g->nspec = 4;
+    g->compute.shader.spv = env ? fbm_env_comp : fbm_comp;
+    g->compute.shader.spv_size = env ? sizeof fbm_env_comp : sizeof fbm_comp;
+    g->compute.shader.params_size = sizeof(K_FbmParams);
+    g->compute.shader.push_size = sizeof(fbm_push);
+    g->compute.shader.spec[0] = params(g)->noise;
+    g->compute.shader.spec[1] = params(g)->flags;
+    g->compute.shader.spec[2] = fb_fbm_lattice_bound(params(g)) < 16777216.0 ? 1u : 0u;
+    g->compute.shader.spec[3] = params(g)->mapping;
+    g->compute.shader.nspec = 4;
     return FB_OK;
 }
 

@@ -352,7 +352,7 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
     if (!rc && e->kind == FB_BACKEND_VULKAN)
         gpu = 0, rc = play_vulkan(g, e, total, &prog, &gpu);
     else if (!rc)
-        rc = fb_flame_play(S, e->pool, threads, g->scalar, st->cr0, st->cr1, total, &st->bad, &prog);
+        rc = fb_flame_play(S, e->pool, threads, g->run.scalar, st->cr0, st->cr1, total, &st->bad, &prog);
     fb_progress_finish(&prog);
     double t1 = fb_now(), points = chain_points(st);
     if (!rc)
@@ -360,15 +360,15 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
     else
         free(total);
     st->seconds = fb_now() - t0;
-    g->prepare_gpu_seconds = gpu;
+    g->prepared.gpu_seconds = gpu;
     st->stats = (fb_flame_stats){.points = chain_points(st), .game_seconds = t1 - t0, .gpu_seconds = gpu};
     if (rc) return rc;
     fb_log(FB_LOG_INFO,
            "%s: %.0f points in %u chains, %.3g Mpts/s (chaos game %.2f s, filters %.2f s), %llu bad values",
            g->layer->name, points, st->cr1 - st->cr0, points / (t1 - t0) * 1e-6, t1 - t0, fb_now() - t1,
            (unsigned long long)st->bad);
-    snprintf(g->summary, sizeof g->summary, "%s: flame %.0f points, %.3g Mpts/s", g->layer->name, points,
-             points / (t1 - t0) * 1e-6);
+    snprintf(g->prepared.summary, sizeof g->prepared.summary, "%s: flame %.0f points, %.3g Mpts/s", g->layer->name,
+             points, points / (t1 - t0) * 1e-6);
     return FB_OK;
 }
 
@@ -505,8 +505,8 @@ static fb_result flame_init(fb_gen *g)
     st->S.tone = f->tone;
     /* points part K of N: the K-th share of the chains (any split sums to the whole histogram) */
     st->cr0 = 0, st->cr1 = st->S.p.chains;
-    if (g->points_part[1] > 0) {
-        uint64_t c = st->S.p.chains, k = (uint64_t)g->points_part[0], parts = (uint64_t)g->points_part[1];
+    if (g->run.points_part[1] > 0) {
+        uint64_t c = st->S.p.chains, k = (uint64_t)g->run.points_part[0], parts = (uint64_t)g->run.points_part[1];
         st->cr0 = (uint32_t)(c * (k - 1) / parts), st->cr1 = (uint32_t)(c * k / parts);
         st->nsums = flame_nsums(g);
         if (9 + 2 * st->nsums > FB_GEN_MAX_CHANNELS)
@@ -519,19 +519,19 @@ static fb_result flame_init(fb_gen *g)
     exrio_type colour = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
     const exrio_type types[9] = {colour,      colour,      colour,      colour,    EXRIO_FLOAT,
                                  EXRIO_FLOAT, EXRIO_FLOAT, EXRIO_FLOAT, EXRIO_UINT};
-    g->nchannels = 9 + 2 * st->nsums; /* a points part also carries its histogram */
-    for (int c = 0; c < g->nchannels; c++) {
+    g->store.nchannels = 9 + 2 * st->nsums; /* a points part also carries its histogram */
+    for (int c = 0; c < g->store.nchannels; c++) {
         if (c < 9)
-            snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+            snprintf(g->store.channel_names[c], sizeof g->store.channel_names[c], "%s.%s", g->layer->name, suffix[c]);
         else
-            snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.hist%d_%s", g->layer->name, (c - 9) / 2,
-                     (c - 9) % 2 ? "hi" : "lo");
-        g->channel_types[c] = c < 9 ? types[c] : EXRIO_UINT;
+            snprintf(g->store.channel_names[c], sizeof g->store.channel_names[c], "%s.hist%d_%s", g->layer->name,
+                     (c - 9) / 2, (c - 9) % 2 ? "hi" : "lo");
+        g->store.channel_types[c] = c < 9 ? types[c] : EXRIO_UINT;
     }
-    g->points_split = true; /* merge reads an outside count: a flame's is 0 (its filter needs none) */
-    g->preview_channel = 3;
-    g->preview_rgb = 0;
-    g->native_rows = flame_rows;
+    g->prepared.points_split = true; /* merge reads an outside count: a flame's is 0 (its filter needs none) */
+    g->store.preview_channel = 3;
+    g->store.preview_rgb = 0;
+    g->compute.native_rows = flame_rows;
     g->prepare = flame_prepare;
     g->memory = flame_memory;
     return FB_OK;

@@ -6,6 +6,7 @@
 
 #include "gen.h"
 #include "ifs.h"
+#include "vkc.h"
 #include "gen_lsystem.h"
 #include "lsys.h"
 #include "palette.h"
@@ -37,12 +38,20 @@ typedef struct fb_ifs_params {
     bool has_surface;
     double inst_min_pixels;
     char inst_up;
+    fb_ref avoid; /* instances-avoid: a mask the plants keep away from */
+    bool has_avoid;
+    double avoid_distance; /* world units */
+    double max_slope;      /* degrees; 90: any */
 } fb_ifs_params;
 
 extern const fb_gen_class fb_gen_ifs;
 
 /* Its benchmarks (bench.c). */
 fb_result fb_ifs_bench(struct fb_bench *b);
+
+/* Steps a chain the chaos game of ifs layer g plays in one dispatch on device vk (host/gen/ifs/layer.c:
+ * a few hundred ms on a CPU device, a fold interval of 2^28 points on a GPU). */
+uint32_t fb_ifs_steps_per_dispatch(const fb_gen *g, const vkc_context *vk);
 
 /* The chaos-game statistics of an ifs layer after prepare (NULL for other layers). */
 const struct fb_ifs_stats *fb_gen_ifs_stats(const fb_gen *g);
@@ -53,7 +62,7 @@ const struct fb_ifs_stats *fb_gen_ifs_stats(const fb_gen *g);
 fb_result fb_gen_ifs_from_sums(fb_gen *g, const uint64_t *hits, const uint64_t *sums, uint64_t outside);
 
 /* Its scene keys and their parser (parse.c). */
-#define FB_IFS_NKEYS 28
+#define FB_IFS_NKEYS 31
 extern const fb_keyspec fb_ifs_keys[FB_IFS_NKEYS];
 fb_result fb_ifs_parse(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L);
 

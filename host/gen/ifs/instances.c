@@ -153,7 +153,7 @@ static fb_result rows_at(rows2 *rw, int r)
             return fb_fail(FB_ERR_NOMEM, "out of memory");
     void *planes[FB_GEN_MAX_CHANNELS] = {0};
     for (int k = 0; k < np; k++) planes[k] = rw->buf[k];
-    pl->src->native_rows(pl->src, y0, n, planes);
+    pl->src->compute.native_rows(pl->src, y0, n, planes);
     rw->r = r;
     return FB_OK;
 }
@@ -211,7 +211,43 @@ static void fill(const fb_ifs_place *pl, size_t id, const fb_ifs_plant *p, doubl
     o->id = (int32_t)id, o->variant = p->generation;
 }
 
-static fb_result place(const fb_ifs_place *pl, const fb_ifs_plant *plants, size_t n, instance *out, bool *ok)
+/* The mask plants keep away from, whole (its layer's native rows, band by band), or NULL with *rc. */
+static float *read_mask(const fb_ifs_place *pl, fb_result *rc)
+{
+    const int band = 64, np = fb_gen_nplanes(pl->avoid);
+    float *mask = malloc((size_t)pl->width * pl->height * sizeof *mask);
+    void *planes[FB_GEN_MAX_CHANNELS] = {0};
+    *rc = mask ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory for the instances' mask");
+    for (int k = 0; k < np && !*rc; k++)
+        if (fb_gen_plane_stored(pl->avoid, k) && !(planes[k] = malloc((size_t)pl->width * band * sizeof(float))))
+            *rc = fb_fail(FB_ERR_NOMEM, "out of memory for the instances' mask");
+    for (int y0 = 0; y0 < pl->height && !*rc; y0 += band) {
+        int n = y0 + band <= pl->height ? band : pl->height - y0;
+        pl->avoid->compute.native_rows(pl->avoid, y0, n, planes);
+        memcpy(mask + (size_t)y0 * pl->width, planes[pl->avoid_plane], (size_t)n * pl->width * sizeof *mask);
+    }
+    for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(planes[k]);
+    if (*rc) free(mask), mask = NULL;
+    return mask;
+}
+
+/* Whether a pixel whose centre lies within r pixels of (u, v) is set in the mask (r = 0: the four
+ * pixel centres around it, those the height is interpolated between). */
+static bool near_mask(const fb_ifs_place *pl, const float *mask, double u, double v, double rx, double ry)
+{
+    int i0 = (int)floor(u - 0.5 - rx), i1 = (int)floor(u - 0.5 + rx) + 1;
+    int j0 = (int)floor(v - 0.5 - ry), j1 = (int)floor(v - 0.5 + ry) + 1;
+    for (int j = j0 < 0 ? 0 : j0; j <= j1 && j < pl->height; j++)
+        for (int i = i0 < 0 ? 0 : i0; i <= i1 && i < pl->width; i++) {
+            double du = rx > 0 ? (i + 0.5 - u) / rx : 0, dv = ry > 0 ? (j + 0.5 - v) / ry : 0;
+            if ((rx > 0 || ry > 0) && du * du + dv * dv > 1) continue;
+            if (mask[(size_t)j * pl->width + i] >= 0.5f) return true;
+        }
+    return false;
+}
+
+static fb_result place(const fb_ifs_place *pl, const fb_ifs_plant *plants, size_t n, instance *out, bool *ok,
+                       size_t *avoided)
 {
     const double *b = pl->frame, *w = pl->has_world ? pl->world : pl->frame;
     const double su = pl->width / (b[1] - b[0]), sv = pl->height / (b[3] - b[2]);
@@ -222,6 +258,9 @@ static fb_result place(const fb_ifs_place *pl, const fb_ifs_plant *plants, size_
     qsort(order, n, sizeof *order, cmp_row); /* each pair of rows computed once */
     rows2 rw = {pl, INT32_MIN, {0}};
     fb_result rc = FB_OK;
+    float *mask = pl->avoid ? read_mask(pl, &rc) : NULL;
+    const double min_up = cos(pl->max_slope * (M_PI / 180)) - 1e-12; /* 90: every slope */
+    *avoided = 0;
     for (size_t k = 0; k < n && !rc; k++) {
         size_t i = order[k].idx;
         double u = (plants[i].x - b[0]) * su, v = (b[3] - plants[i].y) * sv, h = pl->constant, hu = 0, hv = 0;
@@ -229,11 +268,15 @@ static fb_result place(const fb_ifs_place *pl, const fb_ifs_plant *plants, size_
         double hx = hu / cx, hy = -hv / cy, len = sqrt(hx * hx + hy * hy + 1); /* v grows southward */
         double nw[3] = {-hx / len, -hy / len, 1 / len};
         ok[i] = isfinite(h) && isfinite(len);
+        if (ok[i] &&
+            (nw[2] < min_up || (mask && near_mask(pl, mask, u, v, pl->avoid_distance / cx, pl->avoid_distance / cy))))
+            ok[i] = false, ++*avoided;
         double X = pl->has_world ? w[0] + u * cx : plants[i].x, Y = pl->has_world ? w[3] - v * cy : plants[i].y;
         fill(pl, i, &plants[i], X, Y, h, nw, scale, &out[i]);
     }
     for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(rw.buf[k]);
     free(order);
+    free(mask);
     return rc;
 }
 
@@ -285,11 +328,12 @@ static void write_csv(FILE *f, const instance *v, const bool *ok, size_t n)
 }
 
 fb_result fb_ifs_write_instances(const char *path, const fb_ifs_place *pl, const fb_ifs_plant *plants, size_t n,
-                                 size_t *written, size_t *skipped)
+                                 size_t *written, size_t *skipped, size_t *avoided)
 {
     instance *v = malloc((n ? n : 1) * sizeof *v);
     bool *ok = malloc(n ? n : 1);
-    fb_result rc = v && ok ? place(pl, plants, n, v, ok) : fb_fail(FB_ERR_NOMEM, "out of memory");
+    *avoided = 0;
+    fb_result rc = v && ok ? place(pl, plants, n, v, ok, avoided) : fb_fail(FB_ERR_NOMEM, "out of memory");
     size_t count = 0;
     for (size_t i = 0; !rc && i < n; i++) count += ok[i];
     FILE *f = NULL;
@@ -307,6 +351,6 @@ fb_result fb_ifs_write_instances(const char *path, const fb_ifs_place *pl, const
     }
     free(v);
     free(ok);
-    *written = count, *skipped = n - count;
+    *written = count, *skipped = n - count - *avoided;
     return rc;
 }

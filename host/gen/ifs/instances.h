@@ -37,7 +37,9 @@ double fb_ifs_cond_extent(const fb_ifs *cond, uint32_t seed);
  * and optionally a height layer (src's plane `plane`, from its native rows; NULL: the constant
  * height `height`) with the world extent it covers (world[]: xmin, xmax, ymin, ymax, y up; when
  * has_world is false the IFS frame is the world). up: 'y' (x east, y up, z south) or 'z' (x east,
- * y north, z up). */
+ * y north, z up). Plants are left out where the surface is steeper than max_slope degrees, and
+ * within avoid_distance (world units; 0: the four pixels around the base) of a pixel where the mask
+ * (avoid's plane avoid_plane; NULL: none) is 0.5 or more. */
 typedef struct fb_ifs_place {
     double frame[4];
     int width, height;
@@ -48,12 +50,16 @@ typedef struct fb_ifs_place {
     double world[4];
     char up;
     uint32_t seed;
+    double max_slope;
+    const fb_gen *avoid;
+    int avoid_plane;
+    double avoid_distance;
 } fb_ifs_place;
 
 /* Places the plants and writes them to path (.ply: binary little-endian, .csv: text with a header)
  * through the output transaction. *written: the plants written (those over a non-finite height
- * are left out and counted in *skipped). */
+ * are left out and counted in *skipped, those on too steep a slope or near the mask in *avoided). */
 fb_result fb_ifs_write_instances(const char *path, const fb_ifs_place *pl, const fb_ifs_plant *plants, size_t n,
-                                 size_t *written, size_t *skipped);
+                                 size_t *written, size_t *skipped, size_t *avoided);
 
 #endif

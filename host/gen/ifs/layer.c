@@ -19,6 +19,7 @@
 #include "kernels/ifs.h"
 #include "ifs64_comp.h"
 #include "ifs_comp.h"
+#include "ifs_fold_comp.h"
 
 #include <math.h>
 #include <stdatomic.h>
@@ -55,6 +56,8 @@ typedef struct ifs_state {
     size_t nplants;
     const fb_gen *surface;
     int surface_plane, surface_channel;
+    const fb_gen *avoid; /* the mask the plants keep away from, or NULL */
+    int avoid_plane;
 } ifs_state;
 
 static ifs_state *state(const fb_gen *g)
@@ -134,7 +137,8 @@ static fb_result lsystem_condensation(const fb_gen *g, K_IfsMap **out, uint32_t 
     fb_lsys_seg *segs = NULL;
     int depth = 0;
     snprintf(who, sizeof who, "layer %s: condensation", g->layer->name);
-    fb_result rc = fb_lsys_derive(&f->cond_sys, g->scene->seed, f->cond_max_symbols, 0, &g->budget, who, &str, &len);
+    fb_result rc =
+        fb_lsys_derive(&f->cond_sys, g->scene->seed, f->cond_max_symbols, 0, &g->run.budget, who, &str, &len);
     if (rc) return rc;
     size_t nf = 0;
     for (size_t i = 0; i < len; i++) nf += str[i] == 'F';
@@ -248,18 +252,18 @@ static void merge_task(void *ctx, int task)
 
 /* A histogram in whichever layout a backend left it: the hits and the colour sum of a cell. */
 typedef struct cells_view {
-    const uint32_t *hits;    /* 32-bit layouts */
+    const uint32_t *hits;    /* 32-bit layouts (with packed: the folded totals, or NULL) */
     const uint64_t *sum;     /* native: the colour sums */
-    const uint32_t *lo, *hi; /* vulkan, 32-bit atomics: colour sum words */
-    const uint64_t *packed;  /* vulkan, 64-bit atomics: hits | colour (mod 2^32) << 32 */
-    const uint32_t *carry;   /* ... and the carries out of the colour word */
+    const uint32_t *lo, *hi; /* vulkan: colour sum words */
+    const uint64_t *packed;  /* vulkan, 64-bit atomics: hits | colour sum << K_IFS_HIT_BITS since the last fold */
 } cells_view;
 
 static inline void cell_at(const cells_view *v, size_t cell, uint64_t *hits, uint64_t *sum)
 {
     if (v->packed) {
-        *hits = (uint32_t)v->packed[cell];
-        *sum = (uint64_t)v->carry[cell] << 32 | (v->packed[cell] >> 32);
+        uint64_t x = v->packed[cell];
+        *hits = (x & K_IFS_HIT_MASK) + (v->hits ? v->hits[cell] : 0);
+        *sum = (x >> K_IFS_HIT_BITS) + (v->hits ? (uint64_t)v->hi[cell] << 32 | v->lo[cell] : 0);
     } else {
         *hits = v->hits[cell];
         *sum = v->sum ? v->sum[cell] : (uint64_t)v->hi[cell] << 32 | v->lo[cell];
@@ -406,7 +410,7 @@ static fb_result prepare_native(fb_gen *g, fb_engine *e, fb_progress *prog)
     /* The hand-vectorised loop (bit-exact with the kernel, tests/test_avx2.c) where it applies: one
      * task per histogram, in rounds of the dispatch's steps (POINTS_PER_DISPATCH points, a fraction
      * of a second) so that the bar moves at any point count. */
-    bool avx2 = !rc && !g->scalar && (priv || threads == 1) && fb_ifs_avx2_supported(&st->p);
+    bool avx2 = !rc && !g->run.scalar && (priv || threads == 1) && fb_ifs_avx2_supported(&st->p);
     for (uint32_t step0 = 0; avx2 && step0 < last; step0 += st->p.nsteps) {
         uint32_t t1 = last - step0 > st->p.nsteps ? step0 + st->p.nsteps : last;
         avx2_round r = {st, hist, chains, step0, t1, nhist, {{0}}};
@@ -449,6 +453,60 @@ static fb_result prepare_native(fb_gen *g, fb_engine *e, fb_progress *prog)
 }
 
 enum { B_MAPS, B_CHAINS, B_COUNTS, B_HITS, B_LO, B_HI, NBUF };
+enum { F_HITS, F_LO, F_HI, F_FLAGS, NFOLD }; /* the folded totals of the 64-bit histogram */
+
+/* The points one fold interval of the 64-bit histogram may take (kernels/ifs.h). */
+#define FOLD_POINTS ((1ull << K_IFS_HIT_BITS) - 1)
+
+/* One 64-bit atomic a point where the device has them, the packed histogram fits one buffer and a
+ * dispatch of one step a chain fits a fold interval; else two 32-bit ones and a carry. The sums, and
+ * so the result, are the same. */
+static bool wide_histogram(const ifs_state *st, vkc_context *vk)
+{
+    uint64_t cells = (uint64_t)st->p.hist_w * st->p.hist_h;
+    return vkc_info(vk)->int64_atomics && cells * 8 <= vkc_info(vk)->max_storage_buffer_range &&
+           st->cr1 - st->cr0 <= FOLD_POINTS;
+}
+
+/* The 64-bit histogram is folded into totals when the run plays more points than a fold interval. */
+static bool folds(const ifs_state *st)
+{
+    return st->points > FOLD_POINTS;
+}
+
+/* Steps a chain per dispatch: on a CPU device a few hundred ms (POINTS_PER_DISPATCH, init's); on a
+ * GPU as many as a fold interval holds (2^28 points: milliseconds), since each job's end costs a
+ * round trip and, on a discrete GPU, vkc's copy of its buffers back to the host. */
+static uint32_t steps_per_dispatch(const ifs_state *st, const vkc_context *vk)
+{
+    if (!strcmp(vkc_info(vk)->type, "cpu")) return st->p.nsteps;
+    uint64_t n = FOLD_POINTS / (st->cr1 > st->cr0 ? st->cr1 - st->cr0 : 1); /* < 2^28 */
+    return n > st->p.nsteps ? (uint32_t)n : st->p.nsteps;
+}
+
+uint32_t fb_ifs_steps_per_dispatch(const fb_gen *g, const vkc_context *vk)
+{
+    return steps_per_dispatch(state(g), vk);
+}
+
+/* Adds the 64-bit cells into the totals and clears them (shaders/ifs_fold.comp). */
+static fb_result fold(vkc_context *vk, vkc_pipeline *pipe, vkc_buffer *packed, vkc_buffer *const *totals, size_t cells,
+                      double *gpu_seconds)
+{
+    vkc_job *job = NULL;
+    fb_result rc = vkc_job_create(vk, pipe, &job);
+    uint64_t groups = (cells + 63) / 64, gx = groups < 65535 ? groups : 65535;
+    struct {
+        uint32_t cells, stride;
+    } push = {(uint32_t)cells, (uint32_t)gx * 64};
+    vkc_buffer *bufs[1 + NFOLD] = {packed, totals[F_HITS], totals[F_LO], totals[F_HI], totals[F_FLAGS]};
+    double t = -1;
+    if (!rc) rc = vkc_job_submit(vk, job, bufs, 1 + NFOLD, &push, (const uint32_t[3]){gx, (groups + gx - 1) / gx, 1});
+    if (!rc) rc = vkc_job_wait(vk, job, &t);
+    if (t > 0) *gpu_seconds += t;
+    vkc_job_destroy(vk, &job);
+    return rc;
+}
 
 static fb_result prepare_vulkan(fb_gen *g, fb_engine *e, fb_progress *prog, double *gpu_seconds)
 {
@@ -456,17 +514,15 @@ static fb_result prepare_vulkan(fb_gen *g, fb_engine *e, fb_progress *prog, doub
     vkc_context *vk = e->vk;
     size_t cells = (size_t)st->p.hist_w * st->p.hist_h;
     uint64_t range = vkc_info(vk)->max_storage_buffer_range;
-    /* One 64-bit atomic per point where the device has them and the packed histogram fits one
-     * buffer; else two 32-bit ones. The sums, and so the result, are the same. */
-    bool wide = vkc_info(vk)->int64_atomics && (uint64_t)cells * 8 <= range;
+    bool wide = wide_histogram(st, vk), folding = wide && folds(st);
     if ((uint64_t)cells * 4 > range)
         return fb_fail(FB_ERR_INPUT,
                        "layer %s: a histogram of %zu cells needs %zu MiB per buffer; this device allows %llu MiB "
                        "(lower --oversample or the size, or use --backend native)",
                        g->layer->name, cells, cells * 4 >> 20, (unsigned long long)(range >> 20));
-    vkc_pipeline *pipe = NULL;
+    vkc_pipeline *pipe = NULL, *fold_pipe = NULL;
     vkc_job *job = NULL;
-    vkc_buffer *buf[NBUF] = {0};
+    vkc_buffer *buf[NBUF] = {0}, *tot[NFOLD] = {0};
     uint32_t spec[1] = {st->p.cmaps > 0};
     fb_result rc = vkc_pipeline_create(vk,
                                        &(vkc_pipeline_desc){.spv = wide ? ifs64_comp : ifs_comp,
@@ -477,32 +533,51 @@ static fb_result prepare_vulkan(fb_gen *g, fb_engine *e, fb_progress *prog, doub
                                                             .nspec = 1,
                                                             .name = g->layer->name},
                                        &pipe);
-    const uint64_t sizes[NBUF] = {sizeof(K_IfsMap) * st->ntable,
-                                  sizeof(K_IfsChain) * (uint64_t)st->p.chains,
-                                  16ull * st->p.chains,
-                                  (wide ? 8ull : 4ull) * cells,
-                                  4ull * cells,
-                                  wide ? 16ull : 4ull * cells};
+    /* wide: the packed cells, and two unused bindings */
+    const uint64_t sizes[NBUF] = {sizeof(K_IfsMap) * st->ntable, sizeof(K_IfsChain) * (uint64_t)st->p.chains,
+                                  16ull * st->p.chains,          (wide ? 8ull : 4ull) * cells,
+                                  wide ? 16ull : 4ull * cells,   wide ? 16ull : 4ull * cells};
     for (int b = 0; b < NBUF && !rc; b++) rc = vkc_buffer_create(vk, sizes[b], &buf[b]);
+    for (int b = 0; b < NFOLD && folding && !rc; b++)
+        rc = vkc_buffer_create(vk, b == F_FLAGS ? 16 : 4ull * cells, &tot[b]);
+    if (!rc && folding)
+        rc = vkc_pipeline_create(
+            vk,
+            &(vkc_pipeline_desc){FB_SPV(ifs_fold_comp), .push_size = 8, .buffers = 1 + NFOLD, .name = g->layer->name},
+            &fold_pipe);
     if (!rc) rc = vkc_buffer_upload(vk, buf[B_MAPS], st->table, sizes[B_MAPS]);
     void *zero = rc ? NULL : calloc(cells, wide ? 8 : 4);
     if (!rc && !zero) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
     for (int b = B_HITS; b <= B_HI && !rc; b++) rc = vkc_buffer_upload(vk, buf[b], zero, sizes[b]);
+    for (int b = 0; b < NFOLD && folding && !rc; b++)
+        rc = vkc_buffer_upload(vk, tot[b], zero, b == F_FLAGS ? 16 : 4ull * cells);
     free(zero);
     if (!rc) rc = vkc_job_create(vk, pipe, &job);
-    uint32_t last = max_total(&st->p);
+    /* a job of no steps first: the uploads above, outside the game's timestamps */
+    K_IfsParams p0 = st->p;
+    p0.nsteps = 0;
+    if (!rc) rc = vkc_job_submit(vk, job, buf, NBUF, &p0, (const uint32_t[3]){(st->cr1 + 63) / 64, 1, 1});
+    if (!rc) rc = vkc_job_wait(vk, job, NULL);
+    uint32_t last = max_total(&st->p), nsteps = steps_per_dispatch(st, vk);
+    uint64_t since = 0, per = (uint64_t)(st->cr1 - st->cr0) * nsteps; /* points since the last fold, a dispatch's */
     double t0 = fb_now();
-    for (uint32_t step0 = 0; step0 < last && !rc; step0 += st->p.nsteps) {
+    for (uint32_t step0 = 0; step0 < last && !rc; step0 += nsteps) {
         K_IfsParams p = st->p;
         p.step0 = step0;
+        p.nsteps = nsteps;
         p.chain0 = st->cr0;
+        if (folding && since + per > FOLD_POINTS) {
+            rc = fold(vk, fold_pipe, buf[B_HITS], tot, cells, gpu_seconds);
+            since = 0;
+        }
         uint32_t groups[3] = {(st->cr1 + 63) / 64, 1, 1};
         double t = -1;
-        rc = vkc_job_submit(vk, job, buf, NBUF, &p, groups);
+        if (!rc) rc = vkc_job_submit(vk, job, buf, NBUF, &p, groups);
         if (!rc) rc = vkc_job_wait(vk, job, &t);
         if (t > 0) *gpu_seconds += t;
+        since += per;
         if (!rc) add_counts(st, vkc_buffer_data(buf[B_COUNTS]));
-        uint64_t done = (uint64_t)(step0 + p.nsteps < last ? step0 + p.nsteps : last) * (st->cr1 - st->cr0);
+        uint64_t done = (uint64_t)(last - step0 > nsteps ? step0 + nsteps : last) * (st->cr1 - st->cr0);
         fb_progress_update(prog, done < st->points ? done : st->points, st->points);
     }
     st->stats.game_seconds = fb_now() - t0;
@@ -510,14 +585,20 @@ static fb_result prepare_vulkan(fb_gen *g, fb_engine *e, fb_progress *prog, doub
         cells_view v = {
             .hits = vkc_buffer_data(buf[B_HITS]), .lo = vkc_buffer_data(buf[B_LO]), .hi = vkc_buffer_data(buf[B_HI])};
         if (wide) {
-            v = (cells_view){.packed = vkc_buffer_data(buf[B_HITS]), .carry = vkc_buffer_data(buf[B_LO])};
-            if (*(const uint32_t *)vkc_buffer_data(buf[B_HI])) st->stats.saturated++;
+            v = (cells_view){.packed = vkc_buffer_data(buf[B_HITS])};
+            if (folding) {
+                v.hits = vkc_buffer_data(tot[F_HITS]), v.lo = vkc_buffer_data(tot[F_LO]),
+                v.hi = vkc_buffer_data(tot[F_HI]);
+                if (*(const uint32_t *)vkc_buffer_data(tot[F_FLAGS])) st->stats.saturated++;
+            }
         }
         rc = reduce(st, g->scene->width, g->scene->height, &v);
     }
     vkc_job_destroy(vk, &job);
     for (int b = 0; b < NBUF; b++) vkc_buffer_destroy(vk, &buf[b]);
+    for (int b = 0; b < NFOLD; b++) vkc_buffer_destroy(vk, &tot[b]);
     vkc_pipeline_destroy(vk, &pipe);
+    vkc_pipeline_destroy(vk, &fold_pipe);
     return rc;
 }
 
@@ -533,24 +614,36 @@ static fb_result enumerate_plants(const fb_gen *g, ifs_state *st)
     return fb_ifs_plants(&f->maps, cond, b, f->inst_min_pixels / px, &st->plants, &st->nplants);
 }
 
-/* The height layer the instances stand on: a float channel of a layer with native rows. */
+/* A float channel of a layer with native rows, for the instances: the height layer they stand on, or
+ * the mask they keep away from. */
+static fb_result instance_source(fb_gen *g, const fb_gen *const *gens, const fb_ref *r, const char *key,
+                                 const char *kind, const fb_gen **src, int *channel)
+{
+    const fb_gen *l = gens[r->layer];
+    int c = fb_gen_channel_of(l, r->channel, g->layer->name, key);
+    if (c < 0) return FB_ERR_INPUT;
+    if (l->compute.host_rows || !l->compute.native_rows || l->store.channel_types[c] == EXRIO_UINT)
+        return fb_fail(FB_ERR_INPUT, "layer %s: %s %s is %s; name %s", g->layer->name, key, l->store.channel_names[c],
+                       l->compute.host_rows ? "an op layer, computed strip by strip" : "not a height", kind);
+    *src = l, *channel = c;
+    return FB_OK;
+}
+
 static fb_result ifs_resolve(fb_gen *g, const fb_gen *const *gens, const int *plane_offset)
 {
     (void)plane_offset;
     const fb_ifs_params *f = fb_layer_params(g->layer);
-    if (!f->has_surface || f->surface.layer < 0) return FB_OK;
-    const fb_gen *src = gens[f->surface.layer];
-    int c = fb_gen_channel_of(src, f->surface.channel, g->layer->name, "instances-surface");
-    if (c < 0) return FB_ERR_INPUT;
-    if (src->host_op || !src->native_rows || src->channel_types[c] == EXRIO_UINT)
-        return fb_fail(FB_ERR_INPUT,
-                       "layer %s: instances-surface %s is %s; name a height layer (terrain, fbm, constrain...)",
-                       g->layer->name, src->channel_names[c],
-                       src->host_op ? "an op layer, computed strip by strip" : "not a height");
-    state(g)->surface = src;
-    state(g)->surface_plane = fb_gen_plane_of(src, c);
-    state(g)->surface_channel = c;
-    return FB_OK;
+    ifs_state *st = state(g);
+    fb_result rc = FB_OK;
+    int c;
+    if (f->has_surface && f->surface.layer >= 0 &&
+        !(rc = instance_source(g, gens, &f->surface, "instances-surface",
+                               "a height layer (terrain, fbm, constrain, rivers...)", &st->surface, &c)))
+        st->surface_plane = fb_gen_plane_of(st->surface, c), st->surface_channel = c;
+    if (!rc && f->has_avoid &&
+        !(rc = instance_source(g, gens, &f->avoid, "instances-avoid", "a mask (rivers.river...)", &st->avoid, &c)))
+        st->avoid_plane = fb_gen_plane_of(st->avoid, c);
+    return rc;
 }
 
 /* Writes the instances (prepare, after the surface's own prepare: layers prepare in dependency order). */
@@ -565,22 +658,28 @@ static fb_result write_instances(fb_gen *g)
                        .plane = st->surface_plane,
                        .constant = f->has_surface && f->surface.layer < 0 ? f->surface.value : 0,
                        .up = f->inst_up,
-                       .seed = g->scene->seed};
+                       .seed = g->scene->seed,
+                       .max_slope = f->max_slope,
+                       .avoid = st->avoid,
+                       .avoid_plane = st->avoid_plane,
+                       .avoid_distance = f->avoid_distance};
     memcpy(pl.frame, st->stats.bounds, sizeof pl.frame);
-    if (st->surface && st->surface->has_world)
-        pl.has_world = true, memcpy(pl.world, st->surface->world, sizeof pl.world);
-    size_t written, skipped;
-    fb_result rc = fb_ifs_write_instances(f->instances, &pl, st->plants, st->nplants, &written, &skipped);
+    if (st->surface && st->surface->prepared.has_world)
+        pl.has_world = true, memcpy(pl.world, st->surface->prepared.world, sizeof pl.world);
+    size_t written, skipped, avoided;
+    fb_result rc = fb_ifs_write_instances(f->instances, &pl, st->plants, st->nplants, &written, &skipped, &avoided);
     if (rc) return rc;
-    snprintf(g->summary, sizeof g->summary, "layer %s (ifs): %zu plant instances in %.200s%s%.80s", g->layer->name,
-             written, f->instances, st->surface ? " on " : "",
-             st->surface ? st->surface->channel_names[st->surface_channel] : "");
-    snprintf(g->summary_json, sizeof g->summary_json,
-             "{\"layer\": \"%s\", \"generator\": \"ifs\", \"instances\": %zu, \"instances_left_out\": %zu}",
-             g->layer->name, written, skipped);
+    snprintf(g->prepared.summary, sizeof g->prepared.summary, "layer %s (ifs): %zu plant instances in %.200s%s%.80s%s",
+             g->layer->name, written, f->instances, st->surface ? " on " : "",
+             st->surface ? st->surface->store.channel_names[st->surface_channel] : "",
+             avoided ? " (others left out by slope or mask)" : "");
+    snprintf(g->prepared.summary_json, sizeof g->prepared.summary_json,
+             "{\"layer\": \"%s\", \"generator\": \"ifs\", \"instances\": %zu, \"instances_left_out\": %zu, "
+             "\"instances_avoided\": %zu}",
+             g->layer->name, written, skipped, avoided);
     if (skipped)
         fb_log(FB_LOG_WARN, "%s: %zu plants stand where %s has no height (NaN) and are not written", g->layer->name,
-               skipped, st->surface->channel_names[st->surface_channel]);
+               skipped, st->surface->store.channel_names[st->surface_channel]);
     return FB_OK;
 }
 
@@ -601,11 +700,11 @@ static fb_result ifs_prepare(fb_gen *g, fb_engine *e, bool progress)
     fb_progress_finish(&prog);
     st->stats.seconds = fb_now() - t0;
     st->stats.gpu_seconds = gpu;
-    g->prepare_gpu_seconds = gpu;
+    g->prepared.gpu_seconds = gpu;
     if (rc) return rc;
     const fb_ifs_stats *x = &st->stats;
-    g->points_split = true; /* a game that render --points-part splits; merge needs its outside count */
-    g->points_outside = x->outside;
+    g->prepared.points_split = true; /* a game that render --points-part splits; merge needs its outside count */
+    g->prepared.points_outside = x->outside;
     fb_log(FB_LOG_INFO,
            "%s: %llu points: %llu hits, %llu outside the frame, %llu discarded (transient), %llu restarts, %.3g "
            "Mpts/s",
@@ -630,7 +729,7 @@ static void ifs_rows(const fb_gen *g, int y0, int n, void *const *planes)
     memcpy(planes[1], st->density + at, len * 4);
     memcpy(planes[2], st->colour + at, len * 4);
     fb_ifs_tonemap_row(&st->tone, st->density + at, st->colour + at, len, planes[3], planes[4], planes[5], planes[6]);
-    if (g->nchannels > 7) /* a points part: the colour sums, split into two uint words */
+    if (g->store.nchannels > 7) /* a points part: the colour sums, split into two uint words */
         for (size_t i = 0; i < len; i++) {
             uint64_t v = st->sum ? st->sum[at + i] : 0;
             ((uint32_t *)planes[7])[i] = (uint32_t)v;
@@ -656,15 +755,17 @@ const fb_ifs_stats *fb_gen_ifs_stats(const fb_gen *g)
 }
 
 /* The chaos game's memory: its histogram (12 bytes a cell: hits and colour sums; one per thread
- * where they fit in 1 GiB, as prepare_native decides), the chains' state, and the reduction to
- * pixels (16 bytes a pixel, then the 12 kept: count, density, colour; 8 more for a points part). */
+ * where they fit in 1 GiB, as prepare_native decides; on a device with 64-bit atomics 8, and 12 more
+ * for the totals when the run folds), the chains' state, and the reduction to pixels (16 bytes a
+ * pixel, then the 12 kept: count, density, colour; 8 more for a points part). */
 static uint64_t ifs_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
 {
     const ifs_state *st = state(g);
     uint64_t cells = (uint64_t)st->p.hist_w * st->p.hist_h, n = (uint64_t)g->scene->width * g->scene->height;
     uint64_t keep = 12 * n + (st->part ? 8 * n : 0), hist;
     if (e->kind == FB_BACKEND_VULKAN) {
-        hist = 12 * cells + 48ull * st->p.chains;
+        bool wide = e->vk && wide_histogram(st, e->vk);
+        hist = (wide ? 8 + (folds(st) ? 12 : 0) : 12) * cells + 48ull * st->p.chains;
     } else {
         int threads = e->pool ? fb_pool_threads(e->pool) : 1;
         if (threads > 64) threads = 64;
@@ -738,9 +839,10 @@ static fb_result ifs_init(fb_gen *g)
     /* A points part K of N runs the K-th share of the chains, cut at multiples of 64 (a workgroup):
      * the parts' histograms add up to the whole game's exactly. */
     st->cr0 = 0, st->cr1 = p->chains;
-    st->part = g->points_part[1] > 0;
+    st->part = g->run.points_part[1] > 0;
     if (st->part) {
-        uint64_t groups = (p->chains + 63) / 64, k = (uint64_t)g->points_part[0], parts = (uint64_t)g->points_part[1];
+        uint64_t groups = (p->chains + 63) / 64, k = (uint64_t)g->run.points_part[0],
+                 parts = (uint64_t)g->run.points_part[1];
         uint64_t c0 = groups * (k - 1) / parts * 64, c1 = groups * k / parts * 64;
         st->cr0 = (uint32_t)(c0 < p->chains ? c0 : p->chains);
         st->cr1 = (uint32_t)(c1 < p->chains ? c1 : p->chains);
@@ -764,8 +866,8 @@ static fb_result ifs_init(fb_gen *g)
     /* for the benchmark's references: the kernel parameters and the map table */
     _Static_assert(sizeof(K_IfsParams) <= sizeof(g->params), "params fit");
     memcpy(g->params, p, sizeof *p);
-    g->input = st->table;
-    g->input_size = (uint32_t)(st->ntable * sizeof(K_IfsMap));
+    g->compute.shader.input = st->table;
+    g->compute.shader.input_size = (uint32_t)(st->ntable * sizeof(K_IfsMap));
 
     fb_ifs_tone *t = &st->tone;
     t->brightness = f->brightness;
@@ -780,14 +882,14 @@ static fb_result ifs_init(fb_gen *g)
     exrio_type colour = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
     const exrio_type types[9] = {EXRIO_UINT, EXRIO_FLOAT, EXRIO_FLOAT, colour,    colour,
                                  colour,     colour,      EXRIO_UINT,  EXRIO_UINT};
-    g->nchannels = st->part ? 9 : 7; /* a points part also carries the colour sums, which merge adds */
-    for (int c = 0; c < g->nchannels; c++) {
-        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
-        g->channel_types[c] = types[c];
+    g->store.nchannels = st->part ? 9 : 7; /* a points part also carries the colour sums, which merge adds */
+    for (int c = 0; c < g->store.nchannels; c++) {
+        snprintf(g->store.channel_names[c], sizeof g->store.channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        g->store.channel_types[c] = types[c];
     }
-    g->preview_channel = 1;
-    g->preview_rgb = 3;
-    g->native_rows = ifs_rows;
+    g->store.preview_channel = 1;
+    g->store.preview_rgb = 3;
+    g->compute.native_rows = ifs_rows;
     g->prepare = ifs_prepare;
     g->memory = ifs_memory;
     g->resolve = ifs_resolve;
@@ -797,9 +899,10 @@ static fb_result ifs_init(fb_gen *g)
 static int ifs_refs(fb_layer *L, fb_ref_slot *out)
 {
     fb_ifs_params *f = (void *)L->params;
-    if (!f->has_surface) return 0;
-    out[0] = (fb_ref_slot){&f->surface, "instances-surface", NULL};
-    return 1;
+    int n = 0;
+    if (f->has_surface) out[n++] = (fb_ref_slot){&f->surface, "instances-surface", NULL};
+    if (f->has_avoid) out[n++] = (fb_ref_slot){&f->avoid, "instances-avoid", NULL};
+    return n;
 }
 
 static int ifs_outputs(const fb_layer *L, const char **paths, const char **what, int max)

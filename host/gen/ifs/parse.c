@@ -62,6 +62,14 @@ const fb_keyspec fb_ifs_keys[] = {
      "the smallest plant written, in pixels tall in the image (default 1: smaller ones are invisible)"},
     {"instances-up", FB_K_ENUM, 0, 0, false, "y|z", NULL,
      "the instances' up axis: y (default; Houdini: x east, z south) or z (x east, y north)"},
+    {"instances-avoid", FB_K_REF, 0, 0, false, NULL, NULL,
+     "a mask the plants keep away from (\"rivers.river\", \"layer.channel\"): none stands within "
+     "instances-avoid-distance of a pixel where it is 0.5 or more"},
+    {"instances-avoid-distance", FB_K_NUM, 0, 1e15, false, NULL, NULL,
+     "with instances-avoid: the distance in the surface's world units (default 0: not on the 4 pixels around the "
+     "base)"},
+    {"instances-max-slope", FB_K_NUM, 0, 90, false, NULL, NULL,
+     "no plant where the surface is steeper than this, degrees (default: any slope)"},
     {"half", FB_K_BOOL, 0, 0, false, NULL, "true", "store R, G, B, A as half (flags: --half, --float)"},
     {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
@@ -128,9 +136,10 @@ static void spread_colors(const json_t *given, int n, double *out)
 static fb_result parse_instances(const fb_vctx *v, const char *path, json_t *obj, fb_ifs_params *f)
 {
     char sub[256];
-    static const char *const with[] = {"instances-surface", "instances-min-size", "instances-up"};
+    static const char *const with[] = {"instances-surface", "instances-min-size",       "instances-up",
+                                       "instances-avoid",   "instances-avoid-distance", "instances-max-slope"};
     fb_json_string(obj, "instances", f->instances, sizeof f->instances);
-    for (int k = 0; k < 3 && !f->instances[0]; k++)
+    for (int k = 0; k < 6 && !f->instances[0]; k++)
         if (json_object_get(obj, with[k])) {
             snprintf(sub, sizeof sub, "%s.%s", path, with[k]);
             return fb_schema_error(v, sub, "only with instances (the file the plants are written to)");
@@ -153,6 +162,20 @@ static fb_result parse_instances(const fb_vctx *v, const char *path, json_t *obj
     f->inst_min_pixels = json_object_get(obj, "instances-min-size") ? fb_json_num(obj, "instances-min-size") : 1.0;
     const char *up = json_string_value(json_object_get(obj, "instances-up"));
     f->inst_up = up && !strcmp(up, "z") ? 'z' : 'y';
+    json_t *avoid = json_object_get(obj, "instances-avoid");
+    f->has_avoid = avoid != NULL;
+    if (avoid && json_is_number(avoid)) {
+        snprintf(sub, sizeof sub, "%s.instances-avoid", path);
+        return fb_schema_error(v, sub, "expected a mask: another layer's channel, not a number");
+    }
+    if (avoid) fb_json_ref(avoid, &f->avoid);
+    if (json_object_get(obj, "instances-avoid-distance") && !avoid) {
+        snprintf(sub, sizeof sub, "%s.instances-avoid-distance", path);
+        return fb_schema_error(v, sub, "the distance from instances-avoid's mask, and there is no instances-avoid");
+    }
+    f->avoid_distance =
+        json_object_get(obj, "instances-avoid-distance") ? fb_json_num(obj, "instances-avoid-distance") : 0;
+    f->max_slope = json_object_get(obj, "instances-max-slope") ? fb_json_num(obj, "instances-max-slope") : 90;
     return FB_OK;
 }
 

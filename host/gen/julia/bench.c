@@ -6,6 +6,9 @@
 #include "benchkit.h"
 #include "gen_julia.h"
 #include "julia_avx2.h"
+/* after the headers of core: the SPIR-V arrays are uint32_t[] */
+#include "julia_iter_peer_comp.h"
+#include "julia_peer_comp.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -67,6 +70,9 @@ fb_result fb_julia_bench(fb_bench *b)
         bc.work = (double)iters;
         bc.extra_per_work = 1e3 * (double)b->width * b->height / (double)iters; /* Giter/s -> Mpix/s */
         if (!rc) rc = fb_bench_layer(b, &bc, &s, tref);
+        fb_bench_peer full = {
+            .name = "minimal GLSL (bench/peers/julia_peer.comp)", FB_SPV(julia_peer_comp), .planes = 7, .input = true};
+        if (!rc) rc = fb_bench_peer_layer(b, &bc, &s, &full);
     }
     fb_scene_fini(&s);
     /* the same layer storing `iter` only: the escape loop alone, as the AVX2 reference runs it */
@@ -76,6 +82,9 @@ fb_result fb_julia_bench(fb_bench *b)
              b->width, b->height);
     if (!rc) rc = fb_scene_parse(json, NULL, &s);
     if (!rc) rc = fb_bench_variant(b, &bc, &s, "generate-iter-only");
+    fb_bench_peer loop = {
+        .name = "minimal GLSL (bench/peers/julia_iter_peer.comp)", .mode = "-iter-only", FB_SPV(julia_iter_peer_comp)};
+    if (!rc) rc = fb_bench_peer_layer(b, &bc, &s, &loop);
     fb_scene_fini(&s);
     return rc;
 }

@@ -242,11 +242,11 @@ static void store_colour(void *const *planes, size_t i, const julia_palette *pal
 static void julia_rows(const fb_gen *g, int y0, int n, void *const *planes)
 {
     const K_JuliaParams *p = params(g);
-    const julia_palette *pal = g->input;
-    const uint32_t want = want_of(g->spec[4]);
-    const bool colour = planes[P_R] != NULL, dbl = g->needs_float64;
+    const julia_palette *pal = g->compute.shader.input;
+    const uint32_t want = want_of(g->compute.shader.spec[4]);
+    const bool colour = planes[P_R] != NULL, dbl = g->compute.shader.needs_float64;
     /* Every channel bit-exact with the loop below (tests/test_avx2.c), so using it changes no result. */
-    if (!g->scalar && !dbl && fb_julia_avx2_layer_supported(p)) {
+    if (!g->run.scalar && !dbl && fb_julia_avx2_layer_supported(p)) {
         fb_julia_avx2_layer_rows(&(fb_julia_avx2_ctx){p, &pal->colour, pal->entries, &pal->turb, want}, y0, n, planes);
         return;
     }
@@ -354,53 +354,56 @@ static fb_result julia_init(fb_gen *g)
     p->lambda = (float)j->turbulence;
     p->turb_norm = (float)(1.0 / gsum);
     g->owned = pal;
-    g->input = pal;
-    g->input_size = sizeof *pal;
-    g->input_uniform = true; /* julia_body.glsl: the palette's lanes gather from a uniform buffer */
+    g->compute.shader.input = pal;
+    g->compute.shader.input_size = sizeof *pal;
+    g->compute.shader.input_uniform = true; /* julia_body.glsl: the palette's lanes gather from a uniform buffer */
 
     static const char *const suffix[NPLANES] = {"iter", "n", "inside", "de", "R", "G", "B"};
     exrio_type colour = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
     const exrio_type types[NPLANES] = {EXRIO_UINT, EXRIO_FLOAT, EXRIO_HALF, EXRIO_FLOAT, colour, colour, colour};
     uint32_t stored = (uint32_t)j->channels & ((1u << NPLANES) - 1);
-    g->nkernel = NPLANES;
-    g->nchannels = 0;
+    g->compute.nkernel = NPLANES;
+    g->store.nchannels = 0;
     for (int k = 0; k < NPLANES; k++) {
         if (!(stored & (1u << k))) continue;
-        int c = g->nchannels++;
-        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[k]);
-        g->channel_types[c] = types[k];
-        g->kernel_of[c] = k;
+        int c = g->store.nchannels++;
+        snprintf(g->store.channel_names[c], sizeof g->store.channel_names[c], "%s.%s", g->layer->name, suffix[k]);
+        g->store.channel_types[c] = types[k];
+        g->compute.kernel_of[c] = k;
     }
     /* the preview: colour if stored, else the first float channel (n, inside, de), else iter */
-    g->preview_rgb = -1;
-    g->preview_channel = 0;
-    for (int c = g->nchannels - 1; c >= 0; c--) {
-        if (g->kernel_of[c] == P_R) g->preview_rgb = c;
-        if (g->kernel_of[c] != P_ITER && g->kernel_of[c] != P_R && g->kernel_of[c] != P_G && g->kernel_of[c] != P_B)
-            g->preview_channel = c;
+    g->store.preview_rgb = -1;
+    g->store.preview_channel = 0;
+    for (int c = g->store.nchannels - 1; c >= 0; c--) {
+        if (g->compute.kernel_of[c] == P_R) g->store.preview_rgb = c;
+        if (g->compute.kernel_of[c] != P_ITER && g->compute.kernel_of[c] != P_R && g->compute.kernel_of[c] != P_G &&
+            g->compute.kernel_of[c] != P_B)
+            g->store.preview_channel = c;
     }
-    g->native_rows = julia_rows;
-    g->needs_float64 = j->double_precision;
+    g->compute.native_rows = julia_rows;
+    g->compute.shader.needs_float64 = j->double_precision;
     /* the plane's shader carries no environment-map code (kernels/common.h, K_WITH_ENVMAP) */
     bool env = p->mapping >= K_JULIA_LATLONG;
-    g->spv = j->double_precision ? julia64_comp : env ? julia_env_comp : julia_comp;
-    g->spv_size = j->double_precision ? sizeof julia64_comp : env ? sizeof julia_env_comp : sizeof julia_comp;
-    g->params_size = sizeof(K_JuliaParams);
-    g->push_size = sizeof(julia_push);
-    g->spec[0] = p->mapping;
-    g->spec[1] = p->lambda != 0.0f;
-    g->spec[2] = (uint32_t)j->samples;
-    g->spec[3] = (pal->colour.gamma != 1.0f ? 1u : 0u) | (pal->colour.density > 0.0f ? 2u : 0u);
-    g->spec[4] = stored;
-    g->spec[5] = p->width % 2u == 0u; /* each invocation's pair stored as one vec2 (julia_body.glsl) */
-    g->nspec = 6;
-    g->per_invocation = 2;
+    g->compute.shader.spv = j->double_precision ? julia64_comp : env ? julia_env_comp : julia_comp;
+    g->compute.shader.spv_size = j->double_precision ? sizeof julia64_comp
+                                 : env               ? sizeof julia_env_comp
+                                                     : sizeof julia_comp;
+    g->compute.shader.params_size = sizeof(K_JuliaParams);
+    g->compute.shader.push_size = sizeof(julia_push);
+    g->compute.shader.spec[0] = p->mapping;
+    g->compute.shader.spec[1] = p->lambda != 0.0f;
+    g->compute.shader.spec[2] = (uint32_t)j->samples;
+    g->compute.shader.spec[3] = (pal->colour.gamma != 1.0f ? 1u : 0u) | (pal->colour.density > 0.0f ? 2u : 0u);
+    g->compute.shader.spec[4] = stored;
+    g->compute.shader.spec[5] = p->width % 2u == 0u; /* each invocation's pair stored as one vec2 (julia_body.glsl) */
+    g->compute.shader.nspec = 6;
+    g->compute.shader.per_invocation = 2;
     /* The AVX2 path (float grids on a CPU with AVX2) beats lavapipe's shader at every size, with or
      * without turbulence. The scalar loop (double precision, no AVX2): the shader beats it by 1.27x
      * once the work outweighs compiling it (measured crossover: about 8 million samples), but its
      * turbulence (fBm per pixel) runs 7x slower there (bench/RESULTS.md). */
-    g->lavapipe_faster = (j->double_precision || !fb_julia_avx2_layer_supported(p)) && j->turbulence == 0 &&
-                         (double)s->width * s->height * j->samples >= 8e6;
+    g->compute.lavapipe_faster = (j->double_precision || !fb_julia_avx2_layer_supported(p)) && j->turbulence == 0 &&
+                                 (double)s->width * s->height * j->samples >= 8e6;
     return FB_OK;
 }
 
@@ -435,12 +438,12 @@ static fb_result julia_cost(const fb_scene *s, int layer, double *rows, double *
     fb_gen g = {0};
     uint32_t *it = malloc((size_t)w * h * sizeof *it);
     fb_result rc = it ? fb_gen_init(&g, &small, &small_layer) : fb_fail(FB_ERR_NOMEM, "out of memory");
-    if (!rc && (!g.native_rows || fb_gen_nplanes(&g) > FB_GEN_MAX_CHANNELS))
+    if (!rc && (!g.compute.native_rows || fb_gen_nplanes(&g) > FB_GEN_MAX_CHANNELS))
         rc = fb_fail(FB_ERR_INTERNAL, "the Julia pre-pass has no native kernel");
     if (!rc) {
         void *planes[FB_GEN_MAX_CHANNELS] = {0};
         planes[fb_gen_plane_of(&g, 0)] = it;
-        g.native_rows(&g, 0, h, planes);
+        g.compute.native_rows(&g, 0, h, planes);
         double turb = j->turbulence != 0 ? j->turb_octaves * C_JULIA_TURB : 0;
         *total = 0;
         for (int y = 0; y < s->height; y++) {

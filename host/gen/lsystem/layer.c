@@ -166,7 +166,7 @@ static K_LsysSeg segment(const uint32_t *w, const K_LsysParams *p, uint32_t i)
 static void lsystem_rows(const fb_gen *g, int y0, int n, void *const *planes)
 {
     const K_LsysParams *p = params(g);
-    const uint32_t *w = g->input;
+    const uint32_t *w = g->compute.shader.input;
     float *A = planes[0], *R = planes[1], *G = planes[2], *B = planes[3];
     for (int r = 0; r < n; r++) {
         uint32_t y = (uint32_t)(y0 + r);
@@ -275,8 +275,8 @@ static fb_result build_input(fb_gen *g, const K_LsysSeg *segs, size_t nsegs)
     free(fill);
     memcpy(w + p->seg_off, segs, nsegs * sizeof *segs);
     g->owned = w;
-    g->input = w;
-    g->input_size = (uint32_t)(words * 4);
+    g->compute.shader.input = w;
+    g->compute.shader.input_size = (uint32_t)(words * 4);
     return FB_OK;
 }
 
@@ -338,7 +338,7 @@ static fb_result frame_segments(fb_gen *g, const fb_lsys_seg *in, size_t n, int 
  * before each was allocated (fb_lsys_derive). */
 static uint64_t lsystem_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
 {
-    *hold = (uint64_t)g->input_size * (e->kind == FB_BACKEND_VULKAN ? 2u : 1u);
+    *hold = (uint64_t)g->compute.shader.input_size * (e->kind == FB_BACKEND_VULKAN ? 2u : 1u);
     return *hold;
 }
 
@@ -363,7 +363,7 @@ static fb_result lsystem_init(fb_gen *g)
     snprintf(who, sizeof who, "layer %s", g->layer->name);
     uint64_t tiles = (uint64_t)p->tiles_x * ((p->height + TILE - 1) / TILE);
     uint64_t max_f = tiles + 1 < MAX_INPUT_WORDS ? (MAX_INPUT_WORDS - tiles - 1) / (K_LSYS_SEG_WORDS + 1) : 1;
-    fb_result rc = fb_lsys_derive(&L->sys, sc->seed, L->max_symbols, max_f, &g->budget, who, &str, &len);
+    fb_result rc = fb_lsys_derive(&L->sys, sc->seed, L->max_symbols, max_f, &g->run.budget, who, &str, &len);
     if (rc) return rc;
     /* Refuse a drawing the rasteriser cannot take before the turtle allocates its segments. */
     size_t nf = 0;
@@ -388,19 +388,19 @@ static fb_result lsystem_init(fb_gen *g)
            bounds[1], bounds[2], bounds[3]);
 
     static const char *const suffix[4] = {"A", "R", "G", "B"};
-    g->nchannels = 4;
+    g->store.nchannels = 4;
     for (int c = 0; c < 4; c++) {
-        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
-        g->channel_types[c] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
+        snprintf(g->store.channel_names[c], sizeof g->store.channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        g->store.channel_types[c] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
     }
-    g->preview_channel = 0; /* A */
-    g->preview_rgb = 1;     /* R, G, B */
-    g->native_rows = lsystem_rows;
+    g->store.preview_channel = 0; /* A */
+    g->store.preview_rgb = 1;     /* R, G, B */
+    g->compute.native_rows = lsystem_rows;
     g->memory = lsystem_memory;
-    g->spv = lsys_comp;
-    g->spv_size = sizeof lsys_comp;
-    g->params_size = sizeof(K_LsysParams);
-    g->push_size = sizeof(K_LsysParams) + 8;
+    g->compute.shader.spv = lsys_comp;
+    g->compute.shader.spv_size = sizeof lsys_comp;
+    g->compute.shader.params_size = sizeof(K_LsysParams);
+    g->compute.shader.push_size = sizeof(K_LsysParams) + 8;
     return FB_OK;
 }
 

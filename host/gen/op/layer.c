@@ -121,13 +121,12 @@ static void op_rows(const fb_gen *g, size_t count, const void *const *planes, fl
 static fb_result op_init(fb_gen *g)
 {
     const fb_layer *L = g->layer;
-    g->nchannels = 1;
-    snprintf(g->channel_names[0], sizeof g->channel_names[0], "%s.Y", L->name);
-    g->channel_types[0] = L->half ? EXRIO_HALF : EXRIO_FLOAT;
-    g->preview_channel = 0;
-    g->host_op = true;
+    g->store.nchannels = 1;
+    snprintf(g->store.channel_names[0], sizeof g->store.channel_names[0], "%s.Y", L->name);
+    g->store.channel_types[0] = L->half ? EXRIO_HALF : EXRIO_FLOAT;
+    g->store.preview_channel = 0;
     g->resolve = op_resolve;
-    g->host_rows = op_rows;
+    g->compute.host_rows = op_rows;
     op_state st;
     for (int k = 0; k <= FB_OP_MAX_INPUTS; k++) st.plane[k] = -1, st.is_uint[k] = false;
     memcpy(g->params, &st, sizeof st);
@@ -146,7 +145,7 @@ static fb_result op_resolve(fb_gen *g, const fb_gen *const *gens, const int *pla
         int c = fb_gen_channel_of(src, r->channel, g->layer->name, k < o->ninputs ? "input" : "mask");
         if (c < 0) return FB_ERR_INPUT;
         st.plane[k] = plane_offset[r->layer] + c;
-        st.is_uint[k] = src->channel_types[c] == EXRIO_UINT;
+        st.is_uint[k] = src->store.channel_types[c] == EXRIO_UINT;
     }
     memcpy(g->params, &st, sizeof st);
     return FB_OK;

@@ -2,12 +2,15 @@
  * The stars benchmark: a lat-long sky to magnitude 8 (about 47,000 stars) with the Milky Way, on
  * every backend, in Mpix/s, against the simplest fast way to draw the same records: scattering each
  * record's tent into the rows it reaches (the reference; the same weights, summed in another order,
- * so not the same bits), then dividing by the solid angle, with the same catalogue and binning.
+ * so not the same bits), then dividing by the solid angle, with the same catalogue and binning; and
+ * on the device, the layer's shader beside a minimal one of the same formula (bench/peers/).
  */
 #include "benchkit.h"
 #include "gen_stars.h"
 
 #include "kernels/stars.h"
+/* after the headers of core: the SPIR-V array is a uint32_t[] */
+#include "stars_peer_comp.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -24,7 +27,7 @@ static void scatter_rows(void *ctx, int y0, int n, int task)
 {
     const scatter_job *j = ctx;
     const K_StarsParams *p = (const K_StarsParams *)(const void *)j->g->params;
-    const uint32_t *w = j->g->input;
+    const uint32_t *w = j->g->compute.shader.input;
     const K_StarsRec *rec = (const K_StarsRec *)(const void *)(w + p->rec_off);
     size_t plane = (size_t)p->width * p->height;
     float *R = j->rgb, *G = R + plane, *B = G + plane;
@@ -98,6 +101,9 @@ fb_result fb_stars_bench(fb_bench *b)
     fb_scene s;
     fb_result rc = fb_scene_parse(json, NULL, &s);
     if (!rc) rc = fb_bench_layer(b, &bc, &s, time_reference(&s, b->threads > 0 ? b->threads : fb_cpu_count()));
+    fb_bench_peer peer = {
+        .name = "minimal GLSL (bench/peers/stars_peer.comp)", FB_SPV(stars_peer_comp), .planes = 4, .input = true};
+    if (!rc) rc = fb_bench_peer_layer(b, &bc, &s, &peer);
     fb_scene_fini(&s);
     return rc;
 }

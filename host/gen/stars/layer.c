@@ -113,7 +113,7 @@ static const K_StarsParams *params(const fb_gen *g)
 static void stars_rows(const fb_gen *g, int y0, int n, void *const *planes)
 {
     const K_StarsParams *p = params(g);
-    const uint32_t *w = g->input;
+    const uint32_t *w = g->compute.shader.input;
     const K_StarsRec *rec = (const K_StarsRec *)(const void *)(w + p->rec_off);
     float *R = planes[0], *G = planes[1], *B = planes[2], *M = planes[3];
     for (int r = 0; r < n; r++) {
@@ -276,8 +276,8 @@ static fb_result build_input(fb_gen *g, const placer *pl, const double *row_inv)
         memcpy(w + p->row_off + y, &f, 4);
     }
     g->owned = w;
-    g->input = w;
-    g->input_size = (uint32_t)(words * 4);
+    g->compute.shader.input = w;
+    g->compute.shader.input_size = (uint32_t)(words * 4);
     return FB_OK;
 }
 
@@ -319,7 +319,7 @@ static fb_result place_stars(fb_gen *g, const fb_star *stars, size_t n, placer *
 
 static uint64_t stars_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
 {
-    *hold = (uint64_t)g->input_size * (e->kind == FB_BACKEND_VULKAN ? 2u : 1u);
+    *hold = (uint64_t)g->compute.shader.input_size * (e->kind == FB_BACKEND_VULKAN ? 2u : 1u);
     return *hold;
 }
 
@@ -355,24 +355,24 @@ static fb_result stars_init(fb_gen *g)
     if (!rc) rc = build_input(g, &pl, row_inv);
     free(stars), free(pl.v), free(row_inv);
     if (rc) return rc;
-    snprintf(g->summary, sizeof g->summary, "%zu stars, total flux %.9g", n, total);
-    snprintf(g->summary_json, sizeof g->summary_json, "{\"stars\": %zu, \"flux\": %.17g}", n, total);
+    snprintf(g->prepared.summary, sizeof g->prepared.summary, "%zu stars, total flux %.9g", n, total);
+    snprintf(g->prepared.summary_json, sizeof g->prepared.summary_json, "{\"stars\": %zu, \"flux\": %.17g}", n, total);
 
     static const char *const suffix[4] = {"R", "G", "B", "mag"};
-    g->nchannels = 4;
+    g->store.nchannels = 4;
     for (int c = 0; c < 4; c++) {
-        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
-        g->channel_types[c] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
+        snprintf(g->store.channel_names[c], sizeof g->store.channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        g->store.channel_types[c] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
     }
-    g->preview_channel = 1;  /* G */
-    g->preview_rgb = 0;      /* R, G, B */
-    g->preview_light = true; /* starlight: added over the sky behind it */
-    g->native_rows = stars_rows;
+    g->store.preview_channel = 1;  /* G */
+    g->store.preview_rgb = 0;      /* R, G, B */
+    g->store.preview_light = true; /* starlight: added over the sky behind it */
+    g->compute.native_rows = stars_rows;
     g->memory = stars_memory;
-    g->spv = stars_comp;
-    g->spv_size = sizeof stars_comp;
-    g->params_size = sizeof(K_StarsParams);
-    g->push_size = sizeof(stars_push);
+    g->compute.shader.spv = stars_comp;
+    g->compute.shader.spv_size = sizeof stars_comp;
+    g->compute.shader.params_size = sizeof(K_StarsParams);
+    g->compute.shader.push_size = sizeof(stars_push);
     return FB_OK;
 }
 

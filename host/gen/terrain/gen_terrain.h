@@ -20,17 +20,10 @@ typedef struct fb_terrain_layer_params {
     char centers[1024];         /* CSV of centres, or "" */
     bool auto_bounds;
     double bounds[4];
-    char mesh[1024]; /* .ply or .obj, or "" */
-    bool smooth;     /* "interpolation": "smooth": the Clough-Tocher surface (smooth.h) */
-    int epsg;        /* crs "EPSG:N": a projected CRS, recorded in a GeoTIFF heightmap; 0: not stated */
-    /* "palette", "cosine" or "stops" given: also R, G, B, the surface lit from `light` (azimuth
-     * clockwise from north (y up), altitude; degrees) with `ambient` light, coloured by the palette
-     * from its lowest height (colour-range, or the mesh's) to its highest */
-    bool colour;
-    fb_palette_spec palette;
-    double light[2], ambient;
-    bool colour_range_set;
-    double colour_range[2];
+    char mesh[1024];       /* .ply or .obj, or "" */
+    bool smooth;           /* "interpolation": "smooth": the Clough-Tocher surface (smooth.h) */
+    int epsg;              /* crs "EPSG:N": a projected CRS, recorded in a GeoTIFF heightmap; 0: not stated */
+    fb_relief_spec relief; /* colour by height (the lowest and highest: the refined mesh's) */
 } fb_terrain_layer_params;
 
 extern const fb_gen_class fb_gen_terrain;

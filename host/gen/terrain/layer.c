@@ -87,18 +87,7 @@ static const fb_keyspec terrain_keys[] = {
     FB_HEIGHTMAP_KEYS,
     {"crs", FB_K_STRING, 0, 0, false, NULL, NULL,
      "the points' projected CRS, EPSG:N (a GeoTIFF heightmap records it; default: not stated)"},
-    {"palette", FB_K_ENUM, 0, 0, false, FB_PALETTE_NAMES, NULL,
-     "also store R, G, B: the terrain lit and coloured by this map by height (or cosine, stops)"},
-    {"cosine", FB_K_NUMLIST, -10, 10, false, NULL, NULL,
-     "colour by height, a cosine palette a + b cos(2 pi (c t + d)): 12 numbers aR,aG,aB,bR,bG,bB,cR,cG,cB,dR,dG,dB",
-     12},
-    {"stops", FB_K_STOPS, 0, 1e3, false, NULL, NULL,
-     "colour by height, a gradient: [[t, r, g, b], ...], t from 0 (lowest) to 1 (highest) (flag: \"t,r,g,b;...\")"},
-    {"light", FB_K_VEC2, -360, 360, false, NULL, NULL,
-     "with a palette: the light's azimuth (clockwise from north, y up) and altitude, degrees (default 315,45)"},
-    {"ambient", FB_K_NUM, 0, 1, false, NULL, NULL, "with a palette: the light that reaches every slope (default 0.2)"},
-    {"colour-range", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL,
-     "with a palette: the heights at its two ends (default: the refined mesh's lowest and highest)"},
+    FB_RELIEF_KEYS,
     {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store Y (and R, G, B) as half (flags: --half, --float)"},
     {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
      "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
@@ -148,32 +137,7 @@ static fb_result parse_terrain(const fb_vctx *v, const char *path, json_t *obj, 
     t->smooth = !strcmp(json_string_value(json_object_get(obj, "interpolation")), "smooth");
     t->local_variance = !strcmp(json_string_value(json_object_get(obj, "variance")), "local");
     t->additions = !strcmp(json_string_value(json_object_get(obj, "variance")), "additions");
-    t->colour = json_object_get(obj, "palette") || json_object_get(obj, "cosine") || json_object_get(obj, "stops");
-    static const char *const needs_palette[3] = {"light", "ambient", "colour-range"};
-    for (int k = 0; k < 3; k++)
-        if (!t->colour && json_object_get(obj, needs_palette[k])) {
-            snprintf(sub, sizeof sub, "%s.%s", path, needs_palette[k]);
-            return fb_schema_error(v, sub, "%s shapes the colour by height: give palette, cosine or stops too",
-                                   needs_palette[k]);
-        }
-    if (t->colour && (rc = fb_schema_palette(v, path, obj, &t->palette))) return rc;
-    const json_t *lj = json_object_get(obj, "light"), *cr = json_object_get(obj, "colour-range");
-    t->light[0] = lj ? json_number_value(json_array_get(lj, 0)) : 315;
-    t->light[1] = lj ? json_number_value(json_array_get(lj, 1)) : 45;
-    if (t->light[1] < 0 || t->light[1] > 90) {
-        snprintf(sub, sizeof sub, "%s.light", path);
-        return fb_schema_error(v, sub, "the light's altitude must lie in 0..90 degrees, found %g", t->light[1]);
-    }
-    t->ambient = json_object_get(obj, "ambient") ? fb_json_num(obj, "ambient") : 0.2;
-    t->colour_range_set = cr != NULL;
-    if (cr) {
-        t->colour_range[0] = json_number_value(json_array_get(cr, 0));
-        t->colour_range[1] = json_number_value(json_array_get(cr, 1));
-        if (!(t->colour_range[1] > t->colour_range[0])) {
-            snprintf(sub, sizeof sub, "%s.colour-range", path);
-            return fb_schema_error(v, sub, "the second height must be above the first");
-        }
-    }
+    if ((rc = fb_schema_relief(v, path, obj, &t->relief))) return rc;
     fb_json_string(obj, "centers", t->centers, sizeof t->centers);
     fb_json_string(obj, "mesh", t->mesh, sizeof t->mesh);
     json_t *b = json_object_get(obj, "bounds");
@@ -236,25 +200,9 @@ typedef struct terrain_state {
     uint32_t nbands;
     uint32_t *band_start; /* nbands + 1 */
     uint32_t *band_tris;
-    double *grad; /* "smooth": each vertex's gradient (smooth.h), else NULL */
-    /* colour by height (fb_terrain_layer_params.colour): the table, its heights, the light */
-    float table[FB_PALETTE_ENTRIES][4];
-    double zlo, zhi, lx, ly, lz, ambient;
+    double *grad;     /* "smooth": each vertex's gradient (smooth.h), else NULL */
+    fb_relief relief; /* colour by height (fb_terrain_layer_params.relief) */
 } terrain_state;
-
-/* The lit colour of a point of height z whose surface rises by (gx, gy) per world unit: Lambert's
- * law under the layer's light, plus its ambient, times the palette's colour at the height. */
-static void lit_colour(const terrain_state *s, double z, double gx, double gy, float rgb[3])
-{
-    double len = sqrt(gx * gx + gy * gy + 1), d = (-gx * s->lx - gy * s->ly + s->lz) / len;
-    double light = s->ambient + (1 - s->ambient) * (d > 0 ? d : 0);
-    double t = (z - s->zlo) / (s->zhi - s->zlo) * (FB_PALETTE_ENTRIES - 1);
-    t = t < 0 ? 0 : t > FB_PALETTE_ENTRIES - 1 ? FB_PALETTE_ENTRIES - 1 : t;
-    int i = (int)t;
-    int j = i + 1 < FB_PALETTE_ENTRIES ? i + 1 : i;
-    double f = t - i;
-    for (int c = 0; c < 3; c++) rgb[c] = (float)(light * (s->table[i][c] * (1 - f) + s->table[j][c] * f));
-}
 
 static terrain_state *state(const fb_gen *g)
 {
@@ -281,7 +229,7 @@ static void terrain_rows(const fb_gen *g, int y0, int n, void *const *planes)
     const fb_dt *d = &s->t.dt;
     const int W = g->scene->width, H = g->scene->height;
     float *Y = planes[0], *A = planes[1], *S = planes[2];
-    float *R = g->nchannels > 3 ? planes[3] : NULL, *G = R ? planes[4] : NULL, *B = R ? planes[5] : NULL;
+    float *R = g->store.nchannels > 3 ? planes[3] : NULL, *G = R ? planes[4] : NULL, *B = R ? planes[5] : NULL;
     for (size_t i = 0; i < (size_t)n * W; i++) Y[i] = (float)s->fill, A[i] = 0, S[i] = 0;
     for (size_t i = 0; R && i < (size_t)n * W; i++) R[i] = G[i] = B[i] = 0;
     const double sx = (s->bounds[1] - s->bounds[0]) / W, sy = (s->bounds[3] - s->bounds[2]) / H;
@@ -345,7 +293,7 @@ static void terrain_rows(const fb_gen *g, int y0, int n, void *const *planes)
                         S[i] = (float)(atan(hypot(gr[0], gr[1])) * (180.0 / M_PI));
                         if (R) {
                             float c[3];
-                            lit_colour(s, Y[i], gr[0], gr[1], c);
+                            fb_relief_colour(&s->relief, Y[i], gr[0], gr[1], c);
                             R[i] = c[0], G[i] = c[1], B[i] = c[2];
                         }
                         continue;
@@ -354,7 +302,7 @@ static void terrain_rows(const fb_gen *g, int y0, int n, void *const *planes)
                     S[i] = slope;
                     if (R) {
                         float c[3];
-                        lit_colour(s, Y[i], pgx, pgy, c);
+                        fb_relief_colour(&s->relief, Y[i], pgx, pgy, c);
                         R[i] = c[0], G[i] = c[1], B[i] = c[2];
                     }
                 }
@@ -459,13 +407,11 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     double zmin = INFINITY;
     for (uint32_t v = 0; v < s->t.ninput; v++) zmin = fmin(zmin, s->t.z[v]);
     s->fill = zmin;
-    if (P->colour_range_set) {
-        s->zlo = P->colour_range[0], s->zhi = P->colour_range[1];
-    } else { /* the refined surface's own range */
-        s->zlo = INFINITY, s->zhi = -INFINITY;
+    if (P->relief.colour) { /* colour-range, else the refined surface's own range */
+        double zlo = INFINITY, zhi = -INFINITY;
         for (uint32_t v = 0; v < s->t.dt.nv; v++)
-            if (isfinite(s->t.z[v])) s->zlo = fmin(s->zlo, s->t.z[v]), s->zhi = fmax(s->zhi, s->t.z[v]);
-        if (!(s->zhi > s->zlo)) s->zhi = s->zlo + 1;
+            if (isfinite(s->t.z[v])) zlo = fmin(zlo, s->t.z[v]), zhi = fmax(zhi, s->t.z[v]);
+        fb_relief_init(&s->relief, &P->relief, zlo, zhi);
     }
     if (P->auto_bounds) {
         memcpy(s->bounds, s->t.bbox, sizeof s->bounds);
@@ -473,11 +419,11 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     } else {
         memcpy(s->bounds, P->bounds, sizeof s->bounds);
     }
-    g->preview_shade[0] = (s->bounds[1] - s->bounds[0]) / g->scene->width;
-    g->preview_shade[1] = (s->bounds[3] - s->bounds[2]) / g->scene->height;
-    memcpy(g->world, s->bounds, sizeof g->world); /* the image's frame, for a GeoTIFF heightmap */
-    g->has_world = true;
-    g->epsg = P->epsg;
+    g->store.preview_shade[0] = (s->bounds[1] - s->bounds[0]) / g->scene->width;
+    g->store.preview_shade[1] = (s->bounds[3] - s->bounds[2]) / g->scene->height;
+    memcpy(g->prepared.world, s->bounds, sizeof g->prepared.world); /* the image's frame, for a GeoTIFF heightmap */
+    g->prepared.has_world = true;
+    g->prepared.epsg = P->epsg;
     double t0 = fb_now();
     if (P->smooth && !(s->grad = fb_smooth_gradients(&s->t)))
         return fb_fail(FB_ERR_NOMEM, "layer %s: out of memory for the vertex gradients", g->layer->name);
@@ -485,13 +431,13 @@ static fb_result terrain_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     if (P->mesh[0] && (rc = fb_terrain_write_mesh(&s->t, s->bounds, P->mesh))) return rc; /* renamed with the EXR */
     double t_out = fb_now() - t0;
     const fb_terrain_stats *st = &s->st;
-    snprintf(g->summary, sizeof g->summary,
+    snprintf(g->prepared.summary, sizeof g->prepared.summary,
              "layer %s (terrain): %u input points (%llu duplicates left out), %llu inserted, %llu variances clamped "
              "to 0, %u triangles; sigma %.6g; triangulate %.3f s, refine %.3f s, bin%s %.3f s%s%.200s",
              g->layer->name, st->input, (unsigned long long)st->duplicates, (unsigned long long)st->inserted,
              (unsigned long long)st->clamped, s->t.dt.nfinite, st->sigma, st->build_seconds, st->refine_seconds,
              P->mesh[0] ? " and mesh" : "", t_out, P->mesh[0] ? "; mesh " : "", P->mesh);
-    snprintf(g->summary_json, sizeof g->summary_json,
+    snprintf(g->prepared.summary_json, sizeof g->prepared.summary_json,
              "{\"layer\": \"%s\", \"generator\": \"terrain\", \"input_points\": %u, \"duplicates\": %llu, "
              "\"inserted\": %llu, \"hull_splits\": %llu, \"clamped_variances\": %llu, \"rejected_sites\": %llu, "
              "\"variance_stages\": %u, "
@@ -562,23 +508,18 @@ static fb_result terrain_init(fb_gen *g)
     if (rc) return rc;
 
     static const char *const suffix[6] = {"Y", "A", "slope", "R", "G", "B"};
-    g->nchannels = P->colour ? 6 : 3;
-    for (int c = 0; c < g->nchannels; c++) {
-        snprintf(g->channel_names[c], sizeof g->channel_names[c], "%s.%s", g->layer->name, suffix[c]);
-        g->channel_types[c] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
+    g->store.nchannels = P->relief.colour ? 6 : 3;
+    for (int c = 0; c < g->store.nchannels; c++) {
+        snprintf(g->store.channel_names[c], sizeof g->store.channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        g->store.channel_types[c] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
     }
-    g->channel_types[1] = EXRIO_HALF;
-    g->preview_channel = 0;
-    if (P->colour) { /* the preview shows the lit colour */
-        g->preview_rgb = 3;
-        fb_palette_build(&P->palette, s->table);
-        double az = P->light[0] * (M_PI / 180), alt = P->light[1] * (M_PI / 180);
-        s->lx = sin(az) * cos(alt), s->ly = cos(az) * cos(alt), s->lz = sin(alt), s->ambient = P->ambient;
-    }
-    g->native_rows = terrain_rows;
+    g->store.channel_types[1] = EXRIO_HALF;
+    g->store.preview_channel = 0;
+    if (P->relief.colour) g->store.preview_rgb = 3; /* the preview shows the lit colour */
+    g->compute.native_rows = terrain_rows;
     g->prepare = terrain_prepare;
     g->memory = terrain_memory;
-    g->prepare_gpu_seconds = -1;
+    g->prepared.gpu_seconds = -1;
     return FB_OK;
 }
 

@@ -52,14 +52,14 @@ static fb_result checker_init(fb_gen *g)
     const fb_checker_params *c = fb_layer_params(g->layer);
     K_CheckerParams *p = (void *)g->params;
     *p = (K_CheckerParams){(uint32_t)g->scene->width, (uint32_t)g->scene->height, (uint32_t)c->cells, 0};
-    g->nchannels = 1;
-    snprintf(g->channel_names[0], sizeof g->channel_names[0], "%s.Y", g->layer->name);
-    g->channel_types[0] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
-    g->native_rows = checker_rows;
-    g->spv = checker_comp;
-    g->spv_size = sizeof checker_comp;
-    g->params_size = sizeof(K_CheckerParams);
-    g->push_size = sizeof(checker_push);
+    g->store.nchannels = 1;
+    snprintf(g->store.channel_names[0], sizeof g->store.channel_names[0], "%s.Y", g->layer->name);
+    g->store.channel_types[0] = g->layer->half ? EXRIO_HALF : EXRIO_FLOAT;
+    g->compute.native_rows = checker_rows;
+    g->compute.shader.spv = checker_comp;
+    g->compute.shader.spv_size = sizeof checker_comp;
+    g->compute.shader.params_size = sizeof(K_CheckerParams);
+    g->compute.shader.push_size = sizeof(checker_push);
     return FB_OK;
 }
 

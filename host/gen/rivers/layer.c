@@ -1,0 +1,423 @@
+/*
+ * The rivers layer: a landscape raised by tectonic uplift and carved by rivers, the stream power law
+ * solved by Braun and Willett's implicit method (rivers.h), computed whole on the host in prepare on
+ * either backend; strips and regions are copied out of it.
+ *
+ * Channels: NAME.Y (the surface: the bed, with depressions filled unless lakes are kept), NAME.area
+ * (drainage area by steepest descent, world units squared), NAME.river (1 where the area reaches
+ * river-area), NAME.lake (depth of standing water: kept lakes and the sea); with a palette also NAME.R,
+ * .G, .B, the surface lit and coloured by height, the water in its colour.
+ */
+#include "engine.h"
+#include "exrio.h"
+#include "gen_rivers.h"
+#include "heightmap.h"
+#include "rivers.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- the scene keys and their parser ---------------------------------------------------------- */
+
+static const fb_keyspec rivers_keys[] = {
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"rivers\""},
+    {"name", FB_K_NAME, 0, 0, false, NULL, "\"rivers\"", "layer name; channels NAME.Y, .area, .river, .lake"},
+    {"input", FB_K_REF, 0, 0, false, NULL, NULL,
+     "the starting heights: another layer's channel (\"layer\": its Y), or a number (flat at that height; default 0)"},
+    {"uplift", FB_K_NUM, 0, 1e6, false, NULL, "0.001",
+     "U, rock uplift in height per time unit (where uplift-map is 1, with a map)"},
+    {"uplift-map", FB_K_REF, 0, 0, false, NULL, NULL,
+     "where the rock rises: another layer's channel (a survey, a macro shape, fBm), its values from uplift-range "
+     "taken as 0 to 1 of U"},
+    {"uplift-range", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL,
+     "the uplift map's values taken as 0 and 1 of U (LO,HI, clamped; default: the map's lowest and highest)"},
+    {"K", FB_K_NUM, 0, 1e6, false, NULL, "5e-6", "erodibility: incision K A^m S^n (A drainage area, S slope)"},
+    {"m", FB_K_NUM, 0, 2, true, NULL, "0.5", "the drainage area's exponent, in (0, 2]"},
+    {"n", FB_K_NUM, 0, 4, true, NULL, "1",
+     "the slope's exponent, in (0, 4] (1: solved directly; else by Newton's iteration, slower)"},
+    {"kd", FB_K_NUM, 0, 1e9, false, NULL, "0.03", "hillslope diffusivity, area per time unit (0: none)"},
+    {"dt", FB_K_NUM, 0, 1e12, true, NULL, "50000", "the time step, in time units"},
+    {"steps", FB_K_INT, 1, 1000000, false, NULL, "400", "time steps (the simulated time is dt x steps)"},
+    {"noise", FB_K_NUM, 0, 1e9, false, NULL, "1",
+     "the starting heights' perturbation: uniform in [0, noise) at each cell, from the seed"},
+    {"lakes", FB_K_ENUM, 0, 0, false, "fill|keep", "\"fill\"",
+     "depressions: filled (the surface drains everywhere) or kept as lakes (NAME.lake holds their depth)"},
+    {"outlets", FB_K_NAMES, 0, 0, false, "north|south|east|west|none", "[\"north\", \"south\", \"east\", \"west\"]",
+     "the edges water leaves by, each held at its height (none: only the sea; flag: a comma list)"},
+    {"sea-level", FB_K_NUM, -1e15, 1e15, false, NULL, NULL, "cells below this height are the sea: outlets, held"},
+    {"extent", FB_K_NUM, 0, 1e12, true, NULL, NULL,
+     "the image's width in world units (the heights' unit); default: the input's or the uplift map's world width, "
+     "else 100000"},
+    {"river-area", FB_K_NUM, 0, 1e30, true, NULL, NULL,
+     "NAME.river is 1 where the drainage area reaches this, world units squared (default: 1/1000 of the image's "
+     "area)"},
+    FB_RELIEF_KEYS,
+    {"water-colour", FB_K_NUMLIST, 0, 1e3, false, NULL, NULL,
+     "with a palette: the colour of rivers and standing water, R,G,B, lit like the land (default 0.03,0.12,0.3)", 3},
+    {"heightmap", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
+     "also write the heights (Y) for engines: OUT.png (16-bit grey), OUT.r16 (16-bit raw) or OUT.tif (float GeoTIFF)"},
+    FB_HEIGHTMAP_KEYS,
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "false",
+     "store Y and lake as half (area stays float: it exceeds half's range; flags: --half, --float)"},
+    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
+     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+};
+
+static fb_result parse_rivers(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
+{
+    (void)s;
+    fb_result rc = fb_schema_check(v, path, obj, rivers_keys, FB_NKEYS(rivers_keys), "a rivers layer");
+    if (rc) return rc;
+    fb_rivers_layer_params *P = (void *)L->params;
+    char sub[256];
+    const json_t *in = json_object_get(obj, "input"), *map = json_object_get(obj, "uplift-map");
+    P->has_input = in != NULL;
+    if (in) fb_json_ref(in, &P->input);
+    P->has_map = map != NULL;
+    if (map && json_is_number(map)) {
+        snprintf(sub, sizeof sub, "%s.uplift-map", path);
+        return fb_schema_error(v, sub, "expected another layer's channel; a uniform uplift is the number \"uplift\"");
+    }
+    if (map) fb_json_ref(map, &P->map);
+    P->uplift = fb_json_num(obj, "uplift");
+    P->has_range = json_object_get(obj, "uplift-range") != NULL;
+    if (P->has_range) {
+        snprintf(sub, sizeof sub, "%s.uplift-range", path);
+        if (!map) return fb_schema_error(v, sub, "the range of an uplift map, and there is no uplift-map");
+        fb_json_vec2(obj, "uplift-range", P->range);
+        if (!(P->range[1] > P->range[0]))
+            return fb_schema_error(v, sub, "expected LO,HI with LO < HI, found %g,%g", P->range[0], P->range[1]);
+    }
+    P->K = fb_json_num(obj, "K");
+    P->m = fb_json_num(obj, "m");
+    P->n = fb_json_num(obj, "n");
+    P->kd = fb_json_num(obj, "kd");
+    P->dt = fb_json_num(obj, "dt");
+    P->steps = (int)json_integer_value(json_object_get(obj, "steps"));
+    P->noise = fb_json_num(obj, "noise");
+    P->keep_lakes = !strcmp(json_string_value(json_object_get(obj, "lakes")), "keep");
+    const json_t *out = json_object_get(obj, "outlets");
+    static const char *const sides[4] = {"north", "south", "east", "west"};
+    bool none = false;
+    P->outlets = 0;
+    for (size_t i = 0; i < json_array_size(out); i++) {
+        const char *w = json_string_value(json_array_get(out, i));
+        none = none || !strcmp(w, "none");
+        for (int k = 0; k < 4; k++)
+            if (!strcmp(w, sides[k])) P->outlets |= 1u << k;
+    }
+    snprintf(sub, sizeof sub, "%s.outlets", path);
+    if (none && P->outlets) return fb_schema_error(v, sub, "\"none\" with edges: name the edges, or none alone");
+    P->has_sea = json_object_get(obj, "sea-level") != NULL;
+    P->sea_level = P->has_sea ? fb_json_num(obj, "sea-level") : 0;
+    if (!P->outlets && !P->has_sea)
+        return fb_schema_error(v, sub, "no outlet: water must leave by an edge, or set a sea-level");
+    P->extent = json_object_get(obj, "extent") ? fb_json_num(obj, "extent") : 0;
+    P->river_area = json_object_get(obj, "river-area") ? fb_json_num(obj, "river-area") : 0;
+    if ((rc = fb_schema_relief(v, path, obj, &P->relief))) return rc;
+    const json_t *wc = json_object_get(obj, "water-colour");
+    if (wc && !P->relief.colour) {
+        snprintf(sub, sizeof sub, "%s.water-colour", path);
+        return fb_schema_error(v, sub, "water-colour shapes the colour by height: give palette, cosine or stops too");
+    }
+    static const double water[3] = {0.03, 0.12, 0.3};
+    for (int c = 0; c < 3; c++) P->water[c] = wc ? json_number_value(json_array_get(wc, (size_t)c)) : water[c];
+    return FB_OK;
+}
+
+/* ---- the layer --------------------------------------------------------------------------------- */
+
+typedef struct rivers_state {
+    const fb_gen *src, *map; /* the starting heights' and the uplift map's layers (resolve), or NULL */
+    int src_channel, map_channel;
+    fb_rivers_out out;
+    fb_relief relief; /* with a palette: the colour by height */
+    double cell;
+} rivers_state;
+
+static rivers_state *state(const fb_gen *g)
+{
+    return g->owned;
+}
+
+static void rivers_fini(fb_gen *g)
+{
+    rivers_state *s = state(g);
+    if (s) fb_rivers_out_free(&s->out);
+}
+
+/* The layer whose world the image takes: the input's, else the uplift map's (NULL: none has one). */
+static const fb_gen *world_of(const fb_gen *g)
+{
+    const rivers_state *s = state(g);
+    if (!s) return NULL;
+    if (s->src && s->src->prepared.has_world) return s->src;
+    if (s->map && s->map->prepared.has_world) return s->map;
+    return NULL;
+}
+
+static double extent_of(const fb_gen *g)
+{
+    const fb_rivers_layer_params *P = fb_layer_params(g->layer);
+    const fb_gen *w = world_of(g);
+    if (P->extent > 0) return P->extent;
+    if (w) return w->prepared.world[1] - w->prepared.world[0];
+    return 100000;
+}
+
+/* Channel c of layer src over the whole image, band by band through its native rows (its prepare has
+ * run: the bake prepares sources first), so that it is the same on every backend; refused where it
+ * is not finite. */
+static fb_result read_channel(const fb_gen *g, const fb_gen *src, int c, const char *what, float *out)
+{
+    const fb_scene *sc = g->scene;
+    const int band = 64;
+    fb_result rc = FB_OK;
+    void *planes[FB_GEN_MAX_CHANNELS] = {0};
+    for (int k = 0; k < fb_gen_nplanes(src) && !rc; k++)
+        if (fb_gen_plane_stored(src, k) && !(planes[k] = malloc((size_t)sc->width * band * 4)))
+            rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    for (int y0 = 0; y0 < sc->height && !rc; y0 += band) {
+        int n = y0 + band <= sc->height ? band : sc->height - y0;
+        src->compute.native_rows(src, y0, n, planes);
+        memcpy(out + (size_t)y0 * sc->width, planes[fb_gen_plane_of(src, c)], (size_t)n * sc->width * 4);
+    }
+    for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(planes[k]);
+    for (size_t i = 0; !rc && i < (size_t)sc->width * sc->height; i++)
+        if (!isfinite(out[i]))
+            rc = fb_fail(FB_ERR_INPUT, "layer %s: its %s %s has a NaN or infinite value at (%zu, %zu)", g->layer->name,
+                         what, src->store.channel_names[c], i % sc->width, i / sc->width);
+    return rc;
+}
+
+/* The uplift map as factors in [0, 1]: its values from the range (or its own lowest and highest). */
+static void normalise(float *map, size_t n, const fb_rivers_layer_params *P)
+{
+    double lo = P->range[0], hi = P->range[1];
+    if (!P->has_range) {
+        lo = INFINITY, hi = -INFINITY;
+        for (size_t i = 0; i < n; i++) lo = fmin(lo, map[i]), hi = fmax(hi, map[i]);
+    }
+    for (size_t i = 0; i < n; i++) {
+        double t = hi > lo ? (map[i] - lo) / (hi - lo) : 1; /* a flat map: uplift everywhere */
+        map[i] = (float)(t < 0 ? 0 : t > 1 ? 1 : t);
+    }
+}
+
+static fb_result rivers_prepare(fb_gen *g, struct fb_engine *e, bool progress)
+{
+    rivers_state *s = state(g);
+    const fb_rivers_layer_params *P = fb_layer_params(g->layer);
+    const fb_scene *sc = g->scene;
+    size_t n = (size_t)sc->width * sc->height;
+    float *initial = s->src ? malloc(n * sizeof *initial) : NULL, *map = s->map ? malloc(n * sizeof *map) : NULL;
+    fb_result rc = (s->src && !initial) || (s->map && !map) ? fb_fail(FB_ERR_NOMEM, "out of memory") : FB_OK;
+    if (!rc && s->src) rc = read_channel(g, s->src, s->src_channel, "input", initial);
+    if (!rc && s->map) rc = read_channel(g, s->map, s->map_channel, "uplift-map", map);
+    if (!rc && map) normalise(map, n, P);
+    double extent = extent_of(g), cell = extent / sc->width;
+    fb_rivers_desc d = {.width = sc->width,
+                        .height = sc->height,
+                        .cell = cell,
+                        .initial = initial,
+                        .base = P->has_input && P->input.layer < 0 ? P->input.value : 0,
+                        .noise = P->noise,
+                        .seed = sc->seed,
+                        .uplift = P->uplift,
+                        .uplift_map = map,
+                        .K = P->K,
+                        .m = P->m,
+                        .n = P->n,
+                        .kd = P->kd,
+                        .dt = P->dt,
+                        .steps = P->steps,
+                        .keep_lakes = P->keep_lakes,
+                        .outlets = P->outlets,
+                        .has_sea = P->has_sea,
+                        .sea_level = P->sea_level,
+                        .river_area = P->river_area > 0 ? P->river_area : 1e-3 * extent * cell * sc->height};
+    fb_progress prog;
+    char label[96];
+    snprintf(label, sizeof label, "%s: stream-power erosion", g->layer->name);
+    fb_progress_init(&prog, progress, label, "cell-steps");
+    double t0 = fb_now();
+    if (!rc) rc = fb_rivers_run(&d, e->pool, &prog, &s->out);
+    fb_progress_finish(&prog);
+    double secs = fb_now() - t0;
+    free(initial), free(map);
+    if (rc) return rc;
+    /* the world the image covers: the source's top-left corner (else the origin), extent wide */
+    const fb_gen *w = world_of(g);
+    g->prepared.has_world = true;
+    g->prepared.world[0] = w ? w->prepared.world[0] : 0, g->prepared.world[1] = g->prepared.world[0] + extent;
+    g->prepared.world[3] = w ? w->prepared.world[3] : extent * sc->height / sc->width,
+    g->prepared.world[2] = g->prepared.world[3] - cell * sc->height;
+    g->prepared.epsg = w ? w->prepared.epsg : 0;
+    if (sc->height > 1) g->store.preview_shade[0] = g->store.preview_shade[1] = cell;
+    float lo = INFINITY, hi = -INFINITY;
+    uint64_t rivers = 0, lakes = 0;
+    for (size_t i = 0; i < n; i++) {
+        lo = fminf(lo, s->out.height[i]), hi = fmaxf(hi, s->out.height[i]);
+        rivers += s->out.river[i] > 0, lakes += s->out.lake[i] > 0;
+    }
+    s->cell = cell;
+    if (P->relief.colour) fb_relief_init(&s->relief, &P->relief, lo, hi);
+    double work = (double)n * P->steps;
+    snprintf(g->prepared.summary, sizeof g->prepared.summary,
+             "%s: %d x %d cells of %.4g, %d steps of %.4g; relief %.6g, largest basin %.3g%% of the cells, river "
+             "cells %.3g%%, standing water %.3g%%, depressions filled in %d steps (%llu cells); %.3f s, %.3g "
+             "Mcell-steps/s",
+             g->layer->name, sc->width, sc->height, cell, P->steps, P->dt, (double)hi - lo, 100 * s->out.largest_basin,
+             100.0 * rivers / n, 100.0 * lakes / n, s->out.flood_steps, (unsigned long long)s->out.flooded, secs,
+             work / secs * 1e-6);
+    snprintf(g->prepared.summary_json, sizeof g->prepared.summary_json,
+             "{\"layer\": \"%s\", \"generator\": \"rivers\", \"width\": %d, \"height\": %d, \"cell\": %.9g, "
+             "\"steps\": %d, \"relief\": %.9g, \"largest_basin\": %.6g, \"river_cells\": %llu, \"water_cells\": %llu, "
+             "\"flood_steps\": %d, \"flooded\": %llu, \"seconds\": %.6f}",
+             g->layer->name, sc->width, sc->height, cell, P->steps, (double)hi - lo, s->out.largest_basin,
+             (unsigned long long)rivers, (unsigned long long)lakes, s->out.flood_steps,
+             (unsigned long long)s->out.flooded, secs);
+    return FB_OK;
+}
+
+/* The colour of rows [y0, y0 + n): the land by height under the light, rivers and standing water in
+ * the water's colour under the same light; the slope by central differences of the surface (one-sided
+ * at the edges), in world units. */
+static void colour_rows(const fb_gen *g, int y0, int n, float *R, float *G, float *B)
+{
+    const rivers_state *s = state(g);
+    const fb_rivers_layer_params *P = fb_layer_params(g->layer);
+    const int W = g->scene->width, H = g->scene->height;
+    const float *z = s->out.height;
+    for (int y = y0; y < y0 + n; y++)
+        for (int x = 0; x < W; x++) {
+            size_t i = (size_t)y * W + x, o = i - (size_t)y0 * W;
+            int xl = x > 0 ? x - 1 : x, xr = x + 1 < W ? x + 1 : x, yu = y > 0 ? y - 1 : y, yd = y + 1 < H ? y + 1 : y;
+            double gx = xr > xl ? ((double)z[(size_t)y * W + xr] - z[(size_t)y * W + xl]) / ((xr - xl) * s->cell) : 0;
+            double gy = yd > yu ? ((double)z[(size_t)yu * W + x] - z[(size_t)yd * W + x]) / ((yd - yu) * s->cell) : 0;
+            float c[3];
+            if (s->out.river[i] > 0 || s->out.lake[i] > 0) {
+                double light = fb_relief_light(&s->relief, gx, gy);
+                for (int k = 0; k < 3; k++) c[k] = (float)(P->water[k] * light);
+            } else {
+                fb_relief_colour(&s->relief, z[i], gx, gy, c);
+            }
+            R[o] = c[0], G[o] = c[1], B[o] = c[2];
+        }
+}
+
+static void rivers_rows(const fb_gen *g, int y0, int n, void *const *planes)
+{
+    const rivers_state *s = state(g);
+    size_t at = (size_t)y0 * g->scene->width, len = (size_t)n * g->scene->width * 4;
+    const float *src[4] = {s->out.height, s->out.area, s->out.river, s->out.lake};
+    for (int c = 0; c < 4; c++)
+        if (planes[c]) memcpy(planes[c], src[c] + at, len);
+    if (g->store.nchannels > 4) colour_rows(g, y0, n, planes[4], planes[5], planes[6]);
+}
+
+/* The model's state and result (rivers.c), plus the input and the uplift map (4 bytes a cell each)
+ * at the peak; the result (16 bytes a cell) kept for the strips (the colour is computed in them). */
+static uint64_t rivers_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
+{
+    (void)e;
+    uint64_t npx = (uint64_t)g->scene->width * g->scene->height;
+    *hold = 16 * npx;
+    return fb_rivers_memory(g->scene->width, g->scene->height) + 8 * npx;
+}
+
+static fb_result rivers_resolve(fb_gen *g, const fb_gen *const *gens, const int *plane_offset);
+
+static fb_result rivers_init(fb_gen *g)
+{
+    uint64_t hold, peak = rivers_memory(g, NULL, &hold);
+    char who[96];
+    snprintf(who, sizeof who, "stream-power erosion of %d x %d cells", g->scene->width, g->scene->height);
+    fb_result rc = fb_memory_check(&g->run.budget, peak, who);
+    if (rc) return rc;
+    rivers_state *s = calloc(1, sizeof *s);
+    if (!s) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    g->owned = s;
+    g->fini = rivers_fini;
+    static const char *const suffix[7] = {"Y", "area", "river", "lake", "R", "G", "B"};
+    const fb_rivers_layer_params *P = fb_layer_params(g->layer);
+    g->store.nchannels = P->relief.colour ? 7 : 4;
+    for (int c = 0; c < g->store.nchannels; c++) {
+        snprintf(g->store.channel_names[c], sizeof g->store.channel_names[c], "%s.%s", g->layer->name, suffix[c]);
+        g->store.channel_types[c] = (g->layer->half && c != 1) || c == 2 ? EXRIO_HALF : EXRIO_FLOAT;
+    }
+    g->store.preview_channel = 0;
+    if (P->relief.colour) g->store.preview_rgb = 4; /* the preview shows the lit colour */
+    if (g->scene->height > 1) g->store.preview_shade[0] = g->store.preview_shade[1] = extent_of(g) / g->scene->width;
+    g->compute.native_rows = rivers_rows;
+    g->prepare = rivers_prepare;
+    g->memory = rivers_memory;
+    g->resolve = rivers_resolve;
+    g->prepared.gpu_seconds = -1;
+    return FB_OK;
+}
+
+/* A reference's layer and channel: a float channel of a layer with native rows, not an op layer. */
+static fb_result find_source(fb_gen *g, const fb_gen *const *gens, const fb_ref *r, const char *key, const fb_gen **src,
+                             int *channel)
+{
+    const fb_gen *l = gens[r->layer];
+    int c = fb_gen_channel_of(l, r->channel, g->layer->name, key);
+    if (c < 0) return FB_ERR_INPUT;
+    if (l->compute.host_rows || l->store.channel_types[c] == EXRIO_UINT)
+        return fb_fail(FB_ERR_INPUT, "layer %s: %s \"%s\": %s", g->layer->name, key, l->store.channel_names[c],
+                       l->compute.host_rows ? "an op layer cannot drive it yet (bake it, or name the layer it reads)"
+                                            : "a channel of integers, not heights");
+    *src = l, *channel = c;
+    return FB_OK;
+}
+
+static fb_result rivers_resolve(fb_gen *g, const fb_gen *const *gens, const int *plane_offset)
+{
+    (void)plane_offset;
+    const fb_rivers_layer_params *P = fb_layer_params(g->layer);
+    rivers_state *s = state(g);
+    fb_result rc = FB_OK;
+    if (P->has_input && P->input.layer >= 0) rc = find_source(g, gens, &P->input, "input", &s->src, &s->src_channel);
+    if (!rc && P->has_map) rc = find_source(g, gens, &P->map, "uplift-map", &s->map, &s->map_channel);
+    return rc;
+}
+
+static int rivers_refs(fb_layer *L, fb_ref_slot *out)
+{
+    fb_rivers_layer_params *P = (void *)L->params;
+    int n = 0;
+    if (P->has_input && P->input.layer != -1) out[n++] = (fb_ref_slot){&P->input, "input", "a number"};
+    if (P->has_map) out[n++] = (fb_ref_slot){&P->map, "uplift-map", NULL};
+    return n;
+}
+
+/* The plan's cost model: seconds of one core of the reference machine (docs/scenes.md): about 60 ns a
+ * cell-step once the depressions of the first steps are filled (bench/RESULTS.md), and the final
+ * fill and copy per pixel. Whole: the steps run over the whole grid in order. */
+static fb_result rivers_cost(const fb_scene *s, int layer, double *rows, double *total)
+{
+    (void)rows;
+    const fb_rivers_layer_params *P = fb_layer_params(&s->layers[layer]);
+    *total = (double)s->width * s->height * (P->steps * 6.0e-8 /* a cell-step */ + 4.0e-7 /* a pixel */);
+    return FB_OK;
+}
+
+const fb_gen_class fb_gen_rivers = {
+    .name = "rivers",
+    .synopsis = "rivers [options] -o OUT.exr",
+    .summary = "a landscape raised by uplift and carved by rivers: the stream power law with hillslope diffusion",
+    .what = "a rivers layer",
+    .keys = rivers_keys,
+    .nkeys = FB_NKEYS(rivers_keys),
+    .params_size = sizeof(fb_rivers_layer_params),
+    .parse = parse_rivers,
+    .refs = rivers_refs,
+    .init = rivers_init,
+    .share = FB_SHARE_WHOLE,
+    .cost = rivers_cost,
+    .example = "[{\"type\": \"rivers\", \"name\": \"r\", \"extent\": 6400, \"steps\": 30, \"dt\": 20000}]",
+    .bench = fb_rivers_bench,
+};
