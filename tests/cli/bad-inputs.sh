@@ -37,7 +37,7 @@ printf '1,1,H,1.5\n' > badregion.csv
 printf '1,1,Q,0.5\n' > kindregion.csv
 F='<color index="0" rgb="255 0 0"/>'
 printf '<flame size="64 64"><xform weight="1" linear="1" coefs="1 0 0 1 0 0"/>%s</flame>\n' "$F" > ok.flame
-printf '<flame size="64 64"><xform weight="1" escher="0.5" coefs="1 0 0 1 0 0"/>%s</flame>\n' "$F" > escher.flame
+printf '<flame size="64 64"><xform weight="1" hemisphere="0.5" coefs="1 0 0 1 0 0"/>%s</flame>\n' "$F" > plugin.flame
 printf '<flame size="64 64"><xform weight="1" linear="1" coefs="1 0 0"/>%s</flame>\n' "$F" > badcoef.flame
 printf '<flame size="64 64"><xform weight="0" linear="1" coefs="1 0 0 1 0 0"/>%s</flame>\n' "$F" > zero.flame
 printf '<flame size="64 64"><xform weight="1" linear="1" coefs="1 0 0 1 0 0"/></flame>\n' > nopal.flame

@@ -59,9 +59,19 @@ typedef struct records {
     uint32_t n;
 } records;
 
-static void make_records(const fb_flame_setup *S, const K_FlameChain *pts, uint32_t n, records *r)
+static void make_records(const fb_flame_setup *S, bool compact, const K_FlameChain *pts, uint32_t n, records *r)
 {
     uint32_t m = 0;
+    if (compact) { /* every xform visible (visq 32768), the palette entry alone: scatter16 reads no more */
+        for (uint32_t t = 0; t < n; t++) {
+            uint32_t cell = k_flame_cell(S->p, pts[t]);
+            r->cell[m] = cell;
+            r->col[m] = k_flame_index(pts[t].pc);
+            m += cell != K_FLAME_NONE;
+        }
+        r->n = m;
+        return;
+    }
     for (uint32_t t = 0; t < n; t++) {
         uint32_t cell = k_flame_cell(S->p, pts[t]), visq = S->xf[pts[t].vis].visq;
         r->cell[m] = cell;
@@ -128,7 +138,7 @@ typedef struct game {
 
 static void scatter(const game *G, int task, const K_FlameChain *pts, uint32_t n, records *rec)
 {
-    make_records(G->S, pts, n, rec);
+    make_records(G->S, G->compact, pts, n, rec);
     if (G->compact)
         scatter16(G->S, rec, G->hist[task], G->total);
     else
@@ -332,18 +342,16 @@ LANES_AVX2 static uint64_t play8(const game *G, int task, uint32_t i, const lane
             _mm256_storeu_si256((__m256i *)n, _mm256_add_epi32(vn, _mm256_set1_epi32(1)));
             uint32_t f[8];
             _mm256_storeu_si256((__m256i *)f, fn);
-            int lanes_ok = _mm256_movemask_ps(ok);
+            unsigned scalar = ~(unsigned)_mm256_movemask_ps(ok) & 255u;
             K_FlameChain *out = &pts[t * 8];
-            for (int l = 0; l < 8; l++) {
-                if (lanes_ok >> l & 1) {
-                    out[l].px = x[l], out[l].py = y[l], out[l].pc = c[l], out[l].vis = f[l];
-                    continue;
-                }
-                /* the scalar step from the lane's state before this step (n was advanced above) */
+            for (int l = 0; l < 8; l++) out[l].px = x[l], out[l].py = y[l], out[l].pc = c[l], out[l].vis = f[l];
+            /* the other lanes (a few a step: no test a lane, which the random choice would mispredict),
+             * each the scalar step from its state before this step (kept by the blends; n was advanced
+             * above) */
+            for (; scalar; scalar &= scalar - 1u) {
+                int l = __builtin_ctz(scalar);
                 K_FlameChain s = st[l];
-                s.x = _mm256_cvtss_f32(_mm256_permutevar8x32_ps(vx, _mm256_set1_epi32(l)));
-                s.y = _mm256_cvtss_f32(_mm256_permutevar8x32_ps(vy, _mm256_set1_epi32(l)));
-                s.c = _mm256_cvtss_f32(_mm256_permutevar8x32_ps(vc, _mm256_set1_epi32(l)));
+                s.x = x[l], s.y = y[l], s.c = c[l];
                 s.n = n[l] - 1u;
                 s.bad = 0;
                 s = step(P, s, key[l], plain K_FLAME_TABLES);

@@ -15,9 +15,10 @@ typedef struct fb_flame_params {
 } fb_flame_params;
 
 /* The last prepare's chaos game: its points, wall seconds (the game alone: no density estimation,
- * filter or file) and the device's seconds from its timestamps (<= 0: none, or native). */
+ * filter or file), the device's seconds from its timestamps (<= 0: none, or native), and the whole
+ * prepare's wall seconds (the game, density estimation and the spatial filter: no tone map or file). */
 typedef struct fb_flame_stats {
-    double points, game_seconds, gpu_seconds;
+    double points, game_seconds, gpu_seconds, prepare_seconds;
 } fb_flame_stats;
 
 extern const fb_gen_class fb_gen_flame;

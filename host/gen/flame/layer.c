@@ -417,7 +417,8 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
         free(total);
     st->seconds = fb_now() - t0;
     g->prepared.gpu_seconds = gpu;
-    st->stats = (fb_flame_stats){.points = chain_points(st), .game_seconds = t1 - t0, .gpu_seconds = gpu};
+    st->stats = (fb_flame_stats){
+        .points = chain_points(st), .game_seconds = t1 - t0, .gpu_seconds = gpu, .prepare_seconds = st->seconds};
     if (rc) return rc;
     fb_log(FB_LOG_INFO,
            "%s: %.0f points in %u chains, %.3g Mpts/s (chaos game %.2f s, filters %.2f s), %llu bad values",

@@ -546,12 +546,11 @@ void *fb_flame_zalloc(size_t n, fb_pool *pool)
     return p;
 }
 
-void fb_flame_hist_fold(fb_flame_cell *a, fb_flame_cell32 *b, size_t c0, size_t c1)
+void fb_flame_hist_fold(fb_flame_cell *a, const fb_flame_cell32 *b, size_t c0, size_t c1)
 {
     for (size_t i = c0; i < c1; i++) {
         for (int k = 0; k < 5; k++) a[i].c[k] += b[i].c[k];
         a[i].hits += b[i].hits;
-        memset(&b[i], 0, sizeof b[i]);
     }
 }
 

@@ -84,7 +84,7 @@ void fb_flame_tone_row(const fb_flame_tone *t, size_t n, const float *const acc[
  * threads of pool (NULL: this thread); free() it. */
 void *fb_flame_zalloc(size_t n, fb_pool *pool);
 
-/* Adds cells [c0, c1) of the 32-bit histogram b into a and zeroes them in b. */
-void fb_flame_hist_fold(fb_flame_cell *a, fb_flame_cell32 *b, size_t c0, size_t c1);
+/* Adds cells [c0, c1) of the 32-bit histogram b into a. */
+void fb_flame_hist_fold(fb_flame_cell *a, const fb_flame_cell32 *b, size_t c0, size_t c1);
 
 #endif
