@@ -375,4 +375,13 @@ K_FN uint k_flame_vis(uint q, uint visq)
 /* The opacity sum of a point: 255 (4080 in 2^-4 units) times its opacity. */
 #define K_FLAME_OPAQUE 4080u
 
+/* The histogram of a device with 64-bit atomics (shaders/flame_body.glsl, FB_FLAME_INT64): words a
+ * cell, each point one add to each whose result is unused. Word 0 holds the hits in its low
+ * K_FLAME_HIT_BITS bits and the red sum above them; the next green, blue and (translucent genomes,
+ * not compact) alpha and opacity. A point adds at most 4080 to a colour, so every field is exact
+ * while fewer than 2^K_FLAME_HIT_BITS points are played in between folds into wider totals
+ * (shaders/flame_fold.comp): the hits fit their bits and each colour 38 bits. */
+#define K_FLAME_HIT_BITS       26u
+#define K_FLAME_WORDS(compact) ((compact) != 0u ? 3u : 5u)
+
 #endif

@@ -2,13 +2,18 @@
 // of it per dispatch (the first `fuse` not plotted), each plotted point added into the integer
 // histogram with atomics (order-independent sums, the same as the native path's cell for cell).
 // host/gen/flame/game.c runs the same chains natively. Included by flame.comp (32-bit atomics: a
-// field a word) and flame64.comp (FB_FLAME_INT64: two fields a 64-bit word, one add for both; an
-// opaque genome's four fields in one word, add_packed).
+// field a word, the atomics' results read for the carries) and flame64.comp (FB_FLAME_INT64: 64-bit
+// words whose atomics' results nothing waits for, folded into totals by flame_fold.comp).
 //
-// A cell has F fields: opaque genomes (COMPACT) hits, red, green, blue (their alpha and opacity sums
-// are 4080 x hits); others red, green, blue, alpha, opacity, hits. A word that passes 2^32 (or a
-// 64-bit word 2^64, or a packed field its width) counts the carry in `carry`, one counter a field,
-// so the host recovers the exact 64-bit sums (host/gen/flame/layer.c).
+// flame.comp: a cell has F fields: opaque genomes (COMPACT) hits, red, green, blue (their alpha and
+// opacity sums are 4080 x hits); others red, green, blue, alpha, opacity, hits. A word that passes
+// 2^32 counts the carry in `carry`, one counter a field, so the host recovers the exact 64-bit sums
+// (host/gen/flame/layer.c).
+//
+// flame64.comp: a cell has K_FLAME_WORDS(COMPACT) words: hits and red (hits in the low
+// K_FLAME_HIT_BITS bits), green, blue, and for translucent genomes alpha and opacity, the sums since
+// the last fold, exact while fewer than 2^K_FLAME_HIT_BITS points are played in between
+// (kernels/flame.h).
 #define K_GLSL 1
 #include "../kernels/common.h"
 
@@ -86,12 +91,12 @@ layout(std430, set = 0, binding = 6) buffer Hist
     uint v[];
 }
 hist;
-#endif
 layout(std430, set = 0, binding = 7) buffer Carry
 {
     uint v[];
 }
 carry;
+#endif
 
 layout(push_constant) uniform Push
 {
@@ -101,38 +106,18 @@ layout(push_constant) uniform Push
 pc;
 
 #ifdef FB_FLAME_INT64
-// fields f (low word) and f + 1 (high word) of a cell: one 64-bit add, carries counted
-void add2(uint cell, uint f, uint lo, uint hi)
+// A point's sums into the words of its cell, W of them from word `at`: hits and red in word 0, then
+// green, blue (and alpha, opacity: W = 5). The adds' results are unused: nothing waits for them (a
+// GPU sends each off as a reduction), and the host's folds keep every field within its bits.
+void add_words(uint at, uint W, uint r, uint g, uint b, uint a, uint o)
 {
-    uint F = COMPACT != 0u ? 4u : 6u;
-    uint64_t add = (uint64_t(hi) << 32) | uint64_t(lo);
-    uint64_t old = atomicAdd(hist.v[(cell * F + f) >> 1], add);
-    if (uint(old) + lo < uint(old)) atomicAdd(carry.v[cell * F + f], 1u); // into the high word
-    if (old + add < old) atomicAdd(carry.v[cell * F + f + 1u], 1u);       // out of the word
-}
-
-// Opaque genomes: a point's hit and colour in one 64-bit add into word `cell`, as fields of 7, 19,
-// 19 and 19 bits (hits, red, green, blue; a colour is at most 4080), the carries out of each field
-// counted in carry[4 cell + k] (rare: a field wraps once in 2^7 or some 2^19 / 4080 points), so
-// that the host recovers the exact sums (layer.c's device_packed). One locked add a point in place
-// of two, each a loop over the lanes on lavapipe, and half the histogram's memory.
-// Other genomes: word 2 cell the same for hits and the weighted red, green, blue (carries at
-// 6 cell + k), word 2 cell + 1 alpha and opacity as two 32-bit fields (carries at 6 cell + 4 and 5):
-// two adds a point in place of three.
-void add_packed_at(uint word, uint c0, uint hits, uint r, uint g, uint b)
-{
-    uint64_t add = uint64_t(hits) | (uint64_t(r) << 7) | (uint64_t(g) << 26) | (uint64_t(b) << 45);
-    uint64_t old = atomicAdd(hist.v[word], add);
-    uint64_t m7 = uint64_t(0x7fu), m26 = (uint64_t(1u) << 26) - uint64_t(1u), m45 = (uint64_t(1u) << 45) - uint64_t(1u);
-    if ((old & m7) + (add & m7) > m7) atomicAdd(carry.v[c0], 1u);
-    if ((old & m26) + (add & m26) > m26) atomicAdd(carry.v[c0 + 1u], 1u);
-    if ((old & m45) + (add & m45) > m45) atomicAdd(carry.v[c0 + 2u], 1u);
-    if (old + add < old) atomicAdd(carry.v[c0 + 3u], 1u);
-}
-
-void add_packed(uint cell, uvec4 q)
-{
-    add_packed_at(cell, cell * 4u, 1u, q.x, q.y, q.z);
+    atomicAdd(hist.v[at], (uint64_t(r) << K_FLAME_HIT_BITS) | uint64_t(1u));
+    atomicAdd(hist.v[at + 1u], uint64_t(g));
+    atomicAdd(hist.v[at + 2u], uint64_t(b));
+    if (W > 3u) {
+        atomicAdd(hist.v[at + 3u], uint64_t(a));
+        atomicAdd(hist.v[at + 4u], uint64_t(o));
+    }
 }
 #else
 void add1(uint cell, uint f, uint v)
@@ -175,14 +160,10 @@ void main()
         }
 #ifdef FB_FLAME_INT64
         if (COMPACT != 0u) {
-            add_packed(cell, q);
+            add_words(cell * K_FLAME_WORDS(1u), 3u, q.x, q.y, q.z, 0u, 0u);
         } else {
-            add_packed_at(2u * cell, 6u * cell, 1u, k_flame_vis(q.x, visq), k_flame_vis(q.y, visq),
-                          k_flame_vis(q.z, visq));
-            uint a = k_flame_vis(q.w, visq), o = k_flame_vis(K_FLAME_OPAQUE, visq);
-            uint64_t old = atomicAdd(hist.v[2u * cell + 1u], (uint64_t(o) << 32) | uint64_t(a));
-            if (uint(old) + a < uint(old)) atomicAdd(carry.v[6u * cell + 4u], 1u);
-            if (old + ((uint64_t(o) << 32) | uint64_t(a)) < old) atomicAdd(carry.v[6u * cell + 5u], 1u);
+            add_words(cell * K_FLAME_WORDS(0u), 5u, k_flame_vis(q.x, visq), k_flame_vis(q.y, visq),
+                      k_flame_vis(q.z, visq), k_flame_vis(q.w, visq), k_flame_vis(K_FLAME_OPAQUE, visq));
         }
 #else
         if (COMPACT != 0u) {

@@ -47,6 +47,19 @@ same() {
 while read -r name seed vars <&3; do genome "$name" "$seed" "$vars" && same "$name"; done 3< "$HERE/flame-cases.txt"
 # the 32-bit atomics: opaque (4 fields a cell), translucent (6) and the linear palette
 for g in post opacity linear; do same $g FB_VK_NO_INT64=1; done
+# the 64-bit histogram's folds (kernels/flame.h: a cell's words are exact for 2^26 - 1 points between
+# folds): two xforms that map every point to (0.01, 0.01), one cell, 71.7M points in it, opaque (3
+# words a cell) and translucent (5); without the folds its hits wrap past 2^26
+for op in 1 0.5; do
+    cat > "one$op.flame" << EOF
+<flame size="16 16" center="0 0" scale="4" rotate="0" supersample="1" filter="0.5" quality="280000" palette="7"
+ background="0 0 0" brightness="4" gamma="4" vibrancy="1" estimator_radius="0" estimator_minimum="0">
+  <xform weight="0.5" color="0.2" color_speed="0.5" linear="1" coefs="0 0 0 0 0.01 0.01" opacity="1"/>
+  <xform weight="0.5" color="0.9" color_speed="0.5" linear="1" coefs="0 0 0 0 0.01 0.01" opacity="$op"/>
+</flame>
+EOF
+    SIZE=16x16 same "one$op"
+done
 # the histogram is not trivially equal: another seed gives another one
 "$FB" flame --file post.flame --size "$SIZE" --seed 6 --backend vulkan --points-part 1/1 --quiet -o post-s6.exr
 "$FB" compare post-v.exr post-s6.exr --max-abs 0 > /dev/null

@@ -14,6 +14,7 @@
 
 #include "flame64_comp.h"
 #include "flame_comp.h"
+#include "flame_fold_comp.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -156,73 +157,95 @@ static uint32_t device_fields(const fb_flame_setup *S)
     return fb_flame_cell_bytes(S) == 16 ? 4u : 6u;
 }
 
-/* Field f of cell i of the device's histogram as its exact 64-bit sum: the word (a 32-bit one, or
- * a half of a 64-bit one) plus 2^32 for each carry out of it, less the carry into it from the low
- * half. */
-static uint64_t device_field(const void *hist, const uint32_t *carry, bool wide, size_t at)
+/* Field f of cell i of the device's 32-bit histogram as its exact 64-bit sum: the word plus 2^32
+ * for each carry out of it. */
+static uint64_t device_field(const uint32_t *hist, const uint32_t *carry, size_t at)
 {
-    uint64_t v = (uint64_t)carry[at] << 32;
-    if (!wide) return v + ((const uint32_t *)hist)[at];
-    uint64_t w = ((const uint64_t *)hist)[at >> 1];
-    return (at & 1) ? v + (w >> 32) - carry[at - 1] : v + (uint32_t)w;
+    return ((uint64_t)carry[at] << 32) + hist[at];
 }
 
-/* Cell i of an opaque genome's histogram with 64-bit atomics (flame_body.glsl's add_packed): a
- * word of fields of 7, 19, 19 and 19 bits (hits, red, green, blue) and the carries out of each, k. A
- * carry out of field k left 2^bits(k) there and put 1 into field k + 1. */
-static void device_packed(const uint64_t *hist, const uint32_t *carry, size_t i, uint64_t out[4])
+/* The points one fold interval of the 64-bit histogram may take (kernels/flame.h). */
+#define FOLD_POINTS ((1ull << K_FLAME_HIT_BITS) - 1)
+
+/* The 64-bit histogram's words a cell (kernels/flame.h), and its totals' (shaders/flame_fold.comp):
+ * hits, red, green, blue and for translucent genomes alpha, opacity. */
+static uint32_t device_words(const fb_flame_setup *S)
 {
-    static const int lo[4] = {0, 7, 26, 45}, bits[4] = {7, 19, 19, 19};
-    uint64_t w = hist[i];
-    for (int k = 0; k < 4; k++) {
-        uint64_t f = (w >> lo[k]) & ((1ull << bits[k]) - 1);
-        out[k] = f + ((uint64_t)carry[k] << bits[k]) - (k ? carry[k - 1] : 0);
-    }
+    return K_FLAME_WORDS(device_fields(S) == 4);
 }
 
-/* Adds the device's histogram into total (64-bit cells). */
-static void device_to_total(const fb_flame_setup *S, const void *hist, const uint32_t *carry, bool wide,
-                            fb_flame_cell *total)
+/* Adds the device's histogram into total (64-bit cells). 32-bit atomics: hist and carry as
+ * flame_body.glsl's flame.comp leaves them. 64-bit: the words since the last fold in hist64 and,
+ * where the run folded, the totals before them in tot (else NULL). */
+static void device_to_total(const fb_flame_setup *S, const uint32_t *hist, const uint32_t *carry,
+                            const uint64_t *hist64, const uint64_t *tot, fb_flame_cell *total)
 {
     size_t cells = (size_t)S->p.hist_w * S->p.hist_h;
-    uint32_t F = device_fields(S);
+    uint32_t F = device_fields(S), W = device_words(S);
     for (size_t i = 0; i < cells; i++) {
         size_t at = i * F;
         fb_flame_cell *c = &total[i];
-        if (F == 4 && wide) {
-            uint64_t v[4];
-            device_packed(hist, carry + 4 * i, i, v);
-            for (int k = 0; k < 3; k++) c->c[k] += v[1 + k];
-            c->c[3] += K_FLAME_OPAQUE * v[0];
-            c->c[4] += K_FLAME_OPAQUE * v[0];
-            c->hits += v[0];
+        uint64_t v[6] = {0}; /* hits, red, green, blue, alpha, opacity */
+        if (hist64) {
+            const uint64_t *w = hist64 + i * W;
+            v[0] = w[0] & ((1ull << K_FLAME_HIT_BITS) - 1), v[1] = w[0] >> K_FLAME_HIT_BITS;
+            for (uint32_t k = 1; k < W; k++) v[1 + k] = w[k];
+            for (uint32_t k = 0; tot && k <= W; k++) v[k] += tot[i * (W + 1) + k];
         } else if (F == 4) {
-            uint64_t hits = device_field(hist, carry, wide, at);
-            for (int k = 0; k < 3; k++) c->c[k] += device_field(hist, carry, wide, at + 1 + k);
-            c->c[3] += K_FLAME_OPAQUE * hits;
-            c->c[4] += K_FLAME_OPAQUE * hits;
-            c->hits += hits;
-        } else if (wide) { /* word 2i packed as above, word 2i + 1 alpha and opacity (32 bits each) */
-            uint64_t v[4], w = ((const uint64_t *)hist)[2 * i + 1];
-            device_packed(hist, carry + at, 2 * i, v);
-            for (int k = 0; k < 3; k++) c->c[k] += v[1 + k];
-            c->c[3] += (uint32_t)w + ((uint64_t)carry[at + 4] << 32);
-            c->c[4] += (w >> 32) + ((uint64_t)carry[at + 5] << 32) - carry[at + 4];
-            c->hits += v[0];
+            for (int k = 0; k < 4; k++) v[k] = device_field(hist, carry, at + k);
         } else {
-            for (int k = 0; k < 5; k++) c->c[k] += device_field(hist, carry, wide, at + k);
-            c->hits += device_field(hist, carry, wide, at + 5);
+            v[0] = device_field(hist, carry, at + 5);
+            for (int k = 0; k < 5; k++) v[1 + k] = device_field(hist, carry, at + k);
         }
+        if (F == 4) v[4] = v[5] = K_FLAME_OPAQUE * v[0];
+        for (int k = 0; k < 5; k++) c->c[k] += v[1 + k];
+        c->hits += v[0];
     }
 }
 
-/* The device's buffers: the histogram and its carries, and the chains' state of one batch. */
-static void device_bytes(const flame_state *st, uint64_t *hist, uint64_t *chains)
+/* Whether the run folds the 64-bit histogram: it plays more steps (plotted or not) than a fold
+ * interval holds points. */
+static bool folds(const flame_state *st)
+{
+    return (uint64_t)(st->cr1 - st->cr0) * (st->S.p.fuse + st->S.p.len) > FOLD_POINTS;
+}
+
+/* The device's buffers: the histogram, its carries (32-bit atomics) or the totals it is folded into
+ * (64-bit, where the run folds), and the chains' state of one batch. */
+static void device_bytes(const flame_state *st, bool wide, uint64_t *hist, uint64_t *extra, uint64_t *chains)
 {
     uint64_t cells = (uint64_t)st->S.p.hist_w * st->S.p.hist_h, n = st->cr1 - st->cr0;
     uint64_t batch = (uint64_t)FLAME_MAX_GROUPS * 64u;
-    *hist = 4ull * device_fields(&st->S) * cells;
+    uint32_t W = device_words(&st->S);
+    *hist = (wide ? 8ull * W : 4ull * device_fields(&st->S)) * cells;
+    *extra = wide ? (folds(st) ? 8ull * (W + 1) * cells : 0) : *hist;
     *chains = sizeof(K_FlameChain) * (n < batch ? (n ? n : 1) : batch);
+}
+
+/* The 64-bit histogram where the device has 64-bit atomics and its words, and the totals where the
+ * run folds, fit a buffer each; else the 32-bit one with its carries. The sums are the same. */
+static bool wide_histogram(const flame_state *st, vkc_context *vk)
+{
+    uint64_t hist, extra, chains, range = vkc_info(vk)->max_storage_buffer_range;
+    device_bytes(st, true, &hist, &extra, &chains);
+    return vkc_info(vk)->int64_atomics && hist <= range && extra <= range;
+}
+
+/* Adds the 64-bit words into the totals and clears them (shaders/flame_fold.comp). */
+static fb_result fold(vkc_context *vk, vkc_pipeline *pipe, vkc_buffer *hist, vkc_buffer *tot, size_t cells, double *gpu)
+{
+    vkc_job *job = NULL;
+    fb_result rc = vkc_job_create(vk, pipe, &job);
+    uint64_t groups = (cells + 63) / 64, gx = groups < FLAME_MAX_GROUPS ? groups : FLAME_MAX_GROUPS;
+    const uint32_t push[2] = {(uint32_t)cells, (uint32_t)gx * 64}; /* cells, cells a row of groups */
+    double t = -1;
+    if (!rc)
+        rc = vkc_job_submit(vk, job, (vkc_buffer *[2]){hist, tot}, 2, push,
+                            (const uint32_t[3]){(uint32_t)gx, (uint32_t)((groups + gx - 1) / gx), 1});
+    if (!rc) rc = vkc_job_wait(vk, job, &t);
+    if (t > 0) *gpu += t;
+    vkc_job_destroy(vk, &job);
+    return rc;
 }
 
 /* The steps a dispatch may run per chain within FLAME_LOOP_ITERATIONS (lavapipe ends a shader's
@@ -241,29 +264,42 @@ static uint32_t loop_steps(const fb_flame_setup *S, const uint32_t mask[4])
     return FLAME_LOOP_ITERATIONS / (1 + 5 * apply + (S->p.final_xf != K_FLAME_NONE ? apply : 0));
 }
 
+/* Steps a chain per dispatch of n chains: on a CPU device about FLAME_POINTS_PER_DISPATCH points (a
+ * few hundred ms on lavapipe, so that the progress bar moves; fewer where lavapipe's loop limit
+ * would cut a chain short); on a GPU as many as a fold interval holds (2^26 points: milliseconds),
+ * since each job's end costs a round trip and, on a discrete GPU, vkc's copy of its buffers back to
+ * the host. */
+static uint32_t steps_per_dispatch(const fb_flame_setup *S, const vkc_context *vk, uint32_t n, const uint32_t mask[4])
+{
+    uint64_t per = FOLD_POINTS / n;
+    if (!strcmp(vkc_info(vk)->type, "cpu")) {
+        per = FLAME_POINTS_PER_DISPATCH / n;
+        if (per > loop_steps(S, mask)) per = loop_steps(S, mask);
+    }
+    return per ? (uint32_t)per : 1;
+}
+
 /* Chains [cr0, cr1) in the shader, in batches of at most 65535 workgroups, each in dispatches of
- * about FLAME_POINTS_PER_DISPATCH points (fewer where lavapipe's loop limit would cut a chain short);
- * the histogram then added into total. */
+ * steps_per_dispatch; the 64-bit histogram folded before a dispatch could take it past a fold
+ * interval; then added into total. */
 static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_progress *prog, double *gpu)
 {
     flame_state *st = state(g);
     const fb_flame_setup *S = &st->S;
     vkc_context *vk = e->vk;
-    uint64_t hist_bytes, chain_bytes, range = vkc_info(vk)->max_storage_buffer_range;
-    device_bytes(st, &hist_bytes, &chain_bytes);
-    bool wide = vkc_info(vk)->int64_atomics;
-    /* with 64-bit atomics a cell is one word (an opaque genome's) or two (add_packed, add_packed_at) */
-    uint64_t carry_bytes = hist_bytes;
-    if (wide) hist_bytes = 8ull * (device_fields(S) == 4 ? 1 : 2) * S->p.hist_w * S->p.hist_h;
-    if (carry_bytes > range || chain_bytes > range)
+    size_t cells = (size_t)S->p.hist_w * S->p.hist_h;
+    bool wide = wide_histogram(st, vk), folding = wide && folds(st);
+    uint64_t hist_bytes, extra_bytes, chain_bytes, range = vkc_info(vk)->max_storage_buffer_range;
+    device_bytes(st, wide, &hist_bytes, &extra_bytes, &chain_bytes);
+    if (hist_bytes > range || chain_bytes > range)
         return fb_fail(FB_ERR_INPUT,
                        "layer %s: the flame's histogram (%u x %u cells) needs %llu MiB in one buffer; this device "
                        "allows %llu MiB (a smaller size or supersample, or --backend native)",
-                       g->layer->name, S->p.hist_w, S->p.hist_h, (unsigned long long)(carry_bytes >> 20),
+                       g->layer->name, S->p.hist_w, S->p.hist_h, (unsigned long long)(hist_bytes >> 20),
                        (unsigned long long)(range >> 20));
-    vkc_pipeline *pipe = NULL;
+    vkc_pipeline *pipe = NULL, *fold_pipe = NULL;
     vkc_job *job = NULL;
-    vkc_buffer *buf[FB_NBUF] = {0};
+    vkc_buffer *buf[FB_NBUF] = {0}, *tot = NULL;
     uint32_t nxf = S->p.nxf + (S->p.final_xf != K_FLAME_NONE), nvar = S->nvar ? S->nvar : 1;
     /* flame_body.glsl's specialisation: flags, the genome's variations as 4 masks, the tables' sizes */
     uint32_t spec[7] = {
@@ -272,7 +308,8 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
     for (uint32_t f = 0; f < nxf; f++)
         if (S->xf[f].preblur != 0.0f) spec[1 + K_V_PRE_BLUR / 32] |= 1u << (K_V_PRE_BLUR % 32);
     /* the parameters, xforms, variations and palette: uniform buffers (flame_body.glsl), their sizes
-     * in std140 (the parameters' block rounded up to 16 bytes) */
+     * in std140 (the parameters' block rounded up to 16 bytes); with 64-bit atomics the carries'
+     * binding is not used */
     const uint64_t sizes[FB_NBUF] = {(sizeof S->p + 15) & ~(uint64_t)15,
                                      sizeof(K_FlameXform) * nxf,
                                      sizeof(K_FlameVar) * nvar,
@@ -280,7 +317,7 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
                                      sizeof S->palq,
                                      chain_bytes,
                                      hist_bytes,
-                                     carry_bytes};
+                                     wide ? 16 : extra_bytes};
     const uint32_t uniform = 1u << FB_PARAMS | 1u << FB_XF | 1u << FB_VAR | 1u << FB_PAL;
     for (int b = 0; b < FB_NBUF; b++)
         if ((uniform >> b & 1u) && sizes[b] > vkc_info(vk)->max_uniform_buffer_range)
@@ -299,26 +336,40 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
                                                             .nspec = 7,
                                                             .name = g->layer->name},
                                        &pipe);
+    const uint32_t fold_spec[2] = {device_fields(S) == 4, K_FLAME_HIT_BITS};
+    if (!rc && folding)
+        rc = vkc_pipeline_create(vk,
+                                 &(vkc_pipeline_desc){FB_SPV(flame_fold_comp), .push_size = 8, .buffers = 2,
+                                                      .spec = fold_spec, .nspec = 2, .name = g->layer->name},
+                                 &fold_pipe);
     for (int b = 0; b < FB_NBUF && !rc; b++) rc = vkc_buffer_create(vk, sizes[b], &buf[b]);
+    if (!rc && folding) rc = vkc_buffer_create(vk, extra_bytes, &tot);
     const void *data[FB_PAL + 1] = {&S->p, S->xf, S->var, S->dist, S->palq};
     for (int b = 0; b <= FB_PAL && !rc; b++)
         rc = vkc_buffer_upload(vk, buf[b], data[b], b == FB_PARAMS ? sizeof S->p : sizes[b]);
-    void *zero = rc ? NULL : calloc(1, carry_bytes);
+    void *zero = rc ? NULL : calloc(1, hist_bytes > extra_bytes ? hist_bytes : extra_bytes);
     if (!rc && !zero) rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
     for (int b = FB_HIST; b <= FB_CARRY && !rc; b++) rc = vkc_buffer_upload(vk, buf[b], zero, sizes[b]);
+    if (!rc && folding) rc = vkc_buffer_upload(vk, tot, zero, extra_bytes);
     free(zero);
     if (!rc) rc = vkc_job_create(vk, pipe, &job);
     uint32_t steps = S->p.fuse + S->p.len, batch = FLAME_MAX_GROUPS * 64u;
+    uint64_t since = 0; /* steps played since the last fold: a bound on the points any cell took */
     double all = chain_points(st);
     for (uint32_t b0 = st->cr0; b0 < st->cr1 && !rc; b0 += batch) {
         uint32_t b1 = st->cr1 - b0 > batch ? b0 + batch : st->cr1, n = b1 - b0;
-        uint32_t per = FLAME_POINTS_PER_DISPATCH / n ? FLAME_POINTS_PER_DISPATCH / n : 1;
-        if (per > loop_steps(S, spec + 1)) per = loop_steps(S, spec + 1);
+        uint32_t per = steps_per_dispatch(S, vk, n, spec + 1);
         for (uint32_t t0 = 0; t0 < steps && !rc; t0 += per) {
+            uint64_t played = (uint64_t)n * (steps - t0 < per ? steps - t0 : per);
+            if (folding && since + played > FOLD_POINTS) {
+                rc = fold(vk, fold_pipe, buf[FB_HIST], tot, cells, gpu);
+                since = 0;
+            }
+            since += played;
             flame_push push = {b0, b1, t0, per};
             uint32_t groups[3] = {(n + 63) / 64, 1, 1};
             double t = -1;
-            rc = vkc_job_submit(vk, job, buf, FB_NBUF, &push, groups);
+            if (!rc) rc = vkc_job_submit(vk, job, buf, FB_NBUF, &push, groups);
             if (!rc) rc = vkc_job_wait(vk, job, &t);
             if (t > 0) *gpu += t;
             double done = (double)(b0 - st->cr0) * S->p.len + (double)n * fmin(t0 + per, steps) / steps * S->p.len;
@@ -327,10 +378,15 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
         const K_FlameChain *ch = rc ? NULL : vkc_buffer_data(buf[FB_CHAINS]);
         for (uint32_t i = 0; ch && i < n; i++) st->bad += ch[i].bad;
     }
-    if (!rc) device_to_total(S, vkc_buffer_data(buf[FB_HIST]), vkc_buffer_data(buf[FB_CARRY]), wide, total);
+    if (!rc && wide)
+        device_to_total(S, NULL, NULL, vkc_buffer_data(buf[FB_HIST]), folding ? vkc_buffer_data(tot) : NULL, total);
+    else if (!rc)
+        device_to_total(S, vkc_buffer_data(buf[FB_HIST]), vkc_buffer_data(buf[FB_CARRY]), NULL, NULL, total);
     vkc_job_destroy(vk, &job);
     for (int b = 0; b < FB_NBUF; b++) vkc_buffer_destroy(vk, &buf[b]);
+    vkc_buffer_destroy(vk, &tot);
     vkc_pipeline_destroy(vk, &pipe);
+    vkc_pipeline_destroy(vk, &fold_pipe);
     return rc;
 }
 
@@ -468,10 +524,10 @@ static uint64_t flame_memory(const fb_gen *g, const struct fb_engine *e, uint64_
     int threads = e->pool ? fb_pool_threads(e->pool) : 1;
     if (threads > 64) threads = 64;
     *hold = 20 * n + (st->nsums ? cells * sizeof(fb_flame_cell) : 0); /* a points part keeps its histogram */
-    if (e->kind == FB_BACKEND_VULKAN) { /* the device's histogram, its carries and chains, then the total */
-        uint64_t hist, chains;
-        device_bytes(st, &hist, &chains);
-        return 2 * hist + chains + cells * sizeof(fb_flame_cell) + 32 * cells + 20 * n;
+    if (e->kind == FB_BACKEND_VULKAN) { /* the device's histogram, its carries or totals, chains, then the total */
+        uint64_t hist, extra, chains;
+        device_bytes(st, e->vk && wide_histogram(st, e->vk), &hist, &extra, &chains);
+        return hist + extra + chains + cells * sizeof(fb_flame_cell) + 32 * cells + 20 * n;
     }
     return (uint64_t)threads * cells * fb_flame_cell_bytes(&st->S) + cells * sizeof(fb_flame_cell) + 32 * cells +
            20 * n;
