@@ -100,6 +100,15 @@ def reduce(cmd):
     return cmd
 
 
+def user_path():
+    """PATH as a user's shell has it: without the folder of the Python that runs this test when a
+    version manager (pyenv) put it first, which would hand Blender's embedded Python that
+    interpreter's library in place of the system's (no numpy there)."""
+    mine = os.path.dirname(os.path.realpath(sys.executable))
+    return [d for d in os.environ.get('PATH', '').split(os.pathsep)
+            if d and not (os.path.realpath(d) == mine and mine not in ('/usr/bin', '/bin'))]
+
+
 def main():
     root, fb = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
     docs = sys.argv[3:] or ['README.md', 'CONTRIBUTING.md'] + sorted(
@@ -116,7 +125,7 @@ def main():
             bindir = os.path.join(scratch, '.bin')
             os.mkdir(bindir)
             os.symlink(fb, os.path.join(bindir, 'fractalbake'))
-            env = dict(os.environ, PATH=bindir + os.pathsep + os.environ.get('PATH', ''),
+            env = dict(os.environ, PATH=os.pathsep.join([bindir] + user_path()),
                        XDG_RUNTIME_DIR=os.environ.get('XDG_RUNTIME_DIR', scratch))
             for c in cmds:
                 why = next((r for p, r in NOT_RUN if re.search(p, c['text'])), None)

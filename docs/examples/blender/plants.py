@@ -109,7 +109,7 @@ def main(argv):
     placed = sum(1 for i in deps.object_instances if i.is_instance and i.parent.original == pts)
     print("plants.py: %s: %d plants placed" % (a.instances, placed))
     if a.save:
-        bpy.ops.wm.save_as_mainfile(filepath=a.save)
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(a.save))
 
 
 if __name__ == "__main__":

@@ -18,6 +18,7 @@ file whose one colour layer is the sky (bake the sky alone), or the layer as pla
 (`oiiotool sky.exr --ch R=sky.R,G=sky.G,B=sky.B -o sky-rgb.exr`).
 """
 import math
+import os
 import sys
 
 import bpy
@@ -89,7 +90,7 @@ def main(argv):
     if a.render:
         render(a.render, a.size, a.samples)
     if a.save:
-        bpy.ops.wm.save_as_mainfile(filepath=a.save)
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(a.save))
 
 
 if __name__ == "__main__":

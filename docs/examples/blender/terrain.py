@@ -11,6 +11,7 @@ every --heightmap PNG) unless --range gives them. --bounds is the heightmap's ex
 top row is the north edge, at YMAX, and its left column the west edge, at XMIN, so Blender's +X is
 east and +Y north. --save writes the .blend.
 """
+import os
 import struct
 import sys
 import zlib
@@ -89,7 +90,7 @@ def main(argv):
     z = [(obj.matrix_world @ v.co).z for v in mesh.vertices]
     print("terrain.py: %s: %d vertices, heights %.6g to %.6g" % (a.heightmap, len(z), min(z), max(z)))
     if a.save:
-        bpy.ops.wm.save_as_mainfile(filepath=a.save)
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(a.save))
 
 
 if __name__ == "__main__":
