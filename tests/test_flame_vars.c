@@ -90,6 +90,7 @@ static double compare(const int *vars, int n, bool post, double *good, char *xml
         double scale = 1 + fmax(fabs(q[0]), fabs(q[1]));
         if (fabs(o.x - q[0]) <= 1e-3 * scale && fabs(o.y - q[1]) <= 1e-3 * scale && fabs(o.c - q[2]) < 1e-5) agree++;
     }
+    clear_cp(cp, flam3_defaults_on); /* its xforms and xaos rows */
     flam3_free(cp);
     fb_flame_setup_fini(&S);
     *good = (double)ngood / N;

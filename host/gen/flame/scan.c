@@ -197,6 +197,8 @@ static bool scan_feed(scan *s, const char *bytes, size_t n, bool last, const xml
 static fb_result scan_end(scan *s, const xml_errors *x)
 {
     fb_result rc = s->rc ? s->rc : x->set ? xml_error(s->what, x) : FB_OK;
+    /* libxml2 makes a document to hold a DOCTYPE's entities even for SAX, and leaves it to us */
+    if (s->ctxt->myDoc) xmlFreeDoc(s->ctxt->myDoc);
     xmlFreeParserCtxt(s->ctxt);
     return rc;
 }
