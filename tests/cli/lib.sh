@@ -59,6 +59,12 @@ require_vulkan() {
   fi
 }
 
+# sanitized: whether $FB is an AddressSanitizer build, whose shadow memory (terabytes reserved) rules
+# out ulimit -v and whose overheads rule out bounds on time and memory
+sanitized() {
+  ldd "$FB" | grep -q libasan
+}
+
 # require_blender: a script that drives Blender is not run (77) where Blender is not installed
 require_blender() {
   if ! command -v blender > /dev/null; then
