@@ -20,6 +20,7 @@ typedef struct cell16 {
 #define BATCH    1024 /* points computed before they are scattered */
 #define AHEAD    64   /* records prefetched ahead of the one added */
 #define OPAQUE_Q K_FLAME_OPAQUE
+#define GROUP    64 /* chains on the lanes together: those whose step chose a non-linear xform regrouped by it */
 
 static bool compact(const fb_flame_setup *S)
 {
@@ -225,31 +226,33 @@ static uint64_t play(const game *G, int task, uint32_t i, uint32_t len, K_FlameC
     return s.bad;
 }
 
-/* ---- eight chains on AVX2 lanes ------------------------------------------------------------------ */
+/* ---- chains on AVX2 lanes ---------------------------------------------------------------------- */
 
 #if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
+#include "flame_avx2.h"
 
 #define LANES_AVX2 __attribute__((target("avx2")))
 
 /* The xforms' coefficients for the lanes' gathers: colour (speed x colour and 1 - speed, the
- * products the step forms, made once), the affine map and the linear weight; plain: -1 or 0. */
+ * products the step forms, made once), the affine map and the linear weight; plain: -1 or 0; vec:
+ * whether the xform (not plain) is applied on the lanes (fl_xform_avx2). */
 typedef struct lane_tables {
     float sc[FB_FLAME_MAX_XFORMS + 1], oms[FB_FLAME_MAX_XFORMS + 1];
     float ax[FB_FLAME_MAX_XFORMS + 1], bx[FB_FLAME_MAX_XFORMS + 1], cx[FB_FLAME_MAX_XFORMS + 1];
     float ay[FB_FLAME_MAX_XFORMS + 1], by[FB_FLAME_MAX_XFORMS + 1], cy[FB_FLAME_MAX_XFORMS + 1];
     float w[FB_FLAME_MAX_XFORMS + 1];
     int32_t plain[FB_FLAME_MAX_XFORMS + 1];
+    uint8_t vec[FB_FLAME_MAX_XFORMS + 1];
 } lane_tables;
 
-/* Whether the lanes play S: plain linear xforms to take (the other steps are the scalar step's, a
- * lane at a time), at most 8 xforms (their tables are registers, looked up by a permutation: AMD's
- * gathers cost more than the scalar step saves), no xaos, final xform or camera rotation (the
- * scalar path plays those), AVX2. */
+/* Whether the lanes play S: plain linear xforms or xforms of the variations flame_avx2.h has to
+ * take (the other steps are the scalar step's, a lane at a time), at most 8 xforms (their tables
+ * are registers, looked up by a permutation: AMD's gathers cost more than the scalar step saves), no
+ * xaos, final xform or camera rotation (the scalar path plays those), AVX2. */
 static bool lanes_ok(const fb_flame_setup *S, const uint8_t *plain)
 {
     bool any = false;
-    for (uint32_t f = 0; f < S->p.nxf; f++) any |= plain[f] != 0;
+    for (uint32_t f = 0; f < S->p.nxf; f++) any |= plain[f] != 0 || fl_xform_avx2(&S->xf[f], S->var);
     return any && S->p.nxf <= 8 && !S->p.chaos && S->p.final_xf == K_FLAME_NONE && !S->p.rotate &&
            __builtin_cpu_supports("avx2");
 }
@@ -264,16 +267,8 @@ static void lane_tables_init(const fb_flame_setup *S, const uint8_t *plain, lane
         T->ay[f] = X->ay, T->by[f] = X->by, T->cy[f] = X->cy;
         T->w[f] = plain[f] ? S->var[X->var0].w : 0.0f;
         T->plain[f] = plain[f] ? -1 : 0;
+        T->vec[f] = !plain[f] && fl_xform_avx2(X, S->var);
     }
-}
-
-LANES_AVX2 static inline __m256i hash8(__m256i x)
-{
-    x = _mm256_xor_si256(x, _mm256_srli_epi32(x, 16));
-    x = _mm256_mullo_epi32(x, _mm256_set1_epi32(0x7feb352d));
-    x = _mm256_xor_si256(x, _mm256_srli_epi32(x, 15));
-    x = _mm256_mullo_epi32(x, _mm256_set1_epi32((int)0x846ca68bu));
-    return _mm256_xor_si256(x, _mm256_srli_epi32(x, 16));
 }
 
 /* k_flame_bad on the lanes: NaN or beyond +-1e10. */
@@ -285,13 +280,16 @@ LANES_AVX2 static inline __m256 bad8(__m256 v)
     return _mm256_or_ps(nan, _mm256_or_ps(hi, lo));
 }
 
-/* Chains i .. i + 7, each of P.len points (none the last chain), on the lanes: each step the lanes
- * whose chosen xform is plain linear and gives no bad value take apply_linear's operations (the
- * same, in the same order: add and multiply, no FMA), the others the scalar step from the same
- * state, so every chain's points are the scalar path's. Points are scattered a batch at a time as
- * play does (their order within a batch changes no integer sum). */
-LANES_AVX2 static uint64_t play8(const game *G, int task, uint32_t i, const lane_tables *T, K_FlameChain *pts,
-                                 records *rec)
+/* Chains i .. i + g - 1 (g a multiple of 8, at most GROUP), each of P.len points (none the last
+ * chain), on the lanes. Each step: eight chains at a time, the lanes whose chosen xform is plain
+ * linear and gives no bad value take apply_linear's operations (the same, in the same order: add and
+ * multiply, no FMA); the chains whose xform has a form on the lanes (lane_tables.vec) are then
+ * gathered eight at a time by xform and take fl_apply8 (k_flame_apply's operations); the rest, and
+ * any whose result is a bad value, take the scalar step from their state before the step, so every
+ * chain's points are the scalar path's. Points are scattered a batch at a time as play does (their
+ * order within a batch changes no integer sum). */
+LANES_AVX2 static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g, const lane_tables *T,
+                                 K_FlameChain *pts, records *rec)
 {
     const fb_flame_setup *S = G->S;
     const K_FlameParams P = S->p;
@@ -299,68 +297,106 @@ LANES_AVX2 static uint64_t play8(const game *G, int task, uint32_t i, const lane
     const K_FlameVar *k_flame_var = S->var;
     const uint *k_flame_dist = S->dist;
     const uint8_t *plain = G->plain;
-    K_FlameChain st[8];
-    uint32_t key[8];
+    uint32_t key[GROUP];
     uint64_t bad = 0;
-    for (int l = 0; l < 8; l++) {
-        key[l] = k_flame_key(P.seed, i + (uint32_t)l);
-        st[l] = k_flame_init(key[l]);
-        for (uint32_t t = 0; t < P.fuse; t++) st[l] = step(P, st[l], key[l], plain K_FLAME_TABLES);
-        bad += st[l].bad;
+    /* the chains' state as planes */
+    float x[GROUP], y[GROUP], c[GROUP];
+    uint32_t n[GROUP], f[GROUP];
+    for (uint32_t l = 0; l < g; l++) {
+        key[l] = k_flame_key(P.seed, i + l);
+        K_FlameChain s = k_flame_init(key[l]);
+        for (uint32_t t = 0; t < P.fuse; t++) s = step(P, s, key[l], plain K_FLAME_TABLES);
+        bad += s.bad;
+        x[l] = s.x, y[l] = s.y, c[l] = s.c, n[l] = s.n;
     }
-    /* the lanes' state as planes */
-    float x[8], y[8], c[8];
-    uint32_t n[8];
-    for (int l = 0; l < 8; l++) x[l] = st[l].x, y[l] = st[l].y, c[l] = st[l].c, n[l] = st[l].n;
-    const __m256i vkey = _mm256_loadu_si256((const __m256i *)key), grain = _mm256_set1_epi32(K_FLAME_GRAIN - 1);
+    const __m256i grain = _mm256_set1_epi32(K_FLAME_GRAIN - 1);
     const __m256 zero = _mm256_setzero_ps();
     const __m256 t_sc = _mm256_loadu_ps(T->sc), t_oms = _mm256_loadu_ps(T->oms), t_w = _mm256_loadu_ps(T->w);
     const __m256 t_ax = _mm256_loadu_ps(T->ax), t_bx = _mm256_loadu_ps(T->bx), t_cx = _mm256_loadu_ps(T->cx);
     const __m256 t_ay = _mm256_loadu_ps(T->ay), t_by = _mm256_loadu_ps(T->by), t_cy = _mm256_loadu_ps(T->cy);
     const __m256i t_plain = _mm256_loadu_si256((const __m256i *)T->plain);
 #define LOOK(t) _mm256_permutevar8x32_ps(t, fn)
-    const uint32_t per = BATCH / 8;
+    const uint32_t per = BATCH / g;
+    uint32_t list[8][GROUP + 8], cnt[8], scal[GROUP];
     for (uint32_t t0 = 0; t0 < P.len; t0 += per) {
         uint32_t m = P.len - t0 < per ? P.len - t0 : per;
         for (uint32_t t = 0; t < m; t++) {
-            __m256 vx = _mm256_loadu_ps(x), vy = _mm256_loadu_ps(y), vc = _mm256_loadu_ps(c);
-            __m256i vn = _mm256_loadu_si256((const __m256i *)n);
-            __m256i h = hash8(_mm256_xor_si256(vn, vkey));
-            __m256i fn = _mm256_i32gather_epi32((const int *)k_flame_dist, _mm256_and_si256(h, grain), 4);
-            __m256 ok = _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(t_plain, fn));
-            __m256 oc = _mm256_add_ps(LOOK(t_sc), _mm256_mul_ps(LOOK(t_oms), vc));
-            __m256 tx =
-                _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(LOOK(t_ax), vx), _mm256_mul_ps(LOOK(t_bx), vy)), LOOK(t_cx));
-            __m256 ty =
-                _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(LOOK(t_ay), vx), _mm256_mul_ps(LOOK(t_by), vy)), LOOK(t_cy));
-            __m256 w = LOOK(t_w);
-            __m256 p0 = _mm256_add_ps(zero, _mm256_mul_ps(w, tx)), p1 = _mm256_add_ps(zero, _mm256_mul_ps(w, ty));
-            ok = _mm256_andnot_ps(_mm256_or_ps(bad8(p0), bad8(p1)), ok);
-            _mm256_storeu_ps(x, _mm256_blendv_ps(vx, p0, ok));
-            _mm256_storeu_ps(y, _mm256_blendv_ps(vy, p1, ok));
-            _mm256_storeu_ps(c, _mm256_blendv_ps(vc, oc, ok));
-            _mm256_storeu_si256((__m256i *)n, _mm256_add_epi32(vn, _mm256_set1_epi32(1)));
-            uint32_t f[8];
-            _mm256_storeu_si256((__m256i *)f, fn);
-            unsigned scalar = ~(unsigned)_mm256_movemask_ps(ok) & 255u;
-            K_FlameChain *out = &pts[t * 8];
-            for (int l = 0; l < 8; l++) out[l].px = x[l], out[l].py = y[l], out[l].pc = c[l], out[l].vis = f[l];
-            /* the other lanes (a few a step: no test a lane, which the random choice would mispredict),
-             * each the scalar step from its state before this step (kept by the blends; n was advanced
-             * above) */
-            for (; scalar; scalar &= scalar - 1u) {
-                int l = __builtin_ctz(scalar);
-                K_FlameChain s = st[l];
+            K_FlameChain *out = &pts[t * g];
+            uint32_t nsc = 0;
+            memset(cnt, 0, sizeof cnt);
+            for (uint32_t b = 0; b < g; b += 8) {
+                __m256 vx = _mm256_loadu_ps(x + b), vy = _mm256_loadu_ps(y + b), vc = _mm256_loadu_ps(c + b);
+                __m256i vn = _mm256_loadu_si256((const __m256i *)(n + b));
+                __m256i h = fl_hash8(_mm256_xor_si256(vn, _mm256_loadu_si256((const __m256i *)(key + b))));
+                __m256i fn = _mm256_i32gather_epi32((const int *)k_flame_dist, _mm256_and_si256(h, grain), 4);
+                __m256 ok = _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(t_plain, fn));
+                __m256 oc = _mm256_add_ps(LOOK(t_sc), _mm256_mul_ps(LOOK(t_oms), vc));
+                __m256 tx = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(LOOK(t_ax), vx), _mm256_mul_ps(LOOK(t_bx), vy)),
+                                          LOOK(t_cx));
+                __m256 ty = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(LOOK(t_ay), vx), _mm256_mul_ps(LOOK(t_by), vy)),
+                                          LOOK(t_cy));
+                __m256 w = LOOK(t_w);
+                __m256 p0 = _mm256_add_ps(zero, _mm256_mul_ps(w, tx)), p1 = _mm256_add_ps(zero, _mm256_mul_ps(w, ty));
+                ok = _mm256_andnot_ps(_mm256_or_ps(bad8(p0), bad8(p1)), ok);
+                _mm256_storeu_ps(x + b, _mm256_blendv_ps(vx, p0, ok));
+                _mm256_storeu_ps(y + b, _mm256_blendv_ps(vy, p1, ok));
+                _mm256_storeu_ps(c + b, _mm256_blendv_ps(vc, oc, ok));
+                _mm256_storeu_si256((__m256i *)(n + b), _mm256_add_epi32(vn, _mm256_set1_epi32(1)));
+                _mm256_storeu_si256((__m256i *)(f + b), fn);
+                for (uint32_t l = b; l < b + 8; l++)
+                    out[l].px = x[l], out[l].py = y[l], out[l].pc = c[l], out[l].vis = f[l];
+                /* the other lanes (a few a step: no test a lane, which the random choice would
+                 * mispredict), their state before this step kept by the blends (n was advanced
+                 * above), into their xform's list or the scalar one */
+                for (unsigned rest = ~(unsigned)_mm256_movemask_ps(ok) & 255u; rest; rest &= rest - 1u) {
+                    uint32_t l = b + (uint32_t)__builtin_ctz(rest), fl = f[l];
+                    if (T->vec[fl])
+                        list[fl][cnt[fl]++] = l;
+                    else
+                        scal[nsc++] = l;
+                }
+            }
+            /* the chains of each non-linear xform, eight at a time (a short last group padded with
+             * its first chain, whose padding results are dropped) */
+            for (uint32_t fl = 0; fl < P.nxf; fl++) {
+                uint32_t k = cnt[fl];
+                if (!k) continue;
+                for (uint32_t j = k; j < k + 8; j++) list[fl][j] = list[fl][0];
+                for (uint32_t j = 0; j < k; j += 8) {
+                    __m256i vi = _mm256_loadu_si256((const __m256i *)&list[fl][j]);
+                    fl_lanes p = {_mm256_i32gather_ps(x, vi, 4), _mm256_i32gather_ps(y, vi, 4),
+                                  _mm256_i32gather_ps(c, vi, 4), _mm256_i32gather_epi32((const int *)n, vi, 4)};
+                    __m256i vkey = _mm256_i32gather_epi32((const int *)key, vi, 4);
+                    unsigned badm = (unsigned)_mm256_movemask_ps(fl_apply8(&k_flame_xf[fl], k_flame_var, vkey, &p));
+                    float rx[8], ry[8], rc[8];
+                    uint32_t rn[8];
+                    _mm256_storeu_ps(rx, p.x), _mm256_storeu_ps(ry, p.y), _mm256_storeu_ps(rc, p.c);
+                    _mm256_storeu_si256((__m256i *)rn, p.n);
+                    uint32_t e = k - j < 8 ? k - j : 8;
+                    for (uint32_t l = 0; l < e; l++) {
+                        uint32_t ci = list[fl][j + l];
+                        if (badm >> l & 1u) {
+                            scal[nsc++] = ci;
+                            continue;
+                        }
+                        x[ci] = rx[l], y[ci] = ry[l], c[ci] = rc[l], n[ci] = rn[l];
+                        out[ci].px = rx[l], out[ci].py = ry[l], out[ci].pc = rc[l];
+                    }
+                }
+            }
+            /* the scalar steps, each from the chain's state before this step */
+            for (uint32_t q = 0; q < nsc; q++) {
+                uint32_t l = scal[q];
+                K_FlameChain s = {0};
                 s.x = x[l], s.y = y[l], s.c = c[l];
                 s.n = n[l] - 1u;
-                s.bad = 0;
                 s = step(P, s, key[l], plain K_FLAME_TABLES);
                 bad += s.bad;
                 x[l] = s.x, y[l] = s.y, c[l] = s.c, n[l] = s.n;
                 out[l].px = s.px, out[l].py = s.py, out[l].pc = s.pc, out[l].vis = s.vis;
             }
         }
-        scatter(G, task, pts, m * 8, rec);
+        scatter(G, task, pts, m * g, rec);
     }
 #undef LOOK
     return bad;
@@ -374,7 +410,8 @@ static bool lanes_ok(const fb_flame_setup *S, const uint8_t *plain)
     return false;
 }
 static void lane_tables_init(const fb_flame_setup *S, const uint8_t *plain, lane_tables *T) {}
-static uint64_t play8(const game *G, int task, uint32_t i, const lane_tables *T, K_FlameChain *pts, records *rec)
+static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g, const lane_tables *T, K_FlameChain *pts,
+                      records *rec)
 {
     return 0;
 }
@@ -392,8 +429,14 @@ static void game_task(void *ctx, int task)
     K_FlameChain pts[BATCH];
     records rec;
     uint32_t i = a;
-    if (G->lanes)
-        for (; i + 8 <= b && i + 8 < P->chains; i += 8) bad += play8(G, task, i, G->lanes, pts, &rec);
+    /* groups of up to GROUP chains, a multiple of 8, never the last chain (of another length) */
+    while (G->lanes) {
+        uint32_t g = b - i < P->chains - 1u - i ? b - i : P->chains - 1u - i;
+        g = (g < GROUP ? g : GROUP) & ~7u;
+        if (!g) break;
+        bad += playg(G, task, i, g, G->lanes, pts, &rec);
+        i += g;
+    }
     for (; i < b; i++) bad += play(G, task, i, i + 1 == P->chains ? P->last_len : P->len, pts, &rec);
     G->bad[task] += bad;
 }
