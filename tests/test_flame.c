@@ -31,6 +31,13 @@ static const char *const k_translucent =
     "<xform weight=\"0.5\" color=\"0\" opacity=\"0.5\" linear=\"0.6\" spherical=\"0.4\" coefs=\"0.5 0.2 -0.3 0.6 0.2 "
     "0.1\"/>"
     "<xform weight=\"0.5\" color=\"1\" swirl=\"0.3\" linear=\"0.5\" coefs=\"0.8 0 0 0.8 0 0\"/>" PAL "</flame>";
+/* a translucent xform with random draws and one with a post transform: the lanes' 24-byte cells */
+static const char *const k_lanes_translucent =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\">"
+    "<xform weight=\"0.5\" color=\"0.2\" opacity=\"0.7\" horseshoe=\"0.6\" blade=\"0.4\" coefs=\"0.5 0.2 -0.3 "
+    "0.6 0.2 0.1\"/>"
+    "<xform weight=\"0.5\" color=\"0.9\" polar=\"0.3\" disc=\"0.5\" coefs=\"0.8 0 0 0.8 0 0\" post=\"1 0.1 0 1 "
+    "0.1 0.2\"/>" PAL "</flame>";
 /* symmetry (plain linear xforms, game.c's fast path) among others: a linear one with a post
  * transform, one whose points fly off (bad values, retried), a final xform */
 static const char *const k_mixed =
@@ -203,6 +210,7 @@ int main(void)
     test_genome("translucent", k_translucent, 64, 48, 100, 24, 0.5);
     test_genome("symmetry, post, bad values, final", k_mixed, 64, 48, 100, 16, 0.5);
     test_genome("symmetry, bad values (AVX2 lanes)", k_lanes, 64, 48, 100, 16, 0.5);
+    test_genome("translucent, post (AVX2 lanes)", k_lanes_translucent, 64, 48, 100, 24, 0.3);
     /* 2^21 points into one cell: past 2^19 hits a 16-byte cell spills, past 2^31 / 4080 a 24-byte one */
     test_genome("one cell, opaque", k_point, 8, 8, 32768, 16, 0.5);
     test_genome("one cell, translucent", k_point_translucent, 8, 8, 32768, 24, 0.5);

@@ -20,7 +20,7 @@ typedef struct cell16 {
 #define BATCH    1024 /* points computed before they are scattered */
 #define AHEAD    64   /* records prefetched ahead of the one added */
 #define OPAQUE_Q K_FLAME_OPAQUE
-#define GROUP    64 /* chains on the lanes together: those whose step chose a non-linear xform regrouped by it */
+#define GROUP    128 /* chains on the lanes together: those whose step chose a non-linear xform regrouped by it */
 
 static bool compact(const fb_flame_setup *S)
 {
@@ -243,6 +243,12 @@ typedef struct lane_tables {
     float w[FB_FLAME_MAX_XFORMS + 1];
     int32_t plain[FB_FLAME_MAX_XFORMS + 1];
     uint8_t vec[FB_FLAME_MAX_XFORMS + 1];
+    /* the choice table's row in ascending order of xform (as render.c builds it): the xform of an
+     * entry is the number of edges (the first entry of xform k, less 1, for k = 1 .. nedge) below it,
+     * compares instead of a gather */
+    bool sorted;
+    uint32_t nedge;
+    int32_t edge[8];
 } lane_tables;
 
 /* Whether the lanes play S: plain linear xforms or xforms of the variations flame_avx2.h has to
@@ -269,6 +275,14 @@ static void lane_tables_init(const fb_flame_setup *S, const uint8_t *plain, lane
         T->plain[f] = plain[f] ? -1 : 0;
         T->vec[f] = !plain[f] && fl_xform_avx2(X, S->var);
     }
+    T->sorted = true;
+    for (uint32_t j = 1; j < K_FLAME_GRAIN; j++) T->sorted &= S->dist[j] >= S->dist[j - 1];
+    T->nedge = S->p.nxf - 1u;
+    for (uint32_t k = 1; k < S->p.nxf; k++) {
+        uint32_t j = 0;
+        while (j < K_FLAME_GRAIN && S->dist[j] < k) j++;
+        T->edge[k - 1] = (int32_t)j - 1;
+    }
 }
 
 /* k_flame_bad on the lanes: NaN or beyond +-1e10. */
@@ -278,6 +292,61 @@ LANES_AVX2 static inline __m256 bad8(__m256 v)
     __m256 hi = _mm256_cmp_ps(v, _mm256_set1_ps(1e10f), _CMP_GT_OQ);
     __m256 lo = _mm256_cmp_ps(v, _mm256_set1_ps(-1e10f), _CMP_LT_OQ);
     return _mm256_or_ps(nan, _mm256_or_ps(hi, lo));
+}
+
+/* A batch's plotted points as planes. */
+typedef struct planes {
+    float px[BATCH], py[BATCH], pc[BATCH];
+    uint32_t vis[BATCH];
+} planes;
+
+/* make_records of a compact genome (every xform visible, step palette) from planes, eight points at a
+ * time (n a multiple of 8): k_flame_cell and k_flame_index on the lanes, the same integers. */
+LANES_AVX2 static void records8(const K_FlameParams *P, const planes *B, uint32_t n, records *r)
+{
+    const __m256 b0 = _mm256_set1_ps(P->b0), b1 = _mm256_set1_ps(P->b1), b2 = _mm256_set1_ps(P->b2),
+                 b3 = _mm256_set1_ps(P->b3);
+    const __m256 ws0 = _mm256_set1_ps(P->ws0), wb0s0 = _mm256_set1_ps(P->wb0s0), hs1 = _mm256_set1_ps(P->hs1),
+                 hb1s1 = _mm256_set1_ps(P->hb1s1);
+    const __m256i W = _mm256_set1_epi32((int)P->hist_w), H = _mm256_set1_epi32((int)P->hist_h);
+    const __m256i neg1 = _mm256_set1_epi32(-1), top = _mm256_set1_epi32(255);
+    uint32_t m = 0;
+    for (uint32_t t = 0; t < n; t += 8) {
+        __m256 px = _mm256_loadu_ps(B->px + t), py = _mm256_loadu_ps(B->py + t);
+        __m256 in = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(px, b0, _CMP_GE_OQ), _mm256_cmp_ps(py, b1, _CMP_GE_OQ)),
+                                  _mm256_and_ps(_mm256_cmp_ps(px, b2, _CMP_LE_OQ), _mm256_cmp_ps(py, b3, _CMP_LE_OQ)));
+        __m256i ix = _mm256_cvttps_epi32(_mm256_sub_ps(_mm256_mul_ps(ws0, px), wb0s0));
+        __m256i iy = _mm256_cvttps_epi32(_mm256_sub_ps(_mm256_mul_ps(hs1, py), hb1s1));
+        __m256i ok = _mm256_and_si256(_mm256_cmpgt_epi32(ix, neg1), _mm256_cmpgt_epi32(iy, neg1));
+        ok = _mm256_and_si256(ok, _mm256_and_si256(_mm256_cmpgt_epi32(W, ix), _mm256_cmpgt_epi32(H, iy)));
+        ok = _mm256_and_si256(ok, _mm256_castps_si256(in));
+        __m256i cell = _mm256_add_epi32(_mm256_mullo_epi32(iy, W), ix);
+        __m256i ci = _mm256_cvttps_epi32(_mm256_mul_ps(_mm256_loadu_ps(B->pc + t), _mm256_set1_ps(256.0f)));
+        ci = _mm256_max_epi32(_mm256_min_epi32(ci, top), _mm256_setzero_si256());
+        uint32_t cv[8], kv[8];
+        _mm256_storeu_si256((__m256i *)cv, cell), _mm256_storeu_si256((__m256i *)kv, ci);
+        unsigned valid = (unsigned)_mm256_movemask_ps(_mm256_castsi256_ps(ok));
+        for (int l = 0; l < 8; l++) {
+            r->cell[m] = cv[l];
+            r->col[m] = kv[l];
+            m += valid >> l & 1u;
+        }
+    }
+    r->n = m;
+}
+
+/* A batch of planes scattered: compact genomes straight from them, the others through pts. */
+LANES_AVX2 static void scatter_planes(const game *G, int task, const planes *B, uint32_t n, K_FlameChain *pts,
+                                      records *rec)
+{
+    if (G->compact) {
+        records8(&G->S->p, B, n, rec);
+        scatter16(G->S, rec, G->hist[task], G->total);
+        return;
+    }
+    for (uint32_t t = 0; t < n; t++)
+        pts[t].px = B->px[t], pts[t].py = B->py[t], pts[t].pc = B->pc[t], pts[t].vis = B->vis[t];
+    scatter(G, task, pts, n, rec);
 }
 
 /* Chains i .. i + g - 1 (g a multiple of 8, at most GROUP), each of P.len points (none the last
@@ -318,17 +387,26 @@ LANES_AVX2 static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g
 #define LOOK(t) _mm256_permutevar8x32_ps(t, fn)
     const uint32_t per = BATCH / g;
     uint32_t list[8][GROUP + 8], cnt[8], scal[GROUP];
+    planes B;
     for (uint32_t t0 = 0; t0 < P.len; t0 += per) {
         uint32_t m = P.len - t0 < per ? P.len - t0 : per;
         for (uint32_t t = 0; t < m; t++) {
-            K_FlameChain *out = &pts[t * g];
+            float *opx = B.px + t * g, *opy = B.py + t * g, *opc = B.pc + t * g;
+            uint32_t *ovis = B.vis + t * g;
             uint32_t nsc = 0;
             memset(cnt, 0, sizeof cnt);
             for (uint32_t b = 0; b < g; b += 8) {
                 __m256 vx = _mm256_loadu_ps(x + b), vy = _mm256_loadu_ps(y + b), vc = _mm256_loadu_ps(c + b);
                 __m256i vn = _mm256_loadu_si256((const __m256i *)(n + b));
                 __m256i h = fl_hash8(_mm256_xor_si256(vn, _mm256_loadu_si256((const __m256i *)(key + b))));
-                __m256i fn = _mm256_i32gather_epi32((const int *)k_flame_dist, _mm256_and_si256(h, grain), 4);
+                __m256i at = _mm256_and_si256(h, grain), fn;
+                if (T->sorted) {
+                    fn = _mm256_setzero_si256();
+                    for (uint32_t k = 0; k < T->nedge; k++)
+                        fn = _mm256_sub_epi32(fn, _mm256_cmpgt_epi32(at, _mm256_set1_epi32(T->edge[k])));
+                } else {
+                    fn = _mm256_i32gather_epi32((const int *)k_flame_dist, at, 4);
+                }
                 __m256 ok = _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(t_plain, fn));
                 __m256 oc = _mm256_add_ps(LOOK(t_sc), _mm256_mul_ps(LOOK(t_oms), vc));
                 __m256 tx = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(LOOK(t_ax), vx), _mm256_mul_ps(LOOK(t_bx), vy)),
@@ -338,13 +416,13 @@ LANES_AVX2 static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g
                 __m256 w = LOOK(t_w);
                 __m256 p0 = _mm256_add_ps(zero, _mm256_mul_ps(w, tx)), p1 = _mm256_add_ps(zero, _mm256_mul_ps(w, ty));
                 ok = _mm256_andnot_ps(_mm256_or_ps(bad8(p0), bad8(p1)), ok);
-                _mm256_storeu_ps(x + b, _mm256_blendv_ps(vx, p0, ok));
-                _mm256_storeu_ps(y + b, _mm256_blendv_ps(vy, p1, ok));
-                _mm256_storeu_ps(c + b, _mm256_blendv_ps(vc, oc, ok));
+                vx = _mm256_blendv_ps(vx, p0, ok), vy = _mm256_blendv_ps(vy, p1, ok), vc = _mm256_blendv_ps(vc, oc, ok);
+                _mm256_storeu_ps(x + b, vx), _mm256_storeu_ps(opx + b, vx);
+                _mm256_storeu_ps(y + b, vy), _mm256_storeu_ps(opy + b, vy);
+                _mm256_storeu_ps(c + b, vc), _mm256_storeu_ps(opc + b, vc);
                 _mm256_storeu_si256((__m256i *)(n + b), _mm256_add_epi32(vn, _mm256_set1_epi32(1)));
                 _mm256_storeu_si256((__m256i *)(f + b), fn);
-                for (uint32_t l = b; l < b + 8; l++)
-                    out[l].px = x[l], out[l].py = y[l], out[l].pc = c[l], out[l].vis = f[l];
+                _mm256_storeu_si256((__m256i *)(ovis + b), fn);
                 /* the other lanes (a few a step: no test a lane, which the random choice would
                  * mispredict), their state before this step kept by the blends (n was advanced
                  * above), into their xform's list or the scalar one */
@@ -380,7 +458,7 @@ LANES_AVX2 static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g
                             continue;
                         }
                         x[ci] = rx[l], y[ci] = ry[l], c[ci] = rc[l], n[ci] = rn[l];
-                        out[ci].px = rx[l], out[ci].py = ry[l], out[ci].pc = rc[l];
+                        opx[ci] = rx[l], opy[ci] = ry[l], opc[ci] = rc[l];
                     }
                 }
             }
@@ -393,10 +471,10 @@ LANES_AVX2 static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g
                 s = step(P, s, key[l], plain K_FLAME_TABLES);
                 bad += s.bad;
                 x[l] = s.x, y[l] = s.y, c[l] = s.c, n[l] = s.n;
-                out[l].px = s.px, out[l].py = s.py, out[l].pc = s.pc, out[l].vis = s.vis;
+                opx[l] = s.px, opy[l] = s.py, opc[l] = s.pc, ovis[l] = s.vis;
             }
         }
-        scatter(G, task, pts, m * g, rec);
+        scatter_planes(G, task, &B, m * g, pts, rec);
     }
 #undef LOOK
     return bad;
@@ -490,7 +568,7 @@ fb_result fb_flame_play(const fb_flame_setup *S, fb_pool *pool, int threads, boo
         if (!(hist[t] = fb_flame_zalloc(cells * bytes, pool)))
             rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
     /* rounds of chains, for the progress bar; the 32-bit cells are folded once, at the end */
-    uint32_t per_round = 64u * (uint32_t)threads;
+    uint32_t per_round = GROUP * (uint32_t)threads;
     double all = (double)(cr1 - cr0) * S->p.len;
     for (uint32_t c0 = cr0; c0 < cr1 && !rc; c0 += per_round) {
         uint32_t c1 = cr1 - c0 > per_round ? c0 + per_round : cr1;
