@@ -54,7 +54,7 @@ static bool flame_same(float a, float b)
     return (a != a && b != b) || !memcmp(&a, &b, 4);
 }
 
-/* The flame's lanes (host/gen/flame/flame_avx2.h): sin, cos, exp, sinh, cosh and atan2 are
+/* The flame's lanes (host/gen/flame/flame_avx2.h): sin, cos, tan, exp, log, pow, sinh, cosh and atan2 are
  * kernels/kmath.h's to the bit on random and edge arguments, and fl_apply8 is k_flame_apply for xforms
  * of every variation it has, alone and in random mixes, with and without a post transform, on the
  * same inputs: the point, colour, counter and bad values. */
@@ -62,17 +62,23 @@ FL_AVX2 static void flame_lanes_check(void)
 {
     int diff = 0;
     for (uint32_t i = 0; i < 400000u; i += 8) {
-        float a[8], b[8], r[6][8];
+        float a[8], b[8], r[9][8];
         for (int l = 0; l < 8; l++) a[l] = flame_value(i + (uint32_t)l), b[l] = flame_value(i + 7777777u + (uint32_t)l);
         __m256 va = _mm256_loadu_ps(a), vb = _mm256_loadu_ps(b), s, c, hs, hc;
         fl_sincos(va, &s, &c);
         fl_sinhcosh(va, &hs, &hc);
         _mm256_storeu_ps(r[0], s), _mm256_storeu_ps(r[1], c), _mm256_storeu_ps(r[2], fl_exp(va));
         _mm256_storeu_ps(r[3], hs), _mm256_storeu_ps(r[4], hc), _mm256_storeu_ps(r[5], fl_atan2(va, vb));
+        _mm256_storeu_ps(r[6], fl_log(va)), _mm256_storeu_ps(r[7], fl_pow(fl_abs(va), vb));
+        _mm256_storeu_ps(r[8], fl_tan(va));
         for (int l = 0; l < 8; l++) {
             k_vec2 sc = k_sincos(a[l]), sh = k_xsinhcosh(a[l]);
-            float want[6] = {sc.x, sc.y, k_xexp(a[l]), sh.x, sh.y, k_xatan2(a[l], b[l])};
-            for (int f = 0; f < 6; f++)
+            float want[9] = {sc.x,         sc.y,
+                             k_xexp(a[l]), sh.x,
+                             sh.y,         k_xatan2(a[l], b[l]),
+                             k_xlog(a[l]), k_xpow(fabsf(a[l]), b[l]),
+                             k_xtan(a[l])};
+            for (int f = 0; f < 9; f++)
                 if (!flame_same(r[f][l], want[f]) && diff++ < 10)
                     fprintf(stderr, "function %d of %a (%a): %a, not %a\n", f, a[l], b[l], r[f][l], want[f]);
         }
@@ -82,20 +88,20 @@ FL_AVX2 static void flame_lanes_check(void)
     uint32_t ids[K_V_COUNT], nid = 0;
     for (uint32_t v = 0; v < K_V_COUNT; v++)
         if (fl_var_avx2(v)) ids[nid++] = v;
-    CHECKF(nid >= 20, "only %u variations on the lanes", nid);
+    CHECKF(nid >= 40, "only %u variations on the lanes", nid);
     K_FlameVar var[8];
     K_FlameXform X;
     uint dist[1] = {0};
     int xdiff = 0, nbad = 0;
     uint32_t seed = 1;
-    for (uint32_t trial = 0; trial < 3000u; trial++) {
+    for (uint32_t trial = 0; trial < 6000u; trial++) {
 #define R01() k_u01(k_hash(seed++ * 0x9e3779b9u))
 #define RS()  (R01() * 2.0f - 1.0f)
         memset(&X, 0, sizeof X);
         X.ax = RS() * 1.5f, X.bx = RS(), X.cx = RS(), X.ay = RS(), X.by = RS() * 1.5f, X.cy = RS();
         X.pax = RS(), X.pbx = RS(), X.pcx = RS(), X.pay = RS(), X.pby = RS(), X.pcy = RS();
         X.color = R01(), X.speed = R01();
-        X.nvar = trial < nid ? 1u : 1u + (uint32_t)(R01() * 4.0f);
+        X.nvar = trial < 4u * nid ? 1u : 1u + (uint32_t)(R01() * 4.0f);
         /* the precalcs all xforms' variations might read (those not read change nothing) */
         X.flags = K_FLAME_SQRT | K_FLAME_ANGLES | K_FLAME_ATAN_XY | K_FLAME_ATAN_YX;
         if (R01() < 0.3f) X.flags |= K_FLAME_HAS_POST;
@@ -103,10 +109,10 @@ FL_AVX2 static void flame_lanes_check(void)
         for (uint32_t k = 0; k < X.nvar; k++) {
             K_FlameVar *V = &var[k];
             memset(V, 0, sizeof *V);
-            V->id = trial < nid ? ids[trial] : ids[(uint32_t)(R01() * (float)nid) % nid];
+            V->id = trial < 4u * nid ? ids[trial % nid] : ids[(uint32_t)(R01() * (float)nid) % nid];
             if (V->id < last) V->id = last; /* ascending, as the genome's */
             last = V->id;
-            V->w = RS() * 1.2f, V->p0 = RS() * 3.0f, V->p1 = RS() * 2.0f, V->p2 = RS() * 6.0f;
+            V->w = RS() * 1.2f, V->p0 = RS() * 3.0f, V->p1 = RS() * 2.0f, V->p2 = RS() * 6.0f, V->p3 = RS() * 4.0f;
         }
         float x[8], y[8], c[8];
         uint32_t n[8], key[8];

@@ -181,10 +181,72 @@ FL_AVX2 static inline __m256 fl_atan2(__m256 y, __m256 x)
     return FL_SEL(r, FL_ADD(x, y), _mm256_cmp_ps(x, y, _CMP_UNORD_Q));
 }
 
+/* k_xlog */
+FL_AVX2 static inline __m256 fl_log(__m256 x)
+{
+    __m256i b = _mm256_castps_si256(x);
+    __m256i be = _mm256_and_si256(_mm256_srli_epi32(b, 23), _mm256_set1_epi32(255));
+    __m256i e = _mm256_sub_epi32(be, _mm256_set1_epi32(126));
+    __m256 m = _mm256_castsi256_ps(
+        _mm256_or_si256(_mm256_and_si256(b, _mm256_set1_epi32(0x007fffff)), _mm256_set1_epi32(0x3f000000)));
+    __m256 lo = _mm256_cmp_ps(m, FL_S(0.707106781186547524f), _CMP_LT_OQ);
+    e = _mm256_add_epi32(e, _mm256_castps_si256(lo)); /* e - 1 where lo */
+    m = FL_SEL(FL_SUB(m, FL_S(1.0f)), FL_SUB(FL_ADD(m, m), FL_S(1.0f)), lo);
+    __m256 z = FL_MUL(m, m);
+    __m256 y = FL_SUB(FL_MUL(FL_S(7.0376836292e-2f), m), FL_S(1.1514610310e-1f));
+    y = FL_ADD(FL_MUL(y, m), FL_S(1.1676998740e-1f));
+    y = FL_SUB(FL_MUL(y, m), FL_S(1.2420140846e-1f));
+    y = FL_ADD(FL_MUL(y, m), FL_S(1.4249322787e-1f));
+    y = FL_SUB(FL_MUL(y, m), FL_S(1.6668057665e-1f));
+    y = FL_ADD(FL_MUL(y, m), FL_S(2.0000714765e-1f));
+    y = FL_SUB(FL_MUL(y, m), FL_S(2.4999993993e-1f));
+    y = FL_ADD(FL_MUL(y, m), FL_S(3.3333331174e-1f));
+    y = FL_MUL(FL_MUL(y, m), z);
+    __m256 fe = _mm256_cvtepi32_ps(e);
+    y = FL_ADD(y, FL_MUL(fe, FL_S(-2.12194440e-4f)));
+    y = FL_SUB(y, FL_MUL(FL_S(0.5f), z));
+    __m256 r = FL_ADD(FL_ADD(m, y), FL_MUL(fe, FL_S(0.693359375f)));
+    r = FL_SEL(r, x, _mm256_castsi256_ps(_mm256_cmpeq_epi32(be, _mm256_set1_epi32(255))));
+    r = FL_SEL(r, FL_S(K_NAN), _mm256_castsi256_ps(_mm256_srai_epi32(b, 31)));
+    r = FL_SEL(r, FL_S(-K_INF), _mm256_castsi256_ps(_mm256_cmpeq_epi32(be, _mm256_setzero_si256())));
+    return FL_SEL(r, x, _mm256_cmp_ps(x, x, _CMP_UNORD_Q));
+}
+
+/* k_xpow(x, y) */
+FL_AVX2 static inline __m256 fl_pow(__m256 x, __m256 y)
+{
+    const __m256 zero = _mm256_setzero_ps(), one = FL_S(1.0f);
+    __m256 r = fl_exp(FL_MUL(y, fl_log(x)));
+    r = FL_SEL(r, one, _mm256_cmp_ps(y, zero, _CMP_EQ_OQ));
+    __m256 x0 =
+        FL_SEL(FL_SEL(FL_S(K_INF), one, _mm256_cmp_ps(y, zero, _CMP_EQ_OQ)), zero, _mm256_cmp_ps(y, zero, _CMP_GT_OQ));
+    return FL_SEL(r, x0, _mm256_cmp_ps(x, zero, _CMP_EQ_OQ));
+}
+
+/* k_xtan */
+FL_AVX2 static inline __m256 fl_tan(__m256 x)
+{
+    __m256 s, c;
+    fl_sincos(x, &s, &c);
+    return FL_DIV(s, c);
+}
+
+FL_AVX2 static inline __m256 fl_trunc(__m256 x)
+{
+    return _mm256_round_ps(x, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
+}
+
+/* k_xfmod */
+FL_AVX2 static inline __m256 fl_fmod(__m256 x, __m256 y)
+{
+    return FL_SUB(x, FL_MUL(y, fl_trunc(FL_DIV(x, y))));
+}
+
 /* ---- the xform ------------------------------------------------------------------------------------ */
 
-/* Whether variation v has a form on the lanes here. */
-static inline bool fl_var_avx2(uint v)
+/* Which of the functions below has variation v's form on the lanes (fl_var_lo, fl_var_hi,
+ * fl_var_ext: 1, 2, 3), or 0: none. */
+static inline int fl_var_kind(uint v)
 {
     switch (v) {
     case K_V_LINEAR:
@@ -204,6 +266,7 @@ static inline bool fl_var_avx2(uint v)
     case K_V_BENT:
     case K_V_FISHEYE:
     case K_V_EXPONENTIAL:
+        return 1;
     case K_V_COSINE:
     case K_V_BLOB:
     case K_V_EYEFISH:
@@ -214,10 +277,35 @@ static inline bool fl_var_avx2(uint v)
     case K_V_SQUARE:
     case K_V_BLADE:
     case K_V_FLOWER:
-        return true;
+        return 2;
+    case K_V_WAVES:
+    case K_V_POPCORN:
+    case K_V_POWER:
+    case K_V_RINGS:
+    case K_V_FAN:
+    case K_V_PDJ:
+    case K_V_PERSPECTIVE:
+    case K_V_JULIAN:
+    case K_V_JULIASCOPE:
+    case K_V_GAUSSIAN_BLUR:
+    case K_V_RADIAL_BLUR:
+    case K_V_PIE:
+    case K_V_CURL:
+    case K_V_ARCH:
+    case K_V_TANGENT:
+    case K_V_RAYS:
+    case K_V_SECANT2:
+    case K_V_CROSS:
+        return 3;
     default:
-        return false;
+        return 0;
     }
+}
+
+/* Whether variation v has a form on the lanes here. */
+static inline bool fl_var_avx2(uint v)
+{
+    return fl_var_kind(v) != 0;
 }
 
 /* Whether xform X (its variations var[X.var0 ..]) can be applied on the lanes: every variation has
@@ -245,7 +333,7 @@ typedef struct fl_pt {
  * and *py, the number of draws returned (k_flame_variation's). Two functions, by number. */
 #define FL_VAR_ARGS const K_FlameVar *V, const fl_pt *t, __m256i key, __m256i n, __m256 *px, __m256 *py
 
-/* linear .. exponential */
+/* linear .. exponential (fl_var_kind 1) */
 FL_AVX2 static inline __attribute__((always_inline)) uint fl_var_lo(FL_VAR_ARGS)
 {
     const __m256 zero = _mm256_setzero_ps(), w = FL_S(V->w), eps = FL_S(K_FLAME_EPS), pi = FL_S(K_PI);
@@ -356,7 +444,7 @@ FL_AVX2 static inline __attribute__((always_inline)) uint fl_var_lo(FL_VAR_ARGS)
     return draws;
 }
 
-/* cosine .. flower */
+/* cosine .. flower (fl_var_kind 2) */
 FL_AVX2 static inline __attribute__((always_inline)) uint fl_var_hi(FL_VAR_ARGS)
 {
     const __m256 zero = _mm256_setzero_ps(), w = FL_S(V->w), eps = FL_S(K_FLAME_EPS), pi = FL_S(K_PI);
@@ -434,6 +522,137 @@ FL_AVX2 static inline __attribute__((always_inline)) uint fl_var_hi(FL_VAR_ARGS)
     return draws;
 }
 
+/* waves .. cross (fl_var_kind 3) */
+FL_AVX2 static inline __attribute__((always_inline)) uint fl_var_ext(FL_VAR_ARGS)
+{
+    const __m256 zero = _mm256_setzero_ps(), w = FL_S(V->w), eps = FL_S(K_FLAME_EPS), pi = FL_S(K_PI);
+    const __m256 tx = t->tx, ty = t->ty, sumsq = t->sumsq, sq = t->sq, sina = t->sina, cosa = t->cosa;
+    const __m256 atxy = t->atxy, atyx = t->atyx, p0 = FL_S(V->p0), p1 = FL_S(V->p1), p2 = FL_S(V->p2);
+    const __m256 one = FL_S(1.0f), two = FL_S(2.0f), twopi = FL_S(2.0f * K_PI);
+    __m256 dx, dy, s, c;
+    uint draws = 0;
+    (void)zero, (void)eps, (void)sumsq, (void)sina, (void)cosa, (void)atxy, (void)atyx, (void)key, (void)n;
+#define DRAW(i) fl_u01(key, _mm256_add_epi32(n, _mm256_set1_epi32(i)))
+    switch (V->id) {
+    case K_V_WAVES:
+        dx = FL_MUL(w, FL_ADD(tx, FL_MUL(p0, fl_sin(FL_MUL(ty, p2)))));
+        dy = FL_MUL(w, FL_ADD(ty, FL_MUL(p1, fl_sin(FL_MUL(tx, FL_S(V->p3))))));
+        break;
+    case K_V_POPCORN:
+        dx = FL_MUL(w, FL_ADD(tx, FL_MUL(p0, fl_sin(fl_tan(FL_MUL(FL_S(3.0f), ty))))));
+        dy = FL_MUL(w, FL_ADD(ty, FL_MUL(p1, fl_sin(fl_tan(FL_MUL(FL_S(3.0f), tx))))));
+        break;
+    case K_V_POWER: {
+        __m256 r = FL_MUL(w, fl_pow(sq, sina));
+        dx = FL_MUL(r, cosa), dy = FL_MUL(r, sina);
+        break;
+    }
+    case K_V_RINGS: {
+        __m256 r = FL_MUL(w, FL_ADD(FL_SUB(fl_fmod(FL_ADD(sq, p0), FL_MUL(two, p0)), p0), FL_MUL(sq, FL_SUB(one, p0))));
+        dx = FL_MUL(r, cosa), dy = FL_MUL(r, sina);
+        break;
+    }
+    case K_V_FAN: {
+        __m256 dx2 = FL_MUL(FL_S(0.5f), p0);
+        __m256 big = _mm256_cmp_ps(fl_fmod(FL_ADD(atxy, p1), p0), dx2, _CMP_GT_OQ);
+        fl_sincos(FL_ADD(atxy, FL_SEL(dx2, fl_neg(dx2), big)), &s, &c);
+        __m256 r = FL_MUL(w, sq);
+        dx = FL_MUL(r, c), dy = FL_MUL(r, s);
+        break;
+    }
+    case K_V_PDJ:
+        dx = FL_MUL(w, FL_SUB(fl_sin(FL_MUL(p0, ty)), fl_cos(FL_MUL(p1, tx))));
+        dy = FL_MUL(w, FL_SUB(fl_sin(FL_MUL(p2, tx)), fl_cos(FL_MUL(FL_S(V->p3), ty))));
+        break;
+    case K_V_PERSPECTIVE: {
+        __m256 tt = FL_DIV(one, FL_SUB(p0, FL_MUL(ty, p1)));
+        dx = FL_MUL(FL_MUL(FL_MUL(w, p0), tx), tt), dy = FL_MUL(FL_MUL(FL_MUL(w, p2), ty), tt);
+        break;
+    }
+    case K_V_JULIAN: {
+        __m256 tr = fl_trunc(FL_MUL(p2, DRAW(0)));
+        fl_sincos(FL_DIV(FL_ADD(atyx, FL_MUL(twopi, tr)), p0), &s, &c);
+        __m256 r = FL_MUL(w, fl_pow(sumsq, p1));
+        dx = FL_MUL(r, c), dy = FL_MUL(r, s), draws = 1;
+        break;
+    }
+    case K_V_JULIASCOPE: {
+        __m256i tr = _mm256_cvttps_epi32(fl_trunc(FL_MUL(p2, DRAW(0))));
+        __m256 odd =
+            _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(tr, _mm256_set1_epi32(1)), _mm256_set1_epi32(1)));
+        __m256 ft = FL_MUL(twopi, _mm256_cvtepi32_ps(tr));
+        __m256 a = FL_DIV(FL_SEL(FL_ADD(ft, atyx), FL_SUB(ft, atyx), odd), p0);
+        __m256 r = FL_MUL(w, fl_pow(sumsq, p1));
+        fl_sincos(a, &s, &c);
+        dx = FL_MUL(r, c), dy = FL_MUL(r, s), draws = 1;
+        break;
+    }
+    case K_V_GAUSSIAN_BLUR: {
+        fl_sincos(FL_MUL(FL_MUL(DRAW(0), two), pi), &s, &c);
+        __m256 g = FL_ADD(FL_ADD(FL_ADD(DRAW(1), DRAW(2)), DRAW(3)), DRAW(4));
+        __m256 r = FL_MUL(w, FL_SUB(g, two));
+        dx = FL_MUL(r, c), dy = FL_MUL(r, s), draws = 5;
+        break;
+    }
+    case K_V_RADIAL_BLUR: {
+        __m256 g = FL_ADD(FL_ADD(FL_ADD(DRAW(0), DRAW(1)), DRAW(2)), DRAW(3));
+        __m256 rnd = FL_MUL(w, FL_SUB(g, two));
+        fl_sincos(FL_ADD(atyx, FL_MUL(p0, rnd)), &s, &c);
+        __m256 rz = FL_SUB(FL_MUL(p1, rnd), one);
+        dx = FL_ADD(FL_MUL(sq, c), FL_MUL(rz, tx)), dy = FL_ADD(FL_MUL(sq, s), FL_MUL(rz, ty)), draws = 4;
+        break;
+    }
+    case K_V_PIE: {
+        __m256 sl = _mm256_cvtepi32_ps(_mm256_cvttps_epi32(FL_ADD(FL_MUL(DRAW(0), p0), FL_S(0.5f))));
+        __m256 a = FL_ADD(p1, FL_DIV(FL_MUL(twopi, FL_ADD(sl, FL_MUL(DRAW(1), p2))), p0));
+        __m256 r = FL_MUL(w, DRAW(2));
+        fl_sincos(a, &s, &c);
+        dx = FL_MUL(r, c), dy = FL_MUL(r, s), draws = 3;
+        break;
+    }
+    case K_V_CURL: {
+        __m256 re = FL_ADD(FL_ADD(one, FL_MUL(p0, tx)), FL_MUL(p1, FL_SUB(FL_MUL(tx, tx), FL_MUL(ty, ty))));
+        __m256 im = FL_ADD(FL_MUL(p0, ty), FL_MUL(FL_MUL(FL_MUL(two, p1), tx), ty));
+        __m256 r = FL_DIV(w, FL_ADD(FL_MUL(re, re), FL_MUL(im, im)));
+        dx = FL_MUL(FL_ADD(FL_MUL(tx, re), FL_MUL(ty, im)), r);
+        dy = FL_MUL(FL_SUB(FL_MUL(ty, re), FL_MUL(tx, im)), r);
+        break;
+    }
+    case K_V_ARCH:
+        fl_sincos(FL_MUL(FL_MUL(DRAW(0), w), pi), &s, &c);
+        dx = FL_MUL(w, s), dy = FL_DIV(FL_MUL(w, FL_MUL(s, s)), c), draws = 1;
+        break;
+    case K_V_TANGENT:
+        dx = FL_DIV(FL_MUL(w, fl_sin(tx)), fl_cos(ty)), dy = FL_MUL(w, fl_tan(ty));
+        break;
+    case K_V_RAYS: {
+        __m256 a = FL_MUL(FL_MUL(w, DRAW(0)), pi);
+        __m256 r = FL_DIV(w, FL_ADD(sumsq, eps));
+        __m256 tr = FL_MUL(FL_MUL(w, fl_tan(a)), r);
+        dx = FL_MUL(tr, fl_cos(tx)), dy = FL_MUL(tr, fl_sin(ty)), draws = 1;
+        break;
+    }
+    case K_V_SECANT2: {
+        __m256 cr = fl_cos(FL_MUL(w, sq)), icr = FL_DIV(one, cr);
+        dx = FL_MUL(w, tx);
+        dy = FL_SEL(FL_MUL(w, FL_SUB(icr, one)), FL_MUL(w, FL_ADD(icr, one)), _mm256_cmp_ps(cr, zero, _CMP_LT_OQ));
+        break;
+    }
+    case K_V_CROSS: {
+        __m256 q = FL_SUB(FL_MUL(tx, tx), FL_MUL(ty, ty));
+        __m256 r = FL_MUL(w, _mm256_sqrt_ps(FL_DIV(one, FL_ADD(FL_MUL(q, q), eps))));
+        dx = FL_MUL(tx, r), dy = FL_MUL(ty, r);
+        break;
+    }
+    default: /* not fl_xform_avx2: never here */
+        dx = dy = _mm256_set1_ps(K_NAN);
+        break;
+    }
+#undef DRAW
+    *px = dx, *py = dy;
+    return draws;
+}
+
 /* k_flame_apply of xform X (fl_xform_avx2) to the eight lanes of p, chain keys key, n0 the counter
  * of its first draw: the result into p; the lanes whose result is a bad value are set in the mask
  * returned (their p is not the scalar result: the caller replays them). */
@@ -457,7 +676,10 @@ FL_AVX2 static inline __m256 fl_apply8(const K_FlameXform *X, const K_FlameVar *
     for (uint k = 0; k < X->nvar; k++) {
         const K_FlameVar *V = &var[X->var0 + k];
         __m256 dx, dy;
-        uint draws = V->id < K_V_COSINE ? fl_var_lo(V, &t, key, n, &dx, &dy) : fl_var_hi(V, &t, key, n, &dx, &dy);
+        int kind = fl_var_kind(V->id);
+        uint draws = kind == 1   ? fl_var_lo(V, &t, key, n, &dx, &dy)
+                     : kind == 2 ? fl_var_hi(V, &t, key, n, &dx, &dy)
+                                 : fl_var_ext(V, &t, key, n, &dx, &dy);
         p0 = FL_ADD(p0, dx);
         p1 = FL_ADD(p1, dy);
         n = _mm256_add_epi32(n, _mm256_set1_epi32((int)draws));
