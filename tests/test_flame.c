@@ -38,6 +38,13 @@ static const char *const k_lanes_translucent =
     "0.6 0.2 0.1\"/>"
     "<xform weight=\"0.5\" color=\"0.9\" polar=\"0.3\" disc=\"0.5\" coefs=\"0.8 0 0 0.8 0 0\" post=\"1 0.1 0 1 "
     "0.1 0.2\"/>" PAL "</flame>";
+/* the camera rotated: the lanes rotate their planes of points */
+static const char *const k_lanes_rotated =
+    "<flame size=\"64 48\" scale=\"20\" rotate=\"33\" center=\"0.1 -0.2\" estimator_radius=\"3\">"
+    "<symmetry kind=\"2\"/>"
+    "<xform weight=\"0.5\" color=\"0.2\" julia=\"0.6\" curl=\"0.4\" curl_c1=\"0.3\" coefs=\"0.5 0.2 -0.3 0.6 "
+    "0.2 0.1\"/>"
+    "<xform weight=\"0.5\" color=\"0.9\" rectangles=\"0.5\" coefs=\"0.8 0 0 0.8 0 0\"/>" PAL "</flame>";
 /* symmetry (plain linear xforms, game.c's fast path) among others: a linear one with a post
  * transform, one whose points fly off (bad values, retried), a final xform */
 static const char *const k_mixed =
@@ -211,6 +218,7 @@ int main(void)
     test_genome("symmetry, post, bad values, final", k_mixed, 64, 48, 100, 16, 0.5);
     test_genome("symmetry, bad values (AVX2 lanes)", k_lanes, 64, 48, 100, 16, 0.5);
     test_genome("translucent, post (AVX2 lanes)", k_lanes_translucent, 64, 48, 100, 24, 0.3);
+    test_genome("camera rotation (AVX2 lanes)", k_lanes_rotated, 64, 48, 100, 16, 0.3);
     /* 2^21 points into one cell: past 2^19 hits a 16-byte cell spills, past 2^31 / 4080 a 24-byte one */
     test_genome("one cell, opaque", k_point, 8, 8, 32768, 16, 0.5);
     test_genome("one cell, translucent", k_point_translucent, 8, 8, 32768, 24, 0.5);

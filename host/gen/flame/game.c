@@ -254,13 +254,12 @@ typedef struct lane_tables {
 /* Whether the lanes play S: plain linear xforms or xforms of the variations flame_avx2.h has to
  * take (the other steps are the scalar step's, a lane at a time), at most 8 xforms (their tables
  * are registers, looked up by a permutation: AMD's gathers cost more than the scalar step saves), no
- * xaos, final xform or camera rotation (the scalar path plays those), AVX2. */
+ * xaos or final xform (the scalar path plays those), AVX2. */
 static bool lanes_ok(const fb_flame_setup *S, const uint8_t *plain)
 {
     bool any = false;
     for (uint32_t f = 0; f < S->p.nxf; f++) any |= plain[f] != 0 || fl_xform_avx2(&S->xf[f], S->var);
-    return any && S->p.nxf <= 8 && !S->p.chaos && S->p.final_xf == K_FLAME_NONE && !S->p.rotate &&
-           __builtin_cpu_supports("avx2");
+    return any && S->p.nxf <= 8 && !S->p.chaos && S->p.final_xf == K_FLAME_NONE && __builtin_cpu_supports("avx2");
 }
 
 static void lane_tables_init(const fb_flame_setup *S, const uint8_t *plain, lane_tables *T)
@@ -335,10 +334,24 @@ LANES_AVX2 static void records8(const K_FlameParams *P, const planes *B, uint32_
     r->n = m;
 }
 
-/* A batch of planes scattered: compact genomes straight from them, the others through pts. */
-LANES_AVX2 static void scatter_planes(const game *G, int task, const planes *B, uint32_t n, K_FlameChain *pts,
-                                      records *rec)
+/* A batch of planes scattered (n a multiple of 8): the camera's rotation (k_flame_rotate's operations
+ * on the lanes), then compact genomes straight from them, the others through pts. */
+LANES_AVX2 static void scatter_planes(const game *G, int task, planes *B, uint32_t n, K_FlameChain *pts, records *rec)
 {
+    const K_FlameParams *P = &G->S->p;
+    if (P->rotate) {
+        const __m256 rcx = _mm256_set1_ps(P->rcx), rcy = _mm256_set1_ps(P->rcy);
+        const __m256 r00 = _mm256_set1_ps(P->rot00), r01 = _mm256_set1_ps(P->rot01);
+        const __m256 r10 = _mm256_set1_ps(P->rot10), r11 = _mm256_set1_ps(P->rot11);
+        for (uint32_t t = 0; t < n; t += 8) {
+            __m256 qx = _mm256_sub_ps(_mm256_loadu_ps(B->px + t), rcx);
+            __m256 qy = _mm256_sub_ps(_mm256_loadu_ps(B->py + t), rcy);
+            _mm256_storeu_ps(B->px + t,
+                             _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(qx, r00), _mm256_mul_ps(qy, r01)), rcx));
+            _mm256_storeu_ps(B->py + t,
+                             _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(qx, r10), _mm256_mul_ps(qy, r11)), rcy));
+        }
+    }
     if (G->compact) {
         records8(&G->S->p, B, n, rec);
         scatter16(G->S, rec, G->hist[task], G->total);
@@ -471,7 +484,8 @@ LANES_AVX2 static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g
                 s = step(P, s, key[l], plain K_FLAME_TABLES);
                 bad += s.bad;
                 x[l] = s.x, y[l] = s.y, c[l] = s.c, n[l] = s.n;
-                opx[l] = s.px, opy[l] = s.py, opc[l] = s.pc, ovis[l] = s.vis;
+                /* no final xform: the point plotted is the chain's, before the camera (scatter_planes) */
+                opx[l] = s.x, opy[l] = s.y, opc[l] = s.c, ovis[l] = s.vis;
             }
         }
         scatter_planes(G, task, &B, m * g, pts, rec);
