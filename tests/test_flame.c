@@ -45,6 +45,23 @@ static const char *const k_lanes_rotated =
     "<xform weight=\"0.5\" color=\"0.2\" julia=\"0.6\" curl=\"0.4\" curl_c1=\"0.3\" coefs=\"0.5 0.2 -0.3 0.6 "
     "0.2 0.1\"/>"
     "<xform weight=\"0.5\" color=\"0.9\" rectangles=\"0.5\" coefs=\"0.8 0 0 0.8 0 0\"/>" PAL "</flame>";
+/* final xforms on the lanes: one translucent (the opacity's draw) with random draws and bad values,
+ * and one whose variation has no lane form (a chain at a time) */
+static const char *const k_lanes_final =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\"><symmetry kind=\"3\"/>"
+    "<xform weight=\"0.5\" color=\"0.2\" ex=\"0.6\" blob=\"0.4\" coefs=\"0.5 0.2 -0.3 0.6 0.2 0.1\"/>"
+    "<xform weight=\"0.05\" color=\"0.5\" linear=\"1\" coefs=\"1e12 0 0 1e12 0 0\"/>"
+    "<finalxform color=\"0.7\" color_speed=\"0.5\" opacity=\"0.6\" spherical=\"0.5\" blade=\"0.5\" "
+    "coefs=\"0.9 0.1 0 0.9 0 0.1\"/>" PAL "</flame>";
+/* a final xform whose points beyond the unit square are bad values (random points, their draws) */
+static const char *const k_lanes_final_bad =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\"><symmetry kind=\"2\"/>"
+    "<xform weight=\"0.5\" color=\"0.2\" swirl=\"0.7\" blur=\"0.3\" coefs=\"0.9 0.2 -0.3 0.8 0.4 0.1\"/>"
+    "<finalxform color=\"0.7\" opacity=\"0.8\" linear=\"1\" coefs=\"1e10 0 0 1e10 0 0\"/>" PAL "</flame>";
+static const char *const k_lanes_final_scalar =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\"><symmetry kind=\"2\"/>"
+    "<xform weight=\"0.5\" color=\"0.2\" julia=\"1\" coefs=\"0.5 0.2 -0.3 0.6 0.2 0.1\"/>"
+    "<finalxform color=\"0.7\" rectangles=\"0.5\" coefs=\"0.9 0 0 0.9 0 0\"/>" PAL "</flame>";
 /* symmetry (plain linear xforms, game.c's fast path) among others: a linear one with a post
  * transform, one whose points fly off (bad values, retried), a final xform */
 static const char *const k_mixed =
@@ -219,6 +236,9 @@ int main(void)
     test_genome("symmetry, bad values (AVX2 lanes)", k_lanes, 64, 48, 100, 16, 0.5);
     test_genome("translucent, post (AVX2 lanes)", k_lanes_translucent, 64, 48, 100, 24, 0.3);
     test_genome("camera rotation (AVX2 lanes)", k_lanes_rotated, 64, 48, 100, 16, 0.3);
+    test_genome("final xform, translucent (AVX2 lanes)", k_lanes_final, 64, 48, 100, 16, 0.1);
+    test_genome("final xform, a chain at a time (AVX2 lanes)", k_lanes_final_scalar, 64, 48, 100, 16, 0.1);
+    test_genome("final xform, bad values (AVX2 lanes)", k_lanes_final_bad, 64, 48, 100, 16, 0.1);
     /* 2^21 points into one cell: past 2^19 hits a 16-byte cell spills, past 2^31 / 4080 a 24-byte one */
     test_genome("one cell, opaque", k_point, 8, 8, 32768, 16, 0.5);
     test_genome("one cell, translucent", k_point_translucent, 8, 8, 32768, 24, 0.5);

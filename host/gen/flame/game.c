@@ -180,10 +180,10 @@ static inline __attribute__((always_inline)) K_FlameOut apply_linear(uint fn, fl
     return o;
 }
 
-/* k_flame_step (kernels/flame.h), its xforms applied by apply_linear where plain[fn] says so and by
- * k_flame_apply otherwise; the rest line for line the same. */
-static inline __attribute__((always_inline)) K_FlameChain step(K_FlameParams P, K_FlameChain s, uint key,
-                                                               const uint8_t *plain K_FLAME_TABLES_DECL)
+/* k_flame_step (kernels/flame.h) up to its plot: the xform chosen and applied (by apply_linear where
+ * plain[fn] says so, by k_flame_apply otherwise), retried on bad values; line for line the same. */
+static inline __attribute__((always_inline)) K_FlameChain step_xform(K_FlameParams P, K_FlameChain s, uint key,
+                                                                     const uint8_t *plain K_FLAME_TABLES_DECL)
 {
     uint fn = 0u;
     K_FlameOut o;
@@ -203,7 +203,14 @@ static inline __attribute__((always_inline)) K_FlameChain step(K_FlameParams P, 
     }
     s.last = fn + 1u;
     s.vis = fn;
-    return k_flame_plot(P, s, key K_FLAME_TABLES);
+    return s;
+}
+
+/* k_flame_step: step_xform, then the final xform and the camera for the plot (k_flame_plot). */
+static inline __attribute__((always_inline)) K_FlameChain step(K_FlameParams P, K_FlameChain s, uint key,
+                                                               const uint8_t *plain K_FLAME_TABLES_DECL)
+{
+    return k_flame_plot(P, step_xform(P, s, key, plain K_FLAME_TABLES), key K_FLAME_TABLES);
 }
 
 /* Chain i, of length len. */
@@ -249,17 +256,18 @@ typedef struct lane_tables {
     bool sorted;
     uint32_t nedge;
     int32_t edge[8];
+    bool vfinal; /* the final xform (if any) on the lanes */
 } lane_tables;
 
 /* Whether the lanes play S: plain linear xforms or xforms of the variations flame_avx2.h has to
  * take (the other steps are the scalar step's, a lane at a time), at most 8 xforms (their tables
  * are registers, looked up by a permutation: AMD's gathers cost more than the scalar step saves), no
- * xaos or final xform (the scalar path plays those), AVX2. */
+ * xaos (the scalar path plays it), AVX2. */
 static bool lanes_ok(const fb_flame_setup *S, const uint8_t *plain)
 {
     bool any = false;
     for (uint32_t f = 0; f < S->p.nxf; f++) any |= plain[f] != 0 || fl_xform_avx2(&S->xf[f], S->var);
-    return any && S->p.nxf <= 8 && !S->p.chaos && S->p.final_xf == K_FLAME_NONE && __builtin_cpu_supports("avx2");
+    return any && S->p.nxf <= 8 && !S->p.chaos && __builtin_cpu_supports("avx2");
 }
 
 static void lane_tables_init(const fb_flame_setup *S, const uint8_t *plain, lane_tables *T)
@@ -274,6 +282,7 @@ static void lane_tables_init(const fb_flame_setup *S, const uint8_t *plain, lane
         T->plain[f] = plain[f] ? -1 : 0;
         T->vec[f] = !plain[f] && fl_xform_avx2(X, S->var);
     }
+    T->vfinal = S->p.final_xf != K_FLAME_NONE && fl_xform_avx2(&S->xf[S->p.final_xf], S->var);
     T->sorted = true;
     for (uint32_t j = 1; j < K_FLAME_GRAIN; j++) T->sorted &= S->dist[j] >= S->dist[j - 1];
     T->nedge = S->p.nxf - 1u;
@@ -360,6 +369,61 @@ LANES_AVX2 static void scatter_planes(const game *G, int task, planes *B, uint32
     for (uint32_t t = 0; t < n; t++)
         pts[t].px = B->px[t], pts[t].py = B->py[t], pts[t].pc = B->pc[t], pts[t].vis = B->vis[t];
     scatter(G, task, pts, n, rec);
+}
+
+/* The final xform of one chain's step, as k_flame_plot: the opacity's draw (unless always), then the
+ * xform from the chain's point into the point plotted. */
+static void final_one(const fb_flame_setup *S, float x, float y, float c, uint32_t key, uint32_t *n, float *px,
+                      float *py, float *pc)
+{
+    const K_FlameParams P = S->p;
+    const K_FlameXform *k_flame_xf = S->xf;
+    const K_FlameVar *k_flame_var = S->var;
+    const uint *k_flame_dist = S->dist;
+    bool apply = P.final_always != 0u;
+    if (!apply) apply = k_flame_u01(key, (*n)++) < P.final_opacity;
+    *px = x, *py = y, *pc = c;
+    if (!apply) return;
+    K_FlameOut f = k_flame_apply(P.final_xf, x, y, c, key, *n K_FLAME_TABLES);
+    *n = f.n, *px = f.x, *py = f.y, *pc = f.c;
+}
+
+/* The final xform of a step of chains 0 .. g - 1 (their points x, y, c after the step's xform):
+ * eight at a time on the lanes where vec (fl_apply8; a bad value, which takes random draws, through
+ * final_one), else final_one a chain at a time. The points plotted into opx, opy, opc. */
+LANES_AVX2 static void final_pass(const fb_flame_setup *S, bool vec, uint32_t g, const float *x, const float *y,
+                                  const float *c, const uint32_t *key, uint32_t *n, float *opx, float *opy, float *opc)
+{
+    const K_FlameParams *P = &S->p;
+    if (!vec) {
+        for (uint32_t l = 0; l < g; l++) final_one(S, x[l], y[l], c[l], key[l], &n[l], &opx[l], &opy[l], &opc[l]);
+        return;
+    }
+    for (uint32_t b = 0; b < g; b += 8) {
+        __m256 vx = _mm256_loadu_ps(x + b), vy = _mm256_loadu_ps(y + b), vc = _mm256_loadu_ps(c + b);
+        __m256i vn = _mm256_loadu_si256((const __m256i *)(n + b)),
+                vkey = _mm256_loadu_si256((const __m256i *)(key + b));
+        uint32_t n0[8];
+        _mm256_storeu_si256((__m256i *)n0, vn);
+        __m256 app = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+        if (!P->final_always) {
+            app = _mm256_cmp_ps(fl_u01(vkey, vn), _mm256_set1_ps(P->final_opacity), _CMP_LT_OQ);
+            vn = _mm256_add_epi32(vn, _mm256_set1_epi32(1));
+        }
+        fl_lanes p = {vx, vy, vc, vn};
+        __m256 bad = _mm256_and_ps(fl_apply8(&S->xf[P->final_xf], S->var, vkey, &p), app);
+        _mm256_storeu_ps(opx + b, _mm256_blendv_ps(vx, p.x, app));
+        _mm256_storeu_ps(opy + b, _mm256_blendv_ps(vy, p.y, app));
+        _mm256_storeu_ps(opc + b, _mm256_blendv_ps(vc, p.c, app));
+        _mm256_storeu_si256((__m256i *)(n + b), _mm256_blendv_epi8(vn, p.n, _mm256_castps_si256(app)));
+        /* a bad value (random draws) again through final_one, from the chain's counter before */
+        for (unsigned m = (unsigned)_mm256_movemask_ps(bad); m; m &= m - 1u) {
+            int l = __builtin_ctz(m);
+            uint32_t k = b + (uint32_t)l;
+            n[k] = n0[l];
+            final_one(S, x[k], y[k], c[k], key[k], &n[k], &opx[k], &opy[k], &opc[k]);
+        }
+    }
 }
 
 /* Chains i .. i + g - 1 (g a multiple of 8, at most GROUP), each of P.len points (none the last
@@ -481,12 +545,13 @@ LANES_AVX2 static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g
                 K_FlameChain s = {0};
                 s.x = x[l], s.y = y[l], s.c = c[l];
                 s.n = n[l] - 1u;
-                s = step(P, s, key[l], plain K_FLAME_TABLES);
+                s = step_xform(P, s, key[l], plain K_FLAME_TABLES);
                 bad += s.bad;
                 x[l] = s.x, y[l] = s.y, c[l] = s.c, n[l] = s.n;
-                /* no final xform: the point plotted is the chain's, before the camera (scatter_planes) */
+                /* the point plotted, before the final xform and the camera */
                 opx[l] = s.x, opy[l] = s.y, opc[l] = s.c, ovis[l] = s.vis;
             }
+            if (P.final_xf != K_FLAME_NONE) final_pass(S, T->vfinal, g, x, y, c, key, n, opx, opy, opc);
         }
         scatter_planes(G, task, &B, m * g, pts, rec);
     }
