@@ -58,6 +58,15 @@ static const char *const k_lanes_final_bad =
     "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\"><symmetry kind=\"2\"/>"
     "<xform weight=\"0.5\" color=\"0.2\" swirl=\"0.7\" blur=\"0.3\" coefs=\"0.9 0.2 -0.3 0.8 0.4 0.1\"/>"
     "<finalxform color=\"0.7\" opacity=\"0.8\" linear=\"1\" coefs=\"1e10 0 0 1e10 0 0\"/>" PAL "</flame>";
+/* xaos (each chain's choice from the row of its last xform, gathered), a final xform, a plain
+ * linear xform */
+static const char *const k_lanes_xaos =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\">"
+    "<xform weight=\"0.5\" color=\"0.2\" ex=\"0.6\" julia=\"0.4\" coefs=\"0.5 0.2 -0.3 0.6 0.2 0.1\" "
+    "chaos=\"0 1 3\"/>"
+    "<xform weight=\"0.3\" color=\"0.5\" linear=\"1\" coefs=\"-1 0 0 -1 0 0\" chaos=\"1 1 0\"/>"
+    "<xform weight=\"0.4\" color=\"0.9\" rectangles=\"0.5\" coefs=\"0.8 0 0 0.8 0.1 0\" chaos=\"2 0.5 1\"/>"
+    "<finalxform color=\"0.7\" opacity=\"0.5\" spherical=\"0.3\" linear=\"0.7\" coefs=\"1 0 0 1 0 0\"/>" PAL "</flame>";
 static const char *const k_lanes_final_scalar =
     "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\"><symmetry kind=\"2\"/>"
     "<xform weight=\"0.5\" color=\"0.2\" julia=\"1\" coefs=\"0.5 0.2 -0.3 0.6 0.2 0.1\"/>"
@@ -239,6 +248,7 @@ int main(void)
     test_genome("final xform, translucent (AVX2 lanes)", k_lanes_final, 64, 48, 100, 16, 0.1);
     test_genome("final xform, a chain at a time (AVX2 lanes)", k_lanes_final_scalar, 64, 48, 100, 16, 0.1);
     test_genome("final xform, bad values (AVX2 lanes)", k_lanes_final_bad, 64, 48, 100, 16, 0.1);
+    test_genome("xaos, final xform (AVX2 lanes)", k_lanes_xaos, 64, 48, 100, 16, 0.1);
     /* 2^21 points into one cell: past 2^19 hits a 16-byte cell spills, past 2^31 / 4080 a 24-byte one */
     test_genome("one cell, opaque", k_point, 8, 8, 32768, 16, 0.5);
     test_genome("one cell, translucent", k_point_translucent, 8, 8, 32768, 24, 0.5);

@@ -261,13 +261,13 @@ typedef struct lane_tables {
 
 /* Whether the lanes play S: plain linear xforms or xforms of the variations flame_avx2.h has to
  * take (the other steps are the scalar step's, a lane at a time), at most 8 xforms (their tables
- * are registers, looked up by a permutation: AMD's gathers cost more than the scalar step saves), no
- * xaos (the scalar path plays it), AVX2. */
+ * are registers, looked up by a permutation: AMD's gathers cost more than the scalar step saves),
+ * AVX2. */
 static bool lanes_ok(const fb_flame_setup *S, const uint8_t *plain)
 {
     bool any = false;
     for (uint32_t f = 0; f < S->p.nxf; f++) any |= plain[f] != 0 || fl_xform_avx2(&S->xf[f], S->var);
-    return any && S->p.nxf <= 8 && !S->p.chaos && __builtin_cpu_supports("avx2");
+    return any && S->p.nxf <= 8 && __builtin_cpu_supports("avx2");
 }
 
 static void lane_tables_init(const fb_flame_setup *S, const uint8_t *plain, lane_tables *T)
@@ -283,7 +283,7 @@ static void lane_tables_init(const fb_flame_setup *S, const uint8_t *plain, lane
         T->vec[f] = !plain[f] && fl_xform_avx2(X, S->var);
     }
     T->vfinal = S->p.final_xf != K_FLAME_NONE && fl_xform_avx2(&S->xf[S->p.final_xf], S->var);
-    T->sorted = true;
+    T->sorted = !S->p.chaos; /* xaos: a row a chain, gathered */
     for (uint32_t j = 1; j < K_FLAME_GRAIN; j++) T->sorted &= S->dist[j] >= S->dist[j - 1];
     T->nedge = S->p.nxf - 1u;
     for (uint32_t k = 1; k < S->p.nxf; k++) {
@@ -447,13 +447,13 @@ LANES_AVX2 static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g
     uint64_t bad = 0;
     /* the chains' state as planes */
     float x[GROUP], y[GROUP], c[GROUP];
-    uint32_t n[GROUP], f[GROUP];
+    uint32_t n[GROUP], f[GROUP], last[GROUP];
     for (uint32_t l = 0; l < g; l++) {
         key[l] = k_flame_key(P.seed, i + l);
         K_FlameChain s = k_flame_init(key[l]);
         for (uint32_t t = 0; t < P.fuse; t++) s = step(P, s, key[l], plain K_FLAME_TABLES);
         bad += s.bad;
-        x[l] = s.x, y[l] = s.y, c[l] = s.c, n[l] = s.n;
+        x[l] = s.x, y[l] = s.y, c[l] = s.c, n[l] = s.n, last[l] = s.last;
     }
     const __m256i grain = _mm256_set1_epi32(K_FLAME_GRAIN - 1);
     const __m256 zero = _mm256_setzero_ps();
@@ -482,6 +482,9 @@ LANES_AVX2 static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g
                     for (uint32_t k = 0; k < T->nedge; k++)
                         fn = _mm256_sub_epi32(fn, _mm256_cmpgt_epi32(at, _mm256_set1_epi32(T->edge[k])));
                 } else {
+                    if (P.chaos) /* xaos: the row of the chain's last xform */
+                        at = _mm256_add_epi32(at, _mm256_mullo_epi32(_mm256_loadu_si256((const __m256i *)(last + b)),
+                                                                     _mm256_set1_epi32(K_FLAME_GRAIN)));
                     fn = _mm256_i32gather_epi32((const int *)k_flame_dist, at, 4);
                 }
                 __m256 ok = _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(t_plain, fn));
@@ -545,12 +548,18 @@ LANES_AVX2 static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g
                 K_FlameChain s = {0};
                 s.x = x[l], s.y = y[l], s.c = c[l];
                 s.n = n[l] - 1u;
+                s.last = last[l];
                 s = step_xform(P, s, key[l], plain K_FLAME_TABLES);
                 bad += s.bad;
                 x[l] = s.x, y[l] = s.y, c[l] = s.c, n[l] = s.n;
                 /* the point plotted, before the final xform and the camera */
                 opx[l] = s.x, opy[l] = s.y, opc[l] = s.c, ovis[l] = s.vis;
+                f[l] = s.vis; /* its xform after the retries */
             }
+            for (uint32_t b = 0; b < g; b += 8)
+                _mm256_storeu_si256(
+                    (__m256i *)(last + b),
+                    _mm256_add_epi32(_mm256_loadu_si256((const __m256i *)(f + b)), _mm256_set1_epi32(1)));
             if (P.final_xf != K_FLAME_NONE) final_pass(S, T->vfinal, g, x, y, c, key, n, opx, opy, opc);
         }
         scatter_planes(G, task, &B, m * g, pts, rec);
