@@ -67,6 +67,12 @@ static const char *const k_lanes_xaos =
     "<xform weight=\"0.3\" color=\"0.5\" linear=\"1\" coefs=\"-1 0 0 -1 0 0\" chaos=\"1 1 0\"/>"
     "<xform weight=\"0.4\" color=\"0.9\" rectangles=\"0.5\" coefs=\"0.8 0 0 0.8 0.1 0\" chaos=\"2 0.5 1\"/>"
     "<finalxform color=\"0.7\" opacity=\"0.5\" spherical=\"0.3\" linear=\"0.7\" coefs=\"1 0 0 1 0 0\"/>" PAL "</flame>";
+/* 21 xforms (a symmetry of 18): the lanes' tables in three registers */
+static const char *const k_lanes_wide =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\"><symmetry kind=\"18\"/>"
+    "<xform weight=\"2\" color=\"0.2\" ex=\"0.6\" julia=\"0.4\" coefs=\"0.5 0.2 -0.3 0.6 0.2 0.1\"/>"
+    "<xform weight=\"2\" color=\"0.6\" disc=\"0.8\" coefs=\"0.7 0.1 0 0.7 0.1 0\"/>"
+    "<xform weight=\"1\" color=\"0.9\" rectangles=\"0.5\" coefs=\"0.8 0 0 0.8 0.1 0\"/>" PAL "</flame>";
 static const char *const k_lanes_final_scalar =
     "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\"><symmetry kind=\"2\"/>"
     "<xform weight=\"0.5\" color=\"0.2\" julia=\"1\" coefs=\"0.5 0.2 -0.3 0.6 0.2 0.1\"/>"
@@ -249,6 +255,7 @@ int main(void)
     test_genome("final xform, a chain at a time (AVX2 lanes)", k_lanes_final_scalar, 64, 48, 100, 16, 0.1);
     test_genome("final xform, bad values (AVX2 lanes)", k_lanes_final_bad, 64, 48, 100, 16, 0.1);
     test_genome("xaos, final xform (AVX2 lanes)", k_lanes_xaos, 64, 48, 100, 16, 0.1);
+    test_genome("21 xforms (AVX2 lanes)", k_lanes_wide, 64, 48, 100, 16, 0.1);
     /* 2^21 points into one cell: past 2^19 hits a 16-byte cell spills, past 2^31 / 4080 a 24-byte one */
     test_genome("one cell, opaque", k_point, 8, 8, 32768, 16, 0.5);
     test_genome("one cell, translucent", k_point_translucent, 8, 8, 32768, 24, 0.5);

@@ -255,19 +255,18 @@ typedef struct lane_tables {
      * compares instead of a gather */
     bool sorted;
     uint32_t nedge;
-    int32_t edge[8];
+    int32_t edge[FB_FLAME_MAX_XFORMS];
     bool vfinal; /* the final xform (if any) on the lanes */
 } lane_tables;
 
 /* Whether the lanes play S: plain linear xforms or xforms of the variations flame_avx2.h has to
- * take (the other steps are the scalar step's, a lane at a time), at most 8 xforms (their tables
- * are registers, looked up by a permutation: AMD's gathers cost more than the scalar step saves),
- * AVX2. */
+ * take (the other steps are the scalar step's, a lane at a time), AVX2. The xforms' tables are
+ * registers of 8, looked up by permutations (AMD's gathers cost more than the scalar step saves). */
 static bool lanes_ok(const fb_flame_setup *S, const uint8_t *plain)
 {
     bool any = false;
     for (uint32_t f = 0; f < S->p.nxf; f++) any |= plain[f] != 0 || fl_xform_avx2(&S->xf[f], S->var);
-    return any && S->p.nxf <= 8 && __builtin_cpu_supports("avx2");
+    return any && S->p.nxf <= FB_FLAME_MAX_XFORMS && __builtin_cpu_supports("avx2");
 }
 
 static void lane_tables_init(const fb_flame_setup *S, const uint8_t *plain, lane_tables *T)
@@ -426,6 +425,16 @@ LANES_AVX2 static void final_pass(const fb_flame_setup *S, bool vec, uint32_t g,
     }
 }
 
+/* Entry fn of a table of xforms held as registers of 8 (t[0]; t[1] and t[2] too where wide: m8 and
+ * m16 mark the lanes whose fn is 8 or more, 16 or more). */
+LANES_AVX2 static inline __m256 look(const __m256 *t, __m256i fn, __m256 m8, __m256 m16, bool wide)
+{
+    __m256 r = _mm256_permutevar8x32_ps(t[0], fn);
+    if (!wide) return r;
+    r = _mm256_blendv_ps(r, _mm256_permutevar8x32_ps(t[1], fn), m8);
+    return _mm256_blendv_ps(r, _mm256_permutevar8x32_ps(t[2], fn), m16);
+}
+
 /* Chains i .. i + g - 1 (g a multiple of 8, at most GROUP), each of P.len points (none the last
  * chain), on the lanes. Each step: eight chains at a time, the lanes whose chosen xform is plain
  * linear and gives no bad value take apply_linear's operations (the same, in the same order: add and
@@ -434,8 +443,10 @@ LANES_AVX2 static void final_pass(const fb_flame_setup *S, bool vec, uint32_t g,
  * any whose result is a bad value, take the scalar step from their state before the step, so every
  * chain's points are the scalar path's. Points are scattered a batch at a time as play does (their
  * order within a batch changes no integer sum). */
-LANES_AVX2 static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g, const lane_tables *T,
-                                 K_FlameChain *pts, records *rec)
+LANES_AVX2 static inline __attribute__((always_inline)) uint64_t playg_body(const game *G, int task, uint32_t i,
+                                                                            uint32_t g, const lane_tables *T,
+                                                                            K_FlameChain *pts, records *rec,
+                                                                            const bool wide)
 {
     const fb_flame_setup *S = G->S;
     const K_FlameParams P = S->p;
@@ -457,13 +468,18 @@ LANES_AVX2 static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g
     }
     const __m256i grain = _mm256_set1_epi32(K_FLAME_GRAIN - 1);
     const __m256 zero = _mm256_setzero_ps();
-    const __m256 t_sc = _mm256_loadu_ps(T->sc), t_oms = _mm256_loadu_ps(T->oms), t_w = _mm256_loadu_ps(T->w);
-    const __m256 t_ax = _mm256_loadu_ps(T->ax), t_bx = _mm256_loadu_ps(T->bx), t_cx = _mm256_loadu_ps(T->cx);
-    const __m256 t_ay = _mm256_loadu_ps(T->ay), t_by = _mm256_loadu_ps(T->by), t_cy = _mm256_loadu_ps(T->cy);
-    const __m256i t_plain = _mm256_loadu_si256((const __m256i *)T->plain);
-#define LOOK(t) _mm256_permutevar8x32_ps(t, fn)
+    /* the tables as registers of 8 xforms each (three where wide: up to 24) */
+    __m256 t_sc[3], t_oms[3], t_w[3], t_ax[3], t_bx[3], t_cx[3], t_ay[3], t_by[3], t_cy[3], t_plain[3];
+    for (int k = 0; k < (wide ? 3 : 1); k++) {
+        t_sc[k] = _mm256_loadu_ps(T->sc + 8 * k), t_oms[k] = _mm256_loadu_ps(T->oms + 8 * k);
+        t_w[k] = _mm256_loadu_ps(T->w + 8 * k), t_ax[k] = _mm256_loadu_ps(T->ax + 8 * k);
+        t_bx[k] = _mm256_loadu_ps(T->bx + 8 * k), t_cx[k] = _mm256_loadu_ps(T->cx + 8 * k);
+        t_ay[k] = _mm256_loadu_ps(T->ay + 8 * k), t_by[k] = _mm256_loadu_ps(T->by + 8 * k);
+        t_cy[k] = _mm256_loadu_ps(T->cy + 8 * k), t_plain[k] = _mm256_loadu_ps((const float *)T->plain + 8 * k);
+    }
+#define LOOK(t) look(t, fn, m8, m16, wide)
     const uint32_t per = BATCH / g;
-    uint32_t list[8][GROUP + 8], cnt[8], scal[GROUP];
+    uint32_t list[FB_FLAME_MAX_XFORMS][GROUP + 8], cnt[FB_FLAME_MAX_XFORMS], scal[GROUP];
     planes B;
     for (uint32_t t0 = 0; t0 < P.len; t0 += per) {
         uint32_t m = P.len - t0 < per ? P.len - t0 : per;
@@ -487,7 +503,12 @@ LANES_AVX2 static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g
                                                                      _mm256_set1_epi32(K_FLAME_GRAIN)));
                     fn = _mm256_i32gather_epi32((const int *)k_flame_dist, at, 4);
                 }
-                __m256 ok = _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(t_plain, fn));
+                __m256 m8 = _mm256_setzero_ps(), m16 = _mm256_setzero_ps();
+                if (wide) {
+                    m8 = _mm256_castsi256_ps(_mm256_cmpgt_epi32(fn, _mm256_set1_epi32(7)));
+                    m16 = _mm256_castsi256_ps(_mm256_cmpgt_epi32(fn, _mm256_set1_epi32(15)));
+                }
+                __m256 ok = LOOK(t_plain);
                 __m256 oc = _mm256_add_ps(LOOK(t_sc), _mm256_mul_ps(LOOK(t_oms), vc));
                 __m256 tx = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(LOOK(t_ax), vx), _mm256_mul_ps(LOOK(t_bx), vy)),
                                           LOOK(t_cx));
@@ -566,6 +587,14 @@ LANES_AVX2 static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g
     }
 #undef LOOK
     return bad;
+}
+
+/* playg_body for genomes of at most 8 xforms (one register a table) or more (three). */
+LANES_AVX2 static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g, const lane_tables *T,
+                                 K_FlameChain *pts, records *rec)
+{
+    if (G->S->p.nxf <= 8) return playg_body(G, task, i, g, T, pts, rec, false);
+    return playg_body(G, task, i, g, T, pts, rec, true);
 }
 #else
 typedef struct lane_tables {
