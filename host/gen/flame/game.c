@@ -440,9 +440,11 @@ LANES_AVX2 static inline __m256 look(const __m256 *t, __m256i fn, __m256 m8, __m
  * linear and gives no bad value take apply_linear's operations (the same, in the same order: add and
  * multiply, no FMA); the chains whose xform has a form on the lanes (lane_tables.vec) are then
  * gathered eight at a time by xform and take fl_apply8 (k_flame_apply's operations); the rest, and
- * any whose result is a bad value, take the scalar step from their state before the step, so every
- * chain's points are the scalar path's. Points are scattered a batch at a time as play does (their
- * order within a batch changes no integer sum). */
+ * any whose result is a bad value, take the scalar step from their state before the step; then all
+ * of them the final xform (final_pass), and a batch of points the camera (scatter_planes). So every
+ * chain's points are the scalar path's. With xaos a chain's choice is gathered from the row of its
+ * last xform. Points are scattered a batch at a time as play does (their order within a batch
+ * changes no integer sum). */
 LANES_AVX2 static inline __attribute__((always_inline)) uint64_t playg_body(const game *G, int task, uint32_t i,
                                                                             uint32_t g, const lane_tables *T,
                                                                             K_FlameChain *pts, records *rec,
@@ -577,7 +579,7 @@ LANES_AVX2 static inline __attribute__((always_inline)) uint64_t playg_body(cons
                 opx[l] = s.x, opy[l] = s.y, opc[l] = s.c, ovis[l] = s.vis;
                 f[l] = s.vis; /* its xform after the retries */
             }
-            for (uint32_t b = 0; b < g; b += 8)
+            for (uint32_t b = 0; P.chaos && b < g; b += 8)
                 _mm256_storeu_si256(
                     (__m256i *)(last + b),
                     _mm256_add_epi32(_mm256_loadu_si256((const __m256i *)(f + b)), _mm256_set1_epi32(1)));
