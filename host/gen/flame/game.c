@@ -489,7 +489,7 @@ LANES_AVX2 static inline __attribute__((always_inline)) uint64_t playg_body(cons
             float *opx = B.px + t * g, *opy = B.py + t * g, *opc = B.pc + t * g;
             uint32_t *ovis = B.vis + t * g;
             uint32_t nsc = 0;
-            memset(cnt, 0, sizeof cnt);
+            memset(cnt, 0, P.nxf * sizeof *cnt);
             for (uint32_t b = 0; b < g; b += 8) {
                 __m256 vx = _mm256_loadu_ps(x + b), vy = _mm256_loadu_ps(y + b), vc = _mm256_loadu_ps(c + b);
                 __m256i vn = _mm256_loadu_si256((const __m256i *)(n + b));
