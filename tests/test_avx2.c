@@ -3,6 +3,7 @@
  * chaos-game histograms, is bit-identical to the scalar kernel's (the layer with `scalar` set). */
 #include "../kernels/fbm.h"
 #include "../kernels/ifs.h"
+#include "flame_avx2.h"
 #include "fbm3_avx2.h"
 #include "fbm_avx2.h"
 #include "ifs_avx2.h"
@@ -16,8 +17,146 @@
 
 #include <string.h>
 
+#if defined(__x86_64__) || defined(__i386__)
+/* A float from a test's stream: mostly moderate values, and the edge cases (zeros of both signs,
+ * tiny, huge, infinities, NaN, the reduction's limits). */
+static float flame_value(uint32_t i)
+{
+    static const float edge[] = {0.0f,       -0.0f,     1e-30f, -1e-38f, 1e-45f,     1.0f,       -1.0f, 0.5f,
+                                 2.4142137f, 0.414213f, 88.7f,  -87.4f,  89.0f,      -90.0f,     1e10f, -1e10f,
+                                 3e38f,      -3e38f,    1e5f,   -2e6f,   1.5707964f, 3.1415927f, 0.8f,  -0.8f};
+    uint32_t h = k_hash(i * 0x9e3779b9u + 17u);
+    if (h % 11u == 0u) {
+        uint32_t k = (h >> 8) % (sizeof edge / sizeof edge[0] + 3u);
+        if (k == sizeof edge / sizeof edge[0]) return K_INF;
+        if (k == sizeof edge / sizeof edge[0] + 1u) return -K_INF;
+        if (k == sizeof edge / sizeof edge[0] + 2u) return K_NAN;
+        return edge[k];
+    }
+    float u = k_u01(k_hash(h)) * 2.0f - 1.0f;
+    switch (h % 5u) {
+    case 0:
+        return u;
+    case 1:
+        return u * 4.0f;
+    case 2:
+        return u * 100.0f;
+    case 3:
+        return u * 1e4f;
+    default:
+        return u * 0.01f;
+    }
+}
+
+/* the same bits, or both NaN */
+static bool flame_same(float a, float b)
+{
+    return (a != a && b != b) || !memcmp(&a, &b, 4);
+}
+
+/* The flame's lanes (host/gen/flame/flame_avx2.h): sin, cos, tan, exp, log, pow, sinh, cosh and atan2 are
+ * kernels/kmath.h's to the bit on random and edge arguments, and fl_apply8 is k_flame_apply for xforms
+ * of every variation it has, alone and in random mixes, with and without a post transform, on the
+ * same inputs: the point, colour, counter and bad values. */
+FL_AVX2 static void flame_lanes_check(void)
+{
+    int diff = 0;
+    for (uint32_t i = 0; i < 400000u; i += 8) {
+        float a[8], b[8], r[9][8];
+        for (int l = 0; l < 8; l++) a[l] = flame_value(i + (uint32_t)l), b[l] = flame_value(i + 7777777u + (uint32_t)l);
+        __m256 va = _mm256_loadu_ps(a), vb = _mm256_loadu_ps(b), s, c, hs, hc;
+        fl_sincos(va, &s, &c);
+        fl_sinhcosh(va, &hs, &hc);
+        _mm256_storeu_ps(r[0], s), _mm256_storeu_ps(r[1], c), _mm256_storeu_ps(r[2], fl_exp(va));
+        _mm256_storeu_ps(r[3], hs), _mm256_storeu_ps(r[4], hc), _mm256_storeu_ps(r[5], fl_atan2(va, vb));
+        _mm256_storeu_ps(r[6], fl_log(va)), _mm256_storeu_ps(r[7], fl_pow(fl_abs(va), vb));
+        _mm256_storeu_ps(r[8], fl_tan(va));
+        for (int l = 0; l < 8; l++) {
+            k_vec2 sc = k_sincos(a[l]), sh = k_xsinhcosh(a[l]);
+            float want[9] = {sc.x,         sc.y,
+                             k_xexp(a[l]), sh.x,
+                             sh.y,         k_xatan2(a[l], b[l]),
+                             k_xlog(a[l]), k_xpow(fabsf(a[l]), b[l]),
+                             k_xtan(a[l])};
+            for (int f = 0; f < 9; f++)
+                if (!flame_same(r[f][l], want[f]) && diff++ < 10)
+                    fprintf(stderr, "function %d of %a (%a): %a, not %a\n", f, a[l], b[l], r[f][l], want[f]);
+        }
+    }
+    CHECKF(diff == 0, "%d results of the flame's lane functions differ from kmath.h's", diff);
+    /* xforms */
+    uint32_t ids[K_V_COUNT], nid = 0;
+    for (uint32_t v = 0; v < K_V_COUNT; v++)
+        if (fl_var_avx2(v)) ids[nid++] = v;
+    CHECKF(nid >= 40, "only %u variations on the lanes", nid);
+    K_FlameVar var[8];
+    K_FlameXform X;
+    uint dist[1] = {0};
+    int xdiff = 0, nbad = 0;
+    uint32_t seed = 1;
+    for (uint32_t trial = 0; trial < 6000u; trial++) {
+#define R01() k_u01(k_hash(seed++ * 0x9e3779b9u))
+#define RS()  (R01() * 2.0f - 1.0f)
+        memset(&X, 0, sizeof X);
+        X.ax = RS() * 1.5f, X.bx = RS(), X.cx = RS(), X.ay = RS(), X.by = RS() * 1.5f, X.cy = RS();
+        X.pax = RS(), X.pbx = RS(), X.pcx = RS(), X.pay = RS(), X.pby = RS(), X.pcy = RS();
+        X.color = R01(), X.speed = R01();
+        X.nvar = trial < 4u * nid ? 1u : 1u + (uint32_t)(R01() * 4.0f);
+        /* the precalcs all xforms' variations might read (those not read change nothing) */
+        X.flags = K_FLAME_SQRT | K_FLAME_ANGLES | K_FLAME_ATAN_XY | K_FLAME_ATAN_YX;
+        if (R01() < 0.3f) X.flags |= K_FLAME_HAS_POST;
+        uint32_t last = 0;
+        for (uint32_t k = 0; k < X.nvar; k++) {
+            K_FlameVar *V = &var[k];
+            memset(V, 0, sizeof *V);
+            V->id = trial < 4u * nid ? ids[trial % nid] : ids[(uint32_t)(R01() * (float)nid) % nid];
+            if (V->id < last) V->id = last; /* ascending, as the genome's */
+            last = V->id;
+            V->w = RS() * 1.2f, V->p0 = RS() * 3.0f, V->p1 = RS() * 2.0f, V->p2 = RS() * 6.0f, V->p3 = RS() * 4.0f;
+        }
+        float x[8], y[8], c[8];
+        uint32_t n[8], key[8];
+        for (int l = 0; l < 8; l++) {
+            uint32_t j = trial * 8u + (uint32_t)l;
+            x[l] = trial % 4u == 3u ? flame_value(j) : RS() * 2.0f;
+            y[l] = trial % 4u == 3u ? flame_value(j + 555555u) : RS() * 2.0f;
+            c[l] = R01(), n[l] = k_hash(j) >> 4, key[l] = k_hash(j ^ 0xabcdefu);
+        }
+        fl_lanes p = {_mm256_loadu_ps(x), _mm256_loadu_ps(y), _mm256_loadu_ps(c),
+                      _mm256_loadu_si256((const __m256i *)n)};
+        unsigned bad = (unsigned)_mm256_movemask_ps(fl_apply8(&X, var, _mm256_loadu_si256((const __m256i *)key), &p));
+        float ox[8], oy[8], oc[8];
+        uint32_t on[8];
+        _mm256_storeu_ps(ox, p.x), _mm256_storeu_ps(oy, p.y), _mm256_storeu_ps(oc, p.c);
+        _mm256_storeu_si256((__m256i *)on, p.n);
+        const K_FlameXform *k_flame_xf = &X;
+        const K_FlameVar *k_flame_var = var;
+        const uint *k_flame_dist = dist;
+        for (int l = 0; l < 8; l++) {
+            K_FlameOut o = k_flame_apply(0u, x[l], y[l], c[l], key[l], n[l] K_FLAME_TABLES);
+            bool lb = bad >> l & 1u;
+            nbad += o.bad;
+            bool same =
+                lb == o.bad &&
+                (o.bad || (flame_same(ox[l], o.x) && flame_same(oy[l], o.y) && flame_same(oc[l], o.c) && on[l] == o.n));
+            if (!same && xdiff++ < 10)
+                fprintf(stderr,
+                        "xform of %u variations (first %u): lane %d: %a %a %a %u bad %d, not %a %a %a %u bad %d\n",
+                        X.nvar, var[0].id, l, ox[l], oy[l], oc[l], on[l], lb, o.x, o.y, o.c, o.n, o.bad);
+        }
+#undef R01
+#undef RS
+    }
+    CHECKF(xdiff == 0, "%d lanes of the flame's xforms differ from k_flame_apply", xdiff);
+    CHECKF(nbad > 0, "no bad value among the xforms' results");
+}
+#endif
+
 int main(void)
 {
+#if defined(__x86_64__) || defined(__i386__)
+    if (__builtin_cpu_supports("avx2")) flame_lanes_check();
+#endif
     const char *scenes[] = {
         "{\"size\": [203, 61], \"seed\": 1, \"layers\": [{\"type\": \"fbm\"}]}",
         "{\"size\": [128, 128], \"seed\": 77, \"layers\": [{\"type\": \"fbm\", \"octaves\": 24, \"hurst\": 0.3, "

@@ -31,6 +31,52 @@ static const char *const k_translucent =
     "<xform weight=\"0.5\" color=\"0\" opacity=\"0.5\" linear=\"0.6\" spherical=\"0.4\" coefs=\"0.5 0.2 -0.3 0.6 0.2 "
     "0.1\"/>"
     "<xform weight=\"0.5\" color=\"1\" swirl=\"0.3\" linear=\"0.5\" coefs=\"0.8 0 0 0.8 0 0\"/>" PAL "</flame>";
+/* a translucent xform with random draws and one with a post transform: the lanes' 24-byte cells */
+static const char *const k_lanes_translucent =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\">"
+    "<xform weight=\"0.5\" color=\"0.2\" opacity=\"0.7\" horseshoe=\"0.6\" blade=\"0.4\" coefs=\"0.5 0.2 -0.3 "
+    "0.6 0.2 0.1\"/>"
+    "<xform weight=\"0.5\" color=\"0.9\" polar=\"0.3\" disc=\"0.5\" coefs=\"0.8 0 0 0.8 0 0\" post=\"1 0.1 0 1 "
+    "0.1 0.2\"/>" PAL "</flame>";
+/* the camera rotated: the lanes rotate their planes of points */
+static const char *const k_lanes_rotated =
+    "<flame size=\"64 48\" scale=\"20\" rotate=\"33\" center=\"0.1 -0.2\" estimator_radius=\"3\">"
+    "<symmetry kind=\"2\"/>"
+    "<xform weight=\"0.5\" color=\"0.2\" julia=\"0.6\" curl=\"0.4\" curl_c1=\"0.3\" coefs=\"0.5 0.2 -0.3 0.6 "
+    "0.2 0.1\"/>"
+    "<xform weight=\"0.5\" color=\"0.9\" rectangles=\"0.5\" coefs=\"0.8 0 0 0.8 0 0\"/>" PAL "</flame>";
+/* final xforms on the lanes: one translucent (the opacity's draw) with random draws and bad values,
+ * and one whose variation has no lane form (a chain at a time) */
+static const char *const k_lanes_final =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\"><symmetry kind=\"3\"/>"
+    "<xform weight=\"0.5\" color=\"0.2\" ex=\"0.6\" blob=\"0.4\" coefs=\"0.5 0.2 -0.3 0.6 0.2 0.1\"/>"
+    "<xform weight=\"0.05\" color=\"0.5\" linear=\"1\" coefs=\"1e12 0 0 1e12 0 0\"/>"
+    "<finalxform color=\"0.7\" color_speed=\"0.5\" opacity=\"0.6\" spherical=\"0.5\" blade=\"0.5\" "
+    "coefs=\"0.9 0.1 0 0.9 0 0.1\"/>" PAL "</flame>";
+/* a final xform whose points beyond the unit square are bad values (random points, their draws) */
+static const char *const k_lanes_final_bad =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\"><symmetry kind=\"2\"/>"
+    "<xform weight=\"0.5\" color=\"0.2\" swirl=\"0.7\" blur=\"0.3\" coefs=\"0.9 0.2 -0.3 0.8 0.4 0.1\"/>"
+    "<finalxform color=\"0.7\" opacity=\"0.8\" linear=\"1\" coefs=\"1e10 0 0 1e10 0 0\"/>" PAL "</flame>";
+/* xaos (each chain's choice from the row of its last xform, gathered), a final xform, a plain
+ * linear xform */
+static const char *const k_lanes_xaos =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\">"
+    "<xform weight=\"0.5\" color=\"0.2\" ex=\"0.6\" julia=\"0.4\" coefs=\"0.5 0.2 -0.3 0.6 0.2 0.1\" "
+    "chaos=\"0 1 3\"/>"
+    "<xform weight=\"0.3\" color=\"0.5\" linear=\"1\" coefs=\"-1 0 0 -1 0 0\" chaos=\"1 1 0\"/>"
+    "<xform weight=\"0.4\" color=\"0.9\" rectangles=\"0.5\" coefs=\"0.8 0 0 0.8 0.1 0\" chaos=\"2 0.5 1\"/>"
+    "<finalxform color=\"0.7\" opacity=\"0.5\" spherical=\"0.3\" linear=\"0.7\" coefs=\"1 0 0 1 0 0\"/>" PAL "</flame>";
+/* 21 xforms (a symmetry of 18): the lanes' tables in three registers */
+static const char *const k_lanes_wide =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\"><symmetry kind=\"18\"/>"
+    "<xform weight=\"2\" color=\"0.2\" ex=\"0.6\" julia=\"0.4\" coefs=\"0.5 0.2 -0.3 0.6 0.2 0.1\"/>"
+    "<xform weight=\"2\" color=\"0.6\" disc=\"0.8\" coefs=\"0.7 0.1 0 0.7 0.1 0\"/>"
+    "<xform weight=\"1\" color=\"0.9\" rectangles=\"0.5\" coefs=\"0.8 0 0 0.8 0.1 0\"/>" PAL "</flame>";
+static const char *const k_lanes_final_scalar =
+    "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\"><symmetry kind=\"2\"/>"
+    "<xform weight=\"0.5\" color=\"0.2\" julia=\"1\" coefs=\"0.5 0.2 -0.3 0.6 0.2 0.1\"/>"
+    "<finalxform color=\"0.7\" rectangles=\"0.5\" coefs=\"0.9 0 0 0.9 0 0\"/>" PAL "</flame>";
 /* symmetry (plain linear xforms, game.c's fast path) among others: a linear one with a post
  * transform, one whose points fly off (bad values, retried), a final xform */
 static const char *const k_mixed =
@@ -203,6 +249,13 @@ int main(void)
     test_genome("translucent", k_translucent, 64, 48, 100, 24, 0.5);
     test_genome("symmetry, post, bad values, final", k_mixed, 64, 48, 100, 16, 0.5);
     test_genome("symmetry, bad values (AVX2 lanes)", k_lanes, 64, 48, 100, 16, 0.5);
+    test_genome("translucent, post (AVX2 lanes)", k_lanes_translucent, 64, 48, 100, 24, 0.3);
+    test_genome("camera rotation (AVX2 lanes)", k_lanes_rotated, 64, 48, 100, 16, 0.3);
+    test_genome("final xform, translucent (AVX2 lanes)", k_lanes_final, 64, 48, 100, 16, 0.1);
+    test_genome("final xform, a chain at a time (AVX2 lanes)", k_lanes_final_scalar, 64, 48, 100, 16, 0.1);
+    test_genome("final xform, bad values (AVX2 lanes)", k_lanes_final_bad, 64, 48, 100, 16, 0.1);
+    test_genome("xaos, final xform (AVX2 lanes)", k_lanes_xaos, 64, 48, 100, 16, 0.1);
+    test_genome("21 xforms (AVX2 lanes)", k_lanes_wide, 64, 48, 100, 16, 0.1);
     /* 2^21 points into one cell: past 2^19 hits a 16-byte cell spills, past 2^31 / 4080 a 24-byte one */
     test_genome("one cell, opaque", k_point, 8, 8, 32768, 16, 0.5);
     test_genome("one cell, translucent", k_point_translucent, 8, 8, 32768, 24, 0.5);

@@ -20,6 +20,7 @@ typedef struct cell16 {
 #define BATCH    1024 /* points computed before they are scattered */
 #define AHEAD    64   /* records prefetched ahead of the one added */
 #define OPAQUE_Q K_FLAME_OPAQUE
+#define GROUP    128 /* chains on the lanes together: those whose step chose a non-linear xform regrouped by it */
 
 static bool compact(const fb_flame_setup *S)
 {
@@ -179,10 +180,10 @@ static inline __attribute__((always_inline)) K_FlameOut apply_linear(uint fn, fl
     return o;
 }
 
-/* k_flame_step (kernels/flame.h), its xforms applied by apply_linear where plain[fn] says so and by
- * k_flame_apply otherwise; the rest line for line the same. */
-static inline __attribute__((always_inline)) K_FlameChain step(K_FlameParams P, K_FlameChain s, uint key,
-                                                               const uint8_t *plain K_FLAME_TABLES_DECL)
+/* k_flame_step (kernels/flame.h) up to its plot: the xform chosen and applied (by apply_linear where
+ * plain[fn] says so, by k_flame_apply otherwise), retried on bad values; line for line the same. */
+static inline __attribute__((always_inline)) K_FlameChain step_xform(K_FlameParams P, K_FlameChain s, uint key,
+                                                                     const uint8_t *plain K_FLAME_TABLES_DECL)
 {
     uint fn = 0u;
     K_FlameOut o;
@@ -202,7 +203,14 @@ static inline __attribute__((always_inline)) K_FlameChain step(K_FlameParams P, 
     }
     s.last = fn + 1u;
     s.vis = fn;
-    return k_flame_plot(P, s, key K_FLAME_TABLES);
+    return s;
+}
+
+/* k_flame_step: step_xform, then the final xform and the camera for the plot (k_flame_plot). */
+static inline __attribute__((always_inline)) K_FlameChain step(K_FlameParams P, K_FlameChain s, uint key,
+                                                               const uint8_t *plain K_FLAME_TABLES_DECL)
+{
+    return k_flame_plot(P, step_xform(P, s, key, plain K_FLAME_TABLES), key K_FLAME_TABLES);
 }
 
 /* Chain i, of length len. */
@@ -225,33 +233,40 @@ static uint64_t play(const game *G, int task, uint32_t i, uint32_t len, K_FlameC
     return s.bad;
 }
 
-/* ---- eight chains on AVX2 lanes ------------------------------------------------------------------ */
+/* ---- chains on AVX2 lanes ---------------------------------------------------------------------- */
 
 #if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
+#include "flame_avx2.h"
 
 #define LANES_AVX2 __attribute__((target("avx2")))
 
 /* The xforms' coefficients for the lanes' gathers: colour (speed x colour and 1 - speed, the
- * products the step forms, made once), the affine map and the linear weight; plain: -1 or 0. */
+ * products the step forms, made once), the affine map and the linear weight; plain: -1 or 0; vec:
+ * whether the xform (not plain) is applied on the lanes (fl_xform_avx2). */
 typedef struct lane_tables {
     float sc[FB_FLAME_MAX_XFORMS + 1], oms[FB_FLAME_MAX_XFORMS + 1];
     float ax[FB_FLAME_MAX_XFORMS + 1], bx[FB_FLAME_MAX_XFORMS + 1], cx[FB_FLAME_MAX_XFORMS + 1];
     float ay[FB_FLAME_MAX_XFORMS + 1], by[FB_FLAME_MAX_XFORMS + 1], cy[FB_FLAME_MAX_XFORMS + 1];
     float w[FB_FLAME_MAX_XFORMS + 1];
     int32_t plain[FB_FLAME_MAX_XFORMS + 1];
+    uint8_t vec[FB_FLAME_MAX_XFORMS + 1];
+    /* the choice table's row in ascending order of xform (as render.c builds it): the xform of an
+     * entry is the number of edges (the first entry of xform k, less 1, for k = 1 .. nedge) below it,
+     * compares instead of a gather */
+    bool sorted;
+    uint32_t nedge;
+    int32_t edge[FB_FLAME_MAX_XFORMS];
+    bool vfinal; /* the final xform (if any) on the lanes */
 } lane_tables;
 
-/* Whether the lanes play S: plain linear xforms to take (the other steps are the scalar step's, a
- * lane at a time), at most 8 xforms (their tables are registers, looked up by a permutation: AMD's
- * gathers cost more than the scalar step saves), no xaos, final xform or camera rotation (the
- * scalar path plays those), AVX2. */
+/* Whether the lanes play S: plain linear xforms or xforms of the variations flame_avx2.h has to
+ * take (the other steps are the scalar step's, a lane at a time), AVX2. The xforms' tables are
+ * registers of 8, looked up by permutations (AMD's gathers cost more than the scalar step saves). */
 static bool lanes_ok(const fb_flame_setup *S, const uint8_t *plain)
 {
     bool any = false;
-    for (uint32_t f = 0; f < S->p.nxf; f++) any |= plain[f] != 0;
-    return any && S->p.nxf <= 8 && !S->p.chaos && S->p.final_xf == K_FLAME_NONE && !S->p.rotate &&
-           __builtin_cpu_supports("avx2");
+    for (uint32_t f = 0; f < S->p.nxf; f++) any |= plain[f] != 0 || fl_xform_avx2(&S->xf[f], S->var);
+    return any && S->p.nxf <= FB_FLAME_MAX_XFORMS && __builtin_cpu_supports("avx2");
 }
 
 static void lane_tables_init(const fb_flame_setup *S, const uint8_t *plain, lane_tables *T)
@@ -264,16 +279,17 @@ static void lane_tables_init(const fb_flame_setup *S, const uint8_t *plain, lane
         T->ay[f] = X->ay, T->by[f] = X->by, T->cy[f] = X->cy;
         T->w[f] = plain[f] ? S->var[X->var0].w : 0.0f;
         T->plain[f] = plain[f] ? -1 : 0;
+        T->vec[f] = !plain[f] && fl_xform_avx2(X, S->var);
     }
-}
-
-LANES_AVX2 static inline __m256i hash8(__m256i x)
-{
-    x = _mm256_xor_si256(x, _mm256_srli_epi32(x, 16));
-    x = _mm256_mullo_epi32(x, _mm256_set1_epi32(0x7feb352d));
-    x = _mm256_xor_si256(x, _mm256_srli_epi32(x, 15));
-    x = _mm256_mullo_epi32(x, _mm256_set1_epi32((int)0x846ca68bu));
-    return _mm256_xor_si256(x, _mm256_srli_epi32(x, 16));
+    T->vfinal = S->p.final_xf != K_FLAME_NONE && fl_xform_avx2(&S->xf[S->p.final_xf], S->var);
+    T->sorted = !S->p.chaos; /* xaos: a row a chain, gathered */
+    for (uint32_t j = 1; j < K_FLAME_GRAIN; j++) T->sorted &= S->dist[j] >= S->dist[j - 1];
+    T->nedge = S->p.nxf - 1u;
+    for (uint32_t k = 1; k < S->p.nxf; k++) {
+        uint32_t j = 0;
+        while (j < K_FLAME_GRAIN && S->dist[j] < k) j++;
+        T->edge[k - 1] = (int32_t)j - 1;
+    }
 }
 
 /* k_flame_bad on the lanes: NaN or beyond +-1e10. */
@@ -285,13 +301,154 @@ LANES_AVX2 static inline __m256 bad8(__m256 v)
     return _mm256_or_ps(nan, _mm256_or_ps(hi, lo));
 }
 
-/* Chains i .. i + 7, each of P.len points (none the last chain), on the lanes: each step the lanes
- * whose chosen xform is plain linear and gives no bad value take apply_linear's operations (the
- * same, in the same order: add and multiply, no FMA), the others the scalar step from the same
- * state, so every chain's points are the scalar path's. Points are scattered a batch at a time as
- * play does (their order within a batch changes no integer sum). */
-LANES_AVX2 static uint64_t play8(const game *G, int task, uint32_t i, const lane_tables *T, K_FlameChain *pts,
-                                 records *rec)
+/* A batch's plotted points as planes. */
+typedef struct planes {
+    float px[BATCH], py[BATCH], pc[BATCH];
+    uint32_t vis[BATCH];
+} planes;
+
+/* make_records of a compact genome (every xform visible, step palette) from planes, eight points at a
+ * time (n a multiple of 8): k_flame_cell and k_flame_index on the lanes, the same integers. */
+LANES_AVX2 static void records8(const K_FlameParams *P, const planes *B, uint32_t n, records *r)
+{
+    const __m256 b0 = _mm256_set1_ps(P->b0), b1 = _mm256_set1_ps(P->b1), b2 = _mm256_set1_ps(P->b2),
+                 b3 = _mm256_set1_ps(P->b3);
+    const __m256 ws0 = _mm256_set1_ps(P->ws0), wb0s0 = _mm256_set1_ps(P->wb0s0), hs1 = _mm256_set1_ps(P->hs1),
+                 hb1s1 = _mm256_set1_ps(P->hb1s1);
+    const __m256i W = _mm256_set1_epi32((int)P->hist_w), H = _mm256_set1_epi32((int)P->hist_h);
+    const __m256i neg1 = _mm256_set1_epi32(-1), top = _mm256_set1_epi32(255);
+    uint32_t m = 0;
+    for (uint32_t t = 0; t < n; t += 8) {
+        __m256 px = _mm256_loadu_ps(B->px + t), py = _mm256_loadu_ps(B->py + t);
+        __m256 in = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(px, b0, _CMP_GE_OQ), _mm256_cmp_ps(py, b1, _CMP_GE_OQ)),
+                                  _mm256_and_ps(_mm256_cmp_ps(px, b2, _CMP_LE_OQ), _mm256_cmp_ps(py, b3, _CMP_LE_OQ)));
+        __m256i ix = _mm256_cvttps_epi32(_mm256_sub_ps(_mm256_mul_ps(ws0, px), wb0s0));
+        __m256i iy = _mm256_cvttps_epi32(_mm256_sub_ps(_mm256_mul_ps(hs1, py), hb1s1));
+        __m256i ok = _mm256_and_si256(_mm256_cmpgt_epi32(ix, neg1), _mm256_cmpgt_epi32(iy, neg1));
+        ok = _mm256_and_si256(ok, _mm256_and_si256(_mm256_cmpgt_epi32(W, ix), _mm256_cmpgt_epi32(H, iy)));
+        ok = _mm256_and_si256(ok, _mm256_castps_si256(in));
+        __m256i cell = _mm256_add_epi32(_mm256_mullo_epi32(iy, W), ix);
+        __m256i ci = _mm256_cvttps_epi32(_mm256_mul_ps(_mm256_loadu_ps(B->pc + t), _mm256_set1_ps(256.0f)));
+        ci = _mm256_max_epi32(_mm256_min_epi32(ci, top), _mm256_setzero_si256());
+        uint32_t cv[8], kv[8];
+        _mm256_storeu_si256((__m256i *)cv, cell), _mm256_storeu_si256((__m256i *)kv, ci);
+        unsigned valid = (unsigned)_mm256_movemask_ps(_mm256_castsi256_ps(ok));
+        for (int l = 0; l < 8; l++) {
+            r->cell[m] = cv[l];
+            r->col[m] = kv[l];
+            m += valid >> l & 1u;
+        }
+    }
+    r->n = m;
+}
+
+/* A batch of planes scattered (n a multiple of 8): the camera's rotation (k_flame_rotate's operations
+ * on the lanes), then compact genomes straight from them, the others through pts. */
+LANES_AVX2 static void scatter_planes(const game *G, int task, planes *B, uint32_t n, K_FlameChain *pts, records *rec)
+{
+    const K_FlameParams *P = &G->S->p;
+    if (P->rotate) {
+        const __m256 rcx = _mm256_set1_ps(P->rcx), rcy = _mm256_set1_ps(P->rcy);
+        const __m256 r00 = _mm256_set1_ps(P->rot00), r01 = _mm256_set1_ps(P->rot01);
+        const __m256 r10 = _mm256_set1_ps(P->rot10), r11 = _mm256_set1_ps(P->rot11);
+        for (uint32_t t = 0; t < n; t += 8) {
+            __m256 qx = _mm256_sub_ps(_mm256_loadu_ps(B->px + t), rcx);
+            __m256 qy = _mm256_sub_ps(_mm256_loadu_ps(B->py + t), rcy);
+            _mm256_storeu_ps(B->px + t,
+                             _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(qx, r00), _mm256_mul_ps(qy, r01)), rcx));
+            _mm256_storeu_ps(B->py + t,
+                             _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(qx, r10), _mm256_mul_ps(qy, r11)), rcy));
+        }
+    }
+    if (G->compact) {
+        records8(&G->S->p, B, n, rec);
+        scatter16(G->S, rec, G->hist[task], G->total);
+        return;
+    }
+    for (uint32_t t = 0; t < n; t++)
+        pts[t].px = B->px[t], pts[t].py = B->py[t], pts[t].pc = B->pc[t], pts[t].vis = B->vis[t];
+    scatter(G, task, pts, n, rec);
+}
+
+/* The final xform of one chain's step, as k_flame_plot: the opacity's draw (unless always), then the
+ * xform from the chain's point into the point plotted. */
+static void final_one(const fb_flame_setup *S, float x, float y, float c, uint32_t key, uint32_t *n, float *px,
+                      float *py, float *pc)
+{
+    const K_FlameParams P = S->p;
+    const K_FlameXform *k_flame_xf = S->xf;
+    const K_FlameVar *k_flame_var = S->var;
+    const uint *k_flame_dist = S->dist;
+    bool apply = P.final_always != 0u;
+    if (!apply) apply = k_flame_u01(key, (*n)++) < P.final_opacity;
+    *px = x, *py = y, *pc = c;
+    if (!apply) return;
+    K_FlameOut f = k_flame_apply(P.final_xf, x, y, c, key, *n K_FLAME_TABLES);
+    *n = f.n, *px = f.x, *py = f.y, *pc = f.c;
+}
+
+/* The final xform of a step of chains 0 .. g - 1 (their points x, y, c after the step's xform):
+ * eight at a time on the lanes where vec (fl_apply8; a bad value, which takes random draws, through
+ * final_one), else final_one a chain at a time. The points plotted into opx, opy, opc. */
+LANES_AVX2 static void final_pass(const fb_flame_setup *S, bool vec, uint32_t g, const float *x, const float *y,
+                                  const float *c, const uint32_t *key, uint32_t *n, float *opx, float *opy, float *opc)
+{
+    const K_FlameParams *P = &S->p;
+    if (!vec) {
+        for (uint32_t l = 0; l < g; l++) final_one(S, x[l], y[l], c[l], key[l], &n[l], &opx[l], &opy[l], &opc[l]);
+        return;
+    }
+    for (uint32_t b = 0; b < g; b += 8) {
+        __m256 vx = _mm256_loadu_ps(x + b), vy = _mm256_loadu_ps(y + b), vc = _mm256_loadu_ps(c + b);
+        __m256i vn = _mm256_loadu_si256((const __m256i *)(n + b)),
+                vkey = _mm256_loadu_si256((const __m256i *)(key + b));
+        uint32_t n0[8];
+        _mm256_storeu_si256((__m256i *)n0, vn);
+        __m256 app = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+        if (!P->final_always) {
+            app = _mm256_cmp_ps(fl_u01(vkey, vn), _mm256_set1_ps(P->final_opacity), _CMP_LT_OQ);
+            vn = _mm256_add_epi32(vn, _mm256_set1_epi32(1));
+        }
+        fl_lanes p = {vx, vy, vc, vn};
+        __m256 bad = _mm256_and_ps(fl_apply8(&S->xf[P->final_xf], S->var, vkey, &p), app);
+        _mm256_storeu_ps(opx + b, _mm256_blendv_ps(vx, p.x, app));
+        _mm256_storeu_ps(opy + b, _mm256_blendv_ps(vy, p.y, app));
+        _mm256_storeu_ps(opc + b, _mm256_blendv_ps(vc, p.c, app));
+        _mm256_storeu_si256((__m256i *)(n + b), _mm256_blendv_epi8(vn, p.n, _mm256_castps_si256(app)));
+        /* a bad value (random draws) again through final_one, from the chain's counter before */
+        for (unsigned m = (unsigned)_mm256_movemask_ps(bad); m; m &= m - 1u) {
+            int l = __builtin_ctz(m);
+            uint32_t k = b + (uint32_t)l;
+            n[k] = n0[l];
+            final_one(S, x[k], y[k], c[k], key[k], &n[k], &opx[k], &opy[k], &opc[k]);
+        }
+    }
+}
+
+/* Entry fn of a table of xforms held as registers of 8 (t[0]; t[1] and t[2] too where wide: m8 and
+ * m16 mark the lanes whose fn is 8 or more, 16 or more). */
+LANES_AVX2 static inline __m256 look(const __m256 *t, __m256i fn, __m256 m8, __m256 m16, bool wide)
+{
+    __m256 r = _mm256_permutevar8x32_ps(t[0], fn);
+    if (!wide) return r;
+    r = _mm256_blendv_ps(r, _mm256_permutevar8x32_ps(t[1], fn), m8);
+    return _mm256_blendv_ps(r, _mm256_permutevar8x32_ps(t[2], fn), m16);
+}
+
+/* Chains i .. i + g - 1 (g a multiple of 8, at most GROUP), each of P.len points (none the last
+ * chain), on the lanes. Each step: eight chains at a time, the lanes whose chosen xform is plain
+ * linear and gives no bad value take apply_linear's operations (the same, in the same order: add and
+ * multiply, no FMA); the chains whose xform has a form on the lanes (lane_tables.vec) are then
+ * gathered eight at a time by xform and take fl_apply8 (k_flame_apply's operations); the rest, and
+ * any whose result is a bad value, take the scalar step from their state before the step; then all
+ * of them the final xform (final_pass), and a batch of points the camera (scatter_planes). So every
+ * chain's points are the scalar path's. With xaos a chain's choice is gathered from the row of its
+ * last xform. Points are scattered a batch at a time as play does (their order within a batch
+ * changes no integer sum). */
+LANES_AVX2 static inline __attribute__((always_inline)) uint64_t playg_body(const game *G, int task, uint32_t i,
+                                                                            uint32_t g, const lane_tables *T,
+                                                                            K_FlameChain *pts, records *rec,
+                                                                            const bool wide)
 {
     const fb_flame_setup *S = G->S;
     const K_FlameParams P = S->p;
@@ -299,71 +456,147 @@ LANES_AVX2 static uint64_t play8(const game *G, int task, uint32_t i, const lane
     const K_FlameVar *k_flame_var = S->var;
     const uint *k_flame_dist = S->dist;
     const uint8_t *plain = G->plain;
-    K_FlameChain st[8];
-    uint32_t key[8];
+    uint32_t key[GROUP];
     uint64_t bad = 0;
-    for (int l = 0; l < 8; l++) {
-        key[l] = k_flame_key(P.seed, i + (uint32_t)l);
-        st[l] = k_flame_init(key[l]);
-        for (uint32_t t = 0; t < P.fuse; t++) st[l] = step(P, st[l], key[l], plain K_FLAME_TABLES);
-        bad += st[l].bad;
+    /* the chains' state as planes */
+    float x[GROUP], y[GROUP], c[GROUP];
+    uint32_t n[GROUP], f[GROUP], last[GROUP];
+    for (uint32_t l = 0; l < g; l++) {
+        key[l] = k_flame_key(P.seed, i + l);
+        K_FlameChain s = k_flame_init(key[l]);
+        for (uint32_t t = 0; t < P.fuse; t++) s = step(P, s, key[l], plain K_FLAME_TABLES);
+        bad += s.bad;
+        x[l] = s.x, y[l] = s.y, c[l] = s.c, n[l] = s.n, last[l] = s.last;
     }
-    /* the lanes' state as planes */
-    float x[8], y[8], c[8];
-    uint32_t n[8];
-    for (int l = 0; l < 8; l++) x[l] = st[l].x, y[l] = st[l].y, c[l] = st[l].c, n[l] = st[l].n;
-    const __m256i vkey = _mm256_loadu_si256((const __m256i *)key), grain = _mm256_set1_epi32(K_FLAME_GRAIN - 1);
+    const __m256i grain = _mm256_set1_epi32(K_FLAME_GRAIN - 1);
     const __m256 zero = _mm256_setzero_ps();
-    const __m256 t_sc = _mm256_loadu_ps(T->sc), t_oms = _mm256_loadu_ps(T->oms), t_w = _mm256_loadu_ps(T->w);
-    const __m256 t_ax = _mm256_loadu_ps(T->ax), t_bx = _mm256_loadu_ps(T->bx), t_cx = _mm256_loadu_ps(T->cx);
-    const __m256 t_ay = _mm256_loadu_ps(T->ay), t_by = _mm256_loadu_ps(T->by), t_cy = _mm256_loadu_ps(T->cy);
-    const __m256i t_plain = _mm256_loadu_si256((const __m256i *)T->plain);
-#define LOOK(t) _mm256_permutevar8x32_ps(t, fn)
-    const uint32_t per = BATCH / 8;
+    /* the tables as registers of 8 xforms each (three where wide: up to 24) */
+    __m256 t_sc[3], t_oms[3], t_w[3], t_ax[3], t_bx[3], t_cx[3], t_ay[3], t_by[3], t_cy[3], t_plain[3];
+    for (int k = 0; k < (wide ? 3 : 1); k++) {
+        t_sc[k] = _mm256_loadu_ps(T->sc + 8 * k), t_oms[k] = _mm256_loadu_ps(T->oms + 8 * k);
+        t_w[k] = _mm256_loadu_ps(T->w + 8 * k), t_ax[k] = _mm256_loadu_ps(T->ax + 8 * k);
+        t_bx[k] = _mm256_loadu_ps(T->bx + 8 * k), t_cx[k] = _mm256_loadu_ps(T->cx + 8 * k);
+        t_ay[k] = _mm256_loadu_ps(T->ay + 8 * k), t_by[k] = _mm256_loadu_ps(T->by + 8 * k);
+        t_cy[k] = _mm256_loadu_ps(T->cy + 8 * k), t_plain[k] = _mm256_loadu_ps((const float *)T->plain + 8 * k);
+    }
+#define LOOK(t) look(t, fn, m8, m16, wide)
+    const uint32_t per = BATCH / g;
+    uint32_t list[FB_FLAME_MAX_XFORMS][GROUP + 8], cnt[FB_FLAME_MAX_XFORMS], scal[GROUP];
+    planes B;
     for (uint32_t t0 = 0; t0 < P.len; t0 += per) {
         uint32_t m = P.len - t0 < per ? P.len - t0 : per;
         for (uint32_t t = 0; t < m; t++) {
-            __m256 vx = _mm256_loadu_ps(x), vy = _mm256_loadu_ps(y), vc = _mm256_loadu_ps(c);
-            __m256i vn = _mm256_loadu_si256((const __m256i *)n);
-            __m256i h = hash8(_mm256_xor_si256(vn, vkey));
-            __m256i fn = _mm256_i32gather_epi32((const int *)k_flame_dist, _mm256_and_si256(h, grain), 4);
-            __m256 ok = _mm256_castsi256_ps(_mm256_permutevar8x32_epi32(t_plain, fn));
-            __m256 oc = _mm256_add_ps(LOOK(t_sc), _mm256_mul_ps(LOOK(t_oms), vc));
-            __m256 tx =
-                _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(LOOK(t_ax), vx), _mm256_mul_ps(LOOK(t_bx), vy)), LOOK(t_cx));
-            __m256 ty =
-                _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(LOOK(t_ay), vx), _mm256_mul_ps(LOOK(t_by), vy)), LOOK(t_cy));
-            __m256 w = LOOK(t_w);
-            __m256 p0 = _mm256_add_ps(zero, _mm256_mul_ps(w, tx)), p1 = _mm256_add_ps(zero, _mm256_mul_ps(w, ty));
-            ok = _mm256_andnot_ps(_mm256_or_ps(bad8(p0), bad8(p1)), ok);
-            _mm256_storeu_ps(x, _mm256_blendv_ps(vx, p0, ok));
-            _mm256_storeu_ps(y, _mm256_blendv_ps(vy, p1, ok));
-            _mm256_storeu_ps(c, _mm256_blendv_ps(vc, oc, ok));
-            _mm256_storeu_si256((__m256i *)n, _mm256_add_epi32(vn, _mm256_set1_epi32(1)));
-            uint32_t f[8];
-            _mm256_storeu_si256((__m256i *)f, fn);
-            unsigned scalar = ~(unsigned)_mm256_movemask_ps(ok) & 255u;
-            K_FlameChain *out = &pts[t * 8];
-            for (int l = 0; l < 8; l++) out[l].px = x[l], out[l].py = y[l], out[l].pc = c[l], out[l].vis = f[l];
-            /* the other lanes (a few a step: no test a lane, which the random choice would mispredict),
-             * each the scalar step from its state before this step (kept by the blends; n was advanced
-             * above) */
-            for (; scalar; scalar &= scalar - 1u) {
-                int l = __builtin_ctz(scalar);
-                K_FlameChain s = st[l];
+            float *opx = B.px + t * g, *opy = B.py + t * g, *opc = B.pc + t * g;
+            uint32_t *ovis = B.vis + t * g;
+            uint32_t nsc = 0;
+            memset(cnt, 0, P.nxf * sizeof *cnt);
+            for (uint32_t b = 0; b < g; b += 8) {
+                __m256 vx = _mm256_loadu_ps(x + b), vy = _mm256_loadu_ps(y + b), vc = _mm256_loadu_ps(c + b);
+                __m256i vn = _mm256_loadu_si256((const __m256i *)(n + b));
+                __m256i h = fl_hash8(_mm256_xor_si256(vn, _mm256_loadu_si256((const __m256i *)(key + b))));
+                __m256i at = _mm256_and_si256(h, grain), fn;
+                if (T->sorted) {
+                    fn = _mm256_setzero_si256();
+                    for (uint32_t k = 0; k < T->nedge; k++)
+                        fn = _mm256_sub_epi32(fn, _mm256_cmpgt_epi32(at, _mm256_set1_epi32(T->edge[k])));
+                } else {
+                    if (P.chaos) /* xaos: the row of the chain's last xform */
+                        at = _mm256_add_epi32(at, _mm256_mullo_epi32(_mm256_loadu_si256((const __m256i *)(last + b)),
+                                                                     _mm256_set1_epi32(K_FLAME_GRAIN)));
+                    fn = _mm256_i32gather_epi32((const int *)k_flame_dist, at, 4);
+                }
+                __m256 m8 = _mm256_setzero_ps(), m16 = _mm256_setzero_ps();
+                if (wide) {
+                    m8 = _mm256_castsi256_ps(_mm256_cmpgt_epi32(fn, _mm256_set1_epi32(7)));
+                    m16 = _mm256_castsi256_ps(_mm256_cmpgt_epi32(fn, _mm256_set1_epi32(15)));
+                }
+                __m256 ok = LOOK(t_plain);
+                __m256 oc = _mm256_add_ps(LOOK(t_sc), _mm256_mul_ps(LOOK(t_oms), vc));
+                __m256 tx = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(LOOK(t_ax), vx), _mm256_mul_ps(LOOK(t_bx), vy)),
+                                          LOOK(t_cx));
+                __m256 ty = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(LOOK(t_ay), vx), _mm256_mul_ps(LOOK(t_by), vy)),
+                                          LOOK(t_cy));
+                __m256 w = LOOK(t_w);
+                __m256 p0 = _mm256_add_ps(zero, _mm256_mul_ps(w, tx)), p1 = _mm256_add_ps(zero, _mm256_mul_ps(w, ty));
+                ok = _mm256_andnot_ps(_mm256_or_ps(bad8(p0), bad8(p1)), ok);
+                vx = _mm256_blendv_ps(vx, p0, ok), vy = _mm256_blendv_ps(vy, p1, ok), vc = _mm256_blendv_ps(vc, oc, ok);
+                _mm256_storeu_ps(x + b, vx), _mm256_storeu_ps(opx + b, vx);
+                _mm256_storeu_ps(y + b, vy), _mm256_storeu_ps(opy + b, vy);
+                _mm256_storeu_ps(c + b, vc), _mm256_storeu_ps(opc + b, vc);
+                _mm256_storeu_si256((__m256i *)(n + b), _mm256_add_epi32(vn, _mm256_set1_epi32(1)));
+                _mm256_storeu_si256((__m256i *)(f + b), fn);
+                _mm256_storeu_si256((__m256i *)(ovis + b), fn);
+                /* the other lanes (a few a step: no test a lane, which the random choice would
+                 * mispredict), their state before this step kept by the blends (n was advanced
+                 * above), into their xform's list or the scalar one */
+                for (unsigned rest = ~(unsigned)_mm256_movemask_ps(ok) & 255u; rest; rest &= rest - 1u) {
+                    uint32_t l = b + (uint32_t)__builtin_ctz(rest), fl = f[l];
+                    if (T->vec[fl])
+                        list[fl][cnt[fl]++] = l;
+                    else
+                        scal[nsc++] = l;
+                }
+            }
+            /* the chains of each non-linear xform, eight at a time (a short last group padded with
+             * its first chain, whose padding results are dropped) */
+            for (uint32_t fl = 0; fl < P.nxf; fl++) {
+                uint32_t k = cnt[fl];
+                if (!k) continue;
+                for (uint32_t j = k; j < k + 8; j++) list[fl][j] = list[fl][0];
+                for (uint32_t j = 0; j < k; j += 8) {
+                    __m256i vi = _mm256_loadu_si256((const __m256i *)&list[fl][j]);
+                    fl_lanes p = {_mm256_i32gather_ps(x, vi, 4), _mm256_i32gather_ps(y, vi, 4),
+                                  _mm256_i32gather_ps(c, vi, 4), _mm256_i32gather_epi32((const int *)n, vi, 4)};
+                    __m256i vkey = _mm256_i32gather_epi32((const int *)key, vi, 4);
+                    unsigned badm = (unsigned)_mm256_movemask_ps(fl_apply8(&k_flame_xf[fl], k_flame_var, vkey, &p));
+                    float rx[8], ry[8], rc[8];
+                    uint32_t rn[8];
+                    _mm256_storeu_ps(rx, p.x), _mm256_storeu_ps(ry, p.y), _mm256_storeu_ps(rc, p.c);
+                    _mm256_storeu_si256((__m256i *)rn, p.n);
+                    uint32_t e = k - j < 8 ? k - j : 8;
+                    for (uint32_t l = 0; l < e; l++) {
+                        uint32_t ci = list[fl][j + l];
+                        if (badm >> l & 1u) {
+                            scal[nsc++] = ci;
+                            continue;
+                        }
+                        x[ci] = rx[l], y[ci] = ry[l], c[ci] = rc[l], n[ci] = rn[l];
+                        opx[ci] = rx[l], opy[ci] = ry[l], opc[ci] = rc[l];
+                    }
+                }
+            }
+            /* the scalar steps, each from the chain's state before this step */
+            for (uint32_t q = 0; q < nsc; q++) {
+                uint32_t l = scal[q];
+                K_FlameChain s = {0};
                 s.x = x[l], s.y = y[l], s.c = c[l];
                 s.n = n[l] - 1u;
-                s.bad = 0;
-                s = step(P, s, key[l], plain K_FLAME_TABLES);
+                s.last = last[l];
+                s = step_xform(P, s, key[l], plain K_FLAME_TABLES);
                 bad += s.bad;
                 x[l] = s.x, y[l] = s.y, c[l] = s.c, n[l] = s.n;
-                out[l].px = s.px, out[l].py = s.py, out[l].pc = s.pc, out[l].vis = s.vis;
+                /* the point plotted, before the final xform and the camera */
+                opx[l] = s.x, opy[l] = s.y, opc[l] = s.c, ovis[l] = s.vis;
+                f[l] = s.vis; /* its xform after the retries */
             }
+            for (uint32_t b = 0; P.chaos && b < g; b += 8)
+                _mm256_storeu_si256(
+                    (__m256i *)(last + b),
+                    _mm256_add_epi32(_mm256_loadu_si256((const __m256i *)(f + b)), _mm256_set1_epi32(1)));
+            if (P.final_xf != K_FLAME_NONE) final_pass(S, T->vfinal, g, x, y, c, key, n, opx, opy, opc);
         }
-        scatter(G, task, pts, m * 8, rec);
+        scatter_planes(G, task, &B, m * g, pts, rec);
     }
 #undef LOOK
     return bad;
+}
+
+/* playg_body for genomes of at most 8 xforms (one register a table) or more (three). */
+LANES_AVX2 static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g, const lane_tables *T,
+                                 K_FlameChain *pts, records *rec)
+{
+    if (G->S->p.nxf <= 8) return playg_body(G, task, i, g, T, pts, rec, false);
+    return playg_body(G, task, i, g, T, pts, rec, true);
 }
 #else
 typedef struct lane_tables {
@@ -374,7 +607,8 @@ static bool lanes_ok(const fb_flame_setup *S, const uint8_t *plain)
     return false;
 }
 static void lane_tables_init(const fb_flame_setup *S, const uint8_t *plain, lane_tables *T) {}
-static uint64_t play8(const game *G, int task, uint32_t i, const lane_tables *T, K_FlameChain *pts, records *rec)
+static uint64_t playg(const game *G, int task, uint32_t i, uint32_t g, const lane_tables *T, K_FlameChain *pts,
+                      records *rec)
 {
     return 0;
 }
@@ -392,8 +626,14 @@ static void game_task(void *ctx, int task)
     K_FlameChain pts[BATCH];
     records rec;
     uint32_t i = a;
-    if (G->lanes)
-        for (; i + 8 <= b && i + 8 < P->chains; i += 8) bad += play8(G, task, i, G->lanes, pts, &rec);
+    /* groups of up to GROUP chains, a multiple of 8, never the last chain (of another length) */
+    while (G->lanes) {
+        uint32_t g = b - i < P->chains - 1u - i ? b - i : P->chains - 1u - i;
+        g = (g < GROUP ? g : GROUP) & ~7u;
+        if (!g) break;
+        bad += playg(G, task, i, g, G->lanes, pts, &rec);
+        i += g;
+    }
     for (; i < b; i++) bad += play(G, task, i, i + 1 == P->chains ? P->last_len : P->len, pts, &rec);
     G->bad[task] += bad;
 }
@@ -447,7 +687,7 @@ fb_result fb_flame_play(const fb_flame_setup *S, fb_pool *pool, int threads, boo
         if (!(hist[t] = fb_flame_zalloc(cells * bytes, pool)))
             rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
     /* rounds of chains, for the progress bar; the 32-bit cells are folded once, at the end */
-    uint32_t per_round = 64u * (uint32_t)threads;
+    uint32_t per_round = GROUP * (uint32_t)threads;
     double all = (double)(cr1 - cr0) * S->p.len;
     for (uint32_t c0 = cr0; c0 < cr1 && !rc; c0 += per_round) {
         uint32_t c1 = cr1 - c0 > per_round ? c0 + per_round : cr1;
