@@ -19,12 +19,18 @@ rm -f /tmp/fb-fuzz-probe.$$
 if [ ! -f "$B/CMakeCache.txt" ]; then
   CC=clang cmake -S . -B "$B" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFB_FUZZ=ON -DBUILD_TESTING=OFF > /dev/null || exit 1
 fi
-cmake --build "$B" -j"$(nproc)" > "$B/build.log" 2>&1 || { tail -20 "$B/build.log"; exit 1; }
+# the command line and the harnesses alone: the shared library (libfractalbake) is linked with
+# --no-undefined, which a sanitizer's runtime, provided by the executable, cannot satisfy
+harnesses="scene ifs points lsys exr" # tests/fuzz/CMakeLists.txt
+targets="fractalbake $(printf 'fuzz_%s ' $harnesses)"
+# shellcheck disable=SC2086
+cmake --build "$B" -j"$(nproc)" --target $targets > "$B/build.log" 2>&1 || { tail -20 "$B/build.log"; exit 1; }
 
 # corpora: the repository's inputs, then whatever the fuzzer found before
 C=$B/corpus
 mkdir -p "$C"/{scene,ifs,points,lsys,exr} "$B/crashes"
-cp tests/fuzz/seeds/scene/* tests/golden/scenes/*.json docs/examples/*.json "$C/scene/"
+cp tests/fuzz/seeds/scene/* tests/golden/scenes/*.json "$C/scene/"
+for f in docs/examples/*.json; do cp "$f" "$C/scene/example-$(basename "$f")"; done
 cp tests/fuzz/seeds/ifs/* "$C/ifs/"
 cp docs/examples/fractint.ifs "$C/ifs/example-fractint.ifs"
 cp tests/fuzz/seeds/points/* "$C/points/"
@@ -40,7 +46,7 @@ done
 
 pass=0
 fail=0
-for h in scene ifs points lsys exr; do
+for h in $harnesses; do
   log=$B/fuzz-$h.log
   ASAN_OPTIONS=detect_leaks=1 "$B/tests/fuzz/fuzz_$h" -max_total_time="$SECONDS_EACH" -timeout=20 -rss_limit_mb=3072 \
     -max_len=65536 -artifact_prefix="$B/crashes/$h-" -print_final_stats=1 "$C/$h" > "$log" 2>&1
