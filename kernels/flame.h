@@ -145,17 +145,22 @@ K_FN K_FlamePt k_flame_point(float tx, float ty, uint flags)
 }
 
 #ifdef K_FLAME_ONCE
-/* The first of the genome's variations (K_FLAME_VMASK*) numbered v or more, or K_V_COUNT; pre_blur
- * is not among them. */
-K_FN uint k_flame_vnext(uint v)
-{
-    for (uint w = v >> 5u; w < 4u; w++) {
-        uint m = K_FLAME_VWORD(w) & (w == 2u ? ~(1u << (K_V_PRE_BLUR & 31u)) : 0xffffffffu);
-        if (w == v >> 5u) m &= 0xffffffffu << (v & 31u);
-        if (m != 0u) return 32u * w + K_U(findLSB(m));
+/* In a shader's pass over the genome's variations, variation vc's function (k_flame_variation's case,
+ * from the same list), taken by the lanes whose xform has it next; compiled only where the genome has
+ * it. The pass is straight code, each variation's test a constant: lavapipe compiles and runs the
+ * genome's variations alone, each once a step (a loop with a switch ran every case each time round). */
+#define K_FLAME_ONCE_CASE(vc, call, nd)                                                                                \
+    if (K_FLAME_HAS(vc) && k < X.nvar) {                                                                               \
+        K_FlameVar V = k_flame_var[X.var0 + k];                                                                        \
+        if (V.id == vc) {                                                                                              \
+            float w = V.w;                                                                                             \
+            k_vec2 dv = call;                                                                                          \
+            p0 += dv.x;                                                                                                \
+            p1 += dv.y;                                                                                                \
+            n += nd;                                                                                                   \
+            k++;                                                                                                       \
+        }                                                                                                              \
     }
-    return K_V_COUNT;
-}
 #endif
 
 /* Applies xform `fn` to (x, y, c): flam3's apply_xform. In C (and GLSL by default) a loop over the
@@ -183,21 +188,16 @@ K_FLAME_INLINE K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint
     float p0 = 0.0f, p1 = 0.0f;
 #ifdef K_FLAME_ONCE
     uint k = 0u;
-    for (uint v = k_flame_vnext(0u); v < K_V_COUNT; v = k_flame_vnext(v + 1u)) {
-        if (k >= X.nvar) continue;
-        K_FlameVar V = k_flame_var[X.var0 + k];
-        if (V.id != v) continue;
-        k++;
+    K_FLAME_VARIATIONS(K_FLAME_ONCE_CASE)
 #else
     for (uint k = 0u; k < X.nvar; k++) {
         K_FlameVar V = k_flame_var[X.var0 + k];
-        uint v = V.id;
-#endif
-        K_FlameD d = k_flame_variation(v, t, V, key, n);
+        K_FlameD d = k_flame_variation(V.id, t, V, key, n);
         p0 += d.x;
         p1 += d.y;
         n += d.draws;
     }
+#endif
     if ((X.flags & K_FLAME_HAS_POST) != 0u) {
         o.x = X.pax * p0 + X.pbx * p1 + X.pcx;
         o.y = X.pay * p0 + X.pby * p1 + X.pcy;

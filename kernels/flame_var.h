@@ -1048,6 +1048,109 @@ K_STRUCT(K_FlameD)
 }
 K_END(K_FlameD)
 
+/* Every variation but pre_blur, in ascending order of number: X(number, its function at t with weight w,
+ * parameters V and draws from (key, n), the number of draws). The switch below is made of it, and a
+ * shader's pass over the genome's variations (kernels/flame.h, K_FLAME_ONCE). */
+#define K_FLAME_VARIATIONS(X)                                                                                          \
+    X(K_V_LINEAR, k_flame_var_linear(t, w), 0u)                                                                        \
+    X(K_V_SINUSOIDAL, k_flame_var_sinusoidal(t, w), 0u)                                                                \
+    X(K_V_SPHERICAL, k_flame_var_spherical(t, w), 0u)                                                                  \
+    X(K_V_SWIRL, k_flame_var_swirl(t, w), 0u)                                                                          \
+    X(K_V_HORSESHOE, k_flame_var_horseshoe(t, w), 0u)                                                                  \
+    X(K_V_POLAR, k_flame_var_polar(t, w), 0u)                                                                          \
+    X(K_V_HANDKERCHIEF, k_flame_var_handkerchief(t, w), 0u)                                                            \
+    X(K_V_HEART, k_flame_var_heart(t, w), 0u)                                                                          \
+    X(K_V_DISC, k_flame_var_disc(t, w), 0u)                                                                            \
+    X(K_V_SPIRAL, k_flame_var_spiral(t, w), 0u)                                                                        \
+    X(K_V_HYPERBOLIC, k_flame_var_hyperbolic(t, w), 0u)                                                                \
+    X(K_V_DIAMOND, k_flame_var_diamond(t, w), 0u)                                                                      \
+    X(K_V_EX, k_flame_var_ex(t, w), 0u)                                                                                \
+    X(K_V_JULIA, k_flame_var_julia(t, w, key, n), 1u)                                                                  \
+    X(K_V_BENT, k_flame_var_bent(t, w), 0u)                                                                            \
+    X(K_V_WAVES, k_flame_var_waves(t, V), 0u)                                                                          \
+    X(K_V_FISHEYE, k_flame_var_fisheye(t, w), 0u)                                                                      \
+    X(K_V_POPCORN, k_flame_var_popcorn(t, V), 0u)                                                                      \
+    X(K_V_EXPONENTIAL, k_flame_var_exponential(t, w), 0u)                                                              \
+    X(K_V_POWER, k_flame_var_power(t, w), 0u)                                                                          \
+    X(K_V_COSINE, k_flame_var_cosine(t, w), 0u)                                                                        \
+    X(K_V_RINGS, k_flame_var_rings(t, V), 0u)                                                                          \
+    X(K_V_FAN, k_flame_var_fan(t, V), 0u)                                                                              \
+    X(K_V_BLOB, k_flame_var_blob(t, V), 0u)                                                                            \
+    X(K_V_PDJ, k_flame_var_pdj(t, V), 0u)                                                                              \
+    X(K_V_FAN2, k_flame_var_fan2(t, V), 0u)                                                                            \
+    X(K_V_RINGS2, k_flame_var_rings2(t, V), 0u)                                                                        \
+    X(K_V_EYEFISH, k_flame_var_eyefish(t, w), 0u)                                                                      \
+    X(K_V_BUBBLE, k_flame_var_bubble(t, w), 0u)                                                                        \
+    X(K_V_CYLINDER, k_flame_var_cylinder(t, w), 0u)                                                                    \
+    X(K_V_PERSPECTIVE, k_flame_var_perspective(t, V), 0u)                                                              \
+    X(K_V_NOISE, k_flame_var_noise(t, w, key, n), 2u)                                                                  \
+    X(K_V_JULIAN, k_flame_var_julian(t, V, key, n), 1u)                                                                \
+    X(K_V_JULIASCOPE, k_flame_var_juliascope(t, V, key, n), 1u)                                                        \
+    X(K_V_BLUR, k_flame_var_blur(t, w, key, n), 2u)                                                                    \
+    X(K_V_GAUSSIAN_BLUR, k_flame_var_gaussian_blur(t, w, key, n), 5u)                                                  \
+    X(K_V_RADIAL_BLUR, k_flame_var_radial_blur(t, V, key, n), 4u)                                                      \
+    X(K_V_PIE, k_flame_var_pie(t, V, key, n), 3u)                                                                      \
+    X(K_V_NGON, k_flame_var_ngon(t, V), 0u)                                                                            \
+    X(K_V_CURL, k_flame_var_curl(t, V), 0u)                                                                            \
+    X(K_V_RECTANGLES, k_flame_var_rectangles(t, V), 0u)                                                                \
+    X(K_V_ARCH, k_flame_var_arch(t, w, key, n), 1u)                                                                    \
+    X(K_V_TANGENT, k_flame_var_tangent(t, w), 0u)                                                                      \
+    X(K_V_SQUARE, k_flame_var_square(t, w, key, n), 2u)                                                                \
+    X(K_V_RAYS, k_flame_var_rays(t, w, key, n), 1u)                                                                    \
+    X(K_V_BLADE, k_flame_var_blade(t, w, key, n), 1u)                                                                  \
+    X(K_V_SECANT2, k_flame_var_secant2(t, w), 0u)                                                                      \
+    X(K_V_TWINTRIAN, k_flame_var_twintrian(t, w, key, n), 1u)                                                          \
+    X(K_V_CROSS, k_flame_var_cross(t, w), 0u)                                                                          \
+    X(K_V_DISC2, k_flame_var_disc2(t, V), 0u)                                                                          \
+    X(K_V_SUPER_SHAPE, k_flame_var_super_shape(t, V, key, n), 1u)                                                      \
+    X(K_V_FLOWER, k_flame_var_flower(t, V, key, n), 1u)                                                                \
+    X(K_V_CONIC, k_flame_var_conic(t, V, key, n), 1u)                                                                  \
+    X(K_V_PARABOLA, k_flame_var_parabola(t, V, key, n), 2u)                                                            \
+    X(K_V_BENT2, k_flame_var_bent2(t, V), 0u)                                                                          \
+    X(K_V_BIPOLAR, k_flame_var_bipolar(t, V), 0u)                                                                      \
+    X(K_V_BOARDERS, k_flame_var_boarders(t, w, key, n), 1u)                                                            \
+    X(K_V_BUTTERFLY, k_flame_var_butterfly(t, w), 0u)                                                                  \
+    X(K_V_CELL, k_flame_var_cell(t, V), 0u)                                                                            \
+    X(K_V_CPOW, k_flame_var_cpow(t, V, key, n), 1u)                                                                    \
+    X(K_V_CURVE, k_flame_var_curve(t, V), 0u)                                                                          \
+    X(K_V_EDISC, k_flame_var_edisc(t, V), 0u)                                                                          \
+    X(K_V_ELLIPTIC, k_flame_var_elliptic(t, V), 0u)                                                                    \
+    X(K_V_ESCHER, k_flame_var_escher(t, V), 0u)                                                                        \
+    X(K_V_FOCI, k_flame_var_foci(t, w), 0u)                                                                            \
+    X(K_V_LAZYSUSAN, k_flame_var_lazysusan(t, V), 0u)                                                                  \
+    X(K_V_LOONIE, k_flame_var_loonie(t, w), 0u)                                                                        \
+    X(K_V_MODULUS, k_flame_var_modulus(t, V), 0u)                                                                      \
+    X(K_V_OSCILLOSCOPE, k_flame_var_oscilloscope(t, V), 0u)                                                            \
+    X(K_V_POLAR2, k_flame_var_polar2(t, V), 0u)                                                                        \
+    X(K_V_POPCORN2, k_flame_var_popcorn2(t, V), 0u)                                                                    \
+    X(K_V_SCRY, k_flame_var_scry(t, V), 0u)                                                                            \
+    X(K_V_SEPARATION, k_flame_var_separation(t, V), 0u)                                                                \
+    X(K_V_SPLIT, k_flame_var_split(t, V), 0u)                                                                          \
+    X(K_V_SPLITS, k_flame_var_splits(t, V), 0u)                                                                        \
+    X(K_V_STRIPES, k_flame_var_stripes(t, V), 0u)                                                                      \
+    X(K_V_WEDGE, k_flame_var_wedge(t, V), 0u)                                                                          \
+    X(K_V_WEDGE_JULIA, k_flame_var_wedge_julia(t, V, key, n), 1u)                                                      \
+    X(K_V_WEDGE_SPH, k_flame_var_wedge_sph(t, V), 0u)                                                                  \
+    X(K_V_WHORL, k_flame_var_whorl(t, V), 0u)                                                                          \
+    X(K_V_WAVES2, k_flame_var_waves2(t, V), 0u)                                                                        \
+    X(K_V_EXP, k_flame_var_exp(t, w), 0u)                                                                              \
+    X(K_V_LOG, k_flame_var_log(t, w), 0u)                                                                              \
+    X(K_V_SIN, k_flame_var_sin(t, w), 0u)                                                                              \
+    X(K_V_COS, k_flame_var_cos(t, w), 0u)                                                                              \
+    X(K_V_TAN, k_flame_var_tan(t, w), 0u)                                                                              \
+    X(K_V_SEC, k_flame_var_sec(t, w), 0u)                                                                              \
+    X(K_V_CSC, k_flame_var_csc(t, w), 0u)                                                                              \
+    X(K_V_COT, k_flame_var_cot(t, w), 0u)                                                                              \
+    X(K_V_SINH, k_flame_var_sinh(t, w), 0u)                                                                            \
+    X(K_V_COSH, k_flame_var_cosh(t, w), 0u)                                                                            \
+    X(K_V_TANH, k_flame_var_tanh(t, w), 0u)                                                                            \
+    X(K_V_SECH, k_flame_var_sech(t, w), 0u)                                                                            \
+    X(K_V_CSCH, k_flame_var_csch(t, w), 0u)                                                                            \
+    X(K_V_COTH, k_flame_var_coth(t, w), 0u)                                                                            \
+    X(K_V_AUGER, k_flame_var_auger(t, V), 0u)                                                                          \
+    X(K_V_FLUX, k_flame_var_flux(t, V), 0u)                                                                            \
+    X(K_V_MOBIUS, k_flame_var_mobius(t, V), 0u)
+
 /* case V: variation V's function (where compiled), and its number of draws */
 #define K_FLAME_CASE(v, call, nd)                                                                                      \
     case v:                                                                                                            \
@@ -1067,104 +1170,7 @@ K_FLAME_INLINE K_FlameD k_flame_variation(uint v, K_FlamePt t, K_FlameVar V, uin
     k_vec2 d = k_vec2(0.0f, 0.0f);
     float w = V.w;
     switch (v) {
-        K_FLAME_CASE(K_V_LINEAR, k_flame_var_linear(t, w), 0u)
-        K_FLAME_CASE(K_V_SINUSOIDAL, k_flame_var_sinusoidal(t, w), 0u)
-        K_FLAME_CASE(K_V_SPHERICAL, k_flame_var_spherical(t, w), 0u)
-        K_FLAME_CASE(K_V_SWIRL, k_flame_var_swirl(t, w), 0u)
-        K_FLAME_CASE(K_V_HORSESHOE, k_flame_var_horseshoe(t, w), 0u)
-        K_FLAME_CASE(K_V_POLAR, k_flame_var_polar(t, w), 0u)
-        K_FLAME_CASE(K_V_HANDKERCHIEF, k_flame_var_handkerchief(t, w), 0u)
-        K_FLAME_CASE(K_V_HEART, k_flame_var_heart(t, w), 0u)
-        K_FLAME_CASE(K_V_DISC, k_flame_var_disc(t, w), 0u)
-        K_FLAME_CASE(K_V_SPIRAL, k_flame_var_spiral(t, w), 0u)
-        K_FLAME_CASE(K_V_HYPERBOLIC, k_flame_var_hyperbolic(t, w), 0u)
-        K_FLAME_CASE(K_V_DIAMOND, k_flame_var_diamond(t, w), 0u)
-        K_FLAME_CASE(K_V_EX, k_flame_var_ex(t, w), 0u)
-        K_FLAME_CASE(K_V_JULIA, k_flame_var_julia(t, w, key, n), 1u)
-        K_FLAME_CASE(K_V_BENT, k_flame_var_bent(t, w), 0u)
-        K_FLAME_CASE(K_V_WAVES, k_flame_var_waves(t, V), 0u)
-        K_FLAME_CASE(K_V_FISHEYE, k_flame_var_fisheye(t, w), 0u)
-        K_FLAME_CASE(K_V_POPCORN, k_flame_var_popcorn(t, V), 0u)
-        K_FLAME_CASE(K_V_EXPONENTIAL, k_flame_var_exponential(t, w), 0u)
-        K_FLAME_CASE(K_V_POWER, k_flame_var_power(t, w), 0u)
-        K_FLAME_CASE(K_V_COSINE, k_flame_var_cosine(t, w), 0u)
-        K_FLAME_CASE(K_V_RINGS, k_flame_var_rings(t, V), 0u)
-        K_FLAME_CASE(K_V_FAN, k_flame_var_fan(t, V), 0u)
-        K_FLAME_CASE(K_V_BLOB, k_flame_var_blob(t, V), 0u)
-        K_FLAME_CASE(K_V_PDJ, k_flame_var_pdj(t, V), 0u)
-        K_FLAME_CASE(K_V_FAN2, k_flame_var_fan2(t, V), 0u)
-        K_FLAME_CASE(K_V_RINGS2, k_flame_var_rings2(t, V), 0u)
-        K_FLAME_CASE(K_V_EYEFISH, k_flame_var_eyefish(t, w), 0u)
-        K_FLAME_CASE(K_V_BUBBLE, k_flame_var_bubble(t, w), 0u)
-        K_FLAME_CASE(K_V_CYLINDER, k_flame_var_cylinder(t, w), 0u)
-        K_FLAME_CASE(K_V_PERSPECTIVE, k_flame_var_perspective(t, V), 0u)
-        K_FLAME_CASE(K_V_NOISE, k_flame_var_noise(t, w, key, n), 2u)
-        K_FLAME_CASE(K_V_JULIAN, k_flame_var_julian(t, V, key, n), 1u)
-        K_FLAME_CASE(K_V_JULIASCOPE, k_flame_var_juliascope(t, V, key, n), 1u)
-        K_FLAME_CASE(K_V_BLUR, k_flame_var_blur(t, w, key, n), 2u)
-        K_FLAME_CASE(K_V_GAUSSIAN_BLUR, k_flame_var_gaussian_blur(t, w, key, n), 5u)
-        K_FLAME_CASE(K_V_RADIAL_BLUR, k_flame_var_radial_blur(t, V, key, n), 4u)
-        K_FLAME_CASE(K_V_PIE, k_flame_var_pie(t, V, key, n), 3u)
-        K_FLAME_CASE(K_V_NGON, k_flame_var_ngon(t, V), 0u)
-        K_FLAME_CASE(K_V_CURL, k_flame_var_curl(t, V), 0u)
-        K_FLAME_CASE(K_V_RECTANGLES, k_flame_var_rectangles(t, V), 0u)
-        K_FLAME_CASE(K_V_ARCH, k_flame_var_arch(t, w, key, n), 1u)
-        K_FLAME_CASE(K_V_TANGENT, k_flame_var_tangent(t, w), 0u)
-        K_FLAME_CASE(K_V_SQUARE, k_flame_var_square(t, w, key, n), 2u)
-        K_FLAME_CASE(K_V_RAYS, k_flame_var_rays(t, w, key, n), 1u)
-        K_FLAME_CASE(K_V_BLADE, k_flame_var_blade(t, w, key, n), 1u)
-        K_FLAME_CASE(K_V_SECANT2, k_flame_var_secant2(t, w), 0u)
-        K_FLAME_CASE(K_V_TWINTRIAN, k_flame_var_twintrian(t, w, key, n), 1u)
-        K_FLAME_CASE(K_V_CROSS, k_flame_var_cross(t, w), 0u)
-        K_FLAME_CASE(K_V_DISC2, k_flame_var_disc2(t, V), 0u)
-        K_FLAME_CASE(K_V_SUPER_SHAPE, k_flame_var_super_shape(t, V, key, n), 1u)
-        K_FLAME_CASE(K_V_FLOWER, k_flame_var_flower(t, V, key, n), 1u)
-        K_FLAME_CASE(K_V_CONIC, k_flame_var_conic(t, V, key, n), 1u)
-        K_FLAME_CASE(K_V_PARABOLA, k_flame_var_parabola(t, V, key, n), 2u)
-        K_FLAME_CASE(K_V_BENT2, k_flame_var_bent2(t, V), 0u)
-        K_FLAME_CASE(K_V_BIPOLAR, k_flame_var_bipolar(t, V), 0u)
-        K_FLAME_CASE(K_V_BOARDERS, k_flame_var_boarders(t, w, key, n), 1u)
-        K_FLAME_CASE(K_V_BUTTERFLY, k_flame_var_butterfly(t, w), 0u)
-        K_FLAME_CASE(K_V_CELL, k_flame_var_cell(t, V), 0u)
-        K_FLAME_CASE(K_V_CPOW, k_flame_var_cpow(t, V, key, n), 1u)
-        K_FLAME_CASE(K_V_CURVE, k_flame_var_curve(t, V), 0u)
-        K_FLAME_CASE(K_V_EDISC, k_flame_var_edisc(t, V), 0u)
-        K_FLAME_CASE(K_V_ELLIPTIC, k_flame_var_elliptic(t, V), 0u)
-        K_FLAME_CASE(K_V_ESCHER, k_flame_var_escher(t, V), 0u)
-        K_FLAME_CASE(K_V_FOCI, k_flame_var_foci(t, w), 0u)
-        K_FLAME_CASE(K_V_LAZYSUSAN, k_flame_var_lazysusan(t, V), 0u)
-        K_FLAME_CASE(K_V_LOONIE, k_flame_var_loonie(t, w), 0u)
-        K_FLAME_CASE(K_V_MODULUS, k_flame_var_modulus(t, V), 0u)
-        K_FLAME_CASE(K_V_OSCILLOSCOPE, k_flame_var_oscilloscope(t, V), 0u)
-        K_FLAME_CASE(K_V_POLAR2, k_flame_var_polar2(t, V), 0u)
-        K_FLAME_CASE(K_V_POPCORN2, k_flame_var_popcorn2(t, V), 0u)
-        K_FLAME_CASE(K_V_SCRY, k_flame_var_scry(t, V), 0u)
-        K_FLAME_CASE(K_V_SEPARATION, k_flame_var_separation(t, V), 0u)
-        K_FLAME_CASE(K_V_SPLIT, k_flame_var_split(t, V), 0u)
-        K_FLAME_CASE(K_V_SPLITS, k_flame_var_splits(t, V), 0u)
-        K_FLAME_CASE(K_V_STRIPES, k_flame_var_stripes(t, V), 0u)
-        K_FLAME_CASE(K_V_WEDGE, k_flame_var_wedge(t, V), 0u)
-        K_FLAME_CASE(K_V_WEDGE_JULIA, k_flame_var_wedge_julia(t, V, key, n), 1u)
-        K_FLAME_CASE(K_V_WEDGE_SPH, k_flame_var_wedge_sph(t, V), 0u)
-        K_FLAME_CASE(K_V_WHORL, k_flame_var_whorl(t, V), 0u)
-        K_FLAME_CASE(K_V_WAVES2, k_flame_var_waves2(t, V), 0u)
-        K_FLAME_CASE(K_V_EXP, k_flame_var_exp(t, w), 0u)
-        K_FLAME_CASE(K_V_LOG, k_flame_var_log(t, w), 0u)
-        K_FLAME_CASE(K_V_SIN, k_flame_var_sin(t, w), 0u)
-        K_FLAME_CASE(K_V_COS, k_flame_var_cos(t, w), 0u)
-        K_FLAME_CASE(K_V_TAN, k_flame_var_tan(t, w), 0u)
-        K_FLAME_CASE(K_V_SEC, k_flame_var_sec(t, w), 0u)
-        K_FLAME_CASE(K_V_CSC, k_flame_var_csc(t, w), 0u)
-        K_FLAME_CASE(K_V_COT, k_flame_var_cot(t, w), 0u)
-        K_FLAME_CASE(K_V_SINH, k_flame_var_sinh(t, w), 0u)
-        K_FLAME_CASE(K_V_COSH, k_flame_var_cosh(t, w), 0u)
-        K_FLAME_CASE(K_V_TANH, k_flame_var_tanh(t, w), 0u)
-        K_FLAME_CASE(K_V_SECH, k_flame_var_sech(t, w), 0u)
-        K_FLAME_CASE(K_V_CSCH, k_flame_var_csch(t, w), 0u)
-        K_FLAME_CASE(K_V_COTH, k_flame_var_coth(t, w), 0u)
-        K_FLAME_CASE(K_V_AUGER, k_flame_var_auger(t, V), 0u)
-        K_FLAME_CASE(K_V_FLUX, k_flame_var_flux(t, V), 0u)
-        K_FLAME_CASE(K_V_MOBIUS, k_flame_var_mobius(t, V), 0u)
+        K_FLAME_VARIATIONS(K_FLAME_CASE)
     default:
         break;
     }
