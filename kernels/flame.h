@@ -145,10 +145,8 @@ K_FN K_FlamePt k_flame_point(float tx, float ty, uint flags)
 }
 
 #ifdef K_FLAME_ONCE
-/* In a shader's pass over the genome's variations, variation vc's function (k_flame_variation's case,
- * from the same list), taken by the lanes whose xform has it next; compiled only where the genome has
- * it. The pass is straight code, each variation's test a constant: lavapipe compiles and runs the
- * genome's variations alone, each once a step (a loop with a switch ran every case each time round). */
+/* Variation vc of a shader's pass (below): taken by the lanes whose xform has it next, compiled only
+ * where the genome has it. */
 #define K_FLAME_ONCE_CASE(vc, call, nd)                                                                                \
     if (K_FLAME_HAS(vc) && k < X.nvar) {                                                                               \
         K_FlameVar V = k_flame_var[X.var0 + k];                                                                        \
@@ -164,12 +162,13 @@ K_FN K_FlamePt k_flame_point(float tx, float ty, uint flags)
 #endif
 
 /* Applies xform `fn` to (x, y, c): flam3's apply_xform. In C (and GLSL by default) a loop over the
- * xform's variations, each through the switch. A shader that defines K_FLAME_ONCE loops over the
- * genome's variations instead, the same for every lane, each taken by the lanes whose xform has it
- * next (an xform's variations are in ascending order, the order of the pass): lavapipe runs every
- * branch any of its 8 lanes takes, so a loop over an xform's slots ran each of the genome's
- * variations once a slot, and this runs it once a step; the terms are added in the same order, so
- * the sums are the same bits. */
+ * xform's variations, each through the switch. A shader that defines K_FLAME_ONCE makes a pass over
+ * the genome's variations instead, the same for every lane: straight code from K_FLAME_VARIATIONS,
+ * each variation behind a constant test and taken by the lanes whose xform has it next (an xform's
+ * variations are in ascending order, the order of the pass). lavapipe runs every branch any of its 8
+ * lanes takes, so a loop over an xform's slots ran each of the genome's variations once a slot, and a
+ * loop with the switch inside every compiled case each time round; this runs each once a step. The
+ * terms are added in the same order, so the sums are the same bits. */
 K_FLAME_INLINE K_FlameOut k_flame_apply(uint fn, float x, float y, float c, uint key, uint n0 K_FLAME_TABLES_DECL)
 {
     K_FlameXform X = k_flame_xf[fn];

@@ -73,6 +73,7 @@ static const char *const k_lanes_wide =
     "<xform weight=\"2\" color=\"0.2\" ex=\"0.6\" julia=\"0.4\" coefs=\"0.5 0.2 -0.3 0.6 0.2 0.1\"/>"
     "<xform weight=\"2\" color=\"0.6\" disc=\"0.8\" coefs=\"0.7 0.1 0 0.7 0.1 0\"/>"
     "<xform weight=\"1\" color=\"0.9\" rectangles=\"0.5\" coefs=\"0.8 0 0 0.8 0.1 0\"/>" PAL "</flame>";
+/* a final xform whose variation has no lane form: applied a chain at a time */
 static const char *const k_lanes_final_scalar =
     "<flame size=\"64 48\" scale=\"20\" estimator_radius=\"3\"><symmetry kind=\"2\"/>"
     "<xform weight=\"0.5\" color=\"0.2\" julia=\"1\" coefs=\"0.5 0.2 -0.3 0.6 0.2 0.1\"/>"

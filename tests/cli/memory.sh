@@ -4,7 +4,7 @@
 # Usage: memory.sh PATH/TO/fractalbake
 . "$(dirname "$0")/lib.sh"
 cli_init "$@"
-if ldd "$FB" | grep -q 'libasan'; then
+if sanitized; then
   echo "sanitizer build: its shadow memory makes RSS meaningless here (not run)"
   exit 77
 fi
