@@ -21,7 +21,7 @@ import sys
 import tempfile
 
 CMD = re.compile(r'^(fractalbake |\./scripts/|scripts/|bench/|\./build/|printf |listgeo |cmake |idiff |oiiotool |'
-                 r'exrmaketiled |exrinfo |python3 |for |sbatch |bash |mkdir |blender )')
+                 r'exrmaketiled |python3 |for |sbatch |bash |mkdir |blender )')
 NOT_RUN = [
     (r'^\./scripts/test\.sh', 'the test suite itself, which runs this'),
     (r'^\./scripts/bake\.sh', 'builds into the repository (build/, out/); `fractalbake render` is run below'),

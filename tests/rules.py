@@ -340,8 +340,26 @@ def check_tests(root, bad):
             bad.append(f"tests: {rel}:{line_of(text, m.start())}: {m.group(1)}: add tests with fb_test")
 
 
+def check_verdicts(root, bad):
+    """Debian 12's exrinfo (OpenEXR 3.1.5) exits with a random status on valid files: a test or script
+    may read what it prints (`$(exrinfo ...)`, `exrinfo ... |`), never take its exit status."""
+    files = sorted(os.path.relpath(p, root) for pat in ("tests/**/*.sh", "tests/**/*.py", "scripts/**/*.sh",
+                                                         "scripts/**/*.py", "bench/**/*.sh", "bench/**/*.py")
+                   for p in glob.glob(os.path.join(root, pat), recursive=True))
+    for rel in files:
+        if rel == "tests/rules.py":
+            continue
+        for n, line in enumerate(read(root, rel).split("\n"), 1):
+            code = line.split("#", 1)[0] if rel.endswith(".sh") else line
+            for m in re.finditer(r"\bexrinfo\b", code):
+                before, after = code[: m.start()], code[m.end():]
+                if rel.endswith(".sh") and (before.rstrip().endswith("$(") or re.match(r"[^|;&]*\|(?!\|)", after)):
+                    continue
+                bad.append(f"verdicts: {rel}:{n}: exrinfo's exit status is no verdict (read its output: exr_strict)")
+
+
 CHECKS = [check_env, check_print, check_length, check_table, check_gens, check_layers, check_picture, check_paths,
-          check_tests]
+          check_tests, check_verdicts]
 
 
 def check(root):
@@ -354,7 +372,7 @@ def check(root):
 def scratch(src, dst):
     """A copy of src at dst for planting: the files the rules read copied, the rest linked."""
     copy = {"host", "kernels", "scripts", "cmake", "CMakeLists.txt", "docs/architecture.md", "docs/img/architecture.svg",
-            "tests/CMakeLists.txt", "tests/golden/scenes", "tests/golden/thresholds.txt"}
+            "tests/CMakeLists.txt", "tests/golden/scenes", "tests/golden/thresholds.txt", "tests/cli"}
 
     def walk(rel):
         for name in sorted(os.listdir(os.path.join(src, rel))):
@@ -461,6 +479,13 @@ def self_test(src):
               "paths:", "host/core/plan.c", "tests/planted.py")
         plant("a test outside fb_test", add("tests/CMakeLists.txt", "add_test(NAME planted COMMAND true)\n"),
               "tests:", "add_test")
+        plant("exrinfo's exit status as a verdict",
+              {"tests/cli/planted.sh": 'exrinfo --strict a.exr > /dev/null 2>&1 && ok || bad "invalid"\n'},
+              "verdicts:", "tests/cli/planted.sh:1", "exrinfo")
+        plant("exrinfo's exit status in Python", {"tests/planted.py": "subprocess.run(['exrinfo', '--strict', f])\n"},
+              "verdicts:", "tests/planted.py:1")
+        found = planted({"tests/cli/planted.sh": 'out=$(exrinfo --strict a.exr)\nexrinfo a.exr | grep -q File\n'})
+        expect("exrinfo's output read is no breach", not found, "; ".join(found))
         found = planted(add(fbm, '/* getenv(), printf */ static const char *planted = "getenv(stderr)";\n'))
         expect("getenv and printf in a comment and a string pass", not found, "; ".join(found))
     finally:
