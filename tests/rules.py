@@ -347,7 +347,7 @@ def check_verdicts(root, bad):
                                                          "scripts/**/*.py", "bench/**/*.sh", "bench/**/*.py")
                    for p in glob.glob(os.path.join(root, pat), recursive=True))
     for rel in files:
-        if rel == "tests/rules.py":
+        if rel in ("tests/rules.py", "tests/cli/verdicts.sh"):  # this check, and the test of a lying exrinfo
             continue
         for n, line in enumerate(read(root, rel).split("\n"), 1):
             code = line.split("#", 1)[0] if rel.endswith(".sh") else line
