@@ -97,29 +97,68 @@ K_FN k_vec2 k_stars_rows(K_StarsParams p, uint y, bool clamp)
     return k_vec2(lo, hi);
 }
 
-/* The share of record (rx, ry, flags) that pixel (x, y) receives. */
-K_FN float k_stars_weight(K_StarsParams p, float rx, float ry, uint flags, uint x, uint y)
+/* What the share of a record depends on of pixel (x, y): its centre, its footprint's columns and
+ * rows (without and with the pole rows' reach beyond), its face (cube) and row in it. The same for
+ * every record a pixel reads: a shader works it out once, before the loop over its tile's records. */
+K_STRUCT(K_StarsPixel)
 {
-    if (p.mapping == K_ENV_CUBE && (flags >> 8) != y / p.n) return 0.0f;
-    float fx = K_F(x);
-    /* beyond the tent's reach (the masses below would be exactly 0; a pole row's or a corner's share
-     * comes from stars within reach of the pixel's centre too) */
+    float fx, fy;
+    float xlo, xhi;
+    float ylo, yhi, ylo_c, yhi_c; /* _c: with K_STARS_CLAMP_Y */
+    uint face, b;                 /* cube: y / n and y % n */
+}
+K_END(K_StarsPixel)
+
+K_FN K_StarsPixel k_stars_pixel(K_StarsParams p, uint x, uint y)
+{
+    K_StarsPixel px;
+    px.fx = K_F(x);
+    px.fy = K_F(y);
+    px.xlo = k_max(px.fx - 0.5f, p.x_lo);
+    px.xhi = k_min(px.fx + 0.5f, p.x_hi);
+    k_vec2 yr = k_stars_rows(p, y, false), yc = k_stars_rows(p, y, true);
+    px.ylo = yr.x;
+    px.yhi = yr.y;
+    px.ylo_c = yc.x;
+    px.yhi_c = yc.y;
+    px.face = p.mapping == K_ENV_CUBE ? y / p.n : 0u;
+    px.b = p.mapping == K_ENV_CUBE ? y % p.n : 0u;
+    return px;
+}
+
+/* Whether a record centred at (rx, ry) is within the tent's reach of the pixel (beyond it the masses
+ * below would be exactly 0; a pole row's or a corner's share comes from stars within reach of the
+ * pixel's centre too). Only the centre is read: a shader reads a record's other words after it. */
+K_FN bool k_stars_near(K_StarsParams p, K_StarsPixel px, float rx, float ry)
+{
     float reach = p.radius + 0.5f;
-    if (k_abs(fx - rx) >= reach || k_abs(K_F(y) - ry) >= reach) return 0.0f;
-    float xlo = k_max(fx - 0.5f, p.x_lo), xhi = k_min(fx + 0.5f, p.x_hi);
-    k_vec2 yr = k_stars_rows(p, y, (flags & K_STARS_CLAMP_Y) != 0u);
+    return !(k_abs(px.fx - rx) >= reach || k_abs(px.fy - ry) >= reach);
+}
+
+/* The share of a record (rx, ry, flags) near pixel px (k_stars_near). */
+K_FN float k_stars_share(K_StarsParams p, K_StarsPixel px, float rx, float ry, uint flags)
+{
+    if (p.mapping == K_ENV_CUBE && (flags >> 8) != px.face) return 0.0f;
+    bool clamp = (flags & K_STARS_CLAMP_Y) != 0u;
     float r = p.radius, k = p.inv_2r2;
-    float cx0 = k_stars_cdf(xlo, rx, r, k), cx1 = k_stars_cdf(xhi, rx, r, k);
-    float cy0 = k_stars_cdf(yr.x, ry, r, k), cy1 = k_stars_cdf(yr.y, ry, r, k);
+    float cx0 = k_stars_cdf(px.xlo, rx, r, k), cx1 = k_stars_cdf(px.xhi, rx, r, k);
+    float cy0 = k_stars_cdf(clamp ? px.ylo_c : px.ylo, ry, r, k),
+          cy1 = k_stars_cdf(clamp ? px.yhi_c : px.yhi, ry, r, k);
     K_PRECISE float w = (cx1 - cx0) * (cy1 - cy0);
     if ((flags & K_STARS_HOME_CUBE) != 0u) {
         /* the mass beyond two edges at once: to the corner pixel */
-        uint b = y % p.n;
-        K_PRECISE float ex = (fx == p.x_lo ? cx0 : 0.0f) + (fx == p.x_hi ? 1.0f - cx1 : 0.0f);
-        K_PRECISE float ey = (b == 0u ? cy0 : 0.0f) + (b == p.n - 1u ? 1.0f - cy1 : 0.0f);
+        K_PRECISE float ex = (px.fx == p.x_lo ? cx0 : 0.0f) + (px.fx == p.x_hi ? 1.0f - cx1 : 0.0f);
+        K_PRECISE float ey = (px.b == 0u ? cy0 : 0.0f) + (px.b == p.n - 1u ? 1.0f - cy1 : 0.0f);
         w = w + ex * ey;
     }
     return w;
+}
+
+/* The share of record (rx, ry, flags) that pixel (x, y) receives. */
+K_FN float k_stars_weight(K_StarsParams p, float rx, float ry, uint flags, uint x, uint y)
+{
+    K_StarsPixel px = k_stars_pixel(p, x, y);
+    return k_stars_near(p, px, rx, ry) ? k_stars_share(p, px, rx, ry, flags) : 0.0f;
 }
 
 /* (1 + s^2 + t^2)^(-3/2): the solid angle per unit area of a cube face at (s, t). */
@@ -174,19 +213,25 @@ K_FN K_StarsAcc k_stars_init()
     return a;
 }
 
-/* Adds record s's share to pixel (x, y)'s sums; the magnitude channel keeps the brightest star that
- * reaches the pixel. */
-K_FN K_StarsAcc k_stars_add(K_StarsAcc acc, K_StarsParams p, K_StarsRec s, uint x, uint y)
+/* Adds a record's share w (flux r, g, b; magnitude mag) to a pixel's sums; the magnitude channel
+ * keeps the brightest star that reaches the pixel. */
+K_FN K_StarsAcc k_stars_accumulate(K_StarsAcc acc, float w, float sr, float sg, float sb, float mag)
 {
-    float w = k_stars_weight(p, s.x, s.y, s.flags, x, y);
     if (w > 0.0f) {
-        K_PRECISE float r = acc.r + s.r * w, g = acc.g + s.g * w, b = acc.b + s.b * w;
+        K_PRECISE float r = acc.r + sr * w, g = acc.g + sg * w, b = acc.b + sb * w;
         acc.r = r;
         acc.g = g;
         acc.b = b;
-        acc.mag = k_min(acc.mag, s.mag);
+        acc.mag = k_min(acc.mag, mag);
     }
     return acc;
+}
+
+/* Adds record s's share to pixel px's sums. */
+K_FN K_StarsAcc k_stars_add(K_StarsAcc acc, K_StarsParams p, K_StarsPixel px, K_StarsRec s)
+{
+    if (!k_stars_near(p, px, s.x, s.y)) return acc;
+    return k_stars_accumulate(acc, k_stars_share(p, px, s.x, s.y, s.flags), s.r, s.g, s.b, s.mag);
 }
 
 /* The sums as radiance: divided by the pixel's solid angle (row_inv: the row's 1/omega from the

@@ -42,21 +42,6 @@ layout(std430, set = 0, binding = 4) readonly buffer Input
 }
 inp;
 
-K_StarsRec record(uint i)
-{
-    uint o = pc.p.rec_off + i * K_STARS_REC_WORDS;
-    K_StarsRec s;
-    s.x = uintBitsToFloat(inp.w[o]);
-    s.y = uintBitsToFloat(inp.w[o + 1u]);
-    s.r = uintBitsToFloat(inp.w[o + 2u]);
-    s.g = uintBitsToFloat(inp.w[o + 3u]);
-    s.b = uintBitsToFloat(inp.w[o + 4u]);
-    s.mag = uintBitsToFloat(inp.w[o + 5u]);
-    s.flags = inp.w[o + 6u];
-    s.pad = 0u;
-    return s;
-}
-
 void main()
 {
     uint x = gl_GlobalInvocationID.x;
@@ -64,9 +49,19 @@ void main()
     if (x >= pc.p.width || r >= pc.rows) return;
     uint y = pc.y0 + r;
     uint tile = (y >> pc.p.tile_shift) * pc.p.tiles_x + (x >> pc.p.tile_shift);
+    K_StarsPixel px = k_stars_pixel(pc.p, x, y);
     K_StarsAcc acc = k_stars_init();
     uint k1 = inp.w[tile + 1u];
-    for (uint k = inp.w[tile]; k < k1; k++) acc = k_stars_add(acc, pc.p, record(k), x, y);
+    // k_stars_add with each record read as it is needed: its centre, and the rest only when it is
+    // within reach (most of a tile's records are not)
+    for (uint k = inp.w[tile]; k < k1; k++) {
+        uint o = pc.p.rec_off + k * K_STARS_REC_WORDS;
+        float rx = uintBitsToFloat(inp.w[o]), ry = uintBitsToFloat(inp.w[o + 1u]);
+        if (!k_stars_near(pc.p, px, rx, ry)) continue;
+        float w = k_stars_share(pc.p, px, rx, ry, inp.w[o + 6u]);
+        acc = k_stars_accumulate(acc, w, uintBitsToFloat(inp.w[o + 2u]), uintBitsToFloat(inp.w[o + 3u]),
+                                 uintBitsToFloat(inp.w[o + 4u]), uintBitsToFloat(inp.w[o + 5u]));
+    }
     float row_inv = pc.p.mapping == K_ENV_CUBE ? 0.0f : uintBitsToFloat(inp.w[pc.p.row_off + y]);
     acc = k_stars_finish(acc, pc.p, row_inv, x, y);
     uint i = r * pc.p.width + x;

@@ -30,6 +30,8 @@ NOT_RUN = [
     (r'scripts/fuzz\.sh', 'the CTest entry `fuzz` runs it'),
     (r'scripts/try-generator\.sh', 'the CTest entry `recipe` runs it'),
     (r'scripts/golden\.sh', 'the CTest entry `golden` runs it (and `update` rewrites the references)'),
+    (r'scripts/bench-compare\.sh', 'builds another commit and benches for minutes; the CTest entry '
+     '`cli-bench-compare` runs it on a tiny bench'),
     (r'^sbatch ', 'needs a Slurm cluster'),
     (r'slurm-bake\.sh', 'needs a Slurm cluster; the CTest entry `cli-slurm` runs it on one it starts'),
 ]

@@ -2,7 +2,8 @@
  * Op layers (compositing): each op's pixels equal its formula evaluated independently here on the
  * inputs read back from the file (float channels, so exactly); layers may refer to later layers;
  * the strip height does not change anything; a missing layer, a missing channel and a cycle are
- * errors naming both layers.
+ * errors naming both layers; an op whose value overflows a float fails the bake, naming the first
+ * such pixel (found here from the threshold it multiplies).
  */
 #include "bake.h"
 #include "exrio.h"
@@ -209,11 +210,64 @@ static void test_slope(void)
     fb_scene_fini(&s);
 }
 
+/* The finite check: "big" is infinite exactly where the threshold "t" is 1 (1e45 overflows a float),
+ * so the first such pixel (row by row) of t, read back from a bake without "big", is the one the
+ * failing bake must name. A width of 77: rows of 72 values on eight lanes and a tail of five. */
+static void test_nonfinite(void)
+{
+    static const float levels[] = {0.3f, 0.45f, 0.6f};
+    for (size_t l = 0; l < sizeof levels / sizeof levels[0]; l++) {
+        char base[512], json[768];
+        snprintf(base, sizeof base,
+                 "{\"size\": [77, 40], \"seed\": %zu, \"layers\": [{\"type\": \"fbm\", \"name\": \"n\", "
+                 "\"octaves\": 4, \"frequency\": 6}, {\"type\": \"op\", \"name\": \"t\", \"op\": \"threshold\", "
+                 "\"inputs\": [\"n\"], \"level\": %g}",
+                 l + 1, levels[l]);
+        snprintf(json, sizeof json, "%s]}", base);
+        fb_scene s;
+        fb_engine e;
+        REQUIRE(fb_scene_parse(json, "t.json", &s) == FB_OK);
+        REQUIRE(fb_engine_open(&(fb_engine_desc){.backend = FB_BACKEND_NATIVE, .threads = 2}, &e) == FB_OK);
+        const char *path = th_path("finite.exr");
+        REQUIRE(fb_bake(&e, &(fb_bake_desc){.scene = &s, .out = path}, NULL) == FB_OK);
+        exrio_reader *r = NULL;
+        REQUIRE(exrio_open(path, &r) == FB_OK);
+        float *t = malloc(77 * 40 * 4);
+        void *planes[8] = {0};
+        int k = exrio_find_channel(r, "t.Y");
+        REQUIRE(k >= 0 && k < 8 && t);
+        planes[k] = t;
+        REQUIRE(exrio_read_rows(r, 0, 40, planes) == FB_OK);
+        exrio_close(&r);
+        unlink(path);
+        fb_scene_fini(&s);
+        int first = -1;
+        for (int i = 0; i < 77 * 40 && first < 0; i++)
+            if (t[i] == 1.0f) first = i;
+        free(t);
+        CHECKF(first >= 0, "level %g: no pixel of t is 1", levels[l]);
+        snprintf(json, sizeof json,
+                 "%s, {\"type\": \"op\", \"name\": \"big\", \"op\": \"multiply\", \"inputs\": [\"t\", 1e15, "
+                 "1e15, 1e15]}]}",
+                 base);
+        REQUIRE(fb_scene_parse(json, "t.json", &s) == FB_OK);
+        g_msg[0] = 0;
+        fb_result rc = fb_bake(&e, &(fb_bake_desc){.scene = &s, .out = path}, NULL);
+        char want[64];
+        snprintf(want, sizeof want, "an infinity at pixel (%d, %d) of big.Y", first % 77, first / 77);
+        CHECKF(rc != FB_OK && strstr(g_msg, want), "level %g: wanted \"%s\", got \"%s\"", levels[l], want, g_msg);
+        CHECK(access(path, F_OK) != 0); /* no partial output */
+        fb_engine_close(&e);
+        fb_scene_fini(&s);
+    }
+}
+
 int main(void)
 {
     fb_log_set_sink(sink, NULL);
     test_slope();
     test_values();
     test_errors();
+    test_nonfinite();
     TEST_REPORT();
 }

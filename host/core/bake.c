@@ -221,7 +221,8 @@ static fb_result bake_shape_plan(const fb_engine *e, const fb_bake_desc *d, cons
     if (rc) return rc;
     const fb_memory mem = {d->max_memory, e->overhead};
     for (;;) {
-        sh->held = sh->rows % 64 == 0 || sh->rows >= sh->region[3];
+        /* no file, no writer: the ring holds the producer's piece and the consumer's alone */
+        sh->held = d->out && (sh->rows % 64 == 0 || sh->rows >= sh->region[3]);
         int npieces = (sh->region[3] + sh->rows - 1) / sh->rows, least = ahead ? 3 : 2;
         least = least < npieces ? least : npieces; /* no more slots than pieces */
         sh->slots = full_slots(e, sh, ahead);

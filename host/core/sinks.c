@@ -10,6 +10,10 @@
 #include "output.h"
 #include "preview.h"
 
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#endif
+
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -31,14 +35,51 @@ typedef struct check_sink {
     int plane, y, x; /* the first bad value found */
 } check_sink;
 
+/* Whether any of the n values of row is a NaN or an infinity (all exponent bits set). */
+static bool any_bad_scalar(const uint32_t *row, int n)
+{
+    uint32_t any = 0;
+    for (int x = 0; x < n; x++) any |= (row[x] & 0x7f800000u) == 0x7f800000u;
+    return any != 0;
+}
+
+#if defined(__x86_64__) || defined(__i386__)
+/* The same on eight values at a time (the scalar loop costs about eight instructions a value: a
+ * fifth of a Julia layer's native bake was this check). */
+__attribute__((target("avx2"))) static bool any_bad_avx2(const uint32_t *row, int n)
+{
+    const __m256i e = _mm256_set1_epi32(0x7f800000);
+    __m256i any = _mm256_setzero_si256();
+    int x = 0;
+    for (; x + 32 <= n; x += 32)
+        for (int k = 0; k < 4; k++) {
+            __m256i v = _mm256_and_si256(_mm256_loadu_si256((const __m256i *)(row + x + 8 * k)), e);
+            any = _mm256_or_si256(any, _mm256_cmpeq_epi32(v, e));
+        }
+    for (; x + 8 <= n; x += 8) {
+        __m256i v = _mm256_and_si256(_mm256_loadu_si256((const __m256i *)(row + x)), e);
+        any = _mm256_or_si256(any, _mm256_cmpeq_epi32(v, e));
+    }
+    return !_mm256_testz_si256(any, any) || any_bad_scalar(row + x, n - x);
+}
+
+static bool any_bad(const uint32_t *row, int n)
+{
+    return __builtin_cpu_supports("avx2") ? any_bad_avx2(row, n) : any_bad_scalar(row, n);
+}
+#else
+static bool any_bad(const uint32_t *row, int n)
+{
+    return any_bad_scalar(row, n);
+}
+#endif
+
 /* The first non-finite value of rows [y0, y0 + n) of plane k: its row (or -1) and column. */
 static int first_bad(const fb_piece *p, int k, int y0, int n, int *x_out)
 {
     for (int r = y0 - p->y0; r < y0 - p->y0 + n; r++) {
         const uint32_t *row = (const uint32_t *)p->planes[k] + (size_t)r * p->stride;
-        uint32_t any = 0;
-        for (int x = 0; x < p->width; x++) any |= (row[x] & 0x7f800000u) == 0x7f800000u;
-        if (!any) continue;
+        if (!any_bad(row, p->width)) continue;
         for (int x = 0; x < p->width; x++)
             if ((row[x] & 0x7f800000u) == 0x7f800000u) {
                 *x_out = x;

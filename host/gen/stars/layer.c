@@ -122,8 +122,9 @@ static void stars_rows(const fb_gen *g, int y0, int n, void *const *planes)
         if (p->mapping != K_ENV_CUBE) memcpy(&row_inv, w + p->row_off + y, 4);
         for (uint32_t x = 0; x < p->width; x++) {
             uint32_t tile = (y >> p->tile_shift) * p->tiles_x + (x >> p->tile_shift);
+            K_StarsPixel px = k_stars_pixel(*p, x, y);
             K_StarsAcc acc = k_stars_init();
-            for (uint32_t k = w[tile]; k < w[tile + 1]; k++) acc = k_stars_add(acc, *p, rec[k], x, y);
+            for (uint32_t k = w[tile]; k < w[tile + 1]; k++) acc = k_stars_add(acc, *p, px, rec[k]);
             acc = k_stars_finish(acc, *p, row_inv, x, y);
             size_t i = (size_t)r * p->width + x;
             if (R) R[i] = acc.r;
