@@ -528,6 +528,11 @@ int main(int argc, char **argv)
     fb_engine engines[4];
     bool have_gpu;
     int n = th_open_engines(argc, argv, engines, &have_gpu);
+    /* --int32 (with FB_VK_NO_INT64=1): the device's 32-bit atomics, the histogram's words folded as a
+     * device without 64-bit atomics has them; everything below holds the same there */
+    bool int32 = false;
+    for (int i = 1; i < argc; i++) int32 = int32 || !strcmp(argv[i], "--int32");
+    if (have_gpu && int32) CHECKF(!vkc_info(engines[n - 1].vk)->int64_atomics, "--int32: 64-bit atomics still on");
 
     const double fern_b[4] = {-2.75, 2.75, -0.25, 10.25}, tri_b[4] = {-0.05, 1.05, -0.05, 0.9};
     for (int i = 0; i < n; i += (have_gpu ? 3 : 4)) {

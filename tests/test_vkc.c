@@ -3,10 +3,13 @@
  * back by a job's copies into a host buffer at given offsets (a bake's staging ring) gives the bits
  * a shared buffer gives; a job of copies alone, a device-to-device copy timed with timestamps, an
  * upload into a device buffer, and the bounds a kind refuses. Run on lavapipe (direct-mapped shared buffers) and, as
- * its -staging twin, on the discrete GPU's path. 77 where there is no Vulkan device.
+ * its -staging twin, on the discrete GPU's path (under the layer's synchronization checks: the
+ * subnormal probe's buffer is uploaded and then written by its shader, the shape of erosion's). 77
+ * where there is no Vulkan device.
  */
 #include "env.h"
 #include "gen.h"
+#include "probe.h"
 #include "scene.h"
 #include "vkc.h"
 
@@ -130,6 +133,21 @@ int main(void)
     vkc_buffer *big = NULL;
     CHECK(vkc_buffer_create_kind(vk, info->max_storage_buffer_range + 1, VKC_BUFFER_DEVICE, &big) != FB_OK && !big);
     CHECK(vkc_buffer_create_kind(vk, 0, VKC_BUFFER_HOST, &big) != FB_OK && !big);
+
+    /* the subnormal probe (probe.h): its verdicts, and lavapipe, whose LLVM code multiplies with the
+     * CPU's SSE instructions (MXCSR's default: nothing flushed), keeps both */
+    CHECK(!strcmp(fb_denormals_verdict(0x00400000u, 0x03800000u), "kept"));
+    CHECK(!strcmp(fb_denormals_verdict(0, 0), "flushed"));
+    CHECK(!strcmp(fb_denormals_verdict(0, 0x03800000u), "results flushed"));
+    CHECK(!strcmp(fb_denormals_verdict(0x00400000u, 0), "operands flushed"));
+    CHECK(!strcmp(fb_denormals_verdict(0x00400001u, 0x03800000u), "unexpected"));
+    fb_denormals dn;
+    CHECK(fb_denormals_probe(vk, &dn) == FB_OK);
+    if (!strcmp(info->type, "cpu"))
+        CHECKF(dn.product == 0x00400000u && dn.operand == 0x03800000u, "lavapipe's subnormals: %08x %08x", dn.product,
+               dn.operand);
+    else
+        CHECKF(strcmp(dn.verdict, "unexpected"), "the probe's results: %08x %08x", dn.product, dn.operand);
 
     vkc_buffer_destroy(vk, &shared);
     vkc_buffer_destroy(vk, &dev);

@@ -2,6 +2,7 @@
 #include "command.h"
 
 #include "jsonout.h"
+#include "probe.h"
 #include "vkc.h"
 
 #include <stdlib.h>
@@ -19,7 +20,31 @@ static void help(const fb_cli *cli)
     printf("usage: fractalbake devices [--device D] [--json]\n"
            "Lists the Vulkan devices (index, name, type, memory, subgroup size, driver), marks the one\n"
            "fractalbake chooses (with --device D: the one D names), and says what --backend auto does.\n"
+           "On the chosen device, a probe shader says whether fp32 subnormals are kept or flushed; with\n"
+           "FB_VK_VALIDATION=1 the validation layer watches it, and a message (or a layer that is not\n"
+           "installed) fails the command (exit 3).\n"
            "--json: the same as one JSON object.\n");
+}
+
+/* The chosen device opened as a bake opens it (the environment's options), the subnormal probe run
+ * on it; *validation says what the validation layer did: "off" (not asked for), "silent", or
+ * FB_ERR_VULKAN when it is asked for and missing or has spoken. */
+static fb_result probe(const fb_cli *cli, const char *device, fb_denormals *dn, const char **validation)
+{
+    vkc_desc desc = cli->env->vk;
+    desc.device = device;
+    vkc_context *vk = NULL;
+    fb_result rc = vkc_create(&desc, &vk);
+    if (rc) return rc;
+    rc = fb_denormals_probe(vk, dn);
+    *validation = desc.validation ? "silent" : "off";
+    if (!rc && desc.validation && !vkc_validation_enabled(vk))
+        rc = fb_fail(FB_ERR_VULKAN, "FB_VK_VALIDATION=1 but VK_LAYER_KHRONOS_validation is not installed");
+    else if (!rc && vkc_validation_messages(vk))
+        rc = fb_fail(FB_ERR_VULKAN, "vulkan validation reported %u message(s) on the probe (see above)",
+                     vkc_validation_messages(vk));
+    vkc_destroy(&vk);
+    return rc;
 }
 
 static fb_result run(const fb_cli *cli, void *opts)
@@ -44,6 +69,13 @@ static fb_result run(const fb_cli *cli, void *opts)
         return FB_OK;
     }
     if (rc) return rc;
+    fb_denormals dn = {0};
+    const char *validation = "off";
+    rc = probe(cli, d->device, &dn, &validation);
+    if (rc) {
+        free(infos);
+        return rc;
+    }
     if (d->json) {
         json_t *o = json_object(), *list = json_array();
         int chosen = -1;
@@ -59,6 +91,11 @@ static fb_result run(const fb_cli *cli, void *opts)
         }
         json_object_set_new(o, "devices", list);
         json_object_set_new(o, "chosen", json_integer(chosen));
+        if (chosen >= 0)
+            json_object_set_new(json_array_get(list, (size_t)chosen), "subnormals",
+                                json_pack("{sssIsI}", "fp32", dn.verdict, "product_bits", (json_int_t)dn.product,
+                                          "operand_bits", (json_int_t)dn.operand));
+        json_object_set_new(o, "validation", json_string(validation));
         json_object_set_new(o, "native_threads", json_integer(fb_cpu_count()));
         /* what --backend auto does with the chosen device */
         json_object_set_new(o, "auto",
@@ -82,6 +119,11 @@ static fb_result run(const fb_cli *cli, void *opts)
         char arith[256];
         vkc_arith_describe(&infos[i], arith, sizeof arith);
         printf("arithmetic on %s: %s\n", infos[i].name, arith);
+        printf("fp32 subnormals on %s, measured: %s (2^-126 * 0.5 = 0x%08x, 2^-140 * 2^20 = 0x%08x; kept: "
+               "0x00400000, 0x03800000)\n",
+               infos[i].name, dn.verdict, dn.product, dn.operand);
+        printf("validation layer: %s\n",
+               !strcmp(validation, "off") ? "off (FB_VK_VALIDATION=1 turns it on)" : "on, silent");
         if (!strcmp(infos[i].type, "cpu"))
             printf("--backend auto (the default): %s is a CPU implementation of Vulkan, so each layer runs where it\n"
                    "is faster on this machine: the native C path (fBm with its AVX2 loop, float Julia sets with\n"

@@ -489,9 +489,13 @@ static void record_dispatch(vkc_context *ctx, vkc_job *job, const vkc_submit *w)
         w->bufs[i]->upload_pending = false;
         uploads = true;
     }
+    /* The shader may read an uploaded buffer (storage or uniform) and write it too (erosion's
+     * heights, water and flux are uploaded, then updated in place): the copy's writes are made
+     * visible to both, or the dispatch's writes race the copy's (SYNC-HAZARD-WRITE-AFTER-WRITE). */
     if (uploads)
         barrier(ctx, job->cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
-                VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+                VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_UNIFORM_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
     if (job->queries) ctx->vk.vkCmdWriteTimestamp(job->cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, job->queries, 0);
     ctx->vk.vkCmdBindPipeline(job->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
     if (w->nbufs)

@@ -94,6 +94,19 @@ check "merge --json" test "$(jq_ jm.json "r['command'], r['parts'], r['outputs']
 check "tonemap --json" test "$(jq_ jt.json "r['command'], r['outputs'][0]['path']")" = "tonemap jt.exr"
 "$FB" devices --json > jd.json
 check "devices --json: the devices and the chosen one" test "$(jq_ jd.json "len(r['devices']) > 0, r['chosen'] >= 0")" = "True True"
+# the subnormal probe on the chosen device (lavapipe keeps them: the CPU's SSE with MXCSR's default);
+# the validation layer, on for this test, watched it and is required once asked for
+if "$FB" devices | grep -q '^0 *\* *llvmpipe'; then
+  check "devices --json: lavapipe keeps fp32 subnormals" \
+    test "$(jq_ jd.json "[d['subnormals'] for d in r['devices'] if 'subnormals' in d][0]")" = \
+    "{'fp32': 'kept', 'operand_bits': 58720256, 'product_bits': 4194304}"
+  check "devices: the probe's line" grep -q '^fp32 subnormals on llvmpipe.*, measured: kept (' dev.txt
+fi
+check "devices: the validation layer on and silent" grep -qx 'validation layer: on, silent' dev.txt
+VK_LAYER_PATH=$T/none FB_VK_VALIDATION=1 "$FB" devices > nolayer.txt 2> nolayer.err
+rc=$?
+check "devices: FB_VK_VALIDATION=1 without the layer fails (exit $rc), nothing on stdout" test $rc -eq 3 -a ! -s nolayer.txt
+check "... naming the layer" grep -q 'FB_VK_VALIDATION=1 but VK_LAYER_KHRONOS_validation is not installed' nolayer.err
 "$FB" info j.exr --json > ji.json
 check "info --json" test "$(jq_ ji.json "r['size'], r['layers'][0]['layer']")" = "[96, 64] fbm"
 "$FB" compare j.exr j.exr --json > jc.json
