@@ -4,9 +4,13 @@
  * Every output (the EXR, its preview, a terrain mesh, a CSV, a plot, a diff image) is written to a
  * temporary file in the target's folder, mode 0666 less the umask: an anonymous one (O_TMPFILE)
  * where the file system allows, which nothing can see and no end of the process (SIGKILL, a crash,
- * a power cut) leaves behind; elsewhere a hidden one created exclusively (O_CREAT | O_EXCL, a name
- * of 64 random bits). Names, folders and targets are checked when an output is reserved, before
- * any work. Nothing is put in place until the whole run has succeeded; then, at the commit, the
+ * a power cut) leaves behind; elsewhere a hidden one created exclusively (O_CREAT | O_EXCL), named
+ * ".fractalbake-tmp.HOST.OWNER.PID.SET.RAND.NAME.tmp" (OWNER: a digest of the host name, the boot id
+ * and the pid namespace; 96 random bits). The first reservation in a folder sweeps it of the files of
+ * that form a dead run left: removed when proven dead (this process's OWNER, no such pid, no lock on
+ * the file), else named in a warning (another host, boot or namespace; a lock that cannot be seen);
+ * no other name is touched. Names, folders and targets are checked when an output is reserved,
+ * before any work. Nothing is put in place until the whole run has succeeded; then, at the commit, the
  * folders are locked (flock: runs committing into the same folders do it one whole set at a time),
  * signals are held off (fb_outputs_signal), each anonymous file is linked to a hidden name, and every
  * file is renamed over its target. On any failure, and on a signal before the commit, every
