@@ -74,6 +74,7 @@ struct fb_outputs {
     input *in;
     int nin, capin;
     char stdout_claim[32]; /* a document the run prints on standard output itself: no "-" output then */
+    bool stdout_watch;     /* fb_outputs_stdout_watch: standard output is an output of every run */
     /* the set of the outermost transaction (0: none drawn yet), and the folders swept of dead runs'
      * temporary files in it (sweep_locked) */
     uint64_t set;
@@ -228,6 +229,33 @@ static fb_result clash(const char *path, const char *what, const char *in_path, 
                    path, in_path, in_what, what, how);
 }
 
+/* Whether standard output is an output of the run: watched (the command line's), named "-", or
+ * claimed for a document. Called locked. */
+static bool stdout_is_output(const fb_outputs *o)
+{
+    return o->stdout_watch || o->stdout_claim[0] || find((fb_outputs *)o, "-");
+}
+
+/* Standard output written into an input (`1<> in.exr`, `>> in.exr`): refused. */
+static fb_result stdout_clash(const char *in_path, const char *in_what)
+{
+    return fb_fail(FB_ERR_USAGE,
+                   "%s: is an input of this run (read as the %s) and also its standard output (redirected into it "
+                   "with >> or 1<>), which would change it: redirect standard output to another file",
+                   in_path, in_what);
+}
+
+/* The input that standard output is (a regular file: the same device and inode), or NULL. Called
+ * locked. */
+static const input *stdout_input(const fb_outputs *o)
+{
+    struct stat st;
+    if (fstat(STDOUT_FILENO, &st) != 0 || !S_ISREG(st.st_mode)) return NULL;
+    for (int i = 0; i < o->nin; i++)
+        if (o->in[i].has_id && o->in[i].dev == st.st_dev && o->in[i].ino == st.st_ino) return &o->in[i];
+    return NULL;
+}
+
 static entry *free_entry(fb_outputs *o)
 {
     for (int i = 0; i < o->count; i++)
@@ -253,6 +281,8 @@ static fb_result reserve_stdout(fb_outputs *o, const char *what, entry **out)
     if (isatty(STDOUT_FILENO))
         return fb_fail(FB_ERR_USAGE, "-: the %s would go to a terminal: redirect standard output to a file or a pipe",
                        what);
+    const input *in = stdout_input(o);
+    if (in) return stdout_clash(in->path, in->what);
     entry *e = free_entry(o);
     if (!e) return fb_fail(FB_ERR_USAGE, "-: more than %d outputs", FB_MAX_OUTPUTS);
     const char *tmpdir = o->tmpdir[0] ? o->tmpdir : "/tmp";
@@ -719,6 +749,8 @@ static fb_result commit_locked(fb_outputs *o, entry **list, int n)
         else if ((in = input_named(o, list[i]->key, &st)))
             rc = clash(list[i]->path, list[i]->what, in->path, in->what);
     }
+    const input *in = n > 0 && stdout_is_output(o) ? stdout_input(o) : NULL;
+    if (!rc && in) rc = stdout_clash(in->path, in->what);
     if (rc) return rc;
     int lockfds[FB_MAX_OUTPUTS], nlock = lock_folders(list, n, lockfds);
     int idle = IDLE;
@@ -925,11 +957,14 @@ fb_result fb_output_claim_stdout(const char *what)
     if (!o) return FB_OK; /* outside any transaction: no effect */
     pthread_mutex_lock(&o->mu);
     const entry *e = find(o, "-");
+    const input *in;
     if (e)
         rc = fb_fail(FB_ERR_USAGE,
                      "%s: standard output carries the %s (-): name a file for it (standard output carries one "
                      "document)",
                      what, e->what);
+    else if (o->depth > 0 && (in = stdout_input(o)))
+        rc = stdout_clash(in->path, in->what);
     else if (o->depth > 0)
         snprintf(o->stdout_claim, sizeof o->stdout_claim, "%s", what);
     pthread_mutex_unlock(&o->mu);
@@ -947,6 +982,10 @@ fb_result fb_input_note(const char *path, const char *what, int fd)
     if (!o) return FB_OK; /* no transaction on this thread: no run to belong to, no output to clash with */
     fb_result rc = FB_OK;
     pthread_mutex_lock(&o->mu);
+    struct stat so;
+    if (has && stdout_is_output(o) && o->depth > 0 && fstat(STDOUT_FILENO, &so) == 0 && S_ISREG(so.st_mode) &&
+        so.st_dev == st.st_dev && so.st_ino == st.st_ino)
+        rc = stdout_clash(path, what);
     for (int i = 0; i < o->count && !rc; i++) { /* an output reserved before the input was opened */
         const entry *e = &o->out[i];
         if (e->state != FREE && !e->std &&
@@ -1009,6 +1048,15 @@ bool fb_outputs_signal(int sig)
         end = false; /* COMMITTING: taken when the commit ends; DYING: another thread is ending the run */
     }
     return end;
+}
+
+void fb_outputs_stdout_watch(bool on)
+{
+    fb_outputs *o = current(true);
+    if (!o) return;
+    pthread_mutex_lock(&o->mu);
+    o->stdout_watch = on;
+    pthread_mutex_unlock(&o->mu);
 }
 
 void fb_outputs_use_tmpfile(bool on)
@@ -1076,6 +1124,20 @@ int fb_outputs_written(const char **paths, const char **whats, uint64_t *bytes, 
         paths[n] = o->done[n].path;
         whats[n] = o->done[n].what;
         bytes[n] = o->done[n].bytes;
+    }
+    pthread_mutex_unlock(&o->mu);
+    return n;
+}
+
+int fb_inputs_noted(const char **paths, const char **whats, int max)
+{
+    int n = 0;
+    fb_outputs *o = current(false);
+    if (!o) return 0;
+    pthread_mutex_lock(&o->mu);
+    for (; n < o->nin && n < max; n++) {
+        paths[n] = o->in[n].path;
+        whats[n] = o->in[n].what;
     }
     pthread_mutex_unlock(&o->mu);
     return n;

@@ -314,6 +314,32 @@ if ! sanitized; then
 fi
 check "no temporary file after the faults" no_temp_files
 
+# ---- 11b. standard output is an output: never an input's file (1<>, >>) ----
+"$FB" fbm $N --size 16x16 -o so.exr && cp so.exr soA.exr && cp so.exr soB.exr
+sum=$(cat so.exr soA.exr | md5sum)
+echo '{"size": [16, 8], "layers": [{"name": "n", "type": "fbm"}]}' > so.json
+cp so.json so0.json
+try_stdout() { # WHAT FILE COMMAND...: exit 2, one line naming FILE, nothing written
+  local what=$1 file=$2
+  shift 2
+  "$@" 2> so.txt
+  local rc=$?
+  check "$what: exit $rc, wanted 2" test $rc -eq 2
+  check "  one line naming $file: $(cat so.txt)" \
+    test "$(wc -l < so.txt)" -eq 1 -a "$(grep -c "^fractalbake: $file: is an input of this run .* and also its standard output" so.txt)" -eq 1
+}
+try_stdout "render --from so.exr -o - 1<> so.exr" so.exr sh -c '"$0" render --from so.exr -o - 1<> so.exr' "$FB"
+try_stdout "render --from so.exr -o - >> so.exr" so.exr sh -c '"$0" render --from so.exr -o - >> so.exr' "$FB"
+try_stdout "compare soA.exr soB.exr --report - 1<> soA.exr" soA.exr sh -c '"$0" compare soA.exr soB.exr --report - 1<> soA.exr' "$FB"
+try_stdout "info so.exr >> so.exr" so.exr sh -c '"$0" info so.exr >> so.exr' "$FB"
+try_stdout "render so.json -o - 1<> so.json" so.json sh -c '"$0" render so.json -o - 1<> so.json' "$FB"
+try_stdout "render --from so.exr -o x.exr --json >> so.exr" so.exr sh -c '"$0" render --from so.exr -o x.exr --json >> so.exr' "$FB"
+check "  the inputs unchanged" test "$(cat so.exr soA.exr | md5sum)" = "$sum"
+check "  the scene unchanged, no x.exr" sh -c 'cmp -s so.json so0.json && test ! -e x.exr'
+"$FB" render --from so.exr -o - > so-copy.exr 2> /dev/null
+check "standard output into another file is fine" test $? -eq 0 -a -s so-copy.exr
+check "no temporary file" no_temp_files
+
 # ---- 12. a documented maximum runs, tells how far it is, and stops at once on Ctrl-C ----
 "$FB" ifs --help | grep -q "1e14 takes days: progress is shown and Ctrl-C stops it" && ok || bad "ifs --help says nothing of 1e14"
 "$FB" ifs --backend native --points 1e14 --size 128x128 -o long.exr 2> long.txt &
