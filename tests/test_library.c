@@ -249,6 +249,198 @@ static void test_errors(void)
     fractalbake_context_destroy(ctx);
 }
 
+/* Whether the context's line is "fractalbake: " and then want, exactly. */
+static bool said(const fractalbake_context *ctx, const char *want)
+{
+    char line[2048];
+    snprintf(line, sizeof line, "fractalbake: %s", want);
+    if (!strcmp(fractalbake_error(ctx), line)) return true;
+    fprintf(stderr, "  said: %s\n  want: %s\n", fractalbake_error(ctx), line);
+    return false;
+}
+
+/* A file's bytes, for "untouched" checks (at most size; -1 when it cannot be read). */
+static long slurp(const char *path, char *buf, size_t size)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return -1;
+    long n = (long)fread(buf, 1, size, f);
+    fclose(f);
+    return n;
+}
+
+/* Entries of g_dir whose name holds part. */
+static int entries(const char *part)
+{
+    DIR *d = opendir(g_dir);
+    int n = 0;
+    for (struct dirent *e; d && (e = readdir(d));) n += strstr(e->d_name, part) != NULL;
+    if (d) closedir(d);
+    return n;
+}
+
+/* A progress callback that calls back into its own context: every call refused at once. */
+typedef struct reentry {
+    fractalbake_context *ctx;
+    const fractalbake_scene *scene;
+    int calls, render_rc, bake_rc, load_rc;
+    char line[2048];
+} reentry;
+
+static int reenter(double fraction, void *user)
+{
+    (void)fraction;
+    reentry *r = user;
+    if (r->calls++) return 0;
+    fractalbake_image *img = NULL;
+    fractalbake_scene *sc = NULL;
+    char path[256];
+    snprintf(path, sizeof path, "%s/inner.exr", g_dir);
+    r->render_rc = fractalbake_render(r->ctx, r->scene, NULL, &img);
+    snprintf(r->line, sizeof r->line, "%s", fractalbake_error(r->ctx));
+    r->bake_rc = fractalbake_bake(r->ctx, r->scene, path, NULL);
+    r->load_rc = fractalbake_scene_load(r->ctx, NULL, NULL, NULL, 0, &sc);
+    fractalbake_context_destroy(r->ctx); /* not now: the context is working */
+    fractalbake_image_destroy(img);
+    fractalbake_scene_destroy(sc);
+    return 0;
+}
+
+/* The boundary: every pointer, count, size and region an entry point takes is checked before any work,
+ * with the command line's limits; a call from the context's own progress callback is refused, not
+ * deadlocked; no bake replaces its scene's file or writes an EXR under another name. */
+static void test_boundary(void)
+{
+    fractalbake_context *none = NULL;
+    int rc = fractalbake_context_create(
+        &(fractalbake_context_desc){.api = FRACTALBAKE_API, .backend = "native", .threads = 1000000}, &none);
+    CHECK(rc == FRACTALBAKE_ERR_USAGE &&
+              said(none, "threads 1000000: expected 0 (one per core) or 1..1024, as --threads"),
+          "threads 10^6: %d", rc);
+    fractalbake_context_destroy(none);
+    rc = fractalbake_context_create(
+        &(fractalbake_context_desc){.api = FRACTALBAKE_API, .backend = "native", .max_memory = UINT64_MAX}, &none);
+    CHECK(rc == FRACTALBAKE_ERR_USAGE &&
+              said(none, "max_memory 18446744073709551615: expected 0 (80% of the memory) or 1 MiB to 9e18 bytes, as "
+                         "--max-memory"),
+          "max_memory 2^64-1 (-1 through a cast): %d", rc);
+    fractalbake_context_destroy(none);
+    rc = fractalbake_context_create(
+        &(fractalbake_context_desc){.api = FRACTALBAKE_API, .backend = "native", .max_memory = 1000}, &none);
+    CHECK(rc == FRACTALBAKE_ERR_USAGE && strstr(fractalbake_error(none), "max_memory 1000:"), "max_memory 1000: %d",
+          rc);
+    fractalbake_context_destroy(none);
+    CHECK(fractalbake_context_create(NULL, NULL) == FRACTALBAKE_ERR_USAGE, "no place for the context");
+    CHECK(fractalbake_bake(NULL, NULL, "x.exr", NULL) == FRACTALBAKE_ERR_USAGE, "no context");
+    CHECK(!strcmp(fractalbake_backend(NULL), "") && !strcmp(fractalbake_device(NULL), ""), "NULL context's names");
+    fractalbake_set_progress(NULL, NULL, NULL);
+
+    fractalbake_context *ctx = context("native");
+    if (!ctx) {
+        g_fail++;
+        return;
+    }
+    fractalbake_scene *scene = (fractalbake_scene *)1;
+    const char *const holes[] = {"size=96x48", NULL};
+    rc = fractalbake_scene_load(ctx, NULL, NULL, holes, 2, &scene);
+    CHECK(rc == FRACTALBAKE_ERR_USAGE && !scene &&
+              said(ctx, "fractalbake_scene_load: sets[1] is NULL: expected KEY.PATH=VALUE, as --set"),
+          "sets[1] NULL: %d", rc);
+    rc = fractalbake_scene_load(ctx, NULL, NULL, holes, -1, &scene);
+    CHECK(rc == FRACTALBAKE_ERR_USAGE && strstr(fractalbake_error(ctx), "-1 overrides"), "nsets -1: %d", rc);
+    CHECK(fractalbake_scene_load(ctx, NULL, NULL, NULL, 0, NULL) == FRACTALBAKE_ERR_USAGE, "no place for the scene");
+
+    /* the scene from a file, then baked into that file, any spelling: refused, the file as it was */
+    char spath[256], alias[300], text[4096], after[4096], out[300];
+    snprintf(spath, sizeof spath, "%s/scene.exr", g_dir); /* a JSON scene under an EXR name */
+    FILE *f = fopen(spath, "w");
+    if (f) fputs("{\"size\": [96, 48], \"layers\": [{\"name\": \"n\", \"type\": \"fbm\"}]}\n", f), fclose(f);
+    long n = slurp(spath, text, sizeof text);
+    rc = fractalbake_scene_load(ctx, NULL, spath, NULL, 0, &scene);
+    CHECK(rc == 0 && scene, "scene file: %s", fractalbake_error(ctx));
+    if (!scene) {
+        fractalbake_context_destroy(ctx);
+        g_fail++;
+        return;
+    }
+    snprintf(alias, sizeof alias, "%s/./scene.exr", g_dir);
+    char want[1024];
+    snprintf(want, sizeof want,
+             "%s: is an input of this run (read as the scene) and cannot also be the output: write the output under "
+             "another name, then mv it over the input",
+             spath);
+    rc = fractalbake_bake(ctx, scene, spath, NULL);
+    CHECK(rc == FRACTALBAKE_ERR_USAGE && said(ctx, want), "bake into its scene's file: %d", rc);
+    rc = fractalbake_bake(ctx, scene, alias, NULL);
+    CHECK(rc == FRACTALBAKE_ERR_USAGE && strstr(fractalbake_error(ctx), "is the same file as"),
+          "another spelling: %d %s", rc, fractalbake_error(ctx));
+    CHECK(slurp(spath, after, sizeof after) == n && !memcmp(text, after, (size_t)n), "the scene's file changed");
+    /* an EXR only under an EXR's name, and never on standard output */
+    snprintf(out, sizeof out, "%s/o.png", g_dir);
+    rc = fractalbake_bake(ctx, scene, out, NULL);
+    snprintf(want, sizeof want, "fractalbake_bake %s: this writes OpenEXR (.exr), not .png: name the file .exr", out);
+    CHECK(rc == FRACTALBAKE_ERR_USAGE && said(ctx, want), "o.png: %d", rc);
+    rc = fractalbake_bake(ctx, scene, "-", NULL);
+    CHECK(rc == FRACTALBAKE_ERR_USAGE && said(ctx, "fractalbake_bake -: the library writes no standard output: name a "
+                                                   "file .exr"),
+          "-: %d", rc);
+    CHECK(fractalbake_bake(ctx, scene, NULL, NULL) == FRACTALBAKE_ERR_USAGE &&
+              said(ctx, "fractalbake_bake: no output path"),
+          "NULL path");
+    CHECK(fractalbake_bake(ctx, NULL, out, NULL) == FRACTALBAKE_ERR_USAGE && said(ctx, "fractalbake_bake: no scene"),
+          "NULL scene");
+    /* regions: the command line's limits, inside the image */
+    snprintf(out, sizeof out, "%s/r.exr", g_dir);
+    const struct {
+        int r[4];
+        const char *line;
+    } regions[] = {{{90, 0, 10, 10}, "region 90,0,10,10: not inside the 96 x 48 image"},
+                   {{0, 0, 4, 0}, "region 0,0,4,0: expected X,Y >= 0 and W,H in 1..65536"},
+                   {{-1, 0, 4, 4}, "region -1,0,4,4: expected X,Y >= 0 and W,H in 1..65536"},
+                   {{0, 0, 2147483647, 4}, "region 0,0,2147483647,4: expected X,Y >= 0 and W,H in 1..65536"},
+                   {{2147483647, 0, 65536, 4}, "region 2147483647,0,65536,4: not inside the 96 x 48 image"}};
+    for (size_t i = 0; i < sizeof regions / sizeof regions[0]; i++) {
+        fractalbake_image *img = (fractalbake_image *)1;
+        CHECK(fractalbake_bake(ctx, scene, out, regions[i].r) == FRACTALBAKE_ERR_USAGE && said(ctx, regions[i].line),
+              "bake region %zu", i);
+        CHECK(fractalbake_render(ctx, scene, regions[i].r, &img) == FRACTALBAKE_ERR_USAGE && !img &&
+                  said(ctx, regions[i].line),
+              "render region %zu", i);
+    }
+    CHECK(fractalbake_render(ctx, scene, NULL, NULL) == FRACTALBAKE_ERR_USAGE, "render: no place for the image");
+    CHECK(fractalbake_open(ctx, NULL, NULL) == FRACTALBAKE_ERR_USAGE, "open: NULL");
+    CHECK(fractalbake_image_channels(NULL) == 0 && !fractalbake_image_channel(NULL, 0) &&
+              fractalbake_image_type(NULL, 0) == -1 && !fractalbake_image_attribute(NULL, "x"),
+          "NULL image");
+    int w = -1, h = -1;
+    fractalbake_scene_size(NULL, &w, &h);
+    CHECK(w == 0 && h == 0 && !fractalbake_scene_json(NULL), "NULL scene's size");
+
+    /* re-entry from the progress callback: each inner call refused at once with one line; the outer
+     * bake goes on and succeeds; destroying the context from it is put off (the context still works) */
+    reentry r = {.ctx = ctx, .scene = scene};
+    fractalbake_set_progress(ctx, reenter, &r);
+    snprintf(out, sizeof out, "%s/outer.exr", g_dir);
+    rc = fractalbake_bake(ctx, scene, out, NULL);
+    CHECK(rc == 0 && access(out, F_OK) == 0, "the outer bake: %d %s", rc, fractalbake_error(ctx));
+    CHECK(r.calls >= 1 && r.render_rc == FRACTALBAKE_ERR_USAGE && r.bake_rc == FRACTALBAKE_ERR_USAGE &&
+              r.load_rc == FRACTALBAKE_ERR_USAGE,
+          "inner calls: %d %d %d (%d calls)", r.render_rc, r.bake_rc, r.load_rc, r.calls);
+    CHECK(!strcmp(r.line, "fractalbake: fractalbake_render: the context is running another call (this one came from "
+                          "its progress callback or another thread): a context runs one call at a time"),
+          "inner line: %s", r.line);
+    snprintf(out, sizeof out, "%s/inner.exr", g_dir);
+    CHECK(access(out, F_OK) != 0, "the refused inner bake wrote %s", out);
+    fractalbake_set_progress(ctx, NULL, NULL);
+    snprintf(out, sizeof out, "%s/after.exr", g_dir);
+    CHECK(fractalbake_bake(ctx, scene, out, NULL) == 0, "after the callback: %s", fractalbake_error(ctx));
+    CHECK(entries(".tmp") == 0 && entries("o.png") == 0 && access("-", F_OK) != 0, "files left behind");
+    snprintf(out, sizeof out, "%s/r.exr", g_dir);
+    CHECK(access(out, F_OK) != 0, "a refused region wrote %s", out);
+    fractalbake_scene_destroy(scene);
+    fractalbake_context_destroy(ctx);
+}
+
 /* One context's work on a thread: the default scene (small) in planes, then a scene that fails. */
 typedef struct job {
     fractalbake_context *ctx;
@@ -316,6 +508,7 @@ int main(int argc, char **argv)
     if (!mkdtemp(g_dir)) return 2;
     test_native();
     test_errors();
+    test_boundary();
     int skip = test_two_contexts();
     char cmd[128];
     snprintf(cmd, sizeof cmd, "rm -rf '%s'", g_dir);

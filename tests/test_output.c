@@ -4,12 +4,15 @@
  * signal handler's clean-up; outputs that would replace an input; anonymous (O_TMPFILE) files that nothing sees and
  * SIGKILL leaves nothing of; signals during a commit taken after the whole set is in place.
  */
+#define _GNU_SOURCE /* syscall */
 #include "output.h"
 #include "testhelp.h"
 
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <glob.h>
+#include <sys/syscall.h>
 #include <signal.h>
 #include <sys/file.h>
 #include <sys/wait.h>
@@ -78,15 +81,29 @@ static int count_all(void)
     return n;
 }
 
-/* The warnings logged, and the last one, for the sweep's line. */
-static int g_warnings;
-static char g_last_warning[1024];
+/* The warnings logged, and the last one, for the sweep's lines: the last "removed" line and the
+ * first four "left" lines of a sweep (sorted: those of other owners, by pid, then those whose lock
+ * cannot be seen). */
+static int g_warnings, g_nleft;
+static char g_last_warning[1024], g_removed_warning[1024], g_left_warning[4][1024];
 static void count_warnings(int level, const char *msg, void *user)
 {
     (void)user;
     if (level != FB_LOG_WARN) return;
-    g_warnings++;
+    if (g_warnings++ == 0) g_nleft = 0;
     snprintf(g_last_warning, sizeof g_last_warning, "%s", msg);
+    if (!strncmp(msg, "removed ", 8)) snprintf(g_removed_warning, sizeof g_removed_warning, "%s", msg);
+    if (!strncmp(msg, "left ", 5) && g_nleft < 4)
+        snprintf(g_left_warning[g_nleft++], sizeof g_left_warning[0], "%s", msg);
+}
+
+/* flock as the C library's, or failing with g_flock_err: a file system whose locks cannot be seen
+ * (NFS mounted without a lock manager). The sweep's calls come here too (the test links it). */
+static int g_flock_err;
+int flock(int fd, int op)
+{
+    if (g_flock_err) return errno = g_flock_err, -1;
+    return (int)syscall(SYS_flock, fd, op);
 }
 
 /* The signal handler of a run, as main's: outside a commit it ends the process. */
@@ -169,8 +186,10 @@ int main(void)
     CHECK(fb_outputs_end(FB_OK) == FB_OK); /* the outer level has nothing left to commit */
     CHECK(has("a.txt", "two") && access(at("c.txt"), F_OK) != 0 && count_files(".tmp") == 0);
 
-    /* The temporary name: hidden, beside the target, ".NAME.PID.SET.RAND.tmp": this process, the set's
-     * 16 random hex digits (one for the transaction), 8 more random ones of its own. */
+    /* The temporary name: hidden, beside the target, ".fractalbake-tmp.HOST.OWNER.PID.SET.RAND.NAME.tmp":
+     * this host's name (to its first dot), 16 hex digits of the owner's digest (host, boot, pid
+     * namespace), this process, the set's 16 random hex digits (one for the transaction), 8 more
+     * random ones of its own. */
     fb_outputs_begin();
     CHECK(fb_output_reserve(at("d.txt"), "output") == FB_OK);
     CHECK(fb_output_reserve(at("e.txt"), "output") == FB_OK);
@@ -181,17 +200,23 @@ int main(void)
         if (strstr(e->d_name, ".tmp") && k < 2) snprintf(names[k++], sizeof names[k], "%s", e->d_name);
     if (d) closedir(d);
     CHECK(k == 2);
-    char sets[2][17] = {{0}}, rands[2][9] = {{0}};
+    char sets[2][17] = {{0}}, rands[2][9] = {{0}}, owners[2][17] = {{0}}, host[256] = "";
+    REQUIRE(gethostname(host, sizeof host - 1) == 0);
+    host[strcspn(host, ".")] = 0;
     for (int i = 0; i < k; i++) {
         const char *n = names[i];
-        char tail[64];
+        char tail[64] = "", who[64] = "";
         int pid = 0, used = 0;
-        bool form = (!strncmp(n, ".d.txt.", 7) || !strncmp(n, ".e.txt.", 7)) &&
-                    sscanf(n + 7, "%d.%16[0-9a-f].%8[0-9a-f]%n", &pid, sets[i], rands[i], &used) == 3 &&
-                    pid == (int)getpid() && strlen(sets[i]) == 16 && strlen(rands[i]) == 8 &&
-                    snprintf(tail, sizeof tail, "%s", n + 7 + used) > 0 && !strcmp(tail, ".tmp");
+        bool form = !strncmp(n, ".fractalbake-tmp.", 17) &&
+                    sscanf(n + 17, "%63[-_0-9A-Za-z].%16[0-9a-f].%d.%16[0-9a-f].%8[0-9a-f].%n", who, owners[i], &pid,
+                           sets[i], rands[i], &used) == 5 &&
+                    used > 0 && pid == (int)getpid() && strlen(owners[i]) == 16 && strlen(sets[i]) == 16 &&
+                    strlen(rands[i]) == 8 && !strncmp(who, host, 32) &&
+                    snprintf(tail, sizeof tail, "%s", n + 17 + used) > 0 &&
+                    (!strcmp(tail, "d.txt.tmp") || !strcmp(tail, "e.txt.tmp"));
         CHECKF(form, "temporary name %s", n);
     }
+    CHECK(!strcmp(owners[0], owners[1]));
     CHECK(!strcmp(sets[0], sets[1]) && strcmp(rands[0], rands[1]) != 0);
     /* Reserved but never written is an internal error at commit, and leaves nothing. */
     CHECK(fb_outputs_end(FB_OK) == FB_ERR_INTERNAL);
@@ -297,30 +322,89 @@ int main(void)
     CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
     int cst = 0;
     CHECK(kill(child, SIGKILL) == 0 && waitpid(child, &cst, 0) == child);
-    char set[17] = {0}, planted[512];
+    char set[17] = {0}, owner[17] = {0}, who[64] = {0}, planted[512];
     d = opendir(g_dir);
     for (struct dirent *e; d && (e = readdir(d));)
-        if (!strncmp(e->d_name, ".s1.txt.", 8)) sscanf(e->d_name + 8, "%*d.%16[0-9a-f]", set);
+        if (strstr(e->d_name, ".s1.txt.tmp"))
+            sscanf(e->d_name, ".fractalbake-tmp.%63[^.].%16[0-9a-f].%*d.%16[0-9a-f]", who, owner, set);
     if (d) closedir(d);
+    REQUIRE(strlen(set) == 16 && strlen(owner) == 16);
     /* a file whose name says the dead child, held locked by this process (as by a live run) */
-    snprintf(planted, sizeof planted, "%s/.held.txt.%d.%s.0badcafe.tmp", g_dir, (int)child, set);
+    snprintf(planted, sizeof planted, "%s/.fractalbake-tmp.%s.%s.%d.%s.0badcafe.held.txt.tmp", g_dir, who, owner,
+             (int)child, set);
     int held = open(planted, O_WRONLY | O_CREAT | O_EXCL, 0666);
     CHECK(held >= 0 && flock(held, LOCK_EX) == 0);
+    /* Files the sweep cannot prove dead: its pid dead here, but another host's (a live run on another
+     * node of a cluster, its lock not seen through NFS), or this host's name with another owner
+     * (another boot, another pid namespace), or another host's with a live pid; and files that merely
+     * look like temporary files (the form of earlier versions, a dead pid in it; the prefix and
+     * another form; a name ending .tmp): none is removed. */
+    const char *foreign[] = {".fractalbake-tmp.node17.0123456789abcdef.%d.00000000000000aa.00000001.far.txt.tmp",
+                             ".fractalbake-tmp.%s.fedcba9876543210.%d.00000000000000bb.00000002.boot.txt.tmp",
+                             ".fractalbake-tmp.node17.0123456789abcdef.1.00000000000000cc.00000003.init.txt.tmp",
+                             ".user.txt.%d.0123456789abcdef.0badcafe.tmp",
+                             ".fractalbake-tmp.notes.txt",
+                             ".fractalbake-tmp.%s.%s.%d.%s.0badcafe..tmp",
+                             "user.txt.tmp"};
+    char fpath[7][512];
+    for (int i = 0; i < 7; i++) {
+        char name[256];
+        if (i == 1)
+            snprintf(name, sizeof name, foreign[i], who, (int)child);
+        else if (i == 5)
+            snprintf(name, sizeof name, foreign[i], who, owner, (int)child, set);
+        else
+            snprintf(name, sizeof name, foreign[i], (int)child);
+        snprintf(fpath[i], sizeof fpath[i], "%s/%s", g_dir, name);
+        FILE *f = fopen(fpath[i], "w");
+        CHECK(f && fputs("user's", f) >= 0 && fclose(f) == 0);
+    }
     fb_outputs_begin();
     CHECK(fb_output_reserve(at("t2.txt"), "output") == FB_OK);
     CHECK(count_files(".s1.txt.") == 0 && count_files(".s2.txt.") == 0 && count_files(".t2.txt.") == 1);
-    CHECKF(g_warnings == 1 && strstr(g_last_warning, set) && strstr(g_last_warning, "s1.txt, s2.txt") &&
-               strstr(g_last_warning, "removed 2 temporary files of an incomplete set"),
-           "%d warnings: %s", g_warnings, g_last_warning);
+    for (int i = 0; i < 7; i++) CHECKF(has(strrchr(fpath[i], '/') + 1, "user's"), "%s was removed", fpath[i]);
+    /* one line for the removed set, one for each run left (three), each with a command that removes
+     * its files and no other */
+    CHECKF(g_warnings == 4, "%d warnings: %s", g_warnings, g_last_warning);
+    CHECKF(strstr(g_removed_warning, set) && strstr(g_removed_warning, "s1.txt, s2.txt") &&
+               strstr(g_removed_warning, "removed 2 temporary files of an incomplete set"),
+           "%s", g_removed_warning);
+    for (int i = 0; i < 3; i++) {
+        const char *line = g_left_warning[i], *rm = strstr(line, "rm -- ");
+        static const char *const order[3] = {"init.txt", "far.txt", "boot.txt"}; /* by pid, then set */
+        char target[32], file[32];
+        snprintf(target, sizeof target, "for %s)", order[i]);
+        snprintf(file, sizeof file, ".%s.tmp", order[i]);
+        CHECKF(rm && strstr(line, "left 1 temporary file in ") && strstr(line, target) &&
+                   strstr(line, "made on another host, boot or pid namespace"),
+               "left line %d: %s", i, line);
+        glob_t g = {0};
+        CHECKF(rm && glob(rm + 6, 0, NULL, &g) == 0 && g.gl_pathc == 1 && strstr(g.gl_pathv[0], file),
+               "%s matches %zu files", rm ? rm + 6 : "(none)", g.gl_pathc);
+        if (rm) globfree(&g);
+    }
     CHECK(access(planted, F_OK) == 0); /* locked: alive, whatever its name says */
     CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
     close(held);
+    /* A run whose lock cannot be seen (flock fails: NFS without a lock manager): left, and said. */
     g_warnings = 0;
+    g_flock_err = ENOLCK;
     fb_outputs_begin();
     CHECK(fb_output_reserve(at("t3.txt"), "output") == FB_OK);
-    CHECK(access(planted, F_OK) != 0 && g_warnings == 1 && strstr(g_last_warning, "held.txt was not replaced"));
+    g_flock_err = 0;
+    CHECK(access(planted, F_OK) == 0);
+    CHECKF(g_warnings == 4 && strstr(g_left_warning[3], "held.txt") &&
+               strstr(g_left_warning[3], "its lock cannot be seen here (flock: No locks available)"),
+           "%d warnings: %s", g_warnings, g_left_warning[3]);
+    CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
+    /* Unlocked now, its pid dead, this host's and boot's: removed. */
+    g_warnings = 0;
+    fb_outputs_begin();
+    CHECK(fb_output_reserve(at("t4.txt"), "output") == FB_OK);
+    CHECK(access(planted, F_OK) != 0 && g_warnings == 4 && strstr(g_removed_warning, "held.txt was not replaced"));
     CHECK(fb_outputs_end(FB_ERR_USAGE) == FB_ERR_USAGE);
     fb_log_set_sink(NULL, NULL);
+    for (int i = 0; i < 7; i++) CHECK(has(strrchr(fpath[i], '/') + 1, "user's") && unlink(fpath[i]) == 0);
     CHECK(count_files(".tmp") == 0);
 
     /* A name longer than the folder allows is refused when reserved, before any work (not at the

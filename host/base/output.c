@@ -74,6 +74,7 @@ struct fb_outputs {
     input *in;
     int nin, capin;
     char stdout_claim[32]; /* a document the run prints on standard output itself: no "-" output then */
+    bool stdout_watch;     /* fb_outputs_stdout_watch: standard output is an output of every run */
     /* the set of the outermost transaction (0: none drawn yet), and the folders swept of dead runs'
      * temporary files in it (sweep_locked) */
     uint64_t set;
@@ -228,6 +229,33 @@ static fb_result clash(const char *path, const char *what, const char *in_path, 
                    path, in_path, in_what, what, how);
 }
 
+/* Whether standard output is an output of the run: watched (the command line's), named "-", or
+ * claimed for a document. Called locked. */
+static bool stdout_is_output(const fb_outputs *o)
+{
+    return o->stdout_watch || o->stdout_claim[0] || find((fb_outputs *)o, "-");
+}
+
+/* Standard output written into an input (`1<> in.exr`, `>> in.exr`): refused. */
+static fb_result stdout_clash(const char *in_path, const char *in_what)
+{
+    return fb_fail(FB_ERR_USAGE,
+                   "%s: is an input of this run (read as the %s) and also its standard output (redirected into it "
+                   "with >> or 1<>), which would change it: redirect standard output to another file",
+                   in_path, in_what);
+}
+
+/* The input that standard output is (a regular file: the same device and inode), or NULL. Called
+ * locked. */
+static const input *stdout_input(const fb_outputs *o)
+{
+    struct stat st;
+    if (fstat(STDOUT_FILENO, &st) != 0 || !S_ISREG(st.st_mode)) return NULL;
+    for (int i = 0; i < o->nin; i++)
+        if (o->in[i].has_id && o->in[i].dev == st.st_dev && o->in[i].ino == st.st_ino) return &o->in[i];
+    return NULL;
+}
+
 static entry *free_entry(fb_outputs *o)
 {
     for (int i = 0; i < o->count; i++)
@@ -253,6 +281,8 @@ static fb_result reserve_stdout(fb_outputs *o, const char *what, entry **out)
     if (isatty(STDOUT_FILENO))
         return fb_fail(FB_ERR_USAGE, "-: the %s would go to a terminal: redirect standard output to a file or a pipe",
                        what);
+    const input *in = stdout_input(o);
+    if (in) return stdout_clash(in->path, in->what);
     entry *e = free_entry(o);
     if (!e) return fb_fail(FB_ERR_USAGE, "-: more than %d outputs", FB_MAX_OUTPUTS);
     const char *tmpdir = o->tmpdir[0] ? o->tmpdir : "/tmp";
@@ -298,39 +328,97 @@ static fb_result copy_to_stdout(entry *e)
     }
 }
 
-/* A hidden temporary name beside the target, ".NAME.PID.SET.RAND.tmp": the process, the set of
- * outputs it belongs to (16 hex digits, random) and 32 more random bits; what a later run needs to
- * recognise the files of a dead run's set (sweep_locked), and more than anyone can predict. */
+/* Every temporary file's name starts with this, and the sweep touches no other name. */
+#define TEMP_PREFIX ".fractalbake-tmp."
+
+/* Who owns a temporary file: the host's name (to its first dot, letters, digits, '-' and '_', for
+ * people to read) and a digest of what a process is known by: the full host name, the boot
+ * (/proc/sys/kernel/random/boot_id) and the pid namespace (/proc/self/ns/pid). A sweep removes a
+ * file only when its digest is this process's: the pid then names a process of this kernel's and
+ * namespace's, which kill(pid, 0) can see. proven is false where the boot or the namespace cannot
+ * be read: no sweep then removes anything. */
+static struct {
+    char host[33];
+    uint64_t digest;
+    bool proven;
+} g_me;
+static pthread_once_t g_me_once = PTHREAD_ONCE_INIT;
+
+static uint64_t fnv1a(uint64_t h, const char *s)
+{
+    for (; *s; s++) h = (h ^ (unsigned char)*s) * 0x100000001b3ull;
+    return (h ^ 0xff) * 0x100000001b3ull; /* a separator: ("ab", "c") and ("a", "bc") differ */
+}
+
+static void me_init(void)
+{
+    char name[256] = "", boot[64] = "", ns[64] = "";
+    if (gethostname(name, sizeof name - 1) != 0) name[0] = 0;
+    int fd = open("/proc/sys/kernel/random/boot_id", O_RDONLY | O_CLOEXEC);
+    ssize_t n = fd >= 0 ? read(fd, boot, sizeof boot - 1) : -1;
+    if (fd >= 0) close(fd);
+    boot[n > 0 ? n : 0] = 0;
+    ssize_t m = readlink("/proc/self/ns/pid", ns, sizeof ns - 1);
+    ns[m > 0 ? m : 0] = 0;
+    g_me.proven = n >= 32 && m > 0;
+    g_me.digest = fnv1a(fnv1a(fnv1a(0xcbf29ce484222325ull, name), boot), ns);
+    size_t k = 0;
+    for (const char *c = name; *c && *c != '.' && k < sizeof g_me.host - 1; c++)
+        g_me.host[k++] =
+            (strchr("-_", *c) || (*c >= '0' && *c <= '9') || ((*c | 32) >= 'a' && (*c | 32) <= 'z')) ? *c : '-';
+    if (!k) g_me.host[k++] = '-';
+    g_me.host[k] = 0;
+}
+
+/* A hidden temporary name beside the target, TEMP_PREFIX "HOST.OWNER.PID.SET.RAND.NAME.tmp": the host
+ * and the owner's digest (g_me), the process, the set of outputs it belongs to (16 hex digits,
+ * random) and 32 more random bits; what a later run needs to recognise the files of a dead run's set
+ * (sweep_locked), and more than anyone can predict. NAME is the target's (its first 140 bytes). */
 static void temp_name(char *out, size_t size, const char *dir, const char *base, uint64_t set)
 {
-    snprintf(out, size, "%s/.%.180s.%ld.%016llx.%08x.tmp", dir, base, (long)getpid(), (unsigned long long)set,
-             (unsigned)random64());
+    pthread_once(&g_me_once, me_init);
+    snprintf(out, size, "%s/" TEMP_PREFIX "%s.%016llx.%ld.%016llx.%08x.%.140s.tmp", dir, g_me.host,
+             (unsigned long long)g_me.digest, (long)getpid(), (unsigned long long)set, (unsigned)random64(), base);
+}
+
+/* A temporary file a sweep found: its owner, its run, its set and its target's name. */
+typedef struct owned {
+    char host[33];
+    uint64_t digest;
+    long pid;
+    uint64_t set;
+    char base[NAME_MAX + 1];
+} owned;
+
+/* One field of a temporary's name, up to the next '.': n characters of set (n == 0: 1 to max). */
+static const char *field(const char *s, const char *set, size_t n, size_t max, char *out, size_t osize)
+{
+    const char *dot = s ? strchr(s, '.') : NULL;
+    size_t m = dot ? (size_t)(dot - s) : 0;
+    if (!dot || (n ? m != n : m == 0 || m > max) || strspn(s, set) < m || m >= osize) return NULL;
+    memcpy(out, s, m);
+    out[m] = 0;
+    return dot + 1;
 }
 
 /* The parts of a temporary name of temp_name's form; false for any other name. */
-static bool temp_parts(const char *name, char *base, size_t bsize, long *pid, uint64_t *set)
+static bool temp_parts(const char *name, owned *t)
 {
-    char buf[NAME_MAX + 1];
-    size_t n = strlen(name);
-    if (n < 5 || n >= sizeof buf + 4 || name[0] != '.' || strcmp(name + n - 4, ".tmp")) return false;
-    memcpy(buf, name, n - 4);
-    buf[n - 4] = 0;
-    char *field[3]; /* RAND, SET, PID, from the end */
-    static const size_t len[3] = {8, 16, 0};
-    for (int k = 0; k < 3; k++) {
-        char *dot = strrchr(buf, '.');
-        if (!dot || dot == buf) return false;
-        field[k] = dot + 1;
-        size_t m = strlen(field[k]);
-        if (len[k] ? m != len[k] || strspn(field[k], "0123456789abcdef") != m
-                   : m == 0 || m > 9 || strspn(field[k], "0123456789") != m)
-            return false;
-        *dot = 0;
-    }
-    if (!buf[1]) return false;
-    snprintf(base, bsize, "%s", buf + 1);
-    *pid = strtol(field[2], NULL, 10);
-    *set = strtoull(field[1], NULL, 16);
+    static const char hex[] = "0123456789abcdef", dec[] = "0123456789",
+                      host[] = "-_0123456789abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ";
+    size_t n = strlen(name), p = strlen(TEMP_PREFIX);
+    char digest[17], pid[11], set[17], rnd[9];
+    if (n < p + 5 || strncmp(name, TEMP_PREFIX, p) || strcmp(name + n - 4, ".tmp")) return false;
+    const char *s = field(name + p, host, 0, 32, t->host, sizeof t->host);
+    s = field(s, hex, 16, 16, digest, sizeof digest);
+    s = field(s, dec, 0, 10, pid, sizeof pid);
+    s = field(s, hex, 16, 16, set, sizeof set);
+    s = field(s, hex, 8, 8, rnd, sizeof rnd);
+    if (!s || s >= name + n - 4) return false;
+    snprintf(t->base, sizeof t->base, "%.*s", (int)(name + n - 4 - s), s);
+    t->digest = strtoull(digest, NULL, 16);
+    t->pid = strtol(pid, NULL, 10);
+    t->set = strtoull(set, NULL, 16);
     return true;
 }
 
@@ -349,41 +437,87 @@ static int cmp_str(const void *a, const void *b)
     return strcmp(*(const char *const *)a, *(const char *const *)b);
 }
 
-/* A temporary file a sweep removed: its run, its set and its target's name. */
-typedef struct removed {
-    long pid;
-    uint64_t set;
-    char base[NAME_MAX + 1];
-} removed;
+/* What a sweep did with a temporary file of another run. */
+enum { REMOVED = 0, NOT_OURS = 1, LOCK_UNSEEN = 2 };
 
-static int cmp_removed(const void *a, const void *b)
+typedef struct found {
+    int what; /* REMOVED, NOT_OURS, LOCK_UNSEEN */
+    int err;  /* LOCK_UNSEEN: flock's errno */
+    owned t;
+} found;
+
+static int cmp_found(const void *a, const void *b)
 {
-    const removed *x = a, *y = b;
-    if (x->pid != y->pid) return x->pid < y->pid ? -1 : 1;
-    if (x->set != y->set) return x->set < y->set ? -1 : 1;
-    return strcmp(x->base, y->base);
+    const found *x = a, *y = b;
+    if (x->what != y->what) return x->what < y->what ? -1 : 1;
+    if (x->t.pid != y->t.pid) return x->t.pid < y->t.pid ? -1 : 1;
+    if (x->t.set != y->t.set) return x->t.set < y->t.set ? -1 : 1;
+    if (x->t.digest != y->t.digest) return x->t.digest < y->t.digest ? -1 : 1;
+    return strcmp(x->t.base, y->t.base);
 }
 
-/* One warning line for each set of n removed files (sorted), naming the targets it left as they were. */
-static void say_removed(const char *shown, const removed *r, size_t n)
+static bool same_run(const found *x, const found *y)
+{
+    return x->what == y->what && x->t.pid == y->t.pid && x->t.set == y->t.set && x->t.digest == y->t.digest;
+}
+
+/* One warning line for each run's files among the n found (sorted): the removed ones and the targets
+ * they left as they were; the ones left, with how to remove them by hand. */
+static void say_found(const char *shown, const found *f, size_t n)
 {
     for (size_t i = 0, j; i < n; i = j) {
         char targets[512] = "";
-        for (j = i; j < n && r[j].pid == r[i].pid && r[j].set == r[i].set; j++)
-            snprintf(targets + strlen(targets), sizeof targets - strlen(targets), "%s%s", j > i ? ", " : "", r[j].base);
-        fb_log(FB_LOG_WARN,
-               "removed %zu temporary file%s of an incomplete set of outputs in %s (set %016llx of process %ld, "
-               "which died before its commit was done): %s %s not replaced by that run",
-               j - i, j - i == 1 ? "" : "s", shown, (unsigned long long)r[i].set, r[i].pid, targets,
-               j - i == 1 ? "was" : "were");
+        for (j = i; j < n && same_run(&f[j], &f[i]); j++)
+            snprintf(targets + strlen(targets), sizeof targets - strlen(targets), "%s%s", j > i ? ", " : "",
+                     f[j].t.base);
+        const owned *t = &f[i].t;
+        size_t k = j - i;
+        if (f[i].what == REMOVED)
+            fb_log(FB_LOG_WARN,
+                   "removed %zu temporary file%s of an incomplete set of outputs in %s (set %016llx of process %ld, "
+                   "which died before its commit was done): %s %s not replaced by that run",
+                   k, k == 1 ? "" : "s", shown, (unsigned long long)t->set, t->pid, targets, k == 1 ? "was" : "were");
+        else
+            fb_log(FB_LOG_WARN,
+                   "left %zu temporary file%s in %s of process %ld on host %s (set %016llx, for %s): %s%s%s, so "
+                   "that run may still be working; once it is not, remove %s by hand: rm -- %s/" TEMP_PREFIX
+                   "%s.%016llx.%ld.%016llx.*",
+                   k, k == 1 ? "" : "s", shown, t->pid, t->host, (unsigned long long)t->set, targets,
+                   f[i].what == NOT_OURS ? "made on another host, boot or pid namespace"
+                                         : "its lock cannot be seen here (flock: ",
+                   f[i].what == NOT_OURS ? "" : strerror(f[i].err), f[i].what == NOT_OURS ? "" : ")",
+                   k == 1 ? "it" : "them", shown, t->host, (unsigned long long)t->digest, t->pid,
+                   (unsigned long long)t->set);
     }
 }
 
-/* Removes the temporary files a dead run left in dir (shown: the folder as the user spelled it),
- * once per folder and transaction: those of temp_name's form whose process is gone and that no one
- * holds locked, checked on the file itself before its name is removed; one warning line per set.
- * Files of a live process, of another user's process, or of another form are left alone. Called
- * locked. */
+/* What to do with the temporary file `name` of another run (t): REMOVED when it is proven dead and
+ * was removed (the same owner's digest as this process's, its pid gone, and no lock on the file,
+ * checked on the file itself before its name is removed); NOT_OURS or LOCK_UNSEEN when it is left
+ * for the user; -1 when it is left unsaid (a live process's, one held locked, or gone meanwhile). */
+static int sweep_one(int dfd, const char *name, const owned *t, int *err)
+{
+    if (!g_me.proven || t->digest != g_me.digest) return NOT_OURS;
+    if (t->pid <= 0 || t->pid == (long)getpid() || kill((pid_t)t->pid, 0) == 0 || errno != ESRCH) return -1;
+    int fd = openat(dfd, name, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) return -1;
+    struct stat a, b;
+    int rc = -1;
+    if (fstat(fd, &a) == 0 && S_ISREG(a.st_mode)) {
+        if (flock(fd, LOCK_EX | LOCK_NB) != 0)
+            rc = errno == EWOULDBLOCK || errno == EINTR ? -1 : (*err = errno, LOCK_UNSEEN); /* held: alive */
+        else if (fstatat(dfd, name, &b, AT_SYMLINK_NOFOLLOW) == 0 && a.st_dev == b.st_dev && a.st_ino == b.st_ino &&
+                 unlinkat(dfd, name, 0) == 0)
+            rc = REMOVED;
+    }
+    close(fd);
+    return rc;
+}
+
+/* Sweeps dir (shown: the folder as the user spelled it) of the temporary files dead runs left, once
+ * per folder and transaction: only names of temp_name's form are looked at (sweep_one); one warning
+ * line per run whose files were removed, and one per run whose files are left because this process
+ * cannot prove it dead. Called locked. */
 static void sweep_locked(fb_outputs *o, const char *shown, const char *dir)
 {
     for (int i = 0; i < o->nswept; i++)
@@ -391,29 +525,24 @@ static void sweep_locked(fb_outputs *o, const char *shown, const char *dir)
     if (o->nswept < FB_MAX_OUTPUTS && (o->swept[o->nswept] = strdup(dir))) o->nswept++;
     DIR *d = opendir(dir);
     if (!d) return;
-    removed *r = NULL;
+    pthread_once(&g_me_once, me_init);
+    found *f = NULL;
     size_t n = 0, cap = 0;
     for (struct dirent *de; (de = readdir(d));) {
-        removed one;
-        if (de->d_name[0] != '.' || !temp_parts(de->d_name, one.base, sizeof one.base, &one.pid, &one.set)) continue;
-        if (one.pid <= 0 || one.pid == (long)getpid() || kill((pid_t)one.pid, 0) == 0 || errno != ESRCH) continue;
-        int fd = openat(dirfd(d), de->d_name, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
-        if (fd < 0) continue;
-        struct stat a, b;
-        bool gone = fstat(fd, &a) == 0 && S_ISREG(a.st_mode) && flock(fd, LOCK_EX | LOCK_NB) == 0 &&
-                    fstatat(dirfd(d), de->d_name, &b, AT_SYMLINK_NOFOLLOW) == 0 && a.st_dev == b.st_dev &&
-                    a.st_ino == b.st_ino && unlinkat(dirfd(d), de->d_name, 0) == 0;
-        close(fd);
-        if (gone && n == cap) { /* out of memory: the file is gone all the same, its line shorter */
-            removed *grown = realloc(r, (cap ? 2 * cap : 16) * sizeof *r);
-            if (grown) r = grown, cap = cap ? 2 * cap : 16;
+        found one = {0};
+        if (!temp_parts(de->d_name, &one.t)) continue;
+        one.what = sweep_one(dirfd(d), de->d_name, &one.t, &one.err);
+        if (one.what < 0) continue;
+        if (n == cap) { /* out of memory: a removed file is gone all the same, its line shorter */
+            found *grown = realloc(f, (cap ? 2 * cap : 16) * sizeof *f);
+            if (grown) f = grown, cap = cap ? 2 * cap : 16;
         }
-        if (gone && n < cap) r[n++] = one;
+        if (n < cap) f[n++] = one;
     }
     closedir(d);
-    if (n) qsort(r, n, sizeof *r, cmp_removed); /* r is NULL when nothing was removed */
-    say_removed(shown, r, n);
-    free(r);
+    if (n) qsort(f, n, sizeof *f, cmp_found); /* f is NULL when nothing was found */
+    say_found(shown, f, n);
+    free(f);
 }
 
 static void forget_swept_locked(fb_outputs *o)
@@ -620,6 +749,8 @@ static fb_result commit_locked(fb_outputs *o, entry **list, int n)
         else if ((in = input_named(o, list[i]->key, &st)))
             rc = clash(list[i]->path, list[i]->what, in->path, in->what);
     }
+    const input *in = n > 0 && stdout_is_output(o) ? stdout_input(o) : NULL;
+    if (!rc && in) rc = stdout_clash(in->path, in->what);
     if (rc) return rc;
     int lockfds[FB_MAX_OUTPUTS], nlock = lock_folders(list, n, lockfds);
     int idle = IDLE;
@@ -770,7 +901,7 @@ fb_result fb_output_spool(const char *path, void **file)
     int fd = open(dir, O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
     if (fd < 0 && (errno == EOPNOTSUPP || errno == EISDIR || errno == EINVAL)) { /* no O_TMPFILE here */
         char tmp[PATH_MAX];
-        snprintf(tmp, sizeof tmp, "%s/.%.180s.spool.XXXXXX", dir, base);
+        snprintf(tmp, sizeof tmp, "%s/" TEMP_PREFIX "spool.%.180s.XXXXXX", dir, base);
         fd = mkstemp(tmp);
         if (fd >= 0) unlink(tmp);
     }
@@ -826,11 +957,14 @@ fb_result fb_output_claim_stdout(const char *what)
     if (!o) return FB_OK; /* outside any transaction: no effect */
     pthread_mutex_lock(&o->mu);
     const entry *e = find(o, "-");
+    const input *in;
     if (e)
         rc = fb_fail(FB_ERR_USAGE,
                      "%s: standard output carries the %s (-): name a file for it (standard output carries one "
                      "document)",
                      what, e->what);
+    else if (o->depth > 0 && (in = stdout_input(o)))
+        rc = stdout_clash(in->path, in->what);
     else if (o->depth > 0)
         snprintf(o->stdout_claim, sizeof o->stdout_claim, "%s", what);
     pthread_mutex_unlock(&o->mu);
@@ -848,6 +982,10 @@ fb_result fb_input_note(const char *path, const char *what, int fd)
     if (!o) return FB_OK; /* no transaction on this thread: no run to belong to, no output to clash with */
     fb_result rc = FB_OK;
     pthread_mutex_lock(&o->mu);
+    struct stat so;
+    if (has && stdout_is_output(o) && o->depth > 0 && fstat(STDOUT_FILENO, &so) == 0 && S_ISREG(so.st_mode) &&
+        so.st_dev == st.st_dev && so.st_ino == st.st_ino)
+        rc = stdout_clash(path, what);
     for (int i = 0; i < o->count && !rc; i++) { /* an output reserved before the input was opened */
         const entry *e = &o->out[i];
         if (e->state != FREE && !e->std &&
@@ -910,6 +1048,15 @@ bool fb_outputs_signal(int sig)
         end = false; /* COMMITTING: taken when the commit ends; DYING: another thread is ending the run */
     }
     return end;
+}
+
+void fb_outputs_stdout_watch(bool on)
+{
+    fb_outputs *o = current(true);
+    if (!o) return;
+    pthread_mutex_lock(&o->mu);
+    o->stdout_watch = on;
+    pthread_mutex_unlock(&o->mu);
 }
 
 void fb_outputs_use_tmpfile(bool on)
@@ -977,6 +1124,20 @@ int fb_outputs_written(const char **paths, const char **whats, uint64_t *bytes, 
         paths[n] = o->done[n].path;
         whats[n] = o->done[n].what;
         bytes[n] = o->done[n].bytes;
+    }
+    pthread_mutex_unlock(&o->mu);
+    return n;
+}
+
+int fb_inputs_noted(const char **paths, const char **whats, int max)
+{
+    int n = 0;
+    fb_outputs *o = current(false);
+    if (!o) return 0;
+    pthread_mutex_lock(&o->mu);
+    for (; n < o->nin && n < max; n++) {
+        paths[n] = o->in[n].path;
+        whats[n] = o->in[n].what;
     }
     pthread_mutex_unlock(&o->mu);
     return n;

@@ -4,9 +4,13 @@
  * Every output (the EXR, its preview, a terrain mesh, a CSV, a plot, a diff image) is written to a
  * temporary file in the target's folder, mode 0666 less the umask: an anonymous one (O_TMPFILE)
  * where the file system allows, which nothing can see and no end of the process (SIGKILL, a crash,
- * a power cut) leaves behind; elsewhere a hidden one created exclusively (O_CREAT | O_EXCL, a name
- * of 64 random bits). Names, folders and targets are checked when an output is reserved, before
- * any work. Nothing is put in place until the whole run has succeeded; then, at the commit, the
+ * a power cut) leaves behind; elsewhere a hidden one created exclusively (O_CREAT | O_EXCL), named
+ * ".fractalbake-tmp.HOST.OWNER.PID.SET.RAND.NAME.tmp" (OWNER: a digest of the host name, the boot id
+ * and the pid namespace; 96 random bits). The first reservation in a folder sweeps it of the files of
+ * that form a dead run left: removed when proven dead (this process's OWNER, no such pid, no lock on
+ * the file), else named in a warning (another host, boot or namespace; a lock that cannot be seen);
+ * no other name is touched. Names, folders and targets are checked when an output is reserved,
+ * before any work. Nothing is put in place until the whole run has succeeded; then, at the commit, the
  * folders are locked (flock: runs committing into the same folders do it one whole set at a time),
  * signals are held off (fb_outputs_signal), each anonymous file is linked to a hidden name, and every
  * file is renamed over its target. On any failure, and on a signal before the commit, every
@@ -95,6 +99,12 @@ void fb_output_discard(const char *path);
  * in place, in order, with what they are and their sizes in bytes. Returns how many (at most max). */
 int fb_outputs_written(const char **paths, const char **whats, uint64_t *bytes, int max);
 
+/* The inputs noted so far in the calling thread's open transaction (fb_input_note): their paths and
+ * what they were read as, valid until the outermost fb_outputs_end. For a caller that reads in one
+ * call and writes in another (the library: a scene loaded, then baked), which notes them again in the
+ * second. Returns how many (at most max). */
+int fb_inputs_noted(const char **paths, const char **whats, int max);
+
 /* For a signal handler: removes every temporary file of every transaction. Async-signal-safe. */
 void fb_outputs_unlink_all(void);
 
@@ -109,6 +119,12 @@ bool fb_outputs_signal(int sig);
  * false: always the hidden named temporary file, as on a file system without O_TMPFILE (for tests of
  * that path). */
 void fb_outputs_use_tmpfile(bool on);
+
+/* Whether standard output is an output of every run of the calling thread's transaction (default
+ * false: only when "-" is reserved or a document claims it): the command line's, whose commands print
+ * there. While it is one, an input that is the same file as standard output (`1<> in.exr`,
+ * `>> in.exr`) is refused (FB_ERR_USAGE), whichever comes first. */
+void fb_outputs_stdout_watch(bool on);
 
 /* The folder where the calling thread's transaction keeps standard output's data ("-") until the
  * commit (the command line passes $TMPDIR); NULL or "": /tmp. A folder that cannot hold it fails the

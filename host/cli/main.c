@@ -245,6 +245,7 @@ int main(int argc, char **argv)
     fb_progress_set_sink(&(fb_progress_sink){.terminal = isatty(STDERR_FILENO), .write = progress_sink});
     fb_env_read(&g_env);
     fb_outputs_tmpdir(g_env.tmpdir);
+    fb_outputs_stdout_watch(true); /* every command prints there: no input may be standard output's file */
     argv = normalise_args(&argc, argv);
     if (own_outputs(argc, argv)) {
         int code = run_command(argc, argv);

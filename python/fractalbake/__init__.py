@@ -9,13 +9,19 @@
 
 The arrays are the EXR's channels bit for bit: uint32 for UINT channels, float16 for HALF,
 float32 for FLOAT, shaped (height, width). A scene is JSON text, a path, a dict, or None (the
-default scene). Errors raise fractalbake.Error with the line the command line prints. A progress
-callback progress(fraction) may return True to stop the bake; Ctrl-C stops it too, cleanly (no file
-is left) and raises KeyboardInterrupt. The library is found at FRACTALBAKE_LIBRARY, else where
-`cmake --install` put it beside this module, else by the loader's search.
+default scene). Errors raise fractalbake.Error with the line the command line prints; arguments of
+the wrong type or out of range raise TypeError, ValueError or OverflowError before anything is
+done. A progress callback progress(fraction) may return True to stop the bake; an exception it
+raises stops the bake and is raised again by the call; Ctrl-C stops it too, within a strip of rows
+(no file is left) and raises KeyboardInterrupt. The bake runs on a thread of its own while the
+calling thread waits for it, so that signals reach Python. A call into a context from its own
+progress callback raises fractalbake.Error (a context runs one call at a time). The library is found
+at FRACTALBAKE_LIBRARY, else where `cmake --install` put it beside this module, else by the loader's
+search.
 """
 import ctypes
 import json
+import numbers
 import os
 import threading
 
@@ -120,15 +126,115 @@ def _b(s):
     return None if s is None else str(s).encode()
 
 
+# ---- Arguments, checked before any C call: ctypes would wrap an integer silently (2**32 + 4 is 4)
+# and cut a string at its first NUL. The limits are the command line's. ----
+
+_INT_MAX = 2 ** 31 - 1
+_MAX_DIM = 65536
+
+
+def _text(name, v, none=False):
+    """A str (or os.PathLike when a path) without NUL bytes."""
+    if v is None and none:
+        return None
+    if isinstance(v, os.PathLike):
+        v = os.fspath(v)
+    if isinstance(v, bytes) or not isinstance(v, str):
+        raise TypeError(f"fractalbake: {name}: expected a str, found {type(v).__name__} {v!r}")
+    if "\0" in v:
+        raise ValueError(f"fractalbake: {name}: {v!r} holds a NUL character")
+    return v
+
+
+def _int(name, v, lo, hi, expected, c_max=_INT_MAX):
+    """An int (not a bool) in lo..hi; beyond what the C argument holds (c_max) is OverflowError."""
+    if isinstance(v, bool) or not isinstance(v, numbers.Integral):
+        raise TypeError(f"fractalbake: {name}: expected an integer, found {type(v).__name__} {v!r}")
+    v = int(v)
+    if v > c_max or v < -c_max - 1:
+        raise OverflowError(f"fractalbake: {name} {v}: does not fit the C argument ({expected})")
+    if not lo <= v <= hi:
+        raise ValueError(f"fractalbake: {name} {v}: expected {expected}")
+    return v
+
+
+def _context_args(backend, device, threads, max_memory):
+    backend = _text("backend", backend)
+    if device is not None and (isinstance(device, bool) or not isinstance(device, (str, numbers.Integral))):
+        raise TypeError(f"fractalbake: device: expected an index or a name, found {type(device).__name__} {device!r}")
+    threads = _int("threads", threads, 0, 1024, "0 (one per core) or 1..1024, as --threads")
+    max_memory = _int("max_memory", max_memory, 0, int(9e18),
+                      "0 (80% of the memory) or 1 MiB to 9e18 bytes, as --max-memory", c_max=2 ** 64 - 1)
+    if 0 < max_memory < 1 << 20:
+        raise ValueError(f"fractalbake: max_memory {max_memory}: expected 0 (80% of the memory) or 1 MiB to 9e18 "
+                         "bytes, as --max-memory")
+    return backend, None if device is None else str(device), threads, max_memory
+
+
+def _sets(sets):
+    if sets is None:
+        return []
+    if isinstance(sets, (str, bytes)) or not hasattr(sets, "__iter__"):
+        raise TypeError(f"fractalbake: sets: expected a list of \"KEY.PATH=VALUE\" strings, found "
+                        f"{type(sets).__name__} {sets!r}")
+    out = list(sets)
+    for i, v in enumerate(out):
+        if not isinstance(v, str):
+            raise TypeError(f"fractalbake: sets[{i}]: expected a \"KEY.PATH=VALUE\" string such as \"seed=9\", "
+                            f"found {type(v).__name__} {v!r}")
+        _text(f"sets[{i}]", v)
+    return out
+
+
+def _size(size):
+    if size is None:
+        return None
+    if isinstance(size, bool) or not isinstance(size, (numbers.Integral, tuple, list)) or \
+            (not isinstance(size, numbers.Integral) and len(size) != 2):
+        raise TypeError(f"fractalbake: size: expected W or (W, H), found {type(size).__name__} {size!r}")
+    w, h = (size, size // 2) if isinstance(size, numbers.Integral) else size
+    return (_int("size[0]", w, 1, _MAX_DIM, f"a width in 1..{_MAX_DIM}"),
+            _int("size[1]", h, 1, _MAX_DIM, f"a height in 1..{_MAX_DIM}"))
+
+
+def _region_arg(region):
+    if region is None:
+        return None
+    if isinstance(region, (str, bytes)) or not hasattr(region, "__len__") or len(region) != 4:
+        raise TypeError(f"fractalbake: region: expected (x, y, w, h), found {type(region).__name__} {region!r}")
+    names = ("x", "y", "w", "h")
+    return [_int(f"region[{i}] ({names[i]})", v, 0 if i < 2 else 1, _INT_MAX if i < 2 else _MAX_DIM,
+                 "x, y >= 0" if i < 2 else f"w, h in 1..{_MAX_DIM}") for i, v in enumerate(region)]
+
+
+def _progress_arg(progress):
+    if progress is not None and not callable(progress):
+        raise TypeError(f"fractalbake: progress: expected a callable or None, found {type(progress).__name__}")
+    return progress
+
+
+def _scene_arg(scene):
+    if scene is None or isinstance(scene, dict):
+        return scene
+    if isinstance(scene, (str, os.PathLike)):
+        return _text("scene", scene)
+    raise TypeError(f"fractalbake: scene: JSON text, a path, a dict or None (the default scene), found "
+                    f"{type(scene).__name__}")
+
+
 class Context:
     """A backend of its own ("auto", "vulkan" or "native"; a device; threads; a memory limit in
     bytes), used by one thread at a time (a lock sees to it). Contexts share nothing."""
 
     def __init__(self, backend="auto", device=None, threads=0, max_memory=0, tmpdir=None):
+        self._ptr = None
+        backend, device, threads, max_memory = _context_args(backend, device, threads, max_memory)
+        tmpdir = _text("tmpdir", tmpdir, none=True)
         lib = _load()
         self._lib, self._lock = lib, threading.Lock()
+        self._callback = set()  # the threads running this context's progress callback now
         self._ptr = ctypes.c_void_p()
-        desc = _Desc(API, _b(backend), _b(device), int(threads), int(max_memory),
+        desc = _Desc(API, _b(backend), _b(device), threads, max_memory,
                      _b(tmpdir or os.environ.get("TMPDIR") or "/tmp"))
         rc = lib.fractalbake_context_create(ctypes.byref(desc), ctypes.byref(self._ptr))
         if rc:
@@ -166,21 +272,33 @@ class Context:
         if rc:
             raise Error(self._lib.fractalbake_error(self._ptr).decode(), rc)
 
+    def _enter(self, what):
+        """The context's lock for a call; a call from its own progress callback is refused (the lock
+        is held by the call the callback belongs to: waiting would never end)."""
+        if threading.get_ident() in self._callback:
+            raise Error(f"fractalbake: {what}: the context is running another call (this one came from its "
+                        "progress callback): a context runs one call at a time", 1)
+        if not self._ptr:
+            raise Error(f"fractalbake: {what}: the context is closed", 1)
+        return self._lock
+
+    @staticmethod
+    def _args(scene, size, sets, region, progress):
+        """Every argument of a bake checked (types, ranges) before any C call."""
+        return _scene_arg(scene), _size(size), _sets(sets), _region_arg(region), _progress_arg(progress)
+
     def _scene(self, scene, size, sets):
-        sets = list(sets or [])
+        sets = list(sets)
         if size is not None:
-            w, h = (size, size // 2) if isinstance(size, int) else size
-            sets.insert(0, f"size={int(w)}x{int(h)}")
+            sets.insert(0, f"size={size[0]}x{size[1]}")
         text = path = None
         if isinstance(scene, dict):
             text = json.dumps(scene)
-        elif isinstance(scene, (str, os.PathLike)):
-            if isinstance(scene, str) and scene.lstrip().startswith("{"):
+        elif scene is not None:
+            if scene.lstrip().startswith("{"):
                 text = scene
             else:
-                path = os.fspath(scene)
-        elif scene is not None:
-            raise TypeError("scene: JSON text, a path, a dict or None (the default scene)")
+                path = scene
         arr = (ctypes.c_char_p * max(1, len(sets)))(*[_b(s) for s in sets])
         out = ctypes.c_void_p()
         self._check(self._lib.fractalbake_scene_load(self._ptr, _b(text), _b(path), arr, len(sets),
@@ -188,29 +306,55 @@ class Context:
         return out
 
     def _call(self, fn, progress):
-        """fn() with the progress callback set; Ctrl-C (or an exception in progress) stops the bake."""
-        caught = []
+        """fn() on a thread of its own, the progress callback set, while this thread waits: Ctrl-C
+        (KeyboardInterrupt, or any exception a signal handler raises here) and an exception raised by
+        the callback stop the bake at its next strip; once it has stopped (no file left), that
+        exception is raised."""
+        stop, caught, done, result = [], [], threading.Event(), {}
 
         def poll(fraction, _user):
+            if stop or caught:
+                return 1
+            me = threading.get_ident()
+            self._callback.add(me)
             try:
                 return 1 if progress is not None and progress(fraction) else 0
-            except BaseException as e:  # KeyboardInterrupt lands here: the bake stops, then it is raised
+            except BaseException as e:  # the call raises it once the bake has stopped
                 caught.append(e)
                 return 1
+            finally:
+                self._callback.discard(me)
+
+        def work():
+            try:
+                result["rc"] = fn()
+            except BaseException as e:  # pragma: no cover (ctypes raises nothing here)
+                caught.append(e)
+            finally:
+                done.set()
 
         cb = _PROGRESS(poll)
         self._lib.fractalbake_set_progress(self._ptr, cb, None)
+        worker = threading.Thread(target=work, name="fractalbake bake", daemon=True)
         try:
-            rc = fn()
+            worker.start()
+            while not done.is_set():
+                try:
+                    done.wait(0.05)
+                except BaseException as e:  # a signal's exception: stop the bake, wait for it
+                    if not stop:
+                        stop.append(e)
+            worker.join()
         finally:
             self._lib.fractalbake_set_progress(self._ptr, _PROGRESS(), None)
+        if stop:
+            raise stop[0]
         if caught:
             raise caught[0]
-        self._check(rc)
-
+        self._check(result["rc"])
     @staticmethod
     def _region(region):
-        return None if region is None else (ctypes.c_int * 4)(*[int(v) for v in region])
+        return None if region is None else (ctypes.c_int * 4)(*region)
 
     def _planes(self, img):
         lib = self._lib
@@ -227,7 +371,8 @@ class Context:
 
     def render(self, scene=None, size=None, sets=(), region=None, progress=None):
         """The scene's channels as {name: array}, bit for bit those of `fractalbake render`."""
-        with self._lock:
+        scene, size, sets, region, progress = self._args(scene, size, sets, region, progress)
+        with self._enter("render"):
             sc = self._scene(scene, size, sets)
             img = ctypes.c_void_p()
             try:
@@ -240,20 +385,23 @@ class Context:
 
     def bake(self, scene, path, size=None, sets=(), region=None, progress=None):
         """`fractalbake render SCENE -o PATH`: the EXR (and the files the scene names) in place together."""
-        with self._lock:
+        scene, size, sets, region, progress = self._args(scene, size, sets, region, progress)
+        path = _text("path", path)
+        with self._enter("bake"):
             sc = self._scene(scene, size, sets)
             try:
-                self._call(lambda: self._lib.fractalbake_bake(self._ptr, sc, _b(os.fspath(path)),
-                                                              self._region(region)), progress)
+                self._call(lambda: self._lib.fractalbake_bake(self._ptr, sc, _b(path), self._region(region)),
+                           progress)
             finally:
                 self._lib.fractalbake_scene_destroy(sc)
 
     def read(self, path):
         """An EXR file's channels as {name: array}."""
-        with self._lock:
+        path = _text("path", path)
+        with self._enter("read"):
             img = ctypes.c_void_p()
             try:
-                self._check(self._lib.fractalbake_open(self._ptr, _b(os.fspath(path)), ctypes.byref(img)))
+                self._check(self._lib.fractalbake_open(self._ptr, _b(path), ctypes.byref(img)))
                 return self._planes(img)
             finally:
                 self._lib.fractalbake_image_destroy(img)
@@ -262,11 +410,18 @@ class Context:
                 psnr=None, ssim=None, flip=False, ignore_missing=False):
         """`fractalbake compare --json A B` (thresholds as its flags take them) as a dict: per channel
         statistics and verdicts; ["result"] is the verdict."""
-        with self._lock:
-            d = _CompareDesc(*[_b(v) for v in (layer, max_abs, fail_percent, warn, warn_percent, rmse, psnr, ssim)],
-                             int(bool(flip)), int(bool(ignore_missing)))
+        a, b = _text("a", a), _text("b", b)
+        limits = {"layer": layer, "max_abs": max_abs, "fail_percent": fail_percent, "warn": warn,
+                  "warn_percent": warn_percent, "rmse": rmse, "psnr": psnr, "ssim": ssim}
+        for name, v in limits.items():
+            if v is not None and (isinstance(v, bool) or not isinstance(v, (str, numbers.Real))):
+                raise TypeError(f"fractalbake: {name}: expected a str or a number, found {type(v).__name__} {v!r}")
+            if v is not None:
+                _text(name, str(v))
+        with self._enter("compare"):
+            d = _CompareDesc(*[_b(limits[k]) for k in limits], int(bool(flip)), int(bool(ignore_missing)))
             text, passed = ctypes.c_void_p(), ctypes.c_int()
-            self._check(self._lib.fractalbake_compare(self._ptr, _b(os.fspath(a)), _b(os.fspath(b)), ctypes.byref(d),
+            self._check(self._lib.fractalbake_compare(self._ptr, _b(a), _b(b), ctypes.byref(d),
                                                       ctypes.byref(text), ctypes.byref(passed)))
             try:
                 return json.loads(ctypes.string_at(text.value).decode())
@@ -280,10 +435,10 @@ _contexts_lock = threading.Lock()
 
 def _context(backend="auto", device=None, threads=0, max_memory=0):
     """One context per backend and settings, opened when first used and kept for the process."""
-    key = (backend, device, threads, max_memory)
+    key = _context_args(backend, device, threads, max_memory)
     with _contexts_lock:
         if key not in _contexts:
-            _contexts[key] = Context(backend, device, threads, max_memory)
+            _contexts[key] = Context(*key)
         return _contexts[key]
 
 

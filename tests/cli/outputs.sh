@@ -65,7 +65,7 @@ echo old > late.exr
 pid=$!
 # its outputs are reserved: an anonymous file (O_TMPFILE) held open, or the hidden temporary one
 for _ in $(seq 200); do
-  { ls -l /proc/$pid/fd 2> /dev/null | grep -q '/#[0-9]* (deleted)' || ls -A | grep -q '^\.late\.png\..*\.tmp$'; } && break
+  { ls -l /proc/$pid/fd 2> /dev/null | grep -q '/#[0-9]* (deleted)' || ls -A | grep -q '^\.fractalbake-tmp\..*\.late\.png\.tmp$'; } && break
   sleep 0.02
 done
 mkdir late.png
@@ -236,10 +236,10 @@ if ${CC:-cc} -shared -fPIC -o stoprename.so stoprename.c -ldl 2> /dev/null; then
   check "  the EXR is new, the rest old" sh -c '! grep -q old kr/k.exr && grep -q old kr/k.png && grep -q old kr/k.ply && grep -q old kr/k.r16'
   left=$(ls -A kr | grep -c '\.tmp$')
   check "  three temporary files left ($left)" test "$left" -eq 3
-  set_id=$(ls -A kr | sed -n 's/^\.k\.png\.[0-9]*\.\([0-9a-f]\{16\}\)\..*\.tmp$/\1/p')
+  set_id=$(ls -A kr | sed -n 's/^\.fractalbake-tmp\.[^.]*\.[0-9a-f]\{16\}\.[0-9]*\.\([0-9a-f]\{16\}\)\..*\.k\.png\.tmp$/\1/p')
   "$FB" fbm --backend native --size 16x16 -o kr/next.exr 2> next.txt
   check "  the next run into the folder bakes" test $? -eq 0 -a -s kr/next.exr
-  check "  and removed them: $(ls -A kr | tr '\n' ' ')" test "$(ls -A kr | grep -c '^\.k\..*\.tmp$')" -eq 0
+  check "  and removed them: $(ls -A kr | tr '\n' ' ')" test "$(ls -A kr | grep -c '^\.fractalbake-tmp\..*\.k\.[a-z0-9]*\.tmp$')" -eq 0
   check "  one line naming the set $set_id: $(cat next.txt)" \
     test "$(grep -c "removed 3 temporary files of an incomplete set of outputs in kr (set $set_id of process" next.txt)" -eq 1
   check "  and what was not replaced" grep -q "k.ply, k.png, k.r16 were not replaced by that run" next.txt
@@ -250,6 +250,25 @@ if ${CC:-cc} -shared -fPIC -o stoprename.so stoprename.c -ldl 2> /dev/null; then
 else
   echo "no C compiler: the KILL between renames was not run"
 fi
+
+# A cluster's shared folder: another node's live run (its pid dead here, its lock not seen through
+# NFS), and a user's files that look like temporary files (the earlier form with a dead pid; the
+# prefix alone): none is removed; the other node's run is named in one line with the command that
+# removes its files once it is over, and that command removes them and nothing else.
+mkdir shared
+dead=$(sh -c 'echo $$')
+for f in ".fractalbake-tmp.node17.0123456789abcdef.$dead.00000000000000aa.00000001.sky.exr.tmp" \
+  ".sky.exr.$dead.0123456789abcdef.0badcafe.tmp" ".fractalbake-tmp.notes" "sky.exr.tmp"; do
+  echo "user's" > "shared/$f"
+done
+"$FB" fbm --backend native --size 16x16 -o shared/mine.exr 2> shared.txt
+check "a bake beside another node's temporary files: exit $?" test -s shared/mine.exr
+check "  none removed: $(ls -A shared | tr '\n' ' ')" test "$(grep -l "user's" shared/.fractalbake-tmp.* shared/.sky.exr.* shared/sky.exr.tmp | wc -l)" -eq 4
+check "  one line naming the other node's run: $(cat shared.txt)" \
+  test "$(grep -c "left 1 temporary file in shared of process $dead on host node17 (set 00000000000000aa, for sky.exr): made on another host" shared.txt)" -eq 1 -a "$(grep -c warning shared.txt)" -eq 1
+cmd=$(sed -n 's/.*remove it by hand: //p' shared.txt)
+sh -c "$cmd"
+check "  its command ($cmd) removes that run's file alone" test "$(ls -A shared | wc -l)" -eq 4 -a ! -e "shared/.fractalbake-tmp.node17.0123456789abcdef.$dead.00000000000000aa.00000001.sky.exr.tmp"
 
 # ---- 10. inputs that are not regular files are refused at once; so are empty constraint sets ----
 mkfifo fifo.csv
@@ -294,6 +313,32 @@ if ! sanitized; then
   check "... one line, the error: $(cat as.txt)" test "$(wc -l < as.txt)" = 1 -a "$(grep -c 'more than --max-memory' as.txt)" = 1
 fi
 check "no temporary file after the faults" no_temp_files
+
+# ---- 11b. standard output is an output: never an input's file (1<>, >>) ----
+"$FB" fbm $N --size 16x16 -o so.exr && cp so.exr soA.exr && cp so.exr soB.exr
+sum=$(cat so.exr soA.exr | md5sum)
+echo '{"size": [16, 8], "layers": [{"name": "n", "type": "fbm"}]}' > so.json
+cp so.json so0.json
+try_stdout() { # WHAT FILE COMMAND...: exit 2, one line naming FILE, nothing written
+  local what=$1 file=$2
+  shift 2
+  "$@" 2> so.txt
+  local rc=$?
+  check "$what: exit $rc, wanted 2" test $rc -eq 2
+  check "  one line naming $file: $(cat so.txt)" \
+    test "$(wc -l < so.txt)" -eq 1 -a "$(grep -c "^fractalbake: $file: is an input of this run .* and also its standard output" so.txt)" -eq 1
+}
+try_stdout "render --from so.exr -o - 1<> so.exr" so.exr sh -c '"$0" render --from so.exr -o - 1<> so.exr' "$FB"
+try_stdout "render --from so.exr -o - >> so.exr" so.exr sh -c '"$0" render --from so.exr -o - >> so.exr' "$FB"
+try_stdout "compare soA.exr soB.exr --report - 1<> soA.exr" soA.exr sh -c '"$0" compare soA.exr soB.exr --report - 1<> soA.exr' "$FB"
+try_stdout "info so.exr >> so.exr" so.exr sh -c '"$0" info so.exr >> so.exr' "$FB"
+try_stdout "render so.json -o - 1<> so.json" so.json sh -c '"$0" render so.json -o - 1<> so.json' "$FB"
+try_stdout "render --from so.exr -o x.exr --json >> so.exr" so.exr sh -c '"$0" render --from so.exr -o x.exr --json >> so.exr' "$FB"
+check "  the inputs unchanged" test "$(cat so.exr soA.exr | md5sum)" = "$sum"
+check "  the scene unchanged, no x.exr" sh -c 'cmp -s so.json so0.json && test ! -e x.exr'
+"$FB" render --from so.exr -o - > so-copy.exr 2> /dev/null
+check "standard output into another file is fine" test $? -eq 0 -a -s so-copy.exr
+check "no temporary file" no_temp_files
 
 # ---- 12. a documented maximum runs, tells how far it is, and stops at once on Ctrl-C ----
 "$FB" ifs --help | grep -q "1e14 takes days: progress is shown and Ctrl-C stops it" && ok || bad "ifs --help says nothing of 1e14"

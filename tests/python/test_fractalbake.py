@@ -121,9 +121,151 @@ def test_ctrl_c_cancels_cleanly(tmp_path):
 
     with pytest.raises(KeyboardInterrupt):
         fractalbake.bake(None, out, sets=["size=96x96"], backend="native", progress=progress)
-    assert len(calls) == 1 and not out.exists() and os.listdir(tmp_path) == []
+    assert len(calls) >= 1 and not out.exists() and os.listdir(tmp_path) == []
     # the context still works afterwards
     assert "sky.R" in fractalbake.render(sets=SMALL, backend="native")
+
+
+# A bake of several seconds on one thread (julia, 3000 iterations, 2048 x 2048: 2 to 8 s on a loaded
+# two-core machine); the child says "started" at its first progress call, then waits in the bake.
+CHILD = r"""
+import os, sys, time, fractalbake
+out, started = sys.argv[1], []
+def progress(f):
+    if not started:
+        started.append(f)
+        print("started", flush=True)
+    started.append(f)
+try:
+    fractalbake.bake({"size": [2048, 2048], "layers": [{"name": "j", "type": "julia", "max-iter": 3000}]}, out,
+                     backend="native", threads=1, progress=progress)
+    print("finished", flush=True)
+except KeyboardInterrupt:
+    print(f"KeyboardInterrupt {time.monotonic():.6f} last {started[-1]}", flush=True)
+"""
+
+
+def test_sigint_from_outside_stops_the_bake(tmp_path):
+    """Ctrl-C as a terminal sends it: SIGINT from another process while the bake runs in C. Within one
+    second the call raises KeyboardInterrupt, the process lives on, and nothing is left in the folder."""
+    out = tmp_path / "sigint.exr"
+    child = subprocess.Popen([sys.executable, "-c", CHILD, str(out)], stdout=subprocess.PIPE, text=True,
+                             env=os.environ)
+    try:
+        assert child.stdout.readline().strip() == "started"
+        import time
+        time.sleep(0.3)  # well inside the bake's C code
+        sent = time.monotonic()
+        child.send_signal(signal.SIGINT)
+        line = child.stdout.readline().split()
+        assert child.wait(timeout=30) == 0
+    finally:
+        child.kill()
+    assert line[:1] == ["KeyboardInterrupt"], line
+    assert float(line[1]) - sent < 1.0, f"KeyboardInterrupt {float(line[1]) - sent:.3f} s after SIGINT"
+    assert float(line[3]) < 1.0  # the bake had not finished
+    assert os.listdir(tmp_path) == []  # no output, no temporary file
+
+
+def test_callback_exception_cancels_and_is_raised(tmp_path):
+    out = tmp_path / "raised.exr"
+    calls = []
+
+    def progress(f):
+        calls.append(f)
+        raise ValueError("from the callback")
+
+    with pytest.raises(ValueError, match="from the callback"):
+        fractalbake.bake(None, out, sets=SMALL, backend="native", progress=progress)
+    assert calls == [calls[0]] and os.listdir(tmp_path) == []  # called once: the bake stopped
+    assert "sky.R" in fractalbake.render(sets=SMALL, backend="native")
+
+
+@pytest.mark.parametrize("call, kind, words", [
+    (lambda o: fractalbake.render(sets=[None], backend="native"), TypeError,
+     'sets[0]: expected a "KEY.PATH=VALUE" string such as "seed=9", found NoneType None'),
+    (lambda o: fractalbake.render(sets="seed=9", backend="native"), TypeError, "sets: expected a list"),
+    (lambda o: fractalbake.render(sets=SMALL, region=(0, 0, 2 ** 32 + 4, 4), backend="native"), OverflowError,
+     "region[2] (w) 4294967300: does not fit the C argument"),
+    (lambda o: fractalbake.render(sets=SMALL, region=(0, 0, 70000, 4), backend="native"), ValueError,
+     "region[2] (w) 70000: expected w, h in 1..65536"),
+    (lambda o: fractalbake.bake(None, o, sets=SMALL, region=(-1, 0, 4, 4), backend="native"), ValueError,
+     "region[0] (x) -1: expected x, y >= 0"),
+    (lambda o: fractalbake.render(sets=SMALL, size=(2 ** 40, 4), backend="native"), OverflowError, "size[0]"),
+    (lambda o: fractalbake.render(size="big", backend="native"), TypeError, "size: expected W or (W, H)"),
+    (lambda o: fractalbake.render(sets=SMALL, backend="native", threads=10 ** 6), ValueError,
+     "threads 1000000: expected 0 (one per core) or 1..1024, as --threads"),
+    (lambda o: fractalbake.render(sets=SMALL, backend="native", threads=2.5), TypeError,
+     "threads: expected an integer, found float 2.5"),
+    (lambda o: fractalbake.render(sets=SMALL, backend="native", max_memory=-1), ValueError,
+     "max_memory -1: expected 0 (80% of the memory) or 1 MiB to 9e18 bytes, as --max-memory"),
+    (lambda o: fractalbake.render(sets=SMALL, backend="native", max_memory=2 ** 64), OverflowError, "max_memory"),
+    (lambda o: fractalbake.render(sets=SMALL, backend="native", max_memory=1000), ValueError, "max_memory 1000"),
+    (lambda o: fractalbake.render(sets=SMALL, backend="native", progress=5), TypeError, "progress: expected a callable"),
+    (lambda o: fractalbake.bake(None, 7, sets=SMALL, backend="native"), TypeError, "path: expected a str"),
+    (lambda o: fractalbake.bake(None, str(o) + "\0.png", sets=SMALL, backend="native"), ValueError, "NUL"),
+    (lambda o: fractalbake.render(b"{}", backend="native"), TypeError, "scene: JSON text, a path"),
+    (lambda o: fractalbake.compare(o, o, max_abs=[1]), TypeError, "max_abs: expected a str or a number"),
+])
+def test_bad_arguments_raise_before_any_call(tmp_path, call, kind, words):
+    out = tmp_path / "bad.exr"
+    with pytest.raises(kind) as e:
+        call(out)
+    assert str(e.value).startswith("fractalbake: ") and words in str(e.value), str(e.value)
+    assert "\n" not in str(e.value) and os.listdir(tmp_path) == []
+
+
+def test_reentry_from_a_callback_is_an_error_not_a_deadlock(tmp_path):
+    out = tmp_path / "outer.exr"
+    result = {}
+
+    def progress(f):
+        fractalbake.render(sets=SMALL, backend="native")  # the same context: the module keeps one
+
+    def run():
+        try:
+            fractalbake.bake(None, out, sets=SMALL, backend="native", progress=progress)
+        except BaseException as e:
+            result["e"] = e
+
+    t = threading.Thread(target=run, daemon=True)
+    t.start()
+    t.join(120)
+    assert not t.is_alive(), "deadlocked"
+    e = result.get("e")
+    assert isinstance(e, fractalbake.Error) and e.code == 1, repr(e)
+    assert str(e) == ("fractalbake: render: the context is running another call (this one came from its progress "
+                      "callback): a context runs one call at a time")
+    assert os.listdir(tmp_path) == []
+    # a callback may use another context
+    other = fractalbake.Context("native", threads=1)
+    inner = []
+
+    def progress_other(f):
+        if not inner:
+            inner.append(other.render(sets=["size=8x4"]))  # returns None: the bake goes on
+
+    fractalbake.bake(None, out, sets=SMALL, backend="native", progress=progress_other)
+    assert out.exists() and inner and inner[0]["sky.R"].shape == (4, 8)
+    other.close()
+
+
+def test_no_bake_replaces_its_input_or_names_another_format(tmp_path):
+    scene = tmp_path / "s.exr"  # a JSON scene under an EXR's name, as a user may keep one
+    scene.write_text('{"size": [32, 16], "layers": [{"name": "n", "type": "fbm"}]}')
+    before = scene.read_bytes()
+    p = cli("render", str(scene), "-o", str(scene), check=False)
+    with pytest.raises(fractalbake.Error) as e:
+        fractalbake.bake(str(scene), str(scene), backend="native")
+    assert p.returncode == 2 and e.value.code == 1 and str(e.value) == p.stderr.strip()
+    assert "is an input of this run (read as the scene)" in str(e.value)
+    with pytest.raises(fractalbake.Error) as e:
+        fractalbake.bake(str(scene), tmp_path / "o.png", backend="native")
+    assert str(e.value).endswith("o.png: this writes OpenEXR (.exr), not .png: name the file .exr")
+    with pytest.raises(fractalbake.Error) as e:
+        fractalbake.bake(str(scene), "-", backend="native")
+    assert "the library writes no standard output" in str(e.value)
+    assert scene.read_bytes() == before and sorted(os.listdir(tmp_path)) == ["s.exr"]
 
 
 def test_compare_is_the_cli_json(tmp_path):
