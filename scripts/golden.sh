@@ -11,7 +11,7 @@
 #                                                     is no GPU), then review `git diff --stat
 #                                                     tests/golden` and the PNGs
 #
-# A scene names its input files (a flame genome) relative to the repository.
+# A scene names its input files (a flame genome) relative to its own folder, as every scene does.
 #
 # FRACTALBAKE defaults to build/fractalbake; OUTDIR to build/golden. FB_GOLDEN_BACKEND=native or
 # vulkan checks that backend (default: auto); every backend must give the reference's bits.
@@ -37,7 +37,7 @@ render() { # NAME OUT.exr [extra args]
   if [ "$name" = default ]; then
     "$fb" render --set size=256x128 -o "$dst" --quiet "$@"
   else
-    "$fb" render "$gold/scenes/$name.json" -o "$dst" --quiet "$@"
+    "$fb" render "tests/golden/scenes/$name.json" -o "$dst" --quiet "$@"
   fi
 }
 
