@@ -493,6 +493,11 @@ fb_result fb_scene_drop_outputs(const char *text, char **out, char *dropped, siz
             snprintf(dropped + strlen(dropped), size - strlen(dropped), "%slayers.%s.%s=%s", dropped[0] ? ", " : "",
                      name ? name : "?", keys[k].key, v);
             json_object_del(l, keys[k].key);
+            /* the keys that only say how to write it go with it ("instances-surface": they are refused without it) */
+            size_t n = strlen(keys[k].key);
+            for (int q = 0; q < cls->nkeys; q++)
+                if (!strncmp(keys[q].key, keys[k].key, n) && keys[q].key[n] == '-' && json_object_get(l, keys[q].key))
+                    json_object_del(l, keys[q].key);
         }
         /* what only says how to write the heightmap goes with it (it is refused without one) */
         static const char *const qualifiers[] = {"heightmap-engine", "heightmap-range", "tiles"};

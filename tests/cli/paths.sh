@@ -48,4 +48,11 @@ printf '{"size": [32, 32], "layers": [{"type": "terrain", "points": "none.csv"}]
 # names that are not files stay as they are: a constrain layer's macro from a layer, an absolute path
 printf '{"size": [32, 32], "layers": [{"type": "fbm", "name": "hill"}, {"type": "constrain", "macro": "hill", "points": [[4, 4]]}, {"type": "terrain", "name": "abs", "points": "%s"}]}' "$T/sub/pts.csv" > sub/deep/c.json
 (cd work && "$FB" render ../sub/deep/c.json -o c.exr $N 2> err.txt) && ok || bad "a macro layer and an absolute path in a scene: $(cat work/err.txt)"
+# a stored scene with an instances file: --from drops the file and the keys that only say how to write it
+printf '{"size": [48, 32], "layers": [{"type": "fbm", "name": "g"}, {"type": "ifs", "name": "p", "preset": "population", "points": 20000, "instances": "p.csv", "instances-surface": "g", "instances-min-size": 0.5}]}' > sub/i.json
+(cd work && "$FB" render ../sub/i.json -o i.exr $N) && ok || bad "a scene with instances failed"
+check "the scene's instances are written beside it" test -s sub/p.csv
+(cd work && "$FB" render --from i.exr -o i2.exr --backend native 2> err.txt) && ok || bad "--from a file with instances: $(cat work/err.txt)"
+check "--from a file with instances: the same pixels" same work/i.exr work/i2.exr
+check "--from says it dropped the instances" grep -q "not writing the stored scene's outputs (layers.p.instances=../sub/p.csv)" work/err.txt
 cli_finish
