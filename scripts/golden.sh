@@ -5,7 +5,9 @@
 #                                                     the thresholds of tests/golden/thresholds.txt;
 #                                                     for each failure OUTDIR holds NAME.exr (this
 #                                                     render), NAME.diff.exr (|A - B| per channel) and
-#                                                     NAME.diff.png (red: pixels beyond the threshold)
+#                                                     NAME.diff.png (red: pixels beyond the threshold);
+#                                                     the reference's attributes and stored scene must
+#                                                     also be what update writes (NAME.header.txt)
 #   scripts/golden.sh update [FRACTALBAKE] [NAME...]  re-render the references (the named ones, else
 #                                                     all) on the Vulkan backend (lavapipe where there
 #                                                     is no GPU), then review `git diff --stat
@@ -41,6 +43,13 @@ render() { # NAME OUT.exr [extra args]
   fi
 }
 
+# What `info` shows of a file but the name, the backend and device that made it and the version: the
+# attributes and the stored scene, which a reference must hold as `update` writes them today.
+header() {
+  "$fb" info "$1" | grep -v -e '^file:' -e 'fractalbake/backend ' -e 'fractalbake/device ' \
+    -e 'fractalbake/layer-backends ' -e 'fractalbake/version '
+}
+
 case $mode in
 update)
   shift $(($# < 2 ? $# : 2))
@@ -65,6 +74,13 @@ check)
     n=$((n + 1))
     if ! render "$name" "$out/$name.exr" --backend "${FB_GOLDEN_BACKEND:-auto}"; then
       echo "golden $name: render failed"
+      failed=$((failed + 1))
+      continue
+    fi
+    if ! diff <(header "$gold/$name.exr") <(header "$out/$name.exr") > "$out/$name.header.txt"; then
+      echo "golden $name: the reference's header is not what \`scripts/golden.sh update $name\` writes today" \
+        "(see $out/$name.header.txt)"
+      head -4 "$out/$name.header.txt"
       failed=$((failed + 1))
       continue
     fi
