@@ -5,13 +5,15 @@
 #                                                     the thresholds of tests/golden/thresholds.txt;
 #                                                     for each failure OUTDIR holds NAME.exr (this
 #                                                     render), NAME.diff.exr (|A - B| per channel) and
-#                                                     NAME.diff.png (red: pixels beyond the threshold)
+#                                                     NAME.diff.png (red: pixels beyond the threshold);
+#                                                     the reference's attributes and stored scene must
+#                                                     also be what update writes (NAME.header.txt)
 #   scripts/golden.sh update [FRACTALBAKE] [NAME...]  re-render the references (the named ones, else
 #                                                     all) on the Vulkan backend (lavapipe where there
 #                                                     is no GPU), then review `git diff --stat
 #                                                     tests/golden` and the PNGs
 #
-# A scene names its input files (a flame genome) relative to the repository.
+# A scene names its input files (a flame genome) relative to its own folder, as every scene does.
 #
 # FRACTALBAKE defaults to build/fractalbake; OUTDIR to build/golden. FB_GOLDEN_BACKEND=native or
 # vulkan checks that backend (default: auto); every backend must give the reference's bits.
@@ -37,8 +39,15 @@ render() { # NAME OUT.exr [extra args]
   if [ "$name" = default ]; then
     "$fb" render --set size=256x128 -o "$dst" --quiet "$@"
   else
-    "$fb" render "$gold/scenes/$name.json" -o "$dst" --quiet "$@"
+    "$fb" render "tests/golden/scenes/$name.json" -o "$dst" --quiet "$@"
   fi
+}
+
+# What `info` shows of a file but the name, the backend and device that made it and the version: the
+# attributes and the stored scene, which a reference must hold as `update` writes them today.
+header() {
+  "$fb" info "$1" | grep -v -e '^file:' -e 'fractalbake/backend ' -e 'fractalbake/device ' \
+    -e 'fractalbake/layer-backends ' -e 'fractalbake/version '
 }
 
 case $mode in
@@ -65,6 +74,13 @@ check)
     n=$((n + 1))
     if ! render "$name" "$out/$name.exr" --backend "${FB_GOLDEN_BACKEND:-auto}"; then
       echo "golden $name: render failed"
+      failed=$((failed + 1))
+      continue
+    fi
+    if ! diff <(header "$gold/$name.exr") <(header "$out/$name.exr") > "$out/$name.header.txt"; then
+      echo "golden $name: the reference's header is not what \`scripts/golden.sh update $name\` writes today" \
+        "(see $out/$name.header.txt)"
+      head -4 "$out/$name.header.txt"
       failed=$((failed + 1))
       continue
     fi

@@ -43,7 +43,8 @@ void fb_progress_set_sink(const fb_progress_sink *sink);
 
 /* Starts the progress of `total` units of `unit` (pixels, points): nothing at all unless enabled. */
 void fb_progress_init(fb_progress *p, bool enabled, const char *label, const char *unit);
-/* The same for a count of steps ("3 of 14") with no rate: a benchmark's cases. */
+/* The same for a count of steps ("3 of 14") with no rate and no time left (steps of uneven cost): a benchmark's
+ * generators. */
 void fb_progress_init_steps(fb_progress *p, bool enabled, const char *label);
 /* done of total work units, from the thread that knows them */
 void fb_progress_update(fb_progress *p, uint64_t done, uint64_t total);

@@ -141,12 +141,14 @@ static void print_plan(const fb_bake_plan *p, bool json)
 {
     char a[32], b[32];
     if (json) {
-        printf("{\"peak_bytes\": %llu, \"limit_bytes\": %llu, \"base_bytes\": %llu, \"pieces_bytes\": %llu, "
+        printf("{\"peak_bytes\": %llu, \"planned_bytes\": %llu, \"limit_bytes\": %llu, \"base_bytes\": %llu, "
+               "\"pieces_bytes\": %llu, "
                "\"writer_bytes\": %llu, \"preview_bytes\": %llu, \"device_bytes\": %llu, \"compile_bytes\": %llu, "
                "\"piece_rows\": %d, \"pieces_in_flight\": %d, \"layers\": [",
-               (unsigned long long)p->peak, (unsigned long long)p->limit, (unsigned long long)p->base,
-               (unsigned long long)p->pieces, (unsigned long long)p->writer, (unsigned long long)p->preview,
-               (unsigned long long)p->device, (unsigned long long)p->compile, p->piece_rows, p->slots);
+               (unsigned long long)p->peak, (unsigned long long)p->planned, (unsigned long long)p->limit,
+               (unsigned long long)p->base, (unsigned long long)p->pieces, (unsigned long long)p->writer,
+               (unsigned long long)p->preview, (unsigned long long)p->device, (unsigned long long)p->compile,
+               p->piece_rows, p->slots);
         for (int i = 0; i < p->nlayers; i++)
             printf("%s{\"name\": \"%s\", \"bytes\": %llu}", i ? ", " : "", p->layers[i].name,
                    (unsigned long long)p->layers[i].bytes);
@@ -174,6 +176,11 @@ static void print_plan(const fb_bake_plan *p, bool json)
     fb_format_bytes(p->peak, a, sizeof a);
     fb_format_bytes(p->limit, b, sizeof b);
     printf("%-26s %12s  (--max-memory %s)\n", "predicted peak", a, b);
+    if (p->peak != p->planned) {
+        fb_format_bytes(p->planned, a, sizeof a);
+        printf("%-26s %12s  (the ring shrunk to %d pieces to fit --max-memory)\n", "with every piece in flight", a,
+               p->slots);
+    }
     if (p->device) {
         fb_format_bytes(p->device, a, sizeof a);
         printf("%-26s %12s  (the GPU's own memory, besides the peak)\n", "device memory", a);

@@ -25,7 +25,7 @@ static int tone_flag_arity(const char *flag)
 
 typedef struct tonemap_opts {
     fb_arg_list files, flags; /* flags: the tone flags and their values */
-    const char *out, *layer;
+    const char *out, *layer, *preview;
     bool quiet, json, help;
 } tonemap_opts;
 
@@ -34,15 +34,17 @@ static void help(const fb_cli *cli)
     (void)cli;
     char classes[256];
     fb_tone_classes(classes, sizeof classes);
-    printf("usage: fractalbake tonemap IN.exr -o OUT.exr [--layer NAME] [--brightness B] [--gamma G]\n"
-           "          [--gamma-threshold T] [--vibrancy V] [--highlight-power P] [--palette NAME |\n"
-           "          --cosine ... | --stops ...]\n"
-           "Recomputes the tone-mapped channels of a layer that stores what its tone map reads (%s\n"
-           "layers: R, G, B, A from the density and colour channels) with new tone parameters; the\n"
-           "other channels keep their stored values and the layer is not computed again.\n"
-           "--layer NAME: which layer (default: the first that can be re-toned).\n"
-           "--quiet: no summary line; --json: a JSON summary on standard output.\n",
-           classes);
+    printf(
+        "usage: fractalbake tonemap IN.exr -o OUT.exr [--preview P.png] [--layer NAME] [--brightness B] [--gamma G]\n"
+        "          [--gamma-threshold T] [--vibrancy V] [--highlight-power P] [--palette NAME |\n"
+        "          --cosine ... | --stops ...]\n"
+        "Recomputes the tone-mapped channels of a layer that stores what its tone map reads (%s\n"
+        "layers: R, G, B, A from the density and colour channels) with new tone parameters; the\n"
+        "other channels keep their stored values and the layer is not computed again.\n"
+        "--layer NAME: which layer (default: the first that can be re-toned).\n"
+        "--preview P.png: also a PNG of the re-toned layer, as the bake's --preview draws it alone.\n"
+        "--quiet: no summary line; --json: a JSON summary on standard output.\n",
+        classes);
 }
 
 /* The tone flags read as class c's scene keys (fb_tonemap_desc.tone). */
@@ -60,12 +62,17 @@ static fb_result run(const fb_cli *cli, void *opts)
     if (!o->out) return fb_fail(FB_ERR_USAGE, "-o: missing output file (fractalbake tonemap IN.exr -o OUT.exr)");
     if (cli_check_quiet_json(o->quiet, o->json)) return FB_ERR_USAGE;
     double t0 = fb_now();
-    fb_result rc = fb_tonemap(&(fb_tonemap_desc){
-        .in = o->files.v[0], .out = o->out, .layer = o->layer, .tone = tone_from_flags, .user = (void *)o});
+    fb_result rc = fb_tonemap(&(fb_tonemap_desc){.in = o->files.v[0],
+                                                 .out = o->out,
+                                                 .layer = o->layer,
+                                                 .preview = o->preview,
+                                                 .tone = tone_from_flags,
+                                                 .user = (void *)o});
     if (!rc && o->json)
         json_object_set_new(fb_cli_summary(cli, "tonemap"), "seconds", json_real(fb_now() - t0));
     else if (!rc && !o->quiet)
-        cli_after("fractalbake: wrote %s (tone-mapped) in %.2f s", o->out, fb_now() - t0);
+        cli_after("fractalbake: wrote %s (tone-mapped)%s%s in %.2f s", o->out, o->preview ? " and " : "",
+                  o->preview ? o->preview : "", fb_now() - t0);
     return rc;
 }
 
@@ -78,6 +85,7 @@ static int flag_arity(const void *data, const char *flag)
 #define T(f) offsetof(tonemap_opts, f)
 static const fb_arg flags[] = {
     {FB_ARG_OUTPUT, "--output", "-o", T(out), .ext = ".exr"},
+    {FB_ARG_OUTPUT, "--preview", NULL, T(preview), .ext = ".png"},
     {FB_ARG_STRING, "--layer", NULL, T(layer)},
     {FB_ARG_BOOL, "--quiet", NULL, T(quiet)},
     {FB_ARG_DOCUMENT, "--json", NULL, T(json)},

@@ -158,8 +158,15 @@ static int run_command(int argc, char **argv)
         if (!strcmp(name, k_commands[c]->name)) cmd = k_commands[c];
     const fb_gen_class *gen = cmd ? NULL : fb_gen_find(name);
     if (gen && gen->synopsis) cmd = &fb_cmd_generator, data = gen;
-    if (!cmd) {
-        fprintf(stderr, "fractalbake: %s: unknown command (see fractalbake --help)\n", name);
+    if (!cmd) { /* "; did you mean render?" from the table and the generators with a command */
+        const char *cands[sizeof k_commands / sizeof k_commands[0] + 64];
+        int n = 0;
+        for (size_t c = 0; c < sizeof k_commands / sizeof k_commands[0]; c++) cands[n++] = k_commands[c]->name;
+        for (int i = 0; fb_gen_list[i] && n < (int)(sizeof cands / sizeof cands[0]); i++)
+            if (fb_gen_list[i]->synopsis) cands[n++] = fb_gen_list[i]->name;
+        const char *near = fb_closest(name, cands, n);
+        fprintf(stderr, "fractalbake: %s: unknown command%s%s%s (see fractalbake --help)\n", name,
+                near ? "; did you mean " : "", near ? near : "", near ? "?" : "");
         return 2;
     }
     fb_cli cli = {.env = &g_env,

@@ -112,9 +112,9 @@ static void plan_fill(const fb_engine *e, const fb_bake_desc *d, const layer_run
     for (int c = 0; c < nch; c++) px += channels[c].type == EXRIO_HALF ? 2 : 4;
     const fb_scene *s = d->scene;
     int rw = sh->region[2], rh = sh->region[3];
-    uint64_t limit = plan->limit;
+    uint64_t limit = plan->limit, planned = plan->planned;
     memset(plan, 0, sizeof *plan);
-    plan->limit = limit;
+    plan->limit = limit, plan->planned = planned;
     plan->nlayers = s->nlayers;
     plan->piece_rows = sh->rows;
     plan->slots = sh->slots;
@@ -197,13 +197,19 @@ static fb_result plan_refuse(const fb_engine *e, const fb_bake_desc *d, const fb
     for (int i = 1; i < plan->nlayers; i++)
         if (plan->layers[i].bytes > plan->layers[largest].bytes) largest = i;
     const fb_memory mem = {d->max_memory, e->overhead};
-    fb_format_bytes(plan->peak, need, sizeof need);
     fb_format_bytes(plan->limit, lim, sizeof lim);
     fb_format_bytes(plan->layers[largest].bytes, big, sizeof big);
+    char least[80] = "";
+    if (plan->planned > plan->peak) { /* the ring shrunk as far as it goes: still too much */
+        char fewest[32];
+        fb_format_bytes(plan->peak, fewest, sizeof fewest);
+        snprintf(least, sizeof least, " (%s with the fewest pieces in flight)", fewest);
+    }
+    fb_format_bytes(plan->planned, need, sizeof need);
     return fb_fail(FB_ERR_INPUT,
-                   "the bake needs about %s, more than --max-memory %s%s; layer %s alone needs %s (lower its size, "
+                   "the bake needs about %s%s, more than --max-memory %s%s; layer %s alone needs %s (lower its size, "
                    "points or insertions, or raise --max-memory)",
-                   need, lim, fb_memory_limit_note(&mem, note, sizeof note), plan->layers[largest].name, big);
+                   need, least, lim, fb_memory_limit_note(&mem, note, sizeof note), plan->layers[largest].name, big);
 }
 
 /* The shape of the bake and its memory: memory is predicted, not discovered, the whole bake's peak
@@ -220,6 +226,7 @@ static fb_result bake_shape_plan(const fb_engine *e, const fb_bake_desc *d, cons
     fb_result rc = piece_rows(e, d, runs, sh->staged, sh->region[3], &sh->rows);
     if (rc) return rc;
     const fb_memory mem = {d->max_memory, e->overhead};
+    plan->planned = 0;
     for (;;) {
         /* no file, no writer: the ring holds the producer's piece and the consumer's alone */
         sh->held = d->out && (sh->rows % 64 == 0 || sh->rows >= sh->region[3]);
@@ -230,6 +237,7 @@ static fb_result bake_shape_plan(const fb_engine *e, const fb_bake_desc *d, cons
         for (;;) {
             plan->limit = fb_memory_limit(&mem);
             plan_fill(e, d, runs, sh, channels, nch, plan);
+            if (!plan->planned) plan->planned = plan->peak; /* the shape before any shrinking */
             if (plan->peak <= plan->limit || sh->slots <= least) break;
             sh->slots--;
         }

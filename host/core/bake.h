@@ -27,6 +27,8 @@ typedef struct fb_bake_plan {
     uint64_t writer;  /* the EXR writer's compressed chunks (and its copies of rows it does not read in place) */
     uint64_t preview; /* the preview's sums */
     uint64_t peak;    /* all of it at the worst moment: base, then the compile or the rest */
+    uint64_t planned; /* the peak with the ring the bake takes when memory does not limit it (peak: after
+                       * shrinking it to fit limit); --dry-run's prediction and a refusal's figure */
     uint64_t limit;   /* --max-memory */
     uint64_t device;  /* a discrete GPU's own memory: the ring's device buffers (not in peak) */
     int piece_rows;   /* rows of a piece */

@@ -355,7 +355,42 @@ fb_result fb_scene_parse(const char *text, const char *origin, fb_scene *out)
     return fb_scene_parse_sets(text, origin, NULL, 0, out);
 }
 
-fb_result fb_scene_parse_sets(const char *text, const char *origin, const char *const *sets, int nsets, fb_scene *out)
+/* Whether the value `text` of key k of a layer names a file: one it reads or one it writes. */
+static bool names_file(const fb_keyspec *k, const char *text)
+{
+    if (k->type == FB_K_CUSTOM) return k->value && k->value->names_file && k->value->names_file(text);
+    return k->type == FB_K_PATH || k->type == FB_K_OUTPUT;
+}
+
+/* Every relative file name of a scene file's layers joined to the file's folder `dir`, so that the scene reads and
+ * writes the same files from any working folder; what --set gives afterwards stays relative to the working folder.
+ * The joined names are what the scene stores in its EXR, where --from reads them from the working folder, as before.
+ * Values of the wrong shape are left for the checks to report. */
+static fb_result join_paths(json_t *root, const char *dir)
+{
+    json_t *layers = json_object_get(root, "layers");
+    for (size_t i = 0; i < json_array_size(layers); i++) {
+        json_t *l = json_array_get(layers, i);
+        const fb_gen_class *cls = fb_gen_find(json_string_value(json_object_get(l, "type")));
+        for (int k = 0; cls && k < cls->nkeys; k++) {
+            const fb_keyspec *key = &cls->keys[k];
+            const char *name = json_string_value(json_object_get(l, key->key));
+            if (!name || !*name || name[0] == '/' || !strcmp(name, "-") || !names_file(key, name)) continue;
+            size_t n = strlen(dir) + strlen(name) + 2;
+            char *joined = malloc(n);
+            if (!joined) return fb_fail(FB_ERR_NOMEM, "out of memory");
+            snprintf(joined, n, "%s%s%s", dir, strcmp(dir, "/") ? "/" : "", name);
+            int bad = json_object_set_new(l, key->key, json_string(joined));
+            free(joined);
+            if (bad) return fb_fail(FB_ERR_NOMEM, "out of memory");
+        }
+    }
+    return FB_OK;
+}
+
+/* A scene's text parsed with the overrides, its file names joined to `dir` (the scene file's folder; NULL: none). */
+static fb_result parse_in(const char *text, const char *origin, const char *dir, const char *const *sets, int nsets,
+                          fb_scene *out)
 {
     memset(out, 0, sizeof *out);
     json_error_t err;
@@ -370,6 +405,7 @@ fb_result fb_scene_parse_sets(const char *text, const char *origin, const char *
     if (!rc && nsets > 0 && !json_is_object(root))
         rc = fb_fail(FB_ERR_INPUT, "%s: expected a JSON object with \"size\", \"seed\" and \"layers\"",
                      origin ? origin : "scene");
+    if (!rc && dir && strcmp(dir, ".") && json_is_object(root)) rc = join_paths(root, dir);
     for (int i = 0; i < nsets && !rc; i++) rc = fb_scene_apply_set(root, sets[i], paths[i]);
     fb_vctx v = {origin, text, sets, paths, nsets, NULL};
     if (!origin) /* a command line: one generator's flags */
@@ -384,6 +420,11 @@ fb_result fb_scene_parse_sets(const char *text, const char *origin, const char *
     json_decref(root);
     if (rc) fb_scene_fini(out);
     return rc;
+}
+
+fb_result fb_scene_parse_sets(const char *text, const char *origin, const char *const *sets, int nsets, fb_scene *out)
+{
+    return parse_in(text, origin, NULL, sets, nsets, out);
 }
 
 fb_result fb_scene_load(const char *path, fb_scene *out)
@@ -402,7 +443,11 @@ fb_result fb_scene_load_sets(const char *path, const char *const *sets, int nset
         free(text);
         return fb_fail(FB_ERR_INPUT, "%s: scene contains a NUL byte (not a JSON text file)", path);
     }
-    fb_result rc = fb_scene_parse_sets(text, strcmp(path, "-") ? path : "(stdin)", sets, nsets, out);
+    char *dir = strcmp(path, "-") ? strdup(path) : NULL; /* a scene on stdin: the working folder */
+    char *slash = dir ? strrchr(dir, '/') : NULL;
+    if (slash) slash[slash == dir] = 0; /* "/s.json": "/" */
+    fb_result rc = parse_in(text, dir ? path : "(stdin)", slash ? dir : NULL, sets, nsets, out);
+    free(dir);
     free(text);
     return rc;
 }
@@ -448,6 +493,11 @@ fb_result fb_scene_drop_outputs(const char *text, char **out, char *dropped, siz
             snprintf(dropped + strlen(dropped), size - strlen(dropped), "%slayers.%s.%s=%s", dropped[0] ? ", " : "",
                      name ? name : "?", keys[k].key, v);
             json_object_del(l, keys[k].key);
+            /* the keys that only say how to write it go with it ("instances-surface": they are refused without it) */
+            size_t n = strlen(keys[k].key);
+            for (int q = 0; q < cls->nkeys; q++)
+                if (!strncmp(keys[q].key, keys[k].key, n) && keys[q].key[n] == '-' && json_object_get(l, keys[q].key))
+                    json_object_del(l, keys[q].key);
         }
         /* what only says how to write the heightmap goes with it (it is refused without one) */
         static const char *const qualifiers[] = {"heightmap-engine", "heightmap-range", "tiles"};

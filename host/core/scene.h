@@ -97,7 +97,9 @@ typedef struct fb_scene {
  * where a key is reported as its flag, --key). */
 fb_result fb_scene_parse(const char *text, const char *origin, fb_scene *out);
 
-/* Reads a scene file and parses it. */
+/* Reads a scene file and parses it. The relative file names of its layers (the files they read and write) are
+ * relative to the scene file's folder: they are joined to it, and stored so (a scene on stdin, "-": the working
+ * folder). */
 fb_result fb_scene_load(const char *path, fb_scene *out);
 
 /* The same with overrides applied before validation, in order: "KEY.PATH=VALUE" as given to --set.

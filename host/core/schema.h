@@ -29,8 +29,9 @@ typedef enum fb_ktype {
     FB_K_TYPE,
     FB_K_NUMLIST,
     FB_K_STOPS,
-    FB_K_STRING, /* any non-empty string (a file path, an entry name) */
+    FB_K_STRING, /* any non-empty string (an entry name, a text) */
     FB_K_OUTPUT, /* a file this layer writes besides the EXR: never taken from a stored scene (--from) */
+    FB_K_PATH,   /* a file this layer reads (a non-empty string) */
     FB_K_BOUNDS, /* "auto" or [xmin, xmax, ymin, ymax] */
     FB_K_FRACS,  /* 1..count numbers in [lo, hi] */
     FB_K_NAMES,  /* 1..32 distinct names from `enums` (flag: a comma list) */
@@ -51,6 +52,9 @@ typedef struct fb_kvalue {
     /* The JSON value a flag's text stands for; on bad text logs one line naming --flag (fb_fail with
      * FB_ERR_USAGE) and returns NULL. NULL: the text is the value, a string. */
     json_t *(*from_flag)(const struct fb_keyspec *k, const char *flag, const char *text);
+    /* Whether a string value names a file the layer reads (in a scene file, relative to the file's folder); NULL:
+     * never. */
+    bool (*names_file)(const char *text);
 } fb_kvalue;
 
 typedef struct fb_keyspec {
@@ -125,6 +129,9 @@ fb_result fb_schema_palette(const fb_vctx *v, const char *path, const json_t *ob
 /* clang-format on */
 struct fb_relief_spec;
 fb_result fb_schema_relief(const fb_vctx *v, const char *path, const json_t *obj, struct fb_relief_spec *out);
+
+/* For fb_kvalue.names_file: every string is a file name. */
+bool fb_string_names_file(const char *text);
 
 /* Readers of checked values. */
 double fb_json_num(const json_t *obj, const char *key);

@@ -3,6 +3,7 @@
 
 #include "exrio.h"
 #include "gen.h"
+#include "preview.h"
 #include "scene.h"
 
 #include <jansson.h>
@@ -66,6 +67,21 @@ static fb_result apply_tone(const fb_tonemap_desc *d, const fb_gen_class *c, jso
     }
     json_decref(root);
     return FB_OK;
+}
+
+/* The preview of layer `name`'s colour, R, G and B of the file (their indices into rgb), drawn as a bake draws
+ * the layer alone. */
+static fb_result preview_of(const exrio_reader *r, const char *name, const char *in, int rgb[3], fb_preview **out)
+{
+    char want[96];
+    for (int k = 0; k < 3; k++) {
+        snprintf(want, sizeof want, "%s.%c", name, "RGB"[k]);
+        rgb[k] = -1;
+        for (int c = 0; c < exrio_nchannels(r); c++)
+            if (!strcmp(exrio_channel_name(r, c), want) && exrio_channel_type(r, c) != EXRIO_UINT) rgb[k] = c;
+        if (rgb[k] < 0) return fb_fail(FB_ERR_INPUT, "%s: no channel %s for the preview", in, want);
+    }
+    return fb_preview_create(exrio_width(r), exrio_height(r), 2048, 3, out);
 }
 
 fb_result fb_tonemap(const fb_tonemap_desc *d)
@@ -149,14 +165,20 @@ fb_result fb_tonemap(const fb_tonemap_desc *d)
                                                       .envmap = scene.envmap},
                                  &w);
     }
+    fb_preview *pv = NULL;
+    int rgb[3];
+    if (!rc && d->preview) rc = preview_of(r, L->name, in, rgb, &pv);
     for (int y = 0; y < height && !rc; y += rows) {
         int m = y + rows <= height ? rows : height - y;
         rc = exrio_read_rows(r, y, m, planes);
         if (rc) break;
         cls->tone->rows(tone, m, planes);
         rc = exrio_writer_rows(w, y, m, (const void *const *)planes);
+        if (pv) fb_preview_add_rows(pv, y, m, (const float *const[]){planes[rgb[0]], planes[rgb[1]], planes[rgb[2]]});
     }
     if (!rc) rc = exrio_writer_finish(&w);
+    if (!rc && pv) rc = fb_preview_write_png(pv, d->preview, "preview");
+    fb_preview_destroy(&pv);
     exrio_writer_abort(&w);
     if (cls && tone) cls->tone->end(tone);
     exrio_close(&r);

@@ -15,9 +15,10 @@
 struct fb_gen_class;
 
 typedef struct fb_tonemap_desc {
-    const char *in;    /* the baked EXR */
-    const char *out;   /* the EXR written, through the output transaction */
-    const char *layer; /* the layer to re-tone; NULL: the first whose class can */
+    const char *in;      /* the baked EXR */
+    const char *out;     /* the EXR written, through the output transaction */
+    const char *layer;   /* the layer to re-tone; NULL: the first whose class can */
+    const char *preview; /* also this PNG: the re-toned layer's R, G, B, as a bake's preview of it alone; NULL: none */
     /* The new tone parameters once the layer's class c is known: *json, a scene (malloc'd, freed
      * here) whose one layer holds them as c's scene keys, as the command line reads them from its
      * flags (fb_scene_from_flags). A key that is not one of c's tone keys is a usage error naming

@@ -369,15 +369,22 @@ int fractalbake_render(fractalbake_context *ctx, const fractalbake_scene *s, con
      * call that fails or a process that dies leaves at most the empty folder. */
     char dir[PATH_MAX], path[PATH_MAX + 16];
     fb_result rc = FB_OK;
-    if (snprintf(dir, sizeof dir, "%s/fractalbake-XXXXXX", ctx->tmpdir) >= (int)sizeof dir || !mkdtemp(dir))
+    /* planes, not files: the scene without the files its layers would write besides the EXR */
+    char *kept = NULL, dropped[1024];
+    fractalbake_scene planes = {0};
+    if (s) rc = fb_scene_drop_outputs(s->scene.json, &kept, dropped, sizeof dropped);
+    if (!rc && s) rc = fb_scene_parse(kept, "(scene)", &planes.scene);
+    free(kept);
+    if (!rc && (snprintf(dir, sizeof dir, "%s/fractalbake-XXXXXX", ctx->tmpdir) >= (int)sizeof dir || !mkdtemp(dir)))
         rc = fb_fail(FB_ERR_IO, "%s: cannot make a folder for the bake's file: %s", ctx->tmpdir, strerror(errno));
     if (!rc) {
         snprintf(path, sizeof path, "%s/bake.exr", dir);
-        rc = bake(ctx, s, path, region);
+        rc = bake(ctx, s ? &planes : NULL, path, region);
         if (!rc) rc = open_image(path, out);
         unlink(path);
         rmdir(dir);
     }
+    fb_scene_fini(&planes.scene);
     return leave(ctx, old, rc);
 }
 

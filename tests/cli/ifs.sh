@@ -33,10 +33,17 @@ cmp -s in1.exr in2.exr && ok || bad "ifs (native) depends on threads or strip ro
 "$FB" compare in1.exr iv1.exr --max-abs 0 > /dev/null && ok || bad "ifs differs between lavapipe and native"
 # tone mapping re-run from the stored channels: the same parameters give the same bytes, new ones
 # the same pixels as a bake made with them
-"$FB" $I -o tm1.exr
+"$FB" $I -o tm1.exr --preview tm1.png
 "$FB" tonemap tm1.exr -o tm1b.exr --quiet && cmp -s tm1.exr tm1b.exr && ok || bad "tonemap with unchanged parameters changed the file"
-"$FB" $I --brightness 2.5 --gamma 3 --vibrancy 0.5 --highlight-power -1 --palette blossom -o tm2.exr
-"$FB" tonemap tm1.exr -o tm2b.exr --brightness 2.5 --gamma 3 --vibrancy 0.5 --highlight-power -1 --palette blossom
+"$FB" $I --brightness 2.5 --gamma 3 --vibrancy 0.5 --highlight-power -1 --palette blossom -o tm2.exr --preview tm2.png
+"$FB" tonemap tm1.exr -o tm2b.exr --brightness 2.5 --gamma 3 --vibrancy 0.5 --highlight-power -1 --palette blossom \
+  --preview tm2b.png
+# --preview: the re-toned layer drawn as the bake draws it
+check "tonemap --preview is the preview of a bake with the same tone parameters" cmp -s tm2.png tm2b.png
+cmp -s tm1.png tm2b.png && bad "tonemap --preview shows the old tone parameters" || ok
+expect_fail 2 "preview" x.exr -- tonemap tm1.exr -o x.exr --preview x.jpg
+expect_fail 2 "brightness" x.png -- tonemap tm1.exr -o x.exr --preview x.png --brightness -1
+[ -e x.exr ] && bad "a refused tonemap left x.exr" || ok
 "$FB" compare tm2.exr tm2b.exr --max-abs 0 > /dev/null && ok || bad "tonemap differs from a bake with the same tone parameters"
 "$FB" info tm2b.exr | grep -q '"brightness": 2.5' && ok || bad "tonemap did not store the new parameters"
 "$FB" compare tm1.exr tm2b.exr --layer plants > /dev/null; [ $? -eq 1 ] && ok || bad "new tone parameters changed nothing"

@@ -102,8 +102,16 @@ refused() {
 }
 refused "erode 16384^2 under 4G" "layer e: erosion of 16384 x 16384 cells needs about 24.00 GiB, more than --max-memory 4.00 GiB" \
   render erode.json $N --set size=16384x16384 --max-memory 4G
-refused "ifs 16384^2 under 4G" "needs about 10.0. GiB, more than --max-memory 4.00 GiB; layer plants alone" \
+refused "ifs 16384^2 under 4G" "needs about 10.[0-9]* GiB (10.[0-9]* GiB with the fewest pieces in flight), more than --max-memory 4.00 GiB; layer plants alone" \
   ifs $N --size 16384x16384 --max-memory 4G
+# the refusal's figure is --dry-run's prediction of the same bake (one plan computes both)
+dry=$("$FB" ifs $N --size 16384x16384 -o r.exr --dry-run | sed -n 's/^predicted peak *\([0-9.]* [KMG]i*B\) .*/\1/p')
+fewest=$("$FB" ifs $N --size 16384x16384 -o r.exr --max-memory 10.2G --dry-run |
+  sed -n 's/^predicted peak *\([0-9.]* [KMG]i*B\) .*/\1/p')
+check "the refusal says the --dry-run's $dry and its smallest ring's $fewest: $(cat r.txt)" \
+  grep -q "needs about $dry ([0-9.]* GiB with the fewest" r.txt
+check "a ring shrunk to fit --max-memory predicts less ($fewest) than every piece in flight ($dry)" \
+  test -n "$fewest" -a "$fewest" != "$dry"
 refused "constrain 65536x32768 under 8G" "layer terrain needs about .* GiB, more than --max-memory 8.00 GiB" \
   constrain $N --size 65536x32768 --max-memory 8G
 refused "terrain of 1e8 insertions under 2G" "more than --max-memory 2.00 GiB; layer terrain" \

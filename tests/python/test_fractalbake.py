@@ -85,6 +85,25 @@ def test_scene_as_text_dict_and_path(tmp_path):
     same_bits(a, c)
 
 
+def test_render_writes_no_file(tmp_path, monkeypatch):
+    # a scene that names an instances file and a heightmap: render() returns planes and writes neither (the
+    # scene's own folder, the working folder); bake() writes them beside the scene, as the command line does
+    scene = {"size": [64, 48], "seed": 2, "layers": [
+        {"type": "fbm", "name": "ground", "octaves": 3, "heightmap": "ground.png", "heightmap-range": [-2, 2]},
+        {"type": "ifs", "name": "trees", "preset": "population", "points": 20000, "instances": "trees.csv",
+         "instances-surface": "ground", "instances-min-size": 0.5}]}
+    (tmp_path / "scene").mkdir()
+    (tmp_path / "work").mkdir()
+    path = tmp_path / "scene" / "s.json"
+    path.write_text(json.dumps(scene))
+    monkeypatch.chdir(tmp_path / "work")
+    planes = fractalbake.render(str(path), backend="native")
+    assert sorted(os.listdir(tmp_path / "scene")) == ["s.json"] and os.listdir(tmp_path / "work") == []
+    fractalbake.bake(str(path), str(tmp_path / "work" / "s.exr"), backend="native")
+    assert sorted(os.listdir(tmp_path / "scene")) == ["ground.png", "s.json", "trees.csv"]
+    same_bits(fractalbake.read(tmp_path / "work" / "s.exr"), planes)
+
+
 def test_errors_are_the_cli_line(tmp_path):
     path = tmp_path / "bad.json"
     path.write_text('{"size": [64, 32], "layers": [{"type": "fbm", "octaves": 99}]}')

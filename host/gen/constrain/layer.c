@@ -68,15 +68,30 @@ static fb_result check_cregions(const fb_vctx *v, const char *path, const fb_key
     return check_constraints(v, path, j, true);
 }
 
-static const fb_kvalue cpoints_value = {.check = check_cpoints}, cregions_value = {.check = check_cregions};
+/* A macro shape: a built-in's name, another layer's channel, or an EXR file ("IN.exr[:layer.channel]"). */
+static fb_result check_macro(const fb_vctx *v, const char *path, const fb_keyspec *k, json_t *j)
+{
+    fb_keyspec text = *k;
+    text.type = FB_K_STRING;
+    return fb_schema_check_value(v, path, &text, j);
+}
+
+static bool macro_names_file(const char *text)
+{
+    return strstr(text, ".exr") != NULL;
+}
+
+static const fb_kvalue macro_value = {.check = check_macro, .names_file = macro_names_file};
+static const fb_kvalue cpoints_value = {.check = check_cpoints, .names_file = fb_string_names_file},
+                       cregions_value = {.check = check_cregions, .names_file = fb_string_names_file};
 
 static const fb_keyspec constrain_keys[] = {
     {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"constrain\""},
     {"name", FB_K_NAME, 0, 0, false, NULL, "\"terrain\"", "layer name; channels NAME.Y, .macro, .detail, .T, .H"},
-    {"macro", FB_K_STRING, 0, 0, false, NULL, NULL,
-     "macro shape d: cone | ridge | boss | bowl, or IN.exr[:layer.channel] (default boss)"},
+    {"macro", FB_K_CUSTOM, 0, 0, false, NULL, NULL,
+     "macro shape d: cone | ridge | boss | bowl, or IN.exr[:layer.channel] (default boss)", .value = &macro_value},
     {"macro-height", FB_K_NUM, -1e6, 1e6, false, NULL, "10.0", "height of a built-in macro shape"},
-    {"profile", FB_K_STRING, 0, 0, false, NULL, NULL, "1D (height 1): a CSV profile (d, or x,d per line) as the macro"},
+    {"profile", FB_K_PATH, 0, 0, false, NULL, NULL, "1D (height 1): a CSV profile (d, or x,d per line) as the macro"},
     {"T", FB_K_NUM, 0, 1e6, true, NULL, "0.3", "approximation degree T > 0 (small: close to the macro shape)"},
     {"hurst", FB_K_NUM, 0, 1, true, NULL, "0.8", "roughness degree H in (0, 1) (large: smoother)"},
     {"sigma", FB_K_NUM, 0, 1e6, true, NULL, "1.0", "standard deviation of P_fbm's first level"},

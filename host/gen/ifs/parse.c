@@ -23,7 +23,7 @@ const fb_keyspec fb_ifs_keys[] = {
     {"maps", FB_K_CUSTOM, -1e6, 1e6, false, NULL, NULL,
      "affine maps [[a, b, c, d, e, f, p], ...]: x' = a x + b y + e, y' = c x + d y + f (flag: \"a,b,c,d,e,f,p;...\")",
      FB_IFS_MAX_MAPS, .value = &fb_ifs_maps_value},
-    {"file", FB_K_STRING, 0, 0, false, NULL, NULL, "a Fractint .ifs file (its maps are stored in the scene)"},
+    {"file", FB_K_PATH, 0, 0, false, NULL, NULL, "a Fractint .ifs file (its maps are stored in the scene)"},
     {"entry", FB_K_STRING, 0, 0, false, NULL, NULL, "the entry of the .ifs file (flag: --name; default the first)", 0,
      "name"},
     {"colors", FB_K_FRACS, 0, 1, false, NULL, NULL, "colour coordinate of each map, in [0, 1] (default spread evenly)",

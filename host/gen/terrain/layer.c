@@ -54,7 +54,7 @@ static fb_result check_points(const fb_vctx *v, const char *path, const fb_keysp
     return FB_OK;
 }
 
-static const fb_kvalue points_value = {.check = check_points};
+static const fb_kvalue points_value = {.check = check_points, .names_file = fb_string_names_file};
 
 static const fb_keyspec terrain_keys[] = {
     {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"terrain\""},
@@ -62,7 +62,7 @@ static const fb_keyspec terrain_keys[] = {
      "layer name; channels NAME.Y (height) and NAME.A (in the hull)"},
     {"points", FB_K_CUSTOM, -1e15, 1e15, false, NULL, NULL,
      "survey points: an XYZ / CSV file (x y z per line) or a list [[x, y, z], ...]", .value = &points_value},
-    {"from-heightfield", FB_K_STRING, 0, 0, false, NULL, NULL, "instead of points: IN.exr[:layer.channel] sampled"},
+    {"from-heightfield", FB_K_PATH, 0, 0, false, NULL, NULL, "instead of points: IN.exr[:layer.channel] sampled"},
     {"sample", FB_K_INT, 1, 65536, false, NULL, NULL, "with from-heightfield: every N-th pixel (default 16)"},
     {"insert", FB_K_INT, 0, 1e8, false, NULL, "40000", "points inserted by random midpoint displacement"},
     {"hurst", FB_K_NUM, 0, 1, true, NULL, "0.85", "Hurst exponent H in (0, 1); D = 3 - H", 0, NULL, "dimension"},
@@ -75,7 +75,7 @@ static const fb_keyspec terrain_keys[] = {
      "the displacements: the paper's, var(z_abc - z_*) over the mesh per doubling (stage) or the triangle's "
      "neighbourhood (local); or additions, an fBm field of the asked H added to the survey's interpolated "
      "residual"},
-    {"centers", FB_K_STRING, 0, 0, false, NULL, NULL, "CSV of centres x,y,D,sigma: regions of their own D and sigma"},
+    {"centers", FB_K_PATH, 0, 0, false, NULL, NULL, "CSV of centres x,y,D,sigma: regions of their own D and sigma"},
     {"interpolation", FB_K_ENUM, 0, 0, false, "linear|smooth", "\"linear\"",
      "the surface between the vertices: each triangle's plane, or a C1 surface (Clough-Tocher) without facets"},
     {"bounds", FB_K_BOUNDS, -1e15, 1e15, false, NULL, "\"auto\"",
