@@ -6,6 +6,8 @@
 #include "../kernels/stars.h"
 
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
+// the mapping (pc.p.mapping's value, host/gen/stars/layer.c), known when the pipeline is compiled
+layout(constant_id = 0) const uint MAPPING = 0u;
 
 layout(push_constant) uniform Push
 {
@@ -48,23 +50,25 @@ void main()
     uint r = gl_GlobalInvocationID.y;
     if (x >= pc.p.width || r >= pc.rows) return;
     uint y = pc.y0 + r;
-    uint tile = (y >> pc.p.tile_shift) * pc.p.tiles_x + (x >> pc.p.tile_shift);
-    K_StarsPixel px = k_stars_pixel(pc.p, x, y);
+    K_StarsParams p = pc.p;
+    p.mapping = MAPPING;
+    uint tile = (y >> p.tile_shift) * p.tiles_x + (x >> p.tile_shift);
+    K_StarsPixel px = k_stars_pixel(p, x, y);
     K_StarsAcc acc = k_stars_init();
     uint k1 = inp.w[tile + 1u];
     // k_stars_add with each record read as it is needed: its centre, and the rest only when it is
     // within reach (most of a tile's records are not)
     for (uint k = inp.w[tile]; k < k1; k++) {
-        uint o = pc.p.rec_off + k * K_STARS_REC_WORDS;
+        uint o = p.rec_off + k * K_STARS_REC_WORDS;
         float rx = uintBitsToFloat(inp.w[o]), ry = uintBitsToFloat(inp.w[o + 1u]);
-        if (!k_stars_near(pc.p, px, rx, ry)) continue;
-        float w = k_stars_share(pc.p, px, rx, ry, inp.w[o + 6u]);
+        if (!k_stars_near(p, px, rx, ry)) continue;
+        float w = k_stars_share(p, px, rx, ry, inp.w[o + 6u]);
         acc = k_stars_accumulate(acc, w, uintBitsToFloat(inp.w[o + 2u]), uintBitsToFloat(inp.w[o + 3u]),
                                  uintBitsToFloat(inp.w[o + 4u]), uintBitsToFloat(inp.w[o + 5u]));
     }
-    float row_inv = pc.p.mapping == K_ENV_CUBE ? 0.0f : uintBitsToFloat(inp.w[pc.p.row_off + y]);
-    acc = k_stars_finish(acc, pc.p, row_inv, x, y);
-    uint i = r * pc.p.width + x;
+    float row_inv = p.mapping == K_ENV_CUBE ? 0.0f : uintBitsToFloat(inp.w[p.row_off + y]);
+    acc = k_stars_finish(acc, p, row_inv, x, y);
+    uint i = r * p.width + x;
     o_r.v[i] = acc.r;
     o_g.v[i] = acc.g;
     o_b.v[i] = acc.b;

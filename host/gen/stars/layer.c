@@ -374,6 +374,10 @@ static fb_result stars_init(fb_gen *g)
     g->compute.shader.spv_size = sizeof stars_comp;
     g->compute.shader.params_size = sizeof(K_StarsParams);
     g->compute.shader.push_size = sizeof(stars_push);
+    /* the mapping as a specialisation constant too (stars.comp): the compiler drops the other
+     * mappings' code (the cube's face test and corners) from the loop over the records */
+    g->compute.shader.spec[0] = p->mapping;
+    g->compute.shader.nspec = 1;
     return FB_OK;
 }
 
