@@ -30,6 +30,7 @@ NOT_RUN = [
     (r'scripts/fuzz\.sh', 'the CTest entry `fuzz` runs it'),
     (r'scripts/try-generator\.sh', 'the CTest entry `recipe` runs it'),
     (r'scripts/golden\.sh', 'the CTest entry `golden` runs it (and `update` rewrites the references)'),
+    (r'scripts/gpu-check\.sh', 'a check for a GPU machine; the CTest entry `cli-gpu-check` runs it on lavapipe at a tiny scale'),
     (r'^sbatch ', 'needs a Slurm cluster'),
     (r'slurm-bake\.sh', 'needs a Slurm cluster; the CTest entry `cli-slurm` runs it on one it starts'),
 ]
