@@ -118,6 +118,9 @@ do_devices() { # the layer required, the chosen device a GPU, its subnormals
     elif [ $rc -ne 0 ]; then
         line devices "FAILED: exit $rc (devices.txt)"
         verdict FAIL devices "exit $rc under FB_VK_VALIDATION=1: $(grep -m1 'fractalbake:' "$out/devices.txt")"
+    elif ! grep -qx 'validation layer: on, silent' "$out/devices.txt"; then
+        line devices "FAILED: the validation layer is not on (devices.txt)"
+        verdict FAIL devices "the validation layer is not on"
     elif [ -z "$chosen" ]; then
         line devices "FAILED: no Vulkan device (devices.txt)"
         verdict FAIL devices "no Vulkan device"
