@@ -9,7 +9,8 @@
 #                                # 77 reported as not run where no device exists; and a twin,
 #                                # NAME-staging, that runs it again on a discrete GPU's path
 #                                # (FB_VK_STAGING=1: device-local memory, staging copies and the
-#                                # portable exact arithmetic), so that lavapipe tests that path too
+#                                # portable exact arithmetic), so that lavapipe tests that path too,
+#                                # under the layer's synchronization validation as well
 #           [VULKAN]             # it may open a Vulkan device (it runs without one too): the validation
 #                                # layer on, no gpu label
 #           [SKIPPABLE]          # exit 77 reported as not run (it cannot run here: no AVX2, no clang,
@@ -22,6 +23,9 @@
 # `ctest` everything, as CI runs it. A label outside the list below fails the configure, so a typo
 # cannot drop a test from its tier.
 set(FB_TEST_LABELS unit cli build fuzz quick)
+# The staging twins run with the validation layer's synchronization checks too (the layer reads
+# VK_LAYER_ENABLES itself): the discrete path's copies and barriers are where a real GPU reorders.
+set(FB_VK_SYNC_VALIDATION VK_LAYER_ENABLES=VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT)
 
 function(fb_test)
   cmake_parse_arguments(PARSE_ARGV 0 T "GPU;VULKAN;SKIPPABLE" "NAME;TIMEOUT;PROGRAM" "COMMAND;LABELS;ENV;LINK;ARGS")
@@ -69,7 +73,7 @@ function(fb_test)
   if(T_GPU)
     add_test(NAME ${T_NAME}-staging COMMAND ${T_COMMAND})
     set_tests_properties(${T_NAME}-staging PROPERTIES LABELS "gpu;staging" SKIP_RETURN_CODE 77
-                                                      ENVIRONMENT "${env};FB_VK_STAGING=1")
+                                                      ENVIRONMENT "${env};FB_VK_STAGING=1;${FB_VK_SYNC_VALIDATION}")
     if(T_TIMEOUT)
       set_tests_properties(${T_NAME}-staging PROPERTIES TIMEOUT ${T_TIMEOUT})
     endif()

@@ -32,6 +32,7 @@ NOT_RUN = [
     (r'scripts/golden\.sh', 'the CTest entry `golden` runs it (and `update` rewrites the references)'),
     (r'scripts/bench-compare\.sh', 'builds another commit and benches for minutes; the CTest entry '
      '`cli-bench-compare` runs it on a tiny bench'),
+    (r'scripts/gpu-check\.sh', 'a check for a GPU machine; the CTest entry `cli-gpu-check` runs it on lavapipe at a tiny scale'),
     (r'^sbatch ', 'needs a Slurm cluster'),
     (r'slurm-bake\.sh', 'needs a Slurm cluster; the CTest entry `cli-slurm` runs it on one it starts'),
 ]

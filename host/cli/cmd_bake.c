@@ -316,6 +316,8 @@ static void summary_json(json_t *sum, const fb_scene *scene, const fb_bake_opts 
     if (o->region[2])
         json_object_set_new(sum, "region", json_pack("[iiii]", o->region[0], o->region[1], o->region[2], o->region[3]));
     json_object_set_new(sum, "seconds", json_real(st->seconds));
+    /* the device's own time: its dispatches' timestamps, summed (none where nothing ran on it) */
+    if (st->gpu_seconds > 0) json_object_set_new(sum, "gpu_seconds", json_real(st->gpu_seconds));
     json_object_set_new(sum, "backend", json_string(fb_backend_name(o->backend))); /* as fractalbake/backend */
     bool any_vk = false; /* "device": the Vulkan device where a layer ran on it, else native C */
     for (int i = 0; i < scene->nlayers; i++) any_vk = any_vk || st->layer_backend[i] == FB_BACKEND_VULKAN;
