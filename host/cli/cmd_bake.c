@@ -173,7 +173,8 @@ static void print_plan(const fb_bake_plan *p, bool json)
     }
     fb_format_bytes(p->peak, a, sizeof a);
     fb_format_bytes(p->limit, b, sizeof b);
-    printf("%-26s %12s  (--max-memory %s)\n", "predicted peak", a, b);
+    printf("%-26s %12s  (--max-memory %s%s)\n", "predicted peak", a, b,
+           p->peak > p->limit ? ": more than it, so the bake would be refused" : "");
     if (p->device) {
         fb_format_bytes(p->device, a, sizeof a);
         printf("%-26s %12s  (the GPU's own memory, besides the peak)\n", "device memory", a);
