@@ -244,7 +244,7 @@ static fb_result bake_shape_plan(const fb_engine *e, const fb_bake_desc *d, cons
         if (plan->peak <= plan->limit || !sh->staged || d->strip_rows > 0 || sh->rows <= 64) break;
         sh->rows = sh->rows / 2 >= 64 ? sh->rows / 2 - sh->rows / 2 % 64 : 64;
     }
-    return plan_refuse(e, d, plan);
+    return d->dry_run ? FB_OK : plan_refuse(e, d, plan); /* a dry run shows the prediction, whatever it is */
 }
 
 /* ---- the bake ------------------------------------------------------------------------------- */
@@ -308,9 +308,11 @@ static fb_result layer_init(fb_engine *e, const fb_bake_desc *d, layer_run *lr, 
 {
     const fb_scene *s = d->scene;
     fb_log_context("layer %s", s->layers[i].name);
-    fb_result rc =
-        fb_gen_init_run(&lr->gen, s, &s->layers[i],
-                        &(fb_gen_run){{d->points_part[0], d->points_part[1]}, {d->max_memory, e->overhead}, e->scalar});
+    fb_result rc = fb_gen_init_run(
+        &lr->gen, s, &s->layers[i],
+        &(fb_gen_run){{d->points_part[0], d->points_part[1]},
+                      {d->dry_run ? UINT64_MAX : d->max_memory, e->overhead}, /* predicted, not refused */
+                      e->scalar});
     lr->e = *e;
     if (e->per_layer) /* auto on a CPU device: each layer where it runs faster (engine.h) */
         lr->e.kind = lr->gen.compute.lavapipe_faster ? FB_BACKEND_VULKAN : FB_BACKEND_NATIVE;
