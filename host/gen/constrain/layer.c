@@ -206,9 +206,8 @@ typedef struct constrain_state {
     fb_cregion *regions;
     int nregions;
     fb_constrain_out out;
-    /* the macro shape from another layer's channel (resolve), else NULL */
-    const fb_gen *macro_src;
-    int macro_channel;
+    /* the macro shape from another layer's channel (resolve); .gen NULL: none */
+    fb_source macro_src;
 } constrain_state;
 
 static constrain_state *state(const fb_gen *g)
@@ -512,25 +511,7 @@ static fb_result constrain_prepare(fb_gen *g, struct fb_engine *e, bool progress
                            .linear = P->linear};
     double t0 = fb_now();
     fb_result rc = FB_OK;
-    if (s->macro_src) { /* the source layer's channel, row band by row band on the host */
-        const fb_gen *src = s->macro_src;
-        const int band = 64;
-        void *planes[FB_GEN_MAX_CHANNELS] = {0};
-        for (int k = 0; k < fb_gen_nplanes(src) && !rc; k++)
-            if (fb_gen_plane_stored(src, k) && !(planes[k] = malloc((size_t)sc->width * band * 4)))
-                rc = fb_fail(FB_ERR_NOMEM, "out of memory");
-        for (int y0 = 0; y0 < sc->height && !rc; y0 += band) {
-            int n = y0 + band <= sc->height ? band : sc->height - y0;
-            src->compute.native_rows(src, y0, n, planes);
-            memcpy(s->macro + (size_t)y0 * sc->width, planes[fb_gen_plane_of(src, s->macro_channel)],
-                   (size_t)n * sc->width * 4);
-        }
-        for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(planes[k]);
-        for (size_t i = 0; !rc && i < (size_t)sc->width * sc->height; i++)
-            if (!isfinite(s->macro[i]))
-                rc = fb_fail(FB_ERR_INPUT, "layer %s: the macro shape from layer %s has a NaN or infinite value",
-                             g->layer->name, src->layer->name);
-    }
+    if (s->macro_src.gen) rc = fb_source_read(&s->macro_src, g, "macro", s->macro);
     if (!rc) rc = fb_constrain_run(&d, false, &s->out);
     if (rc) return rc;
     double secs = fb_now() - t0, maxdev = 0;
@@ -629,17 +610,7 @@ static fb_result constrain_resolve(fb_gen *g, const fb_gen *const *gens, const i
     const fb_constrain_params *P = fb_layer_params(g->layer);
     const fb_ref *m = &P->macro_ref;
     if (m->layer < 0) return FB_OK;
-    const fb_gen *src = gens[m->layer];
-    int c = fb_gen_channel_of(src, m->channel, g->layer->name, "macro");
-    if (c < 0) return FB_ERR_INPUT;
-    if (src->compute.host_rows || src->store.channel_types[c] == EXRIO_UINT)
-        return fb_fail(FB_ERR_INPUT, "layer \"%s\": macro \"%s\": %s", g->layer->name, src->store.channel_names[c],
-                       src->compute.host_rows
-                           ? "an op layer cannot be a macro shape yet (bake it, then give IN.exr:layer.Y)"
-                           : "a channel of integers, not heights");
-    state(g)->macro_src = src;
-    state(g)->macro_channel = c;
-    return FB_OK;
+    return fb_source_find(&state(g)->macro_src, g, gens, m, "macro", "bake it, then give IN.exr:layer.Y");
 }
 
 static int constrain_refs(fb_layer *L, fb_ref_slot *out)

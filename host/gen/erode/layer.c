@@ -112,8 +112,7 @@ static int erode_outputs(const fb_layer *L, const char **paths, const char **wha
 /* ---- the layer --------------------------------------------------------------------------------- */
 
 typedef struct erode_state {
-    const fb_gen *src; /* the input layer (resolve) and its channel */
-    int channel;
+    fb_source src; /* the input layer's channel (resolve) */
     float *height; /* bed + sediment */
     fb_erode_out out;
 } erode_state;
@@ -136,34 +135,9 @@ static double extent_of(const fb_gen *g)
     const fb_erode_layer_params *P = fb_layer_params(g->layer);
     const erode_state *s = state(g);
     if (P->extent > 0) return P->extent;
-    if (s && s->src && s->src->prepared.has_world) return s->src->prepared.world[1] - s->src->prepared.world[0];
+    const fb_gen *src = s ? s->src.gen : NULL;
+    if (src && src->prepared.has_world) return src->prepared.world[1] - src->prepared.world[0];
     return 1024;
-}
-
-/* The input's channel, band by band through its native rows (its prepare has run: the bake
- * prepares sources first), so that it is the same on every backend. */
-static fb_result read_input(const fb_gen *g, float *bed)
-{
-    const erode_state *s = state(g);
-    const fb_gen *src = s->src;
-    const fb_scene *sc = g->scene;
-    const int band = 64;
-    fb_result rc = FB_OK;
-    void *planes[FB_GEN_MAX_CHANNELS] = {0};
-    for (int k = 0; k < fb_gen_nplanes(src) && !rc; k++)
-        if (fb_gen_plane_stored(src, k) && !(planes[k] = malloc((size_t)sc->width * band * 4)))
-            rc = fb_fail(FB_ERR_NOMEM, "out of memory");
-    for (int y0 = 0; y0 < sc->height && !rc; y0 += band) {
-        int n = y0 + band <= sc->height ? band : sc->height - y0;
-        src->compute.native_rows(src, y0, n, planes);
-        memcpy(bed + (size_t)y0 * sc->width, planes[fb_gen_plane_of(src, s->channel)], (size_t)n * sc->width * 4);
-    }
-    for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(planes[k]);
-    for (size_t i = 0; !rc && i < (size_t)sc->width * sc->height; i++)
-        if (!isfinite(bed[i]))
-            rc = fb_fail(FB_ERR_INPUT, "layer %s: the heights of layer %s have a NaN or infinite value at (%zu, %zu)",
-                         g->layer->name, src->layer->name, i % sc->width, i / sc->width);
-    return rc;
 }
 
 /* The four masks as grey PNGs of P->mask_bits, each 0 at 0 and full scale at its own maximum. */
@@ -205,7 +179,7 @@ static fb_result erode_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     size_t n = (size_t)sc->width * sc->height;
     float *bed = malloc(n * sizeof *bed);
     if (!bed) return fb_fail(FB_ERR_NOMEM, "out of memory");
-    fb_result rc = read_input(g, bed);
+    fb_result rc = fb_source_read(&s->src, g, "input", bed);
     double extent = extent_of(g);
     fb_erode_desc d = {.width = sc->width,
                        .height = sc->height,
@@ -248,10 +222,10 @@ static fb_result erode_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     free(s->out.bed), s->out.bed = NULL;                       /* the strips need only the settled height */
     if (P->masks[0][0] && (rc = write_masks(g, P))) return rc; /* committed with the EXR */
     g->prepared.gpu_seconds = s->out.gpu_seconds;
-    if (s->src->prepared.has_world) {
+    if (s->src.gen->prepared.has_world) {
         g->prepared.has_world = true;
-        memcpy(g->prepared.world, s->src->prepared.world, sizeof g->prepared.world);
-        g->prepared.epsg = s->src->prepared.epsg;
+        memcpy(g->prepared.world, s->src.gen->prepared.world, sizeof g->prepared.world);
+        g->prepared.epsg = s->src.gen->prepared.epsg;
     }
     if (sc->height > 1) g->store.preview_shade[0] = g->store.preview_shade[1] = extent / sc->width;
     double cell_iters = (double)n * P->iterations;
@@ -319,17 +293,7 @@ static fb_result erode_resolve(fb_gen *g, const fb_gen *const *gens, const int *
 {
     (void)plane_offset;
     const fb_erode_layer_params *P = fb_layer_params(g->layer);
-    const fb_gen *src = gens[P->input.layer];
-    int c = fb_gen_channel_of(src, P->input.channel, g->layer->name, "input");
-    if (c < 0) return FB_ERR_INPUT;
-    if (src->compute.host_rows || src->store.channel_types[c] == EXRIO_UINT)
-        return fb_fail(FB_ERR_INPUT, "input \"%s\": %s", src->store.channel_names[c],
-                       src->compute.host_rows
-                           ? "an op layer cannot be eroded yet (bake it, or erode the layer it reads)"
-                           : "a channel of integers, not heights");
-    state(g)->src = src;
-    state(g)->channel = c;
-    return FB_OK;
+    return fb_source_find(&state(g)->src, g, gens, &P->input, "input", NULL);
 }
 
 static int erode_refs(fb_layer *L, fb_ref_slot *out)

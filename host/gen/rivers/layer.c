@@ -125,8 +125,7 @@ static fb_result parse_rivers(const fb_vctx *v, const char *path, json_t *obj, c
 /* ---- the layer --------------------------------------------------------------------------------- */
 
 typedef struct rivers_state {
-    const fb_gen *src, *map; /* the starting heights' and the uplift map's layers (resolve), or NULL */
-    int src_channel, map_channel;
+    fb_source src, map; /* the starting heights' and the uplift map's channels (resolve); .gen NULL: none */
     fb_rivers_out out;
     fb_relief relief; /* with a palette: the colour by height */
     double cell;
@@ -148,8 +147,8 @@ static const fb_gen *world_of(const fb_gen *g)
 {
     const rivers_state *s = state(g);
     if (!s) return NULL;
-    if (s->src && s->src->prepared.has_world) return s->src;
-    if (s->map && s->map->prepared.has_world) return s->map;
+    if (s->src.gen && s->src.gen->prepared.has_world) return s->src.gen;
+    if (s->map.gen && s->map.gen->prepared.has_world) return s->map.gen;
     return NULL;
 }
 
@@ -160,31 +159,6 @@ static double extent_of(const fb_gen *g)
     if (P->extent > 0) return P->extent;
     if (w) return w->prepared.world[1] - w->prepared.world[0];
     return 100000;
-}
-
-/* Channel c of layer src over the whole image, band by band through its native rows (its prepare has
- * run: the bake prepares sources first), so that it is the same on every backend; refused where it
- * is not finite. */
-static fb_result read_channel(const fb_gen *g, const fb_gen *src, int c, const char *what, float *out)
-{
-    const fb_scene *sc = g->scene;
-    const int band = 64;
-    fb_result rc = FB_OK;
-    void *planes[FB_GEN_MAX_CHANNELS] = {0};
-    for (int k = 0; k < fb_gen_nplanes(src) && !rc; k++)
-        if (fb_gen_plane_stored(src, k) && !(planes[k] = malloc((size_t)sc->width * band * 4)))
-            rc = fb_fail(FB_ERR_NOMEM, "out of memory");
-    for (int y0 = 0; y0 < sc->height && !rc; y0 += band) {
-        int n = y0 + band <= sc->height ? band : sc->height - y0;
-        src->compute.native_rows(src, y0, n, planes);
-        memcpy(out + (size_t)y0 * sc->width, planes[fb_gen_plane_of(src, c)], (size_t)n * sc->width * 4);
-    }
-    for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(planes[k]);
-    for (size_t i = 0; !rc && i < (size_t)sc->width * sc->height; i++)
-        if (!isfinite(out[i]))
-            rc = fb_fail(FB_ERR_INPUT, "layer %s: its %s %s has a NaN or infinite value at (%zu, %zu)", g->layer->name,
-                         what, src->store.channel_names[c], i % sc->width, i / sc->width);
-    return rc;
 }
 
 /* The uplift map as factors in [0, 1]: its values from the range (or its own lowest and highest). */
@@ -207,10 +181,11 @@ static fb_result rivers_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     const fb_rivers_layer_params *P = fb_layer_params(g->layer);
     const fb_scene *sc = g->scene;
     size_t n = (size_t)sc->width * sc->height;
-    float *initial = s->src ? malloc(n * sizeof *initial) : NULL, *map = s->map ? malloc(n * sizeof *map) : NULL;
-    fb_result rc = (s->src && !initial) || (s->map && !map) ? fb_fail(FB_ERR_NOMEM, "out of memory") : FB_OK;
-    if (!rc && s->src) rc = read_channel(g, s->src, s->src_channel, "input", initial);
-    if (!rc && s->map) rc = read_channel(g, s->map, s->map_channel, "uplift-map", map);
+    float *initial = s->src.gen ? malloc(n * sizeof *initial) : NULL,
+          *map = s->map.gen ? malloc(n * sizeof *map) : NULL;
+    fb_result rc = (s->src.gen && !initial) || (s->map.gen && !map) ? fb_fail(FB_ERR_NOMEM, "out of memory") : FB_OK;
+    if (!rc && s->src.gen) rc = fb_source_read(&s->src, g, "input", initial);
+    if (!rc && s->map.gen) rc = fb_source_read(&s->map, g, "uplift-map", map);
     if (!rc && map) normalise(map, n, P);
     double extent = extent_of(g), cell = extent / sc->width;
     fb_rivers_desc d = {.width = sc->width,
@@ -354,29 +329,14 @@ static fb_result rivers_init(fb_gen *g)
     return FB_OK;
 }
 
-/* A reference's layer and channel: a float channel of a layer with native rows, not an op layer. */
-static fb_result find_source(fb_gen *g, const fb_gen *const *gens, const fb_ref *r, const char *key, const fb_gen **src,
-                             int *channel)
-{
-    const fb_gen *l = gens[r->layer];
-    int c = fb_gen_channel_of(l, r->channel, g->layer->name, key);
-    if (c < 0) return FB_ERR_INPUT;
-    if (l->compute.host_rows || l->store.channel_types[c] == EXRIO_UINT)
-        return fb_fail(FB_ERR_INPUT, "layer %s: %s \"%s\": %s", g->layer->name, key, l->store.channel_names[c],
-                       l->compute.host_rows ? "an op layer cannot drive it yet (bake it, or name the layer it reads)"
-                                            : "a channel of integers, not heights");
-    *src = l, *channel = c;
-    return FB_OK;
-}
-
 static fb_result rivers_resolve(fb_gen *g, const fb_gen *const *gens, const int *plane_offset)
 {
     (void)plane_offset;
     const fb_rivers_layer_params *P = fb_layer_params(g->layer);
     rivers_state *s = state(g);
     fb_result rc = FB_OK;
-    if (P->has_input && P->input.layer >= 0) rc = find_source(g, gens, &P->input, "input", &s->src, &s->src_channel);
-    if (!rc && P->has_map) rc = find_source(g, gens, &P->map, "uplift-map", &s->map, &s->map_channel);
+    if (P->has_input && P->input.layer >= 0) rc = fb_source_find(&s->src, g, gens, &P->input, "input", NULL);
+    if (!rc && P->has_map) rc = fb_source_find(&s->map, g, gens, &P->map, "uplift-map", NULL);
     return rc;
 }
 
