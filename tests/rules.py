@@ -22,6 +22,12 @@
            stands for any generator; a * is a pattern), but those of PATH_ALLOWED.
   picture  docs/img/architecture.svg is what scripts/architecture-svg.py draws from the code: every
            folder, every generator, the arrows that check-layers.sh allows.
+  params   No generator (host/gen) assigns a JSON value to its parameters by hand: a key's table entry
+           names its field (FB_FIELD) and the schema check fills it (core/schema.h). A statement that
+           reads a JSON value (fb_json_num, json_number_value, json_string_value, ...) and names a
+           params pointer of its function (one taken from ->params or fb_layer_params, or a parameter
+           of an fb_*params type) is a breach; a value type's reader (fb_kvalue.read) writes its own
+           field, and checks that read a value into a local stay.
   tests    Tests are added with fb_test (cmake/fb_test.cmake) alone: no add_test or
            set_tests_properties elsewhere, so that the tiers are the labels.
 
@@ -331,6 +337,34 @@ def check_picture(root, bad):
                    "(scripts/architecture-svg.py > docs/img/architecture.svg)")
 
 
+JSON_READERS = re.compile(r"\b(fb_json_num|fb_json_bool|fb_json_vec2|fb_json_string|fb_json_ref|json_number_value|"
+                          r"json_integer_value|json_real_value|json_boolean_value|json_is_true|json_string_value)\s*\(")
+
+
+def check_params(root, bad):
+    taken = re.compile(r"\b(\w+)\s*=\s*(?:\([^()]*\)\s*)?(?:\w+->params\b|fb_layer_params\s*\()")
+    typed = re.compile(r"\bfb_\w*params\s*\*\s*(\w+)")
+    for rel in sources(root, "host/gen"):
+        code = code_only(read(root, rel))
+        if not JSON_READERS.search(code):
+            continue
+        lines = code.split("\n")
+        for name, first, count in functions(code):
+            body = "\n".join(lines[first - 1: first - 1 + count])
+            ptrs = set(taken.findall(body)) | set(typed.findall(body))
+            if not ptrs:
+                continue
+            named = re.compile(r"\b(?:" + "|".join(sorted(ptrs)) + r")\s*(?:->|\.)")
+            pos = 0
+            for stmt in re.split(r"(?<=;)", body):
+                m = JSON_READERS.search(stmt)
+                if m and named.search(stmt):
+                    line = first + body.count("\n", 0, pos + m.start())
+                    bad.append(f"params: {rel}:{line}: {m.group(1)} in {name}: a key's table entry names its field "
+                               f"(FB_FIELD) and the schema check fills it (core/schema.h)")
+                pos += len(stmt)
+
+
 def check_tests(root, bad):
     for rel in ["CMakeLists.txt"] + sorted(
         os.path.relpath(p, root) for p in glob.glob(os.path.join(root, "tests/**/CMakeLists.txt"), recursive=True)
@@ -359,7 +393,7 @@ def check_verdicts(root, bad):
 
 
 CHECKS = [check_env, check_print, check_length, check_table, check_gens, check_layers, check_picture, check_paths,
-          check_tests, check_verdicts]
+          check_params, check_tests, check_verdicts]
 
 
 def check(root):
@@ -477,6 +511,19 @@ def self_test(src):
                "host/gen/planted/layer.c": "const fb_gen_class fb_gen_planted = {0};\n"}, "picture:")
         plant("a stale path in a comment", add("host/core/plan.c", "/* see tests/planted.py */\n"),
               "paths:", "host/core/plan.c", "tests/planted.py")
+        plant("a parameter read from JSON by hand",
+              add(fbm, "static void planted(fb_layer *L, const json_t *obj)\n{\n    fb_fbm_params *f = (void *)L->params;\n"
+                       "    f->warp = fb_json_num(obj, \"warp\");\n}\n"),
+              "params:", fbm, "fb_json_num in planted")
+        julia = "host/gen/julia/layer.c"
+        plant("a parameter read by a helper given the params",
+              add(julia, "static void planted(fb_julia_params *j, const json_t *obj)\n{\n"
+                         "    fb_json_vec2(obj, \"c\", j->c);\n}\n"),
+              "params:", julia, "fb_json_vec2 in planted")
+        found = planted(add(julia, "static bool planted(fb_julia_params *j, const json_t *obj)\n{\n"
+                                   "    double c = json_number_value(json_object_get(obj, \"radius\"));\n"
+                                   "    return c > j->radius;\n}\n"))
+        expect("a value read into a local for a check is no breach", not found, "; ".join(found))
         plant("a test outside fb_test", add("tests/CMakeLists.txt", "add_test(NAME planted COMMAND true)\n"),
               "tests:", "add_test")
         plant("exrinfo's exit status as a verdict",

@@ -232,6 +232,49 @@ static void sink(int level, const char *msg, void *user)
     if (level == FB_LOG_ERROR) snprintf(g_last_error, sizeof g_last_error, "%s", msg);
 }
 
+/* The declaration check refuses a key nobody reads, a field its values do not fit, and one outside the
+ * parameters; a table of fields fills them from a scene's values. */
+typedef struct decl_params {
+    double x;
+    int n;
+    bool b;
+    double v[2];
+    char s[8];
+    unsigned bits;
+} decl_params;
+
+static void test_declared(void)
+{
+    char why[256];
+    const fb_keyspec good[] = {
+        {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "t", FB_CORE},
+        {"x", FB_K_NUM, 0, 10, false, NULL, "2.5", "x", FB_FIELD(decl_params, x)},
+        {"n", FB_K_INT, 0, 10, false, NULL, NULL, "n", FB_FIELD(decl_params, n)},
+        {"b", FB_K_ENUM, 0, 0, false, "off|on", NULL, "b", FB_FIELD(decl_params, b)},
+        {"v", FB_K_VEC2, -9, 9, false, NULL, NULL, "v", FB_FIELD(decl_params, v)},
+        {"s", FB_K_STRING, 0, 0, false, NULL, NULL, "s", FB_FIELD(decl_params, s)},
+        {"bits", FB_K_NAMES, 0, 0, false, "a|b|c", NULL, "bits", FB_FIELD(decl_params, bits)},
+    };
+    CHECKF(fb_schema_declared(good, FB_NKEYS(good), sizeof(decl_params), why, sizeof why), "%s", why);
+    const fb_keyspec unread[] = {{"x", FB_K_NUM, 0, 10, false, NULL, NULL, "x"}};
+    CHECK(!fb_schema_declared(unread, 1, sizeof(decl_params), why, sizeof why) && strstr(why, "\"x\""));
+    const fb_keyspec misfit[] = {{"v", FB_K_VEC2, 0, 10, false, NULL, NULL, "v", FB_FIELD(decl_params, x)}};
+    CHECK(!fb_schema_declared(misfit, 1, sizeof(decl_params), why, sizeof why) && strstr(why, "do not fit"));
+    CHECK(!fb_schema_declared(good, FB_NKEYS(good), offsetof(decl_params, bits), why, sizeof why) &&
+          strstr(why, "outside"));
+    fb_vctx v = {.origin = "decl", .text = ""};
+    json_t *obj = json_pack("{sis[ff]sssss[ss]}", "n", 7, "v", -1.5, 3.0, "b", "on", "s", "abc", "bits", "c", "a");
+    decl_params p = {.n = -1};
+    CHECK(fb_schema_check(&v, "", obj, good, FB_NKEYS(good), "a test", &p) == FB_OK);
+    CHECK(p.x == 2.5 && p.n == 7 && p.b && p.v[0] == -1.5 && p.v[1] == 3.0 && !strcmp(p.s, "abc") && p.bits == 5u);
+    json_object_set_new(obj, "s", json_string("12345678")); /* no room for it in s[8] */
+    fb_log_set_sink(sink, NULL);
+    CHECK(fb_schema_check(&v, "", obj, good, FB_NKEYS(good), "a test", &p) == FB_ERR_INPUT);
+    CHECKF(strstr(g_last_error, "s: longer than 7 characters"), "%s", g_last_error);
+    fb_log_set_sink(NULL, NULL);
+    json_decref(obj);
+}
+
 /* The registry: every generator is found by its name, its table starts and ends like the others,
  * its flags are distinct, every default is a valid value of its own key, and its parameters fit. */
 static void test_registry(void)
@@ -243,6 +286,9 @@ static void test_registry(void)
         CHECKF(fb_gen_find(c->name) == c, "%s: found by name", c->name);
         CHECKF(c->parse && c->init && c->keys && c->nkeys >= 4 && c->what, "%s: complete", c->name);
         CHECKF(c->params_size > 0, "%s: has parameters", c->name);
+        char why[256] = "";
+        CHECKF(fb_schema_declared(c->keys, c->nkeys, c->params_size, why, sizeof why), "%s: every key is read: %s",
+               c->name, why);
         CHECKF(!strcmp(c->keys[0].key, "type") && !strcmp(c->keys[1].key, "name") &&
                    !strcmp(c->keys[c->nkeys - 2].key, "half") && !strcmp(c->keys[c->nkeys - 1].key, "compression"),
                "%s: type, name first; half, compression last", c->name);
@@ -383,6 +429,7 @@ static void test_envmaps(void)
 
 int main(void)
 {
+    test_declared();
     json_numbers();
     test_registry();
     test_sets();

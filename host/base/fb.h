@@ -149,6 +149,10 @@ void fb_format_bytes(uint64_t bytes, char *out, size_t size);
  * "0.29999999999999999"); "inf", "-inf" or "nan" for those. */
 void fb_format_shortest(double v, char *out, size_t size);
 
+/* What a file of this st_mode is, for "PATH: is KIND" messages ("a FIFO", "a character device"): the
+ * output transaction's and the text inputs' (output.c, textin.c). */
+const char *fb_file_kind(unsigned mode);
+
 /* The candidate nearest to a misspelt word by edit distance (at most 1 edit for words of up to 4
  * letters, 2 beyond), for "did you mean" hints; NULL when none is that near. */
 const char *fb_closest(const char *word, const char *const *cands, int n);

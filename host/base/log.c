@@ -12,6 +12,7 @@
 #include <string.h>
 #include <sys/mman.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -259,6 +260,17 @@ const char *fb_memory_limit_note(const fb_memory *m, char *buf, size_t size)
     snprintf(buf, size, " (the default: the address-space limit, ulimit -v, %s, less about %s the process maps)", total,
              over);
     return buf;
+}
+
+const char *fb_file_kind(unsigned mode)
+{
+    return S_ISDIR(mode)    ? "a directory"
+           : S_ISLNK(mode)  ? "a symbolic link"
+           : S_ISCHR(mode)  ? "a character device"
+           : S_ISBLK(mode)  ? "a block device"
+           : S_ISFIFO(mode) ? "a FIFO"
+           : S_ISSOCK(mode) ? "a socket"
+                            : "not a regular file";
 }
 
 const char *fb_closest(const char *word, const char *const *cands, int n)

@@ -3,7 +3,6 @@
  * The output transaction. See output.h.
  */
 #include "output.h"
-#include "textin.h"
 
 #include <errno.h>
 #include <dirent.h>

@@ -13,17 +13,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-const char *fb_file_kind(unsigned mode)
-{
-    return S_ISDIR(mode)    ? "a directory"
-           : S_ISLNK(mode)  ? "a symbolic link"
-           : S_ISCHR(mode)  ? "a character device"
-           : S_ISBLK(mode)  ? "a block device"
-           : S_ISFIFO(mode) ? "a FIFO"
-           : S_ISSOCK(mode) ? "a socket"
-                            : "not a regular file";
-}
-
 static fb_result open_stdin(const char *what, FILE **out)
 {
     static bool taken; /* standard input, once: a second reader would find it empty */

@@ -44,9 +44,6 @@ fb_result fb_input_open_seekable(const char *path, const char *what, FILE **out)
  * than limit bytes, or a FIFO that gives nothing, is bad input naming it. */
 fb_result fb_input_slurp(const char *path, const char *what, size_t limit, char **text, size_t *len);
 
-/* What a file of this st_mode is, for "PATH: is KIND" messages ("a FIFO", "a character device"). */
-const char *fb_file_kind(unsigned mode);
-
 /* Whether f, opened from path, is a FIFO or pipe that is not standard input. */
 bool fb_input_is_fifo(const char *path, FILE *f);
 

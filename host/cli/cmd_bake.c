@@ -175,13 +175,11 @@ static void print_plan(const fb_bake_plan *p, bool json)
     }
     fb_format_bytes(p->peak, a, sizeof a);
     fb_format_bytes(p->limit, b, sizeof b);
-    printf("%-26s %12s  (--max-memory %s%s)
-", "predicted peak", a, b,
+    printf("%-26s %12s  (--max-memory %s%s)\n", "predicted peak", a, b,
            p->peak > p->limit ? ": more than it, so the bake would be refused" : "");
     if (p->peak != p->planned) {
         fb_format_bytes(p->planned, a, sizeof a);
-        printf("%-26s %12s  (the ring shrunk to %d pieces to fit --max-memory)
-", "with every piece in flight", a,
+        printf("%-26s %12s  (the ring shrunk to %d pieces to fit --max-memory)\n", "with every piece in flight", a,
                p->slots);
     }
     if (p->device) {

@@ -1,5 +1,6 @@
 #include "gen.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -91,4 +92,42 @@ int fb_gen_channel_of(const fb_gen *src, const char *channel, const char *who, c
         fb_fail(FB_ERR_INPUT, "layer \"%s\": %s \"%s\": layer \"%s\" has no channel %s (channels: %s)", who, what, want,
                 src->layer->name, channel[0] ? channel : "Y (name one)", have);
     return c;
+}
+
+fb_result fb_source_find(fb_source *out, const fb_gen *g, const fb_gen *const *gens, const fb_ref *r, const char *key,
+                         const char *op_hint)
+{
+    const fb_gen *l = gens[r->layer];
+    int c = fb_gen_channel_of(l, r->channel, g->layer->name, key);
+    if (c < 0) return FB_ERR_INPUT;
+    if (l->compute.host_rows)
+        return fb_fail(FB_ERR_INPUT, "layer \"%s\": %s \"%s\": an op layer cannot be read yet (%s)", g->layer->name,
+                       key, l->store.channel_names[c], op_hint ? op_hint : "bake it, or name the layer it reads");
+    if (l->store.channel_types[c] == EXRIO_UINT)
+        return fb_fail(FB_ERR_INPUT, "layer \"%s\": %s \"%s\": a channel of integers, not heights", g->layer->name, key,
+                       l->store.channel_names[c]);
+    *out = (fb_source){l, c};
+    return FB_OK;
+}
+
+fb_result fb_source_read(const fb_source *src, const fb_gen *g, const char *key, float *out)
+{
+    const fb_gen *l = src->gen;
+    const fb_scene *sc = g->scene;
+    fb_result rc = FB_OK;
+    void *planes[FB_GEN_MAX_CHANNELS] = {0};
+    for (int k = 0; k < fb_gen_nplanes(l) && !rc; k++)
+        if (fb_gen_plane_stored(l, k) && !(planes[k] = malloc((size_t)sc->width * FB_SOURCE_BAND * 4)))
+            rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+    for (int y0 = 0; y0 < sc->height && !rc; y0 += FB_SOURCE_BAND) {
+        int n = y0 + FB_SOURCE_BAND <= sc->height ? FB_SOURCE_BAND : sc->height - y0;
+        l->compute.native_rows(l, y0, n, planes);
+        memcpy(out + (size_t)y0 * sc->width, planes[fb_gen_plane_of(l, src->channel)], (size_t)n * sc->width * 4);
+    }
+    for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(planes[k]);
+    for (size_t i = 0; !rc && i < (size_t)sc->width * sc->height; i++)
+        if (!isfinite(out[i]))
+            rc = fb_fail(FB_ERR_INPUT, "layer \"%s\": %s \"%s\" has a NaN or infinite value at (%zu, %zu)",
+                         g->layer->name, key, l->store.channel_names[src->channel], i % sc->width, i / sc->width);
+    return rc;
 }

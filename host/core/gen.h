@@ -245,4 +245,27 @@ void fb_gen_fini(fb_gen *g);
  * that names the layer `who` and the channels src has. */
 int fb_gen_channel_of(const fb_gen *src, const char *channel, const char *who, const char *what);
 
+/* Another layer's channel that a layer reads whole before it computes (erode's heights, rivers' input
+ * and uplift map, constrain's macro shape). */
+typedef struct fb_source {
+    const fb_gen *gen; /* the layer; NULL: none */
+    int channel;       /* its stored channel */
+} fb_source;
+
+/* The rows of a source read at once: its native rows fill a band of this many, then the band is copied. */
+#define FB_SOURCE_BAND 64
+
+/* For g's resolve: the channel reference r (of key `key`) names among gens, a float channel of a layer
+ * with native rows. An op layer (host rows) or a channel of integers is refused with one line naming
+ * g, key and the channel; `op_hint` says what to do instead of an op layer (NULL: bake it, or name
+ * the layer it reads). */
+fb_result fb_source_find(fb_source *out, const fb_gen *g, const fb_gen *const *gens, const struct fb_ref *r,
+                         const char *key, const char *op_hint);
+
+/* The source's channel over the whole image into out (width x height floats), FB_SOURCE_BAND rows at a
+ * time through its native rows (its prepare has run: the bake prepares sources first), so that it is
+ * the same on every backend. A value that is not finite is refused with one line naming layer g, the
+ * source's key and the pixel. */
+fb_result fb_source_read(const fb_source *src, const fb_gen *g, const char *key, float *out);
+
 #endif

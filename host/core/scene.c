@@ -293,7 +293,7 @@ static fb_result parse_root(const fb_vctx *v, json_t *root, fb_scene *s)
     if (!json_is_object(root))
         return fb_schema_error(v, "", "expected a JSON object with \"size\", \"seed\" and \"layers\"");
     if (!json_object_get(root, "layers")) return fb_schema_error(v, "", "missing key \"layers\" (an array of layers)");
-    fb_result rc = fb_schema_check(v, "", root, scene_keys, FB_NKEYS(scene_keys), "a scene");
+    fb_result rc = fb_schema_check(v, "", root, scene_keys, FB_NKEYS(scene_keys), "a scene", NULL);
     if (rc) return rc;
     json_t *size = json_object_get(root, "size");
     s->width = (int)json_integer_value(json_array_get(size, 0));

@@ -66,12 +66,16 @@ extern const struct fb_kvalue fb_tiles_value;
 #define FB_HEIGHTMAP_KEYS                                                                                              \
     {"heightmap-engine", FB_K_ENUM, 0, 0, false, FB_HEIGHTMAP_ENGINES, NULL,                                           \
      "the heightmap for an engine: unreal (a landscape size, 16-bit PNG) or unity (2^n+1 square, RAW); writes "        \
-     "OUT.import.json, the import settings that reproduce the heights"},                                               \
+     "OUT.import.json, the import settings that reproduce the heights", FB_CORE},                                               \
     {"heightmap-range", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL,                                                     \
-     "heights stored as 0 and 65535 in a 16-bit heightmap (LO,HI; default: the image's lowest and highest)"},          \
+     "heights stored as 0 and 65535 in a 16-bit heightmap (LO,HI; default: the image's lowest and highest)", FB_CORE},          \
     {"tiles", FB_K_CUSTOM, 1, FB_HEIGHTMAP_MAX_TILES, false, NULL, NULL,                                               \
      "the heightmap as COLSxROWS tiles sharing their edge samples, one height range for all, named by the engine's "   \
-     "convention (OUT_x0_y0.png; unity: OUT_0_0.r16) (flag: --tiles NxM)", .value = &fb_tiles_value}
+     "convention (OUT_x0_y0.png; unity: OUT_0_0.r16) (flag: --tiles NxM)", .value = &fb_tiles_value, FB_CORE}
+/* The last key of every layer's table: its own compression, read by the scene engine. */
+#define FB_COMPRESSION_KEY                                                                                             \
+    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,                                             \
+     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\"", FB_CORE}
 /* clang-format on */
 
 static inline const void *fb_layer_params(const fb_layer *L)

@@ -463,9 +463,135 @@ fb_result fb_schema_check_value(const fb_vctx *v, const char *path, const fb_key
     return FB_OK;
 }
 
-/* Checks every key of `obj` against `keys` and fills in the defaults. */
+/* A reference: a number, or a layer's channel resolved by name after parsing (scene.c). */
+static void read_ref(const json_t *j, fb_ref *r)
+{
+    memset(r, 0, sizeof *r);
+    r->layer = -1;
+    if (json_is_number(j)) {
+        r->value = json_number_value(j);
+        return;
+    }
+    r->layer = -2; /* resolved by name in resolve_refs; the whole reference is kept in channel until then */
+    snprintf(r->channel, sizeof r->channel, "%s", json_string_value(j));
+}
+
+/* ---- the fields the keys fill ---------------------------------------------------------------- */
+
+/* Whether a key of type t may fill a field of kind f of `size` bytes (a list holds what it may take). */
+static bool fits(const fb_keyspec *k)
+{
+    size_t nd = k->size / sizeof(double), nr = k->size / sizeof(fb_ref);
+    switch (k->field) {
+    case FB_F_NONE:
+        return false;
+    case FB_F_CORE:
+    case FB_F_PARSE:
+        return true;
+    case FB_F_DOUBLE:
+        return k->type == FB_K_NUM || k->type == FB_K_INT;
+    case FB_F_INT:
+    case FB_F_UNSIGNED:
+        return k->type == FB_K_INT || k->type == FB_K_ENUM || (k->field == FB_F_UNSIGNED && k->type == FB_K_NAMES);
+    case FB_F_U64:
+        return k->type == FB_K_INT;
+    case FB_F_BOOL:
+        return k->type == FB_K_BOOL ||
+               (k->type == FB_K_ENUM && k->enums && strchr(k->enums, '|') && !strchr(strchr(k->enums, '|') + 1, '|'));
+    case FB_F_DOUBLES:
+        return (k->type == FB_K_VEC2 && nd >= 2) || (k->type == FB_K_BOUNDS && nd >= 4) ||
+               ((k->type == FB_K_NUMLIST || k->type == FB_K_FRACS) && k->count >= 1 && nd >= (size_t)k->count);
+    case FB_F_CHARS:
+        return k->size > 1 && (k->type == FB_K_STRING || k->type == FB_K_PATH || k->type == FB_K_OUTPUT ||
+                               k->type == FB_K_ENUM || k->type == FB_K_CUSTOM);
+    case FB_F_REF:
+        return k->type == FB_K_REF;
+    case FB_F_REFS:
+        return k->type == FB_K_REFS && k->count >= 1 && nr >= (size_t)k->count;
+    case FB_F_VALUE:
+        return k->value && k->value->read;
+    }
+    return false;
+}
+
+bool fb_schema_declared(const fb_keyspec *keys, int n, size_t params_size, char *msg, size_t size)
+{
+    for (int i = 0; i < n; i++) {
+        const fb_keyspec *k = &keys[i];
+        const char *why =
+            k->field == FB_F_NONE ? "fills no field and is not the engine's"
+            : !fits(k)            ? "fills a field of a type its values do not fit"
+            : k->field != FB_F_CORE && k->field != FB_F_PARSE && (k->size == 0 || k->off + k->size > params_size)
+                ? "fills a field outside the parameters"
+                : NULL;
+        if (why) {
+            snprintf(msg, size, "key \"%s\" (%s) %s", k->key, fb_ktype_name(k), why);
+            return false;
+        }
+    }
+    return true;
+}
+
+/* Writes checked value j of key k into its field of params. */
+static fb_result fill(const fb_vctx *v, const char *path, const fb_keyspec *k, const json_t *j, void *params)
+{
+    if (k->field == FB_F_CORE || k->field == FB_F_PARSE) return FB_OK;
+    if (!ALWAYS(fits(k))) return fb_fail(FB_ERR_INTERNAL, "key %s: its field does not fit its values", k->key);
+    char *at = (char *)params + k->off;
+    int idx = 0;
+    if (k->type == FB_K_ENUM && json_is_string(j)) fb_enum_index(k->enums, json_string_value(j), &idx);
+    switch (k->field) {
+    case FB_F_DOUBLE:
+        *(double *)(void *)at = json_number_value(j);
+        break;
+    case FB_F_INT:
+        *(int *)(void *)at = k->type == FB_K_ENUM ? idx : (int)json_integer_value(j);
+        break;
+    case FB_F_UNSIGNED:
+        if (k->type == FB_K_NAMES) {
+            unsigned bits = 0;
+            for (size_t i = 0; i < json_array_size(j); i++)
+                if (fb_enum_index(k->enums, json_string_value(json_array_get(j, i)), &idx)) bits |= 1u << idx;
+            *(unsigned *)(void *)at = bits;
+        } else {
+            *(unsigned *)(void *)at = k->type == FB_K_ENUM ? (unsigned)idx : (unsigned)json_integer_value(j);
+        }
+        break;
+    case FB_F_U64:
+        *(uint64_t *)(void *)at = (uint64_t)json_integer_value(j);
+        break;
+    case FB_F_BOOL:
+        *(bool *)(void *)at = k->type == FB_K_ENUM ? idx == 1 : json_is_true(j);
+        break;
+    case FB_F_DOUBLES:
+        for (size_t i = 0; json_is_array(j) && i < json_array_size(j) && i < k->size / sizeof(double); i++)
+            ((double *)(void *)at)[i] = json_number_value(json_array_get(j, i));
+        break;
+    case FB_F_CHARS:
+        if (json_is_string(j) && strlen(json_string_value(j)) >= k->size)
+            return fb_schema_error(v, path, "longer than %zu characters", k->size - 1);
+        snprintf(at, k->size, "%s", json_is_string(j) ? json_string_value(j) : "");
+        break;
+    case FB_F_REF:
+        read_ref(j, (fb_ref *)(void *)at);
+        break;
+    case FB_F_REFS:
+        for (size_t i = 0; i < json_array_size(j) && i < k->size / sizeof(fb_ref); i++)
+            read_ref(json_array_get(j, i), (fb_ref *)(void *)at + i);
+        break;
+    case FB_F_VALUE:
+        return k->value->read(v, path, j, at);
+    case FB_F_NONE:
+    case FB_F_CORE:
+    case FB_F_PARSE:
+        break;
+    }
+    return FB_OK;
+}
+
+/* Checks every key of `obj` against `keys`, fills in the defaults and the fields of params. */
 fb_result fb_schema_check(const fb_vctx *v, const char *path, json_t *obj, const fb_keyspec *keys, int n,
-                          const char *what)
+                          const char *what, void *params)
 {
     const char *key;
     json_t *val;
@@ -501,6 +627,13 @@ fb_result fb_schema_check(const fb_vctx *v, const char *path, json_t *obj, const
         if (given) continue;
         json_t *d = json_loads(keys[i].def, JSON_DECODE_ANY, NULL);
         if (!d || json_object_set_new(obj, keys[i].key, d) != 0) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    }
+    for (int i = 0; params && i < n; i++) {
+        json_t *j = json_object_get(obj, keys[i].key);
+        if (!j) continue;
+        snprintf(sub, sizeof sub, "%s%s%s", path, path[0] ? "." : "", keys[i].key);
+        fb_result rc = fill(v, sub, &keys[i], j, params);
+        if (rc) return rc;
     }
     return FB_OK;
 }
@@ -598,22 +731,4 @@ bool fb_string_names_file(const char *text)
 {
     (void)text;
     return true;
-}
-
-void fb_json_string(const json_t *obj, const char *key, char *out, size_t size)
-{
-    const json_t *j = json_object_get(obj, key);
-    snprintf(out, size, "%s", json_is_string(j) ? json_string_value(j) : "");
-}
-
-void fb_json_ref(const json_t *j, fb_ref *r)
-{
-    memset(r, 0, sizeof *r);
-    r->layer = -1;
-    if (json_is_number(j)) {
-        r->value = json_number_value(j);
-        return;
-    }
-    r->layer = -2; /* resolved by name in resolve_refs; the whole reference is kept in channel until then */
-    snprintf(r->channel, sizeof r->channel, "%s", json_string_value(j));
 }

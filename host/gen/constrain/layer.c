@@ -86,49 +86,63 @@ static const fb_kvalue cpoints_value = {.check = check_cpoints, .names_file = fb
                        cregions_value = {.check = check_cregions, .names_file = fb_string_names_file};
 
 static const fb_keyspec constrain_keys[] = {
-    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"constrain\""},
-    {"name", FB_K_NAME, 0, 0, false, NULL, "\"terrain\"", "layer name; channels NAME.Y, .macro, .detail, .T, .H"},
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"constrain\"", FB_CORE},
+    {"name", FB_K_NAME, 0, 0, false, NULL, "\"terrain\"", "layer name; channels NAME.Y, .macro, .detail, .T, .H",
+     FB_CORE},
     {"macro", FB_K_CUSTOM, 0, 0, false, NULL, NULL,
-     "macro shape d: cone | ridge | boss | bowl, or IN.exr[:layer.channel] (default boss)", .value = &macro_value},
-    {"macro-height", FB_K_NUM, -1e6, 1e6, false, NULL, "10.0", "height of a built-in macro shape"},
-    {"profile", FB_K_PATH, 0, 0, false, NULL, NULL, "1D (height 1): a CSV profile (d, or x,d per line) as the macro"},
-    {"T", FB_K_NUM, 0, 1e6, true, NULL, "0.3", "approximation degree T > 0 (small: close to the macro shape)"},
-    {"hurst", FB_K_NUM, 0, 1, true, NULL, "0.8", "roughness degree H in (0, 1) (large: smoother)"},
-    {"sigma", FB_K_NUM, 0, 1e6, true, NULL, "1.0", "standard deviation of P_fbm's first level"},
-    {"delta", FB_K_NUM, 0, 1e6, true, NULL, "0.01", "delta of Z = 1 / (sqrt(6) sigma + delta)"},
+     "macro shape d: cone | ridge | boss | bowl, or IN.exr[:layer.channel] (default boss)", .value = &macro_value,
+     FB_FIELD(fb_constrain_params, macro)},
+    {"macro-height", FB_K_NUM, -1e6, 1e6, false, NULL, "10.0", "height of a built-in macro shape",
+     FB_FIELD(fb_constrain_params, macro_height)},
+    {"profile", FB_K_PATH, 0, 0, false, NULL, NULL, "1D (height 1): a CSV profile (d, or x,d per line) as the macro",
+     FB_FIELD(fb_constrain_params, profile)},
+    {"T", FB_K_NUM, 0, 1e6, true, NULL, "0.3", "approximation degree T > 0 (small: close to the macro shape)",
+     FB_FIELD(fb_constrain_params, T)},
+    {"hurst", FB_K_NUM, 0, 1, true, NULL, "0.8", "roughness degree H in (0, 1) (large: smoother)",
+     FB_FIELD(fb_constrain_params, hurst)},
+    {"sigma", FB_K_NUM, 0, 1e6, true, NULL, "1.0", "standard deviation of P_fbm's first level",
+     FB_FIELD(fb_constrain_params, sigma)},
+    {"delta", FB_K_NUM, 0, 1e6, true, NULL, "0.01", "delta of Z = 1 / (sqrt(6) sigma + delta)",
+     FB_FIELD(fb_constrain_params, delta)},
     {"soften", FB_K_NUM, 0, 2.4, false, NULL, "0",
      "soften the crease of equation 10 along P's zero lines: D - d follows an odd cubic for |P| < soften sigma "
-     "(0: the paper)"},
+     "(0: the paper)",
+     FB_FIELD(fb_constrain_params, soften)},
     {"points", FB_K_CUSTOM, 0, 0, false, NULL, NULL,
      "discrete constraints D = d: a file of x,y per line or [[x, y], ...] (pixels from the top left)",
-     .value = &cpoints_value},
+     .value = &cpoints_value, FB_FIELD(fb_constrain_params, points)},
     {"regions", FB_K_CUSTOM, 0, 0, false, NULL, NULL,
-     "continuous constraints: a file of x,y,T|H,value per line or [[x, y, \"H\", 0.95], ...]",
-     .value = &cregions_value},
-    {"domain", FB_K_INT, 0, 16, false, NULL, "4", "a region reaches pixels within 2^domain (L1 distance, eq. 13)"},
-    {"falloff", FB_K_NUM, 0, 1e6, false, NULL, "0.01", "f_d of eq. 14: fall-off with the squared distance"},
+     "continuous constraints: a file of x,y,T|H,value per line or [[x, y, \"H\", 0.95], ...]", .value = &cregions_value,
+     FB_FIELD(fb_constrain_params, regions)},
+    {"domain", FB_K_INT, 0, 16, false, NULL, "4", "a region reaches pixels within 2^domain (L1 distance, eq. 13)",
+     FB_FIELD(fb_constrain_params, domain)},
+    {"falloff", FB_K_NUM, 0, 1e6, false, NULL, "0.01", "f_d of eq. 14: fall-off with the squared distance",
+     FB_FIELD(fb_constrain_params, falloff)},
     {"buffering", FB_K_ENUM, 0, 0, false, "regional|none|naive", "\"regional\"",
-     "discrete constraints: regional buffering, none (zeroed when made), naive (zeroed after)"},
+     "discrete constraints: regional buffering, none (zeroed when made), naive (zeroed after)",
+     FB_FIELD(fb_constrain_params, buffering)},
     {"interpolation", FB_K_ENUM, 0, 0, false, "smooth|linear", "\"smooth\"",
      "P_fbm's levels: smooth stencils of 16 parents (no creases along the coarse levels' rows and columns) or the "
-     "paper's midpoint / diamond-square means"},
-    {"water", FB_K_NUM, -1e15, 1e15, false, NULL, NULL, "a water level: channel NAME.A is 1 where D >= water"},
-    {"csv", FB_K_OUTPUT, 0, 0, false, NULL, NULL, "1D: also write x, d, D per line to this CSV file"},
+     "paper's midpoint / diamond-square means",
+     FB_FIELD(fb_constrain_params, linear)},
+    {"water", FB_K_NUM, -1e15, 1e15, false, NULL, NULL, "a water level: channel NAME.A is 1 where D >= water",
+     FB_FIELD(fb_constrain_params, water)},
+    {"csv", FB_K_OUTPUT, 0, 0, false, NULL, NULL, "1D: also write x, d, D per line to this CSV file",
+     FB_FIELD(fb_constrain_params, csv)},
     {"plot", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
-     "1D: also draw d (blue), D (black) and the constraints (red) to this PNG"},
+     "1D: also draw d (blue), D (black) and the constraints (red) to this PNG", FB_FIELD(fb_constrain_params, plot)},
     {"heightmap", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
-     "also write the heights for engines: OUT.png (16-bit grey) or OUT.r16 (16-bit raw, little-endian)"},
+     "also write the heights for engines: OUT.png (16-bit grey) or OUT.r16 (16-bit raw, little-endian)", FB_CORE},
     FB_HEIGHTMAP_KEYS,
-    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store the channels as half (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
-     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store the channels as half (flags: --half, --float)", FB_CORE},
+    FB_COMPRESSION_KEY,
 };
 
 static fb_result parse_constrain(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
 {
-    fb_result rc = fb_schema_check(v, path, obj, constrain_keys, FB_NKEYS(constrain_keys), "a constrain layer");
-    if (rc) return rc;
     fb_constrain_params *c = (void *)L->params;
+    fb_result rc = fb_schema_check(v, path, obj, constrain_keys, FB_NKEYS(constrain_keys), "a constrain layer", c);
+    if (rc) return rc;
     char sub[256];
     const json_t *macro = json_object_get(obj, "macro"), *prof = json_object_get(obj, "profile");
     if (macro && prof) {
@@ -146,10 +160,7 @@ static fb_result parse_constrain(const fb_vctx *v, const char *path, json_t *obj
             return fb_schema_error(v, sub, "%s output is for 1D profiles: the scene's height must be 1 (it is %d)",
                                    k ? "plot" : "CSV", s->height);
         }
-    snprintf(c->macro, sizeof c->macro, "%s", macro ? json_string_value(macro) : prof ? "" : "boss");
-    fb_json_string(obj, "profile", c->profile, sizeof c->profile);
-    fb_json_string(obj, "csv", c->csv, sizeof c->csv);
-    fb_json_string(obj, "plot", c->plot, sizeof c->plot);
+    if (!macro && !prof) snprintf(c->macro, sizeof c->macro, "boss");
     c->macro_ref.layer = -1;
     if (macro && !strstr(c->macro, ".exr") && strcmp(c->macro, "cone") && strcmp(c->macro, "ridge") &&
         strcmp(c->macro, "boss") && strcmp(c->macro, "bowl")) {
@@ -165,29 +176,14 @@ static fb_result parse_constrain(const fb_vctx *v, const char *path, json_t *obj
         c->macro_ref.layer = -2;
         snprintf(c->macro_ref.channel, sizeof c->macro_ref.channel, "%s", c->macro);
     }
-    if (fb_json_num(obj, "hurst") >= 1) {
+    if (c->hurst >= 1) {
         snprintf(sub, sizeof sub, "%s.hurst", path);
-        return fb_schema_error(v, sub, "expected a roughness H in (0, 1), found %g", fb_json_num(obj, "hurst"));
+        return fb_schema_error(v, sub, "expected a roughness H in (0, 1), found %g", c->hurst);
     }
-    c->macro_height = fb_json_num(obj, "macro-height");
-    c->T = fb_json_num(obj, "T");
-    c->hurst = fb_json_num(obj, "hurst");
-    c->sigma = fb_json_num(obj, "sigma");
-    c->delta = fb_json_num(obj, "delta");
-    c->soften = json_object_get(obj, "soften") ? fb_json_num(obj, "soften") : 0;
-    c->domain = (int)json_integer_value(json_object_get(obj, "domain"));
-    c->falloff = fb_json_num(obj, "falloff");
-    int b = 0;
-    fb_enum_index("regional|none|naive", json_string_value(json_object_get(obj, "buffering")), &b);
-    c->buffering = b;
-    c->linear = !strcmp(json_string_value(json_object_get(obj, "interpolation")), "linear");
     c->has_water = json_object_get(obj, "water") != NULL;
-    c->water = c->has_water ? fb_json_num(obj, "water") : 0;
     const json_t *pts = json_object_get(obj, "points"), *regs = json_object_get(obj, "regions");
-    c->points_inline = pts && json_is_array(pts);
+    c->points_inline = pts && json_is_array(pts); /* else the fields hold the files */
     c->regions_inline = regs && json_is_array(regs);
-    if (pts && !c->points_inline) fb_json_string(obj, "points", c->points, sizeof c->points);
-    if (regs && !c->regions_inline) fb_json_string(obj, "regions", c->regions, sizeof c->regions);
     /* inline points and regions: inside the image; region values in range */
     for (size_t i = 0; c->points_inline && i < json_array_size(pts); i++) {
         const json_t *p = json_array_get(pts, i);
@@ -225,9 +221,8 @@ typedef struct constrain_state {
     fb_cregion *regions;
     int nregions;
     fb_constrain_out out;
-    /* the macro shape from another layer's channel (resolve), else NULL */
-    const fb_gen *macro_src;
-    int macro_channel;
+    /* the macro shape from another layer's channel (resolve); .gen NULL: none */
+    fb_source macro_src;
 } constrain_state;
 
 static constrain_state *state(const fb_gen *g)
@@ -531,25 +526,7 @@ static fb_result constrain_prepare(fb_gen *g, struct fb_engine *e, bool progress
                            .linear = P->linear};
     double t0 = fb_now();
     fb_result rc = FB_OK;
-    if (s->macro_src) { /* the source layer's channel, row band by row band on the host */
-        const fb_gen *src = s->macro_src;
-        const int band = 64;
-        void *planes[FB_GEN_MAX_CHANNELS] = {0};
-        for (int k = 0; k < fb_gen_nplanes(src) && !rc; k++)
-            if (fb_gen_plane_stored(src, k) && !(planes[k] = malloc((size_t)sc->width * band * 4)))
-                rc = fb_fail(FB_ERR_NOMEM, "out of memory");
-        for (int y0 = 0; y0 < sc->height && !rc; y0 += band) {
-            int n = y0 + band <= sc->height ? band : sc->height - y0;
-            src->compute.native_rows(src, y0, n, planes);
-            memcpy(s->macro + (size_t)y0 * sc->width, planes[fb_gen_plane_of(src, s->macro_channel)],
-                   (size_t)n * sc->width * 4);
-        }
-        for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(planes[k]);
-        for (size_t i = 0; !rc && i < (size_t)sc->width * sc->height; i++)
-            if (!isfinite(s->macro[i]))
-                rc = fb_fail(FB_ERR_INPUT, "layer %s: the macro shape from layer %s has a NaN or infinite value",
-                             g->layer->name, src->layer->name);
-    }
+    if (s->macro_src.gen) rc = fb_source_read(&s->macro_src, g, "macro", s->macro);
     if (!rc) rc = fb_constrain_run(&d, false, &s->out);
     if (rc) return rc;
     double secs = fb_now() - t0, maxdev = 0;
@@ -648,17 +625,7 @@ static fb_result constrain_resolve(fb_gen *g, const fb_gen *const *gens, const i
     const fb_constrain_params *P = fb_layer_params(g->layer);
     const fb_ref *m = &P->macro_ref;
     if (m->layer < 0) return FB_OK;
-    const fb_gen *src = gens[m->layer];
-    int c = fb_gen_channel_of(src, m->channel, g->layer->name, "macro");
-    if (c < 0) return FB_ERR_INPUT;
-    if (src->compute.host_rows || src->store.channel_types[c] == EXRIO_UINT)
-        return fb_fail(FB_ERR_INPUT, "layer \"%s\": macro \"%s\": %s", g->layer->name, src->store.channel_names[c],
-                       src->compute.host_rows
-                           ? "an op layer cannot be a macro shape yet (bake it, then give IN.exr:layer.Y)"
-                           : "a channel of integers, not heights");
-    state(g)->macro_src = src;
-    state(g)->macro_channel = c;
-    return FB_OK;
+    return fb_source_find(&state(g)->macro_src, g, gens, m, "macro", "bake it, then give IN.exr:layer.Y");
 }
 
 static int constrain_refs(fb_layer *L, fb_ref_slot *out)

@@ -12,7 +12,8 @@ typedef struct fb_erode_layer_params {
     double extent; /* the image's width in world units (0: the input's world, else 1024) */
     int iterations;
     double duration, rain, gravity, capacity, dissolve, deposit, evaporate, depth, talus, thermal;
-    char masks[4][1040]; /* "masks": PREFIX.flow.png, .wear, .deposition, .sediment; "" none */
+    char prefix[4096];   /* "masks": PREFIX */
+    char masks[4][1040]; /* PREFIX.flow.png, .wear, .deposition, .sediment; "" none */
     int mask_bits;       /* 8 or 16 */
 } fb_erode_layer_params;
 

@@ -22,43 +22,58 @@
 /* ---- the scene keys and their parser ---------------------------------------------------------- */
 
 static const fb_keyspec erode_keys[] = {
-    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"erode\""},
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"erode\"", FB_CORE},
     {"name", FB_K_NAME, 0, 0, false, NULL, "\"eroded\"",
-     "layer name; channels NAME.Y, .flow, .wear, .deposition, .sediment, .water"},
-    {"input", FB_K_REF, 0, 0, false, NULL, NULL, "the heights to erode: another layer's channel (\"layer\": its Y)"},
+     "layer name; channels NAME.Y, .flow, .wear, .deposition, .sediment, .water", FB_CORE},
+    {"input", FB_K_REF, 0, 0, false, NULL, NULL, "the heights to erode: another layer's channel (\"layer\": its Y)",
+     FB_FIELD(fb_erode_layer_params, input)},
     {"extent", FB_K_NUM, 0, 1e12, true, NULL, NULL,
-     "the image's width in world units (the heights' unit); default: the input's world width, else 1024"},
+     "the image's width in world units (the heights' unit); default: the input's world width, else 1024",
+     FB_FIELD(fb_erode_layer_params, extent)},
     {"iterations", FB_K_INT, 1, 1000000, false, NULL, "200",
-     "time steps over the duration (more: a smaller step; double them with the size)"},
-    {"duration", FB_K_NUM, 0, 1e9, true, NULL, "60", "simulated time, in time units"},
-    {"rain", FB_K_NUM, 0, 1e6, false, NULL, "0.005", "water added everywhere, height per time unit"},
-    {"gravity", FB_K_NUM, 0, 1e6, true, NULL, "9.81", "the acceleration that drives water down the pipes"},
-    {"capacity", FB_K_NUM, 0, 1e6, false, NULL, "0.05", "Kc: sediment carried per unit sin(slope) and unit speed"},
-    {"dissolve", FB_K_NUM, 0, 1e6, false, NULL, "0.5", "Ks: rate at which water takes up its capacity, per time unit"},
-    {"deposit", FB_K_NUM, 0, 1e6, false, NULL, "1.0", "Kd: rate at which water drops sediment above it, per time unit"},
-    {"evaporation", FB_K_NUM, 0, 1e6, false, NULL, "0.2", "Ke: water lost, fraction per time unit"},
+     "time steps over the duration (more: a smaller step; double them with the size)",
+     FB_FIELD(fb_erode_layer_params, iterations)},
+    {"duration", FB_K_NUM, 0, 1e9, true, NULL, "60", "simulated time, in time units",
+     FB_FIELD(fb_erode_layer_params, duration)},
+    {"rain", FB_K_NUM, 0, 1e6, false, NULL, "0.005", "water added everywhere, height per time unit",
+     FB_FIELD(fb_erode_layer_params, rain)},
+    {"gravity", FB_K_NUM, 0, 1e6, true, NULL, "9.81", "the acceleration that drives water down the pipes",
+     FB_FIELD(fb_erode_layer_params, gravity)},
+    {"capacity", FB_K_NUM, 0, 1e6, false, NULL, "0.05", "Kc: sediment carried per unit sin(slope) and unit speed",
+     FB_FIELD(fb_erode_layer_params, capacity)},
+    {"dissolve", FB_K_NUM, 0, 1e6, false, NULL, "0.5", "Ks: rate at which water takes up its capacity, per time unit",
+     FB_FIELD(fb_erode_layer_params, dissolve)},
+    {"deposit", FB_K_NUM, 0, 1e6, false, NULL, "1.0", "Kd: rate at which water drops sediment above it, per time unit",
+     FB_FIELD(fb_erode_layer_params, deposit)},
+    {"evaporation", FB_K_NUM, 0, 1e6, false, NULL, "0.2", "Ke: water lost, fraction per time unit",
+     FB_FIELD(fb_erode_layer_params, evaporate)},
     {"depth", FB_K_NUM, 0, 1e6, true, NULL, "0.05",
-     "the water depth that carries the full capacity; shallower water carries proportionally less"},
-    {"talus", FB_K_NUM, 0, 89.9, false, NULL, "35", "thermal erosion: slopes steeper than this angle (degrees) slide"},
-    {"thermal", FB_K_NUM, 0, 1e6, false, NULL, "0.5", "thermal erosion rate, per time unit (0: none)"},
+     "the water depth that carries the full capacity; shallower water carries proportionally less",
+     FB_FIELD(fb_erode_layer_params, depth)},
+    {"talus", FB_K_NUM, 0, 89.9, false, NULL, "35", "thermal erosion: slopes steeper than this angle (degrees) slide",
+     FB_FIELD(fb_erode_layer_params, talus)},
+    {"thermal", FB_K_NUM, 0, 1e6, false, NULL, "0.5", "thermal erosion rate, per time unit (0: none)",
+     FB_FIELD(fb_erode_layer_params, thermal)},
     {"heightmap", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
-     "also write the eroded heights (Y) for engines: OUT.png (16-bit grey) or OUT.r16 (16-bit raw, little-endian)"},
+     "also write the eroded heights (Y) for engines: OUT.png (16-bit grey) or OUT.r16 (16-bit raw, little-endian)",
+     FB_CORE},
     FB_HEIGHTMAP_KEYS,
     {"masks", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
      "also write the masks for texturing as grey PNGs: PREFIX.flow.png, PREFIX.wear.png, PREFIX.deposition.png, "
-     "PREFIX.sediment.png, each from 0 to its own maximum (kept in the text chunk fractalbake/mask-max)"},
-    {"mask-bits", FB_K_INT, 8, 16, false, NULL, "16", "the masks' PNG depth: 8 or 16 bits"},
-    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store the channels as half (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
-     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+     "PREFIX.sediment.png, each from 0 to its own maximum (kept in the text chunk fractalbake/mask-max)",
+     FB_FIELD(fb_erode_layer_params, prefix)},
+    {"mask-bits", FB_K_INT, 8, 16, false, NULL, "16", "the masks' PNG depth: 8 or 16 bits",
+     FB_FIELD(fb_erode_layer_params, mask_bits)},
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store the channels as half (flags: --half, --float)", FB_CORE},
+    FB_COMPRESSION_KEY,
 };
 
 static fb_result parse_erode(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
 {
     (void)s;
-    fb_result rc = fb_schema_check(v, path, obj, erode_keys, FB_NKEYS(erode_keys), "an erode layer");
-    if (rc) return rc;
     fb_erode_layer_params *P = (void *)L->params;
+    fb_result rc = fb_schema_check(v, path, obj, erode_keys, FB_NKEYS(erode_keys), "an erode layer", P);
+    if (rc) return rc;
     char sub[256];
     const json_t *in = json_object_get(obj, "input");
     if (!in || json_is_number(in)) {
@@ -67,26 +82,12 @@ static fb_result parse_erode(const fb_vctx *v, const char *path, json_t *obj, co
                                in ? "expected another layer's heights (\"layer\" or \"layer.channel\"), not a number"
                                   : "required for an erode layer (the layer whose heights it erodes)");
     }
-    fb_json_ref(in, &P->input);
-    P->extent = json_object_get(obj, "extent") ? fb_json_num(obj, "extent") : 0;
-    P->iterations = (int)json_integer_value(json_object_get(obj, "iterations"));
-    P->duration = fb_json_num(obj, "duration");
-    P->rain = fb_json_num(obj, "rain");
-    P->gravity = fb_json_num(obj, "gravity");
-    P->capacity = fb_json_num(obj, "capacity");
-    P->dissolve = fb_json_num(obj, "dissolve");
-    P->deposit = fb_json_num(obj, "deposit");
-    P->evaporate = fb_json_num(obj, "evaporation");
-    P->depth = fb_json_num(obj, "depth");
-    P->talus = fb_json_num(obj, "talus");
-    P->thermal = fb_json_num(obj, "thermal");
-    P->mask_bits = (int)json_integer_value(json_object_get(obj, "mask-bits"));
     if (P->mask_bits != 8 && P->mask_bits != 16) {
         snprintf(sub, sizeof sub, "%s.mask-bits", path);
         return fb_schema_error(v, sub, "a PNG's depth: expected 8 or 16, found %d", P->mask_bits);
     }
-    const char *masks = json_string_value(json_object_get(obj, "masks"));
-    if (masks) {
+    const char *masks = P->prefix;
+    if (masks[0]) {
         static const char *const names[4] = {"flow", "wear", "deposition", "sediment"};
         snprintf(sub, sizeof sub, "%s.masks", path);
         if (strlen(masks) >= sizeof P->masks[0] - 16)
@@ -111,8 +112,7 @@ static int erode_outputs(const fb_layer *L, const char **paths, const char **wha
 /* ---- the layer --------------------------------------------------------------------------------- */
 
 typedef struct erode_state {
-    const fb_gen *src; /* the input layer (resolve) and its channel */
-    int channel;
+    fb_source src; /* the input layer's channel (resolve) */
     float *height; /* bed + sediment */
     fb_erode_out out;
 } erode_state;
@@ -135,34 +135,9 @@ static double extent_of(const fb_gen *g)
     const fb_erode_layer_params *P = fb_layer_params(g->layer);
     const erode_state *s = state(g);
     if (P->extent > 0) return P->extent;
-    if (s && s->src && s->src->prepared.has_world) return s->src->prepared.world[1] - s->src->prepared.world[0];
+    const fb_gen *src = s ? s->src.gen : NULL;
+    if (src && src->prepared.has_world) return src->prepared.world[1] - src->prepared.world[0];
     return 1024;
-}
-
-/* The input's channel, band by band through its native rows (its prepare has run: the bake
- * prepares sources first), so that it is the same on every backend. */
-static fb_result read_input(const fb_gen *g, float *bed)
-{
-    const erode_state *s = state(g);
-    const fb_gen *src = s->src;
-    const fb_scene *sc = g->scene;
-    const int band = 64;
-    fb_result rc = FB_OK;
-    void *planes[FB_GEN_MAX_CHANNELS] = {0};
-    for (int k = 0; k < fb_gen_nplanes(src) && !rc; k++)
-        if (fb_gen_plane_stored(src, k) && !(planes[k] = malloc((size_t)sc->width * band * 4)))
-            rc = fb_fail(FB_ERR_NOMEM, "out of memory");
-    for (int y0 = 0; y0 < sc->height && !rc; y0 += band) {
-        int n = y0 + band <= sc->height ? band : sc->height - y0;
-        src->compute.native_rows(src, y0, n, planes);
-        memcpy(bed + (size_t)y0 * sc->width, planes[fb_gen_plane_of(src, s->channel)], (size_t)n * sc->width * 4);
-    }
-    for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(planes[k]);
-    for (size_t i = 0; !rc && i < (size_t)sc->width * sc->height; i++)
-        if (!isfinite(bed[i]))
-            rc = fb_fail(FB_ERR_INPUT, "layer %s: the heights of layer %s have a NaN or infinite value at (%zu, %zu)",
-                         g->layer->name, src->layer->name, i % sc->width, i / sc->width);
-    return rc;
 }
 
 /* The four masks as grey PNGs of P->mask_bits, each 0 at 0 and full scale at its own maximum. */
@@ -204,7 +179,7 @@ static fb_result erode_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     size_t n = (size_t)sc->width * sc->height;
     float *bed = malloc(n * sizeof *bed);
     if (!bed) return fb_fail(FB_ERR_NOMEM, "out of memory");
-    fb_result rc = read_input(g, bed);
+    fb_result rc = fb_source_read(&s->src, g, "input", bed);
     double extent = extent_of(g);
     fb_erode_desc d = {.width = sc->width,
                        .height = sc->height,
@@ -247,10 +222,10 @@ static fb_result erode_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     free(s->out.bed), s->out.bed = NULL;                       /* the strips need only the settled height */
     if (P->masks[0][0] && (rc = write_masks(g, P))) return rc; /* committed with the EXR */
     g->prepared.gpu_seconds = s->out.gpu_seconds;
-    if (s->src->prepared.has_world) {
+    if (s->src.gen->prepared.has_world) {
         g->prepared.has_world = true;
-        memcpy(g->prepared.world, s->src->prepared.world, sizeof g->prepared.world);
-        g->prepared.epsg = s->src->prepared.epsg;
+        memcpy(g->prepared.world, s->src.gen->prepared.world, sizeof g->prepared.world);
+        g->prepared.epsg = s->src.gen->prepared.epsg;
     }
     if (sc->height > 1) g->store.preview_shade[0] = g->store.preview_shade[1] = extent / sc->width;
     double cell_iters = (double)n * P->iterations;
@@ -318,17 +293,7 @@ static fb_result erode_resolve(fb_gen *g, const fb_gen *const *gens, const int *
 {
     (void)plane_offset;
     const fb_erode_layer_params *P = fb_layer_params(g->layer);
-    const fb_gen *src = gens[P->input.layer];
-    int c = fb_gen_channel_of(src, P->input.channel, g->layer->name, "input");
-    if (c < 0) return FB_ERR_INPUT;
-    if (src->compute.host_rows || src->store.channel_types[c] == EXRIO_UINT)
-        return fb_fail(FB_ERR_INPUT, "input \"%s\": %s", src->store.channel_names[c],
-                       src->compute.host_rows
-                           ? "an op layer cannot be eroded yet (bake it, or erode the layer it reads)"
-                           : "a channel of integers, not heights");
-    state(g)->src = src;
-    state(g)->channel = c;
-    return FB_OK;
+    return fb_source_find(&state(g)->src, g, gens, &P->input, "input", NULL);
 }
 
 static int erode_refs(fb_layer *L, fb_ref_slot *out)

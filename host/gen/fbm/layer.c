@@ -18,68 +18,59 @@
 
 /* ---- the scene keys and their parser ---------------------------------------------------------- */
 
-static const char *const noise_names = "gradient|value|simplex|cellular|cellular-f2|sine";
-
 static const fb_keyspec fbm_keys[] = {
-    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"fbm\""},
-    {"name", FB_K_NAME, 0, 0, false, NULL, "\"fbm\"", "layer name; the channel is NAME.Y (flag: --layer)"},
-    {"noise", FB_K_ENUM, 0, 0, false, "gradient|value|simplex|cellular|cellular-f2|sine", "\"gradient\"", "base noise"},
-    {"hurst", FB_K_NUM, 0, 1, false, NULL, "1.0", "Hurst exponent H; gain G = 2^-H", 0, NULL, "gain"},
-    {"gain", FB_K_NUM, 0, 2, true, NULL, NULL, "octave gain G, instead of hurst"},
-    {"octaves", FB_K_INT, 1, 32, false, NULL, "8", "number of octaves"},
-    {"lacunarity", FB_K_NUM, 1.01, 8, false, NULL, "2.0", "frequency ratio between octaves"},
-    {"rotation", FB_K_NUM, -180, 180, false, NULL, "36.87", "rotation between octaves, degrees"},
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"fbm\"", FB_CORE},
+    {"name", FB_K_NAME, 0, 0, false, NULL, "\"fbm\"", "layer name; the channel is NAME.Y (flag: --layer)", FB_CORE},
+    {"noise", FB_K_ENUM, 0, 0, false, "gradient|value|simplex|cellular|cellular-f2|sine", "\"gradient\"", "base noise",
+     FB_FIELD(fb_fbm_params, noise)},
+    {"hurst", FB_K_NUM, 0, 1, false, NULL, "1.0", "Hurst exponent H; gain G = 2^-H", 0, NULL, "gain",
+     FB_FIELD(fb_fbm_params, hurst)},
+    {"gain", FB_K_NUM, 0, 2, true, NULL, NULL, "octave gain G, instead of hurst", FB_FIELD(fb_fbm_params, gain)},
+    {"octaves", FB_K_INT, 1, 32, false, NULL, "8", "number of octaves", FB_FIELD(fb_fbm_params, octaves)},
+    {"lacunarity", FB_K_NUM, 1.01, 8, false, NULL, "2.0", "frequency ratio between octaves",
+     FB_FIELD(fb_fbm_params, lacunarity)},
+    {"rotation", FB_K_NUM, -180, 180, false, NULL, "36.87", "rotation between octaves, degrees",
+     FB_FIELD(fb_fbm_params, rotation)},
     {"frequency", FB_K_NUM, 0, 1e6, true, NULL, "4.0",
-     "cycles of the first octave across the image width (latlong, cube: round the equator)"},
-    {"offset", FB_K_VEC2, -1e6, 1e6, false, NULL, "[0.0, 0.0]", "domain offset, in first-octave cells (X,Y)"},
-    {"ridged", FB_K_BOOL, 0, 0, false, NULL, "false", "ridged octaves (1 - |n|)^2"},
-    {"billow", FB_K_BOOL, 0, 0, false, NULL, "false", "billow octaves 2|n| - 1"},
-    {"warp", FB_K_NUM, 0, 100, false, NULL, "0.0", "domain-warp strength, in first-octave cells"},
-    {"tileable", FB_K_BOOL, 0, 0, false, NULL, "false", "periodic in x and y: the image wraps without a seam"},
+     "cycles of the first octave across the image width (latlong, cube: round the equator)",
+     FB_FIELD(fb_fbm_params, frequency)},
+    {"offset", FB_K_VEC2, -1e6, 1e6, false, NULL, "[0.0, 0.0]", "domain offset, in first-octave cells (X,Y)",
+     FB_FIELD(fb_fbm_params, offset)},
+    {"ridged", FB_K_BOOL, 0, 0, false, NULL, "false", "ridged octaves (1 - |n|)^2", FB_FIELD(fb_fbm_params, ridged)},
+    {"billow", FB_K_BOOL, 0, 0, false, NULL, "false", "billow octaves 2|n| - 1", FB_FIELD(fb_fbm_params, billow)},
+    {"warp", FB_K_NUM, 0, 100, false, NULL, "0.0", "domain-warp strength, in first-octave cells",
+     FB_FIELD(fb_fbm_params, warp)},
+    {"tileable", FB_K_BOOL, 0, 0, false, NULL, "false", "periodic in x and y: the image wraps without a seam",
+     FB_FIELD(fb_fbm_params, tileable)},
     {"mapping", FB_K_ENUM, 0, 0, false, "rect|latlong|cube", "\"rect\"",
      "the plane, or an environment map of the sphere, latlong (2N x N) or cube (N x 6N): 3D fBm at each "
-     "pixel's direction, no seam and no pinch (docs/sky.md)"},
+     "pixel's direction, no seam and no pinch (docs/sky.md)",
+     FB_FIELD(fb_fbm_params, mapping)},
     {"heightmap", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
-     "also write the heights for engines: OUT.png (16-bit grey) or OUT.r16 (16-bit raw, little-endian)"},
+     "also write the heights for engines: OUT.png (16-bit grey) or OUT.r16 (16-bit raw, little-endian)", FB_CORE},
     FB_HEIGHTMAP_KEYS,
-    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store as half instead of float (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
-     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store as half instead of float (flags: --half, --float)", FB_CORE},
+    FB_COMPRESSION_KEY,
 };
 
 static fb_result parse_fbm(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
 {
     char sub[256];
-    fb_result rc = fb_schema_check(v, path, obj, fbm_keys, FB_NKEYS(fbm_keys), "an fbm layer");
-    if (rc) return rc;
     fb_fbm_params *f = (void *)L->params;
+    fb_result rc = fb_schema_check(v, path, obj, fbm_keys, FB_NKEYS(fbm_keys), "an fbm layer", f);
+    if (rc) return rc;
     if (json_object_get(obj, "hurst") && json_object_get(obj, "gain")) {
         snprintf(sub, sizeof sub, "%s.gain", path);
         return fb_schema_error(v, sub, "give hurst or gain, not both");
     }
-    int idx = 0;
-    fb_enum_index(noise_names, json_string_value(json_object_get(obj, "noise")), &idx);
-    static const unsigned kinds[] = {K_NOISE_GRADIENT, K_NOISE_VALUE,       K_NOISE_SIMPLEX,
-                                     K_NOISE_CELLULAR, K_NOISE_CELLULAR_F2, K_NOISE_SINE};
-    f->noise = kinds[idx];
+    /* the noise and mapping names are in the order of K_NOISE_* and K_ENV_*: their index is the kind */
     f->gain_given = json_object_get(obj, "gain") != NULL;
-    f->hurst = f->gain_given ? -log2(fb_json_num(obj, "gain")) : fb_json_num(obj, "hurst");
-    f->gain = f->gain_given ? fb_json_num(obj, "gain") : exp2(-f->hurst);
-    f->octaves = (int)json_integer_value(json_object_get(obj, "octaves"));
-    f->lacunarity = fb_json_num(obj, "lacunarity");
-    f->rotation = fb_json_num(obj, "rotation");
-    f->frequency = fb_json_num(obj, "frequency");
-    json_t *off = json_object_get(obj, "offset");
-    f->offset[0] = json_number_value(json_array_get(off, 0));
-    f->offset[1] = json_number_value(json_array_get(off, 1));
-    f->ridged = fb_json_bool(obj, "ridged");
-    f->billow = fb_json_bool(obj, "billow");
-    f->tileable = fb_json_bool(obj, "tileable");
-    f->warp = fb_json_num(obj, "warp");
-    int mapping = 0;
-    fb_enum_index("rect|latlong|cube", json_string_value(json_object_get(obj, "mapping")), &mapping);
-    static const unsigned maps[] = {K_ENV_RECT, K_ENV_LATLONG, K_ENV_CUBE};
-    f->mapping = maps[mapping];
+    if (f->gain_given)
+        f->hurst = -log2(f->gain);
+    else
+        f->gain = exp2(-f->hurst);
+    _Static_assert(K_NOISE_VALUE == 1u && K_NOISE_SINE == 5u && K_ENV_LATLONG == 1u && K_ENV_CUBE == 2u,
+                   "the keys' names in the order of the kinds");
     if (f->tileable && f->mapping != K_ENV_RECT) {
         snprintf(sub, sizeof sub, "%s.tileable", path);
         return fb_schema_error(v, sub,

@@ -9,6 +9,9 @@
 #include "render.h"
 
 typedef struct fb_flame_params {
+    char file[4096];        /* the .flame file */
+    char pick[4096];        /* its <flame> by name or index; "": the first */
+    char palettes[4096];    /* flam3's palette library */
     fb_flame_genome genome; /* read from the file at parse time */
     double quality;         /* samples per pixel; 0: the genome's */
     fb_flame_tone tone;     /* the genome's tone map, with the layer's tone keys applied */

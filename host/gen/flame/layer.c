@@ -24,59 +24,60 @@
 #define FB_FLAME_PALETTES "/usr/share/flam3/flam3-palettes.xml"
 
 static const fb_keyspec flame_keys[] = {
-    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"flame\""},
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"flame\"", FB_CORE},
     {"name", FB_K_NAME, 0, 0, false, NULL, "\"flame\"",
-     "layer name; channels NAME.R, .G, .B, .A, .acc_R, .acc_G, .acc_B, .acc_A, .count (flag: --layer)"},
-    {"file", FB_K_PATH, 0, 0, false, NULL, NULL, "a .flame file (flam3's XML genomes); required"},
+     "layer name; channels NAME.R, .G, .B, .A, .acc_R, .acc_G, .acc_B, .acc_A, .count (flag: --layer)", FB_CORE},
+    {"file", FB_K_PATH, 0, 0, false, NULL, NULL, "a .flame file (flam3's XML genomes); required",
+     FB_FIELD(fb_flame_params, file)},
     {"flame", FB_K_STRING, 0, 0, false, NULL, NULL,
-     "the <flame> to render: its name attribute, or its index from 0 (default: the first)"},
-    {"quality", FB_K_NUM, 0, 1e6, false, NULL, "0", "samples per pixel (0: the genome's quality attribute)"},
+     "the <flame> to render: its name attribute, or its index from 0 (default: the first)",
+     FB_FIELD(fb_flame_params, pick)},
+    {"quality", FB_K_NUM, 0, 1e6, false, NULL, "0", "samples per pixel (0: the genome's quality attribute)",
+     FB_FIELD(fb_flame_params, quality)},
     {"palettes", FB_K_PATH, 0, 0, false, NULL, "\"" FB_FLAME_PALETTES "\"",
-     "flam3's palette library, for genomes with palette=\"N\""},
-    {"brightness", FB_K_NUM, 0, 1e6, false, NULL, NULL, "the tone map's brightness (default: the genome's)"},
-    {"gamma", FB_K_NUM, 0, 100, true, NULL, NULL, "the tone map's gamma (default: the genome's)"},
+     "flam3's palette library, for genomes with palette=\"N\"", FB_FIELD(fb_flame_params, palettes)},
+    {"brightness", FB_K_NUM, 0, 1e6, false, NULL, NULL, "the tone map's brightness (default: the genome's)",
+     FB_FIELD(fb_flame_params, tone.brightness)},
+    {"gamma", FB_K_NUM, 0, 100, true, NULL, NULL, "the tone map's gamma (default: the genome's)",
+     FB_FIELD(fb_flame_params, tone.gamma)},
     {"gamma-threshold", FB_K_NUM, 0, 1e6, false, NULL, NULL,
-     "below it the gamma curve is linear (default: the genome's)"},
-    {"vibrancy", FB_K_NUM, -10, 10, false, NULL, NULL, "1: gamma on alpha, 0: per channel (default: the genome's)"},
+     "below it the gamma curve is linear (default: the genome's)", FB_FIELD(fb_flame_params, tone.gamma_threshold)},
+    {"vibrancy", FB_K_NUM, -10, 10, false, NULL, NULL, "1: gamma on alpha, 0: per channel (default: the genome's)",
+     FB_FIELD(fb_flame_params, tone.vibrancy)},
     {"highlight-power", FB_K_NUM, -1e6, 1e6, false, NULL, NULL,
-     "over-bright pixels: < 0 clip, 0 keep the hue, larger fade to white (default: the genome's)"},
-    {"background", FB_K_NUMLIST, 0, 1, false, NULL, NULL, "background R,G,B in [0, 1] (default: the genome's)", 3},
-    {"half", FB_K_BOOL, 0, 0, false, NULL, "true", "store R, G, B, A as half (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
-     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+     "over-bright pixels: < 0 clip, 0 keep the hue, larger fade to white (default: the genome's)",
+     FB_FIELD(fb_flame_params, tone.highlight_power)},
+    {"background", FB_K_NUMLIST, 0, 1, false, NULL, NULL, "background R,G,B in [0, 1] (default: the genome's)", 3,
+     FB_FIELD(fb_flame_params, tone.background)},
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "true", "store R, G, B, A as half (flags: --half, --float)", FB_CORE},
+    FB_COMPRESSION_KEY,
 };
 
 static fb_result parse_flame(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
 {
     char sub[256];
     fb_flame_params *f = (void *)L->params;
-    fb_result rc = fb_schema_check(v, path, obj, flame_keys, FB_NKEYS(flame_keys), "a flame layer");
+    fb_result rc = fb_schema_check(v, path, obj, flame_keys, FB_NKEYS(flame_keys), "a flame layer", f);
     if (rc) return rc;
-    const char *file = json_string_value(json_object_get(obj, "file"));
-    if (!file) {
+    if (!f->file[0]) {
         snprintf(sub, sizeof sub, "%s.file", path);
         return fb_schema_error(v, sub, "a flame layer needs a .flame file");
     }
-    const char *pick = json_string_value(json_object_get(obj, "flame"));
-    const char *palettes = json_string_value(json_object_get(obj, "palettes"));
     char *text = NULL;
     size_t len = 0;
-    if ((rc = fb_flame_slurp(file, &text, &len))) return rc;
-    rc = fb_flame_read(text, len, file, pick, palettes, &f->genome, NULL);
+    if ((rc = fb_flame_slurp(f->file, &text, &len))) return rc;
+    rc = fb_flame_read(text, len, f->file, f->pick[0] ? f->pick : NULL, f->palettes, &f->genome, NULL);
     free(text);
     if (rc) return rc;
-    f->quality = fb_json_num(obj, "quality");
+    /* a tone key not given is the genome's */
     const fb_flame_genome *gn = &f->genome;
-    f->tone =
-        (fb_flame_tone){gn->brightness, gn->gamma,           gn->gamma_threshold,
-                        gn->vibrancy,   gn->highlight_power, {gn->background[0], gn->background[1], gn->background[2]}};
-    if (json_object_get(obj, "brightness")) f->tone.brightness = fb_json_num(obj, "brightness");
-    if (json_object_get(obj, "gamma")) f->tone.gamma = fb_json_num(obj, "gamma");
-    if (json_object_get(obj, "gamma-threshold")) f->tone.gamma_threshold = fb_json_num(obj, "gamma-threshold");
-    if (json_object_get(obj, "vibrancy")) f->tone.vibrancy = fb_json_num(obj, "vibrancy");
-    if (json_object_get(obj, "highlight-power")) f->tone.highlight_power = fb_json_num(obj, "highlight-power");
-    json_t *bg = json_object_get(obj, "background");
-    for (size_t k = 0; bg && k < 3; k++) f->tone.background[k] = json_number_value(json_array_get(bg, k));
+    fb_flame_tone *t = &f->tone;
+    if (!json_object_get(obj, "brightness")) t->brightness = gn->brightness;
+    if (!json_object_get(obj, "gamma")) t->gamma = gn->gamma;
+    if (!json_object_get(obj, "gamma-threshold")) t->gamma_threshold = gn->gamma_threshold;
+    if (!json_object_get(obj, "vibrancy")) t->vibrancy = gn->vibrancy;
+    if (!json_object_get(obj, "highlight-power")) t->highlight_power = gn->highlight_power;
+    for (int k = 0; k < 3 && !json_object_get(obj, "background"); k++) t->background[k] = gn->background[k];
     (void)s;
     return FB_OK;
 }

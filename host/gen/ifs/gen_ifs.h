@@ -12,8 +12,11 @@
 #include "palette.h"
 
 typedef struct fb_ifs_params {
-    fb_ifs maps; /* w1..wN (probabilities as given, or -1) */
-    fb_ifs cond; /* the condensation set's IFS when has_cond */
+    char preset[32];  /* the maps' preset name, or "" */
+    char file[4096];  /* or a Fractint .ifs file's, "" none */
+    char entry[4096]; /* its entry ("": the first) */
+    fb_ifs maps;      /* w1..wN (probabilities as given, or -1) */
+    fb_ifs cond;      /* the condensation set's IFS when has_cond */
     bool has_cond;
     bool cond_lsys;                 /* the condensation set is an L-system drawing instead of cond */
     fb_lsys cond_sys;               /* ... derived with the scene's seed, drawn by the turtle */
@@ -38,6 +41,7 @@ typedef struct fb_ifs_params {
     bool has_surface;
     double inst_min_pixels;
     char inst_up;
+    bool up_z;    /* instances-up: z (else y) */
     fb_ref avoid; /* instances-avoid: a mask the plants keep away from */
     bool has_avoid;
     double avoid_distance; /* world units */

@@ -64,7 +64,22 @@ static json_t *maps_from_flag(const fb_keyspec *k, const char *flag, const char 
     return arr;
 }
 
-const fb_kvalue fb_ifs_maps_value = {.check = check_maps, .from_flag = maps_from_flag};
+/* A checked map list into the fb_ifs at field; a missing probability is -1. */
+static fb_result read_maps(const fb_vctx *v, const char *path, const json_t *j, void *field)
+{
+    fb_ifs *out = field;
+    memset(out, 0, sizeof *out);
+    out->n = (int)json_array_size(j);
+    for (int k = 0; k < out->n; k++) {
+        const json_t *m = json_array_get(j, (size_t)k);
+        double c[7] = {0, 0, 0, 0, 0, 0, -1};
+        for (size_t i = 0; i < json_array_size(m); i++) c[i] = json_number_value(json_array_get(m, i));
+        out->m[k] = (fb_ifs_map){c[0], c[1], c[2], c[3], c[4], c[5], c[6]};
+    }
+    return FB_OK;
+}
+
+const fb_kvalue fb_ifs_maps_value = {.check = check_maps, .from_flag = maps_from_flag, .read = read_maps};
 
 /* A condensation set: a preset name from `enums`, a map list, or an L-system object (checked by the
  * layer's parse). */
@@ -100,4 +115,13 @@ static json_t *condensation_from_flag(const fb_keyspec *k, const char *flag, con
     return maps_from_flag(k, flag, s);
 }
 
-const fb_kvalue fb_ifs_condensation_value = {.check = check_condensation, .from_flag = condensation_from_flag};
+/* A condensation set's IFS into the fb_ifs at field: a preset's or a map list's (an L-system object is
+ * the layer's parse's, with its own keys). */
+static fb_result read_condensation(const fb_vctx *v, const char *path, const json_t *j, void *field)
+{
+    if (json_is_string(j)) return fb_ifs_preset(json_string_value(j), field, NULL, NULL);
+    return json_is_array(j) ? read_maps(v, path, j, field) : FB_OK;
+}
+
+const fb_kvalue fb_ifs_condensation_value = {
+    .check = check_condensation, .from_flag = condensation_from_flag, .read = read_condensation};

@@ -23,50 +23,64 @@
 /* ---- the scene keys and their parser ---------------------------------------------------------- */
 
 static const fb_keyspec julia_keys[] = {
-    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"julia\""},
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"julia\"", FB_CORE},
     {"name", FB_K_NAME, 0, 0, false, NULL, "\"sky\"",
-     "layer name; channels NAME.iter, .n, .inside, .de, .R, .G, .B (flag: --layer)"},
+     "layer name; channels NAME.iter, .n, .inside, .de, .R, .G, .B (flag: --layer)", FB_CORE},
     {"mapping", FB_K_ENUM, 0, 0, false, "rect|polar|latlong|cube", "\"rect\"",
      "starting grid: rect (eq. 7), polar (eq. 8, seamless left/right), or an environment map of the sphere, "
-     "latlong (2N x N) or cube (N x 6N), through p = r (d.x + i d.z) / (1 + d.y) (docs/sky.md)"},
+     "latlong (2N x N) or cube (N x 6N), through p = r (d.x + i d.z) / (1 + d.y) (docs/sky.md)",
+     FB_FIELD(fb_julia_params, mapping)},
     {"scale", FB_K_VEC2, 0, 1e6, false, NULL, NULL,
-     "rect: width and height of the grid (default 3 wide, square pixels)"},
+     "rect: width and height of the grid (default 3 wide, square pixels)", FB_FIELD(fb_julia_params, scale)},
     {"radius", FB_K_NUM, 0, 1e6, true, NULL, "1.5",
-     "polar: radius r of p = r v exp(i 2 pi u); latlong, cube: the horizon's |p|"},
-    {"center", FB_K_VEC2, -1e6, 1e6, false, NULL, "[0.0, 0.0]", "centre of the starting grid (RE,IM)"},
-    {"rotation", FB_K_NUM, -360, 360, false, NULL, "0.0", "rotation of the starting grid, degrees"},
-    {"alpha", FB_K_VEC2, -1e6, 1e6, false, NULL, "[0.0, 0.0]",
-     "allpass warp coefficient a (RE,IM); 0: plain Julia set"},
-    {"c", FB_K_VEC2, -1e6, 1e6, false, NULL, "[-0.8, 0.156]", "Julia constant c (RE,IM)"},
-    {"max-iter", FB_K_INT, 1, 1000000, false, NULL, "256", "iteration limit"},
-    {"bailout", FB_K_NUM, 2, 1e6, false, NULL, "2.0", "escape radius R (iter counts steps until |z| >= R)"},
-    {"turbulence", FB_K_NUM, 0, 10, false, NULL, "0.0", "lambda of eq. 13: z0 = A(1/p) + lambda W(p), W fBm in [0, 1]"},
-    {"turbulence-hurst", FB_K_NUM, 0, 1, false, NULL, "0.8", "Hurst exponent of W"},
-    {"turbulence-octaves", FB_K_INT, 1, 32, false, NULL, "6", "octaves of W"},
-    {"turbulence-frequency", FB_K_NUM, 0, 1e4, true, NULL, "4.0", "cycles of W's first octave across the image"},
-    {"samples", FB_K_INT, 1, 1024, false, NULL, "1", "jittered colour samples per pixel (iter, n, inside, de: centre)"},
+     "polar: radius r of p = r v exp(i 2 pi u); latlong, cube: the horizon's |p|", FB_FIELD(fb_julia_params, radius)},
+    {"center", FB_K_VEC2, -1e6, 1e6, false, NULL, "[0.0, 0.0]", "centre of the starting grid (RE,IM)",
+     FB_FIELD(fb_julia_params, center)},
+    {"rotation", FB_K_NUM, -360, 360, false, NULL, "0.0", "rotation of the starting grid, degrees",
+     FB_FIELD(fb_julia_params, rotation)},
+    {"alpha", FB_K_VEC2, -1e6, 1e6, false, NULL, "[0.0, 0.0]", "allpass warp coefficient a (RE,IM); 0: plain Julia set",
+     FB_FIELD(fb_julia_params, alpha)},
+    {"c", FB_K_VEC2, -1e6, 1e6, false, NULL, "[-0.8, 0.156]", "Julia constant c (RE,IM)", FB_FIELD(fb_julia_params, c)},
+    {"max-iter", FB_K_INT, 1, 1000000, false, NULL, "256", "iteration limit", FB_FIELD(fb_julia_params, max_iter)},
+    {"bailout", FB_K_NUM, 2, 1e6, false, NULL, "2.0", "escape radius R (iter counts steps until |z| >= R)",
+     FB_FIELD(fb_julia_params, bailout)},
+    {"turbulence", FB_K_NUM, 0, 10, false, NULL, "0.0", "lambda of eq. 13: z0 = A(1/p) + lambda W(p), W fBm in [0, 1]",
+     FB_FIELD(fb_julia_params, turbulence)},
+    {"turbulence-hurst", FB_K_NUM, 0, 1, false, NULL, "0.8", "Hurst exponent of W",
+     FB_FIELD(fb_julia_params, turb_hurst)},
+    {"turbulence-octaves", FB_K_INT, 1, 32, false, NULL, "6", "octaves of W", FB_FIELD(fb_julia_params, turb_octaves)},
+    {"turbulence-frequency", FB_K_NUM, 0, 1e4, true, NULL, "4.0", "cycles of W's first octave across the image",
+     FB_FIELD(fb_julia_params, turb_frequency)},
+    {"samples", FB_K_INT, 1, 1024, false, NULL, "1", "jittered colour samples per pixel (iter, n, inside, de: centre)",
+     FB_FIELD(fb_julia_params, samples)},
     {"precision", FB_K_ENUM, 0, 0, false, "float|double", "\"float\"",
      "the grid and orbits in float, or double (escape counts as a double reference has them; Vulkan "
-     "devices need shaderFloat64)"},
+     "devices need shaderFloat64)",
+     FB_FIELD(fb_julia_params, double_precision)},
     {"channels", FB_K_NAMES, 0, 0, false, "iter|n|inside|de|R|G|B",
      "[\"iter\", \"n\", \"inside\", \"de\", \"R\", \"G\", \"B\"]",
-     "channels to store; what none of them needs is not computed (R, G, B go together)"},
-    {"palette", FB_K_ENUM, 0, 0, false, FB_PALETTE_NAMES, "\"night\"", "named colour map", 0, NULL, "cosine|stops"},
+     "channels to store; what none of them needs is not computed (R, G, B go together)",
+     FB_FIELD(fb_julia_params, channels)},
+    {"palette", FB_K_ENUM, 0, 0, false, FB_PALETTE_NAMES, "\"night\"", "named colour map", 0, NULL, "cosine|stops",
+     FB_CORE},
     {"cosine", FB_K_NUMLIST, -10, 10, false, NULL, NULL,
-     "cosine palette a + b cos(2 pi (c t + d)): 12 numbers aR,aG,aB,bR,bG,bB,cR,cG,cB,dR,dG,dB", 12},
+     "cosine palette a + b cos(2 pi (c t + d)): 12 numbers aR,aG,aB,bR,bG,bB,cR,cG,cB,dR,dG,dB", 12, FB_CORE},
     {"stops", FB_K_STOPS, 0, 1e3, false, NULL, NULL,
-     "gradient: [[t, r, g, b], ...], t rising from 0 to 1 (flag: \"t,r,g,b;t,r,g,b\")"},
-    {"period", FB_K_NUM, 0, 1e6, true, NULL, "24.0", "smooth-count units per palette sweep"},
-    {"palette-offset", FB_K_NUM, -1e6, 1e6, false, NULL, "0.0", "palette position at count 0, in sweeps"},
-    {"brightness", FB_K_NUM, 0, 1e3, false, NULL, "1.0", "linear colour scale"},
-    {"gamma", FB_K_NUM, 0, 10, true, NULL, "1.0", "exponent on the colour"},
-    {"density", FB_K_NUM, 0, 16, false, NULL, "1.5", "contrast: larger keeps only pixels near the set bright"},
-    {"density-count", FB_K_NUM, 1, 1e6, false, NULL, "48.0", "smooth count at which brightness is full"},
-    {"inside-color", FB_K_NUMLIST, 0, 1e3, false, NULL, "[0.0, 0.0, 0.0]", "colour of points inside the set (R,G,B)",
-     3},
-    {"half", FB_K_BOOL, 0, 0, false, NULL, "true", "store R, G, B as half (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
-     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+     "gradient: [[t, r, g, b], ...], t rising from 0 to 1 (flag: \"t,r,g,b;t,r,g,b\")", FB_CORE},
+    {"period", FB_K_NUM, 0, 1e6, true, NULL, "24.0", "smooth-count units per palette sweep",
+     FB_FIELD(fb_julia_params, period)},
+    {"palette-offset", FB_K_NUM, -1e6, 1e6, false, NULL, "0.0", "palette position at count 0, in sweeps",
+     FB_FIELD(fb_julia_params, palette_offset)},
+    {"brightness", FB_K_NUM, 0, 1e3, false, NULL, "1.0", "linear colour scale", FB_FIELD(fb_julia_params, brightness)},
+    {"gamma", FB_K_NUM, 0, 10, true, NULL, "1.0", "exponent on the colour", FB_FIELD(fb_julia_params, gamma)},
+    {"density", FB_K_NUM, 0, 16, false, NULL, "1.5", "contrast: larger keeps only pixels near the set bright",
+     FB_FIELD(fb_julia_params, density)},
+    {"density-count", FB_K_NUM, 1, 1e6, false, NULL, "48.0", "smooth count at which brightness is full",
+     FB_FIELD(fb_julia_params, density_count)},
+    {"inside-color", FB_K_NUMLIST, 0, 1e3, false, NULL, "[0.0, 0.0, 0.0]", "colour of points inside the set (R,G,B)", 3,
+     FB_FIELD(fb_julia_params, inside_color)},
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "true", "store R, G, B as half (flags: --half, --float)", FB_CORE},
+    FB_COMPRESSION_KEY,
 };
 
 /* The keys that shape only R, G and B. */
@@ -94,43 +108,12 @@ static fb_result parse_julia(const fb_vctx *v, const char *path, json_t *obj, co
     if (!json_object_get(obj, "scale") && s->width > 0)
         json_object_set_new(obj, "scale", json_pack("[ff]", 3.0, 3.0 * s->height / s->width));
     const char *colour = given_colour_key(v, path, obj); /* before the defaults fill them in */
-    fb_result rc = fb_schema_check(v, path, obj, julia_keys, FB_NKEYS(julia_keys), "a julia layer");
-    if (rc) return rc;
     fb_julia_params *j = (void *)L->params;
-    int mapping = 0;
-    fb_enum_index("rect|polar|latlong|cube", json_string_value(json_object_get(obj, "mapping")), &mapping);
-    j->mapping = (unsigned)mapping; /* K_JULIA_RECT, _POLAR, _LATLONG, _CUBE */
-    fb_json_vec2(obj, "scale", j->scale);
-    fb_json_vec2(obj, "center", j->center);
-    fb_json_vec2(obj, "alpha", j->alpha);
-    fb_json_vec2(obj, "c", j->c);
-    j->radius = fb_json_num(obj, "radius");
-    j->rotation = fb_json_num(obj, "rotation");
-    j->max_iter = (int)json_integer_value(json_object_get(obj, "max-iter"));
-    j->bailout = fb_json_num(obj, "bailout");
-    rc = fb_schema_palette(v, path, obj, &j->palette);
+    fb_result rc = fb_schema_check(v, path, obj, julia_keys, FB_NKEYS(julia_keys), "a julia layer", j);
     if (rc) return rc;
-    j->turbulence = fb_json_num(obj, "turbulence");
-    j->turb_hurst = fb_json_num(obj, "turbulence-hurst");
-    j->turb_octaves = (int)json_integer_value(json_object_get(obj, "turbulence-octaves"));
-    j->turb_frequency = fb_json_num(obj, "turbulence-frequency");
-    j->samples = (int)json_integer_value(json_object_get(obj, "samples"));
-    j->period = fb_json_num(obj, "period");
-    j->palette_offset = fb_json_num(obj, "palette-offset");
-    j->brightness = fb_json_num(obj, "brightness");
-    j->gamma = fb_json_num(obj, "gamma");
-    j->density = fb_json_num(obj, "density");
-    j->density_count = fb_json_num(obj, "density-count");
-    json_t *ic = json_object_get(obj, "inside-color");
-    for (size_t i = 0; i < 3; i++) j->inside_color[i] = json_number_value(json_array_get(ic, i));
-    j->double_precision = !strcmp(json_string_value(json_object_get(obj, "precision")), "double");
-    json_t *chs = json_object_get(obj, "channels");
-    j->channels = 0;
-    for (size_t i = 0; i < json_array_size(chs); i++) {
-        int idx = 0;
-        fb_enum_index("iter|n|inside|de|R|G|B", json_string_value(json_array_get(chs, i)), &idx);
-        j->channels |= 1u << idx;
-    }
+    /* the mapping's names in the order of K_JULIA_*; the channels' bits in the order of their names */
+    _Static_assert(K_JULIA_POLAR == 1u && K_JULIA_LATLONG == 2u && K_JULIA_CUBE == 3u, "mapping names");
+    if ((rc = fb_schema_palette(v, path, obj, &j->palette))) return rc;
     if (j->double_precision && j->mapping >= K_JULIA_LATLONG) {
         char sub[256];
         snprintf(sub, sizeof sub, "%s.precision", path);

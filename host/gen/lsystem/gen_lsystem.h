@@ -23,9 +23,13 @@ typedef struct fb_lsystem_params {
 extern const fb_gen_class fb_gen_lsystem;
 
 /* The L-system of `obj` (an lsystem layer, or an ifs layer's condensation set): a preset fills in what
- * the object does not give, and the stored scene then spells it out; keys checked against `keys`. */
+ * the object does not give, and the stored scene then spells it out; keys checked against `keys`, which
+ * fill their fields of `params`, then the L-system `ls` they filled is checked. */
 fb_result fb_lsystem_parse_def(const fb_vctx *v, const char *path, json_t *obj, const fb_keyspec *keys, int nkeys,
-                               const char *what, fb_lsys *ls);
+                               const char *what, void *params, const fb_lsys *ls);
+
+/* The rules key's value: its reader fills the rules of the fb_lsys that is its field. */
+extern const fb_kvalue fb_lsystem_rules_value;
 
 /* A production "X=successor" or "X(p)=successor" (the rules key's check). */
 bool fb_lsystem_check_rule(const char *text, char *msg, size_t size);

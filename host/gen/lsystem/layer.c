@@ -22,35 +22,39 @@
 /* ---- the scene keys and their parser ---------------------------------------------------------- */
 
 static const fb_keyspec lsystem_keys[] = {
-    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"lsystem\""},
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"lsystem\"", FB_CORE},
     {"name", FB_K_NAME, 0, 0, false, NULL, "\"plants\"",
-     "layer name; channels NAME.A (coverage), .R, .G, .B (flag: --layer)"},
+     "layer name; channels NAME.A (coverage), .R, .G, .B (flag: --layer)", FB_CORE},
     {"preset", FB_K_ENUM, 0, 0, false, FB_LSYS_PRESETS, NULL,
-     "built-in L-system (default bush when no axiom); axiom, rules, iterations and angle override it"},
-    {"axiom", FB_K_STRING, 0, 0, false, NULL, NULL, "the starting string"},
+     "built-in L-system (default bush when no axiom); axiom, rules, iterations and angle override it", FB_PARSE},
+    {"axiom", FB_K_STRING, 0, 0, false, NULL, NULL, "the starting string", FB_FIELD(fb_lsystem_params, sys.axiom)},
     {"rules", FB_K_RULES, 0, FB_LSYS_MAX_RULES, false, NULL, NULL,
      "productions \"X=successor\" or stochastic \"X(0.3)=successor\" (flag: --rule, repeatable)", FB_LSYS_MAX_RULES,
-     "rule", NULL, fb_lsystem_check_rule},
-    {"iterations", FB_K_INT, 0, 64, false, NULL, NULL, "parallel rewriting steps"},
-    {"angle", FB_K_NUM, -360, 360, false, NULL, NULL, "degrees turned by + and -"},
-    {"heading", FB_K_NUM, -360, 360, false, NULL, "90.0",
-     "initial heading, degrees counter-clockwise from +x (90: up)"},
-    {"step", FB_K_NUM, 0, 1e6, true, NULL, "1.0", "length of F and f, turtle units"},
-    {"width", FB_K_NUM, 0, 100, false, NULL, "0.6", "branch width at the base (bracket depth 0), in steps"},
-    {"taper", FB_K_NUM, 0, 1, true, NULL, "0.65", "width factor per bracket depth"},
+     "rule", NULL, fb_lsystem_check_rule, .value = &fb_lsystem_rules_value, FB_FIELD(fb_lsystem_params, sys)},
+    {"iterations", FB_K_INT, 0, 64, false, NULL, NULL, "parallel rewriting steps",
+     FB_FIELD(fb_lsystem_params, sys.iterations)},
+    {"angle", FB_K_NUM, -360, 360, false, NULL, NULL, "degrees turned by + and -",
+     FB_FIELD(fb_lsystem_params, sys.angle)},
+    {"heading", FB_K_NUM, -360, 360, false, NULL, "90.0", "initial heading, degrees counter-clockwise from +x (90: up)",
+     FB_FIELD(fb_lsystem_params, heading)},
+    {"step", FB_K_NUM, 0, 1e6, true, NULL, "1.0", "length of F and f, turtle units", FB_FIELD(fb_lsystem_params, step)},
+    {"width", FB_K_NUM, 0, 100, false, NULL, "0.6", "branch width at the base (bracket depth 0), in steps",
+     FB_FIELD(fb_lsystem_params, width)},
+    {"taper", FB_K_NUM, 0, 1, true, NULL, "0.65", "width factor per bracket depth", FB_FIELD(fb_lsystem_params, taper)},
     {"max-symbols", FB_K_INT, 1, 2147483648.0, false, NULL, "268435456",
-     "longest string allowed while rewriting (a longer one stops with an error)"},
+     "longest string allowed while rewriting (a longer one stops with an error)",
+     FB_FIELD(fb_lsystem_params, max_symbols)},
     {"bounds", FB_K_BOUNDS, -1e9, 1e9, false, NULL, "\"auto\"",
-     "frame XMIN,XMAX,YMIN,YMAX in turtle units, or auto (the drawing, padded 4%, square units)"},
+     "frame XMIN,XMAX,YMIN,YMAX in turtle units, or auto (the drawing, padded 4%, square units)",
+     FB_FIELD(fb_lsystem_params, bounds)},
     {"palette", FB_K_ENUM, 0, 0, false, FB_PALETTE_NAMES, "\"foliage\"", "named colour map, by bracket depth", 0, NULL,
-     "cosine|stops"},
+     "cosine|stops", FB_CORE},
     {"cosine", FB_K_NUMLIST, -10, 10, false, NULL, NULL,
-     "cosine palette a + b cos(2 pi (c t + d)): 12 numbers aR,aG,aB,bR,bG,bB,cR,cG,cB,dR,dG,dB", 12},
+     "cosine palette a + b cos(2 pi (c t + d)): 12 numbers aR,aG,aB,bR,bG,bB,cR,cG,cB,dR,dG,dB", 12, FB_CORE},
     {"stops", FB_K_STOPS, 0, 1e3, false, NULL, NULL,
-     "gradient: [[t, r, g, b], ...], t rising from 0 to 1 (flag: \"t,r,g,b;t,r,g,b\")"},
-    {"half", FB_K_BOOL, 0, 0, false, NULL, "true", "store A, R, G, B as half (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
-     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+     "gradient: [[t, r, g, b], ...], t rising from 0 to 1 (flag: \"t,r,g,b;t,r,g,b\")", FB_CORE},
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "true", "store A, R, G, B as half (flags: --half, --float)", FB_CORE},
+    FB_COMPRESSION_KEY,
 };
 
 /* The L-system of `obj` (a layer, or an ifs layer's condensation set): a preset fills in what the
@@ -61,8 +65,21 @@ bool fb_lsystem_check_rule(const char *text, char *msg, size_t size)
     return fb_lsys_parse_rule(text, &rule, msg, size);
 }
 
+/* The rules key's reader: the checked productions into an fb_lsys. */
+static fb_result read_rules(const fb_vctx *v, const char *path, const json_t *j, void *field)
+{
+    fb_lsys *ls = field;
+    char msg[256];
+    ls->nrules = (int)json_array_size(j);
+    for (int k = 0; k < ls->nrules; k++)
+        fb_lsys_parse_rule(json_string_value(json_array_get(j, (size_t)k)), &ls->rules[k], msg, sizeof msg);
+    return FB_OK;
+}
+
+const fb_kvalue fb_lsystem_rules_value = {.read = read_rules};
+
 fb_result fb_lsystem_parse_def(const fb_vctx *v, const char *path, json_t *obj, const fb_keyspec *keys, int nkeys,
-                               const char *what, fb_lsys *ls)
+                               const char *what, void *params, const fb_lsys *ls)
 {
     char sub[256], msg[256];
     json_t *preset = json_object_get(obj, "preset");
@@ -101,19 +118,8 @@ fb_result fb_lsystem_parse_def(const fb_vctx *v, const char *path, json_t *obj, 
     if (!json_object_get(obj, "rules")) json_object_set_new(obj, "rules", json_array());
     if (!json_object_get(obj, "iterations")) json_object_set_new(obj, "iterations", json_integer(1));
     if (!json_object_get(obj, "angle")) json_object_set_new(obj, "angle", json_real(25.0));
-    fb_result rc = fb_schema_check(v, path, obj, keys, nkeys, what);
+    fb_result rc = fb_schema_check(v, path, obj, keys, nkeys, what, params);
     if (rc) return rc;
-    memset(ls, 0, sizeof *ls);
-    const char *axiom = json_string_value(json_object_get(obj, "axiom"));
-    snprintf(sub, sizeof sub, "%s.axiom", path);
-    if (strlen(axiom) > FB_LSYS_MAX_SUCC) return fb_schema_error(v, sub, "longer than %d symbols", FB_LSYS_MAX_SUCC);
-    snprintf(ls->axiom, sizeof ls->axiom, "%s", axiom);
-    json_t *rules = json_object_get(obj, "rules");
-    ls->nrules = (int)json_array_size(rules);
-    for (int k = 0; k < ls->nrules; k++)
-        fb_lsys_parse_rule(json_string_value(json_array_get(rules, (size_t)k)), &ls->rules[k], msg, sizeof msg);
-    ls->iterations = (int)json_integer_value(json_object_get(obj, "iterations"));
-    ls->angle = fb_json_num(obj, "angle");
     int bad;
     if (!fb_lsys_valid(ls, &bad, msg, sizeof msg)) {
         if (bad >= 0)
@@ -129,16 +135,9 @@ static fb_result parse_lsystem(const fb_vctx *v, const char *path, json_t *obj, 
 {
     fb_lsystem_params *f = (void *)L->params;
     fb_result rc =
-        fb_lsystem_parse_def(v, path, obj, lsystem_keys, FB_NKEYS(lsystem_keys), "an lsystem layer", &f->sys);
+        fb_lsystem_parse_def(v, path, obj, lsystem_keys, FB_NKEYS(lsystem_keys), "an lsystem layer", f, &f->sys);
     if (rc) return rc;
-    f->heading = fb_json_num(obj, "heading");
-    f->step = fb_json_num(obj, "step");
-    f->width = fb_json_num(obj, "width");
-    f->taper = fb_json_num(obj, "taper");
-    f->max_symbols = (uint64_t)json_integer_value(json_object_get(obj, "max-symbols"));
-    json_t *b = json_object_get(obj, "bounds");
-    f->auto_bounds = json_is_string(b);
-    for (size_t i = 0; !f->auto_bounds && i < 4; i++) f->bounds[i] = json_number_value(json_array_get(b, i));
+    f->auto_bounds = json_is_string(json_object_get(obj, "bounds"));
     if ((rc = fb_schema_palette(v, path, obj, &f->palette))) return rc;
     return FB_OK;
 }

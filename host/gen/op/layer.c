@@ -12,46 +12,45 @@
 /* ---- the scene keys and their parser ---------------------------------------------------------- */
 
 static const fb_keyspec op_keys[] = {
-    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"op\""},
-    {"name", FB_K_NAME, 0, 0, false, NULL, "\"op\"", "layer name; the channel is NAME.Y"},
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"op\"", FB_CORE},
+    {"name", FB_K_NAME, 0, 0, false, NULL, "\"op\"", "layer name; the channel is NAME.Y", FB_CORE},
     {"op", FB_K_ENUM, 0, 0, false, "add|multiply|mix|remap|threshold", NULL,
-     "add: sum of w_i x_i; multiply: product; mix: a + (b - a) m; remap: linear range change; threshold: 0/1 step"},
+     "add: sum of w_i x_i; multiply: product; mix: a + (b - a) m; remap: linear range change; threshold: 0/1 step",
+     FB_FIELD(fb_op_params, op)},
     {"inputs", FB_K_REFS, 0, 0, false, NULL, NULL,
      "channels \"layer.channel\" (\"layer\": its Y) or numbers: 2-8 (add, multiply), 2 (mix), 1 (remap, threshold)",
-     FB_OP_MAX_INPUTS},
-    {"weights", FB_K_FRACS, -1e15, 1e15, false, NULL, NULL, "add: one weight per input (default all 1)", 64},
-    {"mask", FB_K_REF, 0, 0, false, NULL, NULL, "mix: the mask m, clamped to [0, 1]"},
-    {"from", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL, "remap: the source range [lo, hi]"},
-    {"to", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL, "remap: the target range [lo, hi] (default [0, 1])"},
-    {"clamp", FB_K_BOOL, 0, 0, false, NULL, NULL, "remap: clamp to the target range (default true)"},
-    {"level", FB_K_NUM, -1e15, 1e15, false, NULL, NULL, "threshold: 1 at and above the level, 0 below"},
-    {"width", FB_K_NUM, 0, 1e15, false, NULL, NULL, "threshold: a smooth step this wide around the level (default 0)"},
-    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store Y as half (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
-     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+     FB_OP_MAX_INPUTS, FB_FIELD(fb_op_params, inputs)},
+    {"weights", FB_K_FRACS, -1e15, 1e15, false, NULL, NULL, "add: one weight per input (default all 1)",
+     FB_OP_MAX_INPUTS, FB_FIELD(fb_op_params, weights)},
+    {"mask", FB_K_REF, 0, 0, false, NULL, NULL, "mix: the mask m, clamped to [0, 1]", FB_FIELD(fb_op_params, mask)},
+    {"from", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL, "remap: the source range [lo, hi]",
+     FB_FIELD(fb_op_params, from)},
+    {"to", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL, "remap: the target range [lo, hi] (default [0, 1])",
+     FB_FIELD(fb_op_params, to)},
+    {"clamp", FB_K_BOOL, 0, 0, false, NULL, NULL, "remap: clamp to the target range (default true)",
+     FB_FIELD(fb_op_params, clamp)},
+    {"level", FB_K_NUM, -1e15, 1e15, false, NULL, NULL, "threshold: 1 at and above the level, 0 below",
+     FB_FIELD(fb_op_params, level)},
+    {"width", FB_K_NUM, 0, 1e15, false, NULL, NULL, "threshold: a smooth step this wide around the level (default 0)",
+     FB_FIELD(fb_op_params, width)},
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store Y as half (flags: --half, --float)", FB_CORE},
+    FB_COMPRESSION_KEY,
 };
 
 static fb_result parse_op(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
 {
-    fb_result rc = fb_schema_check(v, path, obj, op_keys, FB_NKEYS(op_keys), "an op layer");
+    fb_op_params *o = (void *)L->params;
+    fb_result rc = fb_schema_check(v, path, obj, op_keys, FB_NKEYS(op_keys), "an op layer", o);
     if (rc) return rc;
     char sub[256];
-    fb_op_params *o = (void *)L->params;
-    o->mask.layer = -1; /* no mask unless mix */
     const json_t *opj = json_object_get(obj, "op"), *in = json_object_get(obj, "inputs");
     if (!opj || !in) {
         snprintf(sub, sizeof sub, "%s.%s", path, opj ? "inputs" : "op");
         return fb_schema_error(v, sub, "required for an op layer (%s)",
                                opj ? "the channels it combines" : "add|multiply|mix|remap|threshold");
     }
-    int idx = 0;
-    fb_enum_index("add|multiply|mix|remap|threshold", json_string_value(opj), &idx);
-    o->op = (fb_op_kind)idx;
+    int idx = (int)o->op; /* the op's names in the order of fb_op_kind */
     o->ninputs = (int)json_array_size(in);
-    for (int i = 0; i < o->ninputs; i++) {
-        fb_json_ref(json_array_get(in, (size_t)i), &o->inputs[i]);
-        o->weights[i] = 1.0;
-    }
     static const int lo[] = {2, 2, 2, 1, 1}, hi[] = {8, 8, 2, 1, 1};
     static const char *const names[] = {"add", "multiply", "mix", "remap", "threshold"};
     if (o->ninputs < lo[idx] || o->ninputs > hi[idx]) {
@@ -82,28 +81,17 @@ static fb_result parse_op(const fb_vctx *v, const char *path, json_t *obj, const
             return fb_schema_error(v, sub, "required for op %s", names[idx]);
         }
     const json_t *w = json_object_get(obj, "weights");
-    if (w) {
-        if ((int)json_array_size(w) != o->ninputs) {
-            snprintf(sub, sizeof sub, "%s.weights", path);
-            return fb_schema_error(v, sub, "expected one weight per input (%d), found %zu", o->ninputs,
-                                   json_array_size(w));
-        }
-        for (int i = 0; i < o->ninputs; i++) o->weights[i] = json_number_value(json_array_get(w, (size_t)i));
+    if (w && (int)json_array_size(w) != o->ninputs) {
+        snprintf(sub, sizeof sub, "%s.weights", path);
+        return fb_schema_error(v, sub, "expected one weight per input (%d), found %zu", o->ninputs, json_array_size(w));
     }
-    if (o->op == FB_OP_MIX) fb_json_ref(json_object_get(obj, "mask"), &o->mask);
-    if (o->op == FB_OP_REMAP) {
-        fb_json_vec2(obj, "from", o->from);
-        o->to[0] = 0, o->to[1] = 1;
-        if (json_object_get(obj, "to")) fb_json_vec2(obj, "to", o->to);
-        o->clamp = json_object_get(obj, "clamp") ? fb_json_bool(obj, "clamp") : true;
-        if (!(o->from[1] != o->from[0])) {
-            snprintf(sub, sizeof sub, "%s.from", path);
-            return fb_schema_error(v, sub, "the source range must not be empty ([lo, hi] with lo != hi)");
-        }
-    }
-    if (o->op == FB_OP_THRESHOLD) {
-        o->level = fb_json_num(obj, "level");
-        o->width = json_object_get(obj, "width") ? fb_json_num(obj, "width") : 0.0;
+    for (int i = 0; !w && i < o->ninputs; i++) o->weights[i] = 1.0;
+    if (!json_object_get(obj, "mask")) o->mask.layer = -1; /* no mask unless mix */
+    if (o->op == FB_OP_REMAP && !json_object_get(obj, "to")) o->to[0] = 0, o->to[1] = 1;
+    if (o->op == FB_OP_REMAP && !json_object_get(obj, "clamp")) o->clamp = true;
+    if (o->op == FB_OP_REMAP && !(o->from[1] != o->from[0])) {
+        snprintf(sub, sizeof sub, "%s.from", path);
+        return fb_schema_error(v, sub, "the source range must not be empty ([lo, hi] with lo != hi)");
     }
     return FB_OK;
 }

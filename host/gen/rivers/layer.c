@@ -22,100 +22,95 @@
 /* ---- the scene keys and their parser ---------------------------------------------------------- */
 
 static const fb_keyspec rivers_keys[] = {
-    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"rivers\""},
-    {"name", FB_K_NAME, 0, 0, false, NULL, "\"rivers\"", "layer name; channels NAME.Y, .area, .river, .lake"},
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"rivers\"", FB_CORE},
+    {"name", FB_K_NAME, 0, 0, false, NULL, "\"rivers\"", "layer name; channels NAME.Y, .area, .river, .lake", FB_CORE},
     {"input", FB_K_REF, 0, 0, false, NULL, NULL,
-     "the starting heights: another layer's channel (\"layer\": its Y), or a number (flat at that height; default 0)"},
+     "the starting heights: another layer's channel (\"layer\": its Y), or a number (flat at that height; default 0)",
+     FB_FIELD(fb_rivers_layer_params, input)},
     {"uplift", FB_K_NUM, 0, 1e6, false, NULL, "0.001",
-     "U, rock uplift in height per time unit (where uplift-map is 1, with a map)"},
+     "U, rock uplift in height per time unit (where uplift-map is 1, with a map)",
+     FB_FIELD(fb_rivers_layer_params, uplift)},
     {"uplift-map", FB_K_REF, 0, 0, false, NULL, NULL,
      "where the rock rises: another layer's channel (a survey, a macro shape, fBm), its values from uplift-range "
-     "taken as 0 to 1 of U"},
+     "taken as 0 to 1 of U",
+     FB_FIELD(fb_rivers_layer_params, map)},
     {"uplift-range", FB_K_VEC2, -1e15, 1e15, false, NULL, NULL,
-     "the uplift map's values taken as 0 and 1 of U (LO,HI, clamped; default: the map's lowest and highest)"},
-    {"K", FB_K_NUM, 0, 1e6, false, NULL, "5e-6", "erodibility: incision K A^m S^n (A drainage area, S slope)"},
-    {"m", FB_K_NUM, 0, 2, true, NULL, "0.5", "the drainage area's exponent, in (0, 2]"},
+     "the uplift map's values taken as 0 and 1 of U (LO,HI, clamped; default: the map's lowest and highest)",
+     FB_FIELD(fb_rivers_layer_params, range)},
+    {"K", FB_K_NUM, 0, 1e6, false, NULL, "5e-6", "erodibility: incision K A^m S^n (A drainage area, S slope)",
+     FB_FIELD(fb_rivers_layer_params, K)},
+    {"m", FB_K_NUM, 0, 2, true, NULL, "0.5", "the drainage area's exponent, in (0, 2]",
+     FB_FIELD(fb_rivers_layer_params, m)},
     {"n", FB_K_NUM, 0, 4, true, NULL, "1",
-     "the slope's exponent, in (0, 4] (1: solved directly; else by Newton's iteration, slower)"},
-    {"kd", FB_K_NUM, 0, 1e9, false, NULL, "0.03", "hillslope diffusivity, area per time unit (0: none)"},
-    {"dt", FB_K_NUM, 0, 1e12, true, NULL, "50000", "the time step, in time units"},
-    {"steps", FB_K_INT, 1, 1000000, false, NULL, "400", "time steps (the simulated time is dt x steps)"},
+     "the slope's exponent, in (0, 4] (1: solved directly; else by Newton's iteration, slower)",
+     FB_FIELD(fb_rivers_layer_params, n)},
+    {"kd", FB_K_NUM, 0, 1e9, false, NULL, "0.03", "hillslope diffusivity, area per time unit (0: none)",
+     FB_FIELD(fb_rivers_layer_params, kd)},
+    {"dt", FB_K_NUM, 0, 1e12, true, NULL, "50000", "the time step, in time units",
+     FB_FIELD(fb_rivers_layer_params, dt)},
+    {"steps", FB_K_INT, 1, 1000000, false, NULL, "400", "time steps (the simulated time is dt x steps)",
+     FB_FIELD(fb_rivers_layer_params, steps)},
     {"noise", FB_K_NUM, 0, 1e9, false, NULL, "1",
-     "the starting heights' perturbation: uniform in [0, noise) at each cell, from the seed"},
+     "the starting heights' perturbation: uniform in [0, noise) at each cell, from the seed",
+     FB_FIELD(fb_rivers_layer_params, noise)},
     {"lakes", FB_K_ENUM, 0, 0, false, "fill|keep", "\"fill\"",
-     "depressions: filled (the surface drains everywhere) or kept as lakes (NAME.lake holds their depth)"},
+     "depressions: filled (the surface drains everywhere) or kept as lakes (NAME.lake holds their depth)",
+     FB_FIELD(fb_rivers_layer_params, keep_lakes)},
     {"outlets", FB_K_NAMES, 0, 0, false, "north|south|east|west|none", "[\"north\", \"south\", \"east\", \"west\"]",
-     "the edges water leaves by, each held at its height (none: only the sea; flag: a comma list)"},
-    {"sea-level", FB_K_NUM, -1e15, 1e15, false, NULL, NULL, "cells below this height are the sea: outlets, held"},
+     "the edges water leaves by, each held at its height (none: only the sea; flag: a comma list)",
+     FB_FIELD(fb_rivers_layer_params, outlets)},
+    {"sea-level", FB_K_NUM, -1e15, 1e15, false, NULL, NULL, "cells below this height are the sea: outlets, held",
+     FB_FIELD(fb_rivers_layer_params, sea_level)},
     {"extent", FB_K_NUM, 0, 1e12, true, NULL, NULL,
      "the image's width in world units (the heights' unit); default: the input's or the uplift map's world width, "
-     "else 100000"},
+     "else 100000",
+     FB_FIELD(fb_rivers_layer_params, extent)},
     {"river-area", FB_K_NUM, 0, 1e30, true, NULL, NULL,
      "NAME.river is 1 where the drainage area reaches this, world units squared (default: 1/1000 of the image's "
-     "area)"},
+     "area)",
+     FB_FIELD(fb_rivers_layer_params, river_area)},
     FB_RELIEF_KEYS,
     {"water-colour", FB_K_NUMLIST, 0, 1e3, false, NULL, NULL,
-     "with a palette: the colour of rivers and standing water, R,G,B, lit like the land (default 0.03,0.12,0.3)", 3},
+     "with a palette: the colour of rivers and standing water, R,G,B, lit like the land (default 0.03,0.12,0.3)", 3,
+     FB_FIELD(fb_rivers_layer_params, water)},
     {"heightmap", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
-     "also write the heights (Y) for engines: OUT.png (16-bit grey), OUT.r16 (16-bit raw) or OUT.tif (float GeoTIFF)"},
+     "also write the heights (Y) for engines: OUT.png (16-bit grey), OUT.r16 (16-bit raw) or OUT.tif (float GeoTIFF)",
+     FB_CORE},
     FB_HEIGHTMAP_KEYS,
     {"half", FB_K_BOOL, 0, 0, false, NULL, "false",
-     "store Y and lake as half (area stays float: it exceeds half's range; flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
-     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+     "store Y and lake as half (area stays float: it exceeds half's range; flags: --half, --float)", FB_CORE},
+    FB_COMPRESSION_KEY,
 };
 
 static fb_result parse_rivers(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
 {
     (void)s;
-    fb_result rc = fb_schema_check(v, path, obj, rivers_keys, FB_NKEYS(rivers_keys), "a rivers layer");
-    if (rc) return rc;
     fb_rivers_layer_params *P = (void *)L->params;
+    fb_result rc = fb_schema_check(v, path, obj, rivers_keys, FB_NKEYS(rivers_keys), "a rivers layer", P);
+    if (rc) return rc;
     char sub[256];
-    const json_t *in = json_object_get(obj, "input"), *map = json_object_get(obj, "uplift-map");
-    P->has_input = in != NULL;
-    if (in) fb_json_ref(in, &P->input);
+    const json_t *map = json_object_get(obj, "uplift-map");
+    P->has_input = json_object_get(obj, "input") != NULL;
     P->has_map = map != NULL;
     if (map && json_is_number(map)) {
         snprintf(sub, sizeof sub, "%s.uplift-map", path);
         return fb_schema_error(v, sub, "expected another layer's channel; a uniform uplift is the number \"uplift\"");
     }
-    if (map) fb_json_ref(map, &P->map);
-    P->uplift = fb_json_num(obj, "uplift");
     P->has_range = json_object_get(obj, "uplift-range") != NULL;
     if (P->has_range) {
         snprintf(sub, sizeof sub, "%s.uplift-range", path);
         if (!map) return fb_schema_error(v, sub, "the range of an uplift map, and there is no uplift-map");
-        fb_json_vec2(obj, "uplift-range", P->range);
         if (!(P->range[1] > P->range[0]))
             return fb_schema_error(v, sub, "expected LO,HI with LO < HI, found %g,%g", P->range[0], P->range[1]);
     }
-    P->K = fb_json_num(obj, "K");
-    P->m = fb_json_num(obj, "m");
-    P->n = fb_json_num(obj, "n");
-    P->kd = fb_json_num(obj, "kd");
-    P->dt = fb_json_num(obj, "dt");
-    P->steps = (int)json_integer_value(json_object_get(obj, "steps"));
-    P->noise = fb_json_num(obj, "noise");
-    P->keep_lakes = !strcmp(json_string_value(json_object_get(obj, "lakes")), "keep");
-    const json_t *out = json_object_get(obj, "outlets");
-    static const char *const sides[4] = {"north", "south", "east", "west"};
-    bool none = false;
-    P->outlets = 0;
-    for (size_t i = 0; i < json_array_size(out); i++) {
-        const char *w = json_string_value(json_array_get(out, i));
-        none = none || !strcmp(w, "none");
-        for (int k = 0; k < 4; k++)
-            if (!strcmp(w, sides[k])) P->outlets |= 1u << k;
-    }
+    /* the outlets' names in the order of their bits (FB_RIVERS_NORTH ...), then none */
+    bool none = P->outlets & 16u;
+    P->outlets &= 15u;
     snprintf(sub, sizeof sub, "%s.outlets", path);
     if (none && P->outlets) return fb_schema_error(v, sub, "\"none\" with edges: name the edges, or none alone");
     P->has_sea = json_object_get(obj, "sea-level") != NULL;
-    P->sea_level = P->has_sea ? fb_json_num(obj, "sea-level") : 0;
     if (!P->outlets && !P->has_sea)
         return fb_schema_error(v, sub, "no outlet: water must leave by an edge, or set a sea-level");
-    P->extent = json_object_get(obj, "extent") ? fb_json_num(obj, "extent") : 0;
-    P->river_area = json_object_get(obj, "river-area") ? fb_json_num(obj, "river-area") : 0;
     if ((rc = fb_schema_relief(v, path, obj, &P->relief))) return rc;
     const json_t *wc = json_object_get(obj, "water-colour");
     if (wc && !P->relief.colour) {
@@ -123,15 +118,14 @@ static fb_result parse_rivers(const fb_vctx *v, const char *path, json_t *obj, c
         return fb_schema_error(v, sub, "water-colour shapes the colour by height: give palette, cosine or stops too");
     }
     static const double water[3] = {0.03, 0.12, 0.3};
-    for (int c = 0; c < 3; c++) P->water[c] = wc ? json_number_value(json_array_get(wc, (size_t)c)) : water[c];
+    for (int c = 0; c < 3 && !wc; c++) P->water[c] = water[c];
     return FB_OK;
 }
 
 /* ---- the layer --------------------------------------------------------------------------------- */
 
 typedef struct rivers_state {
-    const fb_gen *src, *map; /* the starting heights' and the uplift map's layers (resolve), or NULL */
-    int src_channel, map_channel;
+    fb_source src, map; /* the starting heights' and the uplift map's channels (resolve); .gen NULL: none */
     fb_rivers_out out;
     fb_relief relief; /* with a palette: the colour by height */
     double cell;
@@ -153,8 +147,8 @@ static const fb_gen *world_of(const fb_gen *g)
 {
     const rivers_state *s = state(g);
     if (!s) return NULL;
-    if (s->src && s->src->prepared.has_world) return s->src;
-    if (s->map && s->map->prepared.has_world) return s->map;
+    if (s->src.gen && s->src.gen->prepared.has_world) return s->src.gen;
+    if (s->map.gen && s->map.gen->prepared.has_world) return s->map.gen;
     return NULL;
 }
 
@@ -165,31 +159,6 @@ static double extent_of(const fb_gen *g)
     if (P->extent > 0) return P->extent;
     if (w) return w->prepared.world[1] - w->prepared.world[0];
     return 100000;
-}
-
-/* Channel c of layer src over the whole image, band by band through its native rows (its prepare has
- * run: the bake prepares sources first), so that it is the same on every backend; refused where it
- * is not finite. */
-static fb_result read_channel(const fb_gen *g, const fb_gen *src, int c, const char *what, float *out)
-{
-    const fb_scene *sc = g->scene;
-    const int band = 64;
-    fb_result rc = FB_OK;
-    void *planes[FB_GEN_MAX_CHANNELS] = {0};
-    for (int k = 0; k < fb_gen_nplanes(src) && !rc; k++)
-        if (fb_gen_plane_stored(src, k) && !(planes[k] = malloc((size_t)sc->width * band * 4)))
-            rc = fb_fail(FB_ERR_NOMEM, "out of memory");
-    for (int y0 = 0; y0 < sc->height && !rc; y0 += band) {
-        int n = y0 + band <= sc->height ? band : sc->height - y0;
-        src->compute.native_rows(src, y0, n, planes);
-        memcpy(out + (size_t)y0 * sc->width, planes[fb_gen_plane_of(src, c)], (size_t)n * sc->width * 4);
-    }
-    for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(planes[k]);
-    for (size_t i = 0; !rc && i < (size_t)sc->width * sc->height; i++)
-        if (!isfinite(out[i]))
-            rc = fb_fail(FB_ERR_INPUT, "layer %s: its %s %s has a NaN or infinite value at (%zu, %zu)", g->layer->name,
-                         what, src->store.channel_names[c], i % sc->width, i / sc->width);
-    return rc;
 }
 
 /* The uplift map as factors in [0, 1]: its values from the range (or its own lowest and highest). */
@@ -212,10 +181,11 @@ static fb_result rivers_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     const fb_rivers_layer_params *P = fb_layer_params(g->layer);
     const fb_scene *sc = g->scene;
     size_t n = (size_t)sc->width * sc->height;
-    float *initial = s->src ? malloc(n * sizeof *initial) : NULL, *map = s->map ? malloc(n * sizeof *map) : NULL;
-    fb_result rc = (s->src && !initial) || (s->map && !map) ? fb_fail(FB_ERR_NOMEM, "out of memory") : FB_OK;
-    if (!rc && s->src) rc = read_channel(g, s->src, s->src_channel, "input", initial);
-    if (!rc && s->map) rc = read_channel(g, s->map, s->map_channel, "uplift-map", map);
+    float *initial = s->src.gen ? malloc(n * sizeof *initial) : NULL,
+          *map = s->map.gen ? malloc(n * sizeof *map) : NULL;
+    fb_result rc = (s->src.gen && !initial) || (s->map.gen && !map) ? fb_fail(FB_ERR_NOMEM, "out of memory") : FB_OK;
+    if (!rc && s->src.gen) rc = fb_source_read(&s->src, g, "input", initial);
+    if (!rc && s->map.gen) rc = fb_source_read(&s->map, g, "uplift-map", map);
     if (!rc && map) normalise(map, n, P);
     double extent = extent_of(g), cell = extent / sc->width;
     fb_rivers_desc d = {.width = sc->width,
@@ -359,29 +329,14 @@ static fb_result rivers_init(fb_gen *g)
     return FB_OK;
 }
 
-/* A reference's layer and channel: a float channel of a layer with native rows, not an op layer. */
-static fb_result find_source(fb_gen *g, const fb_gen *const *gens, const fb_ref *r, const char *key, const fb_gen **src,
-                             int *channel)
-{
-    const fb_gen *l = gens[r->layer];
-    int c = fb_gen_channel_of(l, r->channel, g->layer->name, key);
-    if (c < 0) return FB_ERR_INPUT;
-    if (l->compute.host_rows || l->store.channel_types[c] == EXRIO_UINT)
-        return fb_fail(FB_ERR_INPUT, "layer %s: %s \"%s\": %s", g->layer->name, key, l->store.channel_names[c],
-                       l->compute.host_rows ? "an op layer cannot drive it yet (bake it, or name the layer it reads)"
-                                            : "a channel of integers, not heights");
-    *src = l, *channel = c;
-    return FB_OK;
-}
-
 static fb_result rivers_resolve(fb_gen *g, const fb_gen *const *gens, const int *plane_offset)
 {
     (void)plane_offset;
     const fb_rivers_layer_params *P = fb_layer_params(g->layer);
     rivers_state *s = state(g);
     fb_result rc = FB_OK;
-    if (P->has_input && P->input.layer >= 0) rc = find_source(g, gens, &P->input, "input", &s->src, &s->src_channel);
-    if (!rc && P->has_map) rc = find_source(g, gens, &P->map, "uplift-map", &s->map, &s->map_channel);
+    if (P->has_input && P->input.layer >= 0) rc = fb_source_find(&s->src, g, gens, &P->input, "input", NULL);
+    if (!rc && P->has_map) rc = fb_source_find(&s->map, g, gens, &P->map, "uplift-map", NULL);
     return rc;
 }
 

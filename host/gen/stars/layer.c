@@ -18,26 +18,35 @@
 /* ---- the scene keys and their parser ---------------------------------------------------------- */
 
 static const fb_keyspec stars_keys[] = {
-    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"stars\""},
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"stars\"", FB_CORE},
     {"name", FB_K_NAME, 0, 0, false, NULL, "\"stars\"",
-     "layer name; the channels are NAME.R, NAME.G, NAME.B and NAME.mag (flag: --layer)"},
+     "layer name; the channels are NAME.R, NAME.G, NAME.B and NAME.mag (flag: --layer)", FB_CORE},
     {"mapping", FB_K_ENUM, 0, 0, false, "latlong|cube|polar", "\"latlong\"",
      "the sky's layout: latlong (2N x N), cube (N x 6N, faces +X -X +Y -Y +Z -Z) or polar (the upper "
-     "hemisphere as the julia layer's polar grid)"},
-    {"limit", FB_K_NUM, -2, 11, false, NULL, "8.0", "limiting magnitude: the faintest stars drawn"},
-    {"slope", FB_K_NUM, 0.05, 1, false, NULL, "0.49", "star counts N(<m) grow as 10^(slope m)"},
-    {"count6", FB_K_NUM, 0, 1e6, false, NULL, "4970", "stars brighter than magnitude 6 over the whole sky"},
-    {"brightness", FB_K_NUM, 0, 1e12, false, NULL, "1.0", "flux (luminance times steradians) of a magnitude-0 star"},
-    {"psf", FB_K_NUM, 0.5, 4, false, NULL, "1.0", "half width of each star's tent spread, pixels"},
+     "hemisphere as the julia layer's polar grid)",
+     FB_FIELD(fb_stars_params, mapping)},
+    {"limit", FB_K_NUM, -2, 11, false, NULL, "8.0", "limiting magnitude: the faintest stars drawn",
+     FB_FIELD(fb_stars_params, limit)},
+    {"slope", FB_K_NUM, 0.05, 1, false, NULL, "0.49", "star counts N(<m) grow as 10^(slope m)",
+     FB_FIELD(fb_stars_params, slope)},
+    {"count6", FB_K_NUM, 0, 1e6, false, NULL, "4970", "stars brighter than magnitude 6 over the whole sky",
+     FB_FIELD(fb_stars_params, count6)},
+    {"brightness", FB_K_NUM, 0, 1e12, false, NULL, "1.0", "flux (luminance times steradians) of a magnitude-0 star",
+     FB_FIELD(fb_stars_params, brightness)},
+    {"psf", FB_K_NUM, 0.5, 4, false, NULL, "1.0", "half width of each star's tent spread, pixels",
+     FB_FIELD(fb_stars_params, psf)},
     {"milky-way", FB_K_NUM, 0, 100, false, NULL, "0.0",
-     "the Milky Way's star density at its centre line, relative to the sky far from it (0: no band)"},
-    {"milky-way-width", FB_K_NUM, 0.5, 90, false, NULL, "8.0", "the band's half width, degrees of galactic latitude"},
+     "the Milky Way's star density at its centre line, relative to the sky far from it (0: no band)",
+     FB_FIELD(fb_stars_params, milky_way)},
+    {"milky-way-width", FB_K_NUM, 0.5, 90, false, NULL, "8.0", "the band's half width, degrees of galactic latitude",
+     FB_FIELD(fb_stars_params, mw_width)},
     {"galactic-pole", FB_K_VEC2, -360, 360, false, NULL, "[192.86, 27.13]",
      "the band's north pole: longitude and latitude, degrees (default: the real one for a map in right ascension "
-     "and declination)"},
-    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store R, G, B as half instead of float (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
-     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+     "and declination)",
+     FB_FIELD(fb_stars_params, pole)},
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store R, G, B as half instead of float (flags: --half, --float)",
+     FB_CORE},
+    FB_COMPRESSION_KEY,
 };
 
 /* The smallest sizes a mapping takes (the spread must fit in a face or a period), or a message. */
@@ -53,21 +62,11 @@ static const char *size_problem(unsigned mapping, int w, int h)
 static fb_result parse_stars(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
 {
     char sub[256];
-    fb_result rc = fb_schema_check(v, path, obj, stars_keys, FB_NKEYS(stars_keys), "a stars layer");
-    if (rc) return rc;
     fb_stars_params *p = (void *)L->params;
-    int idx = 0;
-    fb_enum_index("latlong|cube|polar", json_string_value(json_object_get(obj, "mapping")), &idx);
-    static const unsigned kinds[] = {K_ENV_LATLONG, K_ENV_CUBE, K_STARS_POLAR};
-    p->mapping = kinds[idx];
-    p->limit = fb_json_num(obj, "limit");
-    p->slope = fb_json_num(obj, "slope");
-    p->count6 = fb_json_num(obj, "count6");
-    p->brightness = fb_json_num(obj, "brightness");
-    p->psf = fb_json_num(obj, "psf");
-    p->milky_way = fb_json_num(obj, "milky-way");
-    p->mw_width = fb_json_num(obj, "milky-way-width");
-    fb_json_vec2(obj, "galactic-pole", p->pole);
+    fb_result rc = fb_schema_check(v, path, obj, stars_keys, FB_NKEYS(stars_keys), "a stars layer", p);
+    if (rc) return rc;
+    static const unsigned kinds[] = {K_ENV_LATLONG, K_ENV_CUBE, K_STARS_POLAR}; /* by the key's index */
+    p->mapping = kinds[p->mapping];
     if (fabs(p->pole[1]) > 90) {
         snprintf(sub, sizeof sub, "%s.galactic-pole", path);
         return fb_schema_error(v, sub, "the pole's latitude %g is outside [-90, 90] degrees", p->pole[1]);

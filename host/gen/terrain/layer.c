@@ -57,49 +57,62 @@ static fb_result check_points(const fb_vctx *v, const char *path, const fb_keysp
 static const fb_kvalue points_value = {.check = check_points, .names_file = fb_string_names_file};
 
 static const fb_keyspec terrain_keys[] = {
-    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"terrain\""},
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"terrain\"", FB_CORE},
     {"name", FB_K_NAME, 0, 0, false, NULL, "\"terrain\"",
-     "layer name; channels NAME.Y (height) and NAME.A (in the hull)"},
+     "layer name; channels NAME.Y (height) and NAME.A (in the hull)", FB_CORE},
     {"points", FB_K_CUSTOM, -1e15, 1e15, false, NULL, NULL,
-     "survey points: an XYZ / CSV file (x y z per line) or a list [[x, y, z], ...]", .value = &points_value},
-    {"from-heightfield", FB_K_PATH, 0, 0, false, NULL, NULL, "instead of points: IN.exr[:layer.channel] sampled"},
-    {"sample", FB_K_INT, 1, 65536, false, NULL, NULL, "with from-heightfield: every N-th pixel (default 16)"},
-    {"insert", FB_K_INT, 0, 1e8, false, NULL, "40000", "points inserted by random midpoint displacement"},
-    {"hurst", FB_K_NUM, 0, 1, true, NULL, "0.85", "Hurst exponent H in (0, 1); D = 3 - H", 0, NULL, "dimension"},
-    {"dimension", FB_K_NUM, 2, 3, true, NULL, NULL, "fractal dimension D in (2, 3), instead of hurst"},
+     "survey points: an XYZ / CSV file (x y z per line) or a list [[x, y, z], ...]", .value = &points_value,
+     FB_FIELD(fb_terrain_layer_params, points)},
+    {"from-heightfield", FB_K_PATH, 0, 0, false, NULL, NULL, "instead of points: IN.exr[:layer.channel] sampled",
+     FB_FIELD(fb_terrain_layer_params, heightfield)},
+    {"sample", FB_K_INT, 1, 65536, false, NULL, NULL, "with from-heightfield: every N-th pixel (default 16)",
+     FB_FIELD(fb_terrain_layer_params, sample)},
+    {"insert", FB_K_INT, 0, 1e8, false, NULL, "40000", "points inserted by random midpoint displacement",
+     FB_FIELD(fb_terrain_layer_params, insert)},
+    {"hurst", FB_K_NUM, 0, 1, true, NULL, "0.85", "Hurst exponent H in (0, 1); D = 3 - H", 0, NULL, "dimension",
+     FB_FIELD(fb_terrain_layer_params, hurst)},
+    {"dimension", FB_K_NUM, 2, 3, true, NULL, NULL, "fractal dimension D in (2, 3), instead of hurst",
+     FB_FIELD(fb_terrain_layer_params, dimension)},
     {"sigma", FB_K_NUM, 0, 1e15, false, NULL, NULL,
-     "standard deviation of height increments at unit distance (default: estimated from the points)"},
+     "standard deviation of height increments at unit distance (default: estimated from the points)",
+     FB_FIELD(fb_terrain_layer_params, sigma)},
     {"order", FB_K_ENUM, 0, 0, false, "random|sweep", "\"random\"",
-     "insertion triangles: random (by area) or an ordered sweep"},
+     "insertion triangles: random (by area) or an ordered sweep", FB_FIELD(fb_terrain_layer_params, sweep)},
     {"variance", FB_K_ENUM, 0, 0, false, "stage|local|additions", "\"stage\"",
      "the displacements: the paper's, var(z_abc - z_*) over the mesh per doubling (stage) or the triangle's "
      "neighbourhood (local); or additions, an fBm field of the asked H added to the survey's interpolated "
-     "residual"},
-    {"centers", FB_K_PATH, 0, 0, false, NULL, NULL, "CSV of centres x,y,D,sigma: regions of their own D and sigma"},
+     "residual",
+     FB_FIELD(fb_terrain_layer_params, variance)},
+    {"centers", FB_K_PATH, 0, 0, false, NULL, NULL, "CSV of centres x,y,D,sigma: regions of their own D and sigma",
+     FB_FIELD(fb_terrain_layer_params, centers)},
     {"interpolation", FB_K_ENUM, 0, 0, false, "linear|smooth", "\"linear\"",
-     "the surface between the vertices: each triangle's plane, or a C1 surface (Clough-Tocher) without facets"},
+     "the surface between the vertices: each triangle's plane, or a C1 surface (Clough-Tocher) without facets",
+     FB_FIELD(fb_terrain_layer_params, smooth)},
     {"bounds", FB_K_BOUNDS, -1e15, 1e15, false, NULL, "\"auto\"",
-     "area rasterised: \"auto\" (the points' bounding box) or [xmin, xmax, ymin, ymax]"},
-    {"mesh", FB_K_OUTPUT, 0, 0, false, NULL, NULL, "also write the refined mesh: OUT.ply (binary) or OUT.obj"},
+     "area rasterised: \"auto\" (the points' bounding box) or [xmin, xmax, ymin, ymax]",
+     FB_FIELD(fb_terrain_layer_params, bounds)},
+    {"mesh", FB_K_OUTPUT, 0, 0, false, NULL, NULL, "also write the refined mesh: OUT.ply (binary) or OUT.obj",
+     FB_FIELD(fb_terrain_layer_params, mesh)},
     {"heightmap", FB_K_OUTPUT, 0, 0, false, NULL, NULL,
      "also write the heights for engines: OUT.png (16-bit grey) or OUT.r16 (16-bit raw, little-endian), or OUT.tif "
-     "(float GeoTIFF with the geotransform; pixels outside the hull are NoData, -3.4028234663852886e+38)"},
+     "(float GeoTIFF with the geotransform; pixels outside the hull are NoData, -3.4028234663852886e+38)",
+     FB_CORE},
     FB_HEIGHTMAP_KEYS,
     {"crs", FB_K_STRING, 0, 0, false, NULL, NULL,
-     "the points' projected CRS, EPSG:N (a GeoTIFF heightmap records it; default: not stated)"},
+     "the points' projected CRS, EPSG:N (a GeoTIFF heightmap records it; default: not stated)",
+     FB_FIELD(fb_terrain_layer_params, crs)},
     FB_RELIEF_KEYS,
-    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store Y (and R, G, B) as half (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
-     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store Y (and R, G, B) as half (flags: --half, --float)", FB_CORE},
+    FB_COMPRESSION_KEY,
 };
 
 static fb_result parse_terrain(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
 {
     char sub[256];
     bool h_given = json_object_get(obj, "hurst") != NULL, d_given = json_object_get(obj, "dimension") != NULL;
-    fb_result rc = fb_schema_check(v, path, obj, terrain_keys, FB_NKEYS(terrain_keys), "a terrain layer");
-    if (rc) return rc;
     fb_terrain_layer_params *t = (void *)L->params;
+    fb_result rc = fb_schema_check(v, path, obj, terrain_keys, FB_NKEYS(terrain_keys), "a terrain layer", t);
+    if (rc) return rc;
     json_t *pts = json_object_get(obj, "points");
     bool hf = json_object_get(obj, "from-heightfield") != NULL;
     if (!pts == !hf) {
@@ -122,27 +135,18 @@ static fb_result parse_terrain(const fb_vctx *v, const char *path, json_t *obj, 
                                h_given ? "hurst" : "dimension");
     }
     t->points_inline = json_is_array(pts);
-    fb_json_string(obj, "points", t->points, sizeof t->points);
-    fb_json_string(obj, "from-heightfield", t->heightfield, sizeof t->heightfield);
-    t->sample = json_object_get(obj, "sample") ? (int)json_integer_value(json_object_get(obj, "sample")) : 16;
-    t->insert = (uint64_t)json_integer_value(json_object_get(obj, "insert"));
-    t->hurst = d_given ? 3 - fb_json_num(obj, "dimension") : fb_json_num(obj, "hurst");
+    if (!json_object_get(obj, "sample")) t->sample = 16;
+    if (d_given) t->hurst = 3 - t->dimension;
     if (!(t->hurst > 0 && t->hurst < 1)) {
         snprintf(sub, sizeof sub, "%s.%s", path, d_given ? "dimension" : "hurst");
         return fb_schema_error(v, sub, "%s must lie strictly inside %s", d_given ? "D" : "H",
                                d_given ? "(2, 3)" : "(0, 1)");
     }
-    t->sigma = json_object_get(obj, "sigma") ? fb_json_num(obj, "sigma") : -1;
-    t->sweep = !strcmp(json_string_value(json_object_get(obj, "order")), "sweep");
-    t->smooth = !strcmp(json_string_value(json_object_get(obj, "interpolation")), "smooth");
-    t->local_variance = !strcmp(json_string_value(json_object_get(obj, "variance")), "local");
-    t->additions = !strcmp(json_string_value(json_object_get(obj, "variance")), "additions");
+    if (!json_object_get(obj, "sigma")) t->sigma = -1;
+    t->local_variance = t->variance == 1; /* stage|local|additions */
+    t->additions = t->variance == 2;
     if ((rc = fb_schema_relief(v, path, obj, &t->relief))) return rc;
-    fb_json_string(obj, "centers", t->centers, sizeof t->centers);
-    fb_json_string(obj, "mesh", t->mesh, sizeof t->mesh);
-    json_t *b = json_object_get(obj, "bounds");
-    t->auto_bounds = json_is_string(b);
-    for (size_t i = 0; !t->auto_bounds && i < 4; i++) t->bounds[i] = json_number_value(json_array_get(b, i));
+    t->auto_bounds = json_is_string(json_object_get(obj, "bounds"));
     const char *too_long = strlen(t->heightfield) >= sizeof t->heightfield - 1              ? "from-heightfield"
                            : strlen(t->centers) >= sizeof t->centers - 1                    ? "centers"
                            : strlen(t->mesh) >= sizeof t->mesh - 1                          ? "mesh"
@@ -152,8 +156,8 @@ static fb_result parse_terrain(const fb_vctx *v, const char *path, json_t *obj, 
         snprintf(sub, sizeof sub, "%s.%s", path, too_long);
         return fb_schema_error(v, sub, "file name longer than %zu characters", sizeof t->mesh - 2);
     }
-    const char *crs = json_string_value(json_object_get(obj, "crs"));
-    if (crs) {
+    const char *crs = t->crs;
+    if (crs[0]) {
         /* EPSG's geographic 2D systems (degrees: 4326 and its kind) are codes 4000 to 4999; the
          * refinement needs x, y in the units of z (a projected system, in metres) */
         unsigned code = 0;

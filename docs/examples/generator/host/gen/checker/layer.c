@@ -11,20 +11,19 @@
 #include <string.h>
 
 static const fb_keyspec checker_keys[] = {
-    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"checker\""},
-    {"name", FB_K_NAME, 0, 0, false, NULL, "\"checker\"", "layer name; the channel is NAME.Y (flag: --layer)"},
-    {"cells", FB_K_INT, 1, 65536, false, NULL, "8", "squares across each side of the image"},
-    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store as half instead of float (flags: --half, --float)"},
-    {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, NULL,
-     "this layer's compression (default: the scene's); needs \"parts\": \"per-layer\""},
+    {"type", FB_K_TYPE, 0, 0, false, NULL, NULL, "generator: \"checker\"", FB_CORE},
+    {"name", FB_K_NAME, 0, 0, false, NULL, "\"checker\"", "layer name; the channel is NAME.Y (flag: --layer)", FB_CORE},
+    {"cells", FB_K_INT, 1, 65536, false, NULL, "8", "squares across each side of the image",
+     FB_FIELD(fb_checker_params, cells)},
+    {"half", FB_K_BOOL, 0, 0, false, NULL, "false", "store as half instead of float (flags: --half, --float)", FB_CORE},
+    FB_COMPRESSION_KEY,
 };
 
 static fb_result parse_checker(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
 {
-    fb_result rc = fb_schema_check(v, path, obj, checker_keys, FB_NKEYS(checker_keys), "a checker layer");
-    if (rc) return rc;
     fb_checker_params *c = (void *)L->params;
-    c->cells = (int)json_integer_value(json_object_get(obj, "cells"));
+    fb_result rc = fb_schema_check(v, path, obj, checker_keys, FB_NKEYS(checker_keys), "a checker layer", c);
+    if (rc) return rc;
     if (c->cells > s->width || c->cells > s->height) {
         char sub[256];
         snprintf(sub, sizeof sub, "%s.cells", path);
