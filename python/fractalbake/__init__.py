@@ -252,6 +252,9 @@ class Context:
         return self._lib.fractalbake_device(self._ptr).decode()
 
     def close(self):
+        if self._ptr and threading.get_ident() in self._callback:
+            raise Error("fractalbake: close: called from the context's own progress callback: close it after the "
+                        "call returns", 1)
         if self._ptr:
             self._lib.fractalbake_context_destroy(self._ptr)
             self._ptr = None

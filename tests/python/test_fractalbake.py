@@ -256,6 +256,11 @@ def test_reentry_from_a_callback_is_an_error_not_a_deadlock(tmp_path):
     assert str(e) == ("fractalbake: render: the context is running another call (this one came from its progress "
                       "callback): a context runs one call at a time")
     assert os.listdir(tmp_path) == []
+    ctx = fractalbake.Context("native", threads=1)
+    with pytest.raises(fractalbake.Error, match="close: called from the context's own progress callback"):
+        ctx.bake(None, out, sets=SMALL, progress=lambda f: ctx.close())
+    assert "sky.R" in ctx.render(sets=["size=8x4"]) and not out.exists()  # still open
+    ctx.close()
     # a callback may use another context
     other = fractalbake.Context("native", threads=1)
     inner = []
