@@ -5,7 +5,8 @@ EXR readers:
   pixel the EXR marks as river or lake blue in the picture and every other pixel grey;
 - a composite: a layer of data with no colour and no coverage (an fBm field) in front of others is left
   out (the line says so), so that the sky and terrain of docs/examples/night.json show; at the back,
-  alone, or named with --preview-layer it is drawn.
+  alone, or named with --preview-layer it is drawn;
+- the default scene's plants: filled silhouettes that cover a visible part of the picture.
 
 Usage: previews.py ROOT FRACTALBAKE
 """
@@ -80,6 +81,25 @@ _, _, back = png_rgb("back.png")
 _, _, field = png_rgb("field.png")
 check("a data layer at the back is drawn: the fern's empty pixels show the field",
       sum(1 for a, f in zip(back, field) if a[0] == a[1] == a[2] and a[0] > 0) > 0.3 * len(back))
+
+# ---- the default scene's plants: filled silhouettes, seen ----
+# A filled silhouette covers each column of it from its top pixel to its bottom one; an outline (the
+# paper's branching tree drawn by its chaos game) only its rims: 67% of the span at this size, two runs
+# a column. Seen: at least 3% of the image, where the old outlines covered 1.4%.
+run("render", "--set", "size=512x256", "--set", "layers.terrain.insert=2000", "--backend", "native", "-q",
+    "-o", "d.exr")
+A = read_exr_channel("d.exr", "plants.A")
+cov = span = runs = cols = 0
+for x in range(len(A[0])):
+    ys = [y for y in range(len(A)) if A[y][x] >= 0.5]
+    if ys:
+        cov, span, cols = cov + len(ys), span + max(ys) - min(ys) + 1, cols + 1
+        runs += 1 + sum(1 for a, b in zip(ys, ys[1:]) if b > a + 1)
+check(f"default scene: the plants fill {cov / max(span, 1):.0%} of their columns' spans (filled: at least 90%)",
+      cov >= 0.9 * span)
+check(f"default scene: {runs / max(cols, 1):.2f} runs a column (filled: under 1.5, an outline 2)", runs < 1.5 * cols)
+check(f"default scene: the plants cover {cov / (len(A) * len(A[0])):.1%} of the image (at least 3%)",
+      cov >= 0.03 * len(A) * len(A[0]))
 
 print(f"{len(failures)} failed" if failures else "all previews as they should be")
 sys.exit(1 if failures else 0)
