@@ -6,7 +6,8 @@ EXR readers:
 - a composite: a layer of data with no colour and no coverage (an fBm field) in front of others is left
   out (the line says so), so that the sky and terrain of docs/examples/night.json show; at the back,
   alone, or named with --preview-layer it is drawn;
-- the default scene's plants: filled silhouettes that cover a visible part of the picture.
+- the default scene's plants: filled silhouettes that cover a visible part of the picture; the trees of
+  docs/examples/rivers-plants.json off the grid their maps once drew.
 
 Usage: previews.py ROOT FRACTALBAKE
 """
@@ -100,6 +101,19 @@ check(f"default scene: the plants fill {cov / max(span, 1):.0%} of their columns
 check(f"default scene: {runs / max(cols, 1):.2f} runs a column (filled: under 1.5, an outline 2)", runs < 1.5 * cols)
 check(f"default scene: the plants cover {cov / (len(A) * len(A[0])):.1%} of the image (at least 3%)",
       cov >= 0.03 * len(A) * len(A[0]))
+
+# ---- docs/examples/rivers-plants.json's trees: not on a grid ----
+# Its four maps of scale 1/2 once stood on the dyadic lattice (every plant's x a multiple of 1/1024 of the
+# extent: a grid of dots); turned a little about the square's corners, the bases leave it.
+run("render", os.path.join(ROOT, "docs/examples/rivers-plants.json"), "--set", "size=128x128", "--set",
+    "layers.range.steps=20", "--set", "layers.trees.instances=trees.csv", "--set",
+    "layers.trees.instances-min-size=0.1", "--backend", "native", "-q", "-o", "rp.exr")
+rows = open("trees.csv").read().split("\n")[1:]
+xs = {float(r.split(",")[1]) for r in rows if r}
+step = 30000 / 1024  # the layer's extent over 1024
+lattice = sum(1 for x in xs if abs(x / step - round(x / step)) < 1e-3)
+check(f"rivers-plants: {len(xs)} distinct plant positions, {lattice} on the 1/1024 lattice (a grid: all; at most 10%)",
+      len(xs) >= 20 and lattice <= 0.1 * len(xs))
 
 print(f"{len(failures)} failed" if failures else "all previews as they should be")
 sys.exit(1 if failures else 0)
