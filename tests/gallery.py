@@ -16,8 +16,8 @@ import tempfile
 import zlib
 
 
-def png_grey(path):
-    """Width, height and the luminance of every pixel of an 8-bit RGB or grey PNG."""
+def png_pixels(path):
+    """Width, height and every pixel, as a tuple of its 1 or 3 samples, of an 8-bit RGB or grey PNG."""
     d = open(path, 'rb').read()
     w, h, depth, kind = struct.unpack('>IIBB', d[16:26])
     assert depth == 8 and kind in (0, 2), (path, depth, kind)
@@ -28,7 +28,7 @@ def png_grey(path):
         if t == b'IDAT':
             idat += d[i + 8:i + 8 + n]
         i += 12 + n
-    raw, stride, prev, lum = zlib.decompress(idat), w * ch, bytearray(w * ch), []
+    raw, stride, prev, px = zlib.decompress(idat), w * ch, bytearray(w * ch), []
     for y in range(h):
         f, row = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
         for x in range(stride):
@@ -42,10 +42,14 @@ def png_grey(path):
                 pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
                 row[x] = (row[x] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
         prev = row
-        for x in range(w):
-            px = row[x * ch:(x + 1) * ch]
-            lum.append(sum(px) / ch)
-    return w, h, lum
+        px += [tuple(row[x * ch:(x + 1) * ch]) for x in range(w)]
+    return w, h, px
+
+
+def png_grey(path):
+    """Width, height and the luminance of every pixel of an 8-bit RGB or grey PNG."""
+    w, h, px = png_pixels(path)
+    return w, h, [sum(p) / len(p) for p in px]
 
 
 def main():

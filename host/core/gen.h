@@ -39,6 +39,9 @@ typedef struct fb_gen_store {
                                 pixel in x and y) */
     bool preview_light;      /* its R, G, B are light without coverage (a star field): the over composite
                                 adds them to the layers behind instead of hiding those */
+    int preview_nwater;      /* a grey or hillshade preview draws water where one of these float channels
+                                is > 0 (a rivers layer's river and lake) */
+    int preview_water[2];
 } fb_gen_store;
 
 /* A compute shader over the layer's kernel: what the Vulkan backend dispatches over a piece of rows,

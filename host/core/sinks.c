@@ -315,7 +315,8 @@ typedef struct previews {
     bool uint[FB_MAX_LAYERS];  /* a scalar uint channel (a julia layer's iter alone): shown as float */
     bool three[FB_MAX_LAYERS]; /* colour */
     bool light[FB_MAX_LAYERS]; /* colour added in the composite (preview_light) */
-    int width, stride;         /* the window's width; the planes' row stride */
+    int nwater[FB_MAX_LAYERS], water[FB_MAX_LAYERS][2]; /* a scalar preview's water masks (preview_water) */
+    int width, stride;                                  /* the window's width; the planes' row stride */
 } previews;
 
 static int alpha_channel(const fb_gen *g)
@@ -359,8 +360,13 @@ static fb_result preview_layer(previews *pv, const bake_view *v, int i)
     snprintf(pv->labels[k], sizeof pv->labels[k], "%s (%s)", s->layers[i].name, s->layers[i].cls->name);
     /* a sheet's tiles share about 2048 pixels across */
     int side = pv->all ? (2048 / cols > 256 ? 2048 / cols : 256) : 2048;
-    fb_result rc =
-        fb_preview_create_alpha(v->region[2], v->region[3], side, pv->three[k] ? 3 : 1, pv->alpha[k] >= 0, &pv->p[k]);
+    pv->nwater[k] = pv->three[k] ? 0 : g->store.preview_nwater;
+    for (int w = 0; w < pv->nwater[k]; w++) pv->water[k][w] = g->store.preview_water[w];
+    fb_result rc = fb_preview_create_alpha(v->region[2], v->region[3], side,
+                                           pv->three[k]    ? 3
+                                           : pv->nwater[k] ? 2
+                                                           : 1,
+                                           pv->alpha[k] >= 0, &pv->p[k]);
     if (rc) return rc;
     fb_preview_set_row_stride(pv->p[k], s->width);
     pv->uint[k] = !pv->three[k] && g->store.channel_types[g->store.preview_channel] == EXRIO_UINT;
@@ -424,7 +430,7 @@ static void preview_note(const previews *pv, const fb_scene *s, char *note, size
         }
     snprintf(note, note_size, "%s composited back to front by their coverage%s%s%s%s%s%s%s", list,
              added[0] ? " (light added: " : "", added, added[0] ? ")" : "", hid,
-             left[0] ? "; op layers not drawn: " : "", left,
+             left[0] ? "; not drawn (op layers, and data with no colour or coverage in front): " : "", left,
              pv->n > 1 || left[0] ? " (--preview-layer NAME shows one, all a sheet of every layer)" : "");
 }
 
@@ -433,13 +439,26 @@ static fb_result previews_band(void *self, const fb_piece *p, int y0, int n)
     previews *pv = self;
     const void *const *planes = p->planes;
     size_t at = (size_t)(y0 - p->y0) * p->stride;
-    float *conv = NULL;
+    float *conv = NULL, *wet = NULL;
     for (int k = 0; k < pv->n; k++) {
         const void *const *lp = planes + pv->offset[k];
         int f = pv->first[k], three = pv->three[k];
         const float *rows[4] = {(const float *)lp[f] + at, (const float *)lp[three ? f + 1 : f] + at,
                                 (const float *)lp[three ? f + 2 : f] + at, NULL};
-        if (pv->alpha[k] >= 0) rows[three ? 3 : 1] = (const float *)lp[pv->alpha[k]] + at;
+        int nc = three ? 3 : pv->nwater[k] ? 2 : 1;
+        if (pv->nwater[k]) { /* 1 where any mask is > 0, in rows of the same stride */
+            if (!wet && !(wet = malloc((size_t)n * pv->stride * sizeof *wet)))
+                return fb_fail(FB_ERR_NOMEM, "out of memory for the preview");
+            for (int r = 0; r < n; r++)
+                for (int x = 0; x < pv->width; x++) {
+                    size_t o = (size_t)r * pv->stride + x;
+                    bool w = false;
+                    for (int m = 0; m < pv->nwater[k]; m++) w = w || ((const float *)lp[pv->water[k][m]] + at)[o] > 0;
+                    wet[o] = w;
+                }
+            rows[1] = wet;
+        }
+        if (pv->alpha[k] >= 0) rows[nc] = (const float *)lp[pv->alpha[k]] + at;
         if (pv->uint[k]) { /* converted into rows of the same stride */
             if (!conv && !(conv = malloc((size_t)n * pv->stride * sizeof *conv)))
                 return fb_fail(FB_ERR_NOMEM, "out of memory for the preview");
@@ -452,6 +471,7 @@ static fb_result previews_band(void *self, const fb_piece *p, int y0, int n)
         fb_preview_add_rows(pv->p[k], y0 - p->top, n, rows);
     }
     free(conv);
+    free(wet);
     return FB_OK;
 }
 
@@ -484,10 +504,12 @@ fb_result sink_previews_create(const bake_view *v, char *note, size_t note_size,
     int only;
     fb_result rc = preview_which(s, v->d->preview_layer, pv, &only);
     for (int i = 0; i < s->nlayers && !rc; i++) {
-        /* op layers are data (masks, sums): shown by name, left out of the composite */
-        bool host = v->runs[i].gen.compute.host_rows != NULL;
-        if (pv->all ? true : pv->over ? !host || (i == s->nlayers - 1 && pv->n == 0) : i == only)
-            rc = preview_layer(pv, v, i);
+        /* op layers are data (masks, sums): shown by name, left out of the composite; so is a layer of data with no
+         * colour and no coverage (an fBm field) in front of another, which it would hide: drawn only at the back */
+        const fb_gen *g = &v->runs[i].gen;
+        bool host = g->compute.host_rows != NULL, opaque_data = g->store.preview_rgb < 0 && alpha_channel(g) < 0;
+        bool composite = (!host && (!opaque_data || pv->n == 0)) || (i == s->nlayers - 1 && pv->n == 0);
+        if (pv->all ? true : pv->over ? composite : i == only) rc = preview_layer(pv, v, i);
     }
     if (rc) {
         previews_destroy(pv);

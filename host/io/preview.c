@@ -16,7 +16,7 @@ struct fb_preview {
     int stride;        /* values per source row given to fb_preview_add_rows */
     int scale;         /* source pixels per preview pixel, per axis */
     int pw, ph;
-    int channels; /* 1 (grey or hillshade) or 3 (RGB), plus 1 when `alpha` */
+    int channels; /* 1 (grey or hillshade), 2 (the same and a water mask) or 3 (RGB), plus 1 when `alpha` */
     bool alpha;   /* the last channel is a coverage in [0, 1] (used by the over composite) */
     bool light;   /* colour without coverage, added in the over composite */
     double *sum;  /* channels values per preview pixel */
@@ -87,7 +87,7 @@ fb_result fb_preview_create_alpha(int width, int height, int max_side, int chann
     if (p->scale < 1) p->scale = 1;
     p->pw = (width + p->scale - 1) / p->scale;
     p->ph = (height + p->scale - 1) / p->scale;
-    p->channels = (channels == 3 ? 3 : 1) + (alpha ? 1 : 0);
+    p->channels = (channels == 3 || channels == 2 ? channels : 1) + (alpha ? 1 : 0);
     p->alpha = alpha;
     p->sum = calloc((size_t)p->pw * p->ph * p->channels, sizeof *p->sum);
     p->count = calloc((size_t)p->pw * p->ph, sizeof *p->count);
@@ -132,11 +132,22 @@ uint8_t fb_srgb8(double v)
 
 static fb_result write_png(const char *path, const char *what, int pw, int ph, int nc, const uint8_t *img);
 
-/* The preview as 8-bit samples, nc of them a pixel (the preview's 1 or 3; 3 with `rgb`: grey repeated). */
+/* Linear ground colour `ground` with the water of pixel i (its mask's mean, s[1] / count) over it: a
+ * deep blue, lit a little by the ground's shade `v` so that the valleys keep their relief. */
+static void water_over(const fb_preview *p, size_t i, double v, double ground[3])
+{
+    static const double water[3] = {0.005, 0.04, 0.22};
+    double w = p->count[i] ? p->sum[i * p->channels + 1] / p->count[i] : 0;
+    w = w < 0 ? 0 : w > 1 ? 1 : w;
+    for (int j = 0; j < 3; j++) ground[j] = (1 - w) * ground[j] + w * water[j] * (0.5 + 0.5 * v);
+}
+
+/* The preview as 8-bit samples, nc of them a pixel (the preview's 1 or 3; 3 with `rgb`: grey repeated; 3 with
+ * water). */
 static void render(const fb_preview *p, uint8_t *img, bool rgb)
 {
     size_t n = (size_t)p->pw * p->ph;
-    int nc = p->channels - (p->alpha ? 1 : 0), out = rgb ? 3 : nc;
+    int nc = p->channels - (p->alpha ? 1 : 0), out = rgb || nc == 2 ? 3 : nc;
     double lo = INFINITY, hi = -INFINITY;
     if (nc == 1 && p->shade_dx <= 0)
         for (size_t i = 0; i < n; i++) {
@@ -154,9 +165,16 @@ static void render(const fb_preview *p, uint8_t *img, bool rgb)
                     img[i * 3 + c] = p->count[i] ? fb_srgb8(p->sum[i * p->channels + c] / p->count[i]) : 0;
                 continue;
             }
-            uint8_t g = p->shade_dx > 0 ? (uint8_t)lrint(255.0 * hillshade(p, x, y))
-                        : p->count[i]   ? (uint8_t)lrint(255.0 * (p->sum[i * p->channels] / p->count[i] - lo) / range)
-                                        : 0;
+            double v = p->shade_dx > 0 ? hillshade(p, x, y)
+                       : p->count[i]   ? (p->sum[i * p->channels] / p->count[i] - lo) / range
+                                       : 0;
+            if (nc == 2) { /* the grey's own levels as light, so that the ground keeps its look */
+                double c[3] = {v * v, v * v, v * v};
+                water_over(p, i, v, c);
+                for (int k = 0; k < 3; k++) img[i * 3 + k] = fb_srgb8(c[k]);
+                continue;
+            }
+            uint8_t g = (uint8_t)lrint(255.0 * v);
             for (int c = 0; c < out; c++) img[i * out + c] = g;
         }
 }
@@ -165,6 +183,7 @@ fb_result fb_preview_write_png(const fb_preview *p, const char *path, const char
 {
     size_t n = (size_t)p->pw * p->ph;
     int nc = p->channels - (p->alpha ? 1 : 0);
+    nc = nc == 2 ? 3 : nc;
     uint8_t *img = malloc(n * nc);
     if (!img) return fb_fail(FB_ERR_NOMEM, "out of memory");
     render(p, img, false);
@@ -302,7 +321,9 @@ fb_result fb_preview_write_over(const fb_preview *const *layers, int n, const ch
                 } else {
                     double v =
                         p->shade_dx > 0 ? hillshade(p, x, y) : (s[0] * inv - lohi[k][0]) / (lohi[k][1] - lohi[k][0]);
-                    for (int j = 0; j < 3; j++) c[j] = a * (p->shade_dx > 0 ? earth[j] * v : v);
+                    for (int j = 0; j < 3; j++) c[j] = p->shade_dx > 0 ? earth[j] * v : v;
+                    if (p->channels - (p->alpha ? 1 : 0) == 2) water_over(p, i, v, c);
+                    for (int j = 0; j < 3; j++) c[j] *= a;
                 }
                 for (int j = 0; j < 3; j++) out[j] = c[j] + (1 - a) * out[j];
             }

@@ -14,7 +14,8 @@
 typedef struct fb_preview fb_preview;
 
 fb_result fb_preview_create(int width, int height, int max_side, int channels, fb_preview **out);
-/* The same with one more channel after the 1 or 3: a coverage in [0, 1], used by the over composite. */
+/* The same with one more channel after the 1 or 3: a coverage in [0, 1], used by the over composite. channels 2:
+ * a grey or hillshade channel and a water mask in [0, 1] after it, drawn as water over the ground (an RGB PNG). */
 fb_result fb_preview_create_alpha(int width, int height, int max_side, int channels, bool alpha, fb_preview **out);
 void fb_preview_destroy(fb_preview **p);
 /* One channel drawn as a hillshade instead of grey levels: the channel is a height in the units of

@@ -320,6 +320,8 @@ static fb_result rivers_init(fb_gen *g)
     }
     g->store.preview_channel = 0;
     if (P->relief.colour) g->store.preview_rgb = 4; /* the preview shows the lit colour */
+    g->store.preview_nwater = 2;                    /* else the hillshade, its rivers and lakes over it */
+    g->store.preview_water[0] = 2, g->store.preview_water[1] = 3;
     if (g->scene->height > 1) g->store.preview_shade[0] = g->store.preview_shade[1] = extent_of(g) / g->scene->width;
     g->compute.native_rows = rivers_rows;
     g->prepare = rivers_prepare;
