@@ -12,6 +12,9 @@ nothing drains in).
   largest  the largest basin (the most cells that drain to one cell), a share of the cells
   hack     Hack's exponent, L ~ A^h: the least-squares slope of the mean log L against log A over the
            cells with A from 100 to 10^4 cells, in bins a tenth of a decade wide (each bin one point)
+  aspect   how much the grid's eight directions show: of the steeper half of the interior cells (the
+           gradient by central differences), weighted by slope, the share whose downhill direction lies
+           within 5 degrees of a multiple of 45 degrees; directions spread evenly give 2/9
 Real basins: next to no pits outside lakes, beta about 0.43, one basin a large share of a range, Hack's
 exponent about 0.57 (Hack 1957; Rigon et al. 1996).
 
@@ -82,7 +85,29 @@ def measure(z, W, H, lake=None):
     hx = [b[0] / b[2] for b in bins.values()]
     hy = [b[1] / b[2] for b in bins.values()]
     return {"pits": pits, "pits_per_1e4": pits * 1e4 / N, "beta": -slope(xs, ys), "largest": largest / N,
-            "hack": slope(hx, hy) if len(hx) > 2 else float("nan")}
+            "hack": slope(hx, hy) if len(hx) > 2 else float("nan"), "aspect": aspect_share(z, W, H)}
+
+
+def aspect_share(z, W, H):
+    grads = []
+    for y in range(1, H - 1):
+        for x in range(1, W - 1):
+            i = y * W + x
+            gx, gy = z[i + 1] - z[i - 1], z[i + W] - z[i - W]
+            s = math.hypot(gx, gy)
+            if s > 0:
+                grads.append((s, gx, gy))
+    if not grads:
+        return float("nan")
+    grads.sort()
+    steep = grads[len(grads) // 2:]
+    near = total = 0.0
+    for s, gx, gy in steep:
+        a = math.degrees(math.atan2(-gy, -gx)) % 45.0
+        total += s
+        if a <= 5.0 or a >= 40.0:
+            near += s
+    return near / total
 
 
 def slope(xs, ys):
@@ -104,7 +129,8 @@ def measure_file(path, channel, lake=None):
 
 def describe(m):
     return (f"pits {m['pits']} ({m['pits_per_1e4']:.3g} per 10^4 cells), beta {m['beta']:.3f}, "
-            f"largest basin {100 * m['largest']:.3g}%, Hack's exponent {m['hack']:.3f}")
+            f"largest basin {100 * m['largest']:.3g}%, Hack's exponent {m['hack']:.3f}, "
+            f"aspect on the grid's directions {m['aspect']:.3f}")
 
 
 # name, scene (a file under the root, or a scene), size, channel, whether it is to measure like rivers
