@@ -20,9 +20,10 @@
 /* The bed's half-width: world units per square root of the drainage area, and its bounds. */
 #define BED_PER_SQRT_AREA 0.001
 #define BED_MAX           0.45
-/* The land's detail is faded out within this many bed half-widths (plus pixels) of a channel
- * draining this many coarse cells or more. */
-#define FADE_CELLS 4
+/* The land's detail is faded out within this many pixels of the bed of a channel draining this many
+ * coarse cells or more. */
+#define FADE_CELLS  4
+#define FADE_PIXELS 3
 
 uint64_t fb_rivers_amp_memory(int cw, int ch)
 {
@@ -270,7 +271,7 @@ static void channels_at(const fb_rivers_amp *a, double u, double v, channel_hit 
                 s->c0 - fall * t + fall * sqrt(s->inv_len2) * fmin(dist, s->hb) + s->bank * fmax(0, dist - s->hb);
             if (level < hit->level) hit->level = level, hit->d = dist, hit->hb = s->hb, hit->area = s->area;
             if (s->area >= fade_area) {
-                double f = (dist - s->hb) / (s->hb + 3 * a->sx);
+                double f = (dist - s->hb) / (FADE_PIXELS * a->sx);
                 f = f < 0 ? 0 : f > 1 ? 1 : f;
                 f = f * f * (3 - 2 * f);
                 if (f < hit->fade) hit->fade = f;
