@@ -46,12 +46,18 @@ static double ulp2(double x)
     return (double)nextafterf(f, INFINITY) - f;
 }
 
-/* A channel's point in cell (x, y): off the grid's lines, from the seed. */
-static void point_of(uint32_t seed, int cw, int x, int y, double *px, double *py)
+/* Cell i's channel point: off the grid's lines, from the seed; an outlet on the grid's edge at the
+ * image's edge, so that its channels run out of the image rather than end inside it. */
+static void point_of(const fb_rivers_amp *a, const int32_t *rcv, int32_t i, double *px, double *py)
 {
-    uint32_t i = (uint32_t)y * (uint32_t)cw + (uint32_t)x;
-    *px = x + 2 * JITTER * (k_u01(k_hash3(seed, 0x61706a78u /* apjx */, i)) - 0.5);
-    *py = y + 2 * JITTER * (k_u01(k_hash3(seed, 0x61706a79u /* apjy */, i)) - 0.5);
+    const int cw = a->cw, ch = a->ch, x = i % cw, y = i / cw;
+    *px = x + 2 * JITTER * (k_u01(k_hash3(a->seed, 0x61706a78u /* apjx */, (uint32_t)i)) - 0.5);
+    *py = y + 2 * JITTER * (k_u01(k_hash3(a->seed, 0x61706a79u /* apjy */, (uint32_t)i)) - 0.5);
+    if (rcv[i] != i) return;
+    if (x == 0) *px = -0.5;
+    if (x == cw - 1) *px = cw - 0.5;
+    if (y == 0) *py = -0.5;
+    if (y == ch - 1) *py = ch - 0.5;
 }
 
 /* Receivers before donors (Kahn's from the cells no other drains to, read backwards). */
@@ -107,7 +113,7 @@ static void build(fb_rivers_amp *a, const fb_rivers_desc *d, const fb_rivers_out
         int32_t i = order[k], r = o->receiver[i];
         fb_rivers_seg *s = &a->seg[i];
         double px, py, qx, qy;
-        point_of(a->seed, cw, i % cw, i / cw, &px, &py);
+        point_of(a, o->receiver, i, &px, &py);
         s->px = (float)px, s->py = (float)py, s->area = o->area[i];
         double hb = BED_PER_SQRT_AREA * sqrt(o->area[i]) / cell;
         hb = fmin(fmax(hb, 0.75 * a->sx), BED_MAX);
@@ -117,7 +123,7 @@ static void build(fb_rivers_amp *a, const fb_rivers_desc *d, const fb_rivers_out
             s->c0 = s->c1 = a->h[i];
             continue;
         }
-        point_of(a->seed, cw, r % cw, r / cw, &qx, &qy);
+        point_of(a, o->receiver, r, &qx, &qy);
         s->ex = (float)(qx - px), s->ey = (float)(qy - py);
         s->inv_len2 = 1.0f / (s->ex * s->ex + s->ey * s->ey);
         double want = a->h[i] - s->bank * (hb + 1.5 * a->sx) - 0.1 * hb * cell;
