@@ -78,6 +78,11 @@ for kv in coarse=40 detail=0.3; do
     "$FB" compare abase.exr k.exr --layer r --max-abs 1e30,r.Y=0 > /dev/null
   [ $? -eq 1 ] && ok || bad "rivers $kv changed nothing"
 done
+# the amplified heights for engines: 2 x 2 tiles sharing their edges
+mkdir -p atiles
+"$FB" render a.json --backend native --quiet --set size=201x167 --set layers.r.heightmap=atiles/r.png --set 'layers.r.tiles=[2, 2]' -o ti.exr &&
+  [ "$(ls atiles | grep -c '^r_x[01]_y[01]\.png$')" = 4 ] && [ "$(png_wh atiles/r_x1_y1.png)" = "101 84" ] && ok ||
+  bad "amplified rivers tiles: $(ls atiles) $(png_wh atiles/r_x1_y1.png)"
 # a coarse grid over half the image's width is the whole grid: the bits of coarse 200
 "$FB" render a.json --backend native --quiet --set layers.r.coarse=101 -o k1.exr &&
   "$FB" render a.json --backend native --quiet --set layers.r.coarse=200 -o k2.exr &&
