@@ -22,8 +22,10 @@
 #define BED_MAX           0.45
 /* The land's detail is faded out within this many pixels of the bed of a channel draining this many
  * coarse cells or more. */
-#define FADE_CELLS  4
-#define FADE_PIXELS 3
+#define FADE_CELLS 4
+/* The banks rise at least this many times as fast as the bed falls. */
+#define BANK_PER_FALL 3
+#define FADE_PIXELS   3
 
 uint64_t fb_rivers_amp_memory(int cw, int ch)
 {
@@ -130,6 +132,8 @@ static void build(fb_rivers_amp *a, const fb_rivers_desc *d, const fb_rivers_out
         double c1 = a->seg[r].c0;
         s->c0 = fmax(want, c1 + 0.5 * (a->h[i] - a->h[r]));
         s->c1 = c1;
+        /* banks steeper than the bed falls, so that the water beside it runs into it, not along it */
+        s->bank = fmax(s->bank, BANK_PER_FALL * (s->c0 - s->c1) * sqrt(s->inv_len2));
     }
 }
 
