@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Stream-power erosion beside its peer, in one run: the rivers layer at its defaults (a flat start
 # with noise, uniform uplift, open edges, filled depressions, hillslope diffusion) for STEPS steps on
-# a SIZE grid, and bench/peers/rivers_peer.c (the same model written plainly, one thread) on the same
-# grid and steps, alternated, REPS times each. The layer's time is its model's (the summary's
-# seconds: no EXR written); both in cell-steps per second of wall time, each run on its line, with
-# its relief and largest basin (the two compute the same landscape), the process's CPU seconds and
-# the load before each (a shared machine's wall time is the load's as much as the code's).
+# a SIZE grid (the whole grid: --coarse its width), and bench/peers/rivers_peer.c (the same model
+# written plainly, one thread) on the same grid and steps, alternated, REPS times each. The layer's
+# time is its model's (the summary's seconds: no EXR written); both in cell-steps per second of wall
+# time, each run on its line, with its relief and largest basin (the two compute the same
+# landscape), the process's CPU seconds and the load before each (a shared machine's wall time is
+# the load's as much as the code's).
 #
 #   bench/rivers.sh PATH/TO/fractalbake [SIZE [STEPS [REPS]]]    (default 2048x2048 500 1)
 set -euo pipefail
@@ -22,7 +23,7 @@ cells=$(echo "$size" | awk -Fx '{print $1 * $2}')
 echo "machine: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores; $(date -u +%Y-%m-%d)"
 for ((i = 0; i < reps; i++)); do
   echo "load before: $(cut -d' ' -f1-3 /proc/loadavg)"
-  /usr/bin/time -f '%U %S' -o "$tmp/t" "$FB" rivers --size "$size" --steps "$steps" --backend native -o "$tmp/r.exr" \
+  /usr/bin/time -f '%U %S' -o "$tmp/t" "$FB" rivers --size "$size" --coarse "${size%%x*}" --steps "$steps" --backend native -o "$tmp/r.exr" \
     --json > "$tmp/s.json" 2> /dev/null
   python3 -c "
 import json

@@ -3,6 +3,7 @@
  * diffusion), its fills against an independent one (Planchon and Darboux), the same bits on any thread
  * count, and its parameter checks. Its scenes are measured as river basins are by tests/drainage.py.
  */
+#include "amplify.h"
 #include "pool.h"
 #include "rivers.h"
 
@@ -221,6 +222,59 @@ static void test_threads(void)
     free(map), free(start);
 }
 
+/* The amplification of a coarse solution, 4 times as wide: every pixel off the border and out of
+ * standing water has a strictly lower neighbour of its 8 (counted here from the output alone), but
+ * for at most 1 in 10^4; the sea's pixels lie below the sea level, with their depth; rows computed
+ * one at a time, or from another start, are the same bits as all at once; the detail changes them. */
+static void test_amplify(bool keep, bool sea)
+{
+    const int cw = 64, ch = 48, k = 4, W = cw * k, H = ch * k;
+    fb_rivers_desc d = base(cw, ch);
+    d.steps = 60, d.kd = 0.5, d.noise = 5, d.receivers = true, d.keep_lakes = keep;
+    float *start = malloc((size_t)cw * ch * sizeof *start);
+    REQUIRE(start);
+    for (int i = 0; i < cw * ch; i++) start[i] = 0.5f * (ch - 1 - i / cw) - 2; /* the south's rows below 0 */
+    if (sea) d.outlets = FB_RIVERS_SOUTH, d.has_sea = true, d.sea_level = 0, d.initial = start;
+    fb_rivers_out o;
+    REQUIRE(fb_rivers_run(&d, NULL, NULL, &o) == FB_OK);
+    REQUIRE(o.receiver != NULL);
+    fb_rivers_amp a;
+    REQUIRE(fb_rivers_amp_init(&a, &d, &o, W, H, 0.6) == FB_OK);
+    size_t n = (size_t)W * H;
+    float *Y = malloc(n * 4), *area = malloc(n * 4), *river = malloc(n * 4), *lake = malloc(n * 4),
+          *row = malloc(W * 4);
+    REQUIRE(Y && area && river && lake && row);
+    fb_rivers_amp_rows(&a, 0, H, Y, area, river, lake);
+    size_t pits = 0, wet = 0, bad_sea = 0, rivers = 0;
+    for (int y = 1; y < H - 1; y++)
+        for (int x = 1; x < W - 1; x++) {
+            size_t i = (size_t)y * W + x;
+            bool lower = false;
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dx = -1; dx <= 1; dx++) lower = lower || Y[i + (ptrdiff_t)dy * W + dx] < Y[i];
+            pits += !lower && !(lake[i] > 0);
+            wet += lake[i] > 0, rivers += river[i] > 0;
+            if (sea && Y[i] < d.sea_level) bad_sea += !(lake[i] > 0 && fabsf(lake[i] - (0 - Y[i])) <= 1e-3f);
+        }
+    CHECKF(pits * 10000 <= n, "keep %d sea %d: %zu pits in %zu pixels", keep, sea, pits, n);
+    CHECKF(!sea || (wet > 0 && bad_sea == 0), "sea: %zu wet pixels, %zu below the level without its depth", wet,
+           bad_sea);
+    CHECKF(rivers > 0, "keep %d sea %d: no river pixel (%zu wet)", keep, sea, wet);
+    bool same = true;
+    for (int y = 0; y < H; y += 7) {
+        fb_rivers_amp_rows(&a, y, 1, row, NULL, NULL, NULL);
+        same = same && !memcmp(row, Y + (size_t)y * W, (size_t)W * 4);
+    }
+    CHECKF(same, "keep %d sea %d: a row alone differs", keep, sea);
+    fb_rivers_amp_fini(&a);
+    REQUIRE(fb_rivers_amp_init(&a, &d, &o, W, H, 0) == FB_OK);
+    fb_rivers_amp_rows(&a, H / 2, 1, row, NULL, NULL, NULL);
+    CHECKF(memcmp(row, Y + (size_t)(H / 2) * W, (size_t)W * 4) != 0, "the detail changes nothing");
+    fb_rivers_amp_fini(&a);
+    free(Y), free(area), free(river), free(lake), free(row), free(start);
+    fb_rivers_out_free(&o);
+}
+
 /* Bad descriptions are refused, with nothing allocated for the caller. */
 static void test_check(void)
 {
@@ -256,6 +310,9 @@ int main(void)
     test_fill(false, true);
     test_fill(true, true);
     test_threads();
+    test_amplify(false, false);
+    test_amplify(true, false);
+    test_amplify(false, true);
     test_check();
     TEST_REPORT();
 }

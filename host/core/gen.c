@@ -110,24 +110,38 @@ fb_result fb_source_find(fb_source *out, const fb_gen *g, const fb_gen *const *g
     return FB_OK;
 }
 
-fb_result fb_source_read(const fb_source *src, const fb_gen *g, const char *key, float *out)
+fb_result fb_source_read_grid(const fb_source *src, const fb_gen *g, const char *key, int cw, int ch, float *out)
 {
     const fb_gen *l = src->gen;
     const fb_scene *sc = g->scene;
+    const int W = sc->width, whole = cw == W && ch == sc->height, band = whole ? FB_SOURCE_BAND : 1;
     fb_result rc = FB_OK;
     void *planes[FB_GEN_MAX_CHANNELS] = {0};
     for (int k = 0; k < fb_gen_nplanes(l) && !rc; k++)
-        if (fb_gen_plane_stored(l, k) && !(planes[k] = malloc((size_t)sc->width * FB_SOURCE_BAND * 4)))
+        if (fb_gen_plane_stored(l, k) && !(planes[k] = malloc((size_t)W * band * 4)))
             rc = fb_fail(FB_ERR_NOMEM, "out of memory");
-    for (int y0 = 0; y0 < sc->height && !rc; y0 += FB_SOURCE_BAND) {
-        int n = y0 + FB_SOURCE_BAND <= sc->height ? FB_SOURCE_BAND : sc->height - y0;
-        l->compute.native_rows(l, y0, n, planes);
-        memcpy(out + (size_t)y0 * sc->width, planes[fb_gen_plane_of(l, src->channel)], (size_t)n * sc->width * 4);
-    }
+    if (whole)
+        for (int y0 = 0; y0 < sc->height && !rc; y0 += band) {
+            int n = y0 + band <= sc->height ? band : sc->height - y0;
+            l->compute.native_rows(l, y0, n, planes);
+            memcpy(out + (size_t)y0 * W, planes[fb_gen_plane_of(l, src->channel)], (size_t)n * W * 4);
+        }
+    else
+        for (int j = 0; j < ch && !rc; j++) {
+            l->compute.native_rows(l, (int)((j + 0.5) * sc->height / ch), 1, planes);
+            const float *row = planes[fb_gen_plane_of(l, src->channel)];
+            for (int i = 0; i < cw; i++) out[(size_t)j * cw + i] = row[(int)((i + 0.5) * W / cw)];
+        }
     for (int k = 0; k < FB_GEN_MAX_CHANNELS; k++) free(planes[k]);
-    for (size_t i = 0; !rc && i < (size_t)sc->width * sc->height; i++)
+    for (size_t i = 0; !rc && i < (size_t)cw * ch; i++)
         if (!isfinite(out[i]))
-            rc = fb_fail(FB_ERR_INPUT, "layer \"%s\": %s \"%s\" has a NaN or infinite value at (%zu, %zu)",
-                         g->layer->name, key, l->store.channel_names[src->channel], i % sc->width, i / sc->width);
+            rc = fb_fail(FB_ERR_INPUT, "layer \"%s\": %s \"%s\" has a NaN or infinite value at (%zu, %zu)%s",
+                         g->layer->name, key, l->store.channel_names[src->channel], i % cw, i / cw,
+                         whole ? "" : " of the coarse grid");
     return rc;
+}
+
+fb_result fb_source_read(const fb_source *src, const fb_gen *g, const char *key, float *out)
+{
+    return fb_source_read_grid(src, g, key, g->scene->width, g->scene->height, out);
 }

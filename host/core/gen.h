@@ -271,4 +271,8 @@ fb_result fb_source_find(fb_source *out, const fb_gen *g, const fb_gen *const *g
  * source's key and the pixel. */
 fb_result fb_source_read(const fb_source *src, const fb_gen *g, const char *key, float *out);
 
+/* The same on a cw x ch grid over the image: the whole image when it is the image's size, else each
+ * cell the source's pixel at the cell's centre (one native row a grid row): a coarse model's input. */
+fb_result fb_source_read_grid(const fb_source *src, const fb_gen *g, const char *key, int cw, int ch, float *out);
+
 #endif

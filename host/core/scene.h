@@ -13,7 +13,7 @@
 #include <stdbool.h>
 
 #define FB_MAX_LAYERS 16
-#define FB_MAX_PIXELS (1ull << 31)
+#define FB_MAX_PIXELS (1ull << 32) /* 65536 x 65536: a pixel's index y W + x fits 32 bits */
 
 /* A reference to another layer's channel ("terrain.Y", or "terrain": its Y) or a constant. */
 typedef struct fb_ref {

@@ -3,7 +3,8 @@
 # either backend (it runs on the host), for regions (cut from the whole: merged, the one bake) and
 # for tasks (plan, render --task, merge); every key reaches the model; the summary; the heights as
 # an engine heightmap and as tiles; plant instances standing on it, kept off the river mask and off
-# steep slopes. Usage: rivers.sh PATH/TO/fractalbake
+# steep slopes; amplified from a coarse grid, the same bits for threads, strips, regions, tasks and
+# backends, and within the memory limit where the whole grid is not. Usage: rivers.sh PATH/TO/fractalbake
 . "$(dirname "$0")/lib.sh"
 cli_init "$@"
 # an fBm shape drives the uplift, a second fBm layer is banded (so that tasks split something)
@@ -17,13 +18,18 @@ EOF
 "$FB" info base.exr | grep -q "layer r .*Y (float), area (float), lake (float), river (half)" && ok ||
   bad "rivers channels: $("$FB" info base.exr | grep 'layer r')"
 same() { "$FB" compare base.exr "$1" --max-abs 0 > /dev/null; }
-# the bits do not depend on threads, strips or the backend
-for f in "--threads 1" "--threads 2 --strip-rows 7" "--threads 3 --strip-rows 1"; do
-  "$FB" render s.json --backend native --quiet $f -o t.exr && same t.exr && ok || bad "rivers differs with $f"
-done
-if have_vulkan; then
-  "$FB" render s.json --backend vulkan --quiet -o v.exr && same v.exr && ok || bad "rivers differs on Vulkan"
-fi
+# the bits of scene $1 (baked in $2) do not depend on threads, strips or the backend
+invariant() {
+  for f in "--threads 1" "--threads 2 --strip-rows 7" "--threads 3 --strip-rows 1"; do
+    "$FB" render "$1" --backend native --quiet $f -o t.exr && "$FB" compare "$2" t.exr --max-abs 0 > /dev/null &&
+      ok || bad "$1 differs with $f"
+  done
+  if have_vulkan; then
+    "$FB" render "$1" --backend vulkan --quiet -o v.exr && "$FB" compare "$2" v.exr --max-abs 0 > /dev/null &&
+      ok || bad "$1 differs on Vulkan"
+  fi
+}
+invariant s.json base.exr
 # regions cut the whole result: three bands and a window merge into the one bake
 for r in "0,0,97,30" "0,30,97,31" "0,61,97,20"; do
   "$FB" render s.json --backend native --quiet --region "$r" -o "reg-${r//,/-}.exr" || bad "region $r"
@@ -36,12 +42,60 @@ done
   "$FB" render s.json --backend native --quiet --region 20,40,40,41 -o w4.exr &&
   "$FB" merge win.exr w1.exr w2.exr w3.exr w4.exr -o m2.exr --quiet && same m2.exr && ok ||
   bad "a window of rivers is not the whole's"
-# tasks: the plan keeps the layer whole (with the shape it reads); the tasks merge into the one bake
+# tasks: the plan cuts the layer into bands (each task runs the model: the same bits); the tasks
+# merge into the one bake
 "$FB" plan s.json --tasks 3 --task-startup 0 --json > plan.json &&
-  python3 -c "import json, sys; p = json.load(open('plan.json')); s = {l['name']: l['split'] for l in p['layers']}; sys.exit(not (s['r'] == 'whole' and s['detail'] == 'bands'))" &&
-  ok || bad "the plan does not keep rivers whole: $(cat plan.json)"
+  python3 -c "import json, sys; p = json.load(open('plan.json')); s = {l['name']: l['split'] for l in p['layers']}; sys.exit(not (s['r'] == 'bands' and s['detail'] == 'bands'))" &&
+  ok || bad "the plan does not cut rivers into bands: $(cat plan.json)"
 for k in 0 1 2; do "$FB" render s.json --backend native --quiet --task $k/3 --task-startup 0 -o task$k.exr || bad "task $k"; done
 "$FB" merge task*.exr -o tasks.exr --quiet && same tasks.exr && ok || bad "rivers tasks do not merge into the bake"
+# amplified: a 50 x 42 model carved into 200 x 167 pixels; the same bits for threads, strips, the
+# backend, regions and tasks (each task runs the model); coarse and detail change it
+cat > a.json << 'EOF'
+{"size": [200, 167], "seed": 4, "layers": [
+  {"type": "fbm", "name": "shape", "octaves": 3, "frequency": 1.5},
+  {"type": "rivers", "name": "r", "uplift-map": "shape", "extent": 20000, "steps": 40, "dt": 20000, "kd": 0.05,
+   "coarse": 50, "river-area": 1e6, "sea-level": 1, "stops": [[0, 0.2, 0.3, 0.1], [1, 0.9, 0.9, 0.9]]}]}
+EOF
+"$FB" render a.json --backend native --quiet -o abase.exr --json > a.txt 2> /dev/null &&
+  python3 -c "import json, sys; r = [l for l in json.load(open('a.txt'))['layers'] if l['name'] == 'r'][0]['summary']; sys.exit(not (r['model'] == [50, 42] and r['width'] == 200))" &&
+  ok || bad "rivers amplified: the model's grid: $(cat a.txt)"
+asame() { "$FB" compare abase.exr "$1" --max-abs 0 > /dev/null; }
+invariant a.json abase.exr
+mkdir -p areg
+for r in "0,0,200,50" "0,50,200,1" "0,51,120,116" "120,51,80,116"; do
+  "$FB" render a.json --backend native --quiet --region "$r" -o "areg/${r//,/-}.exr" || bad "region $r"
+done
+"$FB" merge areg/*.exr -o merged.exr --quiet && asame merged.exr && ok || bad "amplified regions do not merge into the bake"
+"$FB" plan a.json --tasks 4 --task-startup 0 --json > plan.json &&
+  python3 -c "import json, sys; p = json.load(open('plan.json')); s = {l['name']: l['split'] for l in p['layers']}; sys.exit(not (s['r'] == 'bands' and p['bands'] == 4))" &&
+  ok || bad "the plan does not cut amplified rivers into 4 bands: $(cat plan.json)"
+mkdir -p atask
+for k in 0 1 2 3; do "$FB" render a.json --backend native --quiet --task $k/4 --task-startup 0 -o atask/$k.exr || bad "task $k"; done
+"$FB" merge atask/*.exr -o tasks.exr --quiet && asame tasks.exr && ok || bad "amplified tasks do not merge into the bake"
+for kv in coarse=40 detail=0.3; do
+  "$FB" render a.json --backend native --quiet --set "layers.r.$kv" -o k.exr &&
+    "$FB" compare abase.exr k.exr --layer r --max-abs 1e30,r.Y=0 > /dev/null
+  [ $? -eq 1 ] && ok || bad "rivers $kv changed nothing"
+done
+# the amplified heights for engines: 2 x 2 tiles sharing their edges
+mkdir -p atiles
+"$FB" render a.json --backend native --quiet --set size=201x167 --set layers.r.heightmap=atiles/r.png --set 'layers.r.tiles=[2, 2]' -o ti.exr &&
+  [ "$(ls atiles | grep -c '^r_x[01]_y[01]\.png$')" = 4 ] && [ "$(png_wh atiles/r_x1_y1.png)" = "101 84" ] && ok ||
+  bad "amplified rivers tiles: $(ls atiles) $(png_wh atiles/r_x1_y1.png)"
+# a coarse grid over half the image's width is the whole grid: the bits of coarse 200
+"$FB" render a.json --backend native --quiet --set layers.r.coarse=101 -o k1.exr &&
+  "$FB" render a.json --backend native --quiet --set layers.r.coarse=200 -o k2.exr &&
+  "$FB" compare k1.exr k2.exr --max-abs 0 > /dev/null && ok || bad "coarse over half the width is not the whole grid"
+# the memory: the whole grid of 8192 x 8192 is refused under 1G; amplified (the default above 2047
+# wide) it is predicted within it
+"$FB" rivers --size 8192x8192 --coarse 8192 --max-memory 1G -o x.exr 2> m.txt
+[ $? -eq 2 ] && [ ! -e x.exr ] && grep -q "stream-power erosion of 8192 x 8192 cells needs about" m.txt && ok ||
+  bad "whole 8192: $(cat m.txt)"
+"$FB" rivers --size 8192x8192 --coarse 8192 --max-memory 1G --dry-run -o x.exr > m.txt 2>&1 &&
+  grep -q "so the bake would be refused" m.txt && ok || bad "whole 8192, --dry-run: $(cat m.txt)"
+"$FB" rivers --size 8192x8192 --max-memory 1G --dry-run -o x.exr > m.txt 2>&1 && ! grep -q "would be refused" m.txt &&
+  ok || bad "amplified 8192: $(cat m.txt)"
 # every key of the model changes the heights (river-area the mask alone)
 for kv in uplift=0.002 K=1e-5 m=0.45 n=1.2 kd=0.2 dt=30000 steps=30 noise=3 lakes=keep 'outlets=["south"]' \
   sea-level=2 extent=8000 'uplift-range=[-0.5,0.5]' input=5; do

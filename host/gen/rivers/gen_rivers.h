@@ -25,6 +25,8 @@ typedef struct fb_rivers_layer_params {
     double sea_level;      /* */
     double extent;         /* the image's width in world units (0: the input's world, else 100000) */
     double river_area;     /* the river mask's threshold, world units squared (0: 1/1000 of the image's area) */
+    int coarse;            /* "coarse": the model's grid width (0: the default; the image's width: the whole grid) */
+    double detail;         /* "detail": the amplified land's fBm slope, a share of the local slope */
     fb_relief_spec relief; /* colour by height: R, G, B */
     double water[3];       /* the colour of rivers and standing water (lit like the land) */
 } fb_rivers_layer_params;

@@ -10,6 +10,7 @@
  */
 #include "engine.h"
 #include "exrio.h"
+#include "amplify.h"
 #include "gen_rivers.h"
 #include "heightmap.h"
 #include "rivers.h"
@@ -69,6 +70,14 @@ static const fb_keyspec rivers_keys[] = {
      "NAME.river is 1 where the drainage area reaches this, world units squared (default: 1/1000 of the image's "
      "area)",
      FB_FIELD(fb_rivers_layer_params, river_area)},
+    {"coarse", FB_K_INT, 2, 65536, false, NULL, NULL,
+     "the model's grid width in cells (height in proportion); a wider image is the model amplified: its rivers "
+     "carved to the pixel, its hillslopes given detail (default: the image's width up to 2047, else 1024 or what "
+     "--max-memory holds; a grid over half the image's width is the whole grid)",
+     FB_FIELD(fb_rivers_layer_params, coarse)},
+    {"detail", FB_K_NUM, 0, 1, false, NULL, "0.6",
+     "an amplified image's hillslope detail (fBm): its slope as a share of the local slope (0: none)",
+     FB_FIELD(fb_rivers_layer_params, detail)},
     FB_RELIEF_KEYS,
     {"water-colour", FB_K_NUMLIST, 0, 1e3, false, NULL, NULL,
      "with a palette: the colour of rivers and standing water, R,G,B, lit like the land (default 0.03,0.12,0.3)", 3,
@@ -126,9 +135,11 @@ static fb_result parse_rivers(const fb_vctx *v, const char *path, json_t *obj, c
 
 typedef struct rivers_state {
     fb_source src, map; /* the starting heights' and the uplift map's channels (resolve); .gen NULL: none */
-    fb_rivers_out out;
-    fb_relief relief; /* with a palette: the colour by height */
-    double cell;
+    int cw, ch;         /* the model's grid: the image's (whole), or coarse (amplified) */
+    fb_rivers_out out;  /* whole: the result */
+    fb_rivers_amp amp;  /* amplified: what the rows read */
+    fb_relief relief;   /* with a palette: the colour by height */
+    double cell;        /* the image's cell, world units */
 } rivers_state;
 
 static rivers_state *state(const fb_gen *g)
@@ -136,10 +147,47 @@ static rivers_state *state(const fb_gen *g)
     return g->owned;
 }
 
+static bool amplified(const rivers_state *s, const fb_scene *sc)
+{
+    return s->cw != sc->width;
+}
+
 static void rivers_fini(fb_gen *g)
 {
     rivers_state *s = state(g);
-    if (s) fb_rivers_out_free(&s->out);
+    if (s) fb_rivers_out_free(&s->out), fb_rivers_amp_fini(&s->amp);
+}
+
+/* The model's peak (its state and result, the input and the uplift map sampled on its grid) and, when
+ * amplified, what the rows hold. */
+static uint64_t grid_memory(int W, int H, int cw, int ch, uint64_t *hold)
+{
+    uint64_t n = (uint64_t)cw * ch;
+    if (cw == W) { /* the result (16 bytes a cell) kept for the strips (the colour is computed in them) */
+        *hold = 16 * n;
+        return fb_rivers_memory(cw, ch) + 8 * n;
+    }
+    (void)H;
+    *hold = fb_rivers_amp_memory(cw, ch);
+    return fb_rivers_memory(cw, ch) + 8 * n + *hold;
+}
+
+/* The model's grid: the key's width (over half the image's: the whole grid), else the image's up to
+ * 2047 wide, else 1024; narrower where the memory limit would not hold it. */
+static void grid_of(const fb_gen *g, int *cw, int *ch)
+{
+    const fb_rivers_layer_params *P = fb_layer_params(g->layer);
+    const int W = g->scene->width, H = g->scene->height;
+    int c = P->coarse;
+    if (!c) {
+        c = W < 2048 ? W : 1024;
+        uint64_t limit = fb_memory_limit(&g->run.budget), hold;
+        while (c > 64 && grid_memory(W, H, c, (int)fmax(1, round((double)H * c / W)), &hold) > limit / 2) c -= c / 8;
+        if (c < W && 2 * c > W) c = W / 2;
+    }
+    if (2 * c > W) c = W;
+    *cw = c;
+    *ch = c == W ? H : (int)fmax(1, round((double)H * c / W));
 }
 
 /* The layer whose world the image takes: the input's, else the uplift map's (NULL: none has one). */
@@ -175,21 +223,58 @@ static void normalise(float *map, size_t n, const fb_rivers_layer_params *P)
     }
 }
 
+static void rivers_rows(const fb_gen *g, int y0, int n, void *const *planes);
+
+/* The summary: the model's grid and steps, its relief, largest basin, rivers and water (amplified: the
+ * coarse model's). */
+static void summarise(fb_gen *g, double secs, double model_cell)
+{
+    rivers_state *s = state(g);
+    const fb_rivers_layer_params *P = fb_layer_params(g->layer);
+    const fb_scene *sc = g->scene;
+    size_t n = (size_t)s->cw * s->ch;
+    float lo = INFINITY, hi = -INFINITY;
+    uint64_t rivers = 0, lakes = 0;
+    for (size_t i = 0; i < n; i++) {
+        lo = fminf(lo, s->out.height[i]), hi = fmaxf(hi, s->out.height[i]);
+        rivers += s->out.river[i] > 0, lakes += s->out.lake[i] > 0;
+    }
+    char amp[96] = "";
+    if (amplified(s, sc))
+        snprintf(amp, sizeof amp, " amplified to %d x %d (detail %.3g)", sc->width, sc->height, P->detail);
+    double work = (double)n * P->steps;
+    snprintf(g->prepared.summary, sizeof g->prepared.summary,
+             "%s: %d x %d cells of %.4g%s, %d steps of %.4g; relief %.6g, largest basin %.3g%% of the cells, river "
+             "cells %.3g%%, standing water %.3g%%, depressions filled in %d steps (%llu cells); %.3f s, %.3g "
+             "Mcell-steps/s",
+             g->layer->name, s->cw, s->ch, model_cell, amp, P->steps, P->dt, (double)hi - lo,
+             100 * s->out.largest_basin, 100.0 * rivers / n, 100.0 * lakes / n, s->out.flood_steps,
+             (unsigned long long)s->out.flooded, secs, work / secs * 1e-6);
+    snprintf(g->prepared.summary_json, sizeof g->prepared.summary_json,
+             "{\"layer\": \"%s\", \"generator\": \"rivers\", \"width\": %d, \"height\": %d, \"model\": [%d, %d], "
+             "\"cell\": %.9g, \"steps\": %d, \"relief\": %.9g, \"largest_basin\": %.6g, \"river_cells\": %llu, "
+             "\"water_cells\": %llu, \"flood_steps\": %d, \"flooded\": %llu, \"seconds\": %.6f}",
+             g->layer->name, sc->width, sc->height, s->cw, s->ch, s->cell, P->steps, (double)hi - lo,
+             s->out.largest_basin, (unsigned long long)rivers, (unsigned long long)lakes, s->out.flood_steps,
+             (unsigned long long)s->out.flooded, secs);
+    if (P->relief.colour) fb_relief_init(&s->relief, &P->relief, lo, hi);
+}
+
 static fb_result rivers_prepare(fb_gen *g, struct fb_engine *e, bool progress)
 {
     rivers_state *s = state(g);
     const fb_rivers_layer_params *P = fb_layer_params(g->layer);
     const fb_scene *sc = g->scene;
-    size_t n = (size_t)sc->width * sc->height;
+    size_t n = (size_t)s->cw * s->ch;
     float *initial = s->src.gen ? malloc(n * sizeof *initial) : NULL,
           *map = s->map.gen ? malloc(n * sizeof *map) : NULL;
     fb_result rc = (s->src.gen && !initial) || (s->map.gen && !map) ? fb_fail(FB_ERR_NOMEM, "out of memory") : FB_OK;
-    if (!rc && s->src.gen) rc = fb_source_read(&s->src, g, "input", initial);
-    if (!rc && s->map.gen) rc = fb_source_read(&s->map, g, "uplift-map", map);
+    if (!rc && s->src.gen) rc = fb_source_read_grid(&s->src, g, "input", s->cw, s->ch, initial);
+    if (!rc && s->map.gen) rc = fb_source_read_grid(&s->map, g, "uplift-map", s->cw, s->ch, map);
     if (!rc && map) normalise(map, n, P);
-    double extent = extent_of(g), cell = extent / sc->width;
-    fb_rivers_desc d = {.width = sc->width,
-                        .height = sc->height,
+    double extent = extent_of(g), cell = extent / s->cw;
+    fb_rivers_desc d = {.width = s->cw,
+                        .height = s->ch,
                         .cell = cell,
                         .initial = initial,
                         .base = P->has_input && P->input.layer < 0 ? P->input.value : 0,
@@ -207,7 +292,8 @@ static fb_result rivers_prepare(fb_gen *g, struct fb_engine *e, bool progress)
                         .outlets = P->outlets,
                         .has_sea = P->has_sea,
                         .sea_level = P->sea_level,
-                        .river_area = P->river_area > 0 ? P->river_area : 1e-3 * extent * cell * sc->height};
+                        .river_area = P->river_area > 0 ? P->river_area : 1e-3 * extent * cell * s->ch,
+                        .receivers = amplified(s, sc)};
     fb_progress prog;
     char label[96];
     snprintf(label, sizeof label, "%s: stream-power erosion", g->layer->name);
@@ -215,60 +301,45 @@ static fb_result rivers_prepare(fb_gen *g, struct fb_engine *e, bool progress)
     double t0 = fb_now();
     if (!rc) rc = fb_rivers_run(&d, e->pool, &prog, &s->out);
     fb_progress_finish(&prog);
-    double secs = fb_now() - t0;
     free(initial), free(map);
+    if (!rc && amplified(s, sc)) rc = fb_rivers_amp_init(&s->amp, &d, &s->out, sc->width, sc->height, P->detail);
+    double secs = fb_now() - t0;
     if (rc) return rc;
     /* the world the image covers: the source's top-left corner (else the origin), extent wide */
     const fb_gen *w = world_of(g);
+    s->cell = extent / sc->width;
     g->prepared.has_world = true;
     g->prepared.world[0] = w ? w->prepared.world[0] : 0, g->prepared.world[1] = g->prepared.world[0] + extent;
     g->prepared.world[3] = w ? w->prepared.world[3] : extent * sc->height / sc->width,
-    g->prepared.world[2] = g->prepared.world[3] - cell * sc->height;
+    g->prepared.world[2] = g->prepared.world[3] - s->cell * sc->height;
     g->prepared.epsg = w ? w->prepared.epsg : 0;
-    if (sc->height > 1) g->store.preview_shade[0] = g->store.preview_shade[1] = cell;
-    float lo = INFINITY, hi = -INFINITY;
-    uint64_t rivers = 0, lakes = 0;
-    for (size_t i = 0; i < n; i++) {
-        lo = fminf(lo, s->out.height[i]), hi = fmaxf(hi, s->out.height[i]);
-        rivers += s->out.river[i] > 0, lakes += s->out.lake[i] > 0;
-    }
-    s->cell = cell;
-    if (P->relief.colour) fb_relief_init(&s->relief, &P->relief, lo, hi);
-    double work = (double)n * P->steps;
-    snprintf(g->prepared.summary, sizeof g->prepared.summary,
-             "%s: %d x %d cells of %.4g, %d steps of %.4g; relief %.6g, largest basin %.3g%% of the cells, river "
-             "cells %.3g%%, standing water %.3g%%, depressions filled in %d steps (%llu cells); %.3f s, %.3g "
-             "Mcell-steps/s",
-             g->layer->name, sc->width, sc->height, cell, P->steps, P->dt, (double)hi - lo, 100 * s->out.largest_basin,
-             100.0 * rivers / n, 100.0 * lakes / n, s->out.flood_steps, (unsigned long long)s->out.flooded, secs,
-             work / secs * 1e-6);
-    snprintf(g->prepared.summary_json, sizeof g->prepared.summary_json,
-             "{\"layer\": \"%s\", \"generator\": \"rivers\", \"width\": %d, \"height\": %d, \"cell\": %.9g, "
-             "\"steps\": %d, \"relief\": %.9g, \"largest_basin\": %.6g, \"river_cells\": %llu, \"water_cells\": %llu, "
-             "\"flood_steps\": %d, \"flooded\": %llu, \"seconds\": %.6f}",
-             g->layer->name, sc->width, sc->height, cell, P->steps, (double)hi - lo, s->out.largest_basin,
-             (unsigned long long)rivers, (unsigned long long)lakes, s->out.flood_steps,
-             (unsigned long long)s->out.flooded, secs);
+    if (sc->height > 1) g->store.preview_shade[0] = g->store.preview_shade[1] = s->cell;
+    summarise(g, secs, cell);
+    if (amplified(s, sc)) fb_rivers_out_free(&s->out); /* the rows read the amplification alone */
     return FB_OK;
 }
 
 /* The colour of rows [y0, y0 + n): the land by height under the light, rivers and standing water in
  * the water's colour under the same light; the slope by central differences of the surface (one-sided
- * at the edges), in world units. */
-static void colour_rows(const fb_gen *g, int y0, int n, float *R, float *G, float *B)
+ * at the edges), in world units. z holds the surface's rows from zy0 on (y0 - 1 where there is one,
+ * through y0 + n where there is one); river and lake rows y0 on. */
+static void colour_rows(const fb_gen *g, int y0, int n, const float *z, int zy0, const float *river, const float *lake,
+                        float *R, float *G, float *B)
 {
     const rivers_state *s = state(g);
     const fb_rivers_layer_params *P = fb_layer_params(g->layer);
     const int W = g->scene->width, H = g->scene->height;
-    const float *z = s->out.height;
     for (int y = y0; y < y0 + n; y++)
         for (int x = 0; x < W; x++) {
-            size_t i = (size_t)y * W + x, o = i - (size_t)y0 * W;
+            size_t i = (size_t)(y - zy0) * W + x, o = (size_t)(y - y0) * W + x;
             int xl = x > 0 ? x - 1 : x, xr = x + 1 < W ? x + 1 : x, yu = y > 0 ? y - 1 : y, yd = y + 1 < H ? y + 1 : y;
-            double gx = xr > xl ? ((double)z[(size_t)y * W + xr] - z[(size_t)y * W + xl]) / ((xr - xl) * s->cell) : 0;
-            double gy = yd > yu ? ((double)z[(size_t)yu * W + x] - z[(size_t)yd * W + x]) / ((yd - yu) * s->cell) : 0;
+            const float *row = z + (size_t)(y - zy0) * W;
+            double gx = xr > xl ? ((double)row[xr] - row[xl]) / ((xr - xl) * s->cell) : 0;
+            double gy = yd > yu ? ((double)z[(size_t)(yu - zy0) * W + x] - z[(size_t)(yd - zy0) * W + x]) /
+                                      ((yd - yu) * s->cell)
+                                : 0;
             float c[3];
-            if (s->out.river[i] > 0 || s->out.lake[i] > 0) {
+            if (river[o] > 0 || lake[o] > 0) {
                 double light = fb_relief_light(&s->relief, gx, gy);
                 for (int k = 0; k < 3; k++) c[k] = (float)(P->water[k] * light);
             } else {
@@ -278,39 +349,72 @@ static void colour_rows(const fb_gen *g, int y0, int n, float *R, float *G, floa
         }
 }
 
+/* Amplified rows: with a colour, the surface a row beyond each side too (the slope's). Out of memory
+ * for those rows, the colour is NaN, which the bake's finite check reports. */
+static void amplified_rows(const fb_gen *g, int y0, int n, void *const *planes)
+{
+    const rivers_state *s = state(g);
+    const int W = g->scene->width, H = g->scene->height;
+    if (g->store.nchannels == 4) {
+        fb_rivers_amp_rows(&s->amp, y0, n, planes[0], planes[1], planes[2], planes[3]);
+        return;
+    }
+    int ya = y0 > 0 ? y0 - 1 : 0, yb = y0 + n < H ? y0 + n : H - 1, m = yb - ya + 1;
+    size_t len = (size_t)m * W, at = (size_t)(y0 - ya) * W, part = (size_t)n * W;
+    float *buf = malloc(4 * len * sizeof *buf);
+    if (!buf) {
+        for (int c = 4; c < 7; c++)
+            for (size_t i = 0; i < part; i++) ((float *)planes[c])[i] = NAN;
+        return;
+    }
+    float *z = buf, *area = buf + len, *river = buf + 2 * len, *lake = buf + 3 * len;
+    fb_rivers_amp_rows(&s->amp, ya, m, z, area, river, lake);
+    const float *src[4] = {z + at, area + at, river + at, lake + at};
+    for (int c = 0; c < 4; c++)
+        if (planes[c]) memcpy(planes[c], src[c], part * sizeof *buf);
+    colour_rows(g, y0, n, z, ya, river + at, lake + at, planes[4], planes[5], planes[6]);
+    free(buf);
+}
+
 static void rivers_rows(const fb_gen *g, int y0, int n, void *const *planes)
 {
     const rivers_state *s = state(g);
+    if (amplified(s, g->scene)) {
+        amplified_rows(g, y0, n, planes);
+        return;
+    }
     size_t at = (size_t)y0 * g->scene->width, len = (size_t)n * g->scene->width * 4;
     const float *src[4] = {s->out.height, s->out.area, s->out.river, s->out.lake};
     for (int c = 0; c < 4; c++)
         if (planes[c]) memcpy(planes[c], src[c] + at, len);
-    if (g->store.nchannels > 4) colour_rows(g, y0, n, planes[4], planes[5], planes[6]);
+    if (g->store.nchannels > 4)
+        colour_rows(g, y0, n, s->out.height, 0, s->out.river + at, s->out.lake + at, planes[4], planes[5], planes[6]);
 }
 
-/* The model's state and result (rivers.c), plus the input and the uplift map (4 bytes a cell each)
- * at the peak; the result (16 bytes a cell) kept for the strips (the colour is computed in them). */
 static uint64_t rivers_memory(const fb_gen *g, const struct fb_engine *e, uint64_t *hold)
 {
     (void)e;
-    uint64_t npx = (uint64_t)g->scene->width * g->scene->height;
-    *hold = 16 * npx;
-    return fb_rivers_memory(g->scene->width, g->scene->height) + 8 * npx;
+    int cw, ch;
+    grid_of(g, &cw, &ch);
+    return grid_memory(g->scene->width, g->scene->height, cw, ch, hold);
 }
 
 static fb_result rivers_resolve(fb_gen *g, const fb_gen *const *gens, const int *plane_offset);
 
 static fb_result rivers_init(fb_gen *g)
 {
-    uint64_t hold, peak = rivers_memory(g, NULL, &hold);
-    char who[96];
-    snprintf(who, sizeof who, "stream-power erosion of %d x %d cells", g->scene->width, g->scene->height);
+    int cw, ch;
+    grid_of(g, &cw, &ch);
+    uint64_t hold, peak = grid_memory(g->scene->width, g->scene->height, cw, ch, &hold);
+    char who[128];
+    snprintf(who, sizeof who, "stream-power erosion of %d x %d cells", cw, ch);
     fb_result rc = fb_memory_check(&g->run.budget, peak, who);
     if (rc) return rc;
     rivers_state *s = calloc(1, sizeof *s);
     if (!s) return fb_fail(FB_ERR_NOMEM, "out of memory");
     g->owned = s;
     g->fini = rivers_fini;
+    s->cw = cw, s->ch = ch;
     static const char *const suffix[7] = {"Y", "area", "river", "lake", "R", "G", "B"};
     const fb_rivers_layer_params *P = fb_layer_params(g->layer);
     g->store.nchannels = P->relief.colour ? 7 : 4;
@@ -352,13 +456,20 @@ static int rivers_refs(fb_layer *L, fb_ref_slot *out)
 }
 
 /* The plan's cost model: seconds of one core of the reference machine (docs/scenes.md): about 60 ns a
- * cell-step once the depressions of the first steps are filled (bench/RESULTS.md), and the final
- * fill and copy per pixel. Whole: the steps run over the whole grid in order. */
+ * cell-step of the model once the depressions of the first steps are filled, the final fill and copy
+ * per pixel, and an amplified pixel's channels and detail (bench/RESULTS.md). Banded: a pure function
+ * of the pixel once the model has run; each task runs the model (the same bits), counted here once. */
 static fb_result rivers_cost(const fb_scene *s, int layer, double *rows, double *total)
 {
-    (void)rows;
     const fb_rivers_layer_params *P = fb_layer_params(&s->layers[layer]);
-    *total = (double)s->width * s->height * (P->steps * 6.0e-8 /* a cell-step */ + 4.0e-7 /* a pixel */);
+    int c = P->coarse ? P->coarse : s->width < 2048 ? s->width : 1024;
+    if (c < s->width && 2 * c > s->width) c = s->width / 2;
+    if (2 * c > s->width) c = s->width;
+    double cells = (double)c * fmax(1, round((double)s->height * c / s->width));
+    double model = cells * (P->steps * 6.0e-8 /* a cell-step */ + 4.0e-7 /* a cell */);
+    double px = c == s->width ? 0 : 1.5e-6; /* an amplified pixel */
+    *total = 0;
+    for (int y = 0; y < s->height; y++) rows[y] = model / s->height + px * s->width, *total += rows[y];
     return FB_OK;
 }
 
@@ -373,7 +484,7 @@ const fb_gen_class fb_gen_rivers = {
     .parse = parse_rivers,
     .refs = rivers_refs,
     .init = rivers_init,
-    .share = FB_SHARE_WHOLE,
+    .share = FB_SHARE_BAND,
     .cost = rivers_cost,
     .example = "[{\"type\": \"rivers\", \"name\": \"r\", \"extent\": 6400, \"steps\": 30, \"dt\": 20000}]",
     .bench = fb_rivers_bench,

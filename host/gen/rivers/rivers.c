@@ -607,19 +607,19 @@ const char *fb_rivers_check(const fb_rivers_desc *d)
     return NULL;
 }
 
-/* The state (h, z: 8 bytes; rcv, cnt, order, acc, heap, aux: 4; flag: 1), the result (4 x 4), the
+/* The state (h, z: 8 bytes; rcv, cnt, order, acc, heap, aux: 4; flag: 1), the result (5 x 4), the
  * tables and the diffusion's scratch (LANES lines of each task). */
 uint64_t fb_rivers_memory(int width, int height)
 {
     uint64_t n = (uint64_t)width * height;
-    return n * (2 * 8 + 6 * 4 + 1 + 4 * 4) + POW_TABLE * 8 +
+    return n * (2 * 8 + 6 * 4 + 1 + 5 * 4) + POW_TABLE * 8 +
            MAX_TASKS * 8 * LANES * (uint64_t)(width > height ? width : height);
 }
 
 void fb_rivers_out_free(fb_rivers_out *o)
 {
     if (!o) return;
-    free(o->height), free(o->area), free(o->river), free(o->lake);
+    free(o->height), free(o->area), free(o->river), free(o->lake), free(o->receiver);
     memset(o, 0, sizeof *o);
 }
 
@@ -686,9 +686,11 @@ static fb_result step(model *M, uint64_t *flooded)
     return FB_OK;
 }
 
-static fb_result out_alloc(size_t n, fb_rivers_out *o)
+static fb_result out_alloc(size_t n, bool receivers, fb_rivers_out *o)
 {
     memset(o, 0, sizeof *o);
+    if (receivers && !(o->receiver = malloc(n * sizeof *o->receiver)))
+        return fb_fail(FB_ERR_NOMEM, "rivers: out of memory for the result");
     float **p[4] = {&o->height, &o->area, &o->river, &o->lake};
     for (int k = 0; k < 4; k++)
         if (!(*p[k] = malloc(n * sizeof(float)))) {
@@ -704,7 +706,7 @@ static fb_result finish(model *M, fb_rivers_out *o)
 {
     const fb_rivers_desc *d = M->d;
     const size_t N = M->N;
-    fb_result rc = out_alloc(N, o);
+    fb_result rc = out_alloc(N, d->receivers, o);
     if (rc) return rc;
     for (size_t i = 0; i < N; i++) o->height[i] = (float)M->h[i], M->h[i] = o->height[i];
     run_tasks(M, M->tasks, outlets_task, NULL);
@@ -733,6 +735,7 @@ static fb_result finish(model *M, fb_rivers_out *o)
             o->lake[i] = 0;
         if (!d->keep_lakes) o->height[i] = surface;
     }
+    if (o->receiver) memcpy(o->receiver, M->rcv, N * sizeof *o->receiver);
     o->largest_basin = (double)top / N;
     return FB_OK;
 }

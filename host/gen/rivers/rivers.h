@@ -41,6 +41,7 @@ typedef struct fb_rivers_desc {
     bool has_sea;            /* cells below sea_level are the sea: outlets, held */
     double sea_level;        /* */
     double river_area;       /* the river mask: drainage area at least this (world units squared) */
+    bool receivers;          /* also return each cell's receiver (fb_rivers_out.receiver) */
 } fb_rivers_desc;
 
 /* The result, width * height floats each (malloc'd; fb_rivers_out_free frees them), and what the
@@ -50,6 +51,7 @@ typedef struct fb_rivers_out {
     float *area;          /* drainage area (world units squared) by steepest descent on the surface */
     float *river;         /* 1 where area >= river_area (not in the sea), else 0 */
     float *lake;          /* depth of standing water (a kept lake's, the sea's), else 0 */
+    int32_t *receiver;    /* with desc.receivers: the cell each drains to on the surface (itself: an outlet) */
     double largest_basin; /* the share of the cells draining to one outlet */
     uint64_t flooded;     /* cells routed by priority-flood, summed over the steps */
     int flood_steps;      /* steps that had depressions */
@@ -60,7 +62,7 @@ typedef struct fb_rivers_out {
 /* Checks the description; NULL when it is good, else what is wrong. */
 const char *fb_rivers_check(const fb_rivers_desc *d);
 
-/* Bytes the run allocates at its peak (its state and the result). */
+/* Bytes the run allocates at its peak (its state and the result, with the receivers). */
 uint64_t fb_rivers_memory(int width, int height);
 
 /* Runs the model (pool: NULL for the calling thread only). FB_ERR_INPUT when no cell is an outlet (no
