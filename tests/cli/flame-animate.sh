@@ -66,9 +66,10 @@ env sequence=two.flame nframes=8 flam3-genome > seq.flame 2> /dev/null
 frame seq-rotate seq.flame 3
 frame seq-blend seq.flame 12
 env inter=two.flame frame=2 nframes=6 flam3-genome > inter.flame 2> /dev/null
-frame inter inter.flame 0
-env rotate=two.flame frame=2 nframes=6 flam3-genome > rotate.flame 2> /dev/null
-frame rotate rotate.flame 0
+frame inter inter.flame 2
+# rotate takes one genome: camera's, whose <symmetry> xforms stay still (animate 0)
+env rotate=camera.flame frame=2 nframes=6 flam3-genome > rotate.flame 2> /dev/null
+frame rotate rotate.flame 2
 # flam3's shipped animation (library palettes, time 0 to 100)
 keys shipped.flame $S "$Q" /usr/share/flam3/test.flam3
 frame shipped shipped.flame 40

@@ -451,12 +451,14 @@ fb_result fb_flame_frame_init(const fb_flame_genome *keys, int n, double time, i
             f->frame.estimator_minimum = g->estimator_minimum;
             f->frame.estimator_curve = g->estimator_curve;
         }
-        f->gamma += g->gamma / f->n, f->vibrancy += g->vibrancy / f->n;
-        for (int k = 0; k < 3; k++) f->background[k] += g->background[k] / f->n;
+        f->gamma += g->gamma, f->vibrancy += g->vibrancy; /* sums, then means, as flam3 does: n ones make 1 */
+        for (int k = 0; k < 3; k++) f->background[k] += g->background[k];
         f->brightness = g->brightness, f->gamma_threshold = g->gamma_threshold;
         f->highlight_power = g->highlight_power;
     }
     free(g);
+    f->gamma /= f->n, f->vibrancy /= f->n;
+    for (int k = 0; k < 3; k++) f->background[k] /= f->n;
     if (rc) fb_flame_frame_fini(f);
     return rc;
 }

@@ -481,31 +481,56 @@ static uint32_t sample_seed(uint32_t seed, int t)
     return t ? h : seed;
 }
 
-/* An animated frame's temporal samples, one after the other into total: each the genome at its
- * time, a 1/n share of the points, its palette times its weight (rect.c's temporal sample loop);
- * the tone map's k2 from the last, over the mean weight. */
+/* Temporal sample t's game: the genome at its time, 1/n of the points, its palette times its weight
+ * (rect.c's temporal sample loop); *c0, *c1 the chains this run plays. */
+static fb_result sample_setup(fb_gen *g, int t, fb_flame_genome *at, fb_flame_setup *T, uint32_t *c0, uint32_t *c1)
+{
+    flame_state *st = state(g);
+    const fb_flame_params *f = fb_layer_params(g->layer);
+    const fb_flame_frame *fr = &st->frame;
+    fb_result rc = fb_flame_interpolate(st->keys, st->nkeys, f->time + fr->delta[t], at);
+    if (!rc)
+        rc = fb_flame_setup_sample(at, &st->S, f->quality, sample_seed(g->scene->seed, t), 1.0 / fr->n, fr->weight[t],
+                                   T);
+    if (!rc) part_chains(g, T->p.chains, c0, c1);
+    return rc;
+}
+
+/* An animated frame's temporal samples into total, in order: natively FB_FLAME_BATCH at a time into
+ * the threads' histograms, which last the whole frame (a sample's share of the points is small: a
+ * histogram or a wake-up of the pool each would cost more than its game); on Vulkan one after
+ * another. The tone map's k2 is the last sample's over the mean weight. */
 static fb_result play_samples(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_progress *prog, double *gpu,
                               double *points, uint32_t *chains)
 {
     flame_state *st = state(g);
-    const fb_flame_params *f = fb_layer_params(g->layer);
-    fb_flame_genome *at = malloc(sizeof *at);
-    fb_result rc = at ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory");
     const fb_flame_frame *fr = &st->frame;
-    for (int t = 0; t < fr->n && !rc; t++) {
-        fb_flame_setup T;
-        rc = fb_flame_interpolate(st->keys, st->nkeys, f->time + fr->delta[t], at);
-        if (!rc)
-            rc = fb_flame_setup_sample(at, &st->S, f->quality, sample_seed(g->scene->seed, t), 1.0 / fr->n,
-                                       fr->weight[t], &T);
-        uint32_t c0, c1;
-        part_chains(g, T.p.chains, &c0, &c1);
-        if (!rc) rc = play(g, e, &T, c0, c1, total, NULL, gpu);
-        if (!rc) *points += chain_points(&T, c0, c1), *chains += c1 - c0;
-        if (!rc && t == fr->n - 1) st->S.k2 = T.k2 / fr->sumfilt;
-        fb_flame_setup_fini(&T);
-        fb_progress_update(prog, (uint64_t)t + 1, (uint64_t)fr->n);
+    bool native = e->kind != FB_BACKEND_VULKAN;
+    int nb = native ? FB_FLAME_BATCH : 1;
+    fb_flame_genome *at = malloc(sizeof *at);
+    fb_flame_setup *T = calloc((size_t)nb, sizeof *T);
+    const fb_flame_setup *Tp[FB_FLAME_BATCH];
+    uint32_t cr[FB_FLAME_BATCH][2];
+    fb_flame_hists H = {0};
+    fb_result rc = at && T ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (!rc && native)
+        rc = fb_flame_hists_init(&H, &st->S, false, e->pool, e->pool ? fb_pool_threads(e->pool) : 1, total);
+    for (int t0 = 0; t0 < fr->n && !rc; t0 += nb) {
+        int n = fr->n - t0 < nb ? fr->n - t0 : nb;
+        for (int i = 0; i < n && !rc; i++) {
+            rc = sample_setup(g, t0 + i, at, &T[i], &cr[i][0], &cr[i][1]);
+            Tp[i] = &T[i];
+            if (!rc) *points += chain_points(&T[i], cr[i][0], cr[i][1]), *chains += cr[i][1] - cr[i][0];
+        }
+        if (!rc && native) rc = fb_flame_hists_play_batch(&H, Tp, (const uint32_t(*)[2])cr, n, g->run.scalar);
+        if (!rc && !native) rc = play(g, e, &T[0], cr[0][0], cr[0][1], total, NULL, gpu);
+        if (!rc && t0 + n == fr->n) st->S.k2 = T[n - 1].k2 / fr->sumfilt;
+        for (int i = 0; i < n; i++) fb_flame_setup_fini(&T[i]);
+        fb_progress_update(prog, (uint64_t)(t0 + n), (uint64_t)fr->n);
     }
+    if (!rc && native) fb_flame_hists_fold(&H, &st->bad);
+    fb_flame_hists_fini(&H);
+    free(T);
     free(at);
     return rc;
 }
