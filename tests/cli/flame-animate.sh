@@ -54,8 +54,8 @@ keys blur-gauss.flame $S "$Q" 0:post.flame 1:xaos.flame 2:tone.flame temporal_fi
 frame blur-gauss blur-gauss.flame 1
 keys blur-exp.flame $S "$Q" 0:linear.flame 1:post.flame 2:xaos.flame temporal_filter_type=exp temporal_filter_exp=2
 frame blur-exp blur-exp.flame 1
-keys blur-exp2.flame $S "$Q" 0:supersample.flame 1:post.flame temporal_filter_type=exp temporal_filter_exp=-1.5
-frame blur-exp2 blur-exp2.flame 0
+keys blur-exp2.flame $S "$Q" 0:xaos.flame 1:supersample.flame 2:post.flame temporal_filter_type=exp temporal_filter_exp=-1.5
+frame blur-exp2 blur-exp2.flame 1
 # smooth (Catmull-Rom) on the inner segment of four keyframes
 keys smooth.flame $S "$Q" 0:post.flame 3:xaos.flame 6:colors.flame 9:linear.flame interpolation=smooth
 frame smooth smooth.flame 4
