@@ -8,6 +8,7 @@
 #include "heightmap.h"
 #include "output.h"
 #include "plan.h"
+#include "sequence.h"
 #include "textin.h"
 
 #include <stdlib.h>
@@ -388,7 +389,7 @@ static void summary_text(const fb_scene *scene, const fb_bake_opts *o, const fb_
     }
 }
 
-fb_result fb_cli_bake(const fb_cli *cli, const char *command, fb_scene *scene, const fb_bake_opts *o)
+static fb_result bake_once(const fb_cli *cli, const char *command, fb_scene *scene, const fb_bake_opts *o)
 {
     fb_result rc = check_options(scene, o);
     if (rc) return rc;
@@ -464,4 +465,97 @@ fb_result fb_cli_bake(const fb_cli *cli, const char *command, fb_scene *scene, c
 done:
     task_free(&ts);
     return rc;
+}
+
+/* Frame f of a sequence as a bake of its own, committed when done: its own transaction, so that the
+ * frames finished stay when a later one fails or the run is stopped. */
+static fb_result bake_frame(const fb_cli *cli, const char *command, const char *json, const fb_bake_opts *fo)
+{
+    fb_outputs *tx = NULL;
+    fb_result rc = fb_outputs_create(&tx);
+    if (rc) return rc;
+    fb_scope old = fb_scope_get(), frame = old;
+    frame.outputs = tx;
+    fb_scope_set(frame);
+    fb_outputs_begin();
+    fb_scene fs = {0};
+    rc = fb_scene_parse(json, NULL, &fs);
+    if (!rc) rc = bake_once(cli, command, &fs, fo);
+    fb_scene_fini(&fs);
+    rc = fb_outputs_end(rc);
+    fb_scope_set(old);
+    fb_outputs_destroy(&tx);
+    return rc;
+}
+
+/* The frames' paths and stored scenes (what each would be), this task's share of them. Each frame
+ * already there with the same scene is skipped; one there with another is refused before any is
+ * baked. */
+static fb_result bake_sequence(const fb_cli *cli, const char *command, fb_scene *scene, const fb_bake_opts *o,
+                               const fb_frames *fr)
+{
+    if (o->json || o->dry_run || o->region[2] || o->points_part[1])
+        return fb_fail(FB_ERR_USAGE,
+                       "-o %s: a sequence of frames is baked whole: no --json, --dry-run, --region or "
+                       "--points-part",
+                       o->out);
+    long i0 = 0, i1 = fb_frames_count(fr);
+    if (o->task[1] > 0) fb_frames_share(fr, o->task[0], o->task[1], &i0, &i1); /* a task of a cluster's array */
+    fb_result rc = FB_OK;
+    long todo = 0, skip = 0;
+    char **json = calloc((size_t)(i1 - i0 + 1), sizeof *json);
+    if (!json) return fb_fail(FB_ERR_NOMEM, "out of memory");
+    for (long i = i0; i < i1 && !rc; i++) {
+        long f = fr->first + i * fr->step;
+        char path[4096], *text = NULL;
+        fb_scene fs = {0};
+        bool done = false;
+        fb_frame_path(o->out, f, path, sizeof path);
+        rc = fb_frame_scene_json(scene, f, &text);
+        if (!rc) rc = fb_scene_parse(text, NULL, &fs);
+        free(text);
+        if (!rc) rc = fb_frame_done(path, fs.json, &done);
+        if (!rc && !done && !(json[i - i0] = strdup(fs.json))) rc = fb_fail(FB_ERR_NOMEM, "out of memory");
+        fb_scene_fini(&fs);
+        done ? skip++ : todo++;
+    }
+    if (!rc && !o->quiet && skip)
+        fprintf(stderr, "fractalbake: %ld of %ld frames are there from the same scene: kept\n", skip, i1 - i0);
+    long at = 0;
+    for (long i = i0; i < i1 && !rc; i++) {
+        if (!json[i - i0]) continue;
+        long f = fr->first + i * fr->step;
+        char path[4096], preview[4096];
+        fb_bake_opts fo = *o;
+        fb_frame_path(o->out, f, path, sizeof path);
+        fo.out = path, fo.task[0] = fo.task[1] = 0;
+        if (o->preview) fb_frame_path(o->preview, f, preview, sizeof preview), fo.preview = preview;
+        if (!o->quiet) fprintf(stderr, "fractalbake: frame %ld (%ld of %ld): %s\n", f, ++at, todo, path);
+        rc = bake_frame(cli, command, json[i - i0], &fo);
+    }
+    for (long i = 0; i < i1 - i0; i++) free(json[i]);
+    free(json);
+    return rc;
+}
+
+fb_result fb_cli_bake(const fb_cli *cli, const char *command, fb_scene *scene, const fb_bake_opts *o)
+{
+    bool seq = false, pseq = false;
+    fb_result rc = o->out ? fb_frame_pattern("-o", o->out, &seq) : FB_OK;
+    if (!rc && o->preview) rc = fb_frame_pattern("--preview", o->preview, &pseq);
+    if (rc) return rc;
+    bool ft = false;
+    fb_frames fr;
+    if ((rc = fb_scene_frames(scene, &ft, &fr))) return rc;
+    if (seq && !ft)
+        return fb_fail(FB_ERR_USAGE,
+                       "-o %s: a sequence needs its frames (--frames A-B[:STEP], or the scene key frames)", o->out);
+    if (!seq && ft)
+        return fb_fail(FB_ERR_USAGE, "frames: a sequence writes a file a frame: -o NAME.%%04d.exr (a frame number in "
+                                     "the name)");
+    if (seq != pseq && o->preview)
+        return fb_fail(FB_ERR_USAGE, "--preview %s: %s", o->preview,
+                       seq ? "a sequence's previews need a frame number too (NAME.%04d.png)"
+                           : "a frame number in the preview's name needs one in -o's");
+    return seq ? bake_sequence(cli, command, scene, o, &fr) : bake_once(cli, command, scene, o);
 }

@@ -3,6 +3,7 @@
 
 #include "gen.h"
 #include "plan.h"
+#include "sequence.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -44,6 +45,40 @@ static void help(const fb_cli *cli)
            by_share[FB_SHARE_BAND], by_share[FB_SHARE_POINTS], by_share[FB_SHARE_WHOLE]);
 }
 
+/* A sequence's plan: each task's frames (render --task K/N bakes them, whole, in order). */
+static fb_result print_frames(const fb_scene *sc, const fb_frames *fr, int ntasks, bool json)
+{
+    json_t *tasks = json ? json_array() : NULL;
+    if (!json)
+        printf("plan: a sequence of %ld frames (%ld to %ld by %ld), %d x %d, over %d task%s (numbered from 0, like "
+               "SLURM_ARRAY_TASK_ID)\n\n%-6s %s\n",
+               fb_frames_count(fr), fr->first, fr->last, fr->step, sc->width, sc->height, ntasks,
+               ntasks == 1 ? "" : "s", "task", "frames");
+    for (int k = 0; k < ntasks; k++) {
+        long i0, i1;
+        fb_frames_share(fr, k, ntasks, &i0, &i1);
+        long a = fr->first + i0 * fr->step, b = fr->first + (i1 - 1) * fr->step;
+        if (json)
+            json_array_append_new(tasks, i1 > i0 ? json_pack("{sisIsIsI}", "task", k, "first", (json_int_t)a, "last",
+                                                             (json_int_t)b, "frames", (json_int_t)(i1 - i0))
+                                                 : json_pack("{sisI}", "task", k, "frames", (json_int_t)0));
+        else if (i1 > i0)
+            printf("%-6d %ld to %ld (%ld frame%s)\n", k, a, b, i1 - i0, i1 - i0 == 1 ? "" : "s");
+        else
+            printf("%-6d nothing: fewer frames than tasks\n", k);
+    }
+    if (json) {
+        json_t *doc = json_pack("{sIsIsIso}", "first", (json_int_t)fr->first, "last", (json_int_t)fr->last, "step",
+                                (json_int_t)fr->step, "tasks", tasks);
+        char *text = doc ? json_dumps(doc, JSON_COMPACT) : NULL;
+        json_decref(doc);
+        if (!text) return fb_fail(FB_ERR_NOMEM, "out of memory");
+        printf("%s\n", text);
+        free(text);
+    }
+    return FB_OK;
+}
+
 static fb_result run(const fb_cli *cli, void *opts)
 {
     (void)cli;
@@ -56,8 +91,12 @@ static fb_result run(const fb_cli *cli, void *opts)
                    : o->files.n
                        ? fb_scene_load_sets(o->files.v[0], o->sets.v, o->sets.n, sc)
                        : fb_scene_parse_sets(fb_scene_default_json(), "(default scene)", o->sets.v, o->sets.n, sc);
-    if (!rc) rc = fb_plan_make(sc, o->ntasks, o->startup, p);
-    if (!rc && o->json) {
+    bool seq = false;
+    fb_frames fr;
+    if (!rc) rc = fb_scene_frames(sc, &seq, &fr);
+    if (!rc && seq) {
+        rc = print_frames(sc, &fr, o->ntasks, o->json);
+    } else if (!rc && !(rc = fb_plan_make(sc, o->ntasks, o->startup, p)) && o->json) {
         char *text = fb_plan_json(sc, p, true);
         if (text)
             printf("%s\n", text);

@@ -29,6 +29,9 @@ static const fb_keyspec scene_keys[] = {
     {"compression", FB_K_ENUM, 0, 0, false, EXRIO_COMPRESSION_NAMES, "\"zip\"", "EXR compression"},
     {"parts", FB_K_ENUM, 0, 0, false, "single|per-layer", "\"single\"",
      "one EXR part with every layer, or one part per layer (multi-part; each may have its own compression)"},
+    {"frames", FB_K_STRING, 0, 0, false, NULL, NULL,
+     "a sequence: frames A-B or A-B:STEP, each baked at its time into -o NAME.%04d.exr (flam3-animate's begin, "
+     "end, dtime)"},
     {"layers", FB_K_LAYERS, 1, FB_MAX_LAYERS, false, NULL, NULL, "the layers, each a generator"},
 };
 

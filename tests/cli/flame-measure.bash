@@ -34,6 +34,13 @@ run_case() {
         return 2
     fi
     [ $rc -eq 0 ] || { bad "$name: fractalbake failed: $(head -1 "$name.err")"; return 1; }
+    judge "$name"
+}
+
+# judge NAME: our NAME.exr against flam3's NAME-a.png, held to 1.5 times flam3's NAME-a.png from
+# NAME-b.png (another isaac_seed)
+judge() {
+    local name=$1
     # flam3 truncates to 8 bits where our preview rounds: our linear R, G, B to sRGB, less half a
     # level, rounded (OpenImageIO), is flam3's quantisation of our image
     oiiotool "$name.exr" --ch flame.R,flame.G,flame.B --chnames R,G,B --colorconvert linear sRGB \

@@ -659,46 +659,110 @@ static void fold_task(void *ctx, int task)
     }
 }
 
-static void run(fb_pool *pool, int threads, fb_task_fn fn, game *G)
+static void run(fb_pool *pool, int threads, fb_task_fn fn, void *ctx)
 {
     if (pool)
-        fb_pool_run(pool, threads, fn, G);
+        fb_pool_run(pool, threads, fn, ctx);
     else
-        fn(G, 0);
+        fn(ctx, 0);
 }
 
-fb_result fb_flame_play(const fb_flame_setup *S, fb_pool *pool, int threads, bool scalar, uint32_t cr0, uint32_t cr1,
-                        fb_flame_cell *total, uint64_t *bad, fb_progress *prog)
+fb_result fb_flame_hists_init(fb_flame_hists *h, const fb_flame_setup *S, bool compact, fb_pool *pool, int threads,
+                              fb_flame_cell *total)
 {
-    size_t cells = (size_t)S->p.hist_w * S->p.hist_h, bytes = fb_flame_cell_bytes(S);
+    memset(h, 0, sizeof *h);
+    h->cells = (size_t)S->p.hist_w * S->p.hist_h;
+    h->compact = compact;
+    size_t bytes = compact ? sizeof(cell16) : sizeof(fb_flame_cell32);
     if (threads > 64) threads = 64;
     if (!pool || threads < 1) threads = 1;
-    while (threads > 1 && (uint64_t)threads * cells * bytes > (1ull << 30)) threads--;
+    while (threads > 1 && (uint64_t)threads * h->cells * bytes > (1ull << 30)) threads--;
+    h->threads = threads, h->pool = pool, h->total = total;
+    for (int t = 0; t < threads; t++)
+        if (!(h->hist[t] = fb_flame_zalloc(h->cells * bytes, pool))) {
+            fb_flame_hists_fini(h);
+            return fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
+        }
+    return FB_OK;
+}
+
+fb_result fb_flame_hists_play(fb_flame_hists *h, const fb_flame_setup *S, bool scalar, uint32_t cr0, uint32_t cr1,
+                              fb_progress *prog)
+{
     uint8_t plain[FB_FLAME_MAX_XFORMS + 1] = {0};
     for (uint32_t f = 0; f < S->p.nxf; f++) plain[f] = plain_linear(S, f);
     /* the AVX2 lanes where they apply, unless scalar */
     lane_tables tables;
     const lane_tables *lanes = NULL;
     if (!scalar && lanes_ok(S, plain)) lane_tables_init(S, plain, &tables), lanes = &tables;
-    void *hist[64] = {0};
-    uint64_t nbad[64] = {0};
-    fb_result rc = FB_OK;
-    for (int t = 0; t < threads && !rc; t++)
-        if (!(hist[t] = fb_flame_zalloc(cells * bytes, pool)))
-            rc = fb_fail(FB_ERR_NOMEM, "out of memory for the flame's histogram");
     /* rounds of chains, for the progress bar; the 32-bit cells are folded once, at the end */
-    uint32_t per_round = GROUP * (uint32_t)threads;
+    uint32_t per_round = GROUP * (uint32_t)h->threads;
     double all = (double)(cr1 - cr0) * S->p.len;
-    for (uint32_t c0 = cr0; c0 < cr1 && !rc; c0 += per_round) {
+    for (uint32_t c0 = cr0; c0 < cr1; c0 += per_round) {
         uint32_t c1 = cr1 - c0 > per_round ? c0 + per_round : cr1;
-        game G = {S, hist, bytes == sizeof(cell16), total, cells, nbad, c0, c1, threads, plain, lanes};
-        run(pool, threads, game_task, &G);
+        game G = {S, h->hist, h->compact, h->total, h->cells, h->bad, c0, c1, h->threads, plain, lanes};
+        run(h->pool, h->threads, game_task, &G);
         if (prog) fb_progress_update(prog, (uint64_t)fmin((double)(c1 - cr0) * S->p.len, all), (uint64_t)all);
     }
-    if (!rc) {
-        game G = {S, hist, bytes == sizeof(cell16), total, cells, nbad, 0, 0, threads};
-        run(pool, threads, fold_task, &G);
+    return FB_OK;
+}
+
+typedef struct batch {
+    game G[FB_FLAME_BATCH];
+    int n;
+} batch;
+
+/* Each game of the batch in turn, the task's share of its chains (one wake-up of the pool for them
+ * all). */
+static void batch_task(void *ctx, int task)
+{
+    const batch *b = ctx;
+    for (int i = 0; i < b->n; i++) game_task((void *)&b->G[i], task);
+}
+
+fb_result fb_flame_hists_play_batch(fb_flame_hists *h, const fb_flame_setup *const *S, const uint32_t (*cr)[2], int n,
+                                    bool scalar)
+{
+    batch *b = calloc(1, sizeof *b);
+    uint8_t(*plain)[FB_FLAME_MAX_XFORMS + 1] = calloc(FB_FLAME_BATCH, sizeof *plain);
+    lane_tables *T = calloc(FB_FLAME_BATCH, sizeof *T);
+    fb_result rc = b && plain && T ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < n && i < FB_FLAME_BATCH && !rc; i++) {
+        for (uint32_t f = 0; f < S[i]->p.nxf; f++) plain[i][f] = plain_linear(S[i], f);
+        const lane_tables *lanes = NULL;
+        if (!scalar && lanes_ok(S[i], plain[i])) lane_tables_init(S[i], plain[i], &T[i]), lanes = &T[i];
+        b->G[i] = (game){S[i],     h->hist,  h->compact, h->total, h->cells, h->bad,
+                         cr[i][0], cr[i][1], h->threads, plain[i], lanes};
+        b->n = i + 1;
     }
-    for (int t = 0; t < threads; t++) *bad += nbad[t], free(hist[t]);
+    if (!rc) run(h->pool, h->threads, batch_task, b);
+    free(b);
+    free(plain);
+    free(T);
+    return rc;
+}
+
+void fb_flame_hists_fold(fb_flame_hists *h, uint64_t *bad)
+{
+    game G = {NULL, h->hist, h->compact, h->total, h->cells, h->bad, 0, 0, h->threads};
+    run(h->pool, h->threads, fold_task, &G);
+    for (int t = 0; t < h->threads; t++) *bad += h->bad[t], h->bad[t] = 0;
+}
+
+void fb_flame_hists_fini(fb_flame_hists *h)
+{
+    for (int t = 0; t < 64; t++) free(h->hist[t]);
+    memset(h, 0, sizeof *h);
+}
+
+fb_result fb_flame_play(const fb_flame_setup *S, fb_pool *pool, int threads, bool scalar, uint32_t cr0, uint32_t cr1,
+                        fb_flame_cell *total, uint64_t *bad, fb_progress *prog)
+{
+    fb_flame_hists h;
+    fb_result rc = fb_flame_hists_init(&h, S, fb_flame_cell_bytes(S) == sizeof(cell16), pool, threads, total);
+    if (rc) return rc;
+    rc = fb_flame_hists_play(&h, S, scalar, cr0, cr1, prog);
+    if (!rc) fb_flame_hists_fold(&h, bad);
+    fb_flame_hists_fini(&h);
     return rc;
 }

@@ -8,13 +8,20 @@
 #include "genome.h"
 #include "render.h"
 
+#define FB_FLAME_PATH 4096
+
 typedef struct fb_flame_params {
-    char file[4096];        /* the .flame file */
-    char pick[4096];        /* its <flame> by name or index; "": the first */
-    char palettes[4096];    /* flam3's palette library */
-    fb_flame_genome genome; /* read from the file at parse time */
-    double quality;         /* samples per pixel; 0: the genome's */
-    fb_flame_tone tone;     /* the genome's tone map, with the layer's tone keys applied */
+    char file[FB_FLAME_PATH];     /* the .flame file */
+    char pick[4096];              /* its <flame> by name or index; "": the first */
+    char palettes[FB_FLAME_PATH]; /* flam3's palette library */
+    fb_flame_genome genome;       /* read from the file at parse time; animated: the frame's (animate.h) */
+    double quality;               /* samples per pixel; 0: the genome's */
+    fb_flame_tone tone;           /* the genome's tone map, with the layer's tone keys applied */
+    /* animated (the key time): the file's flames are keyframes, the frame is at `time`, made of
+     * temporal_samples (0: the genome's) chaos games between them; the bake reads the file again */
+    bool animated;
+    double time;
+    int temporal_samples;
 } fb_flame_params;
 
 /* The last prepare's chaos game: its points, wall seconds (the game alone: no density estimation,

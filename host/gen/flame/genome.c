@@ -9,6 +9,7 @@
 #include <libxml/parser.h>
 #include <libxml/tree.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -133,10 +134,16 @@ static void init_xform(fb_flame_xform *x, int index)
     x->color_speed = 0.5;
     x->color = index & 1;
     x->opacity = 1.0;
+    x->animate = 1.0;
     x->c[0][0] = x->c[1][1] = 1.0;
     x->post[0][0] = x->post[1][1] = 1.0;
     for (int p = 0; p < FB_FP_COUNT; p++) x->par[p] = par_spec[p].def;
     for (int j = 0; j < FB_FLAME_MAX_XFORMS; j++) x->chaos[j] = 1.0;
+}
+
+void fb_flame_xform_init(fb_flame_xform *x, int index)
+{
+    init_xform(x, index);
 }
 
 /* Hex colours: n of them, each "RRGGBB" (chan 3), "RRGGBBAA" (4) or "00RRGGBB" (-4), white space
@@ -308,9 +315,11 @@ static fb_result parse_xform(reader *r, xmlNodePtr node, fb_flame_xform *x, bool
             rc = number(r, name, val, &x->color_speed);
         } else if (!strcmp(name, "symmetry")) {
             /* the legacy form of color_speed (flam3's parser) */
-            if (!(rc = number(r, name, val, &d))) x->color_speed = (1.0 - d) / 2.0;
-        } else if (!strcmp(name, "animate") || !strcmp(name, "name")) {
-            /* animation only, and a label (Apophysis) */
+            if (!(rc = number(r, name, val, &d))) x->color_speed = (1.0 - d) / 2.0, x->animate = d > 0 ? 0 : 1;
+        } else if (!strcmp(name, "animate")) {
+            rc = number(r, name, val, &x->animate);
+        } else if (!strcmp(name, "name")) {
+            /* a label (Apophysis) */
         } else if (!strcmp(name, "motion_frequency") || !strcmp(name, "motion_function")) {
             rc = bad(r, "attribute %s: motion is for animations, not supported%s", name, "");
         } else if (!strcmp(name, "opacity")) {
@@ -376,10 +385,16 @@ static double round6(double x)
     return 1e-6 * (int)(x + 0.5);
 }
 
+static double det2(const fb_flame_xform *x)
+{
+    return x->c[0][0] * x->c[1][1] - x->c[0][1] * x->c[1][0];
+}
+
 /* <symmetry kind="K"> (flam3_add_symmetry): K >= 2 adds K - 1 rotations by 2 pi / K, K <= -1 a
- * reflection x -> -x and |K| - 1 rotations; weight 1, linear, colour speed 0 each. flam3 then sorts
- * the added xforms, which changes only which random numbers pick them (not the image) unless xaos
- * names them: xaos with symmetry is refused. */
+ * reflection x -> -x and |K| - 1 rotations; weight 1, linear, colour speed and animate 0 each, in
+ * flam3's sorted order (a still's image does not depend on it, keyframes' matched xforms do; xaos
+ * would name them: xaos with symmetry is refused). */
+
 static fb_result add_symmetry(const reader *r, fb_flame_genome *g, int sym, int *nstd)
 {
     if (sym == 0) return bad(r, "<symmetry kind=\"0\">: a random symmetry is not reproducible%s%s", "", "");
@@ -387,10 +402,11 @@ static fb_result add_symmetry(const reader *r, fb_flame_genome *g, int sym, int 
     int n = sym < 0 ? -sym : sym - 1;
     if (sym < -FB_FLAME_MAX_XFORMS || *nstd + n > FB_FLAME_MAX_XFORMS)
         return bad(r, "<symmetry>: more than %s xforms%s", "24", "");
+    int start = *nstd;
     if (sym < 0) {
         fb_flame_xform *x = &g->xf[(*nstd)++];
         init_xform(x, *nstd - 1);
-        x->weight = 1, x->color_speed = 0, x->var[0] = 1, x->color = 1;
+        x->weight = 1, x->color_speed = 0, x->animate = 0, x->var[0] = 1, x->color = 1;
         x->c[0][0] = -1, x->c[1][1] = 1;
         sym = -sym;
     }
@@ -398,14 +414,94 @@ static fb_result add_symmetry(const reader *r, fb_flame_genome *g, int sym, int 
     for (int k = 1; k < sym; k++) {
         fb_flame_xform *x = &g->xf[(*nstd)++];
         init_xform(x, *nstd - 1);
-        x->weight = 1, x->color_speed = 0, x->var[0] = 1;
+        x->weight = 1, x->color_speed = 0, x->animate = 0, x->var[0] = 1;
         x->color = sym < 3 ? 0.0 : (k - 1.0) / (sym - 2.0);
         x->c[0][0] = round6(cos(k * a));
         x->c[0][1] = round6(sin(k * a));
         x->c[1][0] = round6(-x->c[0][1]);
         x->c[1][1] = x->c[0][0];
     }
+    /* flam3 sorts the added xforms (qsort with compare_xforms, glibc's merge sort: stable). Their
+     * colour speeds are all 0, so the key is the determinant of the linear part: the reflection's -1
+     * first, then the rotations, whose round6 coefficients put their determinants a little off 1.
+     * The order is what keyframes' xforms are matched by. */
+    for (int i = start + 1; i < *nstd; i++) {
+        fb_flame_xform x = g->xf[i];
+        double d = det2(&x);
+        int j = i;
+        for (; j > start && det2(&g->xf[j - 1]) > d; j--) g->xf[j] = g->xf[j - 1];
+        g->xf[j] = x;
+    }
     g->symmetry = true;
+    return FB_OK;
+}
+
+/* Which of `names` (NULL-terminated) val is, or -1 after an error naming the attribute. */
+static int choice(const reader *r, const char *att, const char *val, const char *const *names, fb_result *rc)
+{
+    for (int k = 0; names[k]; k++)
+        if (!strcmp(val, names[k])) return k;
+    char want[160] = "";
+    for (int k = 0; names[k]; k++)
+        snprintf(want + strlen(want), sizeof want - strlen(want), "%s%s", k ? ", " : "", names[k]);
+    char msg[256];
+    snprintf(msg, sizeof msg, "attribute %s: expected %s, found '%%s'%%s", att, want);
+    *rc = bad(r, msg, val, "");
+    return -1;
+}
+
+/* The attributes of <flame> that flam3-animate reads: the keyframe's time and how it moves. */
+static const struct {
+    const char *name;
+    size_t at;                /* offsetof(fb_flame_genome, ...) */
+    const char *const *names; /* a choice (stored as an int-sized enum), or NULL: a number */
+    double lo, hi;            /* a number's range */
+} anim_attrs[] = {
+    {"time", offsetof(fb_flame_genome, time), NULL, -1e300, 1e300},
+    {"interpolation", offsetof(fb_flame_genome, interpolation), (const char *const[]){"linear", "smooth", NULL}, 0, 0},
+    {"interpolation_type", offsetof(fb_flame_genome, interpolation_type),
+     (const char *const[]){"log", "linear", "old", "older", NULL}, 0, 0},
+    {"interpolation_space", offsetof(fb_flame_genome, interpolation_type),
+     (const char *const[]){"log", "linear", "old", "older", NULL}, 0, 0},
+    {"palette_interpolation", offsetof(fb_flame_genome, palette_interpolation),
+     (const char *const[]){"hsv_circular", "hsv", "sweep", "rgb", NULL}, 0, 0},
+    {"hsv_rgb_palette_blend", offsetof(fb_flame_genome, hsv_rgb_palette_blend), NULL, -1e300, 1e300},
+    {"temporal_filter_type", offsetof(fb_flame_genome, temporal_filter_type),
+     (const char *const[]){"box", "gaussian", "exp", NULL}, 0, 0},
+    {"temporal_filter_width", offsetof(fb_flame_genome, temporal_filter_width), NULL, 0, 1e300},
+    {"temporal_filter_exp", offsetof(fb_flame_genome, temporal_filter_exp), NULL, -1e300, 1e300},
+};
+
+_Static_assert(sizeof(fb_flame_interp) == sizeof(int) && sizeof(fb_flame_itype) == sizeof(int) &&
+                   sizeof(fb_flame_palint) == sizeof(int) && sizeof(fb_flame_tfilter) == sizeof(int),
+               "anim_attrs stores the choices as int");
+
+static fb_result animation_attr(const reader *r, const char *name, const char *val, fb_flame_genome *g)
+{
+    fb_result rc = FB_OK;
+    if (!strcmp(name, "temporal_samples")) {
+        rc = integer(r, name, val, &g->temporal_samples);
+        if (!rc && (g->temporal_samples < 1 || g->temporal_samples > 100000))
+            rc = bad(r, "attribute temporal_samples: expected 1 to 100000, found '%s'%s", val, "");
+        return rc;
+    }
+    for (size_t a = 0; a < sizeof anim_attrs / sizeof anim_attrs[0]; a++) {
+        if (strcmp(name, anim_attrs[a].name)) continue;
+        char *field = (char *)g + anim_attrs[a].at;
+        if (anim_attrs[a].names) {
+            int k = choice(r, name, val, anim_attrs[a].names, &rc);
+            if (k >= 0) memcpy(field, &k, sizeof k);
+            return rc;
+        }
+        double d;
+        if ((rc = number(r, name, val, &d))) return rc;
+        if (!isfinite(d) || d < anim_attrs[a].lo || d > anim_attrs[a].hi)
+            return bad(r, "attribute %s: out of range, found '%s'", name, val);
+        memcpy(field, &d, sizeof d);
+        if (!strcmp(name, "time")) g->has_time = true;
+        return FB_OK;
+    }
+    /* the rest (version, url, nick, notes, contrast...) are credits or not read by flam3's renderer */
     return FB_OK;
 }
 
@@ -487,6 +583,8 @@ static fb_result flame_attr(reader *r, const char *name, const char *val, fb_fla
         *hue = fmod(*hue, 1.0);
     } else if (!strcmp(name, "soloxform")) {
         rc = bad(r, "attribute soloxform: an editing aid, not supported%s%s", "", "");
+    } else {
+        rc = animation_attr(r, name, val, g);
     }
     return rc;
 }
@@ -573,6 +671,7 @@ static fb_result parse_flame(reader *r, xmlNodePtr node, const char *palettes, f
     g->quality = 1;
     g->brightness = 4, g->gamma = 4, g->vibrancy = 1, g->highlight_power = -1, g->gamma_threshold = 0.01;
     g->estimator = 9, g->estimator_minimum = 0, g->estimator_curve = 0.4;
+    g->temporal_samples = 1000, g->temporal_filter_width = 1.0;
     int palette_number = -1;
     double hue = 0;
     fb_result rc = FB_OK;
@@ -581,8 +680,6 @@ static fb_result parse_flame(reader *r, xmlNodePtr node, const char *palettes, f
         xmlChar *vx = xmlGetProp(node, a->name);
         const char *val = vx ? (const char *)vx : "";
         rc = flame_attr(r, name, val, g, &palette_number, &hue);
-        /* the rest (version, time, interpolation..., temporal_*, url, nick, notes) concern animation,
-         * editing or credits, not a still image */
         xmlFree(vx);
     }
     if (rc) return rc;
@@ -666,16 +763,30 @@ static void find_flames(xmlNodePtr n, xmlNodePtr *out, int *count, int max)
     }
 }
 
+enum { MAXF = 4096 };
+
+/* The parsed document of the XML text and its <flame> elements (*count of them; more than MAXF:
+ * the first MAXF listed, *count says how many there are). */
+static fb_result flames_of(const char *xml, size_t len, const char *what, xmlDocPtr *doc, xmlNodePtr **flames,
+                           int *count)
+{
+    static _Thread_local xmlNodePtr list[MAXF];
+    fb_result rc = fb_flame_parse(xml, len, what, doc);
+    if (rc) return rc;
+    *count = 0;
+    find_flames(xmlDocGetRootElement(*doc), list, count, MAXF);
+    *flames = list;
+    return FB_OK;
+}
+
 fb_result fb_flame_read(const char *xml, size_t len, const char *what, const char *pick, const char *palettes,
                         fb_flame_genome *out, char **element)
 {
     xmlDocPtr doc = NULL;
-    fb_result prc = fb_flame_parse(xml, len, what, &doc);
+    xmlNodePtr *flames;
+    int count;
+    fb_result prc = flames_of(xml, len, what, &doc, &flames, &count);
     if (prc) return prc;
-    enum { MAXF = 4096 };
-    static _Thread_local xmlNodePtr flames[MAXF];
-    int count = 0;
-    find_flames(xmlDocGetRootElement(doc), flames, &count, MAXF);
     if (count > MAXF) count = MAXF;
     int at = -1;
     if (!pick) {
@@ -716,4 +827,63 @@ fb_result fb_flame_read(const char *xml, size_t len, const char *what, const cha
     }
     xmlFreeDoc(doc);
     return rc;
+}
+
+/* flam3_parse_xml2's fixes to a file of keyframes: no smooth interpolation on the first or the last
+ * segment, and each rotate within 180 degrees of the one before (but for old and older). */
+static void fix_keys(fb_flame_genome *k, int n)
+{
+    if (n >= 1 && k[0].interpolation == FB_FLAME_INTERP_SMOOTH) k[0].interpolation = FB_FLAME_INTERP_LINEAR;
+    if (n >= 2 && k[n - 2].interpolation == FB_FLAME_INTERP_SMOOTH) k[n - 2].interpolation = FB_FLAME_INTERP_LINEAR;
+    for (int i = 1; i < n; i++) {
+        if (k[i - 1].interpolation_type == FB_FLAME_ITYPE_OLD || k[i - 1].interpolation_type == FB_FLAME_ITYPE_OLDER)
+            continue;
+        while (k[i].rotate < k[i - 1].rotate - 180) k[i].rotate += 360;
+        while (k[i].rotate > k[i - 1].rotate + 180) k[i].rotate -= 360;
+    }
+}
+
+fb_result fb_flame_read_keys(const char *xml, size_t len, const char *what, const char *palettes, fb_flame_genome **out,
+                             int *n)
+{
+    xmlDocPtr doc = NULL;
+    xmlNodePtr *flames;
+    int count;
+    fb_result rc = flames_of(xml, len, what, &doc, &flames, &count);
+    if (rc) return rc;
+    fb_flame_genome *k = NULL;
+    if (count > MAXF)
+        rc = fb_fail(FB_ERR_INPUT, "%s: more than %d <flame> keyframes", what, MAXF);
+    else if (!count)
+        rc = fb_fail(FB_ERR_INPUT, "%s: no <flame> element", what);
+    else if (!(k = calloc((size_t)count, sizeof *k)))
+        rc = fb_fail(FB_ERR_NOMEM, "out of memory for %d keyframes", count);
+    for (int i = 0; i < count && !rc; i++) {
+        reader r = {.what = what};
+        xmlChar *nm = xmlGetProp(flames[i], (const xmlChar *)"name");
+        if (nm)
+            snprintf(r.where, sizeof r.where, "flame '%s' (keyframe %d)", (const char *)nm, i);
+        else
+            snprintf(r.where, sizeof r.where, "keyframe %d", i);
+        xmlFree(nm);
+        rc = parse_flame(&r, flames[i], palettes, &k[i]);
+        char t[2][32];
+        snprintf(t[0], sizeof t[0], "%.17g", k[i].time);
+        snprintf(t[1], sizeof t[1], "%.17g", i ? k[i - 1].time : 0.0);
+        if (!rc && !isfinite(k[i].time)) rc = bad(&r, "attribute time: expected a finite number, found %s%s", t[0], "");
+        if (!rc && i > 0 && !(k[i].time > k[i - 1].time))
+            rc = bad(&r, "keyframes must be in increasing time: time %s follows %s", t[0], t[1]);
+        if (!rc && i > 0 && (k[i].width != k[0].width || k[i].height != k[0].height)) {
+            /* flam3-animate renders every frame at the first keyframe's size */
+            k[i].width = k[0].width, k[i].height = k[0].height;
+        }
+    }
+    xmlFreeDoc(doc);
+    if (rc) {
+        free(k);
+        return rc;
+    }
+    fix_keys(k, count);
+    *out = k, *n = count;
+    return FB_OK;
 }

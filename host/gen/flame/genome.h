@@ -136,12 +136,27 @@ typedef struct fb_flame_xform {
     double var[K_V_COUNT];
     double par[FB_FP_COUNT];
     double chaos[FB_FLAME_MAX_XFORMS]; /* xaos: the weight of going to xform j after this one (1: none) */
+    double animate;                    /* flam3's animate: 0 for a symmetry xform (flam3-genome's rotate) */
+    bool padding;                      /* added by flam3_align's rules to match another keyframe (animate.c) */
 } fb_flame_xform;
 
 typedef enum {
     FB_FLAME_PALETTE_STEP,
     FB_FLAME_PALETTE_LINEAR,
 } fb_flame_palette_mode;
+
+/* How a keyframe moves to the next (flam3-animate: the <flame> attributes interpolation,
+ * interpolation_type, palette_interpolation, temporal_filter_type). */
+/* (each stored as an int: genome.c's table of attributes writes them so) */
+typedef enum { FB_FLAME_INTERP_LINEAR, FB_FLAME_INTERP_SMOOTH } fb_flame_interp;
+typedef enum { FB_FLAME_ITYPE_LOG, FB_FLAME_ITYPE_LINEAR, FB_FLAME_ITYPE_OLD, FB_FLAME_ITYPE_OLDER } fb_flame_itype;
+typedef enum {
+    FB_FLAME_PALINT_HSV_CIRCULAR,
+    FB_FLAME_PALINT_HSV,
+    FB_FLAME_PALINT_SWEEP,
+    FB_FLAME_PALINT_RGB
+} fb_flame_palint;
+typedef enum { FB_FLAME_TFILTER_BOX, FB_FLAME_TFILTER_GAUSSIAN, FB_FLAME_TFILTER_EXP } fb_flame_tfilter;
 
 typedef struct fb_flame_genome {
     char name[80];
@@ -163,6 +178,17 @@ typedef struct fb_flame_genome {
     bool symmetry;          /* xforms were added by <symmetry> */
     char form[64];          /* how the palette was given, for messages: "<color> elements", ... */
     double palette[256][4]; /* r, g, b (premultiplied by a), a in [0, 1] */
+    /* animation: the keyframe's time and how it is interpolated (flam3's defaults: time 0, linear,
+     * log, hsv_circular, 1000 temporal samples of a box filter of width 1) */
+    double time;
+    bool has_time; /* the time attribute was given */
+    fb_flame_interp interpolation;
+    fb_flame_itype interpolation_type;
+    fb_flame_palint palette_interpolation;
+    double hsv_rgb_palette_blend;
+    int temporal_samples;
+    fb_flame_tfilter temporal_filter_type;
+    double temporal_filter_width, temporal_filter_exp;
     fb_flame_xform xf[FB_FLAME_MAX_XFORMS + 1];
 } fb_flame_genome;
 
@@ -174,9 +200,22 @@ typedef struct fb_flame_genome {
 fb_result fb_flame_read(const char *xml, size_t len, const char *what, const char *pick, const char *palettes,
                         fb_flame_genome *out, char **element);
 
+/* Reads every <flame> of the XML text as the keyframes of an animation, as flam3-animate does:
+ * *out (n of them, malloc'd) in the file's order, their times strictly increasing, each sized as
+ * the first; smooth interpolation on the first or the last segment read as linear, and each
+ * rotate brought within 180 degrees of the one before (flam3_parse_xml2). Errors: FB_ERR_INPUT,
+ * one line naming the file and the flame. */
+fb_result fb_flame_read_keys(const char *xml, size_t len, const char *what, const char *palettes, fb_flame_genome **out,
+                             int *n);
+
 /* Reads a whole .flame file into memory (NUL-terminated), refusing it by its counts as it streams in
  * (scan.h: xforms, palette entries, attributes, sizes, entities), before anything large is built. */
 fb_result fb_flame_slurp(const char *path, char **text, size_t *len);
+
+/* An xform as flam3 starts one, the `index`-th of its genome: no weight, identity coefficients,
+ * colour index & 1, colour speed 0.5, opacity and animate 1, flam3's parameter defaults, no
+ * variation, xaos 1 to every xform. */
+void fb_flame_xform_init(fb_flame_xform *x, int index);
 
 /* Variation number of a flam3 variation name (all 99 of flam3 3.1.1), or -1. */
 int fb_flame_variation_of(const char *name);

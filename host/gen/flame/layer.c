@@ -8,6 +8,7 @@
  * composited under), NAME.A (flam3's alpha), NAME.acc_R, .acc_G, .acc_B, .acc_A (the filtered
  * accumulation at brightness 1: what the tone map reads) and NAME.count (hits).
  */
+#include "animate.h"
 #include "bake.h"
 #include "gen_flame.h"
 #include "game.h"
@@ -34,6 +35,12 @@ static const fb_keyspec flame_keys[] = {
      FB_FIELD(fb_flame_params, pick)},
     {"quality", FB_K_NUM, 0, 1e6, false, NULL, "0", "samples per pixel (0: the genome's quality attribute)",
      FB_FIELD(fb_flame_params, quality)},
+    {"time", FB_K_NUM, -1e9, 1e9, false, NULL, NULL,
+     "render the file's flames as keyframes at this time, as flam3-animate does (default: a still of one flame)",
+     FB_FIELD(fb_flame_params, time)},
+    {"temporal-samples", FB_K_INT, 0, 100000, false, NULL, NULL,
+     "with time: the chaos games a frame's motion blur is made of (default: the genome's temporal_samples)",
+     FB_FIELD(fb_flame_params, temporal_samples)},
     {"palettes", FB_K_PATH, 0, 0, false, NULL, "\"" FB_FLAME_PALETTES "\"",
      "flam3's palette library, for genomes with palette=\"N\"", FB_FIELD(fb_flame_params, palettes)},
     {"brightness", FB_K_NUM, 0, 1e6, false, NULL, NULL, "the tone map's brightness (default: the genome's)",
@@ -53,6 +60,28 @@ static const fb_keyspec flame_keys[] = {
     FB_COMPRESSION_KEY,
 };
 
+/* The file's keyframes (*keys, *n: malloc'd). */
+static fb_result read_keys(const fb_flame_params *f, fb_flame_genome **keys, int *n)
+{
+    char *text = NULL;
+    size_t len = 0;
+    fb_result rc = fb_flame_slurp(f->file, &text, &len);
+    if (!rc) rc = fb_flame_read_keys(text, len, f->file, f->palettes, keys, n);
+    free(text);
+    return rc;
+}
+
+/* The frame at f->time of the file's keyframes. */
+static fb_result frame_of(const fb_flame_params *f, fb_flame_frame *fr)
+{
+    fb_flame_genome *keys = NULL;
+    int n = 0;
+    fb_result rc = read_keys(f, &keys, &n);
+    if (!rc) rc = fb_flame_frame_init(keys, n, f->time, f->temporal_samples, fr);
+    free(keys);
+    return rc;
+}
+
 static fb_result parse_flame(const fb_vctx *v, const char *path, json_t *obj, const fb_scene *s, fb_layer *L)
 {
     char sub[256];
@@ -63,21 +92,41 @@ static fb_result parse_flame(const fb_vctx *v, const char *path, json_t *obj, co
         snprintf(sub, sizeof sub, "%s.file", path);
         return fb_schema_error(v, sub, "a flame layer needs a .flame file");
     }
-    char *text = NULL;
-    size_t len = 0;
-    if ((rc = fb_flame_slurp(f->file, &text, &len))) return rc;
-    rc = fb_flame_read(text, len, f->file, f->pick[0] ? f->pick : NULL, f->palettes, &f->genome, NULL);
-    free(text);
-    if (rc) return rc;
-    /* a tone key not given is the genome's */
-    const fb_flame_genome *gn = &f->genome;
+    f->animated = json_object_get(obj, "time") != NULL;
+    if (f->animated && f->pick[0]) {
+        snprintf(sub, sizeof sub, "%s.flame", path);
+        return fb_schema_error(v, sub, "with a time every <flame> of the file is a keyframe: no flame picks one");
+    }
+    /* the tone map the genome (or the frame) gives */
+    fb_flame_tone base;
+    if (f->animated) {
+        fb_flame_frame fr;
+        if ((rc = frame_of(f, &fr))) return rc;
+        f->genome = fr.frame;
+        base =
+            (fb_flame_tone){fr.brightness, fr.gamma,           fr.gamma_threshold,
+                            fr.vibrancy,   fr.highlight_power, {fr.background[0], fr.background[1], fr.background[2]}};
+        fb_flame_frame_fini(&fr);
+    } else {
+        char *text = NULL;
+        size_t len = 0;
+        if ((rc = fb_flame_slurp(f->file, &text, &len))) return rc;
+        rc = fb_flame_read(text, len, f->file, f->pick[0] ? f->pick : NULL, f->palettes, &f->genome, NULL);
+        free(text);
+        if (rc) return rc;
+        const fb_flame_genome *gn = &f->genome;
+        base = (fb_flame_tone){gn->brightness,      gn->gamma,
+                               gn->gamma_threshold, gn->vibrancy,
+                               gn->highlight_power, {gn->background[0], gn->background[1], gn->background[2]}};
+    }
+    /* a tone key not given is the genome's (the frame's) */
     fb_flame_tone *t = &f->tone;
-    if (!json_object_get(obj, "brightness")) t->brightness = gn->brightness;
-    if (!json_object_get(obj, "gamma")) t->gamma = gn->gamma;
-    if (!json_object_get(obj, "gamma-threshold")) t->gamma_threshold = gn->gamma_threshold;
-    if (!json_object_get(obj, "vibrancy")) t->vibrancy = gn->vibrancy;
-    if (!json_object_get(obj, "highlight-power")) t->highlight_power = gn->highlight_power;
-    for (int k = 0; k < 3 && !json_object_get(obj, "background"); k++) t->background[k] = gn->background[k];
+    if (!json_object_get(obj, "brightness")) t->brightness = base.brightness;
+    if (!json_object_get(obj, "gamma")) t->gamma = base.gamma;
+    if (!json_object_get(obj, "gamma-threshold")) t->gamma_threshold = base.gamma_threshold;
+    if (!json_object_get(obj, "vibrancy")) t->vibrancy = base.vibrancy;
+    if (!json_object_get(obj, "highlight-power")) t->highlight_power = base.highlight_power;
+    for (int k = 0; k < 3 && !json_object_get(obj, "background"); k++) t->background[k] = base.background[k];
     (void)s;
     return FB_OK;
 }
@@ -90,10 +139,13 @@ typedef struct flame_state {
     uint32_t *count;
     uint64_t bad;
     double seconds;
-    fb_flame_stats stats; /* the last prepare's game: fb_gen_flame_stats */
-    uint32_t cr0, cr1;    /* the chains this run plays: all, or a points part's share */
-    int nsums;            /* a points part: the 64-bit sums its histogram is stored as (flame_sums) */
-    fb_flame_cell *hist;  /* a points part: its histogram, kept for its sums channels */
+    fb_flame_stats stats;  /* the last prepare's game: fb_gen_flame_stats */
+    uint32_t cr0, cr1;     /* the chains this run plays: all, or a points part's share */
+    int nsums;             /* a points part: the 64-bit sums its histogram is stored as (flame_sums) */
+    fb_flame_cell *hist;   /* a points part: its histogram, kept for its sums channels */
+    fb_flame_genome *keys; /* animated: the file's keyframes (else NULL) and the frame */
+    int nkeys;
+    fb_flame_frame frame;
 } flame_state;
 
 static flame_state *state(const fb_gen *g)
@@ -101,12 +153,12 @@ static flame_state *state(const fb_gen *g)
     return g->owned;
 }
 
-/* The points of the chains [cr0, cr1) (the last chain of all may be shorter). */
-static double chain_points(const flame_state *st)
+/* The points of the chains [cr0, cr1) of S (the last chain of all may be shorter). */
+static double chain_points(const fb_flame_setup *S, uint32_t cr0, uint32_t cr1)
 {
-    const K_FlameParams *p = &st->S.p;
-    double n = (double)(st->cr1 - st->cr0) * p->len;
-    return st->cr1 == p->chains && st->cr1 > st->cr0 ? n - (p->len - p->last_len) : n;
+    const K_FlameParams *p = &S->p;
+    double n = (double)(cr1 - cr0) * p->len;
+    return cr1 == p->chains && cr1 > cr0 ? n - (p->len - p->last_len) : n;
 }
 
 /* The image planes the filter fills: the accumulations and the hit count. */
@@ -206,29 +258,30 @@ static void device_to_total(const fb_flame_setup *S, const uint32_t *hist, const
 
 /* Whether the run folds the 64-bit histogram: it plays more steps (plotted or not) than a fold
  * interval holds points. */
-static bool folds(const flame_state *st)
+static bool folds(const fb_flame_setup *S, uint32_t cr0, uint32_t cr1)
 {
-    return (uint64_t)(st->cr1 - st->cr0) * (st->S.p.fuse + st->S.p.len) > FOLD_POINTS;
+    return (uint64_t)(cr1 - cr0) * (S->p.fuse + S->p.len) > FOLD_POINTS;
 }
 
 /* The device's buffers: the histogram, its carries (32-bit atomics) or the totals it is folded into
  * (64-bit, where the run folds), and the chains' state of one batch. */
-static void device_bytes(const flame_state *st, bool wide, uint64_t *hist, uint64_t *extra, uint64_t *chains)
+static void device_bytes(const fb_flame_setup *S, uint32_t cr0, uint32_t cr1, bool wide, uint64_t *hist,
+                         uint64_t *extra, uint64_t *chains)
 {
-    uint64_t cells = (uint64_t)st->S.p.hist_w * st->S.p.hist_h, n = st->cr1 - st->cr0;
+    uint64_t cells = (uint64_t)S->p.hist_w * S->p.hist_h, n = cr1 - cr0;
     uint64_t batch = (uint64_t)FLAME_MAX_GROUPS * 64u;
-    uint32_t W = device_words(&st->S);
-    *hist = (wide ? 8ull * W : 4ull * device_fields(&st->S)) * cells;
-    *extra = wide ? (folds(st) ? 8ull * (W + 1) * cells : 0) : *hist;
+    uint32_t W = device_words(S);
+    *hist = (wide ? 8ull * W : 4ull * device_fields(S)) * cells;
+    *extra = wide ? (folds(S, cr0, cr1) ? 8ull * (W + 1) * cells : 0) : *hist;
     *chains = sizeof(K_FlameChain) * (n < batch ? (n ? n : 1) : batch);
 }
 
 /* The 64-bit histogram where the device has 64-bit atomics and its words, and the totals where the
  * run folds, fit a buffer each; else the 32-bit one with its carries. The sums are the same. */
-static bool wide_histogram(const flame_state *st, vkc_context *vk)
+static bool wide_histogram(const fb_flame_setup *S, uint32_t cr0, uint32_t cr1, vkc_context *vk)
 {
     uint64_t hist, extra, chains, range = vkc_info(vk)->max_storage_buffer_range;
-    device_bytes(st, true, &hist, &extra, &chains);
+    device_bytes(S, cr0, cr1, true, &hist, &extra, &chains);
     return vkc_info(vk)->int64_atomics && hist <= range && extra <= range;
 }
 
@@ -283,15 +336,14 @@ static uint32_t steps_per_dispatch(const fb_flame_setup *S, const vkc_context *v
 /* Chains [cr0, cr1) in the shader, in batches of at most 65535 workgroups, each in dispatches of
  * steps_per_dispatch; the 64-bit histogram folded before a dispatch could take it past a fold
  * interval; then added into total. */
-static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_progress *prog, double *gpu)
+static fb_result play_vulkan(fb_gen *g, fb_engine *e, const fb_flame_setup *S, uint32_t cr0, uint32_t cr1,
+                             fb_flame_cell *total, fb_progress *prog, double *gpu, uint64_t *bad)
 {
-    flame_state *st = state(g);
-    const fb_flame_setup *S = &st->S;
     vkc_context *vk = e->vk;
     size_t cells = (size_t)S->p.hist_w * S->p.hist_h;
-    bool wide = wide_histogram(st, vk), folding = wide && folds(st);
+    bool wide = wide_histogram(S, cr0, cr1, vk), folding = wide && folds(S, cr0, cr1);
     uint64_t hist_bytes, extra_bytes, chain_bytes, range = vkc_info(vk)->max_storage_buffer_range;
-    device_bytes(st, wide, &hist_bytes, &extra_bytes, &chain_bytes);
+    device_bytes(S, cr0, cr1, wide, &hist_bytes, &extra_bytes, &chain_bytes);
     if (hist_bytes > range || chain_bytes > range)
         return fb_fail(FB_ERR_INPUT,
                        "layer %s: the flame's histogram (%u x %u cells) needs %llu MiB in one buffer; this device "
@@ -356,9 +408,9 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
     if (!rc) rc = vkc_job_create(vk, pipe, &job);
     uint32_t steps = S->p.fuse + S->p.len, batch = FLAME_MAX_GROUPS * 64u;
     uint64_t since = 0; /* steps played since the last fold: a bound on the points any cell took */
-    double all = chain_points(st);
-    for (uint32_t b0 = st->cr0; b0 < st->cr1 && !rc; b0 += batch) {
-        uint32_t b1 = st->cr1 - b0 > batch ? b0 + batch : st->cr1, n = b1 - b0;
+    double all = chain_points(S, cr0, cr1);
+    for (uint32_t b0 = cr0; b0 < cr1 && !rc; b0 += batch) {
+        uint32_t b1 = cr1 - b0 > batch ? b0 + batch : cr1, n = b1 - b0;
         uint32_t per = steps_per_dispatch(S, vk, n, spec + 1);
         for (uint32_t t0 = 0; t0 < steps && !rc; t0 += per) {
             uint64_t played = (uint64_t)n * (steps - t0 < per ? steps - t0 : per);
@@ -373,11 +425,11 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
             if (!rc) rc = vkc_job_submit(vk, job, buf, FB_NBUF, &push, groups);
             if (!rc) rc = vkc_job_wait(vk, job, &t);
             if (t > 0) *gpu += t;
-            double done = (double)(b0 - st->cr0) * S->p.len + (double)n * fmin(t0 + per, steps) / steps * S->p.len;
-            fb_progress_update(prog, (uint64_t)fmin(done, all), (uint64_t)all);
+            double done = (double)(b0 - cr0) * S->p.len + (double)n * fmin(t0 + per, steps) / steps * S->p.len;
+            if (prog) fb_progress_update(prog, (uint64_t)fmin(done, all), (uint64_t)all);
         }
         const K_FlameChain *ch = rc ? NULL : vkc_buffer_data(buf[FB_CHAINS]);
-        for (uint32_t i = 0; ch && i < n; i++) st->bad += ch[i].bad;
+        for (uint32_t i = 0; ch && i < n; i++) *bad += ch[i].bad;
     }
     if (!rc && wide)
         device_to_total(S, NULL, NULL, vkc_buffer_data(buf[FB_HIST]), folding ? vkc_buffer_data(tot) : NULL, total);
@@ -388,6 +440,93 @@ static fb_result play_vulkan(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_p
     vkc_buffer_destroy(vk, &tot);
     vkc_pipeline_destroy(vk, &pipe);
     vkc_pipeline_destroy(vk, &fold_pipe);
+    return rc;
+}
+
+/* Chains [cr0, cr1) of S into total, on the device or the pool. */
+static fb_result play(fb_gen *g, fb_engine *e, const fb_flame_setup *S, uint32_t cr0, uint32_t cr1,
+                      fb_flame_cell *total, fb_progress *prog, double *gpu)
+{
+    flame_state *st = state(g);
+    if (e->kind == FB_BACKEND_VULKAN) {
+        if (*gpu < 0) *gpu = 0;
+        return play_vulkan(g, e, S, cr0, cr1, total, prog, gpu, &st->bad);
+    }
+    int threads = e->pool ? fb_pool_threads(e->pool) : 1;
+    return fb_flame_play(S, e->pool, threads, g->run.scalar, cr0, cr1, total, &st->bad, prog);
+}
+
+/* A points part's share [*c0, *c1) of n chains (all of them in a whole bake): any split sums to
+ * the whole histogram. */
+static void part_chains(const fb_gen *g, uint32_t n, uint32_t *c0, uint32_t *c1)
+{
+    *c0 = 0, *c1 = n;
+    if (g->run.points_part[1] > 0) {
+        uint64_t k = (uint64_t)g->run.points_part[0], parts = (uint64_t)g->run.points_part[1];
+        *c0 = (uint32_t)(n * (k - 1) / parts), *c1 = (uint32_t)(n * k / parts);
+    }
+}
+
+/* The seed of temporal sample t: the scene's for the first, a hash of it and t for the rest, so that
+ * no two samples play the same chains. */
+static uint32_t sample_seed(uint32_t seed, int t)
+{
+    uint32_t h = seed ^ (uint32_t)t * 0x9E3779B9u;
+    h ^= h >> 16, h *= 0x7feb352du, h ^= h >> 15, h *= 0x846ca68bu, h ^= h >> 16;
+    return t ? h : seed;
+}
+
+/* Temporal sample t's game: the genome at its time, 1/n of the points, its palette times its weight
+ * (rect.c's temporal sample loop); *c0, *c1 the chains this run plays. */
+static fb_result sample_setup(fb_gen *g, int t, fb_flame_genome *at, fb_flame_setup *T, uint32_t *c0, uint32_t *c1)
+{
+    flame_state *st = state(g);
+    const fb_flame_params *f = fb_layer_params(g->layer);
+    const fb_flame_frame *fr = &st->frame;
+    fb_result rc = fb_flame_interpolate(st->keys, st->nkeys, f->time + fr->delta[t], at);
+    if (!rc)
+        rc = fb_flame_setup_sample(at, &st->S, f->quality, sample_seed(g->scene->seed, t), 1.0 / fr->n, fr->weight[t],
+                                   T);
+    if (!rc) part_chains(g, T->p.chains, c0, c1);
+    return rc;
+}
+
+/* An animated frame's temporal samples into total, in order: natively FB_FLAME_BATCH at a time into
+ * the threads' histograms, which last the whole frame (a sample's share of the points is small: a
+ * histogram or a wake-up of the pool each would cost more than its game); on Vulkan one after
+ * another. The tone map's k2 is the last sample's over the mean weight. */
+static fb_result play_samples(fb_gen *g, fb_engine *e, fb_flame_cell *total, fb_progress *prog, double *gpu,
+                              double *points, uint32_t *chains)
+{
+    flame_state *st = state(g);
+    const fb_flame_frame *fr = &st->frame;
+    bool native = e->kind != FB_BACKEND_VULKAN;
+    int nb = native ? FB_FLAME_BATCH : 1;
+    fb_flame_genome *at = malloc(sizeof *at);
+    fb_flame_setup *T = calloc((size_t)nb, sizeof *T);
+    const fb_flame_setup *Tp[FB_FLAME_BATCH];
+    uint32_t cr[FB_FLAME_BATCH][2];
+    fb_flame_hists H = {0};
+    fb_result rc = at && T ? FB_OK : fb_fail(FB_ERR_NOMEM, "out of memory");
+    if (!rc && native)
+        rc = fb_flame_hists_init(&H, &st->S, false, e->pool, e->pool ? fb_pool_threads(e->pool) : 1, total);
+    for (int t0 = 0; t0 < fr->n && !rc; t0 += nb) {
+        int n = fr->n - t0 < nb ? fr->n - t0 : nb;
+        for (int i = 0; i < n && !rc; i++) {
+            rc = sample_setup(g, t0 + i, at, &T[i], &cr[i][0], &cr[i][1]);
+            Tp[i] = &T[i];
+            if (!rc) *points += chain_points(&T[i], cr[i][0], cr[i][1]), *chains += cr[i][1] - cr[i][0];
+        }
+        if (!rc && native) rc = fb_flame_hists_play_batch(&H, Tp, (const uint32_t(*)[2])cr, n, g->run.scalar);
+        if (!rc && !native) rc = play(g, e, &T[0], cr[0][0], cr[0][1], total, NULL, gpu);
+        if (!rc && t0 + n == fr->n) st->S.k2 = T[n - 1].k2 / fr->sumfilt;
+        for (int i = 0; i < n; i++) fb_flame_setup_fini(&T[i]);
+        fb_progress_update(prog, (uint64_t)(t0 + n), (uint64_t)fr->n);
+    }
+    if (!rc && native) fb_flame_hists_fold(&H, &st->bad);
+    fb_flame_hists_fini(&H);
+    free(T);
+    free(at);
     return rc;
 }
 
@@ -402,29 +541,32 @@ static fb_result flame_prepare(fb_gen *g, fb_engine *e, bool progress)
     fb_progress prog;
     char label[96];
     snprintf(label, sizeof label, "%s: chaos game", g->layer->name);
-    fb_progress_init(&prog, progress, label, "pts");
-    double t0 = fb_now();
-    int threads = e->pool ? fb_pool_threads(e->pool) : 1;
-    double gpu = -1;
-    if (!rc && e->kind == FB_BACKEND_VULKAN)
-        gpu = 0, rc = play_vulkan(g, e, total, &prog, &gpu);
-    else if (!rc)
-        rc = fb_flame_play(S, e->pool, threads, g->run.scalar, st->cr0, st->cr1, total, &st->bad, &prog);
+    if (st->keys)
+        fb_progress_init(&prog, progress, label, "samples");
+    else
+        fb_progress_init(&prog, progress, label, "pts");
+    double t0 = fb_now(), gpu = -1, points = 0;
+    uint32_t chains = 0;
+    if (!rc && st->keys) {
+        rc = play_samples(g, e, total, &prog, &gpu, &points, &chains);
+    } else if (!rc) {
+        rc = play(g, e, S, st->cr0, st->cr1, total, &prog, &gpu);
+        points = chain_points(S, st->cr0, st->cr1), chains = st->cr1 - st->cr0;
+    }
     fb_progress_finish(&prog);
-    double t1 = fb_now(), points = chain_points(st);
+    double t1 = fb_now();
     if (!rc)
         rc = finish(st, total, e->pool);
     else
         free(total);
     st->seconds = fb_now() - t0;
     g->prepared.gpu_seconds = gpu;
-    st->stats = (fb_flame_stats){
-        .points = chain_points(st), .game_seconds = t1 - t0, .gpu_seconds = gpu, .prepare_seconds = st->seconds};
+    st->stats =
+        (fb_flame_stats){.points = points, .game_seconds = t1 - t0, .gpu_seconds = gpu, .prepare_seconds = st->seconds};
     if (rc) return rc;
-    fb_log(FB_LOG_INFO,
-           "%s: %.0f points in %u chains, %.3g Mpts/s (chaos game %.2f s, filters %.2f s), %llu bad values",
-           g->layer->name, points, st->cr1 - st->cr0, points / (t1 - t0) * 1e-6, t1 - t0, fb_now() - t1,
-           (unsigned long long)st->bad);
+    fb_log(
+        FB_LOG_INFO, "%s: %.0f points in %u chains, %.3g Mpts/s (chaos game %.2f s, filters %.2f s), %llu bad values",
+        g->layer->name, points, chains, points / (t1 - t0) * 1e-6, t1 - t0, fb_now() - t1, (unsigned long long)st->bad);
     snprintf(g->prepared.summary, sizeof g->prepared.summary, "%s: flame %.0f points, %.3g Mpts/s", g->layer->name,
              points, points / (t1 - t0) * 1e-6);
     return FB_OK;
@@ -511,6 +653,8 @@ static void flame_fini(fb_gen *g)
     flame_state *st = state(g);
     if (!st) return;
     fb_flame_setup_fini(&st->S);
+    free(st->keys);
+    fb_flame_frame_fini(&st->frame);
     for (int k = 0; k < 4; k++) free(st->acc[k]);
     free(st->count);
     free(st->hist);
@@ -527,7 +671,8 @@ static uint64_t flame_memory(const fb_gen *g, const struct fb_engine *e, uint64_
     *hold = 20 * n + (st->nsums ? cells * sizeof(fb_flame_cell) : 0); /* a points part keeps its histogram */
     if (e->kind == FB_BACKEND_VULKAN) { /* the device's histogram, its carries or totals, chains, then the total */
         uint64_t hist, extra, chains;
-        device_bytes(st, e->vk && wide_histogram(st, e->vk), &hist, &extra, &chains);
+        device_bytes(&st->S, st->cr0, st->cr1, e->vk && wide_histogram(&st->S, st->cr0, st->cr1, e->vk), &hist, &extra,
+                     &chains);
         return hist + extra + chains + cells * sizeof(fb_flame_cell) + 32 * cells + 20 * n;
     }
     return (uint64_t)threads * cells * fb_flame_cell_bytes(&st->S) + cells * sizeof(fb_flame_cell) + 32 * cells +
@@ -558,14 +703,16 @@ static fb_result flame_init(fb_gen *g)
     if (!st) return fb_fail(FB_ERR_NOMEM, "out of memory");
     g->owned = st;
     g->fini = flame_fini;
-    fb_result rc = fb_flame_setup_init(&f->genome, s->width, s->height, f->quality, s->seed, &st->S);
+    fb_result rc = FB_OK;
+    if (f->animated && !(rc = read_keys(f, &st->keys, &st->nkeys)))
+        rc = fb_flame_frame_init(st->keys, st->nkeys, f->time, f->temporal_samples, &st->frame);
+    /* the frame: animated, at its time with the first temporal sample's density estimator */
+    if (!rc) rc = fb_flame_setup_init(&f->genome, s->width, s->height, f->quality, s->seed, &st->S);
     if (rc) return rc;
     st->S.tone = f->tone;
     /* points part K of N: the K-th share of the chains (any split sums to the whole histogram) */
-    st->cr0 = 0, st->cr1 = st->S.p.chains;
+    part_chains(g, st->S.p.chains, &st->cr0, &st->cr1);
     if (g->run.points_part[1] > 0) {
-        uint64_t c = st->S.p.chains, k = (uint64_t)g->run.points_part[0], parts = (uint64_t)g->run.points_part[1];
-        st->cr0 = (uint32_t)(c * (k - 1) / parts), st->cr1 = (uint32_t)(c * k / parts);
         st->nsums = flame_nsums(g);
         if (9 + 2 * st->nsums > FB_GEN_MAX_CHANNELS)
             return fb_fail(FB_ERR_INPUT,

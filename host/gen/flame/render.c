@@ -425,29 +425,14 @@ static void choice_row(const fb_flame_genome *g, int from, uint32_t *row)
     }
 }
 
-fb_result fb_flame_setup_init(const fb_flame_genome *g, int width, int height, double quality, uint32_t seed,
-                              fb_flame_setup *s)
+/* The chaos game's part of s for genome g, on the frame s already holds (size, supersample, gutter,
+ * histogram): the camera, the points (share of density x pixels), the xform and choice tables and
+ * the palette (times scalar: a temporal sample's weight), k1, k2 and the tone map. */
+static fb_result setup_game(const fb_flame_genome *g, double quality, uint32_t seed, double share, double scalar,
+                            fb_flame_setup *s)
 {
-    memset(s, 0, sizeof *s);
     K_FlameParams *p = &s->p;
-    s->width = width, s->height = height, s->ss = g->supersample;
-    int ss = g->supersample;
-    fb_result rc = spatial_filter(g->filter_shape, ss, g->filter, &s->filter, &s->fwidth);
-    if (rc) return rc;
-    int gutter = (s->fwidth - ss) / 2, de_fw = (int)ceil(g->estimator) * ss;
-    if (de_fw > 0) de_fw += ss - 1;
-    s->de_offset = de_fw > gutter ? de_fw - gutter : 0;
-    if (de_fw > gutter) gutter = de_fw;
-    s->gutter = gutter;
-    p->hist_w = (uint32_t)(ss * width + 2 * gutter);
-    p->hist_h = (uint32_t)(ss * height + 2 * gutter);
-    if ((uint64_t)p->hist_w * p->hist_h > (1ull << 30))
-        return fb_fail(FB_ERR_INPUT, "the flame's histogram would have %llu cells (size x supersample^2); at most 2^30",
-                       (unsigned long long)p->hist_w * p->hist_h);
-    if (g->estimator > 0) {
-        s->estimator_curve = g->estimator_curve;
-        if ((rc = de_filters(g->estimator, g->estimator_minimum, g->estimator_curve, ss, s))) return rc;
-    }
+    int width = s->width, height = s->height, ss = s->ss, gutter = s->gutter;
     double zoom = pow(2.0, g->zoom), q = quality > 0 ? quality : g->quality;
     double density = q * zoom * zoom;
     double ppux = g->scale * zoom * ((double)width / g->width), ppuy = ppux;
@@ -461,7 +446,7 @@ fb_result fb_flame_setup_init(const fb_flame_genome *g, int width, int height, d
     p->rotate = g->rotate != 0.0;
     p->rot00 = (float)cos(th), p->rot01 = (float)-sin(th), p->rot10 = (float)sin(th), p->rot11 = (float)cos(th);
     p->rcx = (float)g->center[0], p->rcy = (float)g->center[1];
-    s->samples = density * width * height;
+    s->samples = density * width * height * share;
     double area = width * height / (ppux * ppuy);
     s->k1 = (1.0 * 1.0 * PREFILTER_WHITE * 268.0 * 1.0) / 256; /* brightness 1: the tone map scales by it */
     s->k2 = (ss * ss * 1.0) / (1.0 * area * PREFILTER_WHITE * density * 1.0);
@@ -493,12 +478,48 @@ fb_result fb_flame_setup_init(const fb_flame_genome *g, int width, int height, d
     for (int i = 0; i < 256; i++)
         for (int k = 0; k < 4; k++) {
             double v = g->palette[i][k] * 255.0;
-            s->palq[i][k] = (uint32_t)llround(fmin(fmax(v, 0), 255.0) * 16.0);
+            s->palq[i][k] = (uint32_t)llround(fmin(fmax(v, 0), 255.0) * 16.0 * scalar);
         }
     s->tone =
         (fb_flame_tone){g->brightness, g->gamma,           g->gamma_threshold,
                         g->vibrancy,   g->highlight_power, {g->background[0], g->background[1], g->background[2]}};
     return FB_OK;
+}
+
+fb_result fb_flame_setup_init(const fb_flame_genome *g, int width, int height, double quality, uint32_t seed,
+                              fb_flame_setup *s)
+{
+    memset(s, 0, sizeof *s);
+    K_FlameParams *p = &s->p;
+    s->width = width, s->height = height, s->ss = g->supersample;
+    int ss = g->supersample;
+    fb_result rc = spatial_filter(g->filter_shape, ss, g->filter, &s->filter, &s->fwidth);
+    if (rc) return rc;
+    int gutter = (s->fwidth - ss) / 2, de_fw = (int)ceil(g->estimator) * ss;
+    if (de_fw > 0) de_fw += ss - 1;
+    s->de_offset = de_fw > gutter ? de_fw - gutter : 0;
+    if (de_fw > gutter) gutter = de_fw;
+    s->gutter = gutter;
+    p->hist_w = (uint32_t)(ss * width + 2 * gutter);
+    p->hist_h = (uint32_t)(ss * height + 2 * gutter);
+    if ((uint64_t)p->hist_w * p->hist_h > (1ull << 30))
+        return fb_fail(FB_ERR_INPUT, "the flame's histogram would have %llu cells (size x supersample^2); at most 2^30",
+                       (unsigned long long)p->hist_w * p->hist_h);
+    if (g->estimator > 0) {
+        s->estimator_curve = g->estimator_curve;
+        if ((rc = de_filters(g->estimator, g->estimator_minimum, g->estimator_curve, ss, s))) return rc;
+    }
+    return setup_game(g, quality, seed, 1.0, 1.0, s);
+}
+
+fb_result fb_flame_setup_sample(const fb_flame_genome *g, const fb_flame_setup *frame, double quality, uint32_t seed,
+                                double share, double scalar, fb_flame_setup *s)
+{
+    memset(s, 0, sizeof *s);
+    s->width = frame->width, s->height = frame->height, s->ss = frame->ss;
+    s->gutter = frame->gutter, s->de_offset = frame->de_offset;
+    s->p.hist_w = frame->p.hist_w, s->p.hist_h = frame->p.hist_h;
+    return setup_game(g, quality, seed, share, scalar, s);
 }
 
 void fb_flame_setup_fini(fb_flame_setup *s)

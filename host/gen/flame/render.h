@@ -61,6 +61,13 @@ fb_result fb_flame_setup_init(const fb_flame_genome *g, int width, int height, d
                               fb_flame_setup *out);
 void fb_flame_setup_fini(fb_flame_setup *s);
 
+/* A temporal sample of a frame: the chaos game of genome g (its camera, xforms and palette) on the
+ * frame's histogram (size, supersample and gutter from `frame`), `share` of its points and its
+ * palette times `scalar` (the temporal filter's weight). No filters: owns dist alone
+ * (fb_flame_setup_fini). */
+fb_result fb_flame_setup_sample(const fb_flame_genome *g, const fb_flame_setup *frame, double quality, uint32_t seed,
+                                double share, double scalar, fb_flame_setup *out);
+
 /* The K_FlameVar of variation v of xform x (its weight and parameters, as flam3's precalc does). */
 K_FlameVar fb_flame_var_params(const fb_flame_xform *x, int v);
 
