@@ -490,21 +490,29 @@ fb_result fb_scene_drop_outputs(const char *text, char **out, char *dropped, siz
         const fb_gen_class *cls = fb_gen_find(type);
         if (!cls) continue;
         const fb_keyspec *keys = cls->keys;
+        int said = 0; /* the heightmap's qualifiers named so far */
         for (int k = 0; k < cls->nkeys; k++) {
             const char *v = keys[k].type == FB_K_OUTPUT ? json_string_value(json_object_get(l, keys[k].key)) : NULL;
             if (!v) continue;
             snprintf(dropped + strlen(dropped), size - strlen(dropped), "%slayers.%s.%s=%s", dropped[0] ? ", " : "",
                      name ? name : "?", keys[k].key, v);
             json_object_del(l, keys[k].key);
-            /* the keys that only say how to write it go with it ("instances-surface": they are refused without it) */
-            size_t n = strlen(keys[k].key);
+            /* the keys that only say how to write it go with it ("instances-surface", "heightmap-range": they
+             * are refused without it), named after it */
+            size_t len = strlen(keys[k].key);
+            int n = 0;
             for (int q = 0; q < cls->nkeys; q++)
-                if (!strncmp(keys[q].key, keys[k].key, n) && keys[q].key[n] == '-' && json_object_get(l, keys[q].key))
+                if (!strncmp(keys[q].key, keys[k].key, len) && keys[q].key[len] == '-' &&
+                    json_object_get(l, keys[q].key)) {
+                    snprintf(dropped + strlen(dropped), size - strlen(dropped), "%s%s", n++ ? ", " : " with its ",
+                             keys[q].key);
                     json_object_del(l, keys[q].key);
+                }
+            if (!strcmp(keys[k].key, "heightmap")) said = n;
         }
         /* what only says how to write the heightmap goes with it (it is refused without one) */
         static const char *const qualifiers[] = {"heightmap-engine", "heightmap-range", "tiles"};
-        for (int q = 0, n = 0; q < 3 && !json_object_get(l, "heightmap"); q++)
+        for (int q = 0, n = said; q < 3 && !json_object_get(l, "heightmap"); q++)
             if (json_object_get(l, qualifiers[q])) {
                 snprintf(dropped + strlen(dropped), size - strlen(dropped), "%s%s", n++ ? ", " : " with its ",
                          qualifiers[q]);
