@@ -128,19 +128,22 @@ refused "an L-system drawing more than the rasteriser takes" "would draw at leas
 check "--dry-run wrote a file" test ! -e d.exr -a ! -e d.png
 check "--dry-run prints the predicted peak" grep -q "predicted peak" dry.txt
 # A dry run beyond --max-memory prints its prediction (and says the bake would be refused); the bake
-# itself is still refused at once.
-"$FB" rivers $N --size 40000x40000 -o big.exr --dry-run > dry.txt 2> dry.err
+# itself is still refused at once. --coarse 40000: the whole grid (by default a range this wide is
+# amplified from a coarse model, and fits).
+"$FB" rivers $N --size 40000x40000 --max-memory 8G -o big.exr --dry-run > dry.txt 2>&1
+check "rivers 40000^2 amplified: predicted within 8G: $(grep peak dry.txt)" grep -q "^predicted peak .*(--max-memory 8.00 GiB)$" dry.txt
+"$FB" rivers $N --size 40000x40000 --coarse 40000 -o big.exr --dry-run > dry.txt 2> dry.err
 rc=$?
 check "rivers 40000^2 --dry-run: exit $rc, wanted 0, stderr: $(cat dry.err)" test $rc -eq 0 -a ! -s dry.err
 check "  its prediction: $(grep -E 'layer|peak' dry.txt | tr '\n' ' ')" \
   grep -q "^predicted peak .* GiB  (--max-memory .*: more than it, so the bake would be refused)$" dry.txt
-layer=$("$FB" rivers $N --size 40000x40000 --dry-run --json | sed -n 's/.*"name": "rivers", "bytes": \([0-9]*\).*/\1/p')
+layer=$("$FB" rivers $N --size 40000x40000 --coarse 40000 --dry-run --json | sed -n 's/.*"name": "rivers", "bytes": \([0-9]*\).*/\1/p')
 # the model's state alone, 1.6e9 cells of at least 4 floats, is more than 24 GiB
 check "  the layer's bytes in --json (${layer:-none}) are those of 40000 x 40000 cells" \
   test "${layer:-0}" -gt $((24 << 30))
 check "  no file written" test ! -e big.exr
 refused "rivers 40000^2, the bake itself" "layer rivers: stream-power erosion of 40000 x 40000 cells needs about" \
-  rivers $N --size 40000x40000 --max-memory 8G
+  rivers $N --size 40000x40000 --coarse 40000 --max-memory 8G
 "$FB" render erode.json $N --set size=16384x16384 --max-memory 4G -o big.exr --dry-run > dry.txt
 check "erode 16384^2 under 4G --dry-run: exit $?, its prediction" grep -q "more than it, so the bake would be refused" dry.txt
 
